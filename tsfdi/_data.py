@@ -1,0 +1,211 @@
+"""The one place where numpy / pandas / xarray input becomes an array and results go back.
+
+Convention (decided once for the whole package): **time is axis 0**. A scalar signal is 1-D ``(nobs,)``;
+a vector signal is 2-D ``(nobs, nchan)``. For an xarray ``DataArray`` the time dimension is the one named
+``"time"`` if present, otherwise the first dimension; the other dimension (if any) holds the channels.
+
+Results are wrapped back in the caller's kind: a numpy array for numpy input, a ``Series`` /
+``DataFrame`` with the sliced original index for pandas input, and a ``DataArray`` with the sliced time
+coordinate for xarray input. Residuals of a model with ``lags`` lags lose the first ``lags`` samples, so
+their index starts at the original index's position ``lags``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["Signal", "as_signal", "is_xarray"]
+
+
+def is_xarray(obj: Any) -> bool:
+    """True for an ``xarray.DataArray`` without importing xarray when it is not loaded."""
+    return type(obj).__module__.startswith("xarray") and hasattr(obj, "dims") and hasattr(obj, "values")
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A validated signal as a float64 ``(nobs, nchan)`` array plus what is needed to wrap results.
+
+    Attributes
+    ----------
+    values : ndarray, shape (nobs, nchan)
+        The data, float64, finite, C-contiguous.
+    kind : {"numpy", "pandas", "xarray"}
+        Kind of the caller's object.
+    vector : bool
+        Whether the caller passed a vector (2-D) signal; scalar results are returned 1-D.
+    index : pandas.Index or None
+        Time index (pandas) or time coordinate values (xarray); ``None`` for numpy.
+    channels : list of str
+        Channel names (column names, channel coordinate values, or ``"y0", "y1", ...``).
+    name : str or None
+        Series / DataArray name.
+    time_dim, channel_dim : str
+        xarray dimension names used when wrapping.
+    """
+
+    values: np.ndarray
+    kind: str
+    vector: bool
+    index: pd.Index | None = None
+    channels: list = field(default_factory=list)
+    name: Any = None
+    time_dim: str = "time"
+    channel_dim: str = "channel"
+
+    @property
+    def nobs(self) -> int:
+        return self.values.shape[0]
+
+    @property
+    def nchan(self) -> int:
+        return self.values.shape[1]
+
+    def wrap(self, values: np.ndarray, start: int = 0, *, channels: list | None = None,
+             name: Any = None, vector: bool | None = None) -> Any:
+        """Wrap an array whose rows are the samples ``start, start + 1, ...`` of this signal.
+
+        Parameters
+        ----------
+        values : ndarray, shape (m,) or (m, k)
+            Rows aligned with samples ``start .. start + m - 1`` of the input.
+        start : int
+            Position of the first row in the original time index.
+        channels : list, optional
+            Column names for ``k`` columns (defaults to this signal's channels).
+        name : optional
+            Name of a scalar result (defaults to the signal's name).
+        vector : bool, optional
+            Force a 2-D (True) or 1-D (False) result; defaults to the input's shape.
+        """
+        values = np.asarray(values)
+        if values.ndim == 1:
+            values = values[:, None]
+        m = values.shape[0]
+        vector = self.vector if vector is None else vector
+        if channels is None:
+            channels = self.channels if values.shape[1] == self.nchan else [f"y{i}" for i in range(values.shape[1])]
+        name = self.name if name is None else name
+        if not vector:
+            values = values[:, 0]
+        if self.kind == "numpy":
+            return values
+        index = self.index[start:start + m]
+        if len(index) != m:
+            raise ValueError(f"cannot wrap {m} rows starting at {start} on an index of length {len(self.index)}")
+        if self.kind == "pandas":
+            if vector:
+                return pd.DataFrame(values, index=index, columns=list(channels))
+            return pd.Series(values, index=index, name=name)
+        import xarray as xr
+
+        if vector:
+            return xr.DataArray(values, dims=(self.time_dim, self.channel_dim),
+                                coords={self.time_dim: np.asarray(index), self.channel_dim: list(channels)},
+                                name=name)
+        return xr.DataArray(values, dims=(self.time_dim,), coords={self.time_dim: np.asarray(index)}, name=name)
+
+
+def _numeric(arr: np.ndarray, name: str) -> np.ndarray:
+    if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        if arr.dtype == object:
+            try:
+                arr = arr.astype(np.float64)
+            except (TypeError, ValueError):
+                raise TypeError(f"{name} must contain real numbers, got non-numeric values") from None
+        else:
+            raise TypeError(f"{name} must contain real numbers, got dtype {arr.dtype}")
+    return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nobs: int = 1,
+              allow_constant: bool = False, finite: bool = True) -> Signal:
+    """Validate ``data`` and return a :class:`Signal`.
+
+    Parameters
+    ----------
+    data : array_like, pandas.Series, pandas.DataFrame or xarray.DataArray
+        Time on axis 0 (numpy / pandas) or along the ``"time"`` (else first) dimension (xarray).
+    name : str
+        Argument name used in error messages.
+    vector : bool, optional
+        ``False``: a scalar signal is required (1-D, or 2-D with one column). ``True``: a 2-D signal is
+        required. ``None``: either.
+    min_nobs : int
+        Minimum number of samples; the message states it.
+    allow_constant : bool
+        Reject channels with zero variance unless True.
+    finite : bool
+        Reject NaN / inf unless False.
+
+    Raises
+    ------
+    TypeError
+        Non-numeric data or an unsupported container.
+    ValueError
+        Wrong number of dimensions, too few samples, non-finite or constant values.
+    """
+    kind, index, channels, sname, time_dim, channel_dim = "numpy", None, None, None, "time", "channel"
+    if isinstance(data, pd.Series):
+        kind, index, sname = "pandas", data.index, data.name
+        arr = data.to_numpy()
+    elif isinstance(data, pd.DataFrame):
+        kind, index, channels = "pandas", data.index, [str(c) for c in data.columns]
+        try:
+            arr = data.to_numpy(dtype=np.float64) if all(
+                pd.api.types.is_numeric_dtype(t) and not pd.api.types.is_bool_dtype(t) for t in data.dtypes
+            ) else data.to_numpy()
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must contain real numbers") from None
+    elif is_xarray(data):
+        kind, sname = "xarray", data.name
+        dims = list(data.dims)
+        if len(dims) not in (1, 2):
+            raise ValueError(f"{name} must have 1 or 2 dimensions (time[, channel]), got dims {tuple(dims)}")
+        time_dim = "time" if "time" in dims else dims[0]
+        if len(dims) == 2:
+            channel_dim = dims[1] if dims[0] == time_dim else dims[0]
+            data = data.transpose(time_dim, channel_dim)
+            channels = ([str(c) for c in data[channel_dim].values] if channel_dim in data.coords
+                        else [f"y{i}" for i in range(data.sizes[channel_dim])])
+        index = pd.Index(data[time_dim].values) if time_dim in data.coords else pd.RangeIndex(data.sizes[time_dim])
+        arr = data.values
+    elif isinstance(data, (np.ndarray, list, tuple)) or np.isscalar(data):
+        arr = np.asarray(data)
+    else:
+        raise TypeError(f"{name} must be a numpy array, pandas Series/DataFrame or xarray DataArray, "
+                        f"got {type(data).__name__}")
+    arr = _numeric(np.asarray(arr), name)
+    if arr.ndim not in (1, 2):
+        raise ValueError(f"{name} must be 1-D (nobs,) or 2-D (nobs, nchan), got {arr.ndim}-D with shape {arr.shape}")
+    was_vector = arr.ndim == 2
+    if vector is False and was_vector and arr.shape[1] != 1:
+        raise ValueError(f"{name} must be a scalar signal (1-D or one column), got shape {arr.shape}")
+    if vector is True and not was_vector:
+        raise ValueError(f"{name} must be a 2-D (nobs, nchan) vector signal, got shape {arr.shape}")
+    if vector is False:
+        was_vector = False
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    if channels is None:
+        channels = [str(sname)] if (not was_vector and sname is not None) else [f"y{i}" for i in range(arr.shape[1])]
+    if arr.shape[1] == 0:
+        raise ValueError(f"{name} has no channels")
+    if arr.shape[0] < min_nobs:
+        raise ValueError(f"{name} is too short: {arr.shape[0]} samples, at least {min_nobs} are needed")
+    if finite and not np.isfinite(arr).all():
+        bad = int((~np.isfinite(arr)).sum())
+        first = int(np.argwhere(~np.isfinite(arr))[0, 0])
+        raise ValueError(f"{name} contains {bad} NaN/inf value(s) (first at sample {first}); "
+                         "remove or interpolate them first")
+    if not allow_constant and arr.shape[0] > 1:
+        const = np.ptp(arr, axis=0) == 0
+        if const.any():
+            which = [channels[i] for i in np.flatnonzero(const)]
+            raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
+    return Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
+                  channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)

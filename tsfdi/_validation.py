@@ -1,0 +1,78 @@
+"""Argument checks that name the offending argument.
+
+Every public function validates its options through these helpers so that a bad value raises a
+``ValueError`` / ``TypeError`` whose message starts with the argument's name.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+__all__ = ["int_like", "float_like", "option", "probability", "check_rng"]
+
+
+def int_like(value: Any, name: str, *, minimum: int | None = None, maximum: int | None = None,
+             optional: bool = False) -> int | None:
+    """Return ``value`` as an ``int`` or raise naming ``name``.
+
+    Booleans and non-integral floats are rejected.
+    """
+    if value is None and optional:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, np.integer)):
+        if isinstance(value, (float, np.floating)) and float(value).is_integer():
+            value = int(value)
+        else:
+            raise TypeError(f"{name} must be an integer, got {value!r} ({type(value).__name__})")
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise ValueError(f"{name} must be <= {maximum}, got {value}")
+    return value
+
+
+def float_like(value: Any, name: str, *, minimum: float | None = None, maximum: float | None = None,
+               strict_min: bool = False, strict_max: bool = False, optional: bool = False) -> float | None:
+    """Return ``value`` as a finite ``float`` or raise naming ``name``.
+
+    ``strict_min`` / ``strict_max`` make the bounds exclusive.
+    """
+    if value is None and optional:
+        return None
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
+    value = float(value)
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value}")
+    if minimum is not None and (value <= minimum if strict_min else value < minimum):
+        raise ValueError(f"{name} must be {'>' if strict_min else '>='} {minimum}, got {value}")
+    if maximum is not None and (value >= maximum if strict_max else value > maximum):
+        raise ValueError(f"{name} must be {'<' if strict_max else '<='} {maximum}, got {value}")
+    return value
+
+
+def probability(value: Any, name: str = "alpha") -> float:
+    """Return ``value`` as a float strictly inside (0, 1) or raise naming ``name``."""
+    return float_like(value, name, minimum=0.0, maximum=1.0, strict_min=True, strict_max=True)
+
+
+def option(value: Any, name: str, options: Iterable[str]) -> str:
+    """Return ``value`` if it is one of ``options`` (case-insensitive) or raise naming ``name``."""
+    options = tuple(options)
+    if not isinstance(value, str) or value.lower() not in options:
+        raise ValueError(f"{name} must be one of {', '.join(repr(o) for o in options)}, got {value!r}")
+    return value.lower()
+
+
+def check_rng(rng: Any, name: str = "rng") -> np.random.Generator:
+    """Turn ``None | int | numpy.random.Generator`` into a ``Generator``."""
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if rng is None or (isinstance(rng, (numbers.Integral, np.integer)) and not isinstance(rng, bool)):
+        return np.random.default_rng(rng)
+    raise TypeError(f"{name} must be None, an int seed or a numpy.random.Generator, got {type(rng).__name__}")
