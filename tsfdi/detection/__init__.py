@@ -1,0 +1,3 @@
+"""Residual hypothesis tests and the Decision object."""
+
+__all__: list[str] = []

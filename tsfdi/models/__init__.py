@@ -1,0 +1,3 @@
+"""Time-series model families: one module per family, shared kernels in ``_lstsq``."""
+
+__all__: list[str] = []
