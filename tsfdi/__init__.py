@@ -1,7 +1,11 @@
 """tsfdi: statistical time-series fault detection and identification."""
 
 from tsfdi.exceptions import TsfdiWarning
+from tsfdi.io import load
+from tsfdi.models import AR, ARX, VAR, ARResults, ARXResults, VARResults
+from tsfdi.selection import OrderSelection, select_order
 
 __version__ = "0.1.0"
 
-__all__ = ["TsfdiWarning", "__version__"]
+__all__ = ["AR", "ARX", "VAR", "ARResults", "ARXResults", "VARResults", "OrderSelection", "TsfdiWarning",
+           "load", "select_order", "__version__"]

@@ -149,6 +149,8 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
     ValueError
         Wrong number of dimensions, too few samples, non-finite or constant values.
     """
+    if isinstance(data, Signal):
+        return data
     kind, index, channels, sname, time_dim, channel_dim = "numpy", None, None, None, "time", "channel"
     if isinstance(data, pd.Series):
         kind, index, sname = "pandas", data.index, data.name

@@ -1,3 +1,7 @@
 """Time-series model families: one module per family, shared kernels in ``_lstsq``."""
 
-__all__: list[str] = []
+from tsfdi.models.ar import AR, ARResults
+from tsfdi.models.arx import ARX, ARXResults
+from tsfdi.models.var import VAR, VARResults
+
+__all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults"]

@@ -1,0 +1,326 @@
+"""Numba-compiled kernels of the hexacopter simulator (one record per call, no Python objects).
+
+The equations are documented in :mod:`tsfdi.datasets.hexacopter`. The parameter vector layout is
+defined by :data:`PARAM_NAMES` (built in :mod:`tsfdi.datasets._hexacopter_params`) and the gain vector by
+:data:`GAIN_NAMES`. Each record is integrated independently, in scalar code, so a record's result does not
+depend on which other records are simulated with it (bit-for-bit regeneration of subsets).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+# output channels at the integration rate
+N_OUT = 19
+N_X = 18  # 12 rigid-body states + 6 rotor speeds
+
+
+@njit(cache=True)
+def dryden_recursion(Ad, F, C, x0, e):
+    n = e.shape[0]
+    ns = Ad.shape[0]
+    no = C.shape[0]
+    out = np.empty((n, no))
+    x = x0.copy()
+    xn = np.empty(ns)
+    for k in range(n):
+        for j in range(no):
+            s = 0.0
+            for m in range(ns):
+                s += C[j, m] * x[m]
+            out[k, j] = s
+        for i in range(ns):
+            s = 0.0
+            for m in range(ns):
+                s += Ad[i, m] * x[m] + F[i, m] * e[k, m]
+            xn[i] = s
+        for i in range(ns):
+            x[i] = xn[i]
+    return out
+
+
+@njit(cache=True)
+def _deriv(x, wcmd, g, P, alive, dx):
+    # parameters
+    m = P[0]
+    grav = P[1]
+    Ixx = P[2]
+    Iyy = P[3]
+    Izz = P[4]
+    arm = P[5]
+    hr = P[6]
+    kT = P[7]
+    kQ = P[8]
+    tau = P[9]
+    cw = P[10]
+    ch = P[11]
+    kf = P[12]
+    cda = P[13]
+    rho = P[14]
+    kn = P[15]
+    phi = x[3]
+    th = x[4]
+    psi = x[5]
+    u = x[6]
+    v = x[7]
+    w = x[8]
+    p = x[9]
+    q = x[10]
+    r = x[11]
+    sph = math.sin(phi)
+    cph = math.cos(phi)
+    sth = math.sin(th)
+    cth = math.cos(th)
+    sps = math.sin(psi)
+    cps = math.cos(psi)
+    ur = u - g[0]
+    vr = v - g[1]
+    wr = w - g[2]
+    pr = p - g[3]
+    qr = q - g[4]
+    rr = r - g[5]
+    Fx = 0.0
+    Fy = 0.0
+    Fz = 0.0
+    Mx = 0.0
+    My = 0.0
+    Mz = 0.0
+    for i in range(6):
+        ang = i * (math.pi / 3.0)
+        xi = arm * math.cos(ang)
+        yi = arm * math.sin(ang)
+        zi = -hr
+        om = x[12 + i]
+        if om < 0.0:
+            om = 0.0
+        if alive[i] == 0:
+            continue
+        # hub velocity relative to air: v_rel + omega_rel x r_i
+        vhx = ur + qr * zi - rr * yi
+        vhy = vr + rr * xi - pr * zi
+        vhz = wr + pr * yi - qr * xi
+        T = kT * om * om + cw * om * vhz
+        if T < 0.0:
+            T = 0.0
+        fx = -ch * om * vhx
+        fy = -ch * om * vhy
+        fz = -T
+        Fx += fx
+        Fy += fy
+        Fz += fz
+        # r_i x F_i
+        Mx += yi * fz - zi * fy
+        My += zi * fx - xi * fz
+        Mz += xi * fy - yi * fx
+        # blade-flapping moment: disc tilts away from the relative wind
+        Mx += -kf * om * vhy
+        My += kf * om * vhx
+        # reaction torque: rotor 1 (i = 0) clockwise seen from above, alternating
+        spin = 1.0 if i % 2 == 0 else -1.0
+        Mz += -spin * kQ * om * om
+    # fuselage drag and weathervane yaw moment
+    vmag = math.sqrt(ur * ur + vr * vr + wr * wr)
+    Fx += -0.5 * rho * cda * vmag * ur
+    Fy += -0.5 * rho * cda * vmag * vr
+    Fz += -0.5 * rho * cda * vmag * wr
+    vh = math.sqrt(ur * ur + vr * vr)
+    Mz += kn * vh * vr
+    # gravity in body axes
+    Fx += -m * grav * sth
+    Fy += m * grav * sph * cth
+    Fz += m * grav * cph * cth
+    # translational: m (vdot + omega x v) = F
+    dx[6] = Fx / m - (q * w - r * v)
+    dx[7] = Fy / m - (r * u - p * w)
+    dx[8] = Fz / m - (p * v - q * u)
+    # rotational (principal axes)
+    dx[9] = (Mx - (Izz - Iyy) * q * r) / Ixx
+    dx[10] = (My - (Ixx - Izz) * p * r) / Iyy
+    dx[11] = (Mz - (Iyy - Ixx) * p * q) / Izz
+    # Euler angle rates (Z-Y-X)
+    tth = sth / cth
+    dx[3] = p + (q * sph + r * cph) * tth
+    dx[4] = q * cph - r * sph
+    dx[5] = (q * sph + r * cph) / cth
+    # position: NED velocity = R v
+    dx[0] = cth * cps * u + (sph * sth * cps - cph * sps) * v + (cph * sth * cps + sph * sps) * w
+    dx[1] = cth * sps * u + (sph * sth * sps + cph * cps) * v + (cph * sth * sps - sph * cps) * w
+    dx[2] = -sth * u + sph * cth * v + cph * cth * w
+    for i in range(6):
+        dx[12 + i] = (wcmd[i] - x[12 + i]) / tau
+
+
+@njit(cache=True)
+def _ned_velocity(x):
+    phi = x[3]
+    th = x[4]
+    psi = x[5]
+    u = x[6]
+    v = x[7]
+    w = x[8]
+    sph = math.sin(phi)
+    cph = math.cos(phi)
+    sth = math.sin(th)
+    cth = math.cos(th)
+    sps = math.sin(psi)
+    cps = math.cos(psi)
+    vn = cth * cps * u + (sph * sth * cps - cph * sps) * v + (cph * sth * cps + sph * sps) * w
+    ve = cth * sps * u + (sph * sth * sps + cph * cps) * v + (cph * sth * sps - sph * cps) * w
+    vd = -sth * u + sph * cth * v + cph * cth * w
+    return vn, ve, vd
+
+
+@njit(cache=True)
+def _controller(x, integ, ref, G, P, ctrl, wcmd):
+    """Cascade of Fig. 2: velocity -> attitude commands -> attitude/altitude loops -> mixer.
+
+    integ: [I_theta, I_phi, I_collective, I_roll, I_pitch]; ref: [vn_c, ve_c, Z_c, psi_c];
+    ctrl out: [Om0, OmR, OmP, OmY, phi_c, theta_c, psi_c] (+ integrator rates in ctrl[7:12]).
+    """
+    kv, kvi, kz, kzd, kzi, katt, krate, katti, kpsi, kr, maxtilt = (
+        G[0], G[1], G[2], G[3], G[4], G[5], G[6], G[7], G[8], G[9], G[10])
+    wmin = P[16]
+    wmax = P[17]
+    vn, ve, vd = _ned_velocity(x)
+    psi = x[5]
+    c = math.cos(psi)
+    s = math.sin(psi)
+    # velocity errors in the heading frame
+    en = ref[0] - vn
+    ee = ref[1] - ve
+    ex = c * en + s * ee
+    ey = -s * en + c * ee
+    th_c = integ[0] - kv * ex
+    ph_c = integ[1] + kv * ey
+    if th_c > maxtilt:
+        th_c = maxtilt
+    elif th_c < -maxtilt:
+        th_c = -maxtilt
+    if ph_c > maxtilt:
+        ph_c = maxtilt
+    elif ph_c < -maxtilt:
+        ph_c = -maxtilt
+    ez = x[2] - ref[2]
+    om0 = integ[2] + kz * ez + kzd * vd
+    e_ph = ph_c - x[3]
+    e_th = th_c - x[4]
+    omr = integ[3] + katt * e_ph - krate * x[9]
+    omp = integ[4] + katt * e_th - krate * x[10]
+    omy = kpsi * (ref[3] - psi) - kr * x[11]
+    # mixer with priority: collective, roll, pitch first, yaw scaled into the remaining range
+    alpha = 1.0
+    for i in range(6):
+        ang = i * (math.pi / 3.0)
+        b = om0 - math.sin(ang) * omr + math.cos(ang) * omp
+        if b < wmin:
+            b = wmin
+        elif b > wmax:
+            b = wmax
+        wcmd[i] = b
+        my = -1.0 if i % 2 == 0 else 1.0
+        d = my * omy
+        if d > 0.0:
+            room = wmax - b
+            if room < alpha * d:
+                alpha = room / d
+        elif d < 0.0:
+            room = b - wmin
+            if room < -alpha * d:
+                alpha = room / (-d)
+    for i in range(6):
+        my = -1.0 if i % 2 == 0 else 1.0
+        wcmd[i] += alpha * my * omy
+    ctrl[0] = om0
+    ctrl[1] = omr
+    ctrl[2] = omp
+    ctrl[3] = omy
+    ctrl[4] = ph_c
+    ctrl[5] = th_c
+    ctrl[6] = ref[3]
+    # integrator rates (anti-windup: freeze tilt integrators while the tilt command saturates)
+    ctrl[7] = -kvi * ex if abs(th_c) < maxtilt else 0.0
+    ctrl[8] = kvi * ey if abs(ph_c) < maxtilt else 0.0
+    ctrl[9] = kzi * ez
+    ctrl[10] = katti * e_ph
+    ctrl[11] = katti * e_th
+
+
+@njit(cache=True)
+def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps, dt, out, limits):
+    """Integrate one record with RK4 at step ``dt``; write ``N_OUT`` channels per step into ``out``.
+
+    ``fail_rotor`` is 0-based (-1: none). Returns the step at which control was lost (-1: never).
+    ``limits``: [max |roll|, max |pitch| (rad), max altitude error (m)].
+    """
+    x = x0.copy()
+    integ = integ0.copy()
+    alive = np.ones(6, dtype=np.int64)
+    k1 = np.empty(N_X)
+    k2 = np.empty(N_X)
+    k3 = np.empty(N_X)
+    k4 = np.empty(N_X)
+    xt = np.empty(N_X)
+    ctrl = np.empty(12)
+    wcmd = np.empty(6)
+    g = np.empty(6)
+    lost = -1
+    for k in range(n_steps):
+        if k == fail_step and fail_rotor >= 0:
+            alive[fail_rotor] = 0
+        _controller(x, integ, ref, G, P, ctrl, wcmd)
+        for j in range(12):
+            out[k, j] = x[j]
+        for j in range(7):
+            out[k, 12 + j] = ctrl[j]
+        if lost >= 0:
+            for j in range(N_OUT):
+                out[k, j] = np.nan
+            continue
+        for j in range(6):
+            g[j] = gust[k, j]
+        _deriv(x, wcmd, g, P, alive, k1)
+        for j in range(N_X):
+            xt[j] = x[j] + 0.5 * dt * k1[j]
+        _deriv(xt, wcmd, g, P, alive, k2)
+        for j in range(N_X):
+            xt[j] = x[j] + 0.5 * dt * k2[j]
+        _deriv(xt, wcmd, g, P, alive, k3)
+        for j in range(N_X):
+            xt[j] = x[j] + dt * k3[j]
+        _deriv(xt, wcmd, g, P, alive, k4)
+        for j in range(N_X):
+            x[j] = x[j] + dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+        for j in range(5):
+            integ[j] += dt * ctrl[7 + j]
+        bad = False
+        for j in range(N_X):
+            if not math.isfinite(x[j]):
+                bad = True
+        if bad or abs(x[3]) > limits[0] or abs(x[4]) > limits[1] or abs(x[2] - ref[2]) > limits[2]:
+            lost = k + 1
+    return lost
+
+
+@njit(cache=True, parallel=True)
+def simulate_batch(x0, integ0, ref, gusts, P, G, fail_rotor, fail_step, n_steps, dt, out, limits, lost):
+    for i in prange(x0.shape[0]):
+        lost[i] = simulate_record(x0[i], integ0[i], ref[i], gusts[i], P, G, fail_rotor[i], fail_step[i],
+                                  n_steps, dt, out[i], limits)
+
+
+@njit(cache=True)
+def derivative(x, wcmd, g, P, alive):
+    dx = np.empty(N_X)
+    _deriv(x, wcmd, g, P, alive, dx)
+    return dx
+
+
+@njit(cache=True)
+def controller(x, integ, ref, G, P):
+    ctrl = np.empty(12)
+    wcmd = np.empty(6)
+    _controller(x, integ, ref, G, P, ctrl, wcmd)
+    return ctrl, wcmd

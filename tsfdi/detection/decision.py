@@ -1,0 +1,179 @@
+"""The :class:`Decision` object returned by every residual test.
+
+A decision always has the same shape, whatever the test or the options: the per-channel quantities
+(``statistic``, ``threshold``, ``pvalue``, ``df``, ``channel_reject``) are 1-D numpy arrays with one entry
+per tested component (one for a scalar residual, one per channel for a vector residual, one named
+``"joint"`` for a multivariate portmanteau test), and ``reject`` is a plain ``bool`` stating the decision
+for the whole signal.
+
+Combining channels (Dutta et al., Vector residual based FDI): the signal is accepted (healthy, or "this
+model fits") only when **every** channel accepts; it is rejected when any channel rejects. With ``alpha`` used
+per channel the family-wise false-alarm rate of ``k`` independent channels is ``1 - (1 - alpha)**k`` (at most
+``k * alpha``). The tests offer ``correction="bonferroni"``, which tests every channel at ``alpha / k`` so that the
+signal-level false-alarm rate is at most ``alpha``; the default (``None``) is the paper's use.
+"""
+
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Decision"]
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, (float, np.floating)):
+        if np.isnan(v):
+            return "nan"
+        return f"{v:.4g}"
+    if isinstance(v, (np.ndarray, list, tuple)):
+        return "(" + ", ".join(_fmt(x) for x in np.asarray(v).ravel()) + ")"
+    return str(v)
+
+
+@dataclass(frozen=True)
+class Decision:
+    """Outcome of a residual hypothesis test.
+
+    Attributes
+    ----------
+    statistic : ndarray, shape (k,)
+        Test statistic per tested component (channel).
+    threshold : ndarray, shape (k,)
+        Critical value per component; the component rejects when ``statistic > threshold``.
+    pvalue : ndarray, shape (k,)
+        p-value per component; ``nan`` where the test has none (e.g. an empirical GLRT threshold).
+    alpha : float
+        Type I (false alarm) risk requested; per component unless ``details["correction"]`` says otherwise.
+    reject : bool
+        Decision for the whole signal: True (H1, fault / model does not fit) when any component rejects.
+    df : ndarray
+        Degrees of freedom per component: shape (k,) for chi-square tests, shape (k, 2) for the F test
+        (numerator, denominator); ``nan`` where none.
+    nobs : int
+        Number of residual samples tested.
+    null_hypothesis, alternative_hypothesis : str
+        The hypotheses in words.
+    details : dict
+        Test-specific extra results (e.g. alarm times of the GLRT, the multivariate method).
+    channel_reject : ndarray of bool, shape (k,)
+        Decision per component.
+    channels : tuple of str
+        Component names.
+    test : str
+        Name of the test that produced the decision.
+    """
+
+    statistic: np.ndarray
+    threshold: np.ndarray
+    pvalue: np.ndarray
+    alpha: float
+    reject: bool
+    df: np.ndarray
+    nobs: int
+    null_hypothesis: str
+    alternative_hypothesis: str
+    details: dict = field(default_factory=dict)
+    channel_reject: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    channels: tuple = ()
+    test: str = ""
+
+    def __post_init__(self) -> None:
+        stat = np.atleast_1d(np.asarray(self.statistic, dtype=np.float64))
+        k = stat.shape[0]
+        thr = np.broadcast_to(np.asarray(self.threshold, dtype=np.float64), (k,)).copy()
+        pv = np.broadcast_to(np.asarray(self.pvalue, dtype=np.float64), (k,)).copy()
+        df = np.asarray(self.df, dtype=np.float64)
+        df = np.broadcast_to(df, (k,) + df.shape[1:] if df.ndim >= 1 and df.shape[0] == k
+                             else (k,) + df.shape).copy()
+        rej = self.channel_reject
+        if rej is None or np.asarray(rej).size == 0:
+            rej = stat > thr
+        rej = np.broadcast_to(np.asarray(rej, dtype=bool), (k,)).copy()
+        channels = tuple(self.channels) if self.channels else tuple(f"y{i}" for i in range(k))
+        if len(channels) != k:
+            raise ValueError(f"channels has {len(channels)} names for {k} components")
+        for arr in (stat, thr, pv, df, rej):
+            arr.flags.writeable = False
+        object.__setattr__(self, "statistic", stat)
+        object.__setattr__(self, "threshold", thr)
+        object.__setattr__(self, "pvalue", pv)
+        object.__setattr__(self, "df", df)
+        object.__setattr__(self, "channel_reject", rej)
+        object.__setattr__(self, "channels", channels)
+        object.__setattr__(self, "reject", bool(self.reject))
+        object.__setattr__(self, "alpha", float(self.alpha))
+        object.__setattr__(self, "nobs", int(self.nobs))
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def accept(self) -> bool:
+        """``not reject``: the null hypothesis (healthy / model fits) is accepted for the whole signal."""
+        return not self.reject
+
+    @property
+    def signal_pvalue(self) -> float:
+        """p-value of the signal-level decision: the smallest channel p-value (Bonferroni-adjusted,
+        ``min(1, k * p)``, when the test used ``correction="bonferroni"``); ``nan`` if the test has none."""
+        if np.all(np.isnan(self.pvalue)):
+            return float("nan")
+        p = float(np.nanmin(self.pvalue))
+        if self.details.get("correction") == "bonferroni":
+            p = min(1.0, p * len(self.channels))
+        return p
+
+    @property
+    def margin(self) -> float:
+        """Largest ``statistic / threshold`` over the channels (> 1 means reject)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return float(np.max(self.statistic / self.threshold))
+
+    # ------------------------------------------------------------------ display
+    def summary(self) -> str:
+        """A plain-text table of the decision per channel and for the signal."""
+        lines = [f"{self.test or 'Residual test'} (alpha = {self.alpha:g}, nobs = {self.nobs})",
+                 f"  H0: {self.null_hypothesis}",
+                 f"  H1: {self.alternative_hypothesis}"]
+        corr = self.details.get("correction")
+        if corr:
+            lines.append(f"  per-channel correction: {corr}")
+        w = max([7] + [len(c) for c in self.channels])
+        lines.append(f"  {'channel':<{w}}  {'statistic':>12}  {'threshold':>12}  {'p-value':>10}  {'df':>14}  decision")
+        for i, c in enumerate(self.channels):
+            dec = "reject" if self.channel_reject[i] else "accept"
+            lines.append(f"  {c:<{w}}  {self.statistic[i]:>12.5g}  {self.threshold[i]:>12.5g}  "
+                         f"{_fmt(self.pvalue[i]):>10}  {_fmt(self.df[i]):>14}  {dec}")
+        verdict = "reject H0 (fault / model does not fit)" if self.reject else "accept H0"
+        lines.append(f"  signal: {verdict}; rule: the signal is accepted only if every channel accepts")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        stats = ", ".join(f"{c}={s:.4g}{'>' if r else '<='}{t:.4g}" for c, s, t, r in
+                          zip(self.channels, self.statistic, self.threshold, self.channel_reject))
+        return (f"Decision(test={self.test!r}, reject={self.reject}, alpha={self.alpha:g}, nobs={self.nobs}, "
+                f"{stats})")
+
+    def _repr_html_(self) -> str:
+        rows = "".join(
+            f"<tr><td>{html.escape(str(c))}</td><td>{self.statistic[i]:.5g}</td><td>{self.threshold[i]:.5g}</td>"
+            f"<td>{_fmt(self.pvalue[i])}</td><td>{html.escape(_fmt(self.df[i]))}</td>"
+            f"<td>{'reject' if self.channel_reject[i] else 'accept'}</td></tr>"
+            for i, c in enumerate(self.channels))
+        verdict = "reject H0" if self.reject else "accept H0"
+        return (f"<div><b>{html.escape(self.test or 'Residual test')}</b> &mdash; {verdict} "
+                f"(alpha = {self.alpha:g}, nobs = {self.nobs})<br>"
+                f"H0: {html.escape(self.null_hypothesis)}<br>H1: {html.escape(self.alternative_hypothesis)}"
+                "<table><thead><tr><th>channel</th><th>statistic</th><th>threshold</th><th>p-value</th>"
+                f"<th>df</th><th>decision</th></tr></thead><tbody>{rows}</tbody></table></div>")
+
+    def plot(self, ax: Any = None, **kwargs: Any) -> Any:
+        """Bars of the statistic per channel against the critical limit (Dutta et al., Figs. 10-13).
+
+        Returns the matplotlib ``Figure``. See :func:`tsfdi.plotting.plot_decision`.
+        """
+        from tsfdi.plotting.decision import plot_decision
+
+        return plot_decision(self, ax=ax, **kwargs)

@@ -1,0 +1,319 @@
+"""Common machinery of the least-squares time-series models (AR, VAR, ARX).
+
+A model spec validates and stores its data and options; :meth:`fit` estimates by least squares and returns
+an immutable results object whose derived quantities are cached properties computed from the model and the
+parameter matrix alone. This is what makes :func:`tsfdi.load` lossless: a results object is fully defined by
+its model (data + options) and its parameters.
+"""
+
+from __future__ import annotations
+
+import warnings
+from functools import cached_property
+from typing import Any, ClassVar
+
+import numpy as np
+from scipy import signal as sps
+
+from tsfdi import selection
+from tsfdi._data import Signal, as_signal
+from tsfdi._validation import int_like, option
+from tsfdi.exceptions import UnstableModelWarning
+from tsfdi.models import _lstsq
+
+__all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults"]
+
+
+class LinearTimeSeriesModel:
+    """Base of AR, VAR and ARX: ``y[t] + sum A_i y[t-i] = c + sum B_j u[t-nk-j+1] + e[t]``."""
+
+    _vector: ClassVar[bool | None] = None   # False: scalar output required, True: 2-D output required
+    _results_class: ClassVar[type]
+
+    def __init__(self, y: Any, na: int, *, trend: str = "n", hold_back: int | None = None, u: Any = None,
+                 nb: int = 0, nk: int = 0, criterion: str = "logdet", lag_name: str = "lags") -> None:
+        self.trend = option(trend, "trend", ("n", "c"))
+        self.criterion = option(criterion, "criterion", ("logdet", "trace"))
+        self._lag_name = lag_name
+        self.na = int_like(na, lag_name, minimum=0)
+        self.nb = int_like(nb, "nb", minimum=0)
+        self.nk = int_like(nk, "nk", minimum=0)
+        self.data = as_signal(y, "y", vector=self._vector)
+        self.u_data = None
+        if u is not None:
+            self.u_data = as_signal(u, "u")
+            if self.u_data.nobs != self.data.nobs:
+                raise ValueError(f"u has {self.u_data.nobs} samples but y has {self.data.nobs}: they must match")
+        if self.u_data is None and self.nb:
+            raise ValueError("nb > 0 needs an input signal u")
+        if self.na + self.nb < 1:
+            raise ValueError(f"{lag_name} + nb must be >= 1: the model needs at least one regressor")
+        self.max_lag = max(self.na, self.nk + self.nb - 1 if self.nb else 0)
+        hold_back = self.max_lag if hold_back is None else int_like(hold_back, "hold_back", minimum=0)
+        if hold_back < self.max_lag:
+            raise ValueError(f"hold_back must be >= the largest lag ({self.max_lag}), got {hold_back}")
+        self.hold_back = hold_back
+        minimum = hold_back + self.df_eq + 1
+        if self.data.nobs < minimum:
+            raise ValueError(f"y is too short for {lag_name}={self.na}: {self.data.nobs} samples, at least "
+                             f"{minimum} are needed (hold back {hold_back} + {self.df_eq} parameters + 1)")
+
+    # ----------------------------------------------------------------------------------------------
+    @property
+    def k_const(self) -> int:
+        return int(self.trend == "c")
+
+    @property
+    def neqs(self) -> int:
+        return self.data.nchan
+
+    @property
+    def n_inputs(self) -> int:
+        return 0 if self.u_data is None else self.u_data.nchan
+
+    @property
+    def df_eq(self) -> int:
+        """Number of regression coefficients per equation."""
+        return self.k_const + self.na * self.neqs + self.nb * self.n_inputs
+
+    def _rows(self) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """Parameter rows of each output lag (``-y[t-g]``) and each input lag (``u[t-nk-g+1]``)."""
+        pos, ylag, ulag = self.k_const, [], []
+        for g in range(1, max(self.na, self.nb) + 1):
+            if g <= self.na:
+                ylag.append(np.arange(pos, pos + self.neqs))
+                pos += self.neqs
+            if g <= self.nb:
+                ulag.append(np.arange(pos, pos + self.n_inputs))
+                pos += self.n_inputs
+        return ylag, ulag
+
+    def _design(self, y: np.ndarray, u: np.ndarray | None, start: int) -> tuple[np.ndarray, np.ndarray]:
+        return _lstsq.lagged_design(y, self.na, start, const=bool(self.k_const), u=u, nb=self.nb, nk=self.nk)
+
+    def fit(self) -> LinearTimeSeriesResults:
+        """Estimate the parameters by least squares (QR / SVD, never the normal equations)."""
+        X, Y = self._design(self.data.values, None if self.u_data is None else self.u_data.values,
+                            self.hold_back)
+        return self._results_class(self, _lstsq.lstsq(X, Y))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(nobs={self.data.nobs}, {self._lag_name}={self.na}, trend={self.trend!r})"
+
+
+class LinearTimeSeriesResults:
+    """Immutable results of a least-squares time-series fit.
+
+    Attributes are computed on first access and cached. Information criteria follow the likelihood form
+    used by statsmodels ``AutoReg`` (Lütkepohl):
+
+    ``llf = -nobs/2 (s ln 2 pi + ln det Sigma + s)``, ``aic = -2 llf + 2 k``, ``bic = -2 llf + k ln nobs``
+
+    with ``Sigma`` the maximum-likelihood residual covariance and ``k = df_model + s (s + 1) / 2`` the
+    number of free parameters including the noise covariance. Divided by ``nobs`` the BIC is the papers'
+    eq. 5, ``ln sigma_e^2 + d ln N / N``, up to a constant that does not depend on the order.
+    """
+
+    def __init__(self, model: LinearTimeSeriesModel, params: np.ndarray) -> None:
+        params = np.array(params, dtype=float)
+        params.setflags(write=False)
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "_params2d", params.reshape(params.shape[0], -1))
+        object.__setattr__(self, "_frozen", True)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    # --- in-sample quantities ----------------------------------------------------------------------
+    @cached_property
+    def _fitted_design(self) -> tuple[np.ndarray, np.ndarray]:
+        m = self.model
+        return m._design(m.data.values, None if m.u_data is None else m.u_data.values, m.hold_back)
+
+    @cached_property
+    def _resid_array(self) -> np.ndarray:
+        X, Y = self._fitted_design
+        e = Y - X @ self._params2d
+        e.setflags(write=False)
+        return e
+
+    @property
+    def lags(self) -> int:
+        """Autoregressive order."""
+        return self.model.na
+
+    @property
+    def trend(self) -> str:
+        return self.model.trend
+
+    @property
+    def nobs(self) -> int:
+        """Number of residuals used in estimation (signal length minus the held-back samples)."""
+        return self._resid_array.shape[0]
+
+    @property
+    def neqs(self) -> int:
+        return self.model.neqs
+
+    @property
+    def df_model(self) -> int:
+        """Number of estimated regression coefficients (all equations)."""
+        return self._params2d.size
+
+    @property
+    def df_eq(self) -> int:
+        """Number of regression coefficients per equation."""
+        return self._params2d.shape[0]
+
+    @property
+    def df_resid(self) -> int:
+        """Residual degrees of freedom per equation, ``nobs - df_eq`` (the ``N_0 - d`` of paper 003 eq. 11)."""
+        return self.nobs - self.df_eq
+
+    @cached_property
+    def _sse(self) -> np.ndarray:
+        e = self._resid_array
+        return e.T @ e
+
+    @cached_property
+    def _criteria(self) -> dict[str, float]:
+        X, Y = self._fitted_design
+        return selection.criteria(self._sse[None], float(np.sum(Y * Y)), self.nobs, np.array([self.df_model]),
+                                  self.neqs, self.model.criterion)
+
+    @property
+    def llf(self) -> float:
+        """Gaussian log-likelihood at the maximum-likelihood covariance."""
+        return float(self._criteria["llf"][0])
+
+    @property
+    def aic(self) -> float:
+        """Akaike information criterion ``-2 llf + 2 k``."""
+        return float(self._criteria["aic"][0])
+
+    @property
+    def bic(self) -> float:
+        """Bayesian information criterion ``-2 llf + k ln nobs`` (paper 003 eq. 5 times ``nobs``, plus a constant).
+
+        For a vector model with ``criterion="trace"`` the log-determinant of the residual covariance is
+        replaced by the log of its trace, as in paper 003 ("Vector AR Identification Method").
+        """
+        return float(self._criteria["bic"][0])
+
+    @property
+    def rss_sss(self) -> float:
+        """Residual sum of squares over signal sum of squares in percent (paper 003 eq. 6).
+
+        ``100 * sum_t e[t]' e[t] / sum_t y[t]' y[t]`` over the estimation sample (raw, not demeaned, signal).
+        """
+        return float(self._criteria["rss_sss"][0])
+
+    @property
+    def spp(self) -> float:
+        """Samples per parameter, ``nobs * s / df_model`` (paper 003 Table 2; the paper uses the signal length)."""
+        return float(self._criteria["spp"][0])
+
+    @property
+    def resid(self) -> Any:
+        """In-sample residuals (one-step prediction errors) in the caller's data kind."""
+        return self.model.data.wrap(self._resid_array.copy(), self.model.hold_back)
+
+    # --- stability ------------------------------------------------------------------------------
+    def _ar_matrices(self) -> np.ndarray:
+        """AR coefficient matrices ``A_1..A_na`` in the papers' sign, shape (na, s, s)."""
+        rows, _ = self.model._rows()
+        return np.stack([self._params2d[r].T for r in rows]) if rows else np.empty((0, self.neqs, self.neqs))
+
+    def _input_matrices(self) -> np.ndarray:
+        """Input coefficient matrices ``B_1..B_nb``, shape (nb, s, n_inputs)."""
+        _, rows = self.model._rows()
+        return (np.stack([self._params2d[r].T for r in rows]) if rows
+                else np.empty((0, self.neqs, self.model.n_inputs)))
+
+    @cached_property
+    def roots(self) -> np.ndarray:
+        """Roots of the characteristic polynomial ``det(I + A_1 z + ... + A_na z^na)``.
+
+        The model is stable when all roots lie outside the unit circle (statsmodels' convention).
+        Sorted by modulus.
+        """
+        A = self._ar_matrices()
+        na, s = A.shape[0], self.neqs
+        if na == 0:
+            return np.empty(0, dtype=complex)
+        comp = np.zeros((na * s, na * s))
+        comp[:s] = -np.concatenate(list(A), axis=1)
+        comp[s:, :-s] = np.eye((na - 1) * s)
+        eig = np.linalg.eigvals(comp)
+        with np.errstate(divide="ignore"):
+            r = 1.0 / eig
+        return r[np.argsort(np.abs(r))]
+
+    @property
+    def is_stable(self) -> bool:
+        """True when every characteristic root lies strictly outside the unit circle."""
+        return bool(np.all(np.abs(self.roots) > 1.0))
+
+    def _warn_unstable(self) -> None:
+        if not self.is_stable:
+            warnings.warn(f"the fitted {type(self.model).__name__} is unstable (smallest root modulus "
+                          f"{np.abs(self.roots).min():.4f} <= 1)", UnstableModelWarning, stacklevel=3)
+
+    # --- new data --------------------------------------------------------------------------------
+    def _new_signal(self, y: Any, name: str = "y") -> Signal:
+        sig = as_signal(y, name, vector=self.model._vector, min_nobs=self.model.max_lag + 1, allow_constant=True)
+        if sig.nchan != self.neqs:
+            raise ValueError(f"{name} has {sig.nchan} channel(s) but the model was fitted on {self.neqs}")
+        return sig
+
+    def _residuals_array(self, y: np.ndarray, u: np.ndarray | None) -> np.ndarray:
+        """One-step prediction errors of ``y`` (and ``u``) through the fixed model, from ``max_lag`` on."""
+        m = self.model
+        if m.nb == 0 and self.neqs == 1:   # scalar AR: one IIR pass
+            a = np.r_[1.0, self._ar_matrices()[:, 0, 0]]
+            e = sps.lfilter(a, [1.0], y[:, 0])[m.max_lag:]
+            return (e - (self._params2d[0, 0] if m.k_const else 0.0))[:, None]
+        X, Y = m._design(y, u, m.max_lag)
+        return Y - X @ self._params2d
+
+    def save(self, path: Any) -> None:
+        """Save the model (data and options) and its parameters to ``path`` (``.npz``) for :func:`tsfdi.load`."""
+        from tsfdi.io import save
+
+        save(self, path)
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}({type(self.model).__name__}, {self.model._lag_name}={self.model.na}, "
+                f"nobs={self.nobs}, bic={self.bic:.6g})")
+
+    def _summary_rows(self) -> list[tuple[str, str]]:
+        return [("Model", type(self.model).__name__), ("Order", str(self.model.na)), ("Trend", self.trend),
+                ("Observations", str(self.nobs)), ("Parameters", str(self.df_model)),
+                ("Log-likelihood", f"{self.llf:.6g}"), ("AIC", f"{self.aic:.6g}"), ("BIC", f"{self.bic:.6g}"),
+                ("RSS/SSS (%)", f"{self.rss_sss:.6g}"), ("Samples per parameter", f"{self.spp:.2f}"),
+                ("Stable", str(self.is_stable))]
+
+    def summary(self) -> str:
+        """A plain-text summary: fit statistics and the parameter table."""
+        rows = self._summary_rows()
+        width = max(len(k) for k, _ in rows)
+        head = "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+        return f"{head}\n\n{self._param_frame().to_string(float_format=lambda v: f'{v: .6g}')}"
+
+    def _param_frame(self):
+        import pandas as pd
+
+        return pd.DataFrame(self._params2d, index=self._param_names(), columns=self.model.data.channels)
+
+    def _param_names(self) -> list[str]:
+        m = self.model
+        names = ["const"] if m.k_const else []
+        for g in range(1, max(m.na, m.nb) + 1):
+            if g <= m.na:
+                names += [f"a{g}" if self.neqs == 1 else f"A{g}.{c}" for c in m.data.channels]
+            if g <= m.nb:
+                names += [f"b{g}.{c}" for c in m.u_data.channels]
+        return names

@@ -1,0 +1,117 @@
+"""Scalar autoregressive model AR(na) (paper 003 eq. 4)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy import signal as sps
+
+from tsfdi._validation import check_rng, int_like
+from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
+
+__all__ = ["AR", "ARResults"]
+
+
+class AR(LinearTimeSeriesModel):
+    """Scalar autoregression estimated by least squares.
+
+    .. math::  y[t] + \\sum_{i=1}^{n_a} a_i\\, y[t-i] = c + e[t], \\qquad e[t] \\sim \\mathrm{iid}\\ \\mathcal{N}(0, \\sigma_e^2)
+
+    (paper 003, eq. 4; ``c = 0`` unless ``trend="c"``). The coefficients ``a_i`` are stored in this sign;
+    statsmodels' ``AutoReg`` estimates ``phi_i = -a_i`` and the same intercept.
+
+    Parameters
+    ----------
+    y : array_like, Series, DataFrame (one column) or DataArray
+        Scalar signal, time on axis 0 (or the ``"time"`` dimension).
+    lags : int
+        Order ``na >= 1``.
+    trend : {"n", "c"}
+        No intercept (the papers' model) or an intercept.
+    hold_back : int, optional
+        Number of initial samples excluded from the estimation sample (default ``lags``); used to fit
+        several orders on a common sample (see :func:`tsfdi.select_order`).
+    """
+
+    _vector = False
+
+    def __init__(self, y: Any, lags: int, trend: str = "n", *, hold_back: int | None = None) -> None:
+        int_like(lags, "lags", minimum=1)
+        super().__init__(y, lags, trend=trend, hold_back=hold_back)
+
+    def fit(self) -> ARResults:
+        res = super().fit()
+        res._warn_unstable()
+        return res
+
+
+class ARResults(LinearTimeSeriesResults):
+    """Results of :meth:`AR.fit` (immutable).
+
+    Attributes
+    ----------
+    ar_coefs : ndarray, shape (lags,)
+        ``a_1..a_na`` in the papers' sign (``y[t] + sum a_i y[t-i] = c + e[t]``).
+    params : ndarray
+        ``[c, a_1, ..., a_na]`` (``c`` only with ``trend="c"``).
+    sigma2 : float
+        Maximum-likelihood residual variance ``RSS / nobs`` (as statsmodels ``AutoReg``).
+    """
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._params2d[:, 0]
+
+    @property
+    def ar_coefs(self) -> np.ndarray:
+        return self._ar_matrices()[:, 0, 0]
+
+    @property
+    def intercept(self) -> float:
+        return float(self._params2d[0, 0]) if self.model.k_const else 0.0
+
+    @property
+    def sigma2(self) -> float:
+        return float(self._sse[0, 0] / self.nobs)
+
+    def residuals(self, y: Any) -> Any:
+        """One-step prediction errors of a new signal through the fixed model.
+
+        ``e[t] = y[t] + sum_i a_i y[t-i] - c`` for ``t = lags .. len(y) - 1`` (computed by one IIR filter pass).
+
+        Parameters
+        ----------
+        y : array_like, Series or DataArray
+            New scalar signal (at least ``lags + 1`` samples).
+
+        Returns
+        -------
+        Same kind as ``y``, ``len(y) - lags`` samples; its index starts at the original position ``lags``.
+        """
+        sig = self._new_signal(y)
+        return sig.wrap(self._residuals_array(sig.values, None), self.lags)
+
+    def simulate(self, nobs: int, rng: Any = None, *, burn: int | None = None, sigma2: float | None = None) -> np.ndarray:
+        """Simulate ``nobs`` samples of the fitted process with Gaussian innovations.
+
+        Parameters
+        ----------
+        nobs : int
+            Number of samples returned.
+        rng : None, int or numpy.random.Generator
+            Source of randomness.
+        burn : int, optional
+            Samples discarded at the start (default ``10 * lags + 100``).
+        sigma2 : float, optional
+            Innovation variance (default :attr:`sigma2`).
+        """
+        nobs = int_like(nobs, "nobs", minimum=1)
+        burn = 10 * self.lags + 100 if burn is None else int_like(burn, "burn", minimum=0)
+        rng = check_rng(rng)
+        scale = np.sqrt(self.sigma2 if sigma2 is None else sigma2)
+        e = rng.standard_normal(nobs + burn) * scale + self.intercept
+        return sps.lfilter([1.0], np.r_[1.0, self.ar_coefs], e)[burn:]
+
+
+AR._results_class = ARResults

@@ -1,0 +1,107 @@
+"""Autoregressive model with exogenous inputs ARX(na, nb, nk)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from tsfdi._validation import int_like
+from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
+
+__all__ = ["ARX", "ARXResults"]
+
+
+class ARX(LinearTimeSeriesModel):
+    """Scalar-output ARX model with one or several inputs, estimated by least squares.
+
+    .. math::  y[t] + \\sum_{i=1}^{n_a} a_i\\, y[t-i] = c + \\sum_{m} \\sum_{j=1}^{n_b} b_{m,j}\\, u_m[t - n_k - j + 1] + e[t]
+
+    This is the convention of MATLAB's ``arx`` (``nb`` coefficients per input, dead time ``nk``; ``nk = 0``
+    lets ``u[t]`` act on ``y[t]``) and of the ARX model of paper 001 (eqs. 2-3), whose recursive estimate is
+    :class:`tsfdi.RecursiveARX`.
+
+    Parameters
+    ----------
+    y : array_like, Series or DataArray
+        Scalar output.
+    u : array_like (nobs,) or (nobs, n_inputs), Series, DataFrame or DataArray
+        Inputs, same length as ``y``.
+    na, nb : int
+        Number of output and input coefficients (``na + nb >= 1``).
+    nk : int
+        Input delay in samples.
+    trend : {"n", "c"}
+    hold_back : int, optional
+        Initial samples excluded (default: the largest lag ``max(na, nk + nb - 1)``).
+    """
+
+    _vector = False
+
+    def __init__(self, y: Any, u: Any, na: int, nb: int, nk: int = 0, trend: str = "n", *,
+                 hold_back: int | None = None) -> None:
+        if u is None:
+            raise ValueError("u is required: an ARX model needs an input signal")
+        super().__init__(y, na, trend=trend, hold_back=hold_back, u=u, nb=nb, nk=nk, lag_name="na")
+
+    def __repr__(self) -> str:
+        return (f"ARX(nobs={self.data.nobs}, na={self.na}, nb={self.nb}, nk={self.nk}, "
+                f"n_inputs={self.n_inputs}, trend={self.trend!r})")
+
+
+class ARXResults(LinearTimeSeriesResults):
+    """Results of :meth:`ARX.fit` (immutable).
+
+    Attributes
+    ----------
+    a : ndarray, shape (na,)
+        Output coefficients in the papers' sign.
+    b : ndarray, shape (n_inputs, nb)
+        Input coefficients; ``b[m, j]`` multiplies ``u_m[t - nk - j]``.
+    params : ndarray
+        ``[c, (a_1, b_{., 1}), (a_2, b_{., 2}), ...]`` grouped by lag (the regressor order).
+    sigma2 : float
+        ``RSS / nobs``.
+    """
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._params2d[:, 0]
+
+    @property
+    def a(self) -> np.ndarray:
+        return self._ar_matrices()[:, 0, 0]
+
+    @property
+    def b(self) -> np.ndarray:
+        return self._input_matrices()[:, 0, :].T.copy()
+
+    @property
+    def intercept(self) -> float:
+        return float(self._params2d[0, 0]) if self.model.k_const else 0.0
+
+    @property
+    def sigma2(self) -> float:
+        return float(self._sse[0, 0] / self.nobs)
+
+    def residuals(self, y: Any, u: Any) -> Any:
+        """One-step prediction errors of new output ``y`` given new input ``u`` through the fixed model.
+
+        Returns ``len(y) - max(na, nk + nb - 1)`` samples in the kind of ``y``.
+        """
+        sig = self._new_signal(y)
+        usig = self._new_input(u, sig.nobs)
+        return sig.wrap(self._residuals_array(sig.values, usig.values), self.model.max_lag)
+
+    def _new_input(self, u: Any, nobs: int):
+        from tsfdi._data import as_signal
+
+        usig = as_signal(u, "u", allow_constant=True)
+        if usig.nchan != self.model.n_inputs:
+            raise ValueError(f"u has {usig.nchan} input(s) but the model was fitted with {self.model.n_inputs}")
+        if usig.nobs != nobs:
+            raise ValueError(f"u has {usig.nobs} samples but y has {nobs}: they must match")
+        return usig
+
+
+ARX._results_class = ARXResults

@@ -1,0 +1,534 @@
+"""Recursive ARX estimation by (exponentially weighted) recursive least squares, with online anomaly flags.
+
+The model is the MATLAB ``arx`` / :class:`tsfdi.ARX` convention (papers' sign for the AR part)::
+
+    y[t] + a_1 y[t-1] + ... + a_na y[t-na] = sum_j (b_j1 u_j[t-nk] + ... + b_jnb u_j[t-nk-nb+1]) [+ c] + e[t]
+
+so the regressor of sample ``t`` is ``phi[t] = [1 (trend "c" only), -y[t-1], ..., -y[t-na],
+u_0[t-nk], ..., u_0[t-nk-nb+1], u_1[t-nk], ...]`` and ``theta = [c, a_1..a_na, b_0, b_1, ...]`` with the
+same order as ``ARXResults.params``.
+
+The estimator is the RLS of Keipour et al. (paper 001, eqs. 4-7) with the forgetting factor of Hansen
+et al. (paper 002, eqs. 14-16), implemented in the symmetric form ``P <- P / lambda - v v'`` with
+``v = P phi / sqrt(lambda (lambda + phi' P phi))``. This form keeps ``P`` exactly symmetric in floating
+point (``v_i v_j == v_j v_i``), which the textbook ``(P - g phi' P) / lambda`` does not; the asymmetry of
+the latter grows geometrically for ``lambda < 1`` and makes the parameters drift from the exact
+exponentially weighted least-squares solution.
+
+On top of the estimator sits the online detector of paper 001, section IV:
+
+1. the model is *stable* once ``||L(k) e(k)||_inf < eps`` (the parameter step) for ``stable_samples``
+   consecutive samples;
+2. from then on the variance of the a-priori prediction errors is tracked with Welford's recursion
+   (paper 001, eq. 8); it is *stable* once it has at least ``min_variance_samples`` samples and its relative
+   change per sample stays below ``variance_tol`` for ``stable_samples`` consecutive samples;
+3. once both are stable, a sample whose Z-score ``(e(k) - mean) / s`` (mean and sample standard deviation
+   of the errors before ``k``) exceeds ``threshold`` in absolute value is an alarm (paper 001 uses 4.5);
+4. with ``halt_on_alarm`` the parameters, ``P`` and the error statistics are frozen from the first alarm
+   on, so the model does not learn the fault (paper 002, section 2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numba
+import numpy as np
+
+from tsfdi._data import as_signal
+from tsfdi._validation import float_like, int_like, option
+
+__all__ = ["RecursiveARX", "RecursiveARXResults"]
+
+# bits of the per-sample flag array written by the kernel
+_MODEL_STABLE = 1
+_VAR_STABLE = 2
+_ALARM = 4
+_SKIPPED = 8
+_UPDATED = 16
+
+# integer state slots
+_I_VALID, _I_STABLE_CNT, _I_MODEL_STABLE, _I_NW, _I_VAR_CNT, _I_VAR_STABLE, _I_ALARMED, _I_SKIPPED, \
+    _I_SEEN, _I_FIRST_ALARM = range(10)
+# float state slots
+_F_MEAN, _F_M2 = range(2)
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
+def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_min, zthr,
+                theta, P, ybuf, ubuf, ist, fst, out_params, out_err, out_var, out_z, out_flags):  # pragma: no cover
+    """Process samples ``y[t], u[t, :]`` in order, updating the state arrays in place.
+
+    ``ybuf[k] = y[t-1-k]`` (length ``max(na, 1)``), ``ubuf[j, k] = u_j[t-k]`` (``nk + nb`` columns).
+    Non-finite samples are skipped (the caller has already rejected them when the policy is "raise").
+    """
+    n = y.shape[0]
+    d = theta.shape[0]
+    nin = u.shape[1]
+    nu = ubuf.shape[1]
+    t0 = max(na, nk + nb - 1) if nb > 0 else na
+    off_b = na + trend
+    inv_lam = 1.0 / lam
+    phi = np.empty(d)
+    px = np.empty(d)
+    for t in range(n):
+        yt = y[t]
+        finite = np.isfinite(yt)
+        for j in range(nin):
+            if not np.isfinite(u[t, j]):
+                finite = False
+        ist[_I_SEEN] += 1
+        # shift the input history (u_j[t] goes to column 0)
+        for j in range(nin):
+            for k in range(nu - 1, 0, -1):
+                ubuf[j, k] = ubuf[j, k - 1]
+            ubuf[j, 0] = u[t, j]
+        flags = 0
+        e = np.nan
+        z = np.nan
+        if not finite:
+            ist[_I_SKIPPED] += 1
+            ist[_I_VALID] = 0
+            flags |= _SKIPPED
+        else:
+            ist[_I_VALID] += 1
+        if finite and ist[_I_VALID] > t0:
+            # regressor
+            if trend == 1:
+                phi[0] = 1.0
+            for i in range(na):
+                phi[trend + i] = -ybuf[i]
+            for j in range(nin):
+                for k in range(nb):
+                    phi[off_b + j * nb + k] = ubuf[j, nk + k]
+            yhat = 0.0
+            for i in range(d):
+                yhat += phi[i] * theta[i]
+            e = yt - yhat
+            # px = P phi  (row axpy over the symmetric P)
+            for i in range(d):
+                px[i] = 0.0
+            for k in range(d):
+                pk = phi[k]
+                for i in range(d):
+                    px[i] += P[k, i] * pk
+            s = 0.0
+            for i in range(d):
+                s += phi[i] * px[i]
+            s += lam
+            frozen = halt and ist[_I_ALARMED] == 1
+            # parameter step L(k) e(k), L = P phi / (lambda + phi' P phi)
+            step_max = 0.0
+            ge = e / s
+            for i in range(d):
+                st = px[i] * ge
+                if abs(st) > step_max:
+                    step_max = abs(st)
+                if not frozen:
+                    theta[i] += st
+            if not frozen:
+                c = 1.0 / np.sqrt(lam * s)
+                for i in range(d):
+                    px[i] *= c
+                for i in range(d):
+                    vi = px[i]
+                    for k in range(d):
+                        P[i, k] = P[i, k] * inv_lam - vi * px[k]
+                flags |= _UPDATED
+            # model-stability gate (paper 001, section IV-B)
+            if ist[_I_MODEL_STABLE] == 0:
+                if step_max < eps:
+                    ist[_I_STABLE_CNT] += 1
+                else:
+                    ist[_I_STABLE_CNT] = 0
+                if ist[_I_STABLE_CNT] >= n_stable:
+                    ist[_I_MODEL_STABLE] = 1
+            if ist[_I_MODEL_STABLE] == 1:
+                flags |= _MODEL_STABLE
+                nw = ist[_I_NW]
+                mean = fst[_F_MEAN]
+                m2 = fst[_F_M2]
+                if ist[_I_VAR_STABLE] == 1:
+                    sd = np.sqrt(m2 / (nw - 1))
+                    z = (e - mean) / sd if sd > 0 else (np.inf if e != mean else 0.0)
+                    if abs(z) > zthr:
+                        flags |= _ALARM
+                        if ist[_I_ALARMED] == 0:
+                            ist[_I_ALARMED] = 1
+                            ist[_I_FIRST_ALARM] = ist[_I_SEEN] - 1
+                if not (halt and ist[_I_ALARMED] == 1):
+                    # Welford (paper 001, eq. 8)
+                    nw += 1
+                    delta = e - mean
+                    mean += delta / nw
+                    m2 += delta * (e - mean)
+                    if ist[_I_VAR_STABLE] == 0 and nw >= 3:
+                        v_old = fst[_F_M2] / (nw - 2)
+                        v_new = m2 / (nw - 1)
+                        if nw >= var_min and abs(v_new - v_old) <= var_tol * v_old:
+                            ist[_I_VAR_CNT] += 1
+                        else:
+                            ist[_I_VAR_CNT] = 0
+                        if ist[_I_VAR_CNT] >= n_stable:
+                            ist[_I_VAR_STABLE] = 1
+                    ist[_I_NW] = nw
+                    fst[_F_MEAN] = mean
+                    fst[_F_M2] = m2
+                if ist[_I_VAR_STABLE] == 1:
+                    flags |= _VAR_STABLE
+        # shift the output history
+        for i in range(ybuf.shape[0] - 1, 0, -1):
+            ybuf[i] = ybuf[i - 1]
+        ybuf[0] = yt
+        for i in range(d):
+            out_params[t, i] = theta[i]
+        out_err[t] = e
+        out_var[t] = fst[_F_M2] / (ist[_I_NW] - 1) if ist[_I_NW] >= 2 else np.nan
+        out_z[t] = z
+        out_flags[t] = flags
+
+
+@dataclass(frozen=True, eq=False)
+class RecursiveARXResults:
+    """Histories of one :meth:`RecursiveARX.run` call, in the caller's data kind.
+
+    Attributes
+    ----------
+    params : ndarray, DataFrame or DataArray, shape (nobs, d)
+        Parameter estimate after each sample (row ``t`` is ``theta(t)``), columns named as in ``param_names``.
+    resid : ndarray, Series or DataArray, shape (nobs,)
+        A-priori prediction errors ``e(t) = y(t) - phi(t)' theta(t-1)`` (paper 001, eq. 4); NaN for samples
+        without a complete regressor (start-up, after a skipped non-finite sample) and for skipped samples.
+    variance : same kind, shape (nobs,)
+        Welford sample variance ``s_n^2`` of the prediction errors after each sample (NaN before the model is
+        stable and while fewer than two errors are counted).
+    zscore : same kind, shape (nobs,)
+        ``(e(t) - mean) / s`` with the statistics before sample ``t``; NaN until model and variance are stable.
+    model_stable, variance_stable, alarm, skipped : ndarray of bool, shape (nobs,)
+        Per-sample flags (plain numpy arrays).
+    first_alarm : int or None
+        Position (counted from the first sample ever given to the estimator) of the first alarm.
+    first_alarm_time : object or None
+        Index label of the first alarm when it falls inside this run and the input had an index.
+    n_skipped : int
+        Non-finite samples skipped so far (``nonfinite="skip"``).
+    """
+
+    params: Any
+    resid: Any
+    variance: Any
+    zscore: Any
+    model_stable: np.ndarray
+    variance_stable: np.ndarray
+    alarm: np.ndarray
+    skipped: np.ndarray
+    first_alarm: int | None
+    first_alarm_time: Any
+    n_skipped: int
+    param_names: tuple
+    start: int
+
+    @cached_property
+    def nobs(self) -> int:
+        """Number of samples in this run."""
+        return int(self.alarm.shape[0])
+
+
+class RecursiveARX:
+    """ARX model estimated online by recursive least squares with forgetting and Z-score alarms.
+
+    Parameters
+    ----------
+    na : int
+        Number of output lags (``>= 0``).
+    nb : int
+        Number of input coefficients per input (``>= 0``).
+    nk : int, default 0
+        Input delay in samples (``>= 0``); ``nk = 0`` lets ``u[t]`` explain ``y[t]``.
+    forgetting_factor : float, default 1.0
+        ``lambda`` in (0, 1]; 1 gives ordinary recursive least squares (paper 001, eqs. 4-7), below 1 the
+        exponentially weighted version of paper 002, eqs. 14-16 (memory about ``1 / (1 - lambda)`` samples).
+    P0 : float or ndarray, default 1e4
+        Initial covariance ``P(0)``: a positive scalar (times the identity) or a symmetric positive-definite
+        ``(d, d)`` matrix. Large values make the estimate forget the initial ``theta0`` quickly.
+    n_inputs : int, default 1
+        Number of input signals.
+    trend : {"n", "c"}, default "n"
+        "c" adds a constant as the first parameter.
+    theta0 : array_like, optional
+        Initial parameters (default zeros).
+    threshold : float, default 4.5
+        Z-score alarm threshold (paper 001 uses 4.5, a two-sided 99.99932 % Gaussian interval).
+    eps : float, default 1e-2
+        Model-stability bound on ``||L(k) e(k)||_inf`` (absolute, in parameter units).
+    stable_samples : int, default 25
+        Consecutive samples the stability conditions must hold (model and variance).
+    variance_tol : float, default 0.01
+        Relative change of the running variance per sample below which it counts as stable.
+    min_variance_samples : int, default 50
+        Minimum number of prediction errors in the running variance before it can be stable.
+    halt_on_alarm : bool, default False
+        Freeze parameters, ``P`` and error statistics from the first alarm on (paper 002).
+    nonfinite : {"raise", "skip"}, default "raise"
+        Policy for NaN / inf in ``y`` or ``u``: "raise" raises ``ValueError`` naming the sample; "skip" leaves
+        the sample out (no update, NaN error), counts it in ``n_skipped`` and restarts regression once the
+        regressor again holds only finite samples.
+
+    Notes
+    -----
+    Per sample (paper 001, eqs. 4-7; paper 002, eqs. 14-16)::
+
+        e(k)     = y(k) - phi(k)' theta(k-1)
+        L(k)     = P(k-1) phi(k) / (lambda + phi(k)' P(k-1) phi(k))
+        theta(k) = theta(k-1) + L(k) e(k)
+        P(k)     = P(k-1) / lambda - v v',   v = P(k-1) phi(k) / sqrt(lambda (lambda + phi(k)' P(k-1) phi(k)))
+
+    which equals ``P(k) = (lambda P(k-1)^-1 + phi phi')^-1``. With ``P(0) = p0 I`` the estimate after ``N``
+    samples minimises ``sum_t lambda^(N-t) e_t^2 + lambda^N |theta - theta0|^2 / p0``.
+
+    The loop is compiled with numba (``cache=True``); :meth:`update` and :meth:`run` share it, so feeding a
+    stream sample by sample, in chunks or at once gives identical results.
+
+    References
+    ----------
+    .. [1] A. Keipour, M. Mousaei, S. Scherer, "Automatic real-time anomaly detection for autonomous aerial
+       vehicles", ICRA 2019 (paper 001), eqs. 2-8, section IV.
+    .. [2] S. Hansen, M. Blanke, J. Adrian, "A framework for rapid diagnosis of critical faults in UAVs"
+       (paper 002), eqs. 14-16.
+    """
+
+    def __init__(self, na: int, nb: int, nk: int = 0, forgetting_factor: float = 1.0, P0: Any = 1e4,
+                 n_inputs: int = 1, *, trend: str = "n", theta0: Any = None, threshold: float = 4.5,
+                 eps: float = 1e-2, stable_samples: int = 25, variance_tol: float = 0.01,
+                 min_variance_samples: int = 50, halt_on_alarm: bool = False, nonfinite: str = "raise"):
+        self.na = int_like(na, "na", minimum=0)
+        self.nb = int_like(nb, "nb", minimum=0)
+        self.nk = int_like(nk, "nk", minimum=0)
+        self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
+        self.trend = option(trend, "trend", ("n", "c"))
+        self.forgetting_factor = float_like(forgetting_factor, "forgetting_factor", minimum=0.0, maximum=1.0,
+                                            strict_min=True)
+        self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
+        self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
+        self.stable_samples = int_like(stable_samples, "stable_samples", minimum=1)
+        self.variance_tol = float_like(variance_tol, "variance_tol", minimum=0.0)
+        self.min_variance_samples = int_like(min_variance_samples, "min_variance_samples", minimum=3)
+        if not isinstance(halt_on_alarm, (bool, np.bool_)):
+            raise TypeError(f"halt_on_alarm must be a bool, got {halt_on_alarm!r}")
+        self.halt_on_alarm = bool(halt_on_alarm)
+        self.nonfinite = option(nonfinite, "nonfinite", ("raise", "skip"))
+        d = self.n_params
+        if d == 0:
+            raise ValueError("na, nb and trend give a model without parameters: set na > 0, nb > 0 or trend='c'")
+        if np.ndim(P0) == 0:
+            p0 = float_like(P0, "P0", minimum=0.0, strict_min=True)
+            self._P0 = np.eye(d) * p0
+        else:
+            P0 = np.asarray(P0, dtype=np.float64)
+            if P0.shape != (d, d):
+                raise ValueError(f"P0 must be a positive scalar or a ({d}, {d}) matrix, got shape {P0.shape}")
+            if not np.isfinite(P0).all() or not np.allclose(P0, P0.T, rtol=1e-12, atol=0.0):
+                raise ValueError("P0 must be a finite symmetric matrix")
+            try:
+                np.linalg.cholesky(P0)
+            except np.linalg.LinAlgError:
+                raise ValueError("P0 must be positive definite") from None
+            self._P0 = 0.5 * (P0 + P0.T)
+        if theta0 is None:
+            self._theta0 = np.zeros(d)
+        else:
+            theta0 = np.asarray(theta0, dtype=np.float64).ravel()
+            if theta0.shape != (d,) or not np.isfinite(theta0).all():
+                raise ValueError(f"theta0 must hold {d} finite values, got shape {theta0.shape}")
+            self._theta0 = theta0.copy()
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def n_params(self) -> int:
+        """Parameter dimension ``d = [trend] + na + n_inputs * nb``."""
+        return (self.trend == "c") + self.na + self.n_inputs * self.nb
+
+    @property
+    def param_names(self) -> tuple:
+        """Names of the parameters, in the order of ``theta``."""
+        names = ["const"] if self.trend == "c" else []
+        names += [f"a{i + 1}" for i in range(self.na)]
+        for j in range(self.n_inputs):
+            pre = "b" if self.n_inputs == 1 else f"b{j}_"
+            names += [f"{pre}{k + 1}" for k in range(self.nb)]
+        return tuple(names)
+
+    def reset(self) -> None:
+        """Return to the initial state (``theta0``, ``P0``, empty history, no alarm)."""
+        self.theta_ = self._theta0.copy()
+        self.P_ = self._P0.copy()
+        self._ybuf = np.zeros(max(self.na, 1))
+        self._ubuf = np.zeros((self.n_inputs, max(self.nk + self.nb, 1)))
+        self._ist = np.zeros(10, dtype=np.int64)
+        self._ist[_I_FIRST_ALARM] = -1
+        self._fst = np.zeros(2)
+
+    @property
+    def nobs(self) -> int:
+        """Samples given to the estimator since construction or :meth:`reset`."""
+        return int(self._ist[_I_SEEN])
+
+    @property
+    def n_skipped(self) -> int:
+        """Non-finite samples skipped so far."""
+        return int(self._ist[_I_SKIPPED])
+
+    @property
+    def model_stable(self) -> bool:
+        """Whether the stability gate ``||L e||_inf < eps`` has held for ``stable_samples`` samples."""
+        return bool(self._ist[_I_MODEL_STABLE])
+
+    @property
+    def variance_stable(self) -> bool:
+        """Whether the running error variance has settled (Z-score alarms are armed)."""
+        return bool(self._ist[_I_VAR_STABLE])
+
+    @property
+    def alarmed(self) -> bool:
+        """Whether an alarm has been raised."""
+        return bool(self._ist[_I_ALARMED])
+
+    @property
+    def first_alarm(self) -> int | None:
+        """Position of the first alarm among all samples seen, or None."""
+        k = int(self._ist[_I_FIRST_ALARM])
+        return None if k < 0 else k
+
+    @property
+    def error_mean(self) -> float:
+        """Running mean of the prediction errors (Welford)."""
+        return float(self._fst[_F_MEAN])
+
+    @property
+    def error_variance(self) -> float:
+        """Running sample variance ``s_n^2`` of the prediction errors (NaN with fewer than two)."""
+        nw = int(self._ist[_I_NW])
+        return float(self._fst[_F_M2] / (nw - 1)) if nw >= 2 else float("nan")
+
+    # ------------------------------------------------------------------ processing
+    def _prepare_u(self, u: Any, n: int, name: str = "u") -> np.ndarray:
+        if u is None:
+            if self.nb > 0:
+                raise ValueError("u is required when nb > 0")
+            return np.zeros((n, self.n_inputs))
+        if self.n_inputs == 1:
+            su = as_signal(u, name, min_nobs=1, allow_constant=True, finite=False)
+        else:
+            su = as_signal(u, name, vector=True, min_nobs=1, allow_constant=True, finite=False)
+        uv = su.values
+        if uv.shape[1] != self.n_inputs:
+            raise ValueError(f"{name} must have n_inputs={self.n_inputs} column(s), got {uv.shape[1]}")
+        if uv.shape[0] != n:
+            raise ValueError(f"u and y must have the same length, got len(u)={uv.shape[0]} and len(y)={n}")
+        return np.ascontiguousarray(uv)
+
+    def _call(self, yv: np.ndarray, uv: np.ndarray):
+        n = yv.shape[0]
+        d = self.n_params
+        if self.nonfinite == "raise":
+            bad_y = ~np.isfinite(yv)
+            bad_u = ~np.isfinite(uv).all(axis=1)
+            if bad_y.any() or bad_u.any():
+                which = "y" if bad_y.any() else "u"
+                first = int(np.flatnonzero(bad_y | bad_u)[0])
+                raise ValueError(f"{which} contains NaN/inf (first at sample {first} of this call); pass "
+                                 "nonfinite='skip' to skip and count such samples")
+        out_params = np.empty((n, d))
+        out_err = np.empty(n)
+        out_var = np.empty(n)
+        out_z = np.empty(n)
+        out_flags = np.empty(n, dtype=np.int64)
+        _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
+                    self.halt_on_alarm, self.eps, self.stable_samples, self.variance_tol,
+                    self.min_variance_samples, self.threshold, self.theta_, self.P_, self._ybuf, self._ubuf,
+                    self._ist, self._fst, out_params, out_err, out_var, out_z, out_flags)
+        return out_params, out_err, out_var, out_z, out_flags
+
+    def update(self, y: float, u: Any = None) -> float:
+        """Process one sample and return its a-priori prediction error ``y - phi' theta`` (eq. 4).
+
+        Parameters
+        ----------
+        y : float
+            Output sample.
+        u : float or array_like of length ``n_inputs``
+            Input sample(s).
+
+        Returns
+        -------
+        float
+            The prediction error, NaN during start-up (incomplete regressor) or for a skipped sample.
+        """
+        try:
+            yv = np.array([float(y)])
+        except (TypeError, ValueError):
+            raise TypeError(f"y must be a real number, got {y!r}") from None
+        if u is None:
+            if self.nb > 0:
+                raise ValueError("u is required when nb > 0")
+            uv = np.zeros((1, self.n_inputs))
+        else:
+            try:
+                uv = np.asarray(u, dtype=np.float64).reshape(1, -1)
+            except (TypeError, ValueError):
+                raise TypeError(f"u must be real number(s), got {u!r}") from None
+            if uv.shape[1] != self.n_inputs:
+                raise ValueError(f"u must hold n_inputs={self.n_inputs} value(s), got {uv.shape[1]}")
+        _, err, _, _, _ = self._call(yv, np.ascontiguousarray(uv))
+        return float(err[0])
+
+    def run(self, y: Any, u: Any = None) -> RecursiveARXResults:
+        """Process whole arrays (continuing from the current state) and return the histories.
+
+        Parameters
+        ----------
+        y : array_like, Series or DataArray, shape (nobs,)
+            Output signal.
+        u : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, n_inputs)
+            Input signal(s), same length as ``y``.
+
+        Returns
+        -------
+        RecursiveARXResults
+            Histories wrapped in ``y``'s data kind (index kept).
+        """
+        sy = as_signal(y, "y", vector=False, min_nobs=1, allow_constant=True, finite=False)
+        yv = np.ascontiguousarray(sy.values[:, 0])
+        uv = self._prepare_u(u, yv.shape[0])
+        start = self.nobs
+        alarm_before = self.first_alarm
+        params, err, var, z, flags = self._call(yv, uv)
+        names = self.param_names
+        first = self.first_alarm
+        first_time = None
+        if first is not None and alarm_before is None:
+            pos = first - start
+            first_time = sy.index[pos] if sy.index is not None else pos
+        wrap = sy.wrap
+        return RecursiveARXResults(
+            params=wrap(params, 0, channels=list(names), vector=True),
+            resid=wrap(err, 0, vector=False, name="resid"),
+            variance=wrap(var, 0, vector=False, name="variance"),
+            zscore=wrap(z, 0, vector=False, name="zscore"),
+            model_stable=(flags & _MODEL_STABLE) > 0,
+            variance_stable=(flags & _VAR_STABLE) > 0,
+            alarm=(flags & _ALARM) > 0,
+            skipped=(flags & _SKIPPED) > 0,
+            first_alarm=first,
+            first_alarm_time=first_time,
+            n_skipped=self.n_skipped,
+            param_names=names,
+            start=start,
+        )
+
+    def __repr__(self) -> str:
+        return (f"RecursiveARX(na={self.na}, nb={self.nb}, nk={self.nk}, "
+                f"forgetting_factor={self.forgetting_factor}, n_inputs={self.n_inputs}, trend={self.trend!r})")

@@ -1,0 +1,227 @@
+"""Model order selection: information criteria as pure functions and :func:`select_order`.
+
+All candidate orders ``1..max_lags`` are fitted on the **same sample** (the first ``max_lags`` samples are
+held back for every order), so ``select_order(...).table.loc[p, "bic"]`` equals the ``bic`` of the model of
+order ``p`` fitted on that sample (``OrderSelection.fit(p)``) — statsmodels issue 7143 is the counter-example.
+
+Nothing is refitted order by order. The regressor ``[const, -y[t-1], ..., -y[t-max_lags], y[t]]`` is
+grouped by lag, so one upper-triangular factor ``R`` of it gives every nested fit (see
+:func:`tsfdi.models._lstsq.nested_fits`). For AR and VAR models ``R`` is the Cholesky factor of the lag-product
+Gram matrix, computed in ``O(N max_lags)`` from lag products with end corrections; when that factor loses
+digits (ill-conditioned regressor) it is recomputed by a QR decomposition of the regressor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tsfdi._validation import float_like, int_like, option
+from tsfdi.models import _lstsq
+
+__all__ = ["criteria", "select_order", "OrderSelection"]
+
+
+def criteria(sse: np.ndarray, sss: float, nobs: int, df_model: np.ndarray, neqs: int,
+             criterion: str = "logdet") -> dict[str, np.ndarray]:
+    """Fit criteria of one or several fits of an ``s``-channel linear time-series model.
+
+    Parameters
+    ----------
+    sse : ndarray, shape (q, s, s)
+        Residual cross-product matrices ``E'E`` of ``q`` fits.
+    sss : float
+        Signal sum of squares ``sum_t y[t]' y[t]`` over the estimation sample.
+    nobs : int
+        Number of residuals ``N``.
+    df_model : ndarray, shape (q,)
+        Number of regression coefficients ``d`` of each fit (all equations).
+    neqs : int
+        Number of channels ``s``.
+    criterion : {"logdet", "trace"}
+        How a vector model's residual covariance enters the BIC: its log-determinant (the likelihood,
+        statsmodels' ``VAR``) or the log of its trace (paper 003, "Vector AR Identification Method").
+        Identical for ``s = 1``.
+
+    Returns
+    -------
+    dict of ndarray
+        ``llf``, ``aic``, ``bic``, ``rss_sss`` (percent), ``spp``, ``sigma2``.
+
+    Notes
+    -----
+    With ``Sigma = E'E / N`` and ``k = d + s (s + 1) / 2`` free parameters (the noise covariance counted),
+
+    .. math::
+
+        \\ell = -\\tfrac{N}{2}\\,(s \\ln 2\\pi + \\ln\\det\\Sigma + s), \\quad
+        \\mathrm{AIC} = -2\\ell + 2k, \\quad \\mathrm{BIC} = -2\\ell + k \\ln N .
+
+    ``BIC / N = ln sigma_e^2 + k ln N / N + const`` is paper 003's eq. 5 (the constant ``ln 2 pi + 1`` does
+    not depend on the order, so both select the same order). The trace variant uses
+    ``N (ln(2 pi tr Sigma) + 1) + k ln N``. ``RSS/SSS = 100 sum e'e / sum y'y`` is eq. 6 in percent;
+    ``SPP = N s / d`` (paper 003 Table 2 uses the signal length for ``N``). ``sigma2`` is ``tr Sigma / s``.
+    """
+    sse = np.asarray(sse, dtype=float)
+    df_model = np.asarray(df_model, dtype=float)
+    sigma = sse / nobs
+    s = neqs
+    _, logdet = np.linalg.slogdet(sigma)
+    trace = np.trace(sigma, axis1=-2, axis2=-1)
+    llf = -0.5 * nobs * (s * np.log(2 * np.pi) + logdet + s)
+    k = df_model + s * (s + 1) / 2
+    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 1)
+    return {
+        "llf": llf,
+        "aic": -2 * llf + 2 * k,
+        "bic": fit_term + k * np.log(nobs),
+        "rss_sss": 100.0 * nobs * trace / sss,
+        "spp": nobs * s / df_model,
+        "sigma2": trace / s,
+    }
+
+
+def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, nk: int = 0, trend: str = "n",
+                 criterion: str = "logdet", tol: float = 0.01) -> OrderSelection:
+    """Fit all orders ``1..max_lags`` on a common sample and tabulate BIC, AIC, RSS/SSS, SPP.
+
+    Parameters
+    ----------
+    data : array_like, Series, DataFrame or DataArray
+        The output signal ``y`` (scalar for ``"ar"`` / ``"arx"``, ``(nobs, s)`` for ``"var"``).
+    max_lags : int
+        Largest order tried.
+    model : {"ar", "var", "arx"}
+        Model family. For ``"arx"`` the order ``p`` means ``na = nb = p``.
+    u : array_like, optional
+        Input signal, required for ``"arx"``.
+    nk : int
+        Input delay of the ARX model.
+    trend : {"n", "c"}
+        No intercept or an intercept.
+    criterion : {"logdet", "trace"}
+        BIC variant for vector models (see :func:`criteria`).
+    tol : float
+        Relative tolerance of :attr:`OrderSelection.stabilized`: the RSS/SSS curve is considered stable
+        from the smallest order ``p`` after which no order improves RSS/SSS by more than ``tol`` relative
+        to the order before it.
+
+    Returns
+    -------
+    OrderSelection
+
+    Notes
+    -----
+    Paper 003 selects the order by the minimum of BIC (eq. 5) together with the stabilisation of RSS/SSS
+    (eq. 6, Fig. 8).
+    """
+    from tsfdi.models import AR, ARX, VAR
+
+    family = option(model, "model", ("ar", "var", "arx"))
+    max_lags = int_like(max_lags, "max_lags", minimum=1)
+    tol = float_like(tol, "tol", minimum=0.0)
+    if family == "arx":
+        if u is None:
+            raise ValueError("u is required for model='arx'")
+        spec = ARX(data, u, na=max_lags, nb=max_lags, nk=nk, trend=trend)
+    else:
+        if u is not None:
+            raise ValueError(f"u is only used with model='arx', not model={family!r}")
+        spec = (AR(data, max_lags, trend=trend) if family == "ar"
+                else VAR(data, max_lags, trend=trend, criterion=criterion))
+    y = spec.data.values
+    s = y.shape[1]
+    const = bool(spec.k_const)
+    uu = None if spec.u_data is None else spec.u_data.values
+
+    def design() -> np.ndarray:
+        return np.hstack(spec._design(y, uu, spec.hold_back))
+
+    if family == "arx":
+        Z = design()
+        R = _lstsq.triangular_factor(Z.T @ Z, lambda: Z)
+        group = 1 + spec.n_inputs
+    else:
+        R = _lstsq.triangular_factor(_lstsq.lag_gram(y, max_lags, const=const), design)
+        group = s
+    orders = np.arange(1, max_lags + 1)
+    widths = spec.k_const + orders * group
+    sse = _lstsq.nested_fits(R, s, widths)
+    nobs = y.shape[0] - spec.hold_back
+    sss = float(np.sum(R[:, -s:] ** 2))   # = trace(Y'Y): columns of R have the norms of the columns of Z
+    values = criteria(sse, sss, nobs, widths * s, s, spec.criterion)
+    return OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
+
+
+@dataclass(frozen=True, eq=False)
+class OrderSelection:
+    """Result of :func:`select_order`.
+
+    Attributes
+    ----------
+    spec : model
+        The model spec at the largest order (data, options, held-back sample).
+    orders : ndarray
+        Candidate orders ``1..max_lags``.
+    values : dict of ndarray
+        Criteria per order (see :func:`criteria`).
+    tol : float
+        Relative tolerance of the RSS/SSS stabilisation rule.
+    """
+
+    spec: Any
+    orders: np.ndarray
+    values: dict
+    tol: float
+
+    @cached_property
+    def table(self) -> pd.DataFrame:
+        """Criteria indexed by order: ``bic``, ``aic``, ``rss_sss`` (%), ``spp``, ``sigma2``, ``llf``."""
+        cols = ["bic", "aic", "rss_sss", "spp", "sigma2", "llf"]
+        return pd.DataFrame({c: self.values[c] for c in cols}, index=pd.Index(self.orders, name="order"))
+
+    @property
+    def max_lags(self) -> int:
+        return int(self.orders[-1])
+
+    @property
+    def selected(self) -> int:
+        """Order with the smallest BIC."""
+        return int(self.orders[np.argmin(self.values["bic"])])
+
+    @property
+    def stabilized(self) -> int:
+        """Smallest order after which RSS/SSS improves by no more than ``tol`` (relative) at any step."""
+        r = self.values["rss_sss"]
+        gain = (r[:-1] - r[1:]) / r[:-1]          # gain[i]: improvement of order i+2 over order i+1
+        big = np.flatnonzero(gain > self.tol)
+        return int(self.orders[big[-1] + 1]) if big.size else int(self.orders[0])
+
+    def fit(self, order: int | None = None):
+        """Fit the model of ``order`` (default :attr:`selected`) on the common sample of the selection."""
+        order = self.selected if order is None else int_like(order, "order", minimum=1, maximum=self.max_lags)
+        spec = self.spec
+        from tsfdi.models import AR, ARX, VAR
+
+        if isinstance(spec, ARX):
+            model = ARX(spec.data, spec.u_data, na=order, nb=order, nk=spec.nk, trend=spec.trend,
+                        hold_back=spec.hold_back)
+        elif isinstance(spec, VAR):
+            model = VAR(spec.data, order, trend=spec.trend, hold_back=spec.hold_back, criterion=spec.criterion)
+        else:
+            model = AR(spec.data, order, trend=spec.trend, hold_back=spec.hold_back)
+        return model.fit()
+
+    def plot(self, ax=None):
+        """BIC and RSS/SSS against the order, as paper 003 Fig. 8. Returns the Figure."""
+        from tsfdi.plotting.selection import plot_order_selection
+
+        return plot_order_selection(self, ax=ax)
+
+    def __repr__(self) -> str:
+        return (f"OrderSelection({type(self.spec).__name__}, max_lags={self.max_lags}, selected={self.selected}, "
+                f"stabilized={self.stabilized})")
