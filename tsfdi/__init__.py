@@ -3,9 +3,10 @@
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.io import load
 from tsfdi.models import AR, ARX, VAR, ARResults, ARXResults, VARResults
+from tsfdi.plotting import plot_acf
 from tsfdi.selection import OrderSelection, select_order
 
 __version__ = "0.1.0"
 
 __all__ = ["AR", "ARX", "VAR", "ARResults", "ARXResults", "VARResults", "OrderSelection", "TsfdiWarning",
-           "load", "select_order", "__version__"]
+           "load", "plot_acf", "select_order", "__version__"]

@@ -1,3 +1,6 @@
 """Every plot of tsfdi: ``plot_x(..., ax=None) -> Figure``. matplotlib is imported inside each function."""
 
-__all__: list[str] = []
+from tsfdi.plotting.acf import plot_acf
+from tsfdi.plotting.selection import plot_order_selection
+
+__all__ = ["plot_acf", "plot_order_selection"]
