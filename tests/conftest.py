@@ -1,0 +1,61 @@
+"""Shared test helpers: the three data kinds and the location of ../shared/data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+
+matplotlib.use("Agg")
+
+#: ../shared next to the repository (CI has it there too); tests that need it fail loudly if it is missing
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+
+KINDS = ("numpy", "pandas", "xarray")
+
+
+def as_kind(values: np.ndarray, kind: str, channels: list[str] | None = None, name: str = "y"):
+    """Wrap a (n,) or (n, s) array as numpy, pandas (DatetimeIndex at 100 Hz) or xarray (time in s)."""
+    values = np.asarray(values)
+    n = values.shape[0]
+    if kind == "numpy":
+        return values
+    if values.ndim == 2 and channels is None:
+        channels = [f"{name}{i}" for i in range(values.shape[1])]
+    if kind == "pandas":
+        index = pd.date_range("2024-01-01", periods=n, freq="10ms", name="time")
+        if values.ndim == 1:
+            return pd.Series(values, index=index, name=name)
+        return pd.DataFrame(values, index=index, columns=channels)
+    time = np.arange(n) / 100.0
+    if values.ndim == 1:
+        return xr.DataArray(values, dims=("time",), coords={"time": time}, name=name)
+    return xr.DataArray(values, dims=("time", "channel"), coords={"time": time, "channel": channels}, name=name)
+
+
+def to_numpy(obj) -> np.ndarray:
+    return np.asarray(obj.values if hasattr(obj, "values") else obj)
+
+
+def assert_kind(obj, kind: str, ndim: int) -> None:
+    """The result has the caller's kind and dimensionality."""
+    expected = {"numpy": np.ndarray, "pandas": pd.Series if ndim == 1 else pd.DataFrame, "xarray": xr.DataArray}
+    assert isinstance(obj, expected[kind]), type(obj)
+    assert np.ndim(to_numpy(obj)) == ndim
+
+
+@pytest.fixture(params=KINDS)
+def kind(request) -> str:
+    return request.param
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    path = SHARED / "data"
+    if not path.is_dir():
+        raise FileNotFoundError(f"shared data folder missing: {path} (tests need ../shared/data next to the repo)")
+    return path
