@@ -3,10 +3,11 @@
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.io import load
 from tsfdi.models import AR, ARX, VAR, ARResults, ARXResults, VARResults
+from tsfdi.models.recursive import RecursiveARX
 from tsfdi.plotting import plot_acf
 from tsfdi.selection import OrderSelection, select_order
 
 __version__ = "0.1.0"
 
-__all__ = ["AR", "ARX", "VAR", "ARResults", "ARXResults", "VARResults", "OrderSelection", "TsfdiWarning",
+__all__ = ["AR", "ARX", "VAR", "ARResults", "ARXResults", "VARResults", "RecursiveARX", "OrderSelection", "TsfdiWarning",
            "load", "plot_acf", "select_order", "__version__"]

@@ -3,5 +3,6 @@
 from tsfdi.models.ar import AR, ARResults
 from tsfdi.models.arx import ARX, ARXResults
 from tsfdi.models.var import VAR, VARResults
+from tsfdi.models.recursive import RecursiveARX, RecursiveARXResults
 
-__all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults"]
+__all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults", "RecursiveARX", "RecursiveARXResults"]

@@ -118,25 +118,13 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
             for i in range(d):
                 s += phi[i] * px[i]
             s += lam
-            frozen = halt and ist[_I_ALARMED] == 1
             # parameter step L(k) e(k), L = P phi / (lambda + phi' P phi)
-            step_max = 0.0
             ge = e / s
+            step_max = 0.0
             for i in range(d):
-                st = px[i] * ge
-                if abs(st) > step_max:
-                    step_max = abs(st)
-                if not frozen:
-                    theta[i] += st
-            if not frozen:
-                c = 1.0 / np.sqrt(lam * s)
-                for i in range(d):
-                    px[i] *= c
-                for i in range(d):
-                    vi = px[i]
-                    for k in range(d):
-                        P[i, k] = P[i, k] * inv_lam - vi * px[k]
-                flags |= _UPDATED
+                st = abs(px[i] * ge)
+                if st > step_max:
+                    step_max = st
             # model-stability gate (paper 001, section IV-B)
             if ist[_I_MODEL_STABLE] == 0:
                 if step_max < eps:
@@ -178,6 +166,19 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
                     fst[_F_M2] = m2
                 if ist[_I_VAR_STABLE] == 1:
                     flags |= _VAR_STABLE
+            # parameter and covariance update (eqs. 6-7 / 15-16), skipped once halted: the alarmed sample
+            # itself does not enter the model
+            if not (halt and ist[_I_ALARMED] == 1):
+                for i in range(d):
+                    theta[i] += px[i] * ge
+                c = 1.0 / np.sqrt(lam * s)
+                for i in range(d):
+                    px[i] *= c
+                for i in range(d):
+                    vi = px[i]
+                    for k in range(d):
+                        P[i, k] = P[i, k] * inv_lam - vi * px[k]
+                flags |= _UPDATED
         # shift the output history
         for i in range(ybuf.shape[0] - 1, 0, -1):
             ybuf[i] = ybuf[i - 1]

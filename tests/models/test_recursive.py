@@ -1,0 +1,291 @@
+"""RecursiveARX: agreement with batch and exponentially weighted least squares, long-run stability,
+online detection, streaming equivalence, data kinds and bad input."""
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+
+import tsfdi
+from tsfdi.models.recursive import RecursiveARX
+
+
+def simulate_arx(n, rng, a=(-1.2, 0.5), b=(0.8, 0.3), nk=1, sigma=0.1, change_at=None, db=0.5):
+    """y[t] + a1 y[t-1] + a2 y[t-2] = b1 u[t-nk] + b2 u[t-nk-1] + e[t]; b1 += db from ``change_at`` on."""
+    rng = np.random.default_rng(rng)
+    u = rng.standard_normal(n)
+    e = sigma * rng.standard_normal(n)
+    y = np.zeros(n)
+    for t in range(n):
+        acc = e[t]
+        for i, ai in enumerate(a, start=1):
+            if t - i >= 0:
+                acc -= ai * y[t - i]
+        for k, bk in enumerate(b):
+            if t - nk - k >= 0:
+                bb = bk + (db if (k == 0 and change_at is not None and t >= change_at) else 0.0)
+                acc += bb * u[t - nk - k]
+        y[t] = acc
+    return y, u
+
+
+def regressor(y, u, na, nb, nk, trend=False):
+    """Rows t = t0..n-1 of phi[t] = [1?, -y[t-1..t-na], u[t-nk..t-nk-nb+1] per input]."""
+    u = np.asarray(u).reshape(len(y), -1)
+    t0 = max(na, nk + nb - 1)
+    cols = [np.ones(len(y) - t0)] if trend else []
+    cols += [-y[t0 - i:len(y) - i] for i in range(1, na + 1)]
+    for j in range(u.shape[1]):
+        cols += [u[t0 - nk - k:len(y) - nk - k, j] for k in range(nb)]
+    return np.column_stack(cols), y[t0:], t0
+
+
+def test_converges_to_batch_least_squares():
+    y, u = simulate_arx(5000, 1)
+    m = RecursiveARX(2, 2, 1, forgetting_factor=1.0, P0=1e10)
+    res = m.run(y, u)
+    X, Y, t0 = regressor(y, u, 2, 2, 1)
+    # after the transient, theta(t) equals the least-squares fit on samples up to t
+    for t in (200, 1000, 4999):
+        ls = np.linalg.lstsq(X[:t - t0 + 1], Y[:t - t0 + 1], rcond=None)[0]
+        np.testing.assert_allclose(res.params[t], ls, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(m.theta_, [-1.2, 0.5, 0.8, 0.3], atol=0.01)
+    # and the batch ARX model of tsfdi (compared through a and b, which do not depend on the params order)
+    batch = tsfdi.ARX(y, u, 2, 2, 1).fit()
+    np.testing.assert_allclose(m.theta_[:2], batch.a, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(m.theta_[2:], np.ravel(batch.b), rtol=0, atol=1e-6)
+
+
+def test_trend_and_two_inputs_match_least_squares():
+    rng = np.random.default_rng(2)
+    n = 3000
+    u = rng.standard_normal((n, 2))
+    y = np.zeros(n)
+    for t in range(2, n):
+        y[t] = 0.3 + 0.6 * y[t - 1] + 0.5 * u[t, 0] - 0.2 * u[t - 1, 0] + 0.7 * u[t, 1] + 0.1 * u[t - 1, 1] \
+            + 0.05 * rng.standard_normal()
+    m = RecursiveARX(1, 2, 0, P0=1e10, n_inputs=2, trend="c")
+    assert m.param_names == ("const", "a1", "b0_1", "b0_2", "b1_1", "b1_2")
+    m.run(y, u)
+    X, Y, _ = regressor(y, u, 1, 2, 0, trend=True)
+    np.testing.assert_allclose(m.theta_, np.linalg.lstsq(X, Y, rcond=None)[0], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(m.theta_, [0.3, -0.6, 0.5, -0.2, 0.7, 0.1], atol=0.02)
+    batch = tsfdi.ARX(y, u, 1, 2, 0, trend="c").fit()
+    np.testing.assert_allclose(m.theta_[0], batch.intercept, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(m.theta_[1:2], batch.a, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(m.theta_[2:], np.ravel(batch.b), rtol=0, atol=1e-6)
+
+
+def test_forgetting_equals_exponentially_weighted_least_squares():
+    y, u = simulate_arx(100_000, 3)
+    lam = 0.99
+    m = RecursiveARX(2, 2, 1, forgetting_factor=lam, P0=1e4)
+    m.run(y, u)
+    X, Y, _ = regressor(y, u, 2, 2, 1)
+    w = np.sqrt(lam ** np.arange(len(Y))[::-1])
+    exact = np.linalg.lstsq(X * w[:, None], Y * w, rcond=None)[0]
+    np.testing.assert_allclose(m.theta_, exact, rtol=0, atol=1e-8)
+    np.testing.assert_array_equal(m.P_, m.P_.T)  # symmetric form keeps P exactly symmetric
+    # P is the inverse of the weighted information matrix (the prior weight lambda^N / P0 is ~ 0)
+    np.testing.assert_allclose(m.P_, np.linalg.inv((X * w[:, None]).T @ (X * w[:, None])), rtol=1e-6)
+
+
+def test_million_samples_stay_finite_and_positive_definite():
+    rng = np.random.default_rng(4)
+    n = 1_000_000
+    u = rng.standard_normal(n)
+    y = np.empty(n)
+    y[0] = 0.0
+    e = 0.1 * rng.standard_normal(n)
+    # vectorised simulation of y[t] = 0.7 y[t-1] + u[t-1] + e[t] via scipy.signal.lfilter
+    from scipy.signal import lfilter
+    x = np.concatenate([[0.0], u[:-1]]) + e
+    y = lfilter([1.0], [1.0, -0.7], x)
+    m = RecursiveARX(1, 1, 1, forgetting_factor=0.99, P0=1e4)
+    res = m.run(y, u)
+    assert np.isfinite(res.params).all()
+    assert np.isfinite(m.P_).all()
+    np.testing.assert_array_equal(m.P_, m.P_.T)
+    assert np.linalg.eigvalsh(m.P_).min() > 0
+    np.linalg.cholesky(m.P_)
+    np.testing.assert_allclose(m.theta_, [-0.7, 1.0], atol=0.05)
+
+
+def test_abrupt_change_detected_with_bounded_delay_and_no_false_alarm():
+    change = 3000
+    y, u = simulate_arx(4000, 0, change_at=change)
+    res = RecursiveARX(2, 2, 1, forgetting_factor=0.995, halt_on_alarm=True).run(y, u)
+    assert res.model_stable[:200].any() and res.variance_stable[change - 1]
+    assert not res.alarm[:change].any()
+    assert change <= res.first_alarm <= change + 10
+
+
+@pytest.mark.slow
+def test_abrupt_change_monte_carlo():
+    # 40 fault-free stretches of 3000 samples: a Z-score test at 4.5 has a nominal two-sided per-sample rate
+    # of 6.8e-6 (0.02 alarms per stretch); the a-priori errors of a forgetting estimator are somewhat
+    # heavier-tailed (measured about 5 % of stretches). Allow 6 of 40 (P(X > 6 | p = 0.05) = 0.014),
+    # and require every detected change within 10 samples.
+    change, false_alarms, delays = 3000, 0, []
+    for seed in range(40):
+        y, u = simulate_arx(4000, 100 + seed, change_at=change)
+        res = RecursiveARX(2, 2, 1, forgetting_factor=0.995, halt_on_alarm=True).run(y, u)
+        assert res.first_alarm is not None
+        if res.first_alarm < change:
+            false_alarms += 1
+        else:
+            delays.append(res.first_alarm - change)
+    assert false_alarms <= 6
+    assert max(delays) <= 10
+
+
+def test_halt_on_alarm_freezes_adaptation():
+    change = 8000
+    y, u = simulate_arx(10_000, 7, change_at=change, db=1.0)
+    m = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=True)
+    res = m.run(y, u)
+    k = res.first_alarm
+    assert k is not None and k >= change
+    params = np.asarray(res.params)
+    # the parameters stop at theta(k-1): the alarmed sample and later ones do not update them
+    np.testing.assert_array_equal(params[k:], np.broadcast_to(params[k - 1], params[k:].shape))
+    var = np.asarray(res.variance)
+    assert np.all(var[k:] == var[k - 1])
+    # without halting the model adapts to the fault and the error variance grows
+    m2 = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=False)
+    res2 = m2.run(y, u)
+    assert np.abs(np.asarray(res2.params)[-1, 2] - 1.8) < 0.05
+    assert np.asarray(res2.variance)[-1] > var[-1]
+
+
+def test_welford_variance_and_zscore_match_direct_computation():
+    y, u = simulate_arx(4000, 5)
+    m = RecursiveARX(2, 2, 1, forgetting_factor=0.995)
+    res = m.run(y, u)
+    first = int(np.argmax(res.model_stable))
+    e = np.asarray(res.resid)[first:]
+    var = np.asarray(res.variance)
+    np.testing.assert_allclose(var[first + 10], np.var(e[:11], ddof=1), rtol=1e-12)
+    np.testing.assert_allclose(var[-1], np.var(e, ddof=1), rtol=1e-10)
+    np.testing.assert_allclose(m.error_mean, e.mean(), rtol=1e-10, atol=1e-15)
+    armed = int(np.argmax(res.variance_stable))
+    k = armed + 5
+    expected = (e[k - first] - e[:k - first].mean()) / e[:k - first].std(ddof=1)
+    np.testing.assert_allclose(np.asarray(res.zscore)[k], expected, rtol=1e-10)
+    assert np.isnan(np.asarray(res.zscore)[:armed + 1]).all()
+
+
+def test_update_and_chunked_run_equal_one_run():
+    y, u = simulate_arx(1500, 6, change_at=1200)
+    whole = RecursiveARX(2, 2, 1, forgetting_factor=0.98)
+    rw = whole.run(y, u)
+    step = RecursiveARX(2, 2, 1, forgetting_factor=0.98)
+    errs = np.array([step.update(y[t], u[t]) for t in range(len(y))])
+    np.testing.assert_array_equal(errs, rw.resid)
+    np.testing.assert_array_equal(step.theta_, whole.theta_)
+    chunk = RecursiveARX(2, 2, 1, forgetting_factor=0.98)
+    r1 = chunk.run(y[:700], u[:700])
+    r2 = chunk.run(y[700:], u[700:])
+    np.testing.assert_array_equal(np.concatenate([r1.resid, r2.resid]), rw.resid)
+    np.testing.assert_array_equal(np.vstack([r1.params, r2.params]), rw.params)
+    assert r2.start == 700 and chunk.first_alarm == whole.first_alarm
+    assert np.isnan(rw.resid[:2]).all() and np.isfinite(rw.resid[2:]).all()  # start-up: t0 = 2
+    chunk.reset()
+    assert chunk.nobs == 0 and not chunk.alarmed and np.all(chunk.theta_ == 0)
+
+
+@pytest.mark.parametrize("kind", ["numpy", "pandas", "xarray"])
+def test_data_kinds(kind):
+    y, u = simulate_arx(3000, 8, change_at=2500, db=1.0)
+    index = pd.date_range("2020-01-01", periods=len(y), freq="50ms")
+    if kind == "pandas":
+        yy, uu = pd.Series(y, index=index, name="roll"), pd.Series(u, index=index)
+    elif kind == "xarray":
+        yy = xr.DataArray(y, dims="time", coords={"time": index})
+        uu = xr.DataArray(u, dims="time", coords={"time": index})
+    else:
+        yy, uu = y, u
+    res = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=True).run(yy, uu)
+    ref = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=True).run(y, u)
+    np.testing.assert_array_equal(np.asarray(res.params), ref.params)
+    np.testing.assert_array_equal(np.asarray(res.zscore), ref.zscore)
+    assert res.first_alarm == ref.first_alarm and res.first_alarm >= 2500
+    if kind == "pandas":
+        assert isinstance(res.params, pd.DataFrame) and list(res.params.columns) == ["a1", "a2", "b1", "b2"]
+        assert isinstance(res.resid, pd.Series) and res.resid.index.equals(index)
+        assert res.first_alarm_time == index[res.first_alarm]
+    elif kind == "xarray":
+        assert isinstance(res.params, xr.DataArray) and res.params.dims == ("time", "channel")
+        assert isinstance(res.zscore, xr.DataArray)
+        assert res.first_alarm_time == index[res.first_alarm]
+    else:
+        assert isinstance(res.params, np.ndarray) and res.params.shape == (3000, 4)
+        assert res.first_alarm_time == res.first_alarm
+
+
+def test_nonfinite_policy():
+    y, u = simulate_arx(600, 9)
+    bad = y.copy()
+    bad[300] = np.nan
+    with pytest.raises(ValueError, match="y contains NaN/inf.*sample 300"):
+        RecursiveARX(2, 2, 1).run(bad, u)
+    ubad = u.copy()
+    ubad[10] = np.inf
+    with pytest.raises(ValueError, match="u contains NaN/inf"):
+        RecursiveARX(2, 2, 1).run(y, ubad)
+    with pytest.raises(ValueError, match="NaN"):
+        RecursiveARX(2, 2, 1).update(np.nan, 0.0)
+    m = RecursiveARX(2, 2, 1, nonfinite="skip")
+    res = m.run(bad, u)
+    assert res.n_skipped == 1 and m.n_skipped == 1 and res.skipped[300] and res.skipped.sum() == 1
+    resid = np.asarray(res.resid)
+    # the skipped sample and the two that need it as a lagged output have no prediction error
+    assert np.isnan(resid[300:303]).all() and np.isfinite(resid[303:]).all()
+    assert np.isfinite(m.theta_).all()
+    # parameters are not touched by the gap
+    np.testing.assert_array_equal(np.asarray(res.params)[302], np.asarray(res.params)[299])
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError, match="forgetting_factor"):
+        RecursiveARX(2, 2, forgetting_factor=0.0)
+    with pytest.raises(ValueError, match="forgetting_factor"):
+        RecursiveARX(2, 2, forgetting_factor=1.01)
+    with pytest.raises(ValueError, match="na"):
+        RecursiveARX(-1, 2)
+    with pytest.raises(ValueError, match="nb"):
+        RecursiveARX(2, -1)
+    with pytest.raises(ValueError, match="nk"):
+        RecursiveARX(2, 2, nk=-1)
+    with pytest.raises(TypeError, match="na"):
+        RecursiveARX(1.5, 2)
+    with pytest.raises(ValueError, match="without parameters"):
+        RecursiveARX(0, 0)
+    with pytest.raises(ValueError, match="P0"):
+        RecursiveARX(1, 1, P0=-1.0)
+    with pytest.raises(ValueError, match="P0"):
+        RecursiveARX(1, 1, P0=np.array([[1.0, 2.0], [2.0, 1.0]]))
+    with pytest.raises(ValueError, match="P0"):
+        RecursiveARX(1, 1, P0=np.eye(3))
+    with pytest.raises(ValueError, match="theta0"):
+        RecursiveARX(1, 1, theta0=[1.0])
+    with pytest.raises(ValueError, match="nonfinite"):
+        RecursiveARX(1, 1, nonfinite="ignore")
+    m = RecursiveARX(1, 1)
+    with pytest.raises(ValueError, match="same length"):
+        m.run(np.ones(10), np.ones(9))
+    with pytest.raises(ValueError, match="u is required"):
+        m.run(np.ones(10))
+    with pytest.raises(ValueError, match="n_inputs"):
+        m.run(np.ones(10), np.ones((10, 2)))
+    with pytest.raises(ValueError, match="n_inputs"):
+        m.update(1.0, [1.0, 2.0])
+    with pytest.raises(TypeError, match="y"):
+        m.update("a", 1.0)
+    # an AR model needs no input
+    ar = RecursiveARX(1, 0, P0=1e8)
+    rng = np.random.default_rng(0)
+    from scipy.signal import lfilter
+    y = lfilter([1.0], [1.0, -0.5], rng.standard_normal(2000))
+    ar.run(y)
+    np.testing.assert_allclose(ar.theta_, [-0.5], atol=0.05)
