@@ -143,10 +143,10 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
 
     if family == "arx":
         Z = design()
-        R = _lstsq.triangular_factor(Z.T @ Z, lambda: Z)
+        R = _lstsq.triangular_factor(Z.T @ Z, lambda: Z, s)
         group = 1 + spec.n_inputs
     else:
-        R = _lstsq.triangular_factor(_lstsq.lag_gram(y, max_lags, const=const), design)
+        R = _lstsq.triangular_factor(_lstsq.lag_gram(y, max_lags, const=const), design, s)
         group = s
     orders = np.arange(1, max_lags + 1)
     widths = spec.k_const + orders * group

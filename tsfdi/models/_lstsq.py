@@ -151,13 +151,14 @@ def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
     return out
 
 
-def triangular_factor(gram: np.ndarray | None, design: callable) -> np.ndarray:
+def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int = 1) -> np.ndarray:
     """Upper-triangular ``R`` with ``R'R = Z'Z`` from the Gram matrix, or by QR when that loses digits.
 
     The Cholesky factor of the Gram matrix squares the condition number. When a diagonal entry of ``R``
     shows that a column keeps less than ``GRAM_RELATIVE_FLOOR`` of its energy after projection on the
     columns before it (or the factorisation fails), ``R`` is recomputed from a QR decomposition of the
-    explicit regressor ``design()``, which is backward stable.
+    explicit regressor ``design()``, which is backward stable, and a warning is given if that regressor
+    (its first ``R.shape[0] - n_targets`` columns) is ill-conditioned.
     """
     if gram is not None:
         try:
@@ -168,7 +169,14 @@ def triangular_factor(gram: np.ndarray | None, design: callable) -> np.ndarray:
         except linalg.LinAlgError:
             pass
     Z = design()
-    return linalg.qr(Z, mode="r", check_finite=False)[0][: Z.shape[1]]
+    R = linalg.qr(Z, mode="r", check_finite=False)[0][: Z.shape[1]]
+    m = R.shape[0] - n_targets
+    if m:
+        cond = np.linalg.cond(R[:m, :m])
+        if not cond < COND_WARN:
+            warnings.warn(f"the regressor of the largest order is ill-conditioned (condition number {cond:.3g}); "
+                          "criteria of the highest orders are not reliable", IllConditionedWarning, stacklevel=3)
+    return R
 
 
 def nested_fits(R: np.ndarray, n_targets: int, widths: np.ndarray) -> np.ndarray:

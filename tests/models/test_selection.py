@@ -1,0 +1,159 @@
+"""Order selection: common sample, agreement with fitted models, the papers' BIC, the fast Gram path."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from statsmodels.tsa.api import VAR as smVAR
+from statsmodels.tsa.ar_model import ar_select_order
+
+import tsfdi
+from tsfdi.models import _lstsq
+from tests.conftest import as_kind
+from tests.models.test_ar import TRUE_A6, simulate_ar
+from tests.models.test_var_arx import arx_data
+
+
+def var4(seed, n=2000):
+    rng = np.random.default_rng(seed)
+    A = [np.diag([-0.5, -0.3, -0.4]) + 0.05, np.diag([0.3, 0.2, 0.25]), np.diag([-0.15, 0.1, -0.1]),
+         np.array([[0.3, 0.1, 0.0], [0.0, -0.3, 0.1], [0.1, 0.0, 0.35]])]
+    from tsfdi.models.var import _simulate_var
+
+    return _simulate_var(np.stack(A), rng.standard_normal((n + 500, 3)))[500:]
+
+
+@pytest.mark.parametrize("trend", ["n", "c"])
+def test_table_equals_fitted_models_on_the_common_sample(trend):
+    y = simulate_ar(TRUE_A6, 2000, np.random.default_rng(1))
+    sel = tsfdi.select_order(y, 15, trend=trend)
+    assert list(sel.table.index) == list(range(1, 16))
+    for p in (1, 6, 11, 15):
+        res = sel.fit(p)
+        assert res.nobs == 2000 - 15
+        for col in ("bic", "aic", "llf", "rss_sss", "spp", "sigma2"):
+            np.testing.assert_allclose(sel.table.loc[p, col], getattr(res, col), rtol=1e-9)
+
+
+def test_var_table_equals_fitted_models():
+    y = var4(0)
+    for criterion in ("logdet", "trace"):
+        sel = tsfdi.select_order(y, 10, "var", trend="c", criterion=criterion)
+        for p in (1, 4, 10):
+            res = sel.fit(p)
+            assert res.model.criterion == criterion
+            np.testing.assert_allclose(sel.table.loc[p, "bic"], res.bic, rtol=1e-9)
+            np.testing.assert_allclose(sel.table.loc[p, "sigma2"], np.trace(res.sigma) / 3, rtol=1e-9)
+
+
+def test_arx_selection_equals_fits():
+    y, u = arx_data(n=1500)
+    sel = tsfdi.select_order(y, 6, "arx", u=u, nk=1, trend="c")
+    assert sel.selected == 2
+    for p in (1, 2, 6):
+        res = sel.fit(p)
+        assert res.model.na == res.model.nb == p
+        np.testing.assert_allclose(sel.table.loc[p, "bic"], res.bic, rtol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_papers_bic_selects_the_true_ar6_order(seed):
+    y = simulate_ar(TRUE_A6, 2000, np.random.default_rng(seed))
+    sel = tsfdi.select_order(y, 30)
+    assert sel.selected == 6
+    # paper 003 eq. 5 (ln sigma^2 + d ln N / N) picks the same order as the likelihood BIC
+    n = 2000 - 30
+    eq5 = np.log(sel.table["sigma2"]) + sel.table.index * np.log(n) / n
+    assert int(eq5.idxmin()) == 6
+    assert sel.stabilized <= 6
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("criterion", ["logdet", "trace"])
+def test_papers_bic_selects_the_true_var4_order(seed, criterion):
+    sel = tsfdi.select_order(var4(seed), 12, "var", criterion=criterion)
+    assert sel.selected == 4
+
+
+def test_same_orders_as_statsmodels():
+    y = simulate_ar(TRUE_A6, 2000, np.random.default_rng(7))
+    ref = ar_select_order(y, 20, ic="bic", trend="c")
+    assert tsfdi.select_order(y, 20, trend="c").selected == max(ref.ar_lags)
+    Y = var4(3)
+    assert tsfdi.select_order(Y, 10, "var", trend="c").selected == smVAR(Y).select_order(10).selected_orders["bic"]
+
+
+def test_gram_matches_explicit_cross_products():
+    rng = np.random.default_rng(2)
+    for s, const in [(1, False), (1, True), (3, True), (2, False)]:
+        y = rng.standard_normal((300, s)).cumsum(0) * 0.1 + rng.standard_normal((300, s))
+        X, Y = _lstsq.lagged_design(y, 9, 9, const=const)
+        Z = np.hstack([X, Y])
+        np.testing.assert_allclose(_lstsq.lag_gram(y, 9, const=const), Z.T @ Z, rtol=1e-12, atol=1e-9)
+
+
+@pytest.mark.filterwarnings("ignore::tsfdi.exceptions.UnstableModelWarning")  # a sinusoid is marginally stable
+def test_qr_fallback_for_ill_conditioned_regressors():
+    # a nearly noise-free sinusoid: lagged copies are almost collinear (cond ~ 2e7), so the Gram matrix
+    # (cond ~ 5e14) loses the digits and R must come from a QR of the regressor
+    t = np.arange(3000)
+    y = np.sin(0.05 * t) + 1e-7 * np.random.default_rng(0).standard_normal(t.size)
+    gram = _lstsq.lag_gram(y[:, None], 10, const=False)
+    called = []
+
+    def design():
+        called.append(True)
+        return np.hstack(_lstsq.lagged_design(y[:, None], 10, 10, const=False))
+
+    R = _lstsq.triangular_factor(gram, design)
+    assert called, "the QR fallback was not used"
+    Rq = np.linalg.qr(design(), mode="r")
+    np.testing.assert_allclose(np.abs(np.diag(R)), np.abs(np.diag(Rq)), rtol=1e-8)
+    sel = tsfdi.select_order(y, 10)
+    for p in (2, 5, 10):
+        np.testing.assert_allclose(sel.table.loc[p, "sigma2"], sel.fit(p).sigma2, rtol=1e-6)
+
+
+@pytest.mark.filterwarnings("ignore::tsfdi.exceptions.UnstableModelWarning")
+def test_rank_deficient_regressor_warns():
+    y = np.sin(0.05 * np.arange(3000))    # satisfies an exact AR(2) recursion: lags 3+ are collinear
+    with pytest.warns(tsfdi.exceptions.IllConditionedWarning):
+        tsfdi.select_order(y, 10)
+    with pytest.warns(tsfdi.exceptions.IllConditionedWarning):
+        tsfdi.AR(y, 10).fit()
+
+
+def test_stabilized_rule():
+    y = simulate_ar(TRUE_A6, 2000, np.random.default_rng(4))
+    sel = tsfdi.select_order(y, 20, tol=0.01)
+    r = sel.table["rss_sss"].to_numpy()
+    p = sel.stabilized
+    gains = (r[:-1] - r[1:]) / r[:-1]
+    assert np.all(gains[p - 1:] <= 0.01) and gains[p - 2] > 0.01
+
+
+def test_kinds_and_plot(kind):
+    y = simulate_ar(TRUE_A6, 800, np.random.default_rng(5))
+    sel = tsfdi.select_order(as_kind(y, kind), 10)
+    assert sel.selected == tsfdi.select_order(y, 10).selected
+    fig = sel.plot()
+    assert len(fig.axes) == 2
+    Y = var4(1, 600)
+    assert tsfdi.select_order(as_kind(Y, kind), 6, "var").selected == tsfdi.select_order(Y, 6, "var").selected
+    assert "OrderSelection" in repr(sel)
+
+
+def test_bad_options():
+    y = simulate_ar(TRUE_A6, 300, np.random.default_rng(5))
+    with pytest.raises(ValueError, match="model"):
+        tsfdi.select_order(y, 5, "arma")
+    with pytest.raises(ValueError, match="max_lags"):
+        tsfdi.select_order(y, 0)
+    with pytest.raises(ValueError, match="u is required"):
+        tsfdi.select_order(y, 5, "arx")
+    with pytest.raises(ValueError, match="u is only used"):
+        tsfdi.select_order(y, 5, "ar", u=y)
+    with pytest.raises(ValueError, match="order"):
+        tsfdi.select_order(y, 5).fit(6)
+    with pytest.raises(ValueError, match="y is too short"):
+        tsfdi.select_order(y[:40], 30)
