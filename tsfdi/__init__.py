@@ -11,3 +11,4 @@ __version__ = "0.1.0"
 
 __all__ = ["AR", "ARX", "VAR", "ARResults", "ARXResults", "VARResults", "RecursiveARX", "OrderSelection", "TsfdiWarning",
            "load", "plot_acf", "select_order", "__version__"]
+from tsfdi.detection.zscore import ZScore; __all__ += ["ZScore"]  # noqa: E402,E702,I001
