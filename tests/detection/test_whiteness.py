@@ -1,0 +1,178 @@
+"""LjungBox: equals statsmodels, multivariate portmanteau, windowed path, Monte Carlo size, power, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import signal as sps
+from scipy import stats
+from statsmodels.stats.diagnostic import acorr_ljungbox
+from statsmodels.tsa.api import VAR as SMVAR
+
+import tsfdi
+from tsfdi.detection import autocovariance, ljungbox_windows
+from tests.conftest import as_kind
+
+
+def _sm_q(x, lags, model_df=0):
+    r = acorr_ljungbox(x, lags=[lags], model_df=model_df)
+    return r["lb_stat"].iloc[0], r["lb_pvalue"].iloc[0]
+
+
+@pytest.mark.parametrize("n,lags", [(60, 5), (500, 20), (2000, 50), (3000, 100)])
+def test_equals_statsmodels(n, lags):
+    rng = np.random.default_rng(n)
+    x = sps.lfilter([1], [1, -0.3], rng.standard_normal((n, 2)), axis=0) + 0.5
+    d = tsfdi.LjungBox(lags, 0.05).test(x)
+    for c in range(2):
+        q, p = _sm_q(x[:, c], lags)
+        np.testing.assert_allclose(d.statistic[c], q, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(d.pvalue[c], p, rtol=1e-8, atol=1e-300)
+    np.testing.assert_allclose(d.threshold, stats.chi2.ppf(0.95, lags), rtol=1e-10)
+    # in-sample df correction
+    d2 = tsfdi.LjungBox(lags, 0.05, model_df=2).test(x[:, 0])
+    q, p = _sm_q(x[:, 0], lags, model_df=2)
+    np.testing.assert_allclose(d2.pvalue[0], p, rtol=1e-8)
+    assert d2.df[0] == lags - 2
+
+
+def test_autocovariance_paths_agree():
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal((5000, 2))
+    x -= x.mean(axis=0)
+    ref = np.array([[x[k:, c] @ x[:len(x) - k, c] / len(x) for c in range(2)] for k in range(41)])
+    np.testing.assert_allclose(autocovariance(x, 40), ref, atol=1e-13)   # FFT path
+    z = x[:300]
+    ref_small = np.array([[z[k:, c] @ z[:300 - k, c] / 300 for c in range(2)] for k in range(6)])
+    np.testing.assert_allclose(autocovariance(z, 5), ref_small, atol=1e-13)   # lag-product path
+
+
+def test_multivariate_hosking_li_mcleod_against_statsmodels():
+    rng = np.random.default_rng(1)
+    y = rng.standard_normal((800, 3))
+    y[:, 1] += 0.5 * y[:, 0]
+    y = sps.lfilter([1], [1, -0.5], y, axis=0)
+    smres = SMVAR(y).fit(2, trend="n")
+    u = np.asarray(smres.resid)
+    h = 10
+    wt = smres.test_whiteness(nlags=h, adjusted=True)
+    d = tsfdi.LjungBox(h, 0.05, model_df=9 * 2, multivariate="hosking").test(u)
+    np.testing.assert_allclose(d.statistic[0], wt.test_statistic, rtol=1e-10)
+    np.testing.assert_allclose(d.pvalue[0], wt.pvalue, rtol=1e-8)
+    assert d.df[0] == wt.df and d.channels == ("joint",)
+    wt0 = smres.test_whiteness(nlags=h, adjusted=False)
+    d0 = tsfdi.LjungBox(h, 0.05, model_df=18, multivariate="li-mcleod").test(u)
+    n = u.shape[0]
+    np.testing.assert_allclose(d0.statistic[0], wt0.test_statistic + 9 * h * (h + 1) / (2 * n), rtol=1e-10)
+
+
+@pytest.mark.parametrize("window,step,lags", [(1970, 100, 50), (300, 7, 10)])
+def test_windows_equal_statsmodels(window, step, lags):
+    rng = np.random.default_rng(2)
+    x = sps.lfilter([1], [1, -0.2], rng.standard_normal((6000, 2)), axis=0) + 3.0
+    q = ljungbox_windows(x, lags, window, step)
+    starts = np.arange(0, 6000 - window + 1, step)
+    assert q.shape == (starts.size, 2)
+    for w in [0, 1, starts.size // 2, starts.size - 1]:
+        for c in range(2):
+            ref, _ = _sm_q(x[starts[w]:starts[w] + window, c], lags)
+            np.testing.assert_allclose(q[w, c], ref, rtol=1e-9)
+    decs = tsfdi.LjungBox(lags, 0.01).test_windows(x, window, step)
+    assert len(decs) == starts.size
+    np.testing.assert_allclose(decs[3].statistic, q[3])
+
+
+def _ar2(rng, n, reps, a=(-0.6, 0.2)):
+    return sps.lfilter([1], [1, *a], rng.standard_normal((reps, n + 200)), axis=1)[:, 200:]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("alpha", [0.05, 0.01])
+def test_false_alarm_rate_h0(alpha):
+    """H0: AR(2) baseline fitted on one long record (20,000 samples), tested on new records of 1,000.
+
+    df = lags (the papers' use for new data) is accurate when the baseline record is much longer than the
+    tested one; the baseline's estimation error adds about p * N_u / N_0 to E[Q] (0.1 here).
+    """
+    rng = np.random.default_rng(20 if alpha == 0.05 else 21)
+    reps, lags = 2000, 20
+    res = tsfdi.AR(_ar2(rng, 20000, 1)[0], 2).fit()
+    new = _ar2(rng, 1000, reps)
+    test = tsfdi.LjungBox(lags, alpha)
+    rej = np.mean([tsfdi.detect(y, res, test).reject for y in new])
+    lo, hi = stats.binom.interval(0.999, reps, alpha)
+    assert lo / reps <= rej <= hi / reps, rej
+
+
+@pytest.mark.slow
+def test_false_alarm_rate_iid_vector_and_bonferroni():
+    rng = np.random.default_rng(22)
+    reps, alpha = 2000, 0.05
+    e = rng.standard_normal((reps, 400, 3))
+    per = np.array([tsfdi.LjungBox(10, alpha).test(x).channel_reject for x in e])
+    lo, hi = stats.binom.interval(0.999, reps * 3, alpha)
+    assert lo / (reps * 3) <= per.mean() <= hi / (reps * 3)
+    fam = np.mean([tsfdi.LjungBox(10, alpha, correction="bonferroni").test(x).reject for x in e])
+    assert fam <= stats.binom.interval(0.999, reps, alpha)[1] / reps
+    joint = np.mean([tsfdi.LjungBox(10, alpha, multivariate="li-mcleod").test(x).reject for x in e])
+    lo, hi = stats.binom.interval(0.999, reps, alpha)
+    assert lo / reps <= joint <= hi / reps, joint
+
+
+def test_power_changed_dynamics():
+    rng = np.random.default_rng(3)
+    res = tsfdi.AR(_ar2(rng, 5000, 1)[0], 2).fit()
+    faulty = _ar2(rng, 1000, 40, a=(-1.0, 0.4))
+    assert np.mean([tsfdi.detect(y, res, tsfdi.LjungBox(20, 0.01)).reject for y in faulty]) >= 0.95
+
+
+def test_data_kinds(kind):
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal((300, 2))
+    ref = tsfdi.LjungBox(10).test(x)
+    d = tsfdi.LjungBox(10).test(as_kind(x, kind))
+    np.testing.assert_allclose(d.statistic, ref.statistic)
+    assert d.channels == ("y0", "y1")
+    d1 = tsfdi.LjungBox(10).test(as_kind(x[:, 0], kind))
+    np.testing.assert_allclose(d1.statistic, ref.statistic[:1])
+    q = ljungbox_windows(as_kind(x, kind), 10, 100, 50)
+    np.testing.assert_allclose(q[0], tsfdi.LjungBox(10).test(x[:100]).statistic)
+
+
+@pytest.mark.parametrize("alpha", [0, 1, 2.0, -1e-3])
+def test_bad_alpha(alpha):
+    with pytest.raises(ValueError, match="alpha"):
+        tsfdi.LjungBox(10, alpha)
+
+
+def test_bad_input():
+    x = np.random.default_rng(5).standard_normal(50)
+    bad = x.copy()
+    bad[3] = np.nan
+    with pytest.raises(ValueError, match="resid"):
+        tsfdi.LjungBox(10).test(bad)
+    bad[3] = -np.inf
+    with pytest.raises(ValueError, match="resid"):
+        tsfdi.LjungBox(10).test(bad)
+    with pytest.raises(ValueError, match="resid is too short"):
+        tsfdi.LjungBox(50).test(x)
+    with pytest.raises(ValueError, match="constant"):
+        tsfdi.LjungBox(5).test(np.ones(50))
+    with pytest.raises(ValueError, match="lags"):
+        tsfdi.LjungBox(0)
+    with pytest.raises(TypeError, match="lags"):
+        tsfdi.LjungBox(2.5)
+    with pytest.raises(ValueError, match="model_df"):
+        tsfdi.LjungBox(5, model_df=5)
+    with pytest.raises(ValueError, match="multivariate"):
+        tsfdi.LjungBox(5, multivariate="box")
+    with pytest.raises(ValueError, match="window"):
+        ljungbox_windows(x, 10, 10)
+    with pytest.raises(ValueError, match="window"):
+        ljungbox_windows(x, 10, 100)
+    with pytest.raises(ValueError, match="resid"):
+        ljungbox_windows(bad, 5, 20)
+    y = np.random.default_rng(6).standard_normal((100, 2))
+    y[:, 1] = 2 * y[:, 0]
+    with pytest.raises(ValueError, match="singular"):
+        tsfdi.LjungBox(5, multivariate="hosking").test(y)
