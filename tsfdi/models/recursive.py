@@ -58,7 +58,7 @@ _F_MEAN, _F_M2 = range(2)
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_min, zthr,
-                theta, P, ybuf, ubuf, ist, fst, out_params, out_err, out_var, out_z, out_flags):  # pragma: no cover
+                theta, P, ybuf, ubuf, ist, fst, out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
     """Process samples ``y[t], u[t, :]`` in order, updating the state arrays in place.
 
     ``ybuf[k] = y[t-1-k]`` (length ``max(na, 1)``), ``ubuf[j, k] = u_j[t-k]`` (``nk + nb`` columns).
@@ -187,6 +187,7 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
             out_params[t, i] = theta[i]
         out_err[t] = e
         out_var[t] = fst[_F_M2] / (ist[_I_NW] - 1) if ist[_I_NW] >= 2 else np.nan
+        out_mean[t] = fst[_F_MEAN] if ist[_I_NW] >= 1 else np.nan
         out_z[t] = z
         out_flags[t] = flags
 
@@ -205,6 +206,8 @@ class RecursiveARXResults:
     variance : same kind, shape (nobs,)
         Welford sample variance ``s_n^2`` of the prediction errors after each sample (NaN before the model is
         stable and while fewer than two errors are counted).
+    mean : same kind, shape (nobs,)
+        Welford running mean of the prediction errors after each sample (NaN before the model is stable).
     zscore : same kind, shape (nobs,)
         ``(e(t) - mean) / s`` with the statistics before sample ``t``; NaN until model and variance are stable.
     model_stable, variance_stable, alarm, skipped : ndarray of bool, shape (nobs,)
@@ -220,6 +223,7 @@ class RecursiveARXResults:
     params: Any
     resid: Any
     variance: Any
+    mean: Any
     zscore: Any
     model_stable: np.ndarray
     variance_stable: np.ndarray
@@ -445,13 +449,14 @@ class RecursiveARX:
         out_params = np.empty((n, d))
         out_err = np.empty(n)
         out_var = np.empty(n)
+        out_mean = np.empty(n)
         out_z = np.empty(n)
         out_flags = np.empty(n, dtype=np.int64)
         _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
                     self.halt_on_alarm, self.eps, self.stable_samples, self.variance_tol,
                     self.min_variance_samples, self.threshold, self.theta_, self.P_, self._ybuf, self._ubuf,
-                    self._ist, self._fst, out_params, out_err, out_var, out_z, out_flags)
-        return out_params, out_err, out_var, out_z, out_flags
+                    self._ist, self._fst, out_params, out_err, out_var, out_mean, out_z, out_flags)
+        return out_params, out_err, out_var, out_mean, out_z, out_flags
 
     def update(self, y: float, u: Any = None) -> float:
         """Process one sample and return its a-priori prediction error ``y - phi' theta`` (eq. 4).
@@ -483,7 +488,7 @@ class RecursiveARX:
                 raise TypeError(f"u must be real number(s), got {u!r}") from None
             if uv.shape[1] != self.n_inputs:
                 raise ValueError(f"u must hold n_inputs={self.n_inputs} value(s), got {uv.shape[1]}")
-        _, err, _, _, _ = self._call(yv, np.ascontiguousarray(uv))
+        _, err, _, _, _, _ = self._call(yv, np.ascontiguousarray(uv))
         return float(err[0])
 
     def run(self, y: Any, u: Any = None) -> RecursiveARXResults:
@@ -506,7 +511,7 @@ class RecursiveARX:
         uv = self._prepare_u(u, yv.shape[0])
         start = self.nobs
         alarm_before = self.first_alarm
-        params, err, var, z, flags = self._call(yv, uv)
+        params, err, var, mean, z, flags = self._call(yv, uv)
         names = self.param_names
         first = self.first_alarm
         first_time = None
@@ -518,6 +523,7 @@ class RecursiveARX:
             params=wrap(params, 0, channels=list(names), vector=True),
             resid=wrap(err, 0, vector=False, name="resid"),
             variance=wrap(var, 0, vector=False, name="variance"),
+            mean=wrap(mean, 0, vector=False, name="mean"),
             zscore=wrap(z, 0, vector=False, name="zscore"),
             model_stable=(flags & _MODEL_STABLE) > 0,
             variance_stable=(flags & _VAR_STABLE) > 0,
