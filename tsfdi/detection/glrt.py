@@ -135,6 +135,11 @@ def glrt_direct(resid: Any, window: int, sigma: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------------- threshold
+def _ceil(v: float) -> int:
+    """Ceiling that ignores floating-point noise (20 / 1e-4 is 200000, not 200001)."""
+    return math.ceil(v * (1 - 1e-12))
+
+
 class EmpiricalThreshold:
     r"""Threshold of a detection statistic from its distribution on healthy data (Hansen et al., Fig. 2).
 
@@ -187,9 +192,9 @@ class EmpiricalThreshold:
 
     def samples_needed(self) -> int:
         """Smallest calibration sample that supports ``false_alarm`` (empirical or tail fit)."""
-        emp = math.ceil(self.min_exceedances / self.false_alarm)
-        gpd = max(math.ceil(self.min_tail / self.tail_fraction),
-                  math.ceil(self.min_exceedances / (self.false_alarm * self.max_extrapolation)))
+        emp = _ceil(self.min_exceedances / self.false_alarm)
+        gpd = max(_ceil(self.min_tail / self.tail_fraction),
+                  _ceil(self.min_exceedances / (self.false_alarm * self.max_extrapolation)))
         return min(emp, gpd)
 
     def calibrate(self, statistic: Any) -> EmpiricalThreshold:
@@ -218,7 +223,7 @@ class EmpiricalThreshold:
             if n < needed:
                 raise ValueError(
                     f"statistic is too small to calibrate false_alarm={pf:g}: {n} samples, at least {needed} "
-                    f"are needed (empirical quantile: {math.ceil(self.min_exceedances / pf)}; generalised Pareto "
+                    f"are needed (empirical quantile: {_ceil(self.min_exceedances / pf)}; generalised Pareto "
                     f"tail: {needed})")
             from scipy import stats
 

@@ -1,0 +1,196 @@
+"""GLRT: equals the direct O(N M^2) form, change estimates, streaming, thresholds, false-alarm rates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import signal as sps
+from scipy import stats
+
+import tsfdi
+from tsfdi.detection import GLRTStream, glrt_direct
+from tests.conftest import as_kind, assert_kind, to_numpy
+
+
+def _rec(rng, n, phi=0.0):
+    e = rng.standard_normal(n + 500)
+    return sps.lfilter([1], [1, -phi], e)[500:] if phi else e[500:]
+
+
+def _brute(x, window, sigma):
+    """Eq. 3 literally: max over change instants of the LLR maximised over the jump A."""
+    g = np.empty(len(x))
+    for k in range(len(x)):
+        best = -np.inf
+        for j in range(max(0, k - window + 1), k + 1):
+            seg = x[j:k + 1]
+            a = seg.mean()  # ML jump
+            llr = np.sum(stats.norm.logpdf(seg, a, sigma) - stats.norm.logpdf(seg, 0, sigma))
+            best = max(best, llr)
+        g[k] = best
+    return g
+
+
+def test_equals_likelihood_ratio_and_direct():
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal(50) * 1.5
+    x[35:] += 2.0
+    gl = tsfdi.GLRT(12, sigma=1.5)
+    g = gl.statistic(x)
+    np.testing.assert_allclose(g, _brute(x, 12, 1.5), rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(g, glrt_direct(x, 12, 1.5), rtol=1e-12, atol=1e-12)
+    y = rng.standard_normal(20_000)
+    np.testing.assert_allclose(tsfdi.GLRT(200, sigma=1.0).statistic(y), glrt_direct(y, 200, 1.0), rtol=1e-9)
+
+
+def test_change_instant_and_jump():
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(3000) * 0.5
+    x[2000:] += 1.0
+    d = tsfdi.GLRT(100, sigma=0.5, alpha=1e-4).test(x)
+    assert d.reject and d.channel_reject.tolist() == [True]
+    first = d.details["first_alarm"][0]
+    assert 2000 <= first <= 2020
+    assert abs(d.details["change_index"][0] - 2000) <= 10
+    assert 0.5 < d.details["jump"][0] < 2.0
+    scan = tsfdi.GLRT(100, sigma=0.5).scan(x)
+    k = 2099
+    assert abs(scan.change_index[k, 0] - 2000) <= 5
+    np.testing.assert_allclose(scan.jump[k, 0], x[scan.change_index[k, 0]:k + 1].mean())
+    assert np.isnan(d.pvalue).all() and d.test == "GLRT"
+    assert d.threshold[0] == pytest.approx(stats.chi2.isf(1e-4 / 100, 1) / 2)
+
+
+def test_streaming_equals_batch():
+    rng = np.random.default_rng(2)
+    x = rng.standard_normal((700, 2))
+    x[400:, 1] += 1.5
+    gl = tsfdi.GLRT(60, sigma=[1.0, 1.0], alpha=1e-3)
+    g = np.asarray(gl.statistic(x))
+    st = gl.stream(nchan=2)
+    out = np.array([st.update(v) for v in x[:300]])
+    out = np.vstack([out, st.extend(x[300:305]), st.extend(x[305:650]), np.array([st.update(x[650])]),
+                     st.extend(x[651:])])
+    np.testing.assert_allclose(out, g, rtol=1e-12, atol=1e-12)
+    assert st.k == 700 and st.first_alarm == int(np.flatnonzero((g > gl.threshold_).any(axis=1))[0])
+    s1 = tsfdi.GLRT(60, sigma=1.0).stream()
+    vals = [s1.update(v) for v in x[:, 1]]
+    assert isinstance(vals[0], float)
+    np.testing.assert_allclose(vals, g[:, 1], atol=1e-12)
+    sc = tsfdi.GLRT(60, sigma=1.0).scan(x[:, 1])
+    assert s1.change_index[0] == sc.change_index[-1, 0] and s1.jump[0] == pytest.approx(sc.jump[-1, 0])
+    s1.reset()
+    assert s1.k == 0 and s1.first_alarm is None
+    with pytest.raises(ValueError, match="x"):
+        s1.update(np.nan)
+    with pytest.raises(ValueError, match="x"):
+        s1.update([1.0, 2.0])
+    with pytest.raises(ValueError, match="sigma"):
+        tsfdi.GLRT(10).stream()
+    assert isinstance(tsfdi.GLRT(10, sigma=1.0).stream(), GLRTStream)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("phi", [0.0, 0.8])
+def test_empirical_threshold_false_alarm_within_factor_2(phi):
+    """Calibrated on one healthy record, the rate on fresh healthy records is within 2x of P_F, for iid and
+    for AR(1) residuals; the analytical (iid) threshold holds its bound for iid and is far off for AR(1)."""
+    pf, window = 1e-3, 50
+    rng = np.random.default_rng(30)
+    gl = tsfdi.GLRT(window, threshold=tsfdi.EmpiricalThreshold(pf)).calibrate(_rec(rng, 200_000, phi))
+    assert gl.threshold.method_ == "empirical"
+    fresh = [_rec(rng, 100_000, phi) for _ in range(10)]
+    rate = np.mean([gl.test(x).details["alarm_rate"][0] for x in fresh])
+    assert pf / 2 <= rate <= 2 * pf, rate
+    analytical = tsfdi.GLRT(window, sigma=gl.sigma_, alpha=pf)
+    rate_an = np.mean([np.mean(np.asarray(analytical.statistic(x)) > analytical.threshold_) for x in fresh])
+    if phi == 0.0:
+        assert rate_an <= pf          # union bound: conservative for iid
+    else:
+        assert rate_an > 2 * pf       # wrong (by orders of magnitude) for correlated residuals
+        assert rate_an > 50 * pf
+
+
+@pytest.mark.slow
+def test_gpd_tail_threshold():
+    pf = 1e-4
+    rng = np.random.default_rng(31)
+    gl = tsfdi.GLRT(5, threshold=tsfdi.EmpiricalThreshold(pf)).calibrate(rng.standard_normal(50_000))
+    assert gl.threshold.method_ == "gpd"
+    g = np.asarray(gl.statistic(rng.standard_normal(2_000_000)))
+    rate = np.mean(g > gl.threshold_)
+    assert pf / 2 <= rate <= 2 * pf, rate
+    # the tail model agrees with the empirical exceedance at the fit location
+    et = gl.threshold
+    assert et.exceedance(et.gpd_["location"] + 1e-9) == pytest.approx(et.gpd_["zeta"], rel=1e-6)
+
+
+def test_calibration_sample_too_small():
+    et = tsfdi.EmpiricalThreshold(1e-6)
+    with pytest.raises(ValueError, match=r"statistic is too small.*at least 200000 are needed"):
+        et.calibrate(np.random.default_rng(3).standard_normal(5000) ** 2)
+    assert et.samples_needed() == 200_000
+    with pytest.raises(ValueError, match="needed"):
+        tsfdi.GLRT(10, threshold=tsfdi.EmpiricalThreshold(1e-6)).calibrate(np.random.default_rng(4).standard_normal(3000))
+    with pytest.raises(ValueError, match="not calibrated"):
+        tsfdi.GLRT(10, sigma=1.0, threshold=tsfdi.EmpiricalThreshold(1e-3)).test(np.zeros(100))
+
+
+def test_empirical_quantile_value():
+    s = np.random.default_rng(5).exponential(size=10_000)
+    et = tsfdi.EmpiricalThreshold(0.01).calibrate(s)
+    assert et.threshold_ == pytest.approx(np.quantile(s, 0.99))
+    assert "empirical" in repr(et)
+
+
+def test_data_kinds(kind):
+    rng = np.random.default_rng(6)
+    x = rng.standard_normal((400, 2))
+    x[300:, 0] += 2
+    gl = tsfdi.GLRT(40, sigma=1.0, alpha=1e-3)
+    g = gl.statistic(as_kind(x, kind))
+    assert_kind(g, kind, 2)
+    np.testing.assert_allclose(to_numpy(g), np.asarray(gl.statistic(x)))
+    d = gl.test(as_kind(x[:, 0], kind, name="r"))
+    assert d.reject
+    assert_kind(d.details["g"], kind, 1)
+    if kind == "pandas":
+        assert d.details["first_alarm_label"][0] == as_kind(x[:, 0], kind).index[d.details["first_alarm"][0]]
+    cal = tsfdi.GLRT(40, threshold=tsfdi.EmpiricalThreshold(0.01)).calibrate(as_kind(rng.standard_normal(5000), kind))
+    assert cal.threshold.method_ == "empirical"
+
+
+def test_detect_with_glrt_uses_baseline_sigma():
+    rng = np.random.default_rng(7)
+    y0 = sps.lfilter([1], [1, -0.5], rng.standard_normal(3000)) * 0.2
+    res = tsfdi.AR(y0, 1).fit()
+    y = sps.lfilter([1], [1, -0.5], rng.standard_normal(2000)) * 0.2
+    y[1500:] += 0.5
+    d = tsfdi.detect(y, res, tsfdi.GLRT(50, alpha=1e-4))
+    np.testing.assert_allclose(d.details["sigma"], np.sqrt(res.sigma2 * res.nobs / res.df_resid))
+    assert d.reject and 1450 <= d.details["change_index"][0] <= 1560
+
+
+def test_bad_input():
+    x = np.random.default_rng(8).standard_normal(100)
+    bad = x.copy()
+    bad[10] = np.nan
+    with pytest.raises(ValueError, match="resid"):
+        tsfdi.GLRT(10, sigma=1.0).test(bad)
+    with pytest.raises(ValueError, match="healthy"):
+        tsfdi.GLRT(10, threshold=tsfdi.EmpiricalThreshold(0.1)).calibrate(bad)
+    with pytest.raises(ValueError, match="window"):
+        tsfdi.GLRT(0)
+    with pytest.raises(ValueError, match="sigma"):
+        tsfdi.GLRT(10, sigma=-1.0)
+    with pytest.raises(ValueError, match="threshold"):
+        tsfdi.GLRT(10, threshold="bonferroni")
+    with pytest.raises(ValueError, match="threshold"):
+        tsfdi.GLRT(10, threshold=-3.0)
+    for a in (0, 1, 1.2):
+        with pytest.raises(ValueError, match="alpha"):
+            tsfdi.GLRT(10, alpha=a)
+        with pytest.raises(ValueError, match="false_alarm"):
+            tsfdi.EmpiricalThreshold(a)
+    with pytest.raises(ValueError, match="sigma"):
+        tsfdi.GLRT(10, sigma=[1.0, 2.0]).test(np.ones((50, 3)))
