@@ -177,7 +177,7 @@ def _ned_velocity(x):
 def _controller(x, integ, ref, G, P, ctrl, wcmd):
     """Cascade of Fig. 2: velocity -> attitude commands -> attitude/altitude loops -> mixer.
 
-    integ: [I_theta, I_phi, I_collective, I_roll, I_pitch]; ref: [vn_c, ve_c, Z_c, psi_c];
+    integ: [I_theta, I_phi, I_collective, I_roll, I_pitch, I_yaw]; ref: [vn_c, ve_c, Z_c, psi_c];
     ctrl out: [Om0, OmR, OmP, OmY, phi_c, theta_c, psi_c] (+ integrator rates in ctrl[7:12]).
     """
     kv, kvi, kz, kzd, kzi, katt, krate, katti, kpsi, kr, maxtilt = (
@@ -209,8 +209,15 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     e_th = th_c - x[4]
     omr = integ[3] + katt * e_ph - krate * x[9]
     omp = integ[4] + katt * e_th - krate * x[10]
-    omy = kpsi * (ref[3] - psi) - kr * x[11]
-    # mixer with priority: collective, roll, pitch first, yaw scaled into the remaining range
+    rc = kpsi * (ref[3] - psi)
+    if rc > G[11]:
+        rc = G[11]
+    elif rc < -G[11]:
+        rc = -G[11]
+    e_r = rc - x[11]
+    omy = integ[5] + kr * e_r
+    # fixed mixer with priority: collective, roll and pitch are clipped to the speed limits first, the
+    # yaw term is scaled (same factor on every rotor) to fit in the range that remains
     alpha = 1.0
     for i in range(6):
         ang = i * (math.pi / 3.0)
@@ -246,6 +253,8 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     ctrl[9] = kzi * ez
     ctrl[10] = katti * e_ph
     ctrl[11] = katti * e_th
+    # yaw integrator frozen while the mixer cannot deliver the yaw term (alpha < 1)
+    ctrl[12] = G[12] * e_r if alpha >= 1.0 else 0.0
 
 
 @njit(cache=True)
@@ -263,7 +272,7 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
     k3 = np.empty(N_X)
     k4 = np.empty(N_X)
     xt = np.empty(N_X)
-    ctrl = np.empty(12)
+    ctrl = np.empty(13)
     wcmd = np.empty(6)
     g = np.empty(6)
     lost = -1
@@ -293,7 +302,7 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
         _deriv(xt, wcmd, g, P, alive, k4)
         for j in range(N_X):
             x[j] = x[j] + dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-        for j in range(5):
+        for j in range(6):
             integ[j] += dt * ctrl[7 + j]
         bad = False
         for j in range(N_X):
@@ -320,7 +329,7 @@ def derivative(x, wcmd, g, P, alive):
 
 @njit(cache=True)
 def controller(x, integ, ref, G, P):
-    ctrl = np.empty(12)
+    ctrl = np.empty(13)
     wcmd = np.empty(6)
     _controller(x, integ, ref, G, P, ctrl, wcmd)
     return ctrl, wcmd

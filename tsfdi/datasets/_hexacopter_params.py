@@ -1,0 +1,145 @@
+"""Parameter set and controller gains of the simulated hexacopter.
+
+The aircraft is a regular hexacopter of the 2-3 kg class of the paper (Dutta et al., Fig. 1): the arm is half
+the hub-to-hub distance 0.6096 m that the paper uses as the Dryden span. Each value carries its source or
+reason in the field's comment; the constants are typical of 10-inch propellers on ~700 kV motors
+(thrust and torque coefficients as in the UIUC propeller database for 10x4.5 propellers, rotor drag and
+flapping coefficients of the order identified by Martin & Salaun (2010) and Mahony, Kumar & Corke (2012)
+scaled to this size).
+
+References
+----------
+.. [1] R. Mahony, V. Kumar, P. Corke, "Multirotor Aerial Vehicles: Modeling, Estimation, and Control of
+       Quadrotor", IEEE Robotics & Automation Magazine 19(3), 2012 (rotor drag, blade flapping).
+.. [2] P. Martin, E. Salaun, "The true role of accelerometer feedback in quadrotor control", ICRA 2010.
+.. [3] J. B. Brandt, M. S. Selig, "Propeller performance data at low Reynolds numbers", AIAA 2011-1255
+       (UIUC propeller data base: C_T ~ 0.11, C_P ~ 0.045 for 10-inch APC propellers).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+import numpy as np
+
+__all__ = ["HexacopterParameters", "ControllerGains"]
+
+
+@dataclass(frozen=True)
+class HexacopterParameters:
+    """Physical parameters (SI units) of the simulated hexacopter.
+
+    Attributes
+    ----------
+    mass : float
+        2.4 kg: a 550-650 mm class hexacopter with a 4S battery (the paper's aircraft is of this class).
+    gravity : float
+        9.80665 m/s^2.
+    ixx, iyy, izz : float
+        0.045, 0.045, 0.080 kg m^2: six 0.2 kg motor/propeller/ESC masses on 0.3048 m arms
+        (6 x 0.2 x 0.3048^2 / 2 = 0.028 about x and y, twice that about z) plus the central body.
+    arm : float
+        0.3048 m: half of the hub-to-hub distance 0.6096 m (2 ft) given in the paper.
+    rotor_height : float
+        0.05 m: rotor plane above the centre of gravity (H-forces then make pitch and roll moments).
+    k_thrust : float
+        1.57e-5 N s^2: T = k_thrust Omega^2, so that the six rotors carry 2.4 kg at Omega = 500 rad/s
+        (4800 rpm), consistent with C_T ~ 0.11 of a 10-inch propeller.
+    k_torque : float
+        2.5e-7 N m s^2: Q = k_torque Omega^2 (Q/T = 0.016 m, from C_P / C_T of the same propeller).
+    motor_time_constant : float
+        0.03 s: first-order lag of the rotor speed (brushless motor with a 10-inch propeller).
+    k_inflow : float
+        7.2e-4 N s/m: T increases by k_inflow Omega w_hub when the hub descends relative to the air
+        (blade-element slope dT/dw ~ 0.36 N/(m/s) at hover); it gives heave and roll/pitch damping and makes
+        vertical and angular gusts act on the aircraft.
+    k_rotor_drag : float
+        1.2e-4 N s/m: rotor H-force -k_rotor_drag Omega v_hub (in-plane air-relative hub velocity); about
+        0.36 N/(m/s) for the six rotors at hover, the order reported for rotor drag of small multirotors.
+    k_flapping : float
+        4e-6 N s: blade-flapping moment k_flapping Omega (-v_y, v_x) of a rotor whose disc tilts away from
+        the relative wind (0.06 N m at 5 m/s for six rotors).
+    drag_area : float
+        0.04 m^2: C_D A of the central body, drag -rho C_D A |v| v / 2.
+    air_density : float
+        1.225 kg/m^3 (ISA sea level).
+    k_weathervane : float
+        8e-4 N s^2: yaw moment k_weathervane |v_h| v_y of the body, legs and arms in sideslip (turns the
+        nose into the relative wind; a side area of ~0.03 m^2 a few cm behind the centre of gravity).
+    omega_min, omega_max : float
+        60 and 900 rad/s: rotor speed limits (idle and full throttle; full thrust 12.7 N per rotor, so
+        the thrust-to-weight ratio is 3.2).
+    """
+
+    mass: float = 2.4
+    gravity: float = 9.80665
+    ixx: float = 0.045
+    iyy: float = 0.045
+    izz: float = 0.080
+    arm: float = 0.3048
+    rotor_height: float = 0.05
+    k_thrust: float = 1.57e-5
+    k_torque: float = 2.5e-7
+    motor_time_constant: float = 0.03
+    k_inflow: float = 7.2e-4
+    k_rotor_drag: float = 1.2e-4
+    k_flapping: float = 4e-6
+    drag_area: float = 0.04
+    air_density: float = 1.225
+    k_weathervane: float = 8e-4
+    omega_min: float = 60.0
+    omega_max: float = 900.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not np.isfinite(v) or (v < 0) or (v == 0 and f.name not in
+                                                 {"rotor_height", "k_inflow", "k_rotor_drag", "k_flapping",
+                                                  "drag_area", "k_weathervane", "omega_min"}):
+                raise ValueError(f"{f.name} must be a finite positive number, got {v!r}")
+        if self.omega_min >= self.omega_max:
+            raise ValueError(f"omega_min must be < omega_max, got {self.omega_min} >= {self.omega_max}")
+
+    def to_array(self) -> np.ndarray:
+        return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class ControllerGains:
+    """Gains of the cascade controller (paper's Fig. 2), designed at hover by pole placement.
+
+    The loops, from outside in: velocity (PI, heading frame) -> pitch/roll commands (limited to
+    ``max_tilt``); altitude (PID) -> collective Omega_0; attitude (PID) -> Omega_R, Omega_P; heading (PD)
+    -> Omega_Y. Controls are in rotor-speed units (rad/s) as in the paper's eq. 2. Attitude loop: natural
+    frequency ~8 rad/s, damping ~0.7 with the rotor-speed effectiveness 0.32 rad/s^2 per rad/s; altitude
+    loop ~2 rad/s; velocity loop ~1 rad/s; heading ~2 rad/s.
+    """
+
+    k_velocity: float = 0.15        # rad per m/s
+    ki_velocity: float = 0.05       # rad per m
+    k_altitude: float = 100.0       # rad/s per m
+    kd_altitude: float = 70.0       # rad/s per m/s
+    ki_altitude: float = 30.0       # rad/s per m s
+    k_attitude: float = 200.0       # rad/s per rad
+    k_rate: float = 28.0            # rad/s per rad/s
+    ki_attitude: float = 100.0      # rad/s per rad s
+    k_heading: float = 2.0          # rad/s of yaw-rate command per rad of heading error
+    k_yaw_rate: float = 110.0       # rad/s per rad/s
+    max_tilt: float = 0.5           # rad
+    max_yaw_rate: float = 1.0       # rad/s
+    ki_yaw_rate: float = 100.0      # rad/s per rad
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not np.isfinite(v) or v < 0:
+                raise ValueError(f"{f.name} must be a finite non-negative number, got {v!r}")
+
+    def to_array(self) -> np.ndarray:
+        return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
