@@ -16,8 +16,10 @@ the residual sums of squares of *all* orders at once (see :func:`nested_fits`).
 
 from __future__ import annotations
 
+import functools
 import warnings
 
+import numba
 import numpy as np
 from scipy import linalg
 
@@ -89,20 +91,21 @@ def lstsq(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
 def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
     """Gram matrix of ``[const, -y[t-1], ..., -y[t-lags], y[t]]`` over ``t = lags .. n-1`` in O(n * lags).
 
-    The lag-product blocks are Toeplitz up to end effects: with
-    ``C_k = sum_{u=k}^{n-1} y[u] y[u-k]'`` the block of lags ``(i, j)``, ``i <= j``, ``k = j - i`` is
+    The lag-product blocks are Toeplitz up to end effects. With ``L[i, j] = sum_{t=p}^{n-1} y[t-i] y[t-j]'``
+    (lag space, ``i, j = 0..p``), the first block row follows from the full lag products
+    ``C_k = sum_{u=k}^{n-1} y[u] y[u-k]'`` (:func:`lag_products`) less the ``u < p`` terms, and shifting
+    the summation window by one sample gives
 
-    .. math::  \\sum_{t=p}^{n-1} y[t-i]\\, y[t-j]' = C_k - H_k(p - i) - T_k(n - i),
+    .. math::  L[i+1, j+1] = L[i, j] + y[p-1-i]\\, y[p-1-j]' - y[n-1-i]\\, y[n-1-j]' .
 
-    where ``H`` removes the products before the sample (``u < p - i``) and ``T`` those after it
-    (``u >= n - i``). Both only involve the first and last ``p`` samples, so the cost is ``p + 1`` lag
-    products over the signal plus ``O(p^2 s^2)`` corrections, instead of ``O(n p^2 s^2)`` for ``X'X``.
+    The cost is the ``p + 1`` lag products over the signal plus ``O(p^2 s^2)`` for the recursion (a
+    compiled kernel), instead of ``O(n p^2 s^2)`` for ``X'X``.
 
     Parameters
     ----------
     y : ndarray, shape (n, s)
     lags : int
-        Largest lag ``p`` (``n > 2 p`` is required).
+        Largest lag ``p`` (``n > p``).
     const : bool
         Prepend the intercept column.
 
@@ -113,42 +116,103 @@ def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
         sign of the regressor.
     """
     n, s = y.shape
-    p = lags
-    # full lag products C[k] = sum_{u=k}^{n-1} y[u] y[u-k]'
-    C = np.empty((p + 1, s, s))
-    for k in range(p + 1):
-        C[k] = y[k:].T @ y[:n - k]
-    # products y[u] y[u-k]' for u in the first p samples (head) and the last p samples (tail)
-    k_idx = np.arange(p + 1)[:, None]
-    u_head = np.arange(p)[None, :]
-    valid = u_head >= k_idx
-    head = y[u_head][..., :, None] * y[np.where(valid, u_head - k_idx, 0)][..., None, :]
-    head[~valid] = 0.0
-    u_tail = np.arange(n - p, n)[None, :]
-    tail = y[u_tail][..., :, None] * y[u_tail - k_idx][..., None, :]
-    zero = np.zeros((p + 1, 1, s, s))
-    Hc = np.concatenate([zero, np.cumsum(head, axis=1)], axis=1)           # Hc[k, e] = sum_{u<e} (head)
-    Tc = np.concatenate([np.cumsum(tail[:, ::-1], axis=1)[:, ::-1], zero], axis=1)  # Tc[k, b] = sum_{u>=n-p+b}
-    I, J = np.triu_indices(p + 1)
-    K = J - I
-    blocks = C[K] - Hc[K, p - I] - Tc[K, p - I]
-    G4 = np.empty((p + 1, p + 1, s, s))
-    G4[I, J] = blocks
-    G4[J, I] = np.swapaxes(blocks, -1, -2)
-    # reorder lag index: 0 (y[t]) goes last; lag blocks i >= 1 take the regressor sign (-1)
-    order = np.r_[1:p + 1, 0]
-    sign = np.r_[-np.ones(p), 1.0]
-    G4 = G4[order][:, order] * (sign[:, None] * sign[None, :])[:, :, None, None]
-    G = G4.transpose(0, 2, 1, 3).reshape((p + 1) * s, (p + 1) * s)
-    if not const:
-        return G
-    cs = np.concatenate([np.zeros((1, s)), np.cumsum(y, axis=0)])
-    lag_sums = np.stack([cs[n - i] - cs[p - i] for i in order]) * sign[:, None]
-    out = np.empty((G.shape[0] + 1, G.shape[0] + 1))
-    out[0, 0] = n - p
-    out[0, 1:] = out[1:, 0] = lag_sums.ravel()
-    out[1:, 1:] = G
+    C = lag_products(y, lags)
+    out = np.empty((int(const) + (lags + 1) * s,) * 2)
+    _assemble_gram(C, y[:lags], y[n - lags:], y[lags:].sum(axis=0), int(n), bool(const), out)
     return out
+
+
+@numba.njit(cache=True)
+def _assemble_gram(C, head, tail, S0, n, const, out):  # pragma: no cover - compiled
+    """Fill ``out`` from the full lag products ``C`` and the first / last ``p`` samples (see :func:`lag_gram`).
+
+    In lag space (lag 0 = ``y[t]``) the block ``L[0, k] = C[k] - sum_{u=k}^{p-1} y[u] y[u-k]'`` and
+    ``L[i+1, j+1] = L[i, j] + y[p-1-i] y[p-1-j]' - y[n-1-i] y[n-1-j]'`` (shift the window by one sample).
+    Lag ``i >= 1`` goes to block ``i - 1`` with a minus sign, lag 0 to the last block; the intercept row
+    holds ``sum_t y[t-i]`` by the same recursion.
+    """
+    p = head.shape[0]
+    s = C.shape[1]
+    c = 1 if const else 0
+    L = np.empty((p + 1, p + 1, s, s))
+    for k in range(p + 1):
+        for a in range(s):
+            for b in range(s):
+                acc = C[k, a, b]
+                for u in range(k, p):
+                    acc -= head[u, a] * head[u - k, b]
+                L[0, k, a, b] = acc
+    for i in range(p):
+        hi = head[p - 1 - i]
+        ti = tail[p - 1 - i]
+        for j in range(i, p):
+            hj = head[p - 1 - j]
+            tj = tail[p - 1 - j]
+            for a in range(s):
+                for b in range(s):
+                    L[i + 1, j + 1, a, b] = L[i, j, a, b] + hi[a] * hj[b] - ti[a] * tj[b]
+    for i in range(p + 1):
+        bi = p if i == 0 else i - 1
+        si = 1.0 if i == 0 else -1.0
+        for j in range(i, p + 1):
+            bj = p if j == 0 else j - 1
+            sg = si * (1.0 if j == 0 else -1.0)
+            for a in range(s):
+                for b in range(s):
+                    v = sg * L[i, j, a, b]
+                    out[c + bi * s + a, c + bj * s + b] = v
+                    out[c + bj * s + b, c + bi * s + a] = v
+    if const:
+        out[0, 0] = n - p
+        S = S0.copy()                       # S_i = sum_{t=p}^{n-1} y[t-i]
+        for i in range(p + 1):
+            bi = p if i == 0 else i - 1
+            si = 1.0 if i == 0 else -1.0
+            for a in range(s):
+                out[0, 1 + bi * s + a] = si * S[a]
+                out[1 + bi * s + a, 0] = si * S[a]
+            if i < p:
+                for a in range(s):
+                    S[a] += head[p - 1 - i, a] - tail[p - 1 - i, a]
+
+
+def lag_products(y: np.ndarray, lags: int) -> np.ndarray:
+    """``C[k] = sum_{u=k}^{n-1} y[u] y[u-k]'`` for ``k = 0..lags``, shape ``(lags + 1, s, s)``.
+
+    The signal is cut into blocks of ``B = lags + 1`` samples, stacked as the rows of ``M``; every pair of
+    samples at most ``lags`` apart lies in one block or in two consecutive blocks, so the two matrix
+    products ``M'M`` and ``M[1:]' M[:-1]`` hold every lag product exactly once per pair and the
+    ``C[k]`` are sums along their block diagonals. Same O(n lags s^2) work as ``lags + 1`` dot products,
+    done by two BLAS-3 calls.
+    """
+    n, s = y.shape
+    B = lags + 1
+    rows = -(-n // B)
+    within, cross = _product_bins(lags, s)
+    yp = np.zeros((rows * B, s))
+    yp[:n] = y
+    M = yp.reshape(rows, B * s)
+    nbins = B * s * s + 1                      # the last bin collects the entries that are not needed
+    C = np.bincount(within, (M.T @ M).ravel(), nbins)
+    if rows > 1:
+        C += np.bincount(cross, (M[1:].T @ M[:-1]).ravel(), nbins)
+    return C[:-1].reshape(B, s, s)
+
+
+@functools.lru_cache(maxsize=64)
+def _product_bins(p: int, s: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bins of :func:`lag_products`: entry ``(a, i, b, j)`` of ``M'M`` has lag ``a - b``, of ``M[1:]'M[:-1]``
+    lag ``B + a - b``; its bin is ``(lag, i, j)``, or the discard bin ``B s s`` when the lag is outside 0..p."""
+    B = p + 1
+    a = np.arange(B)[:, None, None, None]
+    b = np.arange(B)[None, None, :, None]
+    i = np.arange(s)[None, :, None, None]
+    j = np.arange(s)[None, None, None, :]
+
+    def bins(lag):
+        return np.where((lag >= 0) & (lag < B), (lag * s + i) * s + j, B * s * s).ravel()
+
+    return bins(a - b), bins(B + a - b)
 
 
 def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int = 1) -> np.ndarray:

@@ -1,0 +1,87 @@
+"""Speed of tsfdi.select_order against statsmodels, measured in one run.
+
+Prints the median wall time of
+  * select_order(y, max_lags=50)           vs statsmodels ar_select_order(y, 50)        for N = 2,000 and 60,000
+  * select_order(Y, 20, model="var")       vs statsmodels VAR(Y).select_order(20)      3 channels, N = 2,000
+and the ratio, together with the orders both select (they must agree). BLAS is pinned to one thread.
+
+Run: python benchmarks/order_selection.py
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import time  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy import signal as sps  # noqa: E402
+from statsmodels.tsa.api import VAR as smVAR  # noqa: E402
+from statsmodels.tsa.ar_model import ar_select_order  # noqa: E402
+
+import tsfdi  # noqa: E402
+
+TARGETS = {"AR N=2000": 300, "AR N=60000": 3000, "VAR N=2000": 100}
+
+
+def median_time(fn, repeat: int, budget: float = 20.0) -> float:
+    times = []
+    t_end = time.perf_counter() + budget
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+        if time.perf_counter() > t_end and len(times) >= 3:
+            break
+    return float(np.median(times))
+
+
+def ar6(n, rng):
+    a = np.poly(np.r_[0.9 * np.exp(1j * np.array([0.3, -0.3, 1.2, -1.2])), 0.7, -0.5]).real
+    return sps.lfilter([1.0], a, rng.standard_normal(n + 500))[500:]
+
+
+def var4(n, rng):
+    from tsfdi.models.var import _simulate_var
+
+    A = [np.diag([-0.5, -0.3, -0.4]) + 0.05, np.diag([0.3, 0.2, 0.25]), np.diag([-0.15, 0.1, -0.1]),
+         np.array([[0.3, 0.1, 0.0], [0.0, -0.3, 0.1], [0.1, 0.0, 0.35]])]
+    return _simulate_var(np.stack(A), rng.standard_normal((n + 500, 3)))[500:]
+
+
+def main() -> None:
+    rng = np.random.default_rng(2026)
+    rows = []
+    for n, rep_ref in ((2000, 7), (60000, 3)):
+        y = ar6(n, rng)
+        ours = median_time(lambda: tsfdi.select_order(y, 50, trend="c").selected, 200)
+        ref = median_time(lambda: ar_select_order(y, 50, ic="bic", trend="c"), rep_ref, budget=60)
+        p_ours = tsfdi.select_order(y, 50, trend="c").selected
+        p_ref = max(ar_select_order(y, 50, ic="bic", trend="c").ar_lags)
+        rows.append((f"AR N={n}", ours, ref, p_ours, p_ref))
+    Y = var4(2000, rng)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ours = median_time(lambda: tsfdi.select_order(Y, 20, "var", trend="c").selected, 200)
+        ref = median_time(lambda: smVAR(Y).select_order(20, trend="c"), 7)
+        p_ref = smVAR(Y).select_order(20, trend="c").selected_orders["bic"]
+    rows.append(("VAR N=2000", ours, ref, tsfdi.select_order(Y, 20, "var", trend="c").selected, p_ref))
+
+    print(f"{'case':<12} {'tsfdi (ms)':>11} {'statsmodels (ms)':>17} {'ratio':>9} {'target':>7}  "
+          f"{'order tsfdi':>11} {'order sm':>8}")
+    ok = True
+    for name, ours, ref, p_ours, p_ref in rows:
+        ratio = ref / ours
+        ok &= ratio >= TARGETS[name] and p_ours == p_ref
+        print(f"{name:<12} {1e3 * ours:>11.3f} {1e3 * ref:>17.1f} {ratio:>8.0f}x {TARGETS[name]:>6}x  "
+              f"{p_ours:>11d} {p_ref:>8d}")
+    print("all targets met and the same orders selected" if ok else "SOME TARGET MISSED OR ORDERS DIFFER")
+
+
+if __name__ == "__main__":
+    main()
