@@ -40,11 +40,18 @@ produce the four controls of eq. 2 (:math:`\\Omega_0, \\Omega_R, \\Omega_P, \\Om
 fixed mixer turns into rotor speed commands
 :math:`\\Omega_{c,i} = \\Omega_0 - \\sin\\psi_i \\Omega_R + \\cos\\psi_i \\Omega_P \\mp \\Omega_Y`.
 Saturation is handled with priority: collective, roll and pitch are clipped to the speed limits first, the
-yaw term is scaled down to fit in what remains. After a rotor failure the hexacopter cannot hold all four
-axes with positive thrust (the rotor opposite the failed one would have to stop); the prioritised mixer
-keeps roll, pitch and altitude, the heading settles at an offset where the weathervane moment balances the
-yaw torque that the saturated allocation cannot deliver (the heading deviates in opposite directions
-for rotors of opposite spin, as in the paper's Fig. 6).
+yaw term is scaled down (one factor for all rotors) to fit in what remains; the yaw loop is a heading-to-
+yaw-rate P loop with a PI yaw-rate loop whose integrator freezes while the yaw term is scaled.
+
+*What a failure does here.* A PNPNPN hexacopter with one rotor failed cannot hold all four axes with
+positive thrusts: the rotor opposite the failed one would have to stop (Du et al. 2015). With the fixed
+mixer and the rotor speed floor ``omega_min`` the controller keeps roll, pitch and altitude (prioritised)
+and gives up the heading: after the transient the aircraft turns at a roughly constant rate (about
++2 rad/s for rotor 1, -2 rad/s for rotors 2 and 6, since rotor 1 spins the other way), the heading drifts
+in opposite directions for rotors 1 and 2 (the paper's Fig. 6), and roll, pitch, body rates and the
+controls become stationary again. ``yaw`` is the unwrapped heading and grows linearly after a failure;
+use the yaw rate ``r`` or the differenced heading as a stationary yaw signal. In severe turbulence a few
+records lose the aircraft; they are flagged in ``lost_control``.
 
 **Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz; the controller and the gusts are held
 constant over a step (sampled-data controller at 1 kHz). Each record is integrated on its own
