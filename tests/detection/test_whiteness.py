@@ -41,7 +41,9 @@ def test_autocovariance_paths_agree():
     x = rng.standard_normal((5000, 2))
     x -= x.mean(axis=0)
     ref = np.array([[x[k:, c] @ x[:len(x) - k, c] / len(x) for c in range(2)] for k in range(41)])
-    np.testing.assert_allclose(autocovariance(x, 40), ref, atol=1e-13)   # FFT path
+    np.testing.assert_allclose(autocovariance(x, 40), ref, atol=1e-13)   # lag-product path
+    ref200 = np.array([[x[k:, c] @ x[:len(x) - k, c] / len(x) for c in range(2)] for k in range(201)])
+    np.testing.assert_allclose(autocovariance(x, 200), ref200, atol=1e-13)   # FFT path
     z = x[:300]
     ref_small = np.array([[z[k:, c] @ z[:300 - k, c] / 300 for c in range(2)] for k in range(6)])
     np.testing.assert_allclose(autocovariance(z, 5), ref_small, atol=1e-13)   # lag-product path

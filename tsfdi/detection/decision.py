@@ -82,17 +82,22 @@ class Decision:
     test: str = ""
 
     def __post_init__(self) -> None:
-        stat = np.atleast_1d(np.asarray(self.statistic, dtype=np.float64))
+        stat = np.array(self.statistic, dtype=np.float64, ndmin=1)
         k = stat.shape[0]
-        thr = np.broadcast_to(np.asarray(self.threshold, dtype=np.float64), (k,)).copy()
-        pv = np.broadcast_to(np.asarray(self.pvalue, dtype=np.float64), (k,)).copy()
-        df = np.asarray(self.df, dtype=np.float64)
-        df = np.broadcast_to(df, (k,) + df.shape[1:] if df.ndim >= 1 and df.shape[0] == k
-                             else (k,) + df.shape).copy()
+
+        def per_channel(v: Any, dtype: type) -> np.ndarray:
+            a = np.array(v, dtype=dtype, ndmin=1)
+            if a.shape[0] == k:
+                return a
+            if a.shape == (1,):
+                return np.full(k, a[0], dtype=dtype)
+            return np.broadcast_to(a, (k,) + a.shape).copy()
+
+        thr = per_channel(self.threshold, np.float64)
+        pv = per_channel(self.pvalue, np.float64)
+        df = per_channel(self.df, np.float64)
         rej = self.channel_reject
-        if rej is None or np.asarray(rej).size == 0:
-            rej = stat > thr
-        rej = np.broadcast_to(np.asarray(rej, dtype=bool), (k,)).copy()
+        rej = stat > thr if rej is None or np.size(rej) == 0 else per_channel(rej, bool)
         channels = tuple(self.channels) if self.channels else tuple(f"y{i}" for i in range(k))
         if len(channels) != k:
             raise ValueError(f"channels has {len(channels)} names for {k} components")

@@ -7,6 +7,8 @@ from typing import Any
 import numpy as np
 from scipy import special
 
+import numba
+
 from tsfdi._data import as_signal
 from tsfdi._validation import int_like, option
 from tsfdi.detection.base import ResidualTest
@@ -14,14 +16,31 @@ from tsfdi.detection.decision import Decision
 
 __all__ = ["LjungBox", "autocovariance", "ljungbox_windows"]
 
-_FFT_MIN_WORK = 40_000  # nobs * lags above which the FFT path is used
+_FFT_MIN_LAGS = 96  # above this many lags (and a long record) the FFT path is used
+
+
+@numba.njit(cache=True, nogil=True, fastmath=True)
+def _acov_lagprod(xt, lags):  # pragma: no cover - compiled
+    """Lag products sum_t x[t] x[t-lag] of each row, lag = 0..lags: O(N * lags), SIMD reductions."""
+    k, n = xt.shape
+    out = np.empty((k, lags + 1))
+    for c in range(k):
+        x = xt[c]
+        for lag in range(lags + 1):
+            a = x[lag:]
+            b = x[:n - lag]
+            s = 0.0
+            for t in range(n - lag):
+                s += a[t] * b[t]
+            out[c, lag] = s
+    return out
 
 
 def autocovariance(x: np.ndarray, lags: int) -> np.ndarray:
     """Biased autocovariances ``c_k = sum_{t=k}^{N-1} x_t x_{t-k} / N``, ``k = 0..lags``, of each column.
 
-    ``x`` is a float64 ``(N, k)`` array already centred by the caller. Cost O(N * lags) (lag products by
-    BLAS dot products) or O(N log N) (FFT, used for long records and many lags) -- never the O(N^2) of a
+    ``x`` is a float64 ``(N, k)`` array already centred by the caller. Cost O(N * lags) (compiled lag
+    products) or O(N log N) (FFT, used above 96 lags) -- never the O(N^2) of a
     full correlation (statsmodels issue 4135).
 
     Returns
@@ -34,19 +53,14 @@ def autocovariance(x: np.ndarray, lags: int) -> np.ndarray:
 def _acov_t(xt: np.ndarray, lags: int) -> np.ndarray:
     """Autocovariances of the rows of a C-contiguous ``(k, N)`` array: returns ``(k, lags + 1)``."""
     k, n = xt.shape
-    if n * lags >= _FFT_MIN_WORK and lags > 8:
+    if lags > _FFT_MIN_LAGS and n > 4 * lags:
         from scipy import fft as sfft
 
         nfft = sfft.next_fast_len(n + lags, real=True)
         f = sfft.rfft(xt, n=nfft, axis=-1)
         acov = sfft.irfft(f.real ** 2 + f.imag ** 2, n=nfft, axis=-1)[:, : lags + 1]
     else:
-        acov = np.empty((k, lags + 1))
-        for c in range(k):
-            row = xt[c]
-            acov[c, 0] = row @ row
-            for lag in range(1, lags + 1):
-                acov[c, lag] = row[lag:] @ row[:-lag]
+        acov = _acov_lagprod(xt, lags)
     return acov / n
 
 
