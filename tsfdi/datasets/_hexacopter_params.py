@@ -60,11 +60,11 @@ class HexacopterParameters:
         4e-6 N s: blade-flapping moment k_flapping Omega (-v_y, v_x) of a rotor whose disc tilts away from
         the relative wind (0.06 N m at 5 m/s for six rotors).
     drag_area : float
-        0.04 m^2: C_D A of the central body, drag -rho C_D A |v| v / 2.
+        0.04 m^2: C_D A of the central body, drag ``-rho C_D A |v| v / 2``.
     air_density : float
         1.225 kg/m^3 (ISA sea level).
     k_weathervane : float
-        8e-4 N s^2: yaw moment k_weathervane |v_h| v_y of the body, legs and arms in sideslip (turns the
+        8e-4 N s^2: yaw moment ``k_weathervane |v_h| v_y`` of the body, legs and arms in sideslip (turns the
         nose into the relative wind; a side area of ~0.03 m^2 a few cm behind the centre of gravity).
     omega_min, omega_max : float
         60 and 900 rad/s: rotor speed limits (idle and full throttle; full thrust 12.7 N per rotor, so
