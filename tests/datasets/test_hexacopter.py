@@ -1,0 +1,171 @@
+"""Hexacopter simulator: trim equilibria, rotor failures, the paper's qualitative facts, bit-for-bit data."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from tsfdi.datasets import load_hexacopter, make_hexacopter_dataset, simulate_hexacopter, trim
+from tsfdi.datasets.hexacopter import CHANNELS, PACK_SCALE, SHIPPED_VARIABLES, encode_for_file
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    return load_hexacopter()
+
+
+@pytest.mark.parametrize("speed", [0.0, 5.0])
+def test_trim_is_an_equilibrium_without_turbulence(speed):
+    tr = trim(speed)
+    assert tr["residual"] < 1e-9
+    ds = simulate_hexacopter(duration=5.0, speed=speed, turbulence="none", failed_rotor=0)
+    for name in ("roll", "pitch", "yaw", "p", "q", "r", "u", "v", "w", "z", "collective", "pitch_control"):
+        x = ds[name].values[0]
+        assert np.max(np.abs(x - x[0])) < 1e-7, name
+    assert ds["x"].values[0, -1] == pytest.approx(speed * ds.time.values[-1], abs=1e-6)
+    assert not bool(ds["lost_control"][0])
+
+
+def test_output_structure_units_and_coords():
+    ds = simulate_hexacopter(duration=2.0, turbulence=["light", "none"], failed_rotor=[2, 0], failure_time=1.0,
+                             seed=[1, 2])
+    assert ds.sizes == {"record": 2, "time": 200}
+    assert set(CHANNELS) <= set(ds.data_vars)
+    assert ds["roll"].attrs["units"] == "rad" and ds["collective"].attrs["units"] == "rad/s"
+    assert list(ds.state.values) == ["rotor2", "healthy"]
+    assert list(ds.failed_rotor.values) == [2, 0]
+    assert ds.failure_time.values[0] == 1.0 and np.isnan(ds.failure_time.values[1])
+    np.testing.assert_allclose(np.diff(ds.time.values), 0.01)
+
+
+@pytest.mark.parametrize("rotor", [1, 2, 6])
+def test_failure_in_severe_turbulence_keeps_flying(rotor):
+    """Failure at 10 s, severe turbulence, 8 seeds: at least 7 fly the remaining 50 s with attitude and
+    altitude bounded, and roll/pitch are stationary after the transient (variances of 30-45 s and 45-60 s
+    agree: median ratio within [0.5, 2] -- 15 s of severe turbulence with a 7 s gust correlation time give
+    variance estimates with few degrees of freedom -- and means within 3 standard deviations)."""
+    ds = simulate_hexacopter(duration=60.0, turbulence="severe", failed_rotor=rotor, failure_time=10.0,
+                             seed=list(range(11, 19)))
+    flying = ~ds["lost_control"].values
+    assert flying.sum() >= 7
+    for name in ("roll", "pitch"):
+        x = ds[name].values[flying]
+        assert np.all(np.isfinite(x)) and np.max(np.abs(x)) < 1.2
+        a, b = x[:, 3000:4500], x[:, 4500:]
+        ratio = a.var(axis=1) / b.var(axis=1)
+        assert 0.5 < np.median(ratio) < 2.0, (name, ratio)
+        assert np.all(np.abs(a.mean(axis=1) - b.mean(axis=1)) < 3 * np.sqrt((a.var(axis=1) + b.var(axis=1)) / 2))
+    z = ds["z"].values[flying]
+    assert np.max(np.abs(z - z[:, :1])) < 5.0
+
+
+def _dev(ds, name):
+    x = ds[name].values
+    return np.abs(x[:, 1000:1500] - x[:, 500:1000].mean(axis=1, keepdims=True)).max(axis=1)
+
+
+def _flying(ds, state):
+    return ds.where((ds.state == state) & ~ds.lost_control, drop=True)
+
+
+def test_front_rotor_failure_mainly_pitches(shipped):
+    r1 = _flying(shipped, "rotor1")
+    assert np.median(_dev(r1, "pitch")) > 2 * np.median(_dev(r1, "roll"))
+    assert np.mean(_dev(r1, "pitch") > _dev(r1, "roll")) > 0.9
+
+
+@pytest.mark.parametrize("state", ["rotor2", "rotor6"])
+def test_side_rotor_failure_moves_roll_and_pitch(shipped, state):
+    healthy = _flying(shipped, "healthy")
+    s = _flying(shipped, state)
+    for name in ("roll", "pitch"):
+        assert np.median(_dev(s, name)) > 2 * np.median(_dev(healthy, name)), name
+    # roll deviation of side rotors is larger than that of the front rotor
+    assert np.median(_dev(s, "roll")) > 1.5 * np.median(_dev(_flying(shipped, "rotor1"), "roll"))
+
+
+def test_heading_drifts_in_opposite_directions_for_rotors_1_and_2(shipped):
+    d1 = _flying(shipped, "rotor1")["yaw"].values
+    d2 = _flying(shipped, "rotor2")["yaw"].values
+    assert np.all(d1[:, -1] - d1[:, 1000] > 0)
+    assert np.all(d2[:, -1] - d2[:, 1000] < 0)
+    h = _flying(shipped, "healthy")["yaw"].values
+    assert np.max(np.abs(h)) < 1.0  # the healthy aircraft holds its heading
+
+
+@pytest.mark.parametrize("state, name", [("rotor1", "pitch"), ("rotor2", "roll"), ("rotor6", "roll")])
+def test_rolling_variance_settles_after_transient(shipped, state, name):
+    """Variance over 10 s windows every 0.1 s (paper's Fig. 7): peaks in the transient, then settles to a
+    level that stays constant (mean rolling variance over 40-50 s and 50-60 s agree within a factor 1.5)."""
+    s = _flying(shipped, state)
+    x = s[name].to_pandas().T  # time x records
+    rv = x.rolling(1000).var().iloc[::10]
+    t = rv.index.values
+    peak = rv[(t >= 10) & (t <= 25)].max()
+    late = rv[t >= 40]
+    assert np.median(peak / late.median()) > 2.0
+    a, b = rv[(t >= 40) & (t < 50)].mean(), rv[t >= 50].mean()
+    assert 1 / 1.5 < np.median(a / b) < 1.5
+
+
+def test_lost_control_is_flagged_and_rare(shipped):
+    lost = shipped["lost_control"].values
+    assert not lost[shipped.state.values == "healthy"].any()
+    assert lost.sum() <= 12  # at most 5 % of the 240 records
+    for i in np.flatnonzero(lost):
+        t_lost = float(shipped["lost_control_time"][i])
+        assert t_lost > 10.0 and np.isnan(shipped["roll"].values[i, -1])
+
+
+def test_shipped_design(shipped):
+    assert shipped.sizes == {"record": 240, "time": 6000}
+    counts = shipped.groupby(shipped.state + "/" + shipped.turbulence).count()["lost_control"]
+    assert set(counts.values.tolist()) == {20}
+    assert set(SHIPPED_VARIABLES) <= set(shipped.data_vars)
+    assert np.all(shipped.failure_time.values[shipped.failed_rotor.values > 0] == 10.0)
+
+
+def test_shipped_records_regenerate_bit_for_bit(shipped, tmp_path):
+    idx = [0, 70, 150, 235]  # healthy light, rotor1 moderate, rotor2 severe, rotor6 severe
+    sub = shipped.isel(record=idx)
+    ds = simulate_hexacopter(turbulence=sub.turbulence.values.tolist(), failed_rotor=sub.failed_rotor.values,
+                             failure_time=10.0, seed=sub.seed.values, duration=60.0)
+    out, enc = encode_for_file(ds)
+    out.to_netcdf(tmp_path / "x.nc", engine="h5netcdf", encoding=enc)
+    with xr.open_dataset(tmp_path / "x.nc", engine="h5netcdf") as back:
+        for v in SHIPPED_VARIABLES:
+            np.testing.assert_array_equal(back[v].values, sub[v].values, err_msg=v)
+
+
+def test_packing_error_far_below_noise(shipped):
+    h = shipped.where(shipped.state == "healthy", drop=True)
+    for v in ("roll", "pitch"):
+        assert PACK_SCALE[v] / 2 < 1e-3 * float(h[v].std(dim="time").min())
+
+
+def test_make_dataset_seeds_are_per_record():
+    a = make_hexacopter_dataset(1, seed=5, duration=1.0, failure_time=0.5, states=("healthy", "rotor1"),
+                                turbulence=("light",))
+    b = make_hexacopter_dataset(1, seed=5, duration=1.0, failure_time=0.5, states=("healthy",),
+                                turbulence=("light",))
+    assert a.seed.values[0] == b.seed.values[0] != a.seed.values[1]
+    np.testing.assert_array_equal(a["roll"].values[0], b["roll"].values[0])
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"failed_rotor": 7}, "failed_rotor"), ({"failed_rotor": -1}, "failed_rotor"),
+    ({"failure_time": -1.0, "failed_rotor": 1}, "failure_time"),
+    ({"failure_time": 5.0, "failed_rotor": 1}, "failure_time"),
+    ({"turbulence": "hurricane"}, "turbulence"), ({"dt": 0.0}, "dt"), ({"dt": -0.001}, "dt"),
+    ({"duration": -1.0}, "duration"), ({"fs": 300.0}, "fs"), ({"seed": -3}, "seed"),
+    ({"failed_rotor": [1, 2], "seed": [1, 2, 3]}, "length")])
+def test_bad_input(kwargs, name):
+    kw = {"duration": 2.0, **kwargs}
+    with pytest.raises(ValueError, match=name):
+        simulate_hexacopter(**kw)
+
+
+def test_bad_types():
+    with pytest.raises(TypeError, match="failed_rotor"):
+        simulate_hexacopter(duration=1.0, failed_rotor=1.5)
+    with pytest.raises(TypeError, match="params"):
+        simulate_hexacopter(duration=1.0, params={"mass": 2})
