@@ -147,6 +147,15 @@ def test_identify_windows_equals_identify(models):
             np.testing.assert_allclose(wins[w].decisions[m].statistic, ref.decisions[m].statistic, rtol=1e-9)
     fw = identify_windows(y, models, tsfdi.FTest(1e-8), window=2000, step=1000)
     assert len(fw) == 2 and fw[1].span == (1000, 3000)
+    assert fw.labels[1] == fw[1].label and fw.status[0] == fw[0].status
+    np.testing.assert_allclose(fw.statistic[1, 3], tsfdi.identify(y[1000:], models, tsfdi.FTest(1e-8))
+                               .decisions["rotor6"].statistic)
+    assert wins.labels == ["rotor6"] * 5 and wins.status == ["identified"] * 5
+    assert wins.statistic.shape == (5, 4, 3) and wins.accepted[:, 3].all()
+    frame = wins.to_frame()
+    assert frame["start"].tolist() == [0, 250, 500, 750, 1000] and "5" in repr(wins)
+    assert [i.label for i in wins] == wins.labels and wins[-1].span == (1000, 3000)
+    np.testing.assert_allclose(wins.pvalue[2, 1], wins[2].decisions["rotor1"].pvalue)
 
 
 def test_data_kinds(kind, models):

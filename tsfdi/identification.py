@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy import special
 
 from tsfdi._data import as_signal
 from tsfdi._validation import int_like
@@ -22,7 +23,7 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
 
-__all__ = ["detect", "identify", "identify_windows", "Identification"]
+__all__ = ["detect", "identify", "identify_windows", "Identification", "WindowedIdentification"]
 
 
 def _check_test(test: Any) -> ResidualTest:
@@ -192,19 +193,95 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None) -> 
     return Identification(decisions=decisions, test=type(test).__name__)
 
 
+class WindowedIdentification:
+    """:func:`identify` on every sliding window of a record, held as arrays; windows as objects on demand.
+
+    Attributes
+    ----------
+    models : tuple of str
+        Candidate model names (axis 1 of the arrays).
+    channels : tuple of str
+    starts, stops : ndarray of int
+        Window ``w`` covers signal samples ``[starts[w], stops[w])``.
+    statistic, threshold, pvalue : ndarray, shape (n_windows, n_models, n_channels)
+    channel_reject : ndarray of bool, shape (n_windows, n_models, n_channels)
+    accepted : ndarray of bool, shape (n_windows, n_models)
+        Model accepted in the window (every channel accepts).
+    labels : list
+        The single accepted model per window, else ``None``.
+    status : list of str
+        ``"identified" | "ambiguous" | "none"`` per window.
+
+    Indexing (``result[w]``) or iterating gives :class:`Identification` objects, built when asked for.
+    """
+
+    def __init__(self, models: tuple, channels: tuple, starts: np.ndarray, window: int,
+                 decisions: list[dict] | None = None, *, arrays: dict | None = None,
+                 make_decision: Any = None, test: str = "") -> None:
+        self.models, self.channels, self.test = tuple(models), tuple(channels), test
+        self.starts = np.asarray(starts, dtype=np.int64)
+        self.stops = self.starts + int(window)
+        if decisions is not None:
+            def stack(attr):
+                return np.array([[getattr(d[m], attr) for m in self.models] for d in decisions])
+            arrays = {a: stack(a) for a in ("statistic", "threshold", "pvalue", "channel_reject")}
+            self._decisions = decisions
+        else:
+            self._decisions = None
+        self.statistic = arrays["statistic"]
+        self.threshold = arrays["threshold"]
+        self.pvalue = arrays["pvalue"]
+        self.channel_reject = arrays["channel_reject"]
+        self._make_decision = make_decision
+        self.accepted = ~self.channel_reject.any(axis=2)
+        n_acc = self.accepted.sum(axis=1)
+        self.status = ["identified" if a == 1 else ("ambiguous" if a > 1 else "none") for a in n_acc]
+        self.labels = [self.models[int(np.argmax(row))] if a == 1 else None for row, a in zip(self.accepted, n_acc)]
+
+    def __len__(self) -> int:
+        return self.starts.size
+
+    def __getitem__(self, w: int) -> Identification:
+        w = int(w)
+        if w < 0:
+            w += len(self)
+        if not 0 <= w < len(self):
+            raise IndexError(f"window index out of range (0..{len(self) - 1})")
+        if self._decisions is not None:
+            dec = self._decisions[w]
+        else:
+            dec = {m: self._make_decision(i, self.statistic[w, i]) for i, m in enumerate(self.models)}
+        return Identification(decisions=dec, test=self.test, span=(int(self.starts[w]), int(self.stops[w])))
+
+    def __iter__(self):
+        return (self[w] for w in range(len(self)))
+
+    def to_frame(self):
+        """One row per window: start, stop, status, label."""
+        import pandas as pd
+
+        return pd.DataFrame({"start": self.starts, "stop": self.stops, "status": self.status, "label": self.labels})
+
+    def __repr__(self) -> str:
+        counts = {s: self.status.count(s) for s in ("identified", "ambiguous", "none")}
+        return f"WindowedIdentification(windows={len(self)}, models={self.models}, {counts})"
+
+
 def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = None, *, window: int,
-                     step: int = 1) -> list[Identification]:
+                     step: int = 1) -> WindowedIdentification:
     """:func:`identify` on every sliding window of one record.
 
     Window ``w`` covers signal samples ``[w * step, w * step + window)``. For a per-channel
     :class:`~tsfdi.LjungBox` the record is filtered once through each model (a fixed model's residuals of a
     window are a slice of the record's residuals) and all windows' statistics come from
-    :func:`~tsfdi.detection.whiteness.ljungbox_windows`; other tests are applied window by window.
+    :func:`~tsfdi.detection.whiteness.ljungbox_windows` (O(N * lags) for all windows); other tests are
+    applied window by window.
 
     Returns
     -------
-    list of Identification
-        One per window, with ``span = (start, stop)``.
+    WindowedIdentification
+        Arrays over windows, models and channels; ``result[w]`` is the :class:`Identification` of window ``w``
+        (with ``span = (start, stop)``), equal to ``identify(signal[start:stop], models, test)``.
     """
     test = _check_test(test)
     models = _check_models(models)
@@ -216,25 +293,29 @@ def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = N
     for name, res in models.items():
         _check_model(res, name, sig.nchan, "models")
     starts = np.arange(0, sig.nobs - window + 1, step)
+    names = tuple(models)
+    chans = tuple(sig.channels)
     if isinstance(test, LjungBox) and test.multivariate is None:
-        per_model = {}
+        qs, nres = [], []
         for name, res in models.items():
             p = int(res.lags)
             if window - p <= test.lags:
                 raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for "
                                  f"models {name!r}, got {window}")
             e = np.asarray(res.residuals(sig.values if sig.vector else sig.values[:, 0]), dtype=np.float64)
-            q = ljungbox_windows(e, test.lags, window - p, step, demean=test.demean)
-            per_model[name] = (q, window - p)
-        out = []
-        chans = tuple(sig.channels)
-        for w, s0 in enumerate(starts):
-            dec = {name: test._decision(q[w], n, chans) for name, (q, n) in per_model.items()}
-            out.append(Identification(decisions=dec, test=type(test).__name__, span=(int(s0), int(s0 + window))))
-        return out
+            qs.append(ljungbox_windows(e, test.lags, window - p, step, demean=test.demean))
+            nres.append(window - p)
+        q = np.stack(qs, axis=1)                                   # (W, M, k)
+        template = [test._decision(np.ones(sig.nchan), n, chans) for n in nres]
+        thr = np.stack([np.broadcast_to(t.threshold, (sig.nchan,)) for t in template])[None]
+        df = template[0].df[0]
+        arrays = {"statistic": q, "threshold": np.broadcast_to(thr, q.shape), "pvalue": special.chdtrc(df, q),
+                  "channel_reject": q > thr}
+        def make(i: int, stat_row: np.ndarray) -> Decision:
+            return test._decision(stat_row, nres[i], chans)
+
+        return WindowedIdentification(names, chans, starts, window, arrays=arrays, make_decision=make,
+                                      test=type(test).__name__)
     vals = sig.values if sig.vector else sig.values[:, 0]
-    out = []
-    for s0 in starts:
-        ident = identify(vals[s0:s0 + window], models, test)
-        out.append(Identification(decisions=ident.decisions, test=ident.test, span=(int(s0), int(s0 + window))))
-    return out
+    decisions = [identify(vals[s0:s0 + window], models, test).decisions for s0 in starts]
+    return WindowedIdentification(names, chans, starts, window, decisions, test=type(test).__name__)

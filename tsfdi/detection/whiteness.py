@@ -279,23 +279,52 @@ def ljungbox_windows(resid: Any, lags: int, window: int, step: int = 1, *, demea
     if window <= lags:
         raise ValueError(f"window must be > lags ({lags}), got {window}")
     x = x - x.mean(axis=0)  # global centring limits cancellation in the prefix sums
-    starts = np.arange(0, n_all - window + 1, step)
-    ends = starts + window
-    zero = np.zeros((1, k))
-    s1 = np.concatenate([zero, np.cumsum(x, axis=0)])
-    s2 = np.concatenate([zero, np.cumsum(x * x, axis=0)])
-    n = float(window)
-    mean = (s1[ends] - s1[starts]) / n if demean else np.zeros((starts.size, k))
-    gamma0 = s2[ends] - s2[starts] - n * mean * mean
-    if np.any(gamma0 <= 0):
+    starts = np.arange(0, n_all - window + 1, step, dtype=np.int64)
+    q = np.empty((starts.size, k))
+    for c in range(k):
+        q[:, c] = _windows_q(np.ascontiguousarray(x[:, c]), lags, window, starts, bool(demean))
+    if not np.all(np.isfinite(q)):
         raise ValueError("resid is constant within a window: autocorrelations are undefined")
-    q = np.zeros((starts.size, k))
+    return q
+
+
+@numba.njit(cache=True, nogil=True)
+def _windows_q(x, lags, window, starts, demean):  # pragma: no cover - compiled
+    n_all = x.shape[0]
+    nw = starts.shape[0]
+    s1 = np.zeros(n_all + 1)
+    s2 = np.zeros(n_all + 1)
+    for t in range(n_all):
+        s1[t + 1] = s1[t] + x[t]
+        s2[t + 1] = s2[t] + x[t] * x[t]
+    n = float(window)
+    mean = np.zeros(nw)
+    gamma0 = np.empty(nw)
+    for w in range(nw):
+        a = starts[w]
+        b = a + window
+        if demean:
+            mean[w] = (s1[b] - s1[a]) / n
+        gamma0[w] = s2[b] - s2[a] - n * mean[w] * mean[w]
+    q = np.zeros(nw)
+    p = np.zeros(n_all + 1)
     for lag in range(1, lags + 1):
-        p = np.concatenate([zero, np.cumsum(x[lag:] * x[:-lag], axis=0)])
-        lagsum = p[ends - lag] - p[starts]
-        head = s1[ends] - s1[starts + lag]          # sum of x_t, t in [start + lag, end)
-        tail = s1[ends - lag] - s1[starts]          # sum of x_{t-lag}
-        c = lagsum - mean * (head + tail) + (n - lag) * mean * mean
-        rho = c / gamma0
-        q += rho * rho / (n - lag)
-    return n * (n + 2) * q
+        # p[i] = sum_{t' < i} x[t' + lag] x[t']
+        for i in range(n_all - lag):
+            p[i + 1] = p[i] + x[i + lag] * x[i]
+        inv = 1.0 / (n - lag)
+        for w in range(nw):
+            a = starts[w]
+            b = a + window
+            m = mean[w]
+            lagsum = p[b - lag] - p[a]
+            head = s1[b] - s1[a + lag]
+            tail = s1[b - lag] - s1[a]
+            c = lagsum - m * (head + tail) + (n - lag) * m * m
+            r = c / gamma0[w]
+            q[w] += r * r * inv
+    for w in range(nw):
+        q[w] *= n * (n + 2)
+        if not gamma0[w] > 0:
+            q[w] = np.nan
+    return q
