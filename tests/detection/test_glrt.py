@@ -194,3 +194,14 @@ def test_bad_input():
             tsfdi.EmpiricalThreshold(a)
     with pytest.raises(ValueError, match="sigma"):
         tsfdi.GLRT(10, sigma=[1.0, 2.0]).test(np.ones((50, 3)))
+
+
+def test_scan_direct_and_threshold_kinds(kind):
+    rng = np.random.default_rng(40)
+    x = rng.standard_normal(500)
+    gl = tsfdi.GLRT(30, sigma=1.0)
+    sc = gl.scan(as_kind(x, kind))
+    np.testing.assert_allclose(sc.g[:, 0], glrt_direct(as_kind(x, kind), 30, 1.0))
+    s = rng.exponential(size=5000)
+    et = tsfdi.EmpiricalThreshold(0.01).calibrate(as_kind(s, kind))
+    assert et.threshold_ == pytest.approx(np.quantile(s, 0.99))

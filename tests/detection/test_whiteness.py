@@ -178,3 +178,24 @@ def test_bad_input():
     y[:, 1] = 2 * y[:, 0]
     with pytest.raises(ValueError, match="singular"):
         tsfdi.LjungBox(5, multivariate="hosking").test(y)
+
+
+@pytest.mark.slow
+def test_baseline_estimation_error_inflates_q_by_p_nu_over_n0():
+    """Documented in LjungBox: with a baseline fitted on N0 samples, E[Q] on new data is lags + p * Nu / N0.
+    With N0 = Nu (the papers' 2,000 / 2,000) an AR(6) baseline raises E[Q] by about 6."""
+    rng = np.random.default_rng(23)
+    reps, lags, p = 1000, 20, 6
+    base = _ar2(rng, 1000, reps)
+    new = _ar2(rng, 1000, reps)
+    q = np.array([tsfdi.detect(new[r], tsfdi.AR(base[r], p).fit(), tsfdi.LjungBox(lags)).statistic[0]
+                  for r in range(reps)])
+    se = q.std() / np.sqrt(reps)
+    assert abs(q.mean() - lags - p) < 4 * se, (q.mean(), se)
+
+
+def test_more_data_kinds(kind):
+    rng = np.random.default_rng(24)
+    x = rng.standard_normal((600, 2))
+    decs = tsfdi.LjungBox(10, 0.05).test_windows(as_kind(x, kind), 200, 100)
+    np.testing.assert_allclose(decs[2].statistic, tsfdi.LjungBox(10).test(x[200:400]).statistic)

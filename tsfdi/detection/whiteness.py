@@ -116,9 +116,11 @@ class LjungBox(ResidualTest):
     Li and McLeod (1981) :math:`Q = N \sum_{k=1}^{r} \mathrm{tr}(C_k^T C_0^{-1} C_k C_0^{-1}) + s^2 r (r+1)/(2N)`;
     both :math:`\sim \chi^2(s^2 r - \text{model\_df})`.
 
-    For residuals of a model fitted on one record and driven by a new record of the same length, the
-    estimation error of the baseline adds roughly ``p * N_u / N_0`` to :math:`E[Q]`; the chi-square(r) level is
-    accurate when the baseline record is much longer than the tested one.
+    Residuals of a baseline fitted on :math:`N_0` samples and driven by :math:`N_u` new samples carry the
+    baseline's estimation error: :math:`E[Q] \approx r + p N_u / N_0` for an AR(p) baseline (checked by Monte
+    Carlo in ``tests/detection/test_whiteness.py``). With :math:`N_0 = N_u` (the papers' 2,000 / 2,000) the
+    false-alarm rate is therefore above ``alpha``; the chi-square(r) level is accurate when the baseline record
+    is much longer than the tested one (or use a smaller ``alpha``, as the papers do).
 
     References
     ----------
