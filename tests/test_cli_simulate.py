@@ -1,0 +1,50 @@
+"""`tsfdi simulate`: writes a netCDF that regenerates make_hexacopter_dataset; bad input exits 2."""
+
+import subprocess
+import sys
+
+import numpy as np
+import xarray as xr
+
+from tsfdi.cli import COMMANDS, main
+from tsfdi.datasets import make_hexacopter_dataset
+
+
+def test_simulate_writes_dataset(tmp_path, capsys):
+    out = tmp_path / "h.nc"
+    rc = main(["simulate", "--out", str(out), "--records-per-case", "1", "--duration", "2", "--failure-time", "1",
+               "--states", "healthy,rotor2", "--turbulence", "light", "--seed", "3"])
+    assert rc == 0 and "wrote 2 records" in capsys.readouterr().out
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        ref = make_hexacopter_dataset(1, seed=3, duration=2.0, failure_time=1.0, states=("healthy", "rotor2"),
+                                      turbulence=("light",))
+        np.testing.assert_array_equal(ds["roll"].values, ref["roll"].values)
+        assert list(ds.state.values) == ["healthy", "rotor2"]
+
+
+def test_simulate_shipped_packing(tmp_path):
+    out = tmp_path / "s.nc"
+    assert main(["simulate", "--out", str(out), "--records-per-case", "1", "--duration", "1", "--failure-time",
+                 "0.5", "--states", "rotor1", "--turbulence", "severe", "--shipped"]) == 0
+    with xr.open_dataset(out, engine="h5netcdf", mask_and_scale=False) as ds:
+        assert ds["roll"].dtype == np.int16 and "p" not in ds
+
+
+def test_bad_input_exits_2(tmp_path, capsys):
+    rc = main(["simulate", "--out", str(tmp_path / "x.nc"), "--states", "rotor9", "--duration", "1"])
+    assert rc == 2 and "failed_rotor" in capsys.readouterr().err
+    rc = main(["simulate", "--out", str(tmp_path / "x.nc"), "--turbulence", "hurricane", "--duration", "1"])
+    assert rc == 2 and "turbulence" in capsys.readouterr().err
+    rc = main(["simulate", "--out", str(tmp_path / "x.nc"), "--dt", "0", "--duration", "1"])
+    assert rc == 2 and "dt" in capsys.readouterr().err
+
+
+def test_no_command_prints_help_and_registry(capsys):
+    assert main([]) == 2
+    assert "simulate" in capsys.readouterr().out
+    assert "simulate" in COMMANDS
+
+
+def test_module_entry_point():
+    r = subprocess.run([sys.executable, "-m", "tsfdi.cli", "simulate", "--help"], capture_output=True, text=True)
+    assert r.returncode == 0 and "--records-per-case" in r.stdout
