@@ -112,10 +112,11 @@ class ControllerGains:
     """Gains of the cascade controller (paper's Fig. 2), designed at hover by pole placement.
 
     The loops, from outside in: velocity (PI, heading frame) -> pitch/roll commands (limited to
-    ``max_tilt``); altitude (PID) -> collective Omega_0; attitude (PID) -> Omega_R, Omega_P; heading (PD)
-    -> Omega_Y. Controls are in rotor-speed units (rad/s) as in the paper's eq. 2. Attitude loop: natural
+    ``max_tilt``); altitude (PID) -> collective Omega_0; attitude (PID) -> Omega_R, Omega_P; heading (P,
+    yaw-rate command limited to ``max_yaw_rate``) -> yaw rate (PI, integrator frozen while the mixer scales
+    the yaw term) -> Omega_Y. Controls are in rotor-speed units (rad/s) as in the paper's eq. 2. Attitude loop: natural
     frequency ~8 rad/s, damping ~0.7 with the rotor-speed effectiveness 0.32 rad/s^2 per rad/s; altitude
-    loop ~2 rad/s; velocity loop ~1 rad/s; heading ~2 rad/s.
+    loop ~2 rad/s; velocity loop ~1 rad/s; heading 2 rad/s.
     """
 
     k_velocity: float = 0.15        # rad per m/s
