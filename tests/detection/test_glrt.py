@@ -120,9 +120,17 @@ def test_gpd_tail_threshold():
     g = np.asarray(gl.statistic(rng.standard_normal(2_000_000)))
     rate = np.mean(g > gl.threshold_)
     assert pf / 2 <= rate <= 2 * pf, rate
-    # the tail model agrees with the empirical exceedance at the fit location
+    # the tail model agrees with the empirical exceedance at the fit location and at the threshold
     et = gl.threshold
     assert et.exceedance(et.gpd_["location"] + 1e-9) == pytest.approx(et.gpd_["zeta"], rel=1e-6)
+    assert et.exceedance(et.threshold_) == pytest.approx(pf, rel=1e-6)
+    assert et.gpd_["shape"] == 0.0
+    # shape fitted by maximum likelihood as well
+    free = tsfdi.EmpiricalThreshold(pf, tail_shape=None).calibrate(gl.healthy_statistic_.ravel())
+    assert free.method_ == "gpd" and free.gpd_["shape"] != 0.0
+    assert free.exceedance(free.threshold_) == pytest.approx(pf, rel=1e-6)
+    fixed = tsfdi.EmpiricalThreshold(pf, tail_shape=0.1).calibrate(gl.healthy_statistic_.ravel())
+    assert fixed.gpd_["shape"] == 0.1 and fixed.exceedance(fixed.threshold_) == pytest.approx(pf, rel=1e-6)
 
 
 def test_calibration_sample_too_small():

@@ -160,6 +160,11 @@ class EmpiricalThreshold:
     max_extrapolation : float
         The tail fit may reach :math:`P_F` down to ``min_exceedances / (n * max_extrapolation)``; a smaller
         sample raises an error stating how many samples are needed.
+    tail_shape : float or None
+        Shape :math:`\xi` of the generalised Pareto tail. ``0`` (default): exponential excesses, the Gumbel
+        domain of attraction of a maximum of chi-square variables such as the GLRT statistic; its scale is the
+        mean excess. ``None``: :math:`\xi` fitted by maximum likelihood too (for other statistics; with
+        strongly dependent samples the fitted :math:`\xi` tends to be negative and the threshold too low).
 
     Attributes
     ----------
@@ -179,12 +184,13 @@ class EmpiricalThreshold:
     """
 
     def __init__(self, false_alarm: float = 1e-3, *, min_exceedances: int = 20, tail_fraction: float = 0.05,
-                 min_tail: int = 100, max_extrapolation: float = 100.0) -> None:
+                 min_tail: int = 100, max_extrapolation: float = 100.0, tail_shape: float | None = 0.0) -> None:
         self.false_alarm = probability(false_alarm, "false_alarm")
         self.min_exceedances = int_like(min_exceedances, "min_exceedances", minimum=1)
         self.tail_fraction = float_like(tail_fraction, "tail_fraction", minimum=0.0, maximum=0.5, strict_min=True)
         self.min_tail = int_like(min_tail, "min_tail", minimum=10)
         self.max_extrapolation = float_like(max_extrapolation, "max_extrapolation", minimum=1.0)
+        self.tail_shape = float_like(tail_shape, "tail_shape", minimum=-1.0, maximum=1.0, optional=True)
 
     def __repr__(self) -> str:
         fitted = f", threshold_={self.threshold_:.5g} ({self.method_})" if hasattr(self, "threshold_") else ""
@@ -233,7 +239,13 @@ class EmpiricalThreshold:
             if exc.size < self.min_tail or np.ptp(exc) == 0:
                 raise ValueError(f"statistic has only {exc.size} distinct excesses over its "
                                  f"{1 - self.tail_fraction:g} quantile; a longer healthy sample is needed")
-            xi, _, scale = stats.genpareto.fit(exc, floc=0.0)
+            if self.tail_shape is None:
+                xi, _, scale = stats.genpareto.fit(exc, floc=0.0)
+            elif self.tail_shape == 0.0:
+                xi, scale = 0.0, float(exc.mean())           # ML scale of exponential excesses
+            else:
+                xi = self.tail_shape
+                _, _, scale = stats.genpareto.fit(exc, f0=xi, floc=0.0)
             if abs(xi) < 1e-9:
                 thr = u - scale * math.log(pf / zeta)
             else:

@@ -184,7 +184,10 @@ class LjungBox(ResidualTest):
         k = q.shape[0]
         df = float(self.lags - self.model_df)
         a = self._channel_alpha(self.alpha, k, self.correction)
-        thr = special.chdtri(df, a)
+        key = (df, a)
+        if getattr(self, "_thr_key", None) != key:      # options are fixed; cache the critical value
+            self._thr_key, self._thr = key, float(special.chdtri(df, a))
+        thr = self._thr
         pv = special.chdtrc(df, q)
         rej = q > thr
         return Decision(statistic=q, threshold=np.full(k, thr), pvalue=pv, alpha=self.alpha,
