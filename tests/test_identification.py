@@ -249,3 +249,17 @@ def test_bad_input(models):
         tsfdi.identify(y, models, "ljungbox")
     with pytest.raises(ValueError, match="window"):
         identify_windows(y, models, tsfdi.LjungBox(10), window=1000)
+
+
+def test_detect_identify_arx_with_input():
+    rng = np.random.default_rng(9)
+    u = rng.standard_normal(3000)
+    y = sps.lfilter([0, 0.8, 0.3], [1, -0.5], u) + sps.lfilter([1], [1, -0.5], 0.1 * rng.standard_normal(3000))
+    res = tsfdi.ARX(y[:2000], u[:2000], 1, 2, nk=1).fit()
+    d = tsfdi.detect(y[2000:], res, tsfdi.FTest(1e-3), u=u[2000:])
+    np.testing.assert_allclose(d.statistic, tsfdi.FTest(1e-3).test(res.residuals(y[2000:], u[2000:]),
+                                                                      **tsfdi.FTest().reference(res)).statistic)
+    assert not d.reject
+    yf = sps.lfilter([0, 0.4, 0.3], [1, -0.5], u) + 0.1 * rng.standard_normal(3000)
+    ident = tsfdi.identify(yf[2000:], {"healthy": res}, tsfdi.FTest(1e-3), u=u[2000:])
+    assert ident.status == "none"

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import html
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -44,7 +44,7 @@ def _check_model(res: Any, name: str, nchan: int, arg: str) -> None:
         raise ValueError(f"signal has {nchan} channel(s) but {arg} {name!r} was fitted on {neqs} channel(s)")
 
 
-def detect(signal: Any, baseline: Any, test: ResidualTest | None = None) -> Decision:
+def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: Any = None) -> Decision:
     """Healthy-vs-fault decision: drive ``signal`` through ``baseline`` and test the residuals.
 
     Parameters
@@ -57,6 +57,8 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None) -> Deci
         :class:`~tsfdi.FTest`, :class:`~tsfdi.LjungBox` (default, ``lags=20``) or :class:`~tsfdi.GLRT`.
         What the test needs from the baseline (reference variance and degrees of freedom for the F test,
         sigma for the GLRT) is taken from the fitted results.
+    u : array_like, optional
+        Input signal for an input-output baseline (``tsfdi.ARX(...).fit()``), passed to its ``residuals``.
 
     Returns
     -------
@@ -66,7 +68,7 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None) -> Deci
     test = _check_test(test)
     sig = as_signal(signal, "signal", allow_constant=True)
     _check_model(baseline, "baseline", sig.nchan, "baseline")
-    resid = baseline.residuals(signal)
+    resid = baseline.residuals(signal) if u is None else baseline.residuals(signal, u)
     return test.test(resid, **test.reference(baseline))
 
 
@@ -87,7 +89,6 @@ class Identification:
     decisions: dict
     test: str = ""
     span: tuple | None = None
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def accepted(self) -> tuple:
@@ -163,7 +164,7 @@ def _check_models(models: Any) -> Mapping:
     return models
 
 
-def identify(signal: Any, models: Mapping, test: ResidualTest | None = None) -> Identification:
+def identify(signal: Any, models: Mapping, test: ResidualTest | None = None, *, u: Any = None) -> Identification:
     """Multi-class identification by one binary test per candidate model (Dutta et al., eq. 11 and the
     residual uncorrelatedness method).
 
@@ -176,6 +177,8 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None) -> 
         model and one model per fault type. All must have the signal's number of channels.
     test : ResidualTest, optional
         The test applied to each model's residuals (default ``LjungBox()``).
+    u : array_like, optional
+        Input signal when the candidates are input-output models (``tsfdi.ARX``).
 
     Returns
     -------
@@ -188,7 +191,7 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None) -> 
         _check_model(res, name, sig.nchan, "models")
     decisions = {}
     for name, res in models.items():
-        resid = res.residuals(signal)
+        resid = res.residuals(signal) if u is None else res.residuals(signal, u)
         decisions[name] = test.test(resid, **test.reference(res))
     return Identification(decisions=decisions, test=type(test).__name__)
 
