@@ -248,3 +248,523 @@ class OnlineDetector:
                                resid=sy.wrap(E, 0, channels=names, vector=True),
                                alarm=A, first_alarms=fa, first_alarm=first, first_alarm_time=first_time,
                                first_alarm_pair=pair)
+
+
+# =====================================================================================================================
+# Monitor: sliding windows -> detection with the healthy model -> steady-state check -> identification
+# (Dutta et al., paper 003, Fig. 3 and the Fig. 7 discussion).
+# =====================================================================================================================
+
+from collections.abc import Mapping  # noqa: E402
+
+from scipy import special as _special  # noqa: E402
+
+__all__ += ["Monitor", "MonitorResult", "MonitorEvent", "window_statistics", "rolling_variance", "RULES"]
+
+#: Decision rules of :class:`Monitor` and :func:`tsfdi.evaluate`. ``"paper"``: a model is accepted when its residual
+#: test does not reject; one accepted model is an identification, several are ambiguous, none is no decision
+#: (Dutta et al.). ``"likelihood"``: among the accepted models (all models when none is accepted) take the one whose
+#: residuals have the largest Gaussian log-likelihood on the window (smallest log-determinant of the window's residual
+#: covariance, on samples common to every model). ``"pvalue"``: the same with the largest signal-level p-value
+#: (the smallest channel p-value of each model).
+RULES = ("paper", "likelihood", "pvalue")
+
+
+def _seconds_to_samples(value: Any, name: str, fs: float, minimum: int = 1) -> int:
+    v = float_like(value, name, minimum=0.0, strict_min=True)
+    n = int(round(v * fs))
+    if n < minimum:
+        raise ValueError(f"{name} = {v} s is {n} sample(s) at fs = {fs} Hz; at least {minimum} are needed")
+    return n
+
+
+def rolling_variance(signal: Any, window: int, step: int = 1) -> np.ndarray:
+    """Variance of every channel over sliding windows (Dutta et al., Fig. 7).
+
+    Parameters
+    ----------
+    signal : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, k)
+    window : int
+        Window length in samples.
+    step : int
+        Samples between window starts.
+
+    Returns
+    -------
+    ndarray, shape (n_windows, k)
+        Variance (``ddof=0``) of window ``w`` = samples ``[w * step, w * step + window)``, from prefix sums of the
+        globally centred signal.
+    """
+    sig = as_signal(signal, "signal", allow_constant=True)
+    window = int_like(window, "window", minimum=2)
+    step = int_like(step, "step", minimum=1)
+    return _rolling_variance(sig.values, window, step)
+
+
+def _rolling_variance(x: np.ndarray, window: int, step: int) -> np.ndarray:
+    n_all = x.shape[0]
+    if window > n_all:
+        raise ValueError(f"window must be <= the signal length {n_all}, got {window}")
+    x = x - x.mean(axis=0)
+    zero = np.zeros((1, x.shape[1]))
+    s1 = np.concatenate([zero, np.cumsum(x, axis=0)])
+    s2 = np.concatenate([zero, np.cumsum(x * x, axis=0)])
+    starts = np.arange(0, n_all - window + 1, step)
+    m = (s1[starts + window] - s1[starts]) / window
+    return np.maximum((s2[starts + window] - s2[starts]) / window - m * m, 0.0)
+
+
+def _model_channels(res: Any, values: np.ndarray) -> np.ndarray:
+    neqs = int(getattr(res, "neqs", 1))
+    if neqs != values.shape[1]:
+        raise ValueError(f"signal has {values.shape[1]} channel(s) but a model was fitted on {neqs}")
+    e = res.residuals(values if neqs > 1 else values[:, 0])
+    return np.asarray(e, dtype=np.float64).reshape(-1, neqs)
+
+
+def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, step: int = 1,
+                      common: int | None = None) -> dict:
+    r"""Residual test of every model on every sliding window of one record, all windows at once.
+
+    The record is filtered once through each (fixed) model; the residuals of a signal window are a slice of the
+    record's residuals (samples ``[s + p, s + W)`` of window ``[s, s + W)`` for an order-``p`` model), so every
+    window's statistic comes from prefix sums: :func:`~tsfdi.detection.ljungbox_windows` for
+    :class:`~tsfdi.LjungBox` (per channel), windowed sums of squares for :class:`~tsfdi.FTest`.
+
+    Parameters
+    ----------
+    signal : array_like, DataFrame or DataArray, shape (nobs, k) or (nobs,)
+    models : mapping
+        Name -> fitted AR / VAR results with ``k`` channels.
+    test : LjungBox or FTest
+        Per-channel test (``LjungBox(multivariate=None)`` or ``FTest(alternative="greater")``); other tests
+        are applied window by window through their ``test`` method.
+    window, step : int
+        Window length and step in samples.
+    common : int, optional
+        Largest model order over which the likelihood score is aligned (default: the largest order in
+        ``models``); the score of every model uses signal samples ``[s + common, s + W)``.
+
+    Returns
+    -------
+    dict
+        ``starts`` (n_windows,) window starts; and per model name arrays ``statistic``, ``pvalue``,
+        ``channel_reject`` (n_windows, k), ``reject`` (n_windows,), ``threshold`` (k,) under ``"decisions"``;
+        ``loglik`` (n_models, n_windows) Gaussian log-likelihood per sample of each model's residuals on the
+        common samples with the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
+    """
+    from tsfdi.detection.variance import FTest
+    from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
+
+    sig = as_signal(signal, "signal", allow_constant=True)
+    x = sig.values
+    window = int_like(window, "window", minimum=2)
+    step = int_like(step, "step", minimum=1)
+    if not isinstance(models, Mapping) or not models:
+        raise TypeError("models must be a non-empty mapping name -> fitted results")
+    if window > sig.nobs:
+        raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
+    orders = {name: int(res.lags) for name, res in models.items()}
+    pmax = max(orders.values()) if common is None else int_like(common, "common", minimum=0)
+    if window - pmax < 3:
+        raise ValueError(f"window ({window}) must exceed the largest model order ({pmax}) by at least 3 samples")
+    starts = np.arange(0, sig.nobs - window + 1, step)
+    nwin, k = starts.size, sig.nchan
+    decisions: dict = {}
+    loglik = np.empty((len(models), nwin))
+    for j, (name, res) in enumerate(models.items()):
+        p = orders[name]
+        e = _model_channels(res, x)
+        n = window - p
+        if isinstance(test, LjungBox) and test.multivariate is None:
+            if n <= test.lags:
+                raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model "
+                                 f"{name!r}, got {window}")
+            stat = ljungbox_windows(e, test.lags, n, step, demean=test.demean)
+            df = float(test.lags - test.model_df)
+            a = test._channel_alpha(test.alpha, k, test.correction)
+            thr = np.full(k, _special.chdtri(df, a))
+            pv = _special.chdtrc(df, stat)
+        elif isinstance(test, FTest) and test.alternative == "greater":
+            ref = test.reference(res)
+            var0, df0 = np.asarray(ref["reference_variance"]), np.asarray(ref["reference_df"])
+            zero = np.zeros((1, k))
+            c2 = np.concatenate([zero, np.cumsum(e * e, axis=0)])[starts + n] - \
+                np.concatenate([zero, np.cumsum(e * e, axis=0)])[starts]
+            if test.demean:
+                c1 = np.concatenate([zero, np.cumsum(e, axis=0)])
+                s1 = c1[starts + n] - c1[starts]
+                nu = n - 1
+                var_u = (c2 - s1 * s1 / n) / nu
+            else:
+                nu = n
+                var_u = c2 / n
+            stat = var_u / var0
+            a = test._channel_alpha(test.alpha, k, test.correction)
+            thr = _special.fdtri(float(nu), df0, 1.0 - a)
+            pv = _special.fdtrc(float(nu), df0, stat)
+        else:
+            ds = [test.test(e[s:s + n], **test.reference(res)) for s in starts]
+            stat = np.array([d.statistic for d in ds])
+            pv = np.array([d.pvalue for d in ds])
+            thr = ds[0].threshold if ds else np.full(k, np.nan)
+            rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
+            decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr),
+                               "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}
+            stat = None
+        if stat is not None:
+            rej_c = stat > thr
+            decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr, dtype=float),
+                               "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}
+        # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
+        off = pmax - p
+        m = window - pmax
+        ee = (e[:, :, None] * e[:, None, :]).reshape(e.shape[0], k * k)
+        cs = np.concatenate([np.zeros((1, k * k)), np.cumsum(ee, axis=0)])
+        c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
+        lo, hi = starts + off, starts + off + m
+        mu = (c1[hi] - c1[lo]) / m
+        cov = ((cs[hi] - cs[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
+        sign, logdet = np.linalg.slogdet(cov)
+        logdet = np.where(sign > 0, logdet, np.inf)
+        loglik[j] = -0.5 * (logdet + k * np.log(2 * np.pi) + k)
+    return {"starts": starts, "decisions": decisions, "loglik": loglik, "names": tuple(models), "channels":
+            tuple(sig.channels)}
+
+
+def apply_rule(reject: np.ndarray, loglik: np.ndarray, pvalue: np.ndarray, rule: str = "paper") -> np.ndarray:
+    """Label index per window from the per-model decisions (see :data:`RULES`).
+
+    Parameters
+    ----------
+    reject : ndarray of bool, shape (n_models, n_windows)
+        Whether each model's residual test rejects on each window.
+    loglik : ndarray, shape (n_models, n_windows)
+        Residual log-likelihood per sample of each model on each window (:func:`window_statistics`).
+    pvalue : ndarray, shape (n_models, n_windows)
+        Signal-level p-value of each model on each window (smallest channel p-value).
+    rule : {"paper", "likelihood", "pvalue"}
+
+    Returns
+    -------
+    ndarray of int, shape (n_windows,)
+        Index of the identified model; ``-1`` no decision, ``-2`` ambiguous (``"paper"`` only).
+    """
+    rule = option(rule, "rule", RULES)
+    reject = np.asarray(reject, dtype=bool)
+    acc = ~reject
+    nacc = acc.sum(axis=0)
+    if rule == "paper":
+        out = np.where(nacc == 1, np.argmax(acc, axis=0), np.where(nacc == 0, -1, -2))
+        return out.astype(int)
+    score = np.asarray(loglik if rule == "likelihood" else pvalue, dtype=float)
+    score = np.where(np.isnan(score), -np.inf, score)
+    masked = np.where(acc | (nacc == 0)[None, :], score, -np.inf)
+    out = np.argmax(masked, axis=0).astype(int)
+    out[~np.isfinite(masked.max(axis=0))] = -1
+    return out
+
+
+@dataclass(frozen=True)
+class MonitorEvent:
+    """One event of a :class:`Monitor`.
+
+    Attributes
+    ----------
+    time : float
+        Time in seconds from the start of the stream (the end of the window that produced the event).
+    kind : {"detection", "steady", "identification"}
+        Fault detected by the healthy model; post-failure steady state reached (rolling variances below the
+        baseline thresholds); a window identified.
+    label : str or None
+        The identified model (identification events; ``None`` for an ambiguous or empty decision).
+    status : str
+        ``"fault"``, ``"steady"`` or the identification status ``"identified"``, ``"ambiguous"``, ``"none"``.
+    accepted : tuple of str
+        Models accepted by the residual test (identification events).
+    window : tuple of float
+        ``(start, end)`` time of the window in seconds.
+    """
+
+    time: float
+    kind: str
+    label: str | None = None
+    status: str = ""
+    accepted: tuple = ()
+    window: tuple = ()
+
+
+@dataclass(frozen=True, eq=False)
+class MonitorResult:
+    """Outcome of :meth:`Monitor.run`.
+
+    Attributes
+    ----------
+    events : list of MonitorEvent
+    windows : pandas.DataFrame
+        One row per window: ``start``, ``end`` (s), ``detect_statistic`` (largest channel statistic/threshold
+        ratio of the healthy model), ``detect_pvalue``, ``fault`` (healthy model rejects), ``phase`` ("healthy",
+        "transient", "steady"), ``status``, ``label``, ``accepted``, and the rolling variance of every channel.
+    detection_time, steady_time : float or None
+        Time of the first detection / steady-state event.
+    label : str or None
+        Most frequent label over the identified windows (``None`` if none).
+    """
+
+    events: list
+    windows: pd.DataFrame
+    detection_time: float | None
+    steady_time: float | None
+    label: str | None
+
+    def to_frame(self) -> pd.DataFrame:
+        """The events as a ``DataFrame`` (one row per event)."""
+        return pd.DataFrame([{"time": e.time, "kind": e.kind, "label": e.label, "status": e.status,
+                              "accepted": ",".join(e.accepted), "window_start": e.window[0] if e.window else np.nan,
+                              "window_end": e.window[1] if e.window else np.nan} for e in self.events],
+                            columns=["time", "kind", "label", "status", "accepted", "window_start", "window_end"])
+
+    def plot(self, ax: Any = None) -> Any:
+        """Rolling variances against time with the steady-state thresholds and events (Dutta et al., Fig. 7)."""
+        from tsfdi.plotting.monitoring import plot_monitor
+
+        return plot_monitor(self, ax=ax)
+
+    def __repr__(self) -> str:
+        return (f"MonitorResult(windows={len(self.windows)}, events={len(self.events)}, detection_time="
+                f"{self.detection_time}, steady_time={self.steady_time}, label={self.label!r})")
+
+
+class Monitor:
+    r"""Sliding-window fault detection and identification (Dutta et al., Fig. 3).
+
+    Every window of ``window`` seconds, ``step`` seconds apart, goes through three phases:
+
+    1. *healthy*: the window's residuals through the healthy ``baseline`` model are tested with
+       ``detection_test``; the first rejection is a ``"detection"`` event at the window's end.
+    2. *transient*: the rolling variance of every channel over ``steady_window`` seconds is compared with
+       ``steady_thresholds`` (estimated in the baseline phase as the largest steady-state variances of the
+       fault records, Fig. 7 discussion); the first variance window lying wholly after the detection with every
+       channel below its threshold is a ``"steady"`` event.
+    3. *steady*: every window starting at or after the start of that variance window is identified: its
+       residuals through each fault model in ``models`` are tested with ``test``, and ``rule`` turns the
+       decisions into a label (``"identification"`` event per window).
+
+    Parameters
+    ----------
+    baseline : fitted results
+        Healthy model :math:`M_0` (AR or VAR results).
+    models : mapping
+        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels.
+    window : float
+        Window length in seconds (samples when ``fs = 1``).
+    step : float
+        Seconds between window starts (default: 1 s as in the paper, at least one sample).
+    fs : float
+        Sampling frequency in Hz.
+    test : ResidualTest, optional
+        Identification test, :class:`~tsfdi.LjungBox` (default ``LjungBox(lags=25, alpha=1e-3)``) or
+        :class:`~tsfdi.FTest`.
+    detection_test : ResidualTest, optional
+        Detection test on the healthy model's residuals (default: ``test``).
+    steady_thresholds : array_like, shape (k,), optional
+        Rolling-variance thresholds per channel; ``None`` skips the steady-state check (identification starts
+        with the first window after the detection).
+    steady_window : float
+        Length of the rolling-variance window in seconds (default 10 s, the paper's).
+    rule : {"paper", "likelihood", "pvalue"}
+        Decision rule (see :data:`RULES`).
+
+    Notes
+    -----
+    :meth:`run` filters the record once through each model and computes every window's statistic from prefix
+    sums (:func:`window_statistics`); :meth:`update` feeds a stream chunk by chunk and gives the same events as
+    :meth:`run` on the concatenated stream.
+
+    References
+    ----------
+    Dutta, McKay, Kopsaftopoulos, Gandhi, *Statistical Time Series Methods for Multicopter Fault Detection and
+    Identification* (paper 003), Fig. 3, Fig. 7 and eqs. 8-14.
+    """
+
+    def __init__(self, baseline: Any, models: Mapping, *, window: float, step: float | None = None,
+                 fs: float = 1.0, test: Any = None, detection_test: Any = None, steady_thresholds: Any = None,
+                 steady_window: float | None = None, rule: str = "paper") -> None:
+        from tsfdi.detection.base import ResidualTest
+        from tsfdi.detection.whiteness import LjungBox
+
+        self.fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
+        if not hasattr(baseline, "residuals"):
+            raise TypeError(f"baseline must be fitted results (AR or VAR) with a residuals() method, got "
+                            f"{type(baseline).__name__}")
+        if not isinstance(models, Mapping) or not models:
+            raise TypeError("models must be a non-empty mapping name -> fitted fault models")
+        for name, res in models.items():
+            if not hasattr(res, "residuals"):
+                raise TypeError(f"models[{name!r}] must be fitted results, got {type(res).__name__}")
+            if int(getattr(res, "neqs", 1)) != int(getattr(baseline, "neqs", 1)):
+                raise ValueError(f"models[{name!r}] has {getattr(res, 'neqs', 1)} channel(s) but baseline has "
+                                 f"{getattr(baseline, 'neqs', 1)}")
+        self.baseline = baseline
+        self.models = dict(models)
+        self.nchan = int(getattr(baseline, "neqs", 1))
+        self.window_n = _seconds_to_samples(window, "window", self.fs, minimum=3)
+        self.step_n = max(1, int(round(self.fs))) if step is None else _seconds_to_samples(step, "step", self.fs)
+        self.window = self.window_n / self.fs
+        self.step = self.step_n / self.fs
+        test = LjungBox(lags=25, alpha=1e-3) if test is None else test
+        if not isinstance(test, ResidualTest):
+            raise TypeError(f"test must be a residual test (LjungBox, FTest), got {type(test).__name__}")
+        detection_test = test if detection_test is None else detection_test
+        if not isinstance(detection_test, ResidualTest):
+            raise TypeError(f"detection_test must be a residual test, got {type(detection_test).__name__}")
+        self.test, self.detection_test = test, detection_test
+        self.rule = option(rule, "rule", RULES)
+        sw = 10.0 if steady_window is None else steady_window
+        self.steady_window_n = _seconds_to_samples(sw, "steady_window", self.fs, minimum=2)
+        if steady_thresholds is None:
+            self.steady_thresholds = None
+        else:
+            thr = np.asarray(steady_thresholds, dtype=np.float64).ravel()
+            if thr.shape != (self.nchan,) or not np.all(np.isfinite(thr)) or np.any(thr <= 0):
+                raise ValueError(f"steady_thresholds must hold {self.nchan} finite positive variance(s), got "
+                                 f"{steady_thresholds!r}")
+            self.steady_thresholds = thr
+        self.reset()
+
+    def __repr__(self) -> str:
+        return (f"Monitor(models={list(self.models)}, window={self.window:g} s, step={self.step:g} s, fs={self.fs:g}, "
+                f"rule={self.rule!r})")
+
+    def reset(self) -> None:
+        """Forget the stream: back to the healthy phase at time 0."""
+        self._buffer = np.empty((0, self.nchan))
+        self._offset = 0           # stream position of _buffer[0]
+        self._next = 0             # stream position of the next window start
+        self._phase = "healthy"
+        self._detect_pos: int | None = None
+        self._steady_pos: int | None = None
+        self._rows: list = []
+        self._events: list = []
+
+    # ------------------------------------------------------------------------------------------------------------
+    def _values(self, signal: Any) -> np.ndarray:
+        sig = as_signal(signal, "signal", allow_constant=True)
+        if sig.nchan != self.nchan:
+            raise ValueError(f"signal has {sig.nchan} channel(s) but the models have {self.nchan}")
+        return sig.values
+
+    def _t(self, pos: int) -> float:
+        return round(pos / self.fs, 9)
+
+    def _process(self, x: np.ndarray, pos0: int, hist: int) -> list:
+        """Windows starting at ``x[hist]``, ``x[hist + step]``, ...; ``x[0]`` is stream position ``pos0``.
+
+        The ``hist`` samples before the first window only feed the rolling variance."""
+        W, S, V = self.window_n, self.step_n, self.steady_window_n
+        body = x[hist:]
+        if body.shape[0] < W:
+            return []
+        det = window_statistics(body, {"healthy": self.baseline}, self.detection_test, window=W, step=S)
+        d0 = det["decisions"]["healthy"]
+        ident = window_statistics(body, self.models, self.test, window=W, step=S)
+        names = ident["names"]
+        rej = np.array([ident["decisions"][n]["reject"] for n in names])
+        pmin = np.array([ident["decisions"][n]["pvalue"].min(axis=1) for n in names])
+        labels = apply_rule(rej, ident["loglik"], pmin, self.rule)
+        paper = apply_rule(rej, ident["loglik"], pmin, "paper")
+        new_events = []
+        for w, s in enumerate(det["starts"]):
+            i0 = hist + int(s)                      # window start in x
+            start = pos0 + i0
+            end = start + W
+            lo = i0 + W - V                         # rolling-variance window [lo, i0 + W) in x
+            var = x[lo:i0 + W].var(axis=0) if lo >= 0 else np.full(self.nchan, np.nan)
+            fault = bool(d0["reject"][w])
+            row = {"start": self._t(start), "end": self._t(end),
+                   "detect_statistic": float(np.max(d0["statistic"][w] / d0["threshold"])),
+                   "detect_pvalue": float(np.min(d0["pvalue"][w])), "fault": fault}
+            for c in range(self.nchan):
+                row[f"variance_{c}"] = float(var[c])
+            if self._phase == "healthy" and fault:
+                self._phase = "transient"
+                self._detect_pos = end
+                new_events.append(MonitorEvent(self._t(end), "detection", None, "fault",
+                                               window=(self._t(start), self._t(end))))
+                if self.steady_thresholds is None:
+                    self._phase, self._steady_pos = "steady", start
+                    new_events.append(MonitorEvent(self._t(end), "steady", None, "steady",
+                                                   window=(self._t(start), self._t(end))))
+            if self._phase == "transient":
+                var_start = pos0 + lo
+                if lo >= 0 and var_start >= self._detect_pos and np.all(var <= self.steady_thresholds):
+                    self._phase, self._steady_pos = "steady", var_start
+                    new_events.append(MonitorEvent(self._t(end), "steady", None, "steady",
+                                                   window=(self._t(var_start), self._t(end))))
+            row["phase"] = self._phase
+            status, label, acc = "", None, ()
+            if self._phase == "steady" and start >= self._steady_pos:
+                acc = tuple(n for j, n in enumerate(names) if not rej[j, w])
+                status = "identified" if paper[w] >= 0 else ("none" if paper[w] == -1 else "ambiguous")
+                label = names[labels[w]] if labels[w] >= 0 else None
+                new_events.append(MonitorEvent(self._t(end), "identification", label, status, acc,
+                                               (self._t(start), self._t(end))))
+            row.update({"status": status, "label": label, "accepted": ",".join(acc)})
+            self._rows.append(row)
+        self._events.extend(new_events)
+        return new_events
+
+    def update(self, samples: Any) -> list:
+        """Feed the next samples of a stream; returns the events of the windows they complete.
+
+        Parameters
+        ----------
+        samples : array_like, DataFrame or DataArray, shape (n, k)
+            New samples (time on axis 0), continuing the stream.
+
+        Returns
+        -------
+        list of MonitorEvent
+        """
+        x = self._values(samples)
+        self._buffer = np.concatenate([self._buffer, x])
+        end = self._offset + self._buffer.shape[0]
+        W, S = self.window_n, self.step_n
+        if end - self._next < W:
+            return []
+        nwin = (end - self._next - W) // S + 1
+        hist = self._next - self._offset
+        seg = self._buffer[:hist + (nwin - 1) * S + W]
+        events = self._process(seg, self._offset, hist)
+        self._next += nwin * S
+        keep = max(self._offset, self._next - max(self.steady_window_n - W, 0))
+        self._buffer = self._buffer[keep - self._offset:]
+        self._offset = keep
+        return events
+
+    def run(self, signal: Any) -> MonitorResult:
+        """Monitor a whole record from time 0 (resets the monitor first).
+
+        Parameters
+        ----------
+        signal : array_like, DataFrame or DataArray, shape (nobs, k)
+
+        Returns
+        -------
+        MonitorResult
+        """
+        self.reset()
+        self.update(signal)
+        return self.result()
+
+    def result(self) -> MonitorResult:
+        """Events and per-window table of everything fed so far."""
+        cols = ["start", "end", "detect_statistic", "detect_pvalue", "fault"] + \
+            [f"variance_{c}" for c in range(self.nchan)] + ["phase", "status", "label", "accepted"]
+        frame = pd.DataFrame(self._rows, columns=cols)
+        ident = frame["label"][frame["status"] != ""].dropna()
+        label = ident.value_counts().idxmax() if len(ident) else None
+        det = next((e.time for e in self._events if e.kind == "detection"), None)
+        st = next((e.time for e in self._events if e.kind == "steady"), None)
+        return MonitorResult(events=list(self._events), windows=frame, detection_time=det, steady_time=st,
+                             label=label)

@@ -1,0 +1,734 @@
+"""Baseline phase and evaluation of the whole method over many records (Dutta et al., paper 003, Tables 2-4).
+
+:func:`fit_baselines` fits, for every aircraft state, a scalar AR model on each channel and a VAR model on all
+channels with the order chosen by BIC (:func:`tsfdi.select_order`), and estimates the steady-state
+rolling-variance thresholds; :attr:`Baselines.table` is the analogue of the paper's Table 2.
+:func:`evaluate` then runs detection with the healthy model and identification with the fault models on every
+sliding window of every record that was *not* used for fitting, for the models x methods x window lengths x
+turbulence levels asked for, and returns an :class:`Evaluation` holding the per-window outcomes, the Table 4
+analogue (percent of windows of each true failure accepted as each rotor), unique-correct, ambiguity and
+no-decision rates, detection false-alarm and missed-fault rates and detection delays.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tsfdi._data import as_signal, is_xarray
+from tsfdi._validation import float_like, int_like, option, probability
+from tsfdi.monitoring import RULES, Monitor, _rolling_variance, apply_rule, window_statistics
+
+__all__ = ["Baselines", "Evaluation", "Records", "evaluate", "fit_baselines", "hexacopter_signals", "PAPER_ALPHA",
+           "METHODS", "RULES"]
+
+#: Identification methods: the residual variance F test and the residual whiteness (Ljung-Box) test.
+METHODS = ("whiteness", "variance")
+
+#: Type I risk of each method and model family in the paper's Table 3 (scalar AR on roll / pitch / yaw, VAR).
+PAPER_ALPHA = {("variance", "roll"): 1e-6, ("variance", "pitch"): 1e-12, ("variance", "yaw"): 1e-12,
+               ("variance", "var"): 1e-8, ("whiteness", "roll"): 1e-3, ("whiteness", "pitch"): 1e-3,
+               ("whiteness", "yaw"): 1e-3, ("whiteness", "var"): 1e-3}
+
+
+def _paper_alpha(method: str, model: str) -> float:
+    key = "yaw" if model.startswith("yaw") else model
+    return PAPER_ALPHA.get((method, key), 1e-3 if method == "whiteness" else 1e-8)
+
+
+# ------------------------------------------------------------------------------------------------------------- data
+def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
+    """Roll, pitch and yaw channels of a hexacopter dataset as one ``(record, time, channel)`` DataArray.
+
+    Parameters
+    ----------
+    data : xarray.Dataset
+        As returned by :func:`tsfdi.datasets.load_hexacopter` (variables ``roll``, ``pitch``, ``yaw``).
+    yaw : {"rate", "angle"}
+        ``"rate"`` (default): the heading increment times ``fs`` (rad/s), channel ``yaw_rate``. After a rotor
+        failure the simulated hexacopter loses yaw authority and turns at about 1.3 rad/s, so the heading angle
+        is an integrated, non-stationary signal that no stationary AR model fits; its increment is stationary.
+        The first sample is dropped so every channel has the same time axis. ``"angle"``: the raw heading.
+
+    Returns
+    -------
+    xarray.DataArray
+        Dims ``(record, time, channel)`` with the dataset's record coordinates.
+    """
+    import xarray as xr
+
+    if not isinstance(data, xr.Dataset):
+        raise TypeError(f"data must be an xarray.Dataset with roll, pitch and yaw variables, got "
+                        f"{type(data).__name__}")
+    yaw = option(yaw, "yaw", ("rate", "angle"))
+    missing = [v for v in ("roll", "pitch", "yaw") if v not in data]
+    if missing:
+        raise ValueError(f"data lacks the variable(s) {missing}")
+    t = np.asarray(data["time"].values, dtype=float)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64) for v in ("roll", "pitch", "yaw")]
+    if yaw == "rate":
+        arrs = [a[:, 1:] for a in arrs[:2]] + [np.diff(arrs[2], axis=1) * fs]
+        t = t[1:]
+        names = ["roll", "pitch", "yaw_rate"]
+    else:
+        names = ["roll", "pitch", "yaw"]
+    vals = np.stack(arrs, axis=-1)
+    coords = {k: (("record",), np.asarray(c.values)) for k, c in data.coords.items()
+              if c.dims == ("record",) and k != "record"}
+    coords["record"] = np.asarray(data["record"].values)
+    coords["time"] = t
+    coords["channel"] = names
+    if "lost_control" in data:
+        coords["lost_control"] = (("record",), np.asarray(data["lost_control"].values, dtype=bool))
+    return xr.DataArray(vals, dims=("record", "time", "channel"), coords=coords, name="attitude")
+
+
+@dataclass(frozen=True, eq=False)
+class Records:
+    """Many records of the same channels, normalised from an xarray object or a sequence of signals.
+
+    Attributes
+    ----------
+    values : list of ndarray, each (nobs, k)
+    state, turbulence : ndarray of str
+    failure_time : ndarray of float (NaN for healthy records)
+    ids : ndarray
+        Record identifiers.
+    valid : ndarray of bool
+        False for records that cannot be used (lost control: NaN after the loss).
+    channels : tuple of str
+    fs : float
+    """
+
+    values: list
+    state: np.ndarray
+    turbulence: np.ndarray
+    failure_time: np.ndarray
+    ids: np.ndarray
+    valid: np.ndarray
+    channels: tuple
+    fs: float
+
+    @classmethod
+    def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
+                  fs: float | None = None, name: str = "data") -> Records:
+        """Build from a hexacopter ``Dataset``, a ``(record, time, channel)`` DataArray or a sequence of
+        signals (numpy / pandas / xarray, each ``(nobs, k)``) with ``states`` (and optional ``failure_times``,
+        ``turbulence``) given per record."""
+        if isinstance(data, Records):
+            return data
+        import xarray as xr
+
+        if isinstance(data, xr.Dataset):
+            data = hexacopter_signals(data)
+        if isinstance(data, xr.DataArray) and data.ndim == 3 and "record" in data.dims:
+            da = data.transpose("record", "time", ...)
+            t = np.asarray(da["time"].values, dtype=float)
+            fs_ = 1.0 / float(np.median(np.diff(t))) if fs is None else float_like(fs, "fs", minimum=0.0,
+                                                                                    strict_min=True)
+            n = da.sizes["record"]
+
+            def coord(key, given, default):
+                if given is not None:
+                    return np.asarray(given)
+                return np.asarray(da[key].values) if key in da.coords else np.full(n, default)
+
+            st = coord("state", states, None)
+            if st[0] is None:
+                raise ValueError(f"{name} needs a 'state' coordinate (or pass states=)")
+            lost = np.asarray(da["lost_control"].values, dtype=bool) if "lost_control" in da.coords else \
+                np.zeros(n, bool)
+            vals = [np.asarray(v, dtype=np.float64) for v in da.values]
+            valid = ~lost & np.array([np.all(np.isfinite(v)) for v in vals])
+            chans = tuple(str(c) for c in da[da.dims[2]].values)
+            return cls(vals, st.astype(str), coord("turbulence", turbulence, "").astype(str),
+                       coord("failure_time", failure_times, np.nan).astype(float),
+                       np.asarray(da["record"].values) if "record" in da.coords else np.arange(n), valid, chans, fs_)
+        if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
+            raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
+                            f"non-empty sequence of signals, got {type(data).__name__}")
+        if states is None:
+            raise ValueError(f"states is required when {name} is a sequence of signals (one state per record)")
+        sigs = [as_signal(d, f"{name}[{i}]", vector=True) for i, d in enumerate(data)]
+        k = {s.nchan for s in sigs}
+        if len(k) != 1:
+            raise ValueError(f"every record of {name} must have the same number of channels, got {sorted(k)}")
+        n = len(sigs)
+        st = np.asarray(states).astype(str)
+        if st.shape != (n,):
+            raise ValueError(f"states must have one entry per record ({n}), got shape {st.shape}")
+        ft = np.full(n, np.nan) if failure_times is None else np.asarray(failure_times, dtype=float)
+        tb = np.full(n, "") if turbulence is None else np.asarray(turbulence).astype(str)
+        if ft.shape != (n,) or tb.shape != (n,):
+            raise ValueError(f"failure_times and turbulence must have one entry per record ({n})")
+        fs_ = 1.0 if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
+        return cls([s.values for s in sigs], st, tb, ft, np.arange(n), np.ones(n, bool), tuple(sigs[0].channels),
+                   fs_)
+
+
+def _segment(rec: Records, i: int, settle: float, duration: float | None) -> np.ndarray:
+    ft = rec.failure_time[i]
+    t0 = (ft if np.isfinite(ft) else 0.0) + settle
+    a = int(round(t0 * rec.fs))
+    b = None if duration is None else a + int(round(duration * rec.fs))
+    seg = rec.values[i][a:b]
+    if b is not None and seg.shape[0] < b - a:
+        raise ValueError(f"record {rec.ids[i]} is too short for a {duration} s segment starting at {t0} s")
+    return seg
+
+
+# ---------------------------------------------------------------------------------------------------- baselines
+@dataclass(frozen=True, eq=False)
+class Baselines:
+    """Baseline models of every state (outcome of :func:`fit_baselines`).
+
+    Attributes
+    ----------
+    models : dict
+        Model name (a channel name for a scalar AR, ``"var"`` for the VAR) -> {state -> fitted results}.
+    selections : dict
+        ``(model name, state)`` -> :class:`~tsfdi.OrderSelection`.
+    channels : tuple of str
+        Channel names of the records.
+    healthy : str
+        Name of the healthy state.
+    faults : tuple of str
+        Names of the fault states (the identification candidates).
+    steady_thresholds : ndarray, shape (k,)
+        Rolling-variance threshold of each channel below which a post-failure signal is steady.
+    steady_window : float
+        Rolling-variance window in seconds.
+    fit_records : tuple
+        Identifiers of the records used for fitting (excluded from :func:`evaluate`).
+    fs : float
+        Sampling frequency in Hz.
+    """
+
+    models: dict
+    selections: dict
+    channels: tuple
+    healthy: str
+    faults: tuple
+    steady_thresholds: np.ndarray
+    steady_window: float
+    fit_records: tuple
+    fs: float
+    segments: dict = field(default_factory=dict, repr=False)
+
+    def model_channels(self, model: str) -> list[int]:
+        """Channel positions a model uses (all for ``"var"``)."""
+        if model == "var":
+            return list(range(len(self.channels)))
+        if model not in self.channels:
+            raise ValueError(f"model must be 'var' or one of the channels {self.channels}, got {model!r}")
+        return [self.channels.index(model)]
+
+    @property
+    def table(self) -> pd.DataFrame:
+        """Table 2 analogue: one row per (state, model) with the BIC order, parameters, SPP, RSS/SSS and BIC.
+
+        SPP is the paper's samples per parameter: estimation samples x channels / estimated AR parameters.
+        """
+        rows = []
+        for state in (self.healthy,) + self.faults:
+            for name, per_state in self.models.items():
+                res = per_state[state]
+                vec = name == "var"
+                rows.append({"state": state, "model": "VAR" if vec else "AR",
+                             "signals": ",".join(self.channels) if vec else name,
+                             "order": f"{'VAR' if vec else 'AR'}({res.lags})", "lags": int(res.lags),
+                             "parameters": int(res.df_model), "nobs": int(res.nobs), "spp": float(res.spp),
+                             "rss_sss": float(res.rss_sss), "bic": float(res.bic), "stable": bool(res.is_stable)})
+        return pd.DataFrame(rows)
+
+    def monitor(self, model: str = "var", *, window: float = 20.0, step: float = 1.0, method: str = "whiteness",
+                alpha: float | None = None, lags: int | None = None, rule: str = "paper") -> Monitor:
+        """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models, tests and thresholds."""
+        test = _make_test(method, model, alpha, lags, window, self.fs)
+        chans = self.model_channels(model)
+        return Monitor(self.models[model][self.healthy], {f: self.models[model][f] for f in self.faults},
+                       window=window, step=step, fs=self.fs, test=test,
+                       steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
+
+    def __repr__(self) -> str:
+        return (f"Baselines(models={list(self.models)}, healthy={self.healthy!r}, faults={self.faults}, "
+                f"fit_records={len(self.fit_records)})")
+
+
+def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
+                  fs: float | None = None, healthy: str = "healthy", fit_records: Any = "first",
+                  fit_turbulence: Any = None, settle: float = 10.0, duration: float | None = 20.0,
+                  models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 12,
+                  steady_window: float = 10.0, steady_factor: float = 1.0) -> Baselines:
+    r"""Baseline phase: fit a scalar AR model per channel and a VAR on all channels for every state.
+
+    Parameters
+    ----------
+    data : xarray.Dataset, xarray.DataArray or mapping or sequence of signals
+        A hexacopter dataset (:func:`tsfdi.datasets.load_hexacopter`; converted by :func:`hexacopter_signals`),
+        a ``(record, time, channel)`` DataArray with ``state`` (and ``failure_time``, ``turbulence``)
+        coordinates, a sequence of ``(nobs, k)`` signals with ``states=`` (numpy, pandas or xarray each), or a
+        mapping state -> signal (one steady-state segment per state, used whole).
+    states, failure_times, turbulence : array_like, optional
+        Per-record labels for a sequence of signals.
+    fs : float, optional
+        Sampling frequency in Hz (from the time coordinate for xarray input, else 1).
+    healthy : str
+        Name of the healthy state; every other state is a fault state.
+    fit_records : "first", "all" or sequence
+        Records used for fitting: the first valid record of each (state, turbulence) cell (default), every
+        valid record, or explicit record identifiers. They are listed in :attr:`Baselines.fit_records` and
+        excluded by :func:`evaluate`.
+    fit_turbulence : str or sequence, optional
+        Restrict fitting records to these turbulence levels (the paper fits on "severe" only).
+    settle : float
+        Seconds after the failure (after 0 for records without failure) where the fitting segment starts:
+        the post-failure transient is excluded.
+    duration : float or None
+        Length of the fitting segment in seconds (the paper's 20 s); ``None`` uses the rest of the record.
+    models : sequence of str, optional
+        Which models to fit: channel names (scalar AR) and/or ``"var"``; default all channels and ``"var"``.
+    max_lags, var_max_lags : int
+        Largest AR / VAR order searched; the order is the BIC minimum (paper eq. 5) on a common sample.
+    steady_window : float
+        Rolling-variance window (s) of the steady-state check.
+    steady_factor : float
+        Thresholds are ``steady_factor`` times the largest rolling variance of each channel over the steady
+        parts (from ``settle`` after the failure) of the fault-state fitting records (the paper's rule with
+        factor 1).
+
+    Returns
+    -------
+    Baselines
+
+    Notes
+    -----
+    Segments of several fitting records of one state are joined end to end; the ``lags`` residuals straddling
+    each junction are a negligible part of the estimation sample. Order selection follows the paper: BIC (eq. 5)
+    over orders ``1..max_lags``, with RSS/SSS (eq. 6) reported in the table.
+
+    References
+    ----------
+    Dutta et al. (paper 003), section "Parametric Model Identification", Table 2 and the Fig. 7 discussion.
+    """
+    from tsfdi.selection import select_order
+
+    settle = float_like(settle, "settle", minimum=0.0)
+    duration = None if duration is None else float_like(duration, "duration", minimum=0.0, strict_min=True)
+    max_lags = int_like(max_lags, "max_lags", minimum=1)
+    var_max_lags = int_like(var_max_lags, "var_max_lags", minimum=1)
+    steady_window = float_like(steady_window, "steady_window", minimum=0.0, strict_min=True)
+    steady_factor = float_like(steady_factor, "steady_factor", minimum=0.0, strict_min=True)
+    if isinstance(data, Mapping) and not is_xarray(data):
+        if not data:
+            raise ValueError("data is an empty mapping: give one signal per state")
+        names = list(data)
+        data = [data[s] for s in names]
+        states, failure_times, turbulence = names, None, None
+        fit_records, settle, duration = "all", 0.0, None
+    rec = Records.from_data(data, states=states, failure_times=failure_times, turbulence=turbulence, fs=fs)
+    uniq = list(dict.fromkeys(rec.state.tolist()))
+    if healthy not in uniq:
+        raise ValueError(f"healthy state {healthy!r} not found among the states {uniq}")
+    faults = tuple(s for s in uniq if s != healthy)
+    if not faults:
+        raise ValueError("data has no fault state: at least one state other than the healthy one is needed")
+    # which records fit
+    ok = rec.valid.copy()
+    if fit_turbulence is not None:
+        levels = [fit_turbulence] if isinstance(fit_turbulence, str) else list(fit_turbulence)
+        ok &= np.isin(rec.turbulence, levels)
+    if isinstance(fit_records, str):
+        fit_records = option(fit_records, "fit_records", ("first", "all"))
+        if fit_records == "all":
+            chosen = np.flatnonzero(ok)
+        else:
+            seen, chosen = set(), []
+            for i in np.flatnonzero(ok):
+                key = (rec.state[i], rec.turbulence[i])
+                if key not in seen:
+                    seen.add(key)
+                    chosen.append(i)
+            chosen = np.array(chosen, dtype=int)
+    else:
+        wanted = list(fit_records)
+        pos = {v: i for i, v in enumerate(rec.ids.tolist())}
+        bad = [w for w in wanted if w not in pos]
+        if bad:
+            raise ValueError(f"fit_records {bad} are not record identifiers of data")
+        chosen = np.array([pos[w] for w in wanted], dtype=int)
+        if not np.all(rec.valid[chosen]):
+            raise ValueError("fit_records contains records that lost control or hold NaN")
+    names = list(rec.channels) + ["var"] if models is None else list(models)
+    for m in names:
+        if m != "var" and m not in rec.channels:
+            raise ValueError(f"models must hold channel names {rec.channels} or 'var', got {m!r}")
+    out: dict = {m: {} for m in names}
+    sels: dict = {}
+    segments: dict = {}
+    for state in (healthy,) + faults:
+        idx = [i for i in chosen if rec.state[i] == state]
+        if not idx:
+            raise ValueError(f"no valid fitting record for state {state!r}")
+        seg = np.concatenate([_segment(rec, i, settle, duration) for i in idx])
+        segments[state] = seg
+        for m in names:
+            if m == "var":
+                sel = select_order(pd.DataFrame(seg, columns=list(rec.channels)), var_max_lags, "var")
+            else:
+                j = rec.channels.index(m)
+                sel = select_order(pd.Series(seg[:, j], name=m), max_lags, "ar")
+            sels[(m, state)] = sel
+            with warnings.catch_warnings():
+                warnings.simplefilter("default")
+                out[m][state] = sel.fit()
+    # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
+    V = int(round(steady_window * rec.fs))
+    step = max(1, int(round(0.1 * rec.fs)))
+    peaks = []
+    for i in chosen:
+        if rec.state[i] in faults:
+            post = _segment(rec, i, settle, None)
+            if post.shape[0] >= V:
+                peaks.append(_rolling_variance(post, V, step).max(axis=0))
+    thr = steady_factor * np.max(peaks, axis=0) if peaks else np.full(len(rec.channels), np.inf)
+    return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
+                     steady_thresholds=thr, steady_window=steady_window,
+                     fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments)
+
+
+# ---------------------------------------------------------------------------------------------------- evaluation
+def _default_lags(window: float, fs: float) -> int:
+    """Ljung-Box lags for a window: 20, fewer for short windows (at least 10 samples per lag)."""
+    return int(min(20, max(2, round(window * fs) // 10)))
+
+
+def _make_test(method: str, model: str, alpha: float | None, lags: int | None, window: float, fs: float):
+    from tsfdi.detection.variance import FTest
+    from tsfdi.detection.whiteness import LjungBox
+
+    method = option(method, "method", METHODS)
+    a = _paper_alpha(method, model) if alpha is None else probability(alpha, "alpha")
+    if method == "variance":
+        return FTest(alpha=a)
+    return LjungBox(lags=_default_lags(window, fs) if lags is None else int_like(lags, "lags", minimum=1), alpha=a)
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """Outcome of :func:`evaluate`.
+
+    Attributes
+    ----------
+    identification : pandas.DataFrame
+        One row per (record, model, method, window length, window) of a fault record, windows starting at least
+        ``settle`` s after the failure: ``record, state, turbulence, model, method, window, start``, one bool
+        column ``acc_<fault>`` per fault model (its test accepts), and ``label_<rule>`` per rule (the identified
+        fault or ``""``; for ``"paper"`` ``"ambiguous"`` / ``"none"`` when not unique).
+    detection : pandas.DataFrame
+        One row per (record, model, method, window length, window) of every evaluated record: ``fault_true``
+        (the window starts after the failure), ``alarm`` (the healthy model's test rejects), ``pre`` (the window
+        ends before the failure), ``start``, ``end``.
+    faults : tuple of str
+    rules : tuple of str
+    alphas : dict
+        ``(model, method)`` -> alpha used.
+    lags : dict
+        window length -> Ljung-Box lags.
+    records : pandas.DataFrame
+        The records evaluated (id, state, turbulence) and those skipped with the reason.
+    """
+
+    identification: pd.DataFrame
+    detection: pd.DataFrame
+    faults: tuple
+    rules: tuple
+    alphas: dict
+    lags: dict
+    records: pd.DataFrame
+    nchan: dict = field(default_factory=dict)
+
+    # -- identification
+    def confusion(self, rule: str = "paper") -> pd.DataFrame:
+        """Percent of the windows of each true failure accepted (``"paper"``, several may be accepted) or
+        labelled (other rules) as each fault, per model, method and window length (paper's Table 4 numbers).
+
+        Returns
+        -------
+        DataFrame indexed by ``(model, method, window, true)`` with one column per fault.
+        """
+        rule = option(rule, "rule", self.rules)
+        df = self.identification
+        keys = ["model", "method", "window", "state"]
+        if rule == "paper":
+            cols = [f"acc_{f}" for f in self.faults]
+            tab = df.groupby(keys, sort=False)[cols].mean() * 100.0
+            tab.columns = list(self.faults)
+        else:
+            lab = df[f"label_{rule}"]
+            tab = pd.concat({f: (lab == f) for f in self.faults}, axis=1).groupby(
+                [df[k] for k in keys], sort=False).mean() * 100.0
+        tab.index = tab.index.set_names(["model", "method", "window", "true"])
+        return tab
+
+    def rates(self) -> pd.DataFrame:
+        """Per model, method, window length, true failure and rule: percent of windows identified uniquely and
+        correctly (``correct``), uniquely but wrongly (``wrong``), ambiguous (``ambiguous``) and with no
+        decision (``none``), and the number of windows."""
+        df = self.identification
+        keys = ["model", "method", "window", "state"]
+        parts = []
+        for rule in self.rules:
+            lab = df[f"label_{rule}"]
+            known = lab.isin(self.faults)
+            flags = pd.DataFrame({"correct": known & (lab == df["state"]), "wrong": known & (lab != df["state"]),
+                                  "ambiguous": lab == "ambiguous", "none": (lab == "none") | (lab == "")})
+            g = flags.groupby([df[k] for k in keys], sort=False)
+            t = g.mean() * 100.0
+            t["windows"] = g.size()
+            t["rule"] = rule
+            parts.append(t.reset_index().rename(columns={"state": "true"}))
+        return pd.concat(parts, ignore_index=True).set_index(["model", "method", "window", "true", "rule"])
+
+    def table4(self, window: float | None = None, rule: str = "paper") -> pd.DataFrame:
+        """The paper's Table 4 layout: rows ``(model, method)``, one column per true failure holding
+        ``"a/b/c"``, the percent of its windows accepted (or labelled) as each fault, for one window length."""
+        conf = self.confusion(rule)
+        wins = sorted(conf.index.get_level_values("window").unique())
+        window = wins[-1] if window is None else float(window)
+        if window not in wins:
+            raise ValueError(f"window must be one of the evaluated lengths {wins}, got {window}")
+        sub = conf.xs(window, level="window")
+        out = {}
+        for (model, method, true), row in sub.iterrows():
+            out.setdefault((model, method), {})[true] = "/".join(f"{v:.2f}" for v in row.values)
+        frame = pd.DataFrame.from_dict(out, orient="index")
+        frame.index = frame.index.set_names(["model", "method"])
+        return frame[[f for f in self.faults if f in frame.columns]]
+
+    # -- detection
+    def detection_rates(self) -> pd.DataFrame:
+        """Per model, method and window length: ``false_alarm`` (percent of healthy-record windows flagged),
+        ``expected_false_alarm`` (percent, ``1 - (1 - alpha)^k`` for ``k`` channels tested at ``alpha``),
+        ``missed_fault`` (percent of fault-record windows starting after the failure not flagged),
+        ``missed_records`` (fault records with no alarm after the failure), ``delay_median`` and ``delay_max``
+        (s, from the failure to the end of the first flagged window ending after it)."""
+        det = self.detection
+        keys = ["model", "method", "window"]
+        rows = []
+        for key, g in det.groupby(keys, sort=False):
+            h = g[g["state"] == self._healthy]
+            f = g[(g["state"] != self._healthy) & g["fault_true"]]
+            post = g[(g["state"] != self._healthy) & ~g["pre"]]
+            delays = []
+            missed = 0
+            for _, r in post.groupby("record", sort=False):
+                hit = r[r["alarm"]]
+                if len(hit):
+                    delays.append(float(hit["end"].iloc[0] - r["failure_time"].iloc[0]))
+                else:
+                    missed += 1
+            a = self.alphas[(key[0], key[1])]
+            k = self.nchan.get(key[0], 1)
+            rows.append({"model": key[0], "method": key[1], "window": key[2],
+                         "false_alarm": 100.0 * h["alarm"].mean() if len(h) else np.nan,
+                         "expected_false_alarm": 100.0 * (1.0 - (1.0 - a) ** k), "healthy_windows": len(h),
+                         "missed_fault": 100.0 * (1.0 - f["alarm"].mean()) if len(f) else np.nan,
+                         "missed_records": missed,
+                         "delay_median": float(np.median(delays)) if delays else np.nan,
+                         "delay_max": float(np.max(delays)) if delays else np.nan})
+        return pd.DataFrame(rows).set_index(keys)
+
+    @property
+    def _healthy(self) -> str:
+        return str(self.records.attrs.get("healthy", "healthy"))
+
+    def summary(self) -> str:
+        """Table 4 (paper rule) per window length, the rates of every rule and the detection rates as text."""
+        parts = []
+        for w in sorted(self.identification["window"].unique()):
+            for rule in self.rules:
+                parts.append(f"Identification, {w:g} s windows, rule {rule!r} (percent of windows of each true "
+                             f"failure {'accepted' if rule == 'paper' else 'labelled'} as {'/'.join(self.faults)}):")
+                parts.append(self.table4(w, rule).to_string())
+        parts.append("Rates (percent of windows):")
+        parts.append(self.rates().round(2).to_string())
+        parts.append("Detection with the healthy model:")
+        parts.append(self.detection_rates().round(4).to_string())
+        return "\n\n".join(parts)
+
+    def __repr__(self) -> str:
+        return (f"Evaluation(windows={len(self.identification)} identification, {len(self.detection)} detection, "
+                f"faults={self.faults}, rules={self.rules})")
+
+
+def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",),
+             methods: Sequence[str] = ("whiteness",), windows: Sequence[float] = (5.0, 10.0, 20.0),
+             turbulence: Any = None, step: float = 1.0, settle: float = 10.0, alpha: Any = None, lags: Any = None,
+             rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True, progress: bool = True,
+             states: Any = None, failure_times: Any = None, fs: float | None = None) -> Evaluation:
+    r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
+
+    Parameters
+    ----------
+    data : xarray.Dataset, xarray.DataArray or sequence of signals
+        Records as accepted by :func:`fit_baselines`; the records in ``baselines.fit_records`` and records that
+        lost control (NaN) are skipped.
+    baselines : Baselines or mapping
+        From :func:`fit_baselines`, or a mapping turbulence level -> :class:`Baselines` (condition-scheduled
+        baselines: each record is tested with the models of its own turbulence level; levels not in the mapping
+        are skipped).
+    models : sequence of str
+        Model names of ``baselines`` (channel names for scalar AR, ``"var"``).
+    methods : sequence of {"whiteness", "variance"}
+        Ljung-Box residual uncorrelatedness test or residual variance F test.
+    windows : sequence of float
+        Window lengths in seconds.
+    turbulence : str or sequence, optional
+        Turbulence levels to evaluate (default all).
+    step : float
+        Seconds between window starts (the paper's 1 s).
+    settle : float
+        Identification windows start at least ``settle`` s after the failure (post-failure steady state).
+    alpha : float or dict, optional
+        Type I risk for every test, or a dict ``(model, method) -> alpha``; default the paper's Table 3
+        (:data:`PAPER_ALPHA`). Each channel is tested at ``alpha`` and a model is accepted only if every channel
+        accepts (paper's rule for vector residuals).
+    lags : int or dict, optional
+        Ljung-Box lags, or a dict window length -> lags; default 20 (at least 10 samples per lag).
+    rules : sequence of str
+        Decision rules (:data:`tsfdi.monitoring.RULES`); ``"paper"`` is always included.
+    detection : bool
+        Also test every window of every record with the healthy model (false alarms, missed faults, delays).
+    progress : bool
+        Show a tqdm progress bar over records.
+    states, failure_times, fs :
+        Per-record labels and sampling frequency for a sequence of signals.
+
+    Returns
+    -------
+    Evaluation
+
+    Notes
+    -----
+    Every record is filtered once through each model and all windows' statistics come from prefix sums
+    (:func:`tsfdi.monitoring.window_statistics`, :func:`tsfdi.detection.ljungbox_windows`).
+    """
+    if isinstance(baselines, Baselines):
+        by_level = None
+    elif isinstance(baselines, Mapping) and baselines and all(isinstance(b, Baselines) for b in baselines.values()):
+        by_level = {str(k): b for k, b in baselines.items()}
+    else:
+        raise TypeError("baselines must be the result of tsfdi.fit_baselines or a mapping turbulence level -> "
+                        f"Baselines, got {type(baselines).__name__}")
+    first = baselines if by_level is None else next(iter(by_level.values()))
+    rec = Records.from_data(data, states=states, failure_times=failure_times, fs=fs)
+    for b in ([first] if by_level is None else by_level.values()):
+        if rec.channels != b.channels:
+            raise ValueError(f"data has channels {rec.channels} but the baselines were fitted on {b.channels}")
+        if abs(rec.fs - b.fs) > 1e-9 * b.fs:
+            raise ValueError(f"data is sampled at {rec.fs} Hz but the baselines at {b.fs} Hz")
+        if (b.healthy, b.faults) != (first.healthy, first.faults):
+            raise ValueError("every Baselines of the mapping must have the same healthy and fault states")
+    models = [models] if isinstance(models, str) else list(models)
+    for m in models:
+        if m not in first.models:
+            raise ValueError(f"models must be among the fitted models {list(first.models)}, got {m!r}")
+    methods = [option(m, "methods", METHODS) for m in ([methods] if isinstance(methods, str) else methods)]
+    wins = [float_like(w, "windows", minimum=0.0, strict_min=True) for w in np.atleast_1d(windows)]
+    if not models or not methods or not wins:
+        raise ValueError("models, methods and windows must each hold at least one entry")
+    rules = tuple(dict.fromkeys(["paper"] + [option(r, "rules", RULES) for r in rules]))
+    step_n = max(1, int(round(float_like(step, "step", minimum=0.0, strict_min=True) * rec.fs)))
+    settle = float_like(settle, "settle", minimum=0.0)
+    healthy, faults = first.healthy, first.faults
+    fit = set(first.fit_records) if by_level is None else {r for b in by_level.values() for r in b.fit_records}
+    use = rec.valid & ~np.isin(rec.ids, list(fit)) & np.isin(rec.state, (healthy,) + faults)
+    if by_level is not None:
+        use &= np.isin(rec.turbulence, list(by_level))
+    if turbulence is not None:
+        use &= np.isin(rec.turbulence, [turbulence] if isinstance(turbulence, str) else list(turbulence))
+    reasons = np.where(np.isin(rec.ids, list(fit)), "fitting record",
+                       np.where(~rec.valid, "lost control / non-finite",
+                                np.where(use, "", "not selected")))
+    recs = pd.DataFrame({"record": rec.ids, "state": rec.state, "turbulence": rec.turbulence,
+                         "evaluated": use, "skipped": reasons})
+    recs.attrs["healthy"] = healthy
+    if not use.any():
+        raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
+
+    alphas, lag_of, tests = {}, {}, {}
+    for m in models:
+        for meth in methods:
+            a = alpha.get((m, meth)) if isinstance(alpha, Mapping) else alpha
+            for w in wins:
+                lg = lags.get(w) if isinstance(lags, Mapping) else lags
+                t = _make_test(meth, m, a, lg, w, rec.fs)
+                tests[(m, meth, w)] = t
+                alphas[(m, meth)] = t.alpha
+                if meth == "whiteness":
+                    lag_of[w] = t.lags
+
+    ident_parts, det_parts = [], []
+    idx = np.flatnonzero(use)
+    iterator = idx
+    if progress:
+        from tqdm.auto import tqdm
+
+        iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
+    for i in iterator:
+        x_all = rec.values[i]
+        state, ft = rec.state[i], rec.failure_time[i]
+        is_fault = state != healthy
+        base = first if by_level is None else by_level[rec.turbulence[i]]
+        for m in models:
+            x = x_all[:, base.model_channels(m)]
+            fault_models = {f: base.models[m][f] for f in faults}
+            for meth in methods:
+                for w in wins:
+                    W = int(round(w * rec.fs))
+                    test = tests[(m, meth, w)]
+                    if detection:
+                        d = window_statistics(x, {"h": base.models[m][healthy]}, test, window=W,
+                                              step=step_n)["decisions"]["h"]
+                        starts = np.arange(0, x.shape[0] - W + 1, step_n)
+                        st, en = starts / rec.fs, (starts + W) / rec.fs
+                        det_parts.append(pd.DataFrame({
+                            "record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
+                            "method": meth, "window": w, "start": st, "end": en,
+                            "failure_time": ft, "fault_true": is_fault & (st >= ft),
+                            "pre": ~is_fault | (en <= ft), "alarm": d["reject"]}))
+                    if not is_fault:
+                        continue
+                    ws = window_statistics(x, fault_models, test, window=W, step=step_n)
+                    starts = ws["starts"]
+                    keep = starts / rec.fs >= ft + settle
+                    if not keep.any():
+                        continue
+                    rej = np.array([ws["decisions"][f]["reject"] for f in faults])[:, keep]
+                    pmin = np.array([ws["decisions"][f]["pvalue"].min(axis=1) for f in faults])[:, keep]
+                    ll = ws["loglik"][:, keep]
+                    cols = {"record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
+                            "method": meth, "window": w, "start": starts[keep] / rec.fs}
+                    for j, f in enumerate(faults):
+                        cols[f"acc_{f}"] = ~rej[j]
+                    names = np.array(list(faults) + ["ambiguous", "none"], dtype=object)
+                    for rule in rules:
+                        lab = apply_rule(rej, ll, pmin, rule)
+                        cols[f"label_{rule}"] = names[np.where(lab >= 0, lab, np.where(lab == -2, len(faults),
+                                                                                       len(faults) + 1))]
+                    ident_parts.append(pd.DataFrame(cols))
+    ident = pd.concat(ident_parts, ignore_index=True) if ident_parts else pd.DataFrame(
+        columns=["record", "state", "turbulence", "model", "method", "window", "start"]
+        + [f"acc_{f}" for f in faults] + [f"label_{r}" for r in rules])
+    det = pd.concat(det_parts, ignore_index=True) if det_parts else pd.DataFrame(
+        columns=["record", "state", "turbulence", "model", "method", "window", "start", "end", "failure_time",
+                 "fault_true", "pre", "alarm"])
+    return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
+                      records=recs, nchan={m: len(first.model_channels(m)) for m in models})
