@@ -21,7 +21,7 @@ from tsfdi._validation import int_like, option
 from tsfdi.exceptions import UnstableModelWarning
 from tsfdi.models import _lstsq
 
-__all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults"]
+__all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
 
 
 class LinearTimeSeriesModel:
@@ -95,7 +95,9 @@ class LinearTimeSeriesModel:
         """Estimate the parameters by least squares (QR / SVD, never the normal equations)."""
         X, Y = self._design(self.data.values, None if self.u_data is None else self.u_data.values,
                             self.hold_back)
-        return self._results_class(self, _lstsq.lstsq(X, Y))
+        res = self._results_class(self, _lstsq.lstsq(X, Y))
+        res._warn_unstable()
+        return res
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(nobs={self.data.nobs}, {self._lag_name}={self.na}, trend={self.trend!r})"
@@ -258,9 +260,9 @@ class LinearTimeSeriesResults:
         return bool(np.all(np.abs(self.roots) > 1.0))
 
     def _warn_unstable(self) -> None:
-        if not self.is_stable:
+        if self.model.na and not self.is_stable:
             warnings.warn(f"the fitted {type(self.model).__name__} is unstable (smallest root modulus "
-                          f"{np.abs(self.roots).min():.4f} <= 1)", UnstableModelWarning, stacklevel=3)
+                          f"{np.abs(self.roots).min():.4f} <= 1)", UnstableModelWarning, stacklevel=4)
 
     # --- new data --------------------------------------------------------------------------------
     def _new_signal(self, y: Any, name: str = "y") -> Signal:
@@ -317,3 +319,20 @@ class LinearTimeSeriesResults:
             if g <= m.nb:
                 names += [f"b{g}.{c}" for c in m.u_data.channels]
         return names
+
+
+class ScalarOutputResults(LinearTimeSeriesResults):
+    """Results of a model with one output channel (AR, ARX): 1-D ``params``, scalar ``sigma2``."""
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._params2d[:, 0]
+
+    @property
+    def intercept(self) -> float:
+        return float(self._params2d[0, 0]) if self.model.k_const else 0.0
+
+    @property
+    def sigma2(self) -> float:
+        """Maximum-likelihood residual variance ``RSS / nobs`` (as statsmodels ``AutoReg``)."""
+        return float(self._sse[0, 0] / self.nobs)

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import signal as sps
 
 from tsfdi._validation import check_rng, int_like
-from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
+from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
 
 __all__ = ["AR", "ARResults"]
 
@@ -40,13 +40,8 @@ class AR(LinearTimeSeriesModel):
         int_like(lags, "lags", minimum=1)
         super().__init__(y, lags, trend=trend, hold_back=hold_back)
 
-    def fit(self) -> ARResults:
-        res = super().fit()
-        res._warn_unstable()
-        return res
 
-
-class ARResults(LinearTimeSeriesResults):
+class ARResults(ScalarOutputResults):
     """Results of :meth:`AR.fit` (immutable).
 
     Attributes
@@ -60,20 +55,8 @@ class ARResults(LinearTimeSeriesResults):
     """
 
     @property
-    def params(self) -> np.ndarray:
-        return self._params2d[:, 0]
-
-    @property
     def ar_coefs(self) -> np.ndarray:
         return self._ar_matrices()[:, 0, 0]
-
-    @property
-    def intercept(self) -> float:
-        return float(self._params2d[0, 0]) if self.model.k_const else 0.0
-
-    @property
-    def sigma2(self) -> float:
-        return float(self._sse[0, 0] / self.nobs)
 
     def residuals(self, y: Any) -> Any:
         """One-step prediction errors of a new signal through the fixed model.

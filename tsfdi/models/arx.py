@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from tsfdi._validation import int_like
-from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
+from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
 
 __all__ = ["ARX", "ARXResults"]
 
@@ -49,7 +49,7 @@ class ARX(LinearTimeSeriesModel):
                 f"n_inputs={self.n_inputs}, trend={self.trend!r})")
 
 
-class ARXResults(LinearTimeSeriesResults):
+class ARXResults(ScalarOutputResults):
     """Results of :meth:`ARX.fit` (immutable).
 
     Attributes
@@ -65,24 +65,12 @@ class ARXResults(LinearTimeSeriesResults):
     """
 
     @property
-    def params(self) -> np.ndarray:
-        return self._params2d[:, 0]
-
-    @property
     def a(self) -> np.ndarray:
         return self._ar_matrices()[:, 0, 0]
 
     @property
     def b(self) -> np.ndarray:
         return self._input_matrices()[:, 0, :].T.copy()
-
-    @property
-    def intercept(self) -> float:
-        return float(self._params2d[0, 0]) if self.model.k_const else 0.0
-
-    @property
-    def sigma2(self) -> float:
-        return float(self._sse[0, 0] / self.nobs)
 
     def residuals(self, y: Any, u: Any) -> Any:
         """One-step prediction errors of new output ``y`` given new input ``u`` through the fixed model.

@@ -42,11 +42,6 @@ class VAR(LinearTimeSeriesModel):
         int_like(lags, "lags", minimum=1)
         super().__init__(y, lags, trend=trend, hold_back=hold_back, criterion=criterion)
 
-    def fit(self) -> VARResults:
-        res = super().fit()
-        res._warn_unstable()
-        return res
-
 
 class VARResults(LinearTimeSeriesResults):
     """Results of :meth:`VAR.fit` (immutable).
