@@ -325,6 +325,12 @@ class GLRT(ResidualTest):
     alpha : float
         Per-sample false-alarm probability for the analytical threshold.
 
+        The false-alarm probability of the GLRT (``alpha`` here, ``false_alarm`` of an
+        :class:`EmpiricalThreshold`) is per sample, as in Hansen et al. (Fig. 2): on a healthy record of
+        ``N`` samples about ``N * alpha`` samples alarm, so :meth:`test` (which rejects when any sample alarms)
+        rejects a long healthy record with high probability unless ``alpha << 1 / N``. The alarm rate of a
+        record is in ``details["alarm_rate"]``.
+
     Notes
     -----
     H0: :math:`x_i = w_i`, H1: :math:`x_i = A + w_i` for :math:`i \ge j` (eq. 1), :math:`w` iid
