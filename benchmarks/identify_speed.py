@@ -28,7 +28,7 @@ from statsmodels.tsa.ar_model import AutoReg  # noqa: E402
 
 import tsfdi  # noqa: E402
 from tsfdi.detection import glrt_direct  # noqa: E402
-from tsfdi.identification import identify_windows  # noqa: E402
+from tsfdi import identify_windows  # noqa: E402
 
 
 def median_time(fn, repeat, number=1):
