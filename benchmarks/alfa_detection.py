@@ -1,29 +1,49 @@
 """Online detection on every labelled ALFA flight of the shared copy (Keipour et al. Table I style).
 
-Run: ``python benchmarks/alfa_detection.py`` (reads ``../shared/data/alfa`` next to the repository).
+Run: ``python benchmarks/alfa_detection.py`` (reads ``../shared/data/alfa`` next to the repository; ~1 min).
 
-Inputs: only the non-leaking columns of ``merged_20hz`` (45 flights: 36 with a failure, 9 without) --
-IMU angular rates and accelerations, local-position velocities, autopilot navigation errors and the attitude
-tracking errors ``delta_*`` (commanded minus measured). Never used: ``ground_truth`` / ``field.data`` (the
-answer), throttle and rc-out (not in this layout; they leak the failure).
+Inputs: only non-leaking columns of ``merged_20hz`` (45 flights: 36 with a failure, 9 without) -- IMU angular
+rates and specific forces, the autopilot navigation errors (airspeed and altitude errors) and the attitude
+tracking errors ``delta_*`` (commanded minus measured; ``delta_yaw`` wrapped to [-180, 180)). Never used:
+``ground_truth`` / ``field.data`` / ``label`` (the answer), throttle and rc-out (they leak the failure).
 
-Scoring (per flight): the first alarm of the detector over all pairs. Failure flight: an alarm before the
-onset is FP, an alarm at or after it TP (detection time = alarm - onset), no alarm FN. Flight without a
+Scoring (per flight): the first alarm of the detector over all its channels. Failure flight: an alarm before
+the onset is FP, an alarm at or after it TP (detection time = alarm - onset), no alarm FN. Flight without a
 failure: any alarm FP, none TN. precision = TP / (TP + FP), recall = TP / (TP + FN), accuracy =
-(TP + TN) / flights.
+(TP + TN) / flights (the definitions of Keipour et al., Table I).
 
-Two configurations are reported:
+Configurations
+--------------
+A. *paper 001, fixed*: Z-score 4.5 on RLS ARX(na=2, nb=2, nk=0) prediction errors, forgetting 1, P0 = 1e4,
+   stability gate eps = 1e-2 for 25 samples, variance tolerance 1 % for 25 samples after >= 50 errors, halt on
+   alarm, streaming GLRT (window 20, alpha 1e-6); pairs (y, u): roll rate / roll tracking error, pitch rate /
+   pitch tracking error, yaw rate / yaw tracking error. A-K: the same detector on the 7 engine flights with
+   commanded and measured attitude, with Keipour's exact pairing (input u = commanded angle, output
+   y = measured - commanded), roll / pitch / yaw.
+B. *physical residuals, thresholds by leave-one-flight-out*. Three channels whose structure was fixed from
+   flight mechanics, each an RLS model, a moving average of its a-priori prediction errors and a threshold in
+   physical units, armed after a baseline phase of 20 s from the start of the record (the record starts at the
+   switch to autonomous flight; the first ~15 s are the settling of that switch):
 
-A. *fixed before running* (paper 001 settings): Z-score 4.5, ARX(na=2, nb=2, nk=0), forgetting 1 (plain RLS as
-   in paper 001), P0 = 1e4, stability gate eps = 1e-2 for 25 samples, variance tolerance 1 % for 25 samples
-   after >= 50 errors, halt on alarm, streaming GLRT window 20 at alpha 1e-6 (analytical threshold); pairs
-   (y, u): roll rate / roll tracking error, pitch rate / pitch tracking error, yaw rate / yaw tracking error
-   (the commanded-minus-measured errors drive the surfaces through the autopilot, the rates are their
-   response).
-B. *chosen by leave-one-flight-out*: for each flight, the configuration (ARX orders and forgetting factor
-   from a small grid x one or two signal pairs from the candidate list below) with the best accuracy on the
-   other 44 flights (ties: smaller mean detection time) is applied to the held-out flight; the reported
-   numbers are over the held-out outcomes only.
+   1. *thrust*: specific force along the body x axis, f_x = (T - D) / m. The autopilot (TECS) sets the
+      throttle from the airspeed and altitude errors, so the RLS model f_x = c + b1 aspd_error + b2 alt_error
+      (na = 0, nb = 1, forgetting 0.999 ~ 50 s memory) predicts the commanded thrust changes; a loss of thrust
+      makes the prediction error drop by T / m (about 1-2 m/s^2) while the autopilot asks for more.
+      Moving average over 10 samples (0.5 s), one-sided ("down").
+   2. *sideslip*: specific force along the body y axis. In coordinated flight f_y ~ 0; a stuck rudder
+      produces a steady sideslip and a lateral force. Predictor: its exponentially weighted mean (trend only,
+      forgetting 0.995 ~ 10 s memory); moving average over 20 samples (1 s), two-sided.
+   3. *pitch response*: pitch rate from the pitch tracking error (FIR, nb = 5, forgetting 0.999): a stuck
+      elevator (or the upset after another failure) breaks the autopilot's pitch-error -> pitch-rate response.
+      Moving average over 20 samples, two-sided.
+
+   Only the three thresholds are chosen from data, and by leave-one-flight-out: for each held-out flight the
+   triple (each from a fixed physical grid, or "off") with the best accuracy on the other 44 flights (ties:
+   smaller mean detection time) is applied to the held-out flight; the tables report held-out outcomes only.
+   The per-flight first alarm for a threshold is read off one run of the statistic (halting only acts after
+   the first alarm, so the first crossing is the detector's first alarm; the script re-runs the detector with
+   the all-flight thresholds and checks this). The all-flight choice ("B-fit", in-sample) is printed too; it is
+   what ``ALFA_SETTINGS`` ships.
 """
 
 import os
@@ -42,140 +62,212 @@ from tsfdi.detection.glrt import GLRT  # noqa: E402
 from tsfdi.monitoring import OnlineDetector  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "alfa"
-
-PAIRS = {  # name: (output y, input u) -- all non-leaking columns
-    "rollrate|droll": ("field.angular_velocity.x", "delta_roll"),
-    "pitchrate|dpitch": ("field.angular_velocity.y", "delta_pitch"),
-    "yawrate|dyaw": ("field.angular_velocity.z", "delta_yaw"),
-    "droll|rollrate": ("delta_roll", "field.angular_velocity.x"),
-    "dpitch|pitchrate": ("delta_pitch", "field.angular_velocity.y"),
-    "accx|aspd_err": ("field.linear_acceleration.x", "field.aspd_error"),
-    "vz|dpitch": ("field.twist.linear.z", "delta_pitch"),
-    "accy|yawrate": ("field.linear_acceleration.y", "field.angular_velocity.z"),
-    "accz|pitchrate": ("field.linear_acceleration.z", "field.angular_velocity.y"),
-}
-FIXED_PAIRS = ("rollrate|droll", "pitchrate|dpitch", "yawrate|dyaw")
-FIXED_SETTING = (2, 2, 1.0)
-GRID = [(2, 2, 1.0), (2, 2, 0.995), (2, 2, 0.99), (4, 4, 1.0)]
+FS = 20.0
 LEAKING = {"ground_truth", "field.data", "label", "throttle"}
+FAULTS = ["engine", "ailerons", "rudder", "elevator", "none"]
+
+# --------------------------------------------------------------------------- configuration A (paper 001)
+PAPER_PAIRS = {"roll": ("field.angular_velocity.x", "delta_roll"),
+               "pitch": ("field.angular_velocity.y", "delta_pitch"),
+               "yaw": ("field.angular_velocity.z", "delta_yaw")}
 
 
-def first_alarm_times(flights, setting):
-    """{pair: array of first-alarm seconds from the first row (nan: none)} for one ARX setting."""
-    na, nb, lam = setting
-    names = list(PAIRS)
-    ycols = [PAIRS[p][0] for p in names]
-    ucols = [PAIRS[p][1] for p in names]
-    assert not (set(ycols) | set(ucols)) & LEAKING
-    out = {p: np.full(len(flights), np.nan) for p in names}
-    for i, df in enumerate(flights):
-        det = OnlineDetector(names, na=na, nb=nb, nk=0, forgetting_factor=lam, P0=1e4, threshold=4.5,
-                             glrt=GLRT(window=20, alpha=1e-6), halt_on_alarm=True, nonfinite="skip")
-        res = det.run(df[ycols], df[ucols])
-        fa = res.first_alarms
-        for p in names:
-            if fa.loc[p, "position"] >= 0:
-                out[p][i] = (fa.loc[p, "time"] - df.index[0]).total_seconds()
+def paper_detector():
+    return OnlineDetector(list(PAPER_PAIRS), na=2, nb=2, nk=0, forgetting_factor=1.0, P0=1e4, threshold=4.5,
+                          glrt=GLRT(window=20, alpha=1e-6), halt_on_alarm=True, nonfinite="skip")
+
+
+# --------------------------------------------------------------------------- configuration B (physical)
+ARM_AFTER_S = 20.0
+#: channel: y column, u columns, OnlineDetector options, threshold grid (physical units) -- all fixed in advance
+CHANNELS = {
+    "thrust": dict(y="field.linear_acceleration.x", u=["field.aspd_error", "field.alt_error"],
+                   options=dict(na=0, nb=1, trend="c", forgetting_factor=0.999, P0=1e2, n_inputs=2,
+                                statistic="mean", window=10, direction="down"),
+                   grid=np.round(np.arange(0.6, 2.01, 0.1), 2)),
+    "sideslip": dict(y="field.linear_acceleration.y", u=["field.linear_acceleration.y"],
+                     options=dict(na=0, nb=0, trend="c", forgetting_factor=0.995, P0=1e2, n_inputs=1,
+                                  statistic="mean", window=20, direction="both"),
+                     grid=np.round(np.arange(0.5, 2.51, 0.1), 2)),
+    "pitch": dict(y="field.angular_velocity.y", u=["delta_pitch"],
+                  options=dict(na=0, nb=5, trend="n", forgetting_factor=0.999, P0=1e2, n_inputs=1,
+                               statistic="mean", window=20, direction="both"),
+                  grid=np.round(np.arange(0.15, 0.61, 0.025), 3)),
+}
+
+
+def prepare(df):
+    """Non-leaking inputs of one merged flight, delta_yaw wrapped to [-180, 180)."""
+    df = df.drop(columns=[c for c in df.columns if c in LEAKING])
+    df["delta_yaw"] = (df["delta_yaw"] + 180.0) % 360.0 - 180.0
+    return df
+
+
+def channel_detector(name, threshold):
+    ch = CHANNELS[name]
+    return OnlineDetector([name], threshold=threshold, halt_on_alarm=True, nonfinite="skip",
+                          arm_after=int(round(ARM_AFTER_S * FS)), **ch["options"])
+
+
+def run_channel(df, name, threshold):
+    ch = CHANNELS[name]
+    assert not ({ch["y"], *ch["u"]} & LEAKING)
+    return channel_detector(name, threshold).run(df[[ch["y"]]], df[ch["u"]])
+
+
+def first_alarm_s(df, det_result):
+    fa = det_result.first_alarms
+    pos = fa["position"].to_numpy()
+    pos = pos[pos >= 0]
+    return (df.index[pos.min()] - df.index[0]).total_seconds() if pos.size else np.nan
+
+
+def crossing_times(df, name, grid):
+    """First time (s) the channel statistic exceeds each threshold of ``grid`` after the baseline phase."""
+    res = run_channel(df, name, 1e300)
+    s = np.asarray(res.statistic, dtype=float)[:, 0]
+    arm = int(round(ARM_AFTER_S * FS))
+    t = (df.index - df.index[0]).total_seconds().to_numpy()
+    s = np.where(np.arange(s.size) >= arm, np.nan_to_num(s, nan=-np.inf), -np.inf)
+    out = np.full(len(grid), np.nan)
+    for j, c in enumerate(grid):
+        k = np.flatnonzero(s > c)
+        if k.size:
+            out[j] = t[k[0]]
     return out
 
 
-def outcomes(tab, alarm):
-    """Per-flight outcome and detection time for first-alarm times ``alarm`` (nan: no alarm)."""
+# --------------------------------------------------------------------------- scoring
+def outcomes(onset, alarm):
+    """Outcome and detection time per flight for first-alarm times ``alarm`` (nan: none)."""
     res, det = [], []
-    for (_, r), a in zip(tab.iterrows(), alarm):
-        if r.fault == "none":
+    for on, a in zip(onset, alarm):
+        if not np.isfinite(on):
             res.append("TN" if np.isnan(a) else "FP")
             det.append(np.nan)
         elif np.isnan(a):
             res.append("FN")
             det.append(np.nan)
-        elif a < r.onset_s:
+        elif a < on:
             res.append("FP")
             det.append(np.nan)
         else:
             res.append("TP")
-            det.append(a - r.onset_s)
+            det.append(a - on)
     return np.array(res), np.array(det)
 
 
 def metrics(res, det):
     tp, fp, fn, tn = ((res == k).sum() for k in ("TP", "FP", "FN", "TN"))
-    prec = tp / (tp + fp) if tp + fp else np.nan
-    rec = tp / (tp + fn) if tp + fn else np.nan
-    acc = (tp + tn) / len(res) if len(res) else np.nan
     d = det[res == "TP"]
-    return dict(flights=len(res), TP=tp, FP=fp, FN=fn, TN=tn, precision=prec, recall=rec, accuracy=acc,
+    return dict(flights=len(res), TP=tp, FP=fp, FN=fn, TN=tn,
+                precision=tp / (tp + fp) if tp + fp else np.nan, recall=tp / (tp + fn) if tp + fn else np.nan,
+                accuracy=(tp + tn) / len(res) if len(res) else np.nan,
                 mean_det_s=d.mean() if d.size else np.nan, max_det_s=d.max() if d.size else np.nan)
 
 
-def table(tab, res, det):
-    rows = {}
-    for fault in ["engine", "ailerons", "rudder", "elevator", "none"]:
-        sel = (tab.fault == fault).to_numpy()
-        rows[fault] = metrics(res[sel], det[sel])
+def table(fault, res, det):
+    rows = {f: metrics(res[fault == f], det[fault == f]) for f in FAULTS if (fault == f).any()}
     rows["all"] = metrics(res, det)
-    return pd.DataFrame(rows).T
+    t = pd.DataFrame(rows).T
+    for c, f in {"precision": "{:.3f}", "recall": "{:.3f}", "accuracy": "{:.3f}", "mean_det_s": "{:.2f}",
+                 "max_det_s": "{:.2f}"}.items():
+        t[c] = [f.format(v) if pd.notna(v) else "-" for v in t[c]]
+    return t
 
 
-def combine(times, pairs):
-    stack = np.vstack([times[p] for p in pairs])
-    out = np.full(stack.shape[1], np.nan)
-    ok = np.isfinite(stack).any(axis=0)
-    out[ok] = np.nanmin(stack[:, ok], axis=0)
-    return out
+def lofo(onset, times, grids):
+    """Leave-one-flight-out choice of one threshold per channel (index len(grid) = channel off)."""
+    names = list(times)
+    n = len(onset)
+    opts = [range(len(grids[c]) + 1) for c in names]
+    combos = list(itertools.product(*opts))
+    full = {c: np.column_stack([times[c], np.full(n, np.nan)]) for c in names}
+    with np.errstate(all="ignore"):
+        A = np.stack([np.nanmin(np.stack([full[c][:, j] for c, j in zip(names, cb)]), axis=0) for cb in combos])
+    on = np.where(np.isfinite(onset), onset, np.inf)
+    tp = np.isfinite(A) & (A >= on)
+    ok = tp | (~np.isfinite(A) & ~np.isfinite(onset)[None, :])
+    det = np.where(tp, A - on, 0.0)
+
+    def best(keep):
+        acc = ok[:, keep].mean(axis=1)
+        md = det[:, keep].sum(axis=1) / np.maximum(tp[:, keep].sum(axis=1), 1)
+        return int(np.lexsort((md, -acc))[0])
+
+    chosen = [best(np.arange(n) != i) for i in range(n)]
+    alarm = np.array([A[j, i] for i, j in enumerate(chosen)])
+
+    def label(j):
+        return ", ".join(f"{c} {'off' if k == len(grids[c]) else grids[c][k]:g}"
+                         if k < len(grids[c]) else f"{c} off" for c, k in zip(names, combos[j]))
+
+    fit = best(np.arange(n))
+    return alarm, [label(j) for j in chosen], A[fit], label(fit), {c: combos[fit][i] for i, c in enumerate(names)}
 
 
 def main():
     t0 = time.perf_counter()
     tab = list_alfa(ROOT)
-    flights = [load_alfa(p) for p in tab.merged_path]
-    print(f"{len(flights)} flights ({(tab.fault != 'none').sum()} with a failure) from {ROOT}")
-    times = {s: first_alarm_times(flights, s) for s in GRID}
-    pd.set_option("display.width", 160)
+    flights = [prepare(load_alfa(p)) for p in tab.merged_path]
+    onset = tab.onset_s.to_numpy(dtype=float)
+    fault = tab.fault.to_numpy()
+    print(f"{len(flights)} flights ({(fault != 'none').sum()} with a failure) from {ROOT}")
+    pd.set_option("display.width", 200)
     pd.set_option("display.max_rows", 100)
+    pd.set_option("display.max_colwidth", 80)
 
-    # A: fixed configuration
-    with np.errstate(all="ignore"):
-        alarm_a = combine(times[FIXED_SETTING], FIXED_PAIRS)
-    res_a, det_a = outcomes(tab, alarm_a)
+    # A: paper 001 settings
+    ycols = [v[0] for v in PAPER_PAIRS.values()]
+    ucols = [v[1] for v in PAPER_PAIRS.values()]
+    alarm_a = np.array([first_alarm_s(df, paper_detector().run(df[ycols], df[ucols])) for df in flights])
+    res_a, det_a = outcomes(onset, alarm_a)
 
-    # B: leave-one-flight-out choice of (setting, pairs)
-    cands = [(s, (p,)) for s in GRID for p in PAIRS] + [(s, c) for s in GRID for c in itertools.combinations(PAIRS, 2)]
-    with np.errstate(all="ignore"):
-        cand_alarms = [combine(times[s], c) for s, c in cands]
-    cand_out = [outcomes(tab, a) for a in cand_alarms]
-    n = len(tab)
-    res_b, det_b, chosen = [], [], []
-    for i in range(n):
-        keep = np.arange(n) != i
-        best, key = None, None
-        for j, (r, d) in enumerate(cand_out):
-            acc = np.mean(np.isin(r[keep], ("TP", "TN")))
-            dd = d[keep][r[keep] == "TP"]
-            k = (acc, -(dd.mean() if dd.size else np.inf))
-            if key is None or k > key:
-                best, key = j, k
-        res_b.append(cand_out[best][0][i])
-        det_b.append(cand_out[best][1][i])
-        chosen.append(f"{cands[best][0]} {'+'.join(cands[best][1])}")
-    res_b, det_b = np.array(res_b), np.array(det_b)
+    # A-K: Keipour's pairing on the engine commanded / measured flights
+    eng = tab[tab.engine_path.notna()]
+    res_k, det_k = [], []
+    for _, r in eng.iterrows():
+        df = load_alfa(r.engine_path)
+        y = pd.DataFrame({a: df[f"{a}_measured"] - df[f"{a}_commanded"] for a in ("roll", "pitch", "yaw")})
+        y["yaw"] = (y["yaw"] + 180.0) % 360.0 - 180.0
+        u = df[[f"{a}_commanded" for a in ("roll", "pitch", "yaw")]]
+        det = paper_detector()
+        out = det.run(y.set_axis(list(PAPER_PAIRS), axis=1), u)
+        a = first_alarm_s(df, out)
+        rr, dd = outcomes([df.attrs["onset_s"]], [a])
+        res_k.append(rr[0])
+        det_k.append(dd[0])
+    res_k, det_k = np.array(res_k), np.array(det_k)
 
-    per = pd.DataFrame({"flight": tab.flight.str.replace("carbonZ_", ""), "fault": tab.fault,
-                        "onset_s": tab.onset_s, "A_outcome": res_a, "A_det_s": det_a.round(2),
-                        "B_outcome": res_b, "B_det_s": det_b.round(2)})
-    print("\nPer flight (A: fixed paper settings; B: leave-one-flight-out choice)")
+    # B: physical channels, thresholds by leave-one-flight-out
+    grids = {c: CHANNELS[c]["grid"] for c in CHANNELS}
+    times = {c: np.array([crossing_times(df, c, grids[c]) for df in flights]) for c in CHANNELS}
+    alarm_b, chosen, alarm_fit, label_fit, idx_fit = lofo(onset, times, grids)
+    res_b, det_b = outcomes(onset, alarm_b)
+    res_f, det_f = outcomes(onset, alarm_fit)
+    # check: the detector run with the all-flight thresholds alarms exactly at the read-off crossing times
+    for df, a in zip(flights, alarm_fit):
+        runs = [first_alarm_s(df, run_channel(df, c, grids[c][k])) for c, k in idx_fit.items() if k < len(grids[c])]
+        direct = np.nanmin(runs) if np.isfinite(runs).any() else np.nan
+        assert (np.isnan(direct) and np.isnan(a)) or abs(direct - a) < 1e-9, (direct, a)
+
+    per = pd.DataFrame({"flight": tab.flight.str.replace("carbonZ_", ""), "fault": fault, "onset_s": onset,
+                        "A": res_a, "A_det_s": det_a.round(2), "B_lofo": res_b, "B_det_s": det_b.round(2),
+                        "B_fit": res_f, "Bfit_det_s": det_f.round(2)})
+    print("\nPer flight (A: paper 001 settings; B_lofo: physical channels, held-out; B_fit: all-flight thresholds)")
     print(per.to_string(index=False))
-    print("\nB: configurations chosen (times chosen over the 45 folds)")
+    print("\nB: thresholds chosen in the 45 leave-one-flight-out folds (count)")
     print(pd.Series(chosen).value_counts().to_string())
-    fmt = {"precision": "{:.3f}", "recall": "{:.3f}", "accuracy": "{:.3f}", "mean_det_s": "{:.2f}",
-           "max_det_s": "{:.2f}"}
-    for name, (r, d) in {"A (fixed, paper 001 settings, 3 attitude pairs)": (res_a, det_a),
-                         "B (leave-one-flight-out selection)": (res_b, det_b)}.items():
-        t = table(tab, r, d)
-        for c, f in fmt.items():
-            t[c] = [f.format(v) if pd.notna(v) else "-" for v in t[c]]
+    print(f"B-fit thresholds (all 45 flights, in-sample): {label_fit}")
+    for name, (f, r, d) in {
+            "A (fixed, paper 001 settings, 3 attitude pairs, 45 merged flights)": (fault, res_a, det_a),
+            "A-K (fixed, paper 001 settings, Keipour's commanded/measured pairing, 7 engine flights)":
+                (np.array(["engine"] * len(res_k)), res_k, det_k),
+            "B (physical channels, thresholds by leave-one-flight-out, held-out outcomes)": (fault, res_b, det_b),
+            "B-fit (same, thresholds fitted on all 45 flights: in-sample, optimistic)": (fault, res_f, det_f),
+    }.items():
         print(f"\nTable I-like summary, configuration {name}")
-        print(t.to_string())
+        print(table(f, r, d).to_string())
     print("\nTargets: precision >= 0.90, recall >= 0.90, mean detection time <= 2.0 s "
           "(Keipour et al., 22 flights: 0.882 / 0.882 / 2.02 s)")
     print(f"elapsed {time.perf_counter() - t0:.1f} s")

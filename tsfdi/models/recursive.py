@@ -51,13 +51,13 @@ _UPDATED = 16
 
 # integer state slots
 _I_VALID, _I_STABLE_CNT, _I_MODEL_STABLE, _I_NW, _I_VAR_CNT, _I_VAR_STABLE, _I_ALARMED, _I_SKIPPED, \
-    _I_SEEN, _I_FIRST_ALARM = range(10)
+    _I_SEEN, _I_FIRST_ALARM, _I_FROZEN = range(11)
 # float state slots
 _F_MEAN, _F_M2 = range(2)
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
-def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_min, zthr,
+def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_min, zthr, arm_after,
                 theta, P, ybuf, ubuf, ist, fst, out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
     """Process samples ``y[t], u[t, :]`` in order, updating the state arrays in place.
 
@@ -141,12 +141,12 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
                 if ist[_I_VAR_STABLE] == 1:
                     sd = np.sqrt(m2 / (nw - 1))
                     z = (e - mean) / sd if sd > 0 else (np.inf if e != mean else 0.0)
-                    if abs(z) > zthr:
+                    if abs(z) > zthr and ist[_I_SEEN] > arm_after:
                         flags |= _ALARM
                         if ist[_I_ALARMED] == 0:
                             ist[_I_ALARMED] = 1
                             ist[_I_FIRST_ALARM] = ist[_I_SEEN] - 1
-                if not (halt and ist[_I_ALARMED] == 1):
+                if not ((halt and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
                     # Welford (paper 001, eq. 8)
                     nw += 1
                     delta = e - mean
@@ -168,7 +168,7 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
                     flags |= _VAR_STABLE
             # parameter and covariance update (eqs. 6-7 / 15-16), skipped once halted: the alarmed sample
             # itself does not enter the model
-            if not (halt and ist[_I_ALARMED] == 1):
+            if not ((halt and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
                 for i in range(d):
                     theta[i] += px[i] * ge
                 c = 1.0 / np.sqrt(lam * s)
@@ -280,6 +280,10 @@ class RecursiveARX:
         Policy for NaN / inf in ``y`` or ``u``: "raise" raises ``ValueError`` naming the sample; "skip" leaves
         the sample out (no update, NaN error), counts it in ``n_skipped`` and restarts regression once the
         regressor again holds only finite samples.
+    arm_after : int, default 0
+        Baseline phase: no Z-score alarm among the first ``arm_after`` samples given to the estimator, even
+        when the gates are open (the model and the error statistics keep learning). On a real vehicle this
+        is the settling time after take-off or after the switch to autonomous flight.
 
     Notes
     -----
@@ -307,7 +311,8 @@ class RecursiveARX:
     def __init__(self, na: int, nb: int, nk: int = 0, forgetting_factor: float = 1.0, P0: Any = 1e4,
                  n_inputs: int = 1, *, trend: str = "n", theta0: Any = None, threshold: float = 4.5,
                  eps: float = 1e-2, stable_samples: int = 25, variance_tol: float = 0.01,
-                 min_variance_samples: int = 50, halt_on_alarm: bool = False, nonfinite: str = "raise"):
+                 min_variance_samples: int = 50, halt_on_alarm: bool = False, nonfinite: str = "raise",
+                 arm_after: int = 0):
         self.na = int_like(na, "na", minimum=0)
         self.nb = int_like(nb, "nb", minimum=0)
         self.nk = int_like(nk, "nk", minimum=0)
@@ -324,6 +329,7 @@ class RecursiveARX:
             raise TypeError(f"halt_on_alarm must be a bool, got {halt_on_alarm!r}")
         self.halt_on_alarm = bool(halt_on_alarm)
         self.nonfinite = option(nonfinite, "nonfinite", ("raise", "skip"))
+        self.arm_after = int_like(arm_after, "arm_after", minimum=0)
         d = self.n_params
         if d == 0:
             raise ValueError("na, nb and trend give a model without parameters: set na > 0, nb > 0 or trend='c'")
@@ -372,7 +378,7 @@ class RecursiveARX:
         self.P_ = self._P0.copy()
         self._ybuf = np.zeros(max(self.na, 1))
         self._ubuf = np.zeros((self.n_inputs, max(self.nk + self.nb, 1)))
-        self._ist = np.zeros(10, dtype=np.int64)
+        self._ist = np.zeros(11, dtype=np.int64)
         self._ist[_I_FIRST_ALARM] = -1
         self._fst = np.zeros(2)
 
@@ -400,6 +406,17 @@ class RecursiveARX:
     def alarmed(self) -> bool:
         """Whether an alarm has been raised."""
         return bool(self._ist[_I_ALARMED])
+
+    @property
+    def frozen(self) -> bool:
+        """Whether adaptation was stopped by :meth:`freeze`."""
+        return bool(self._ist[_I_FROZEN])
+
+    def freeze(self) -> None:
+        """Stop adapting from the next sample on: parameters, ``P`` and the error statistics stay as they are,
+        prediction errors and Z-scores are still computed (used by detectors that alarm on a statistic other
+        than the model's own Z-score, paper 002's "halt the RLS" on their alarm). :meth:`reset` undoes it."""
+        self._ist[_I_FROZEN] = 1
 
     @property
     def first_alarm(self) -> int | None:
@@ -454,7 +471,7 @@ class RecursiveARX:
         out_flags = np.empty(n, dtype=np.int64)
         _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
                     self.halt_on_alarm, self.eps, self.stable_samples, self.variance_tol,
-                    self.min_variance_samples, self.threshold, self.theta_, self.P_, self._ybuf, self._ubuf,
+                    self.min_variance_samples, self.threshold, self.arm_after, self.theta_, self.P_, self._ybuf, self._ubuf,
                     self._ist, self._fst, out_params, out_err, out_var, out_mean, out_z, out_flags)
         return out_params, out_err, out_var, out_mean, out_z, out_flags
 
