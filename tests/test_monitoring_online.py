@@ -122,3 +122,159 @@ def test_nonfinite_and_bad_input():
         OnlineDetector(2, forgetting_factor=1.5)
     with pytest.raises(ValueError, match="na"):
         OnlineDetector(2, na=-1)
+
+
+# ------------------------------------------------------------------ moving-average statistic, baseline phase
+def thrust_like(n=3000, change=2000, drop=1.0, seed=11):
+    """y = 0.5 + 0.8 u1 - 0.3 u2 + noise (sd 0.3) with a level drop ``drop`` from ``change`` (loss of thrust)."""
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, 2))
+    y = 0.5 + 0.8 * u[:, 0] - 0.3 * u[:, 1] + 0.3 * rng.standard_normal(n)
+    y[change:] -= drop
+    return y, u
+
+
+def mean_detector(**kw):
+    opts = dict(na=0, nb=1, trend="c", forgetting_factor=0.999, P0=1e2, n_inputs=2, statistic="mean", window=10,
+                direction="down", threshold=0.6, arm_after=300)
+    opts.update(kw)
+    return OnlineDetector(["thrust"], **opts)
+
+
+def test_mean_statistic_detects_a_level_drop_within_the_window_and_not_before():
+    y, u = thrust_like()
+    out = mean_detector().run(y, u)
+    fa = out.first_alarms.loc["thrust"]
+    assert fa["source"] == "mean"
+    # a drop of 1.0 against a threshold of 0.6: the 10-sample average passes it after 6-10 post-change samples
+    assert 2000 + 4 <= fa["position"] <= 2000 + 12
+    assert not out.alarm[:2000].any()
+    # the statistic is the direction-signed 10-sample average of the prediction errors
+    e = np.asarray(out.resid)[:, 0]
+    ref = -pd.Series(e).rolling(10).mean().to_numpy()
+    np.testing.assert_allclose(np.asarray(out.statistic)[:, 0], ref, rtol=1e-10, atol=1e-12, equal_nan=True)
+    # one-sided: a rise of the same size is no fault for direction="down", it is for "up" and "both"
+    y_up, _ = thrust_like(drop=-1.0)
+    assert mean_detector().run(y_up, u).first_alarm is None
+    for d in ("up", "both"):
+        pos = mean_detector(direction=d).run(y_up, u).first_alarm
+        assert 2004 <= pos <= 2012
+
+
+def test_mean_statistic_halts_the_model_at_the_first_alarm():
+    y, u = thrust_like()
+    det = mean_detector()
+    out = det.run(y, u)
+    first = out.first_alarm
+    m = det.models[0]
+    assert m.frozen
+    # the frozen parameters are those after the sample before the alarm: equal to a model run up to it
+    ref = RecursiveARX(0, 1, 0, 0.999, P0=1e2, n_inputs=2, trend="c", threshold=1e300, nonfinite="skip")
+    ref.run(y[:first], u[:first])
+    np.testing.assert_allclose(m.theta_, ref.theta_, rtol=1e-12)
+    # the fault is not learnt: the errors stay near -1 (the drop) to the end; without halting they fade
+    assert np.asarray(out.resid)[-200:, 0].mean() < -0.8
+    free = mean_detector(halt_on_alarm=False).run(y, u)
+    assert np.asarray(free.resid)[-200:, 0].mean() > -0.5
+
+
+def test_mean_statistic_streaming_equals_block():
+    y, u = thrust_like(n=2500, change=1500, seed=4)
+    whole = mean_detector().run(y, u)
+    det = mean_detector()
+    parts = [det.run(y[a:b], u[a:b]) for a, b in ((0, 700), (700, 1505), (1505, 2500))]
+    pd.testing.assert_frame_equal(det.first_alarms, whole.first_alarms)
+    np.testing.assert_allclose(np.concatenate([np.asarray(p.statistic) for p in parts]),
+                               np.asarray(whole.statistic), rtol=1e-12, equal_nan=True)
+    np.testing.assert_allclose(np.concatenate([np.asarray(p.resid) for p in parts]), np.asarray(whole.resid),
+                               rtol=1e-12, equal_nan=True)
+    step = mean_detector()
+    flags = np.array([step.update(y[t], u[t])[0] for t in range(len(y))])
+    np.testing.assert_array_equal(flags, whole.alarm[:, 0])
+
+
+def test_arm_after_suppresses_alarms_in_the_baseline_phase():
+    # a change at 400 inside a 600-sample baseline phase is not reported; with a shorter phase it is
+    y, u = thrust_like(n=1500, change=400)
+    assert mean_detector(arm_after=600).run(y, u).first_alarm is None or \
+        mean_detector(arm_after=600).run(y, u).first_alarm >= 600
+    assert 404 <= mean_detector(arm_after=300).run(y, u).first_alarm <= 412
+    # Z-score mode: the recursive model's alarms and the GLRT obey the same phase
+    yy, uu = two_pairs(gain=1.0)
+    out = OnlineDetector(["a", "b"], na=1, nb=1, arm_after=3500).run(yy, uu)
+    assert (out.first_alarms["position"] == -1).all() or out.first_alarms["position"].max() >= 3500
+    assert not out.alarm[:3500].any()
+
+
+@pytest.mark.parametrize("kind", ["numpy", "pandas", "xarray"])
+def test_mean_statistic_data_kinds(kind):
+    y, u = thrust_like(n=2500, change=1500)
+    index = pd.date_range("2018-07-18 19:56:50", periods=len(y), freq="50ms")
+    if kind == "pandas":
+        yy, uu = pd.Series(y, index=index, name="ax"), pd.DataFrame(u, index=index, columns=["aspd", "alt"])
+    elif kind == "xarray":
+        yy = xr.DataArray(y, dims=("time",), coords={"time": index})
+        uu = xr.DataArray(u, dims=("time", "input"), coords={"time": index})
+    else:
+        yy, uu = y, u
+    out = mean_detector().run(yy, uu)
+    ref = mean_detector().run(y, u)
+    assert out.first_alarm == ref.first_alarm
+    np.testing.assert_array_equal(np.asarray(out.statistic), np.asarray(ref.statistic))
+    if kind == "pandas":
+        assert isinstance(out.statistic, pd.DataFrame) and out.first_alarm_time == index[out.first_alarm]
+    elif kind == "xarray":
+        assert isinstance(out.statistic, xr.DataArray) and out.first_alarm_time == index[out.first_alarm]
+
+
+def test_mean_statistic_bad_input():
+    y, u = thrust_like(n=500)
+    with pytest.raises(ValueError, match="n_inputs"):
+        mean_detector().run(y, u[:, :1])
+    with pytest.raises(ValueError, match="statistic"):
+        OnlineDetector(1, statistic="median")
+    with pytest.raises(ValueError, match="direction"):
+        OnlineDetector(1, direction="sideways")
+    with pytest.raises(ValueError, match="window"):
+        OnlineDetector(1, window=0)
+    with pytest.raises(ValueError, match="arm_after"):
+        OnlineDetector(1, arm_after=-1)
+    with pytest.raises(TypeError, match="halt_on_alarm"):
+        OnlineDetector(1, halt_on_alarm="yes")
+    assert mean_detector().glrt is None and OnlineDetector(1).glrt is not None
+
+
+# ------------------------------------------------------------------ real flights with the shipped settings
+def _alfa_benchmark():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "alfa_detection.py"
+    spec = importlib.util.spec_from_file_location("alfa_detection_bench", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    if not (mod.ROOT / "flights.csv").is_file():
+        raise FileNotFoundError(f"shared ALFA data missing at {mod.ROOT}: tests need ../shared/data/alfa")
+    return mod
+
+
+def test_real_alfa_flights_with_the_shipped_settings():
+    """Rudder, engine and no-failure flights: alarms shortly after the onset, none on the healthy flight."""
+    B = _alfa_benchmark()
+    from tsfdi.datasets.alfa import list_alfa, load_alfa
+
+    tab = list_alfa(B.ROOT).set_index("flight")
+    cases = {"carbonZ_2018-09-11-15-06-34_1_rudder_right_failure": ("sideslip", 1.5),
+             "carbonZ_2018-07-30-16-39-00_1_engine_failure": ("thrust", 2.0),
+             "carbonZ_2018-10-05-14-37-22_1_no_failure": (None, None)}
+    for flight, (channel, max_delay) in cases.items():
+        df = B.prepare(load_alfa(tab.loc[flight, "merged_path"]))
+        assert not set(df.columns) & B.LEAKING
+        alarms = {c: B.first_alarm_s(df, B.run_channel(df, c, t)) for c, t in B.ALFA_SETTINGS.items()}
+        first = min((a for a in alarms.values() if np.isfinite(a)), default=np.nan)
+        if channel is None:
+            assert np.isnan(first), alarms
+        else:
+            onset = df.attrs["onset_s"]
+            assert onset <= alarms[channel] <= onset + max_delay, (alarms, onset)
+            assert onset <= first <= onset + max_delay

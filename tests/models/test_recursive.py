@@ -289,3 +289,34 @@ def test_bad_arguments():
     y = lfilter([1.0], [1.0, -0.5], rng.standard_normal(2000))
     ar.run(y)
     np.testing.assert_allclose(ar.theta_, [-0.5], atol=0.05)
+
+
+def test_arm_after_and_freeze():
+    change = 3000
+    y, u = simulate_arx(4000, 0, change_at=change)
+    # a baseline phase longer than the change hides its alarm; the statistics still learn during it
+    late = RecursiveARX(2, 2, 1, forgetting_factor=0.995, arm_after=3500).run(y, u)
+    free = RecursiveARX(2, 2, 1, forgetting_factor=0.995).run(y, u)
+    assert not late.alarm[:3500].any()
+    np.testing.assert_array_equal(np.asarray(late.zscore), np.asarray(free.zscore))
+    np.testing.assert_array_equal(late.alarm[3500:], free.alarm[3500:])
+    early = RecursiveARX(2, 2, 1, forgetting_factor=0.995, arm_after=2000).run(y, u)
+    assert change <= early.first_alarm <= change + 10
+    # freeze(): parameters, P and error statistics stop; errors and Z-scores are still computed
+    m = RecursiveARX(2, 2, 1, forgetting_factor=0.995)
+    m.run(y[:2000], u[:2000])
+    theta, P, var = m.theta_.copy(), m.P_.copy(), m.error_variance
+    assert not m.frozen
+    m.freeze()
+    res = m.run(y[2000:], u[2000:])
+    assert m.frozen and np.isfinite(np.asarray(res.resid)).all()
+    np.testing.assert_array_equal(m.theta_, theta)
+    np.testing.assert_array_equal(m.P_, P)
+    assert m.error_variance == var
+    # the frozen model still predicts: its errors equal y - phi' theta with the frozen theta
+    phi = np.column_stack([-y[1999:-1], -y[1998:-2], u[1999:-1], u[1998:-2]])
+    np.testing.assert_allclose(np.asarray(res.resid), y[2000:] - phi @ theta, rtol=1e-10, atol=1e-12)
+    m.reset()
+    assert not m.frozen
+    with pytest.raises(ValueError, match="arm_after"):
+        RecursiveARX(2, 2, arm_after=-1)
