@@ -65,6 +65,311 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+
+# ----------------------------------------------------------------------------------------------------- demo
+def _demo_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", default="tsfdi-demo", help="output folder for the figures and tables (default "
+                                                       "./tsfdi-demo)")
+    p.add_argument("--data", default=None, help="hexacopter netCDF file (default: the shipped data/hexacopter.nc)")
+    p.add_argument("--records-per-case", type=int, default=None,
+                   help="use only the first N records of each state and turbulence level (N >= 2; default all)")
+    p.add_argument("--windows", default="5,10,20", help="comma-separated window lengths in s")
+    p.add_argument("--models", default=None, help="comma-separated models: roll, pitch, yaw_rate, var (default all)")
+    p.add_argument("--methods", default="whiteness,variance", help="comma-separated: whiteness, variance")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.add_argument("--no-figures", action="store_true", help="do not write figures")
+
+
+def _csv_list(text: str | None) -> list[str] | None:
+    return None if text is None else [t.strip() for t in text.split(",") if t.strip()]
+
+
+def _markdown(df) -> str:
+    """A pipe table of a DataFrame (index levels as leading columns), without the optional tabulate package."""
+    flat = df.reset_index()
+
+    def cell(v):
+        if isinstance(v, float):
+            return f"{v:.6g}"
+        return str(v)
+
+    head = "| " + " | ".join(str(c) for c in flat.columns) + " |"
+    rule = "|" + "|".join("---" for _ in flat.columns) + "|"
+    rows = ["| " + " | ".join(cell(v) for v in row) + " |" for row in flat.itertuples(index=False)]
+    return "\n".join([head, rule] + rows)
+
+
+def demo_report(bases: dict, ev, *, markdown: bool = False) -> str:
+    """Text of the demo: Table 2 analogue, Table 4 analogues (paper and improved rules), rates, detection."""
+    import pandas as pd
+
+    from tsfdi.evaluation import baselines_table
+
+    def show(df: pd.DataFrame) -> str:
+        return _markdown(df) if markdown else df.to_string()
+
+    out = []
+    t2 = baselines_table(bases)[["turbulence", "state", "model", "signals", "order", "parameters", "nobs", "spp",
+                                 "rss_sss"]]
+    out.append("## Table 2 analogue: baseline models (order by BIC)\n")
+    out.append(show(t2.set_index(["turbulence", "state", "model", "signals"]).round(
+        {"spp": 2, "rss_sss": 5})))
+    for w in sorted(ev.identification["window"].unique()):
+        for rule in ev.rules:
+            what = "accepted" if rule == "paper" else "labelled"
+            out.append(f"\n## Table 4 analogue, {w:g} s windows, rule '{rule}'\n\nPercent of the windows of each true "
+                       f"failure (columns) {what} as {' / '.join(ev.faults)}.\n")
+            out.append(show(ev.table4(w, rule)))
+    r = ev.rates()["correct"].unstack("true").unstack("rule")
+    r.columns = [f"{t} ({rule})" for t, rule in r.columns]
+    out.append("\n## Correct unique identification (percent of windows)\n")
+    out.append(show(r.round(2)))
+    out.append("\n## Detection with the healthy model\n")
+    out.append(show(ev.detection_rates().round(3)))
+    return "\n".join(out) + "\n"
+
+
+def write_figures(bases: dict, ev, data, out) -> list:
+    """Figures of the study under ``out`` (Path): order selection, residual ACF, variance evolution, identification
+    bars, confusion heatmaps. Returns the written paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from tsfdi.evaluation import hexacopter_signals
+    from tsfdi.plotting.acf import plot_acf
+    from tsfdi.plotting.monitoring import plot_confusion, plot_variance_evolution
+
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    def save(fig, name):
+        p = out / name
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        written.append(p)
+
+    level = "severe" if "severe" in bases else next(iter(bases))
+    b = bases[level]
+    if ("var", b.healthy) in b.selections:
+        save(b.selections[("var", b.healthy)].plot(), "order_selection_var_healthy.png")
+    ch = b.channels[1] if len(b.channels) > 1 else b.channels[0]
+    if (ch, b.healthy) in b.selections:
+        save(b.selections[(ch, b.healthy)].plot(), f"order_selection_ar_{ch}_healthy.png")
+    sig = hexacopter_signals(data)
+    st, tb = sig["state"].values, sig["turbulence"].values
+    valid = ~sig["lost_control"].values if "lost_control" in sig.coords else np.ones(sig.sizes["record"], bool)
+    fit = set(b.fit_records)
+    test_rec = {s: next((i for i in range(sig.sizes["record"]) if st[i] == s and tb[i] == level and valid[i]
+                         and sig["record"].values[i] not in fit), None) for s in (b.healthy,) + b.faults}
+    if "var" in b.models and test_rec[b.healthy] is not None:
+        x = sig.isel(record=test_rec[b.healthy]).values[2000:4000]
+        save(plot_acf(np.asarray(b.models["var"][b.healthy].residuals(x)), lags=40), "acf_var_healthy.png")
+    recs = [sig.isel(record=i).values for s, i in test_rec.items() if i is not None and s != b.healthy]
+    if recs:
+        save(plot_variance_evolution(recs, fs=b.fs, thresholds=b.steady_thresholds, failure_time=10.0,
+                                     labels=[s for s, i in test_rec.items() if i is not None and s != b.healthy],
+                                     channels=list(b.channels)), "variance_evolution.png")
+    if "var" in b.models:
+        for f in b.faults:
+            i = test_rec.get(f)
+            if i is None:
+                continue
+            mon = b.monitor("var", window=20.0)
+            from tsfdi.identification import identify
+
+            x = sig.isel(record=i).values[3000:5000]
+            ident = identify(x, {g: b.models["var"][g] for g in b.faults}, mon.test)
+            save(ident.plot(), f"identification_bars_var_{f}.png")
+    confs = {rule: ev.confusion(rule).sort_index() for rule in ev.rules[:2]}
+    for key in confs["paper"].index.droplevel("true").unique():
+        model, method, w = key
+        if model != "var":
+            continue
+        for rule, conf in confs.items():
+            c = conf.loc[key]
+            save(plot_confusion(c, title=f"{model}, {method}, {w:g} s, rule {rule}"),
+                 f"confusion_{model}_{method}_{int(w)}s_{rule}.png")
+    return written
+
+
+@command("demo", "run the whole Dutta et al. study on the shipped hexacopter data: baselines (Table 2), "
+                 "identification (Table 4), detection rates and figures", _demo_args)
+def _demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from tsfdi.datasets import load_hexacopter
+    from tsfdi.evaluation import hexacopter_study
+
+    t0 = time.perf_counter()
+    data = load_hexacopter(args.data)
+    windows = [float(w) for w in _csv_list(args.windows)]
+    bases, ev = hexacopter_study(data, records_per_case=args.records_per_case, models=_csv_list(args.models),
+                                 methods=_csv_list(args.methods), windows=windows, progress=not args.no_progress)
+    text = demo_report(bases, ev)
+    print(text)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "report.md").write_text(demo_report(bases, ev, markdown=True))
+    ev.identification.to_csv(out / "identification_windows.csv.gz", index=False)
+    nfig = 0 if args.no_figures else len(write_figures(bases, ev, data, out / "figures"))
+    print(f"wrote {out / 'report.md'} and {nfig} figure(s) under {out / 'figures'} in "
+          f"{time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+# ------------------------------------------------------------------------------------------------- fit / identify
+def _read_signal(path: str, columns: list[str] | None, fs: float | None):
+    """A ``DataFrame`` (time index in s) from a CSV (first column time if named ``time``) or netCDF file."""
+    from pathlib import Path
+
+    import numpy as np
+    import pandas as pd
+
+    p = Path(path)
+    if not p.exists():
+        raise ValueError(f"data file {path} does not exist")
+    if p.suffix.lower() in (".nc", ".nc4", ".netcdf", ".cdf"):
+        import xarray as xr
+
+        with xr.open_dataset(p, engine="h5netcdf") as ds:
+            ds = ds.load()
+        names = columns or [v for v in ds.data_vars if ds[v].dims == ("time",)]
+        missing = [c for c in names if c not in ds]
+        if missing:
+            raise ValueError(f"{path} lacks the variable(s) {missing}")
+        bad = [c for c in names if ds[c].ndim != 1]
+        if bad:
+            raise ValueError(f"variables {bad} of {path} are not 1-D time series (select one record first)")
+        df = pd.DataFrame({c: np.asarray(ds[c].values, dtype=float) for c in names},
+                          index=pd.Index(np.asarray(ds[ds[names[0]].dims[0]].values), name="time"))
+    else:
+        df = pd.read_csv(p)
+        if "time" in df.columns:
+            df = df.set_index("time")
+        if columns:
+            missing = [c for c in columns if c not in df.columns]
+            if missing:
+                raise ValueError(f"{path} lacks the column(s) {missing}")
+            df = df[columns]
+    if df.shape[1] == 0:
+        raise ValueError(f"{path} has no data column")
+    if fs is None:
+        if df.index.name == "time" and len(df) > 1:
+            fs = 1.0 / float(np.median(np.diff(np.asarray(df.index, dtype=float))))
+        else:
+            fs = 1.0
+    return df.astype(float), float(fs)
+
+
+def _fit_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("data", help="CSV (optional 'time' column) or netCDF file with one record")
+    p.add_argument("--out", required=True, help="output .npz file for the fitted model")
+    p.add_argument("--columns", default=None, help="comma-separated channels (default all)")
+    p.add_argument("--model", choices=("ar", "var"), default=None,
+                   help="ar (one column) or var (several); default from the number of columns")
+    p.add_argument("--max-lags", type=int, default=20, help="largest order searched (BIC)")
+    p.add_argument("--lags", type=int, default=None, help="fixed order instead of the BIC choice")
+    p.add_argument("--start", type=float, default=None, help="first time (s) used")
+    p.add_argument("--stop", type=float, default=None, help="last time (s) used")
+    p.add_argument("--fs", type=float, default=None, help="sampling frequency (Hz; default from the time column)")
+
+
+@command("fit", "fit an AR / VAR baseline model (order by BIC) on a CSV or netCDF record and save it (.npz)",
+         _fit_args)
+def _fit(args: argparse.Namespace) -> int:
+    import warnings
+
+    from tsfdi.selection import select_order
+
+    df, fs = _read_signal(args.data, _csv_list(args.columns), args.fs)
+    a = 0 if args.start is None else int(round(args.start * fs))
+    b = None if args.stop is None else int(round(args.stop * fs))
+    df = df.iloc[a:b]
+    model = args.model or ("ar" if df.shape[1] == 1 else "var")
+    if model == "ar" and df.shape[1] != 1:
+        raise ValueError(f"--model ar needs one column, got {df.shape[1]}: pick one with --columns")
+    if model == "var" and df.shape[1] < 2:
+        raise ValueError("--model var needs at least two columns")
+    y = df.iloc[:, 0] if model == "ar" else df
+    sel = select_order(y, args.max_lags, model)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = sel.fit(args.lags)
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    res.save(args.out)
+    print(f"{model.upper()}({res.lags}) on {list(df.columns)} ({res.nobs} samples): BIC {res.bic:.6g}, "
+          f"RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}; saved to {args.out}")
+    return 0
+
+
+def _identify_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("data", help="CSV (optional 'time' column) or netCDF file with one record")
+    p.add_argument("--models", required=True, nargs="+", help="saved models (.npz from 'tsfdi fit'), as "
+                                                               "NAME=PATH or PATH (name = file stem)")
+    p.add_argument("--columns", default=None, help="comma-separated channels, in the models' order (default all)")
+    p.add_argument("--window", type=float, default=None, help="window length in s (default the whole record)")
+    p.add_argument("--step", type=float, default=1.0, help="seconds between windows")
+    p.add_argument("--fs", type=float, default=None, help="sampling frequency (Hz; default from the time column)")
+    p.add_argument("--method", choices=("whiteness", "variance"), default="whiteness")
+    p.add_argument("--alpha", type=float, default=1e-3, help="type I risk per channel")
+    p.add_argument("--lags", type=int, default=20, help="Ljung-Box lags")
+    p.add_argument("--rule", choices=("paper", "likelihood", "pvalue"), default="paper")
+    p.add_argument("--out", default=None, help="write the table to this CSV file")
+
+
+@command("identify", "identify which saved model fits a CSV / netCDF record, window by window", _identify_args)
+def _identify(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    import numpy as np
+    import pandas as pd
+
+    from tsfdi.detection import FTest, LjungBox
+    from tsfdi.io import load
+    from tsfdi.monitoring import apply_rule, window_statistics
+
+    df, fs = _read_signal(args.data, _csv_list(args.columns), args.fs)
+    models = {}
+    for spec in args.models:
+        name, _, path = spec.rpartition("=")
+        name = name or Path(path).stem
+        if not Path(path).exists():
+            raise ValueError(f"model file {path} does not exist")
+        models[name] = load(path)
+    W = len(df) if args.window is None else int(round(args.window * fs))
+    S = max(1, int(round(args.step * fs)))
+    test = LjungBox(lags=args.lags, alpha=args.alpha) if args.method == "whiteness" else FTest(alpha=args.alpha)
+    x = df.to_numpy()
+    if any(int(getattr(m, "neqs", 1)) != x.shape[1] for m in models.values()):
+        raise ValueError(f"the data has {x.shape[1]} column(s) {list(df.columns)} but the models have "
+                         f"{sorted({int(getattr(m, 'neqs', 1)) for m in models.values()})}: choose --columns")
+    ws = window_statistics(x, models, test, window=W, step=S)
+    names = list(models)
+    rej = np.array([ws["decisions"][n]["reject"] for n in names])
+    pmin = np.array([ws["decisions"][n]["pvalue"].min(axis=1) for n in names])
+    lab = apply_rule(rej, ws["loglik"], pmin, args.rule)
+    t0 = float(df.index[0]) if df.index.name == "time" else 0.0
+    table = pd.DataFrame({"start": t0 + ws["starts"] / fs, "end": t0 + (ws["starts"] + W) / fs})
+    for j, n in enumerate(names):
+        table[f"pvalue_{n}"] = pmin[j]
+        table[f"accept_{n}"] = ~rej[j]
+    table["status"] = np.where(lab >= 0, "identified", np.where(lab == -2, "ambiguous", "none"))
+    if args.rule != "paper":
+        paper = apply_rule(rej, ws["loglik"], pmin, "paper")
+        table["status"] = np.where(paper >= 0, "identified", np.where(paper == -2, "ambiguous", "none"))
+    table["label"] = [names[i] if i >= 0 else "" for i in lab]
+    with pd.option_context("display.width", 160, "display.max_rows", 200):
+        print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    if args.out:
+        table.to_csv(args.out, index=False)
+        print(f"wrote {args.out}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``tsfdi`` command."""
     parser = argparse.ArgumentParser(prog="tsfdi", description="Statistical time-series fault detection and "

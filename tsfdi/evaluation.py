@@ -24,8 +24,8 @@ from tsfdi._data import as_signal, is_xarray
 from tsfdi._validation import float_like, int_like, option, probability
 from tsfdi.monitoring import RULES, Monitor, _rolling_variance, apply_rule, window_statistics
 
-__all__ = ["Baselines", "Evaluation", "Records", "evaluate", "fit_baselines", "hexacopter_signals", "PAPER_ALPHA",
-           "METHODS", "RULES"]
+__all__ = ["Baselines", "Evaluation", "Records", "baselines_table", "evaluate", "fit_baselines", "hexacopter_signals",
+           "hexacopter_study", "PAPER_ALPHA", "METHODS", "RULES"]
 
 #: Identification methods: the residual variance F test and the residual whiteness (Ljung-Box) test.
 METHODS = ("whiteness", "variance")
@@ -732,3 +732,76 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                  "fault_true", "pre", "alarm"])
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
                       records=recs, nchan={m: len(first.model_channels(m)) for m in models})
+
+
+def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, models: Sequence[str] | None = None,
+                     methods: Sequence[str] = METHODS, windows: Sequence[float] = (5.0, 10.0, 20.0),
+                     rules: Sequence[str] = ("paper", "likelihood", "pvalue"), lags: Any = None, settle: float = 10.0,
+                     progress: bool = True) -> tuple[dict, Evaluation]:
+    """The whole study of paper 003 on a hexacopter dataset: baselines per turbulence level, then evaluation.
+
+    For every turbulence level the first valid record of each state fits the baselines (whole post-settle part
+    of the record; see :func:`fit_baselines`), and every other valid record of that level is evaluated with
+    the models of its own level (condition-scheduled baselines).
+
+    Parameters
+    ----------
+    data : xarray.Dataset, optional
+        Default the shipped :func:`tsfdi.datasets.load_hexacopter`.
+    records_per_case : int, optional
+        Use only the first ``records_per_case`` records of each (state, turbulence) cell (at least 2: one fits,
+        the others are evaluated); default all.
+    models, methods, windows, rules, lags, settle, progress :
+        As in :func:`evaluate`; ``models`` defaults to every channel and ``"var"``.
+
+    Returns
+    -------
+    baselines : dict
+        Turbulence level -> :class:`Baselines`.
+    evaluation : Evaluation
+    """
+    if data is None:
+        from tsfdi.datasets import load_hexacopter
+
+        data = load_hexacopter()
+    import xarray as xr
+
+    if not isinstance(data, xr.Dataset):
+        raise TypeError(f"data must be a hexacopter xarray.Dataset, got {type(data).__name__}")
+    if records_per_case is not None:
+        n = int_like(records_per_case, "records_per_case", minimum=2)
+        st, tb = data["state"].values, data["turbulence"].values
+        keep, count = [], {}
+        for i in range(data.sizes["record"]):
+            key = (st[i], tb[i])
+            count[key] = count.get(key, 0) + 1
+            if count[key] <= n:
+                keep.append(i)
+        data = data.isel(record=keep)
+    levels = list(dict.fromkeys(np.asarray(data["turbulence"].values).astype(str).tolist()))
+    sig = hexacopter_signals(data)
+    names = list(sig["channel"].values) + ["var"] if models is None else list(models)
+    with warnings.catch_warnings():
+        from tsfdi.exceptions import UnstableModelWarning
+
+        warnings.simplefilter("ignore", UnstableModelWarning)
+        bases = {lvl: fit_baselines(sig, fit_turbulence=lvl, duration=None, settle=settle, models=names)
+                 for lvl in levels}
+    ev = evaluate(sig, bases, models=names, methods=methods, windows=windows, rules=rules, lags=lags,
+                  settle=settle, progress=progress)
+    return bases, ev
+
+
+def baselines_table(baselines: Any) -> pd.DataFrame:
+    """Table 2 analogue of one :class:`Baselines` or of a mapping turbulence level -> Baselines (one
+    ``turbulence`` column added)."""
+    if isinstance(baselines, Baselines):
+        return baselines.table
+    if not isinstance(baselines, Mapping) or not all(isinstance(b, Baselines) for b in baselines.values()):
+        raise TypeError("baselines must be a Baselines or a mapping turbulence level -> Baselines")
+    frames = []
+    for lvl, b in baselines.items():
+        t = b.table
+        t.insert(0, "turbulence", lvl)
+        frames.append(t)
+    return pd.concat(frames, ignore_index=True)

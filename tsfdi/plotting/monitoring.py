@@ -1,0 +1,156 @@
+"""Plots of the monitoring and evaluation stage: variance evolution (Dutta et al., Fig. 7), monitor timelines and
+confusion heatmaps (Table 4). matplotlib is imported inside each function."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["plot_variance_evolution", "plot_monitor", "plot_confusion"]
+
+
+def _axes(ax: Any, nrows: int = 1, figsize=(7, 5)):
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        fig, axes = plt.subplots(nrows, 1, figsize=figsize, sharex=True, squeeze=False)
+        return fig, list(axes[:, 0])
+    axes = list(np.atleast_1d(ax))
+    if len(axes) != nrows:
+        raise ValueError(f"ax must hold {nrows} axes, got {len(axes)}")
+    return axes[0].figure, axes
+
+
+def plot_variance_evolution(signals: Any, *, fs: float = 1.0, window: float = 10.0, step: float = 0.1,
+                            thresholds: Any = None, failure_time: float | None = None, labels: Any = None,
+                            channels: Any = None, ax: Any = None) -> Any:
+    """Rolling variance of each channel against time for one or more records (Dutta et al., Fig. 7).
+
+    Parameters
+    ----------
+    signals : array_like (nobs, k) or sequence of them (numpy, pandas or xarray)
+        Records; each is drawn as one line per channel panel.
+    fs : float
+        Sampling frequency (Hz).
+    window, step : float
+        Rolling window and its update interval in seconds (the paper: 10 s, 0.1 s).
+    thresholds : array_like, shape (k,), optional
+        Steady-state variance thresholds, drawn dashed.
+    failure_time : float, optional
+        Failure instant (s), drawn as a vertical dashed line.
+    labels : sequence of str, optional
+        Legend labels of the records.
+    channels : sequence of str, optional
+        Panel titles (default the signal's channel names).
+    ax : sequence of k Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from tsfdi._data import as_signal
+    from tsfdi.monitoring import rolling_variance
+
+    is_one = not isinstance(signals, (list, tuple))
+    sigs = [as_signal(s, "signals", allow_constant=True) for s in ([signals] if is_one else signals)]
+    if not sigs:
+        raise ValueError("signals is empty")
+    k = sigs[0].nchan
+    W = max(2, int(round(window * fs)))
+    S = max(1, int(round(step * fs)))
+    fig, axes = _axes(ax, k, figsize=(7, 2.2 * k))
+    names = list(channels) if channels is not None else list(sigs[0].channels)
+    for r, sig in enumerate(sigs):
+        v = rolling_variance(sig.values, W, S)
+        t = (np.arange(v.shape[0]) * S + W) / fs
+        for c in range(k):
+            axes[c].plot(t, v[:, c], lw=1, label=None if labels is None else str(labels[r]))
+    for c in range(k):
+        axes[c].set_ylabel(f"var({names[c]})")
+        axes[c].set_yscale("log")
+        if thresholds is not None:
+            axes[c].axhline(float(np.asarray(thresholds)[c]), color="k", ls="--", lw=1)
+        if failure_time is not None:
+            axes[c].axvline(failure_time, color="k", ls=":", lw=1)
+    axes[-1].set_xlabel(f"time of the window end (s), window {window:g} s")
+    if labels is not None:
+        axes[0].legend(fontsize="small", ncol=min(4, len(sigs)))
+    fig.tight_layout()
+    return fig
+
+
+def plot_monitor(result: Any, ax: Any = None) -> Any:
+    """Timeline of a :class:`~tsfdi.monitoring.MonitorResult`: rolling variances, healthy-model detection
+    statistic (ratio to its threshold) and the identified label of each window.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    w = result.windows
+    if len(w) == 0:
+        raise ValueError("result has no window to plot")
+    var_cols = [c for c in w.columns if c.startswith("variance_")]
+    fig, axes = _axes(ax, 3, figsize=(7, 6))
+    for c in var_cols:
+        axes[0].plot(w["end"], w[c], lw=1, label=c.replace("variance_", "channel "))
+    axes[0].set_yscale("log")
+    axes[0].set_ylabel("rolling variance")
+    axes[0].legend(fontsize="small")
+    axes[1].plot(w["end"], w["detect_statistic"], lw=1, color="C3")
+    axes[1].axhline(1.0, color="k", ls="--", lw=1)
+    axes[1].set_yscale("log")
+    axes[1].set_ylabel("healthy model\nstatistic / threshold")
+    labs = sorted({str(x) for x in w["label"].dropna()} | {"(none)"})
+    y = [labs.index(str(x)) if x is not None and x == x else labs.index("(none)") for x in w["label"]]
+    ident = (w["status"] != "").to_numpy()
+    axes[2].scatter(w["end"][ident], np.asarray(y)[ident], s=10)
+    axes[2].set_yticks(range(len(labs)), labs)
+    axes[2].set_ylabel("label")
+    axes[2].set_xlabel("time of the window end (s)")
+    for e in result.events:
+        if e.kind in ("detection", "steady"):
+            for a in axes:
+                a.axvline(e.time, color="k" if e.kind == "detection" else "g", ls=":", lw=1)
+    fig.tight_layout()
+    return fig
+
+
+def plot_confusion(table: Any, ax: Any = None, *, title: str | None = None, cmap: str = "Blues") -> Any:
+    """Heatmap of a confusion table: rows true failures, columns identified (or accepted) faults, percent.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Rows true classes, columns candidate classes, values in percent (e.g. one ``(model, method, window)``
+        slice of :meth:`tsfdi.Evaluation.confusion`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+    import pandas as pd
+
+    if not isinstance(table, pd.DataFrame) or table.empty:
+        raise TypeError("table must be a non-empty pandas DataFrame (rows true class, columns candidates)")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(1.3 * table.shape[1] + 2, 1.0 * table.shape[0] + 1.5))
+    else:
+        fig = ax.figure
+    vals = table.to_numpy(dtype=float)
+    im = ax.imshow(vals, cmap=cmap, vmin=0, vmax=100)
+    ax.set_xticks(range(table.shape[1]), [str(c) for c in table.columns])
+    ax.set_yticks(range(table.shape[0]), [str(i) for i in table.index])
+    ax.set_xlabel("identified as")
+    ax.set_ylabel("true failure")
+    for i in range(vals.shape[0]):
+        for j in range(vals.shape[1]):
+            ax.text(j, i, f"{vals[i, j]:.1f}", ha="center", va="center",
+                    color="white" if vals[i, j] > 60 else "black", fontsize="small")
+    fig.colorbar(im, ax=ax, label="% of windows")
+    if title:
+        ax.set_title(title, fontsize="medium")
+    fig.tight_layout()
+    return fig
