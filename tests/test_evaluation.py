@@ -1,0 +1,175 @@
+"""fit_baselines (Table 2 analogue), evaluate (Table 4 analogue, rates, detection) and their helpers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from _synthetic_fdi import FS, dataset, record
+from conftest import as_kind
+from scipy import stats
+
+import tsfdi
+from tsfdi.evaluation import Evaluation, hexacopter_signals
+
+
+@pytest.fixture(scope="module")
+def synthetic():
+    """5 records per state, 40 s at 100 Hz, failure at 10 s."""
+    return dataset(5, 4000, 1000, np.random.default_rng(5))
+
+
+@pytest.fixture(scope="module")
+def fitted(synthetic):
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, steady_window=5.0)
+    return b
+
+
+def test_baselines_table_and_exclusion(synthetic, fitted):
+    b = fitted
+    assert b.healthy == "healthy" and b.faults == ("f1", "f2")
+    assert b.fit_records == (0, 5, 10)          # first record of each state
+    t = b.table
+    assert list(t.columns[:6]) == ["state", "model", "signals", "order", "lags", "parameters"]
+    assert len(t) == 3 * 3                      # 3 states x (2 scalar AR + VAR)
+    var = t[t["model"] == "VAR"].set_index("state")
+    # the systems are VAR(2): BIC finds order 2; parameters s^2 p; SPP = nobs s / parameters
+    assert (var["lags"] == 2).all() and (var["parameters"] == 8).all()
+    np.testing.assert_allclose(var["spp"], var["nobs"] * 2 / 8)
+    # the table's order equals tsfdi.select_order on the same segment
+    seg = b.segments["f1"]
+    assert b.models["y0"]["f1"].lags == tsfdi.select_order(seg[:, 0], 6, "ar").selected
+    # steady threshold: max 5 s rolling variance (0.1 s step) of the post-settle fault fitting records
+    recs, _, _ = synthetic
+    post = [recs[i][1500:] for i in (5, 10)]
+    ref = np.max([tsfdi.monitoring.rolling_variance(p, 500, 10).max(axis=0) for p in post], axis=0)
+    np.testing.assert_allclose(b.steady_thresholds, ref, rtol=1e-10)
+
+
+def test_evaluate_synthetic(synthetic, fitted):
+    recs, states, ft = synthetic
+    ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var", "y0"),
+                        methods=("whiteness", "variance"), windows=(5.0, 20.0), settle=5.0,
+                        alpha=1e-3, rules=("paper", "likelihood", "pvalue"), progress=False)
+    # fitting records are excluded
+    assert not set(ev.identification["record"]) & set(fitted.fit_records)
+    assert set(ev.records.loc[~ev.records["evaluated"], "skipped"]) == {"fitting record"}
+    # windows: starts >= failure + settle = 15 s, 1 s apart, up to 40 - W
+    w20 = ev.identification.query("model == 'var' and method == 'whiteness' and window == 20.0")
+    assert sorted(w20["start"].unique()) == list(np.arange(15.0, 21.0))
+    assert len(w20) == 8 * 6
+    rates = ev.rates()
+    corr = rates.xs(("var", "whiteness", 20.0), level=("model", "method", "window"))["correct"]
+    assert (corr.xs("paper", level="rule") >= 90).all()
+    assert (corr.xs("likelihood", level="rule") == 100).all()
+    t4 = ev.table4(20.0)
+    assert t4.index.names == ["model", "method"] and list(t4.columns) == ["f1", "f2"]
+    assert t4.loc[("var", "whiteness"), "f1"].count("/") == 1
+    # detection: healthy-window false alarms within a binomial bound of 1 - (1 - alpha)^2 (windows overlap, so
+    # the bound uses the number of disjoint 5 s windows)
+    det = ev.detection_rates()
+    row = det.loc[("var", "whiteness", 5.0)]
+    p0 = 1 - (1 - 1e-3) ** 2
+    n_disjoint = 4 * 8
+    assert row["expected_false_alarm"] == pytest.approx(100 * p0)
+    assert row["false_alarm"] / 100 <= stats.binom.ppf(0.999, n_disjoint, p0) / n_disjoint + 1e-12
+    assert row["missed_records"] == 0
+    assert 0 < row["delay_median"] <= 5.0
+    assert "Identification" in ev.summary()
+
+
+def test_confusion_closed_form():
+    """Hand-made windows: confusion, rates, Table 4 and detection rates from counts."""
+    ident = pd.DataFrame({
+        "record": [1, 1, 2, 2, 3, 3, 3, 3], "state": ["a"] * 4 + ["b"] * 4, "turbulence": "x", "model": "var",
+        "method": "whiteness", "window": 5.0, "start": [0, 1, 0, 1, 0, 1, 2, 3],
+        "acc_a": [True, True, True, False, False, True, False, False],
+        "acc_b": [False, True, False, False, True, True, True, False],
+        "label_paper": ["a", "ambiguous", "a", "none", "b", "ambiguous", "b", "none"],
+        "label_likelihood": ["a", "a", "a", "b", "b", "a", "b", "b"]})
+    det = pd.DataFrame({
+        "record": [0, 0, 0, 0, 1, 1, 1, 1, 2, 2], "state": ["h"] * 4 + ["a"] * 6, "model": "var",
+        "method": "whiteness", "window": 5.0, "start": [0, 1, 2, 3, 0, 5, 10, 0, 5, 10],
+        "end": [5, 6, 7, 8, 5, 10, 15, 5, 10, 15], "failure_time": [np.nan] * 4 + [6.0] * 6,
+        "fault_true": [False] * 4 + [False, False, True, False, False, True],
+        "pre": [True] * 4 + [True, False, False, True, False, False],
+        "alarm": [False, True, False, False, False, True, True, False, False, False]})
+    recs = pd.DataFrame({"record": [0, 1, 2, 3]})
+    recs.attrs["healthy"] = "h"
+    ev = Evaluation(identification=ident, detection=det, faults=("a", "b"), rules=("paper", "likelihood"),
+                    alphas={("var", "whiteness"): 0.01}, lags={5.0: 20}, records=recs, nchan={"var": 3})
+    conf = ev.confusion("paper").xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
+    np.testing.assert_allclose(conf.loc["a"], [75.0, 25.0])
+    np.testing.assert_allclose(conf.loc["b"], [25.0, 75.0])
+    conf = ev.confusion("likelihood").xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
+    np.testing.assert_allclose(conf.loc["a"], [75.0, 25.0])
+    np.testing.assert_allclose(conf.loc["b"], [25.0, 75.0])
+    r = ev.rates().xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
+    np.testing.assert_allclose(r.loc[("a", "paper"), ["correct", "wrong", "ambiguous", "none"]], [50, 0, 25, 25])
+    np.testing.assert_allclose(r.loc[("b", "paper"), ["correct", "wrong", "ambiguous", "none"]], [50, 0, 25, 25])
+    np.testing.assert_allclose(r.loc[("b", "likelihood"), ["correct", "wrong", "ambiguous", "none"]], [75, 25, 0, 0])
+    assert r.loc[("a", "paper"), "windows"] == 4
+    assert ev.table4(5.0).loc[("var", "whiteness"), "a"] == "75.00/25.00"
+    d = ev.detection_rates().loc[("var", "whiteness", 5.0)]
+    assert d["false_alarm"] == pytest.approx(25.0)
+    assert d["expected_false_alarm"] == pytest.approx(100 * (1 - 0.99 ** 3))
+    assert d["missed_fault"] == pytest.approx(50.0)         # 2 post-failure windows, 1 alarm
+    assert d["missed_records"] == 1                          # record 2: no alarm after the failure
+    assert d["delay_median"] == pytest.approx(4.0)           # first alarm window ends at 10 s, failure at 6 s
+    with pytest.raises(ValueError, match="window"):
+        ev.table4(7.0)
+
+
+def test_fit_baselines_data_kinds(kind):
+    rng = np.random.default_rng(7)
+    segs = {s: as_kind(record(s, 3000, rng), kind) for s in ("healthy", "f1", "f2")}
+    b = tsfdi.fit_baselines(segs, max_lags=4, var_max_lags=4, models=["var"])
+    assert b.faults == ("f1", "f2")
+    assert all(b.models["var"][s].lags == 2 for s in segs)
+    assert b.monitor("var", window=10.0, lags=10).nchan == 2
+
+
+def test_hexacopter_signals():
+    t = np.arange(6) / 100.0
+    ds = xr.Dataset({v: (("record", "time"), np.arange(12.0).reshape(2, 6) * k)
+                     for v, k in (("roll", 1.0), ("pitch", 2.0), ("yaw", 3.0))},
+                    coords={"record": [0, 1], "time": t, "state": ("record", ["healthy", "rotor1"]),
+                            "failure_time": ("record", [np.nan, 0.02])})
+    da = hexacopter_signals(ds)
+    assert da.dims == ("record", "time", "channel")
+    assert list(da["channel"].values) == ["roll", "pitch", "yaw_rate"]
+    np.testing.assert_allclose(da["time"].values, t[1:])
+    np.testing.assert_allclose(da.values[0, :, 2], 3.0 * 100.0)           # diff(3 t) * fs
+    np.testing.assert_allclose(da.values[1, :, 0], np.arange(7.0, 12.0))
+    assert list(da["state"].values) == ["healthy", "rotor1"]
+    with pytest.raises(TypeError, match="data"):
+        hexacopter_signals(ds["roll"])
+    with pytest.raises(ValueError, match="yaw"):
+        hexacopter_signals(ds, yaw="heading")
+
+
+def test_bad_input(synthetic, fitted):
+    recs, states, ft = synthetic
+    with pytest.raises(ValueError, match="states"):
+        tsfdi.fit_baselines(recs, fs=FS)
+    with pytest.raises(ValueError, match="healthy"):
+        tsfdi.fit_baselines(recs, states=states, healthy="nominal", fs=FS)
+    with pytest.raises(ValueError, match="models"):
+        tsfdi.fit_baselines(recs, states=states, fs=FS, models=["altitude"])
+    with pytest.raises(TypeError, match="baselines"):
+        tsfdi.evaluate(recs, {"x": 1}, states=states, fs=FS)
+    with pytest.raises(ValueError, match="models"):
+        tsfdi.evaluate(recs, fitted, states=states, fs=FS, models=("roll",))
+    with pytest.raises(ValueError, match="methods"):
+        tsfdi.evaluate(recs, fitted, states=states, fs=FS, methods=("spectral",))
+    with pytest.raises(ValueError, match="Hz"):
+        tsfdi.evaluate(recs, fitted, states=states, fs=50.0)
+    with pytest.raises(ValueError, match="channels"):
+        tsfdi.evaluate([r[:, :1] for r in recs], fitted, states=states, fs=FS)
+    with pytest.raises(TypeError, match="data"):
+        tsfdi.evaluate("records.csv", fitted)
+    with pytest.raises(ValueError, match="alpha"):
+        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, alpha=2.0, progress=False)
