@@ -110,7 +110,7 @@ def demo_report(bases: dict, ev, *, markdown: bool = False) -> str:
 
     out = []
     t2 = baselines_table(bases)[["turbulence", "state", "model", "signals", "order", "parameters", "nobs", "spp",
-                                 "rss_sss"]]
+                                 "rss_sss", "stable"]]
     out.append("## Table 2 analogue: baseline models (order by BIC)\n")
     out.append(show(t2.set_index(["turbulence", "state", "model", "signals"]).round(
         {"spp": 2, "rss_sss": 5})))

@@ -385,9 +385,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                 j = rec.channels.index(m)
                 sel = select_order(pd.Series(seg[:, j], name=m), max_lags, "ar")
             sels[(m, state)] = sel
-            with warnings.catch_warnings():
-                warnings.simplefilter("default")
-                out[m][state] = sel.fit()
+            out[m][state] = sel.fit()
     # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
     V = int(round(steady_window * rec.fs))
     step = max(1, int(round(0.1 * rec.fs)))
