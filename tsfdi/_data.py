@@ -149,7 +149,11 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
     ValueError
         Wrong number of dimensions, too few samples, non-finite or constant values.
     """
-    if isinstance(data, Signal):
+    if isinstance(data, Signal):    # already validated (finite, numeric); re-check what depends on the caller
+        if vector is False and data.nchan != 1:
+            raise ValueError(f"{name} must be a scalar signal (1-D or one column), got {data.nchan} channels")
+        if data.nobs < min_nobs:
+            raise ValueError(f"{name} is too short: {data.nobs} samples, at least {min_nobs} are needed")
         return data
     kind, index, channels, sname, time_dim, channel_dim = "numpy", None, None, None, "time", "channel"
     if isinstance(data, pd.Series):

@@ -191,7 +191,7 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None, *, 
         _check_model(res, name, sig.nchan, "models")
     decisions = {}
     for name, res in models.items():
-        resid = res.residuals(signal) if u is None else res.residuals(signal, u)
+        resid = res.residuals(sig) if u is None else res.residuals(sig, u)
         decisions[name] = test.test(resid, **test.reference(res))
     return Identification(decisions=decisions, test=type(test).__name__)
 

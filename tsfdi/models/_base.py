@@ -226,8 +226,19 @@ class LinearTimeSeriesResults:
     # --- stability ------------------------------------------------------------------------------
     def _ar_matrices(self) -> np.ndarray:
         """AR coefficient matrices ``A_1..A_na`` in the papers' sign, shape (na, s, s)."""
+        return self._ar_blocks.copy()
+
+    @cached_property
+    def _ar_blocks(self) -> np.ndarray:
         rows, _ = self.model._rows()
-        return np.stack([self._params2d[r].T for r in rows]) if rows else np.empty((0, self.neqs, self.neqs))
+        A = np.stack([self._params2d[r].T for r in rows]) if rows else np.empty((0, self.neqs, self.neqs))
+        A.setflags(write=False)
+        return A
+
+    @cached_property
+    def _ar_blocks_t(self) -> np.ndarray:
+        """``A_i'`` as C-contiguous blocks, for the residual recursion."""
+        return np.ascontiguousarray(np.swapaxes(self._ar_blocks, 1, 2))
 
     def _input_matrices(self) -> np.ndarray:
         """Input coefficient matrices ``B_1..B_nb``, shape (nb, s, n_inputs)."""
@@ -275,9 +286,16 @@ class LinearTimeSeriesResults:
         """One-step prediction errors of ``y`` (and ``u``) through the fixed model, from ``max_lag`` on."""
         m = self.model
         if m.nb == 0 and self.neqs == 1:   # scalar AR: one IIR pass
-            a = np.r_[1.0, self._ar_matrices()[:, 0, 0]]
+            a = np.r_[1.0, self._ar_blocks[:, 0, 0]]
             e = sps.lfilter(a, [1.0], y[:, 0])[m.max_lag:]
             return (e - (self._params2d[0, 0] if m.k_const else 0.0))[:, None]
+        if m.nb == 0:   # VAR: accumulate the lag terms, no design matrix
+            p, n = m.na, y.shape[0]
+            e = y[p:] - self._params2d[0] if m.k_const else y[p:].copy()
+            At = self._ar_blocks_t
+            for i in range(1, p + 1):
+                e += y[p - i:n - i] @ At[i - 1]
+            return e
         X, Y = m._design(y, u, m.max_lag)
         return Y - X @ self._params2d
 
