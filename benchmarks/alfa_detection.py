@@ -59,6 +59,7 @@ os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
 import itertools  # noqa: E402
 import time  # noqa: E402
+import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -194,7 +195,8 @@ def lofo(onset, times, grids):
     opts = [range(len(grids[c]) + 1) for c in names]
     combos = list(itertools.product(*opts))
     full = {c: np.column_stack([times[c], np.full(n, np.nan)]) for c in names}
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns: no channel alarmed
         A = np.stack([np.nanmin(np.stack([full[c][:, j] for c, j in zip(names, cb)]), axis=0) for cb in combos])
     on = np.where(np.isfinite(onset), onset, np.inf)
     tp = np.isfinite(A) & (A >= on)
@@ -262,9 +264,13 @@ def main():
         direct = np.nanmin(runs) if np.isfinite(runs).any() else np.nan
         assert (np.isnan(direct) and np.isnan(a)) or abs(direct - a) < 1e-9, (direct, a)
 
+    fit_t = {c: (times[c][:, k] if k < len(grids[c]) else np.full(len(flights), np.nan)) for c, k in idx_fit.items()}
+    which = [min(((fit_t[c][i], c) for c in fit_t if np.isfinite(fit_t[c][i])), default=(np.nan, "-"))[1]
+             for i in range(len(flights))]
     per = pd.DataFrame({"flight": tab.flight.str.replace("carbonZ_", ""), "fault": fault, "onset_s": onset,
                         "A": res_a, "A_det_s": det_a.round(2), "B_lofo": res_b, "B_det_s": det_b.round(2),
-                        "B_fit": res_f, "Bfit_det_s": det_f.round(2)})
+                        "B_fit": res_f, "Bfit_det_s": det_f.round(2), "Bfit_alarm_s": alarm_fit.round(2),
+                        "Bfit_channel": which})
     print("\nPer flight (A: paper 001 settings; B_lofo: physical channels, held-out; B_fit: all-flight thresholds)")
     print(per.to_string(index=False))
     print("\nB: thresholds chosen in the 45 leave-one-flight-out folds (count)")
