@@ -1,0 +1,95 @@
+"""Speed of tsfdi.evaluate on the shipped hexacopter data (issue 6 acceptance: < 30 s).
+
+All 240 records (minus the fitting records and the 6 that lost control) x every 1 s sliding window x the 4 VAR
+models (healthy for detection, rotor 1 / 2 / 6 for identification), whiteness (Ljung-Box) method, 5 / 10 / 20 s
+windows. Reference, measured in the same run on a few records: the window-by-window path (each window filtered
+through each model and tested with ``LjungBox.test``, i.e. ``tsfdi.identify`` per window) and statsmodels
+``acorr_ljungbox`` per window and channel. Prints medians and ratios.
+
+Run: ``python benchmarks/evaluate_speed.py``
+"""
+
+import os
+
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+
+import statistics  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import tsfdi  # noqa: E402
+from tsfdi.datasets import load_hexacopter  # noqa: E402
+from tsfdi.evaluation import hexacopter_signals  # noqa: E402
+from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
+
+WINDOWS = (5.0, 10.0, 20.0)
+
+
+def main() -> None:
+    warnings.simplefilter("ignore", UnstableModelWarning)
+    sig = hexacopter_signals(load_hexacopter())
+    levels = ("light", "moderate", "severe")
+    bases = {lvl: tsfdi.fit_baselines(sig, fit_turbulence=lvl, duration=None, models=["var"]) for lvl in levels}
+    n_rec = int(sig.sizes["record"])
+
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        ev = tsfdi.evaluate(sig, bases, models=("var",), methods=("whiteness",), windows=WINDOWS, progress=False)
+        times.append(time.perf_counter() - t0)
+    n_eval = int(ev.records["evaluated"].sum())
+    n_win = len(ev.detection)
+    n_tests = n_win + len(ev.identification) * 3
+    t_fast = statistics.median(times)
+    print(f"tsfdi.evaluate: {n_eval} of {n_rec} records evaluated (others: fitting records / lost control), "
+          f"{n_win} windows x healthy model + {len(ev.identification)} windows x 3 fault models "
+          f"= {n_tests} VAR residual tests over windows {WINDOWS} s")
+    print(f"  median of 3 runs: {t_fast:.2f} s  (runs: {', '.join(f'{t:.2f}' for t in times)})  "
+          f"-> {'PASS' if t_fast < 30 else 'FAIL'} (< 30 s)")
+    per_test_fast = t_fast / n_tests
+
+    # reference 1: window by window with tsfdi.identify (filter each window through each model, LjungBox.test)
+    b = bases["severe"]
+    models = {s: b.models["var"][s] for s in (b.healthy,) + b.faults}
+    recs = [i for i in range(n_rec) if sig["turbulence"].values[i] == "severe"
+            and sig["record"].values[i] not in b.fit_records and not bool(sig["lost_control"].values[i])][:2]
+    fs = b.fs
+    W = int(20.0 * fs)
+    test = tsfdi.LjungBox(lags=20, alpha=1e-3)
+    t0 = time.perf_counter()
+    n_ref = 0
+    for i in recs:
+        x = sig.isel(record=i).values
+        for s in range(0, x.shape[0] - W + 1, int(fs)):
+            tsfdi.identify(x[s:s + W], models, test)
+            n_ref += len(models)
+    per_test_loop = (time.perf_counter() - t0) / n_ref
+    print(f"window-by-window tsfdi.identify: {per_test_loop * 1e6:.0f} us per model-window test "
+          f"({n_ref} tests); evaluate: {per_test_fast * 1e6:.1f} us -> {per_test_loop / per_test_fast:.1f}x faster")
+
+    # reference 2: statsmodels acorr_ljungbox per window and channel on residuals filtered once
+    try:
+        from statsmodels.stats.diagnostic import acorr_ljungbox
+    except ImportError:  # pragma: no cover
+        print("statsmodels not installed: reference 2 skipped")
+        return
+    x = sig.isel(record=recs[0]).values
+    e = np.asarray(models["rotor1"].residuals(x))
+    n = W - models["rotor1"].lags
+    t0 = time.perf_counter()
+    cnt = 0
+    for s in range(0, e.shape[0] - n + 1, int(fs)):
+        for c in range(3):
+            acorr_ljungbox(e[s:s + n, c], lags=[20])
+        cnt += 1
+    per_test_sm = (time.perf_counter() - t0) / cnt
+    print(f"statsmodels acorr_ljungbox per window (3 channels, residuals filtered once): {per_test_sm * 1e6:.0f} us "
+          f"per model-window test ({cnt} windows) -> evaluate {per_test_sm / per_test_fast:.1f}x faster")
+    print(f"projected time of the same evaluation: window-by-window {per_test_loop * n_tests:.0f} s, "
+          f"statsmodels {per_test_sm * n_tests:.0f} s, tsfdi.evaluate {t_fast:.1f} s")
+
+
+if __name__ == "__main__":
+    main()
