@@ -2,7 +2,9 @@
 
 All candidate orders ``1..max_lags`` are fitted on the **same sample** (the first ``max_lags`` samples are
 held back for every order), so ``select_order(...).table.loc[p, "bic"]`` equals the ``bic`` of the model of
-order ``p`` fitted on that sample (``OrderSelection.fit(p)``) — statsmodels issue 7143 is the counter-example.
+order ``p`` fitted on that sample (``OrderSelection.fit(p)``) up to rounding (the table comes from one
+triangular factor, the fit from its own QR; they agree to about 1e-9 relative) — statsmodels issue 7143 is
+the counter-example, where they are computed on different samples.
 
 Nothing is refitted order by order. The regressor ``[const, -y[t-1], ..., -y[t-max_lags], y[t]]`` is
 grouped by lag, so one upper-triangular factor ``R`` of it gives every nested fit (see
