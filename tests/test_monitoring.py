@@ -162,3 +162,23 @@ def test_bad_input(models, failure_record):
         mon.run(bad)
     with pytest.raises(ValueError, match="window"):
         window_statistics(failure_record[:100], models, LjungBox(lags=10), window=200)
+
+
+def test_plots(models, failure_record):
+    import matplotlib.pyplot as plt
+
+    from tsfdi.plotting.monitoring import plot_confusion, plot_variance_evolution
+
+    thr = 3.0 * failure_record[1500:].var(axis=0)
+    res = _monitor(models, steady_thresholds=thr).run(failure_record)
+    fig = res.plot()
+    assert len(fig.axes) == 3
+    fig2 = plot_variance_evolution([failure_record], fs=FS, window=5.0, thresholds=thr, failure_time=10.0,
+                                   labels=["f1"])
+    line = fig2.axes[0].lines[0]
+    np.testing.assert_allclose(line.get_ydata(), rolling_variance(failure_record, 500, 10)[:, 0])
+    fig3 = plot_confusion(pd.DataFrame([[90.0, 10.0], [0.0, 100.0]], index=["a", "b"], columns=["a", "b"]))
+    assert fig3.axes[0].images[0].get_array().max() == 100.0
+    with pytest.raises(TypeError, match="DataFrame"):
+        plot_confusion([[1, 2]])
+    plt.close("all")
