@@ -278,3 +278,23 @@ def test_real_alfa_flights_with_the_shipped_settings():
             onset = df.attrs["onset_s"]
             assert onset <= alarms[channel] <= onset + max_delay, (alarms, onset)
             assert onset <= first <= onset + max_delay
+
+
+def test_alfa_lofo_chooses_the_channel_set_inside_the_folds():
+    """A channel that alarms before the onset is switched off in every fold; held-out alarms and metrics exact."""
+    B = _alfa_benchmark()
+    onset = np.array([10.0, 10.0, np.nan, np.nan])
+    times = {"good": np.array([[11.0], [12.0], [np.nan], [np.nan]]),
+             "bad": np.array([[5.0], [11.0], [3.0], [np.nan]])}
+    grids = {"good": np.array([1.0]), "bad": np.array([2.0])}
+    alarm, chosen, alarm_fit, label_fit, idx_fit = B.lofo(onset, times, grids)
+    np.testing.assert_array_equal(alarm, [11.0, 12.0, np.nan, np.nan])
+    assert chosen == ["good 1, bad off"] * 4 and label_fit == "good 1, bad off"
+    assert idx_fit == {"good": 0, "bad": 1}
+    res, det = B.outcomes(onset, alarm)
+    m = B.metrics(res, det)
+    assert (m["TP"], m["FP"], m["FN"], m["TN"], m["TP_5s"]) == (2, 0, 0, 2, 2)
+    assert m["mean_det_s"] == 1.5 and m["mean_det_5s"] == 1.5 and m["accuracy"] == 1.0
+    res, det = B.outcomes(np.array([0.0, 0.0]), np.array([1.0, 7.0]))
+    m = B.metrics(res, det)
+    assert m["mean_det_s"] == 4.0 and m["mean_det_5s"] == 1.0 and m["TP_5s"] == 1
