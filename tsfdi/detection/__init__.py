@@ -5,7 +5,7 @@ from tsfdi.detection.decision import Decision
 from tsfdi.detection.glrt import GLRT, EmpiricalThreshold, GLRTScan, GLRTStream, glrt_direct
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, autocovariance, ljungbox_windows
+from tsfdi.detection.zscore import ZScore
 
 __all__ = ["Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "ResidualTest",
-           "autocovariance", "glrt_direct", "ljungbox_windows"]
-from tsfdi.detection.zscore import ZScore; __all__ += ["ZScore"]  # noqa: E402,E702
+           "ZScore", "autocovariance", "glrt_direct", "ljungbox_windows"]
