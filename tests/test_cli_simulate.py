@@ -27,7 +27,7 @@ def test_simulate_shipped_packing(tmp_path):
     assert main(["simulate", "--out", str(out), "--records-per-case", "1", "--duration", "1", "--failure-time",
                  "0.5", "--states", "rotor1", "--turbulence", "severe", "--shipped"]) == 0
     with xr.open_dataset(out, engine="h5netcdf", mask_and_scale=False) as ds:
-        assert ds["roll"].dtype == np.int16 and "p" not in ds
+        assert ds["roll"].dtype == np.int32 and "p" not in ds and "r" in ds
 
 
 def test_bad_input_exits_2(tmp_path, capsys):

@@ -39,14 +39,14 @@ def test_output_structure_units_and_coords():
 
 @pytest.mark.parametrize("rotor", [1, 2, 6])
 def test_failure_in_severe_turbulence_keeps_flying(rotor):
-    """Failure at 10 s, severe turbulence, 8 seeds: at least 7 fly the remaining 50 s with attitude and
+    """Failure at 10 s, severe turbulence, 8 seeds: all fly the remaining 50 s with attitude and
     altitude bounded, and roll/pitch are stationary after the transient (variances of 30-45 s and 45-60 s
     agree: median ratio within [0.5, 2] -- 15 s of severe turbulence with a 7 s gust correlation time give
     variance estimates with few degrees of freedom -- and means within 3 standard deviations)."""
     ds = simulate_hexacopter(duration=60.0, turbulence="severe", failed_rotor=rotor, failure_time=10.0,
                              seed=list(range(11, 19)))
     flying = ~ds["lost_control"].values
-    assert flying.sum() >= 7
+    assert flying.all()
     for name in ("roll", "pitch"):
         x = ds[name].values[flying]
         assert np.all(np.isfinite(x)) and np.max(np.abs(x)) < 1.2
@@ -59,8 +59,10 @@ def test_failure_in_severe_turbulence_keeps_flying(rotor):
 
 
 def _dev(ds, name):
+    """Largest deviation in the first 2 s after the failure (the direct response, before the heading
+    change after a failure turns the flight direction in body axes) from the 5-10 s mean."""
     x = ds[name].values
-    return np.abs(x[:, 1000:1500] - x[:, 500:1000].mean(axis=1, keepdims=True)).max(axis=1)
+    return np.abs(x[:, 1000:1200] - x[:, 500:1000].mean(axis=1, keepdims=True)).max(axis=1)
 
 
 def _flying(ds, state):
@@ -86,10 +88,12 @@ def test_side_rotor_failure_moves_roll_and_pitch(shipped, state):
 def test_heading_drifts_in_opposite_directions_for_rotors_1_and_2(shipped):
     d1 = _flying(shipped, "rotor1")["yaw"].values
     d2 = _flying(shipped, "rotor2")["yaw"].values
-    assert np.all(d1[:, -1] - d1[:, 1000] > 0)
-    assert np.all(d2[:, -1] - d2[:, 1000] < 0)
+    # net heading change over the 50 s after the failure: rotor 1 (clockwise) nose right, rotor 2 left
+    assert np.mean(d1[:, -1] - d1[:, 1000] > 0) > 0.9 and np.median(d1[:, -1] - d1[:, 1000]) > 1.0
+    assert np.mean(d2[:, -1] - d2[:, 1000] < 0) > 0.9 and np.median(d2[:, -1] - d2[:, 1000]) < -1.0
     h = _flying(shipped, "healthy")["yaw"].values
-    assert np.max(np.abs(h)) < 1.0  # the healthy aircraft holds its heading
+    # the healthy aircraft holds its heading (severe angular gusts move it by up to about 1 rad)
+    assert np.max(np.abs(h)) < 1.5 and np.median(np.abs(h[:, -1])) < 0.3
 
 
 @pytest.mark.parametrize("state, name", [("rotor1", "pitch"), ("rotor2", "roll"), ("rotor6", "roll")])
@@ -110,10 +114,9 @@ def test_rolling_variance_settles_after_transient(shipped, state, name):
 def test_lost_control_is_flagged_and_rare(shipped):
     lost = shipped["lost_control"].values
     assert not lost[shipped.state.values == "healthy"].any()
-    assert lost.sum() <= 12  # at most 5 % of the 240 records
-    for i in np.flatnonzero(lost):
-        t_lost = float(shipped["lost_control_time"][i])
-        assert t_lost > 10.0 and np.isnan(shipped["roll"].values[i, -1])
+    assert lost.sum() == 0  # every record of the shipped design is kept flying
+    assert np.all(np.isnan(shipped["lost_control_time"].values))
+    assert all(np.isfinite(shipped[v].values).all() for v in SHIPPED_VARIABLES)
 
 
 def test_shipped_design(shipped):
@@ -136,10 +139,30 @@ def test_shipped_records_regenerate_bit_for_bit(shipped, tmp_path):
             np.testing.assert_array_equal(back[v].values, sub[v].values, err_msg=v)
 
 
-def test_packing_error_far_below_noise(shipped):
-    h = shipped.where(shipped.state == "healthy", drop=True)
-    for v in ("roll", "pitch"):
-        assert PACK_SCALE[v] / 2 < 1e-3 * float(h[v].std(dim="time").min())
+def _ar_residual_std(x, lags=10):
+    X = np.column_stack([x[lags - k - 1:len(x) - k - 1] for k in range(lags)] + [np.ones(len(x) - lags)])
+    y = x[lags:]
+    beta = np.linalg.lstsq(X, y, rcond=None)[0]
+    return float(np.std(y - X @ beta))
+
+
+@pytest.mark.parametrize("name, ratio", [("roll", 20), ("pitch", 20), ("yaw", 20), ("r", 20),
+                                         ("collective", 10), ("roll_control", 10), ("pitch_control", 10),
+                                         ("yaw_control", 10)])
+def test_packing_step_far_below_ar_residual(shipped, name, ratio):
+    """The int32 step is below 1/20 (attitude, yaw rate) or 1/10 (controls) of the one-step prediction error
+    of an AR(10) model (least squares, statsmodels' AutoReg with a constant gives the same residuals) on each
+    healthy light-turbulence record, so quantisation is negligible for AR/VAR identification at 100 Hz."""
+    h = shipped.where((shipped.state == "healthy") & (shipped.turbulence == "light"), drop=True)
+    resid = min(_ar_residual_std(h[name].values[i]) for i in range(h.sizes["record"]))
+    assert PACK_SCALE[name] < resid / ratio, (name, resid)
+
+
+def test_ar_residual_helper_matches_statsmodels(shipped):
+    from statsmodels.tsa.ar_model import AutoReg
+    x = shipped["roll"].values[0]
+    res = AutoReg(x, lags=10, trend="c").fit()
+    assert _ar_residual_std(x) == pytest.approx(float(np.std(res.resid)), rel=1e-9)
 
 
 def test_make_dataset_seeds_are_per_record():

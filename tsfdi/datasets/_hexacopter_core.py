@@ -16,6 +16,8 @@ from numba import njit, prange
 # output channels at the integration rate
 N_OUT = 19
 N_X = 18  # 12 rigid-body states + 6 rotor speeds
+# yaw-rate integrator runs only while at least this fraction of the yaw term reaches the rotors
+YAW_FREEZE = 0.75
 
 
 @njit(cache=True)
@@ -98,6 +100,12 @@ def _deriv(x, wcmd, g, P, alive, dx):
             om = 0.0
         if alive[i] == 0:
             continue
+        # rotor speed relative to the air: the motor holds om relative to the airframe, which turns at
+        # r - r_g relative to the air (rotor 1 clockwise seen from above, directions alternating)
+        spin = 1.0 if i % 2 == 0 else -1.0
+        om = om + spin * rr
+        if om < 0.0:
+            om = 0.0
         # hub velocity relative to air: v_rel + omega_rel x r_i
         vhx = ur + qr * zi - rr * yi
         vhy = vr + rr * xi - pr * zi
@@ -118,8 +126,7 @@ def _deriv(x, wcmd, g, P, alive, dx):
         # blade-flapping moment: disc tilts away from the relative wind
         Mx += -kf * om * vhy
         My += kf * om * vhx
-        # reaction torque: rotor 1 (i = 0) clockwise seen from above, alternating
-        spin = 1.0 if i % 2 == 0 else -1.0
+        # reaction torque, opposite to the rotor's spin (yaw damping -2 k_Q om r through om)
         Mz += -spin * kQ * om * om
     # fuselage drag and weathervane yaw moment
     vmag = math.sqrt(ur * ur + vr * vr + wr * wr)
@@ -188,37 +195,51 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     psi = x[5]
     c = math.cos(psi)
     s = math.sin(psi)
-    # velocity errors in the heading frame
+    # velocity loop in the world (north-east) frame: tilt commands toward north (a_n, pitch-like) and
+    # east (a_e, roll-like) with integrators in the world frame, limited in magnitude to max_tilt, then
+    # rotated into the heading frame each step (correct also while the aircraft turns)
     en = ref[0] - vn
     ee = ref[1] - ve
-    ex = c * en + s * ee
-    ey = -s * en + c * ee
-    th_c = integ[0] - kv * ex
-    ph_c = integ[1] + kv * ey
-    if th_c > maxtilt:
-        th_c = maxtilt
-    elif th_c < -maxtilt:
-        th_c = -maxtilt
-    if ph_c > maxtilt:
-        ph_c = maxtilt
-    elif ph_c < -maxtilt:
-        ph_c = -maxtilt
+    a_n = integ[0] - kv * en
+    a_e = integ[1] + kv * ee
+    tilt = math.sqrt(a_n * a_n + a_e * a_e)
+    sat = tilt > maxtilt
+    if sat:
+        a_n *= maxtilt / tilt
+        a_e *= maxtilt / tilt
+    th_c = c * a_n - s * a_e
+    ph_c = s * a_n + c * a_e
     ez = x[2] - ref[2]
     om0 = integ[2] + kz * ez + kzd * vd
     e_ph = ph_c - x[3]
     e_th = th_c - x[4]
     omr = integ[3] + katt * e_ph - krate * x[9]
     omp = integ[4] + katt * e_th - krate * x[10]
-    rc = kpsi * (ref[3] - psi)
+    # heading error wrapped to (-pi, pi]: after a turn the loop aims at the nearest equivalent heading
+    e_psi = ref[3] - psi
+    e_psi -= 2.0 * math.pi * math.floor((e_psi + math.pi) / (2.0 * math.pi))
+    if e_psi > math.pi:
+        e_psi -= 2.0 * math.pi
+    elif e_psi <= -math.pi:
+        e_psi += 2.0 * math.pi
+    rc = kpsi * e_psi
     if rc > G[11]:
         rc = G[11]
     elif rc < -G[11]:
         rc = -G[11]
     e_r = rc - x[11]
     omy = integ[5] + kr * e_r
-    # fixed mixer with priority: collective, roll and pitch are clipped to the speed limits first, the
-    # yaw term is scaled (same factor on every rotor) to fit in the range that remains
-    alpha = 1.0
+    if omy > G[13]:
+        omy = G[13]
+    elif omy < -G[13]:
+        omy = -G[13]
+    # fixed mixer, saturation-aware: collective, roll and pitch are clipped to the speed limits first;
+    # the yaw term is then added to each rotor and clipped to what that rotor has left. A rotor near a
+    # limit (or a dead rotor whose command the pitch/roll loops drive up) delivers less of the yaw term
+    # while the others keep theirs; the yaw-rate integrator freezes while less than ``yaw_freeze`` of
+    # the commanded yaw term reaches the rotors (anti-windup).
+    asked = 0.0
+    given = 0.0
     for i in range(6):
         ang = i * (math.pi / 3.0)
         b = om0 - math.sin(ang) * omr + math.cos(ang) * omp
@@ -226,20 +247,16 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
             b = wmin
         elif b > wmax:
             b = wmax
-        wcmd[i] = b
         my = -1.0 if i % 2 == 0 else 1.0
-        d = my * omy
-        if d > 0.0:
-            room = wmax - b
-            if room < alpha * d:
-                alpha = room / d
-        elif d < 0.0:
-            room = b - wmin
-            if room < -alpha * d:
-                alpha = room / (-d)
-    for i in range(6):
-        my = -1.0 if i % 2 == 0 else 1.0
-        wcmd[i] += alpha * my * omy
+        c = b + my * omy
+        if c < wmin:
+            c = wmin
+        elif c > wmax:
+            c = wmax
+        wcmd[i] = c
+        asked += abs(omy)
+        given += abs(c - b)
+    alpha = given / asked if asked > 0.0 else 1.0
     ctrl[0] = om0
     ctrl[1] = omr
     ctrl[2] = omp
@@ -248,13 +265,13 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     ctrl[5] = th_c
     ctrl[6] = ref[3]
     # integrator rates (anti-windup: freeze tilt integrators while the tilt command saturates)
-    ctrl[7] = -kvi * ex if abs(th_c) < maxtilt else 0.0
-    ctrl[8] = kvi * ey if abs(ph_c) < maxtilt else 0.0
+    ctrl[7] = -kvi * en if not sat else 0.0
+    ctrl[8] = kvi * ee if not sat else 0.0
     ctrl[9] = kzi * ez
     ctrl[10] = katti * e_ph
     ctrl[11] = katti * e_th
     # yaw integrator frozen while the mixer cannot deliver the yaw term (alpha < 1)
-    ctrl[12] = G[12] * e_r if alpha >= 1.0 else 0.0
+    ctrl[12] = G[12] * e_r if alpha >= YAW_FREEZE else 0.0
 
 
 @njit(cache=True)

@@ -121,17 +121,18 @@ class ControllerGains:
 
     k_velocity: float = 0.15        # rad per m/s
     ki_velocity: float = 0.05       # rad per m
-    k_altitude: float = 100.0       # rad/s per m
-    kd_altitude: float = 70.0       # rad/s per m/s
-    ki_altitude: float = 30.0       # rad/s per m s
-    k_attitude: float = 200.0       # rad/s per rad
-    k_rate: float = 28.0            # rad/s per rad/s
+    k_altitude: float = 50.0        # rad/s per m
+    kd_altitude: float = 40.0       # rad/s per m/s
+    ki_altitude: float = 10.0       # rad/s per m s
+    k_attitude: float = 400.0       # rad/s per rad
+    k_rate: float = 55.0            # rad/s per rad/s
     ki_attitude: float = 100.0      # rad/s per rad s
-    k_heading: float = 2.0          # rad/s of yaw-rate command per rad of heading error
-    k_yaw_rate: float = 110.0       # rad/s per rad/s
+    k_heading: float = 1.0          # rad/s of yaw-rate command per rad of heading error
+    k_yaw_rate: float = 40.0        # rad/s per rad/s
     max_tilt: float = 0.5           # rad
     max_yaw_rate: float = 1.0       # rad/s
-    ki_yaw_rate: float = 100.0      # rad/s per rad
+    ki_yaw_rate: float = 20.0       # rad/s per rad
+    max_yaw_control: float = 120.0  # rad/s
 
     def __post_init__(self) -> None:
         for f in fields(self):
