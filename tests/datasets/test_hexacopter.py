@@ -86,14 +86,29 @@ def test_side_rotor_failure_moves_roll_and_pitch(shipped, state):
 
 
 def test_heading_drifts_in_opposite_directions_for_rotors_1_and_2(shipped):
-    d1 = _flying(shipped, "rotor1")["yaw"].values
-    d2 = _flying(shipped, "rotor2")["yaw"].values
-    # net heading change over the 50 s after the failure: rotor 1 (clockwise) nose right, rotor 2 left
-    assert np.mean(d1[:, -1] - d1[:, 1000] > 0) > 0.9 and np.median(d1[:, -1] - d1[:, 1000]) > 1.0
-    assert np.mean(d2[:, -1] - d2[:, 1000] < 0) > 0.9 and np.median(d2[:, -1] - d2[:, 1000]) < -1.0
-    h = _flying(shipped, "healthy")["yaw"].values
+    """Paper's Fig. 6: the heading deviates nose right after the failure of rotor 1 (clockwise: its reaction
+    torque is lost) and nose left after rotor 2 or 6 (counter-clockwise); heading change over 10-12 s."""
+    d = {s: _flying(shipped, s)["yaw"].values for s in ("rotor1", "rotor2", "rotor6", "healthy")}
+    change = {s: x[:, 1200] - x[:, 1000] for s, x in d.items()}
+    assert np.all(change["rotor1"] > 0) and np.median(change["rotor1"]) > 0.5
+    assert np.all(change["rotor2"] < 0) and np.median(change["rotor2"]) < -0.5
+    assert np.mean(change["rotor6"] < 0) > 0.95
     # the healthy aircraft holds its heading (severe angular gusts move it by up to about 1 rad)
-    assert np.max(np.abs(h)) < 1.5 and np.median(np.abs(h[:, -1])) < 0.3
+    assert np.max(np.abs(d["healthy"])) < 1.5 and np.median(np.abs(d["healthy"][:, -1])) < 0.3
+
+
+@pytest.mark.parametrize("state", ["rotor1", "rotor2", "rotor6"])
+def test_yaw_rate_settles_after_failure(shipped, state):
+    """After the transient the yaw-rate loop holds the heading again in light and moderate turbulence
+    (|mean r| over 30-60 s: median below 0.05 rad/s, 90 % of the records below 0.2 rad/s); in severe turbulence the heading
+    slips by whole turns now and then (the yaw moment the five rotors can make is one-sided near the
+    trim), but the median drift stays below 0.3 rad/s."""
+    s = _flying(shipped, state)
+    r = s["r"].values[:, 3000:].mean(axis=1)
+    turb = s.turbulence.values
+    calm = np.abs(r[turb != "severe"])
+    assert np.median(calm) < 0.05 and np.quantile(calm, 0.9) < 0.2, calm
+    assert np.median(np.abs(r[turb == "severe"])) < 0.3
 
 
 @pytest.mark.parametrize("state, name", [("rotor1", "pitch"), ("rotor2", "roll"), ("rotor6", "roll")])

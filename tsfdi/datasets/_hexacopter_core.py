@@ -229,10 +229,18 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
         rc = -G[11]
     e_r = rc - x[11]
     omy = integ[5] + kr * e_r
-    if omy > G[13]:
-        omy = G[13]
-    elif omy < -G[13]:
-        omy = -G[13]
+    # attitude priority: the yaw-control limit shrinks linearly to zero as the roll + pitch error grows
+    # to ``yaw_priority_error`` (a yaw term can then never take the authority the attitude loops need)
+    ylim = G[13] * (1.0 - (abs(e_ph) + abs(e_th)) / G[14])
+    if ylim < 0.0:
+        ylim = 0.0
+    yclip = 0
+    if omy > ylim:
+        omy = ylim
+        yclip = 1
+    elif omy < -ylim:
+        omy = -ylim
+        yclip = -1
     # fixed mixer, saturation-aware: collective, roll and pitch are clipped to the speed limits first;
     # the yaw term is then added to each rotor and clipped to what that rotor has left. A rotor near a
     # limit (or a dead rotor whose command the pitch/roll loops drive up) delivers less of the yaw term
@@ -271,7 +279,12 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     ctrl[10] = katti * e_ph
     ctrl[11] = katti * e_th
     # yaw integrator frozen while the mixer cannot deliver the yaw term (alpha < 1)
-    ctrl[12] = G[12] * e_r if alpha >= YAW_FREEZE else 0.0
+    # yaw-rate integrator: runs while the yaw term reaches the rotors and is not limited; while it is
+    # limited (or the rotors cannot deliver it) only unwinding is allowed (anti-windup)
+    di = G[12] * e_r
+    if (alpha < YAW_FREEZE or yclip != 0) and di * integ[5] > 0.0:
+        di = 0.0
+    ctrl[12] = di
 
 
 @njit(cache=True)

@@ -119,20 +119,21 @@ class ControllerGains:
     loop ~2 rad/s; velocity loop ~1 rad/s; heading 2 rad/s.
     """
 
-    k_velocity: float = 0.15        # rad per m/s
-    ki_velocity: float = 0.05       # rad per m
+    k_velocity: float = 0.08        # rad per m/s
+    ki_velocity: float = 0.02       # rad per m
     k_altitude: float = 50.0        # rad/s per m
     kd_altitude: float = 40.0       # rad/s per m/s
     ki_altitude: float = 10.0       # rad/s per m s
     k_attitude: float = 400.0       # rad/s per rad
     k_rate: float = 55.0            # rad/s per rad/s
     ki_attitude: float = 100.0      # rad/s per rad s
-    k_heading: float = 1.0          # rad/s of yaw-rate command per rad of heading error
+    k_heading: float = 0.3          # rad/s of yaw-rate command per rad of heading error
     k_yaw_rate: float = 40.0        # rad/s per rad/s
     max_tilt: float = 0.5           # rad
     max_yaw_rate: float = 1.0       # rad/s
     ki_yaw_rate: float = 20.0       # rad/s per rad
-    max_yaw_control: float = 120.0  # rad/s
+    max_yaw_control: float = 350.0  # rad/s
+    yaw_priority_error: float = 0.8  # rad
 
     def __post_init__(self) -> None:
         for f in fields(self):
