@@ -1,7 +1,7 @@
 """Figures analogous to the paper's Figs. 4-7 from the shipped hexacopter data (docs/figures/).
 
-Fig. 4-6: pitch, roll and yaw of one healthy, one rotor-1 and one rotor-2 record (severe turbulence, first
-flying record of each), failure at 10 s (dashed). Fig. 7: variance over 10 s windows updated every 0.1 s.
+Fig. 4-6: pitch, roll and yaw (heading and yaw rate) of one healthy, one rotor-1 and one rotor-2 record
+(severe turbulence, first flying record of each), failure at 10 s (dashed). Fig. 7: variance over 10 s windows updated every 0.1 s.
 Run from the repository root: ``python docs/scripts/hexacopter_figures.py``.
 """
 
@@ -29,14 +29,22 @@ def main() -> None:
     ds = load_hexacopter()
     recs = {s: pick(ds, s) for s in COLORS}
     for fig_no, name in [(4, "pitch"), (5, "roll"), (6, "yaw")]:
-        fig, ax = plt.subplots(figsize=(7, 3.2))
+        rows = 2 if name == "yaw" else 1
+        fig, axes = plt.subplots(rows, 1, figsize=(7, 3.2 * rows), sharex=True, squeeze=False)
+        ax = axes[0, 0]
         for s, r in recs.items():
             ax.plot(r.time, np.degrees(r[name]), color=COLORS[s], lw=0.8, label=s)
         ax.axvline(10.0, ls="--", color="gray")
-        ax.set_xlabel("time (s)")
         ax.set_ylabel(f"{name} (deg)")
         ax.set_title(f"Fig. {fig_no} analogue: {name}, 5 m/s, severe turbulence")
         ax.legend(loc="best", fontsize=8)
+        if name == "yaw":  # the heading is unwrapped: also show the yaw rate
+            ax = axes[1, 0]
+            for s, r in recs.items():
+                ax.plot(r.time, r["r"], color=COLORS[s], lw=0.6, label=s)
+            ax.axvline(10.0, ls="--", color="gray")
+            ax.set_ylabel("yaw rate r (rad/s)")
+        axes[-1, 0].set_xlabel("time (s)")
         fig.tight_layout()
         fig.savefig(OUT / f"hexacopter_fig{fig_no}_{name}.png", dpi=120)
         plt.close(fig)

@@ -207,3 +207,44 @@ def test_bad_types():
         simulate_hexacopter(duration=1.0, failed_rotor=1.5)
     with pytest.raises(TypeError, match="params"):
         simulate_hexacopter(duration=1.0, params={"mass": 2})
+
+
+def _failed_trim(rotor, speed=5.0):
+    """Level flight north at ``speed`` with ``rotor`` dead: solve the six force/moment balances for roll,
+    pitch and the four controls of the fixed mixer; return the rotor speeds."""
+    from scipy import optimize
+
+    from tsfdi.datasets import _hexacopter_core as core
+    from tsfdi.datasets._hexacopter_params import HexacopterParameters
+    P = HexacopterParameters().to_array()
+    az = np.arange(6) * np.pi / 3
+    sign = np.array([-1, 1, -1, 1, -1, 1.0])
+    alive = np.ones(6, dtype=np.int64)
+    alive[rotor - 1] = 0
+
+    def build(z):
+        ph, th, om0, omr, omp, omy = z
+        x = np.zeros(18)
+        x[2], x[3], x[4] = -5.0, ph, th
+        x[6:9] = speed * np.array([np.cos(th), np.sin(ph) * np.sin(th), np.cos(ph) * np.sin(th)])
+        x[12:] = om0 - np.sin(az) * omr + np.cos(az) * omp + sign * omy
+        return x
+
+    def f(z):
+        x = build(z)
+        return core.derivative(x, x[12:], np.zeros(6), P, alive)[6:12] * np.array([1, 1, 1, 100, 100, 100])
+
+    z, info, ier, msg = optimize.fsolve(f, [0, 0, 560, 0, 0, 0], full_output=True, xtol=1e-13)
+    assert ier == 1, msg
+    return build(z)[12:]
+
+
+def test_yaw_margin_after_failure_is_small_and_heading_dependent():
+    """Documented in the module: with rotor 1 dead the opposite rotor (4) runs at ~140 rad/s in the 5 m/s
+    trim heading north (above the 60 rad/s floor: the heading can be held); with rotor 2 dead its opposite
+    (rotor 5) would need less than the floor, so the aircraft has to turn away from north. (At hover the
+    opposite rotor would have to stop, Du et al. 2015.)"""
+    w1 = _failed_trim(1)
+    assert 100 < w1[3] < 200 and np.all(np.delete(w1, [0, 3]) > 500)
+    w2 = _failed_trim(2)
+    assert 0 < w2[4] < 60

@@ -20,8 +20,9 @@ def load_hexacopter(path=None):
 
     Design of the paper's Table 1 (Dutta et al.): healthy, rotor 1, rotor 2 and rotor 6 failure at 10 s,
     light / moderate / severe Dryden turbulence, 5 m/s forward flight at 5 m altitude. Variables: roll,
-    pitch, yaw, body rates p, q, r and the four controls (collective, roll, pitch, yaw; rad/s), plus the
-    per-record flag ``lost_control``.
+    pitch, yaw (unwrapped heading), yaw rate ``r`` and the four controls (collective, roll, pitch, yaw;
+    rad/s), stored as int32 counts far below the AR(10) one-step prediction error (see ``data/README.md``),
+    plus the per-record flag ``lost_control`` (no record of the shipped design is lost).
 
     Parameters
     ----------

@@ -25,7 +25,15 @@ the air :math:`\\mathbf v_h = (\\mathbf v - \\mathbf v_g) + (\\boldsymbol\\omega
 \\times \\mathbf r_i` (gusts :math:`\\mathbf v_g = (u_g, v_g, w_g)`, :math:`\\boldsymbol\\omega_g = (p_g, q_g,
 r_g)` from :mod:`tsfdi.datasets.dryden`, applied in body axes as in MIL-F-8785C):
 
-- thrust :math:`T_i = k_T \\Omega_i^2 + k_w \\Omega_i v_{h,z}` (>= 0), torque :math:`Q_i = k_Q \\Omega_i^2`;
+- thrust :math:`T_i = k_T \\bar\\Omega_i^2 + k_w \\bar\\Omega_i v_{h,z}` (>= 0), torque
+  :math:`Q_i = k_Q \\bar\\Omega_i^2`, where :math:`\\bar\\Omega_i = \\Omega_i + s_i (r - r_g)` is the rotor
+  speed relative to the air (:math:`s_i = +1` for the clockwise rotors; the motor holds
+  :math:`\\Omega_i` relative to the turning airframe). This gives the rotor yaw damping
+  :math:`-2 k_Q \\Omega_i r` per rotor (Mahony, Kumar & Corke 2012 model the rotor aerodynamics in the
+  air-relative frame); with the rotor drag below, whose hub velocities include :math:`r \\times
+  \\mathbf r_i`, the yaw damping is :math:`\\approx 6 (k_h \\Omega \\ell^2 + 2 k_Q \\Omega)
+  \\approx 0.035` N m s at hover (``arm`` :math:`\\ell`), a yaw time constant :math:`I_{zz}/0.035 \\approx
+  2.3` s: weak, as for every multirotor, so the controller must provide the yaw stiffness;
 - rotor drag (H-force) :math:`-k_h \\Omega_i (v_{h,x}, v_{h,y})`;
 - blade-flapping moment :math:`k_f \\Omega_i (-v_{h,y}, v_{h,x}, 0)`;
 
@@ -35,23 +43,34 @@ and a weathervane yaw moment :math:`k_n |v_{r,h}| v_{r,y}`. A failed rotor's thr
 flapping are zero from the failure time on.
 
 **Controller** (spirit of the paper's Fig. 2, no adaptation after a failure): a PI velocity loop in the
-heading frame sets the pitch and roll commands; PID loops on altitude, roll and pitch and a PD heading loop
-produce the four controls of eq. 2 (:math:`\\Omega_0, \\Omega_R, \\Omega_P, \\Omega_Y`, rad/s) which a
-fixed mixer turns into rotor speed commands
+north-east frame (integrators in world axes, the tilt command limited in magnitude and rotated into the
+heading frame every step, so it stays right while the aircraft turns) sets the pitch and roll commands;
+PID loops on altitude, roll and pitch and a heading loop (P on the heading error wrapped to
+:math:`(-\\pi, \\pi]`, giving a limited yaw-rate command, then a PI yaw-rate loop) produce the four
+controls of eq. 2 (:math:`\\Omega_0, \\Omega_R, \\Omega_P, \\Omega_Y`, rad/s) which a fixed mixer turns
+into rotor speed commands
 :math:`\\Omega_{c,i} = \\Omega_0 - \\sin\\psi_i \\Omega_R + \\cos\\psi_i \\Omega_P \\mp \\Omega_Y`.
-Saturation is handled with priority: collective, roll and pitch are clipped to the speed limits first, the
-yaw term is scaled down (one factor for all rotors) to fit in what remains; the yaw loop is a heading-to-
-yaw-rate P loop with a PI yaw-rate loop whose integrator freezes while the yaw term is scaled.
+Priorities: thrust, roll and pitch first -- :math:`|\\Omega_Y|` is limited to ``max_yaw_control`` times
+:math:`1 - (|e_\\phi| + |e_\\theta|)/` ``yaw_priority_error`` (no yaw authority while the attitude
+error is large), collective/roll/pitch are clipped to the speed limits before the yaw term is added, and
+each rotor takes the yaw term only as far as its own limits allow (a dead rotor whose command the pitch
+loop drives up does not take the yaw authority of the five others). The yaw-rate integrator only unwinds
+while :math:`\\Omega_Y` is limited or less than 75 % of the yaw term reaches the rotors (anti-windup).
 
-*What a failure does here.* A PNPNPN hexacopter with one rotor failed cannot hold all four axes with
-positive thrusts: the rotor opposite the failed one would have to stop (Du et al. 2015). With the fixed
-mixer and the rotor speed floor ``omega_min`` the controller keeps roll, pitch and altitude (prioritised)
-and gives up the heading: after the transient the aircraft turns at a roughly constant rate (about
-+2 rad/s for rotor 1, -2 rad/s for rotors 2 and 6, since rotor 1 spins the other way), the heading drifts
-in opposite directions for rotors 1 and 2 (the paper's Fig. 6), and roll, pitch, body rates and the
-controls become stationary again. ``yaw`` is the unwrapped heading and grows linearly after a failure;
-use the yaw rate ``r`` or the differenced heading as a stationary yaw signal. In severe turbulence a few
-records lose the aircraft; they are flagged in ``lost_control``.
+*What a failure does here.* A planar PNPNPN hexacopter with one rotor failed can hold all four axes at
+hover only with the opposite rotor stopped (Du et al. 2015; Michieletto et al. 2018): there is no margin
+for yaw. In forward flight the nose-up moment of rotor drag and blade flapping gives a small margin at
+headings that put the relative wind on the failed rotor's side (at 5 m/s and heading north the opposite
+rotor runs at about 140 rad/s after rotor 1 fails, against the 60 rad/s floor; after rotor 2 fails it would
+need 38 rad/s, so the aircraft must turn away from north). After the failure the heading deviates --
+nose right for rotor 1 (clockwise, its reaction torque is lost), nose left for rotors 2 and 6 (the paper's
+Fig. 6) -- often by a full turn, then the heading loop holds it again (the nearest equivalent of north or a
+heading next to it): in light and moderate turbulence the mean yaw rate over 30-60 s is below 0.05 rad/s
+in most records. In severe turbulence the gusts take the small yaw margin away for seconds at a time and
+the heading slips by whole turns now and then, in the direction of the lost torque (median drift below
+0.3 rad/s); roll, pitch, body rates and the controls become stationary again after the transient in every
+case (tests in ``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading. No record of the
+shipped design loses the aircraft; a configuration that does is flagged in ``lost_control``.
 
 **Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz; the controller and the gusts are held
 constant over a step (sampled-data controller at 1 kHz). Each record is integrated on its own
@@ -68,6 +87,11 @@ References
 .. [2] G.-X. Du, Q. Quan, K.-Y. Cai, "Controllability analysis and degraded control for a class of
        hexacopters subject to rotor failures", J. Intell. Robot. Syst. 78, 2015 (a PNPNPN hexacopter with
        one rotor failed cannot hold all four axes).
+.. [3] G. Michieletto, M. Ryll, A. Franchi, "Fundamental actuation properties of multirotors:
+       force-moment decoupling and fail-safe robustness", IEEE Trans. Robotics 34(3), 2018 (a planar
+       hexarotor is not fail-safe for one rotor loss; a tilted one is).
+.. [4] R. Mahony, V. Kumar, P. Corke, "Multirotor Aerial Vehicles: Modeling, Estimation, and Control of
+       Quadrotor", IEEE Robotics & Automation Magazine 19(3), 2012.
 """
 
 from __future__ import annotations
@@ -118,7 +142,7 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
     Returns
     -------
     dict
-        ``state`` (18: rigid body + rotor speeds), ``integrators`` (5), ``controls``
+        ``state`` (18: rigid body + rotor speeds), ``integrators`` (6), ``controls``
         (Omega_0, Omega_R, Omega_P, Omega_Y), ``residual`` (max abs derivative at the trim).
     """
     speed = float_like(speed, "speed", minimum=0.0)
