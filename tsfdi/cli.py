@@ -39,7 +39,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--dt", type=float, default=0.001, help="integration step in s")
     p.add_argument("--fs", type=float, default=100.0, help="output sampling frequency in Hz")
     p.add_argument("--shipped", action="store_true",
-                   help="write only the shipped variables packed as int16 (see data/README.md); "
+                   help="write only the shipped variables packed as int32 counts (see data/README.md); "
                         "default: every channel as float64")
 
 
