@@ -55,7 +55,7 @@ def test_failure_in_severe_turbulence_keeps_flying(rotor):
         assert 0.5 < np.median(ratio) < 2.0, (name, ratio)
         assert np.all(np.abs(a.mean(axis=1) - b.mean(axis=1)) < 3 * np.sqrt((a.var(axis=1) + b.var(axis=1)) / 2))
     z = ds["z"].values[flying]
-    assert np.max(np.abs(z - z[:, :1])) < 5.0
+    assert np.max(np.abs(z - z[:, :1])) < 4.0 and np.max(z) < -0.5  # clear of the ground (z is down)
 
 
 def _dev(ds, name):
@@ -248,3 +248,12 @@ def test_yaw_margin_after_failure_is_small_and_heading_dependent():
     assert 100 < w1[3] < 200 and np.all(np.delete(w1, [0, 3]) > 500)
     w2 = _failed_trim(2)
     assert 0 < w2[4] < 60
+
+
+def test_ground_contact_is_a_loss():
+    """At 0.5 m the sink after a rotor-1 failure reaches the ground: flagged, NaN from then on."""
+    ds = simulate_hexacopter(duration=5.0, altitude=0.5, turbulence="none", failed_rotor=1, failure_time=1.0)
+    assert bool(ds["lost_control"][0])
+    t = float(ds["lost_control_time"][0])
+    assert 1.0 < t < 5.0 and np.isnan(ds["roll"].values[0, -1])
+    assert np.max(np.abs(ds["roll"].values[0, : int(t * 100) - 1])) < 1.2  # not an attitude loss

@@ -292,7 +292,7 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
     """Integrate one record with RK4 at step ``dt``; write ``N_OUT`` channels per step into ``out``.
 
     ``fail_rotor`` is 0-based (-1: none). Returns the step at which control was lost (-1: never).
-    ``limits``: [max |roll|, max |pitch| (rad), max altitude error (m)].
+    ``limits``: [max |roll|, max |pitch| (rad), max altitude error (m)]; ground contact (z > 0) is a loss too.
     """
     x = x0.copy()
     integ = integ0.copy()
@@ -338,7 +338,10 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
         for j in range(N_X):
             if not math.isfinite(x[j]):
                 bad = True
-        if bad or abs(x[3]) > limits[0] or abs(x[4]) > limits[1] or abs(x[2] - ref[2]) > limits[2]:
+        # lost: non-finite state, roll or pitch beyond the limits, altitude error beyond the limit, or
+        # ground contact (z is down: altitude -z below 0)
+        if (bad or abs(x[3]) > limits[0] or abs(x[4]) > limits[1] or abs(x[2] - ref[2]) > limits[2]
+                or x[2] > 0.0):
             lost = k + 1
     return lost
 

@@ -119,9 +119,9 @@ class ControllerGains:
     speed range the attitude loops need. Controls are in rotor-speed units (rad/s) as in the paper's eq. 2.
 
     Design values (effectiveness per rad/s of control at hover, from the default parameters): attitude
-    0.32 rad/s^2 -> natural frequency 11 rad/s, damping 0.78; altitude 0.039 m/s^2 -> 1.4 rad/s, damping
-    0.56; velocity 0.08 rad of tilt per m/s -> 0.8 rad/s; yaw 0.019 rad/s^2 plus the aerodynamic yaw
-    damping 0.44 1/s -> yaw-rate bandwidth about 1.2 rad/s; heading 0.3 rad/s. The attitude loop is stiff
+    0.32 rad/s^2 -> natural frequency 11 rad/s, damping 0.78; altitude 0.039 m/s^2 -> 2.0 rad/s, damping
+    0.69; velocity 0.08 rad of tilt per m/s -> 0.8 rad/s; yaw 0.019 rad/s^2 plus the aerodynamic yaw
+    damping 0.44 1/s -> yaw-rate bandwidth about 2.3 rad/s; heading 0.3 rad/s. The attitude loop is stiff
     and the velocity and heading loops soft so that, after a rotor failure, the yaw and velocity loops do
     not take the authority the attitude loops need to keep the aircraft flying: with these values no record
     of the shipped design (240 x 60 s, severe turbulence included) is lost, and the heading is held again
@@ -130,17 +130,17 @@ class ControllerGains:
 
     k_velocity: float = 0.08        # rad per m/s
     ki_velocity: float = 0.02       # rad per m
-    k_altitude: float = 50.0        # rad/s per m
-    kd_altitude: float = 40.0       # rad/s per m/s
-    ki_altitude: float = 10.0       # rad/s per m s
+    k_altitude: float = 100.0       # rad/s per m
+    kd_altitude: float = 70.0       # rad/s per m/s
+    ki_altitude: float = 30.0       # rad/s per m s
     k_attitude: float = 400.0       # rad/s per rad
     k_rate: float = 55.0            # rad/s per rad/s
     ki_attitude: float = 100.0      # rad/s per rad s
     k_heading: float = 0.3          # rad/s of yaw-rate command per rad of heading error
-    k_yaw_rate: float = 40.0        # rad/s per rad/s
-    max_tilt: float = 0.5           # rad
+    k_yaw_rate: float = 100.0       # rad/s per rad/s
+    max_tilt: float = 0.3           # rad
     max_yaw_rate: float = 1.0       # rad/s
-    ki_yaw_rate: float = 20.0       # rad/s per rad
+    ki_yaw_rate: float = 40.0       # rad/s per rad
     max_yaw_control: float = 350.0  # rad/s
     yaw_priority_error: float = 0.8  # rad
 

@@ -128,7 +128,8 @@ _DESCRIPTIONS = {
 STATES = ("healthy", "rotor1", "rotor2", "rotor6")
 TURBULENCE_LEVELS = ("none",) + tuple(INTENSITIES)
 
-#: Bounds beyond which a record is flagged ``lost_control`` (roll, pitch in rad; altitude error in m).
+#: Bounds beyond which a record is flagged ``lost_control`` (roll, pitch in rad; altitude error in m); a
+#: record is also lost when the aircraft reaches the ground (altitude below 0).
 LOSS_LIMITS = (1.2, 1.2, 20.0)
 
 
@@ -228,8 +229,8 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     xarray.Dataset
         One variable per channel (see :data:`CHANNELS`), dims ``(record, time)``, units in ``attrs``;
         per-record coordinates ``state``, ``turbulence``, ``speed``, ``seed``, ``failure_time``,
-        ``failed_rotor`` and the variable ``lost_control`` (True where roll or pitch exceeded 1.2 rad or
-        the altitude error 20 m; the record is NaN from then on).
+        ``failed_rotor`` and the variable ``lost_control`` (True where roll or pitch exceeded 1.2 rad, the
+        altitude error 20 m or the aircraft reached the ground; the record is NaN from then on).
     """
     import xarray as xr
 
