@@ -73,14 +73,22 @@ def _signal_from(arrays: Any, meta: dict[str, Any], prefix: str) -> Signal:
 def save(results: Any, path: Any) -> None:
     """Write ``results`` (AR, VAR or ARX) to ``path`` as a ``.npz`` archive (the suffix is added if missing)."""
     model = results.model
-    arrays, ymeta = _signal_arrays(model.data, "y_")
+    arrays: dict[str, np.ndarray] = {}
+    ymeta, umeta = [], None
+    for i, rec in enumerate(model.records):
+        a, m = _signal_arrays(rec, f"y{i}_")
+        arrays.update(a)
+        ymeta.append(m)
+    if model.u_records is not None:
+        umeta = []
+        for i, rec in enumerate(model.u_records):
+            a, m = _signal_arrays(rec, f"u{i}_")
+            arrays.update(a)
+            umeta.append(m)
     meta: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": type(model).__name__,
                             "options": {"na": model.na, "nb": model.nb, "nk": model.nk, "trend": model.trend,
                                         "hold_back": model.hold_back, "criterion": model.criterion},
-                            "y": ymeta, "u": None}
-    if model.u_data is not None:
-        uarr, meta["u"] = _signal_arrays(model.u_data, "u_")
-        arrays.update(uarr)
+                            "multi": model.multi, "y": ymeta, "u": umeta}
     arrays["params"] = results._params2d
     arrays["meta"] = np.array(json.dumps(meta))
     with open(Path(path), "wb") as fh:
@@ -100,7 +108,10 @@ def load(path: Any) -> Any:
         raise ValueError(f"path {str(path)!r} is not a tsfdi results archive")
     if meta["version"] > VERSION:
         raise ValueError(f"path {str(path)!r} was written by a newer tsfdi (format version {meta['version']})")
-    y = _signal_from(arrays, meta["y"], "y_")
+    ys = [_signal_from(arrays, m, f"y{i}_") for i, m in enumerate(meta["y"])]
+    us = None if meta["u"] is None else [_signal_from(arrays, m, f"u{i}_") for i, m in enumerate(meta["u"])]
+    y = ys if meta["multi"] else ys[0]
+    u = us if (us is None or meta["multi"]) else us[0]
     o = meta["options"]
     family = meta["family"]
     if family == "AR":
@@ -108,7 +119,6 @@ def load(path: Any) -> Any:
     elif family == "VAR":
         model = models.VAR(y, o["na"], o["trend"], hold_back=o["hold_back"], criterion=o["criterion"])
     elif family == "ARX":
-        u = _signal_from(arrays, meta["u"], "u_")
         model = models.ARX(y, u, o["na"], o["nb"], o["nk"], o["trend"], hold_back=o["hold_back"])
     else:
         raise ValueError(f"path {str(path)!r} holds an unknown model family {family!r}")

@@ -93,8 +93,10 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
 
     Parameters
     ----------
-    data : array_like, Series, DataFrame or DataArray
-        The output signal ``y`` (scalar for ``"ar"`` / ``"arx"``, ``(nobs, s)`` for ``"var"``).
+    data : array_like, Series, DataFrame or DataArray, or a list of them
+        The output signal ``y`` (scalar for ``"ar"`` / ``"arx"``, ``(nobs, s)`` for ``"var"``), or a list of
+        records of the same process (each holds back its own first ``max_lags`` samples; their Gram
+        matrices add up).
     max_lags : int
         Largest order tried.
     model : {"ar", "var", "arx"}
@@ -135,25 +137,24 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
             raise ValueError(f"u is only used with model='arx', not model={family!r}")
         spec = (AR(data, max_lags, trend=trend) if family == "ar"
                 else VAR(data, max_lags, trend=trend, criterion=criterion))
-    y = spec.data.values
-    s = y.shape[1]
+    s = spec.neqs
     const = bool(spec.k_const)
-    uu = None if spec.u_data is None else spec.u_data.values
 
     def design() -> np.ndarray:
-        return np.hstack(spec._design(y, uu, spec.hold_back))
+        return np.hstack(spec._design_all())
 
     if family == "arx":
         Z = design()
         R = _lstsq.triangular_factor(Z.T @ Z, lambda: Z, s)
         group = 1 + spec.n_inputs
-    else:
-        R = _lstsq.triangular_factor(_lstsq.lag_gram(y, max_lags, const=const), design, s)
+    else:   # the Gram matrix of several records is the sum of theirs
+        gram = sum(_lstsq.lag_gram(r.values, max_lags, const=const) for r in spec.records)
+        R = _lstsq.triangular_factor(gram, design, s)
         group = s
     orders = np.arange(1, max_lags + 1)
     widths = spec.k_const + orders * group
     sse = _lstsq.nested_fits(R, s, widths)
-    nobs = y.shape[0] - spec.hold_back
+    nobs = sum(spec.nobs_records)
     sss = float(np.sum(R[:, -s:] ** 2))   # = trace(Y'Y): columns of R have the norms of the columns of Z
     values = criteria(sse, sss, nobs, widths * s, s, spec.criterion)
     return OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
@@ -209,13 +210,14 @@ class OrderSelection:
         spec = self.spec
         from tsfdi.models import AR, ARX, VAR
 
+        y = list(spec.records) if spec.multi else spec.data
         if isinstance(spec, ARX):
-            model = ARX(spec.data, spec.u_data, na=order, nb=order, nk=spec.nk, trend=spec.trend,
-                        hold_back=spec.hold_back)
+            u = list(spec.u_records) if spec.multi else spec.u_data
+            model = ARX(y, u, na=order, nb=order, nk=spec.nk, trend=spec.trend, hold_back=spec.hold_back)
         elif isinstance(spec, VAR):
-            model = VAR(spec.data, order, trend=spec.trend, hold_back=spec.hold_back, criterion=spec.criterion)
+            model = VAR(y, order, trend=spec.trend, hold_back=spec.hold_back, criterion=spec.criterion)
         else:
-            model = AR(spec.data, order, trend=spec.trend, hold_back=spec.hold_back)
+            model = AR(y, order, trend=spec.trend, hold_back=spec.hold_back)
         return model.fit()
 
     def plot(self, ax=None):

@@ -13,15 +13,25 @@ from functools import cached_property
 from typing import Any, ClassVar
 
 import numpy as np
+import pandas as pd
 from scipy import signal as sps
 
 from tsfdi import selection
-from tsfdi._data import Signal, as_signal
+from tsfdi._data import Signal, as_signal, is_xarray
 from tsfdi._validation import int_like, option
 from tsfdi.exceptions import UnstableModelWarning
 from tsfdi.models import _lstsq
 
 __all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
+
+
+def _is_record_list(y: Any) -> bool:
+    """A list / tuple of signals (arrays, Series, DataFrames, DataArrays) is a set of records of one process.
+
+    A list of numbers (or of lists of numbers) is one signal, as numpy reads it.
+    """
+    return isinstance(y, (list, tuple)) and len(y) > 0 and all(
+        isinstance(r, (np.ndarray, pd.Series, pd.DataFrame, Signal)) or is_xarray(r) for r in y)
 
 
 class LinearTimeSeriesModel:
@@ -38,13 +48,28 @@ class LinearTimeSeriesModel:
         self.na = int_like(na, lag_name, minimum=0)
         self.nb = int_like(nb, "nb", minimum=0)
         self.nk = int_like(nk, "nk", minimum=0)
-        self.data = as_signal(y, "y", vector=self._vector)
-        self.u_data = None
+        self.multi = _is_record_list(y)
+        records = list(y) if self.multi else [y]
+        self.records = tuple(as_signal(r, "y" if not self.multi else f"y[{i}]", vector=self._vector)
+                             for i, r in enumerate(records))
+        for i, r in enumerate(self.records[1:], start=1):
+            if r.nchan != self.records[0].nchan:
+                raise ValueError(f"y[{i}] has {r.nchan} channel(s) but y[0] has {self.records[0].nchan}")
+        self.u_records = None
         if u is not None:
-            self.u_data = as_signal(u, "u")
-            if self.u_data.nobs != self.data.nobs:
-                raise ValueError(f"u has {self.u_data.nobs} samples but y has {self.data.nobs}: they must match")
-        if self.u_data is None and self.nb:
+            if self.multi != _is_record_list(u) or (self.multi and len(u) != len(records)):
+                raise ValueError("u must be a list of as many records as y when y is a list of records "
+                                 "(and a single signal otherwise)")
+            u_list = list(u) if self.multi else [u]
+            self.u_records = tuple(as_signal(r, "u" if not self.multi else f"u[{i}]") for i, r in enumerate(u_list))
+            for i, (ur, yr) in enumerate(zip(self.u_records, self.records)):
+                name = "u" if not self.multi else f"u[{i}]"
+                if ur.nobs != yr.nobs:
+                    raise ValueError(f"{name} has {ur.nobs} samples but {name.replace('u', 'y', 1)} has {yr.nobs}: "
+                                     "they must match")
+                if ur.nchan != self.u_records[0].nchan:
+                    raise ValueError(f"{name} has {ur.nchan} input(s) but u[0] has {self.u_records[0].nchan}")
+        if self.u_records is None and self.nb:
             raise ValueError("nb > 0 needs an input signal u")
         if self.na + self.nb < 1:
             raise ValueError(f"{lag_name} + nb must be >= 1: the model needs at least one regressor")
@@ -54,9 +79,42 @@ class LinearTimeSeriesModel:
             raise ValueError(f"hold_back must be >= the largest lag ({self.max_lag}), got {hold_back}")
         self.hold_back = hold_back
         minimum = hold_back + self.df_eq + 1
-        if self.data.nobs < minimum:
+        if not self.multi and self.data.nobs < minimum:
             raise ValueError(f"y is too short for {lag_name}={self.na}: {self.data.nobs} samples, at least "
                              f"{minimum} are needed (hold back {hold_back} + {self.df_eq} parameters + 1)")
+        if self.multi:
+            for i, r in enumerate(self.records):
+                if r.nobs <= hold_back:
+                    raise ValueError(f"y[{i}] is too short: {r.nobs} samples, at least {hold_back + 1} are needed "
+                                     f"(hold back {hold_back} + 1)")
+            rows = sum(r.nobs - hold_back for r in self.records)
+            if rows < self.df_eq + 1:
+                raise ValueError(f"y is too short for {lag_name}={self.na}: {rows} usable samples in all records, "
+                                 f"at least {self.df_eq + 1} are needed ({self.df_eq} parameters + 1)")
+
+    @property
+    def data(self) -> Signal:
+        """The (first) output record; see :attr:`records` for a model fitted on several records."""
+        return self.records[0]
+
+    @property
+    def u_data(self) -> Signal | None:
+        """The (first) input record, or None."""
+        return None if self.u_records is None else self.u_records[0]
+
+    @property
+    def nobs_records(self) -> list[int]:
+        """Number of estimation rows contributed by each record."""
+        return [r.nobs - self.hold_back for r in self.records]
+
+    def _design_all(self, start: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Regressor and target of all records, stacked (each record keeps its own first ``start`` samples)."""
+        start = self.hold_back if start is None else start
+        parts = [self._design(r.values, None if self.u_records is None else self.u_records[i].values, start)
+                 for i, r in enumerate(self.records)]
+        if len(parts) == 1:
+            return parts[0]
+        return np.vstack([p[0] for p in parts]), np.vstack([p[1] for p in parts])
 
     # ----------------------------------------------------------------------------------------------
     @property
@@ -93,14 +151,15 @@ class LinearTimeSeriesModel:
 
     def fit(self) -> LinearTimeSeriesResults:
         """Estimate the parameters by least squares (QR / SVD, never the normal equations)."""
-        X, Y = self._design(self.data.values, None if self.u_data is None else self.u_data.values,
-                            self.hold_back)
+        X, Y = self._design_all()
         res = self._results_class(self, _lstsq.lstsq(X, Y))
         res._warn_unstable()
         return res
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}(nobs={self.data.nobs}, {self._lag_name}={self.na}, trend={self.trend!r})"
+        records = f", records={len(self.records)}" if self.multi else ""
+        return (f"{type(self).__name__}(nobs={sum(r.nobs for r in self.records)}{records}, "
+                f"{self._lag_name}={self.na}, trend={self.trend!r})")
 
 
 class LinearTimeSeriesResults:
@@ -133,7 +192,7 @@ class LinearTimeSeriesResults:
     @cached_property
     def _fitted_design(self) -> tuple[np.ndarray, np.ndarray]:
         m = self.model
-        return m._design(m.data.values, None if m.u_data is None else m.u_data.values, m.hold_back)
+        return m._design_all()
 
     @cached_property
     def _resid_array(self) -> np.ndarray:
@@ -220,8 +279,16 @@ class LinearTimeSeriesResults:
 
     @property
     def resid(self) -> Any:
-        """In-sample residuals (one-step prediction errors) in the caller's data kind."""
-        return self.model.data.wrap(self._resid_array.copy(), self.model.hold_back)
+        """In-sample residuals (one-step prediction errors) in the caller's data kind.
+
+        A model fitted on a list of records gives a list with the residuals of each record.
+        """
+        m = self.model
+        if not m.multi:
+            return m.data.wrap(self._resid_array.copy(), m.hold_back)
+        bounds = np.cumsum([0] + m.nobs_records)
+        return [r.wrap(self._resid_array[a:b].copy(), m.hold_back)
+                for r, a, b in zip(m.records, bounds[:-1], bounds[1:])]
 
     # --- stability ------------------------------------------------------------------------------
     def _ar_matrices(self) -> np.ndarray:

@@ -23,8 +23,10 @@ class AR(LinearTimeSeriesModel):
 
     Parameters
     ----------
-    y : array_like, Series, DataFrame (one column) or DataArray
-        Scalar signal, time on axis 0 (or the ``"time"`` dimension).
+    y : array_like, Series, DataFrame (one column) or DataArray, or a list of them
+        Scalar signal, time on axis 0 (or the ``"time"`` dimension). A list of signals is a set of records
+        of the same process (several flights): their regressions are stacked, each record holding back its
+        own first samples, so no artificial jump joins them.
     lags : int
         Order ``na >= 1``.
     trend : {"n", "c"}

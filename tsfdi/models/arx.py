@@ -23,10 +23,10 @@ class ARX(LinearTimeSeriesModel):
 
     Parameters
     ----------
-    y : array_like, Series or DataArray
-        Scalar output.
-    u : array_like (nobs,) or (nobs, n_inputs), Series, DataFrame or DataArray
-        Inputs, same length as ``y``.
+    y : array_like, Series or DataArray, or a list of them
+        Scalar output, or a list of records of the same process (stacked regressions, as for :class:`AR`).
+    u : array_like (nobs,) or (nobs, n_inputs), Series, DataFrame or DataArray, or a list of them
+        Inputs, same length as ``y`` (one input record per output record).
     na, nb : int
         Number of output and input coefficients (``na + nb >= 1``).
     nk : int

@@ -22,8 +22,8 @@ class VAR(LinearTimeSeriesModel):
 
     Parameters
     ----------
-    y : array_like (nobs, s), DataFrame or DataArray (time, channel)
-        Vector signal.
+    y : array_like (nobs, s), DataFrame or DataArray (time, channel), or a list of them
+        Vector signal, or a list of records of the same process (stacked regressions, as for :class:`AR`).
     lags : int
         Order ``na >= 1``.
     trend : {"n", "c"}
