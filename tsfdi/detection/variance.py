@@ -108,22 +108,8 @@ class FTest(ResidualTest):
         if reference_variance is None or reference_df is None:
             raise TypeError("FTest.test needs reference_variance and reference_df (the baseline's unbiased "
                             "residual variance and N0 - d); tsfdi.detect/identify take them from the model")
-        ref = np.asarray(reference_variance, dtype=np.float64)
-        if ref.ndim == 0:
-            ref = np.full(k, float(ref))
-        if ref.shape != (k,):
-            raise ValueError(f"reference_variance must be a scalar or have one value per channel ({k}), "
-                             f"got shape {ref.shape}")
-        if not np.all(np.isfinite(ref)) or np.any(ref <= 0):
-            raise ValueError(f"reference_variance must be finite and > 0, got {ref}")
-        df0 = np.asarray(reference_df, dtype=np.float64)
-        if df0.ndim == 0:
-            df0 = np.full(k, float(df0))
-        if df0.shape != (k,):
-            raise ValueError(f"reference_df must be a scalar or have one value per channel ({k}), "
-                             f"got shape {df0.shape}")
-        if not np.all(np.isfinite(df0)) or np.any(df0 <= 0):
-            raise ValueError(f"reference_df must be finite and > 0, got {df0}")
+        ref = _per_channel(reference_variance, "reference_variance", k)
+        df0 = _per_channel(reference_df, "reference_df", k)
         n = e.shape[0]
         if self.demean:
             nu = n - 1
@@ -150,3 +136,15 @@ class FTest(ResidualTest):
                         df=np.column_stack([dfn, df0]), nobs=n, null_hypothesis=self.null_hypothesis,
                         alternative_hypothesis=self.alternative_hypothesis, details=details,
                         channel_reject=rej, channels=tuple(sig.channels), test="FTest")
+
+
+def _per_channel(value: Any, name: str, k: int) -> np.ndarray:
+    """A positive finite scalar or one value per channel, as a ``(k,)`` float array."""
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim == 0:
+        arr = np.full(k, float(arr))
+    if arr.shape != (k,):
+        raise ValueError(f"{name} must be a scalar or have one value per channel ({k}), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"{name} must be finite and > 0, got {arr}")
+    return arr
