@@ -40,8 +40,9 @@ def test_baselines_table_and_exclusion(synthetic, fitted):
     assert (var["lags"] == 2).all() and (var["parameters"] == 8).all()
     np.testing.assert_allclose(var["spp"], var["nobs"] * 2 / 8)
     # the table's order equals tsfdi.select_order on the same segment
-    seg = b.segments["f1"]
+    seg = b.segments["f1"][0]
     assert b.models["y0"]["f1"].lags == tsfdi.select_order(seg[:, 0], 6, "ar").selected
+    assert (t["records"] == 1).all() and np.isfinite(t["q_insample"]).all()
     # steady threshold: max 5 s rolling variance (0.1 s step) of the post-settle fault fitting records
     recs, _, _ = synthetic
     post = [recs[i][1500:] for i in (5, 10)]
@@ -173,3 +174,33 @@ def test_bad_input(synthetic, fitted):
         tsfdi.evaluate("records.csv", fitted)
     with pytest.raises(ValueError, match="alpha"):
         tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, alpha=2.0, progress=False)
+
+
+def test_fit_baselines_pooled_records(synthetic):
+    """fit_records=n pools the first n records of each state without junctions (= the list fit of the models);
+    order options; in-sample whiteness column."""
+    from scipy import stats
+
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, fit_records=3, models=["var"])
+    assert b.fit_records == (0, 1, 2, 5, 6, 7, 10, 11, 12)
+    segs = [recs[i][1500:] for i in (5, 6, 7)]
+    ref = tsfdi.select_order(segs, 6, "var")
+    np.testing.assert_allclose(b.models["var"]["f1"].params, ref.fit().params, rtol=1e-10)
+    t = b.table.set_index("state")
+    assert (t["records"] == 3).all() and (t["lags"] == 2).all()
+    # in-sample residuals of the true order are white: median Q over 20 s blocks near the chi2(20) median
+    q = t["q_insample"].to_numpy()
+    assert np.all(np.abs(q - stats.chi2.median(20)) < 4.0), q
+    fixed = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None,
+                                max_lags=6, var_max_lags=6, fit_records=3, models=["var"], order=4)
+    assert fixed.models["var"]["f1"].lags == 4
+    np.testing.assert_allclose(fixed.models["var"]["f1"].params, ref.fit(4).params, rtol=1e-10)
+    stab = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None,
+                               max_lags=6, var_max_lags=6, fit_records=3, models=["var"], order="rss_sss")
+    assert stab.models["var"]["f1"].lags == ref.stabilized
+    with pytest.raises(ValueError, match="order"):
+        tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, order="aic")
+    with pytest.raises(ValueError, match="fit_records"):
+        tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, fit_records=0)

@@ -109,11 +109,12 @@ def demo_report(bases: dict, ev, *, markdown: bool = False) -> str:
         return _markdown(df) if markdown else df.to_string()
 
     out = []
-    t2 = baselines_table(bases)[["turbulence", "state", "model", "signals", "order", "parameters", "nobs", "spp",
-                                 "rss_sss", "stable"]]
-    out.append("## Table 2 analogue: baseline models (order by BIC)\n")
+    t2 = baselines_table(bases)[["turbulence", "state", "model", "signals", "order", "parameters", "records", "nobs",
+                                 "spp", "rss_sss", "q_insample", "stable"]]
+    out.append("## Table 2 analogue: baseline models (pooled fitting records; q_insample: median in-sample "
+               "Ljung-Box Q, 20 lags, 20 s blocks)\n")
     out.append(show(t2.set_index(["turbulence", "state", "model", "signals"]).round(
-        {"spp": 2, "rss_sss": 5})))
+        {"spp": 2, "rss_sss": 5, "q_insample": 2})))
     for w in sorted(ev.identification["window"].unique()):
         for rule in ev.rules:
             what = "accepted" if rule == "paper" else "labelled"

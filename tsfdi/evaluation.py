@@ -50,10 +50,11 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
     data : xarray.Dataset
         As returned by :func:`tsfdi.datasets.load_hexacopter` (variables ``roll``, ``pitch``, ``yaw``).
     yaw : {"rate", "angle"}
-        ``"rate"`` (default): the heading increment times ``fs`` (rad/s), channel ``yaw_rate``. After a rotor
-        failure the simulated hexacopter loses yaw authority and turns at about 1.3 rad/s, so the heading angle
-        is an integrated, non-stationary signal that no stationary AR model fits; its increment is stationary.
-        The first sample is dropped so every channel has the same time axis. ``"angle"``: the raw heading.
+        ``"rate"`` (default): the body yaw rate, channel ``yaw_rate``: the dataset's ``r`` variable when it has
+        one, else the heading increment times ``fs`` (the first sample is then dropped so every channel has the
+        same time axis). After a rotor failure the heading of the simulated hexacopter drifts and, in severe
+        turbulence, now and then slips by whole turns (marginal yaw authority with one dead rotor), so the
+        heading angle is not stationary; the yaw rate is. ``"angle"``: the raw heading.
 
     Returns
     -------
@@ -66,13 +67,17 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
         raise TypeError(f"data must be an xarray.Dataset with roll, pitch and yaw variables, got "
                         f"{type(data).__name__}")
     yaw = option(yaw, "yaw", ("rate", "angle"))
-    missing = [v for v in ("roll", "pitch", "yaw") if v not in data]
+    use_r = yaw == "rate" and "r" in data
+    missing = [v for v in ("roll", "pitch", "r" if use_r else "yaw") if v not in data]
     if missing:
         raise ValueError(f"data lacks the variable(s) {missing}")
     t = np.asarray(data["time"].values, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
-    arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64) for v in ("roll", "pitch", "yaw")]
-    if yaw == "rate":
+    arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64)
+            for v in ("roll", "pitch", "r" if use_r else "yaw")]
+    if use_r:
+        names = ["roll", "pitch", "yaw_rate"]
+    elif yaw == "rate":
         arrs = [a[:, 1:] for a in arrs[:2]] + [np.diff(arrs[2], axis=1) * fs]
         t = t[1:]
         names = ["roll", "pitch", "yaw_rate"]
@@ -231,9 +236,12 @@ class Baselines:
 
     @property
     def table(self) -> pd.DataFrame:
-        """Table 2 analogue: one row per (state, model) with the BIC order, parameters, SPP, RSS/SSS and BIC.
+        """Table 2 analogue: one row per (state, model) with the order, parameters, SPP, RSS/SSS and BIC.
 
         SPP is the paper's samples per parameter: estimation samples x channels / estimated AR parameters.
+        ``records`` is the number of pooled fitting records; ``q_insample`` the median Ljung-Box ``Q`` (20 lags)
+        of the in-sample residuals over 20 s blocks (``20 * fs`` samples; the whole record when shorter) and
+        channels, to compare with the median of chi2(20), about 19.3.
         """
         rows = []
         for state in (self.healthy,) + self.faults:
@@ -243,8 +251,10 @@ class Baselines:
                 rows.append({"state": state, "model": "VAR" if vec else "AR",
                              "signals": ",".join(self.channels) if vec else name,
                              "order": f"{'VAR' if vec else 'AR'}({res.lags})", "lags": int(res.lags),
-                             "parameters": int(res.df_model), "nobs": int(res.nobs), "spp": float(res.spp),
-                             "rss_sss": float(res.rss_sss), "bic": float(res.bic), "stable": bool(res.is_stable)})
+                             "parameters": int(res.df_model), "records": len(_resid_list(res)),
+                             "nobs": int(res.nobs), "spp": float(res.spp), "rss_sss": float(res.rss_sss),
+                             "bic": float(res.bic), "q_insample": _insample_q(res, int(round(20 * self.fs))),
+                             "stable": bool(res.is_stable)})
         return pd.DataFrame(rows)
 
     def monitor(self, model: str = "var", *, window: float = 20.0, step: float = 1.0, method: str = "whiteness",
@@ -261,11 +271,30 @@ class Baselines:
                 f"fit_records={len(self.fit_records)})")
 
 
+def _resid_list(res: Any) -> list:
+    e = res.resid
+    return [np.asarray(r, dtype=np.float64) for r in e] if isinstance(e, list) else [np.asarray(e, np.float64)]
+
+
+def _insample_q(res: Any, block: int, lags: int = 20) -> float:
+    """Median Ljung-Box Q of the in-sample residuals over non-overlapping blocks and channels."""
+    from tsfdi.detection.whiteness import ljungbox_windows
+
+    qs = []
+    for e in _resid_list(res):
+        e = e.reshape(e.shape[0], -1)
+        n = min(block, e.shape[0])
+        if n <= lags + 1:
+            continue
+        qs.append(ljungbox_windows(e, lags, n, n).ravel())
+    return float(np.median(np.concatenate(qs))) if qs else float("nan")
+
+
 def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
                   fs: float | None = None, healthy: str = "healthy", fit_records: Any = "first",
                   fit_turbulence: Any = None, settle: float = 10.0, duration: float | None = 20.0,
-                  models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 12,
-                  steady_window: float = 10.0, steady_factor: float = 1.0) -> Baselines:
+                  models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 20,
+                  order: Any = "bic", steady_window: float = 10.0, steady_factor: float = 1.0) -> Baselines:
     r"""Baseline phase: fit a scalar AR model per channel and a VAR on all channels for every state.
 
     Parameters
@@ -281,12 +310,15 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         Sampling frequency in Hz (from the time coordinate for xarray input, else 1).
     healthy : str
         Name of the healthy state; every other state is a fault state.
-    fit_records : "first", "all" or sequence
+    fit_records : "first", "all", int or sequence
         Records used for fitting: the first valid record of each (state, turbulence) cell (default), every
-        valid record, or explicit record identifiers. They are listed in :attr:`Baselines.fit_records` and
-        excluded by :func:`evaluate`.
+        valid record, the first ``n`` valid records of each cell (an int), or explicit record identifiers. They
+        are listed in :attr:`Baselines.fit_records` and excluded by :func:`evaluate`. The records of one state
+        are pooled: their regressions are stacked (each record holds back its own first samples, no junction
+        between records), which shrinks the estimation error of the parameters.
     fit_turbulence : str or sequence, optional
-        Restrict fitting records to these turbulence levels (the paper fits on "severe" only).
+        Restrict fitting records to these turbulence levels (the paper fits on "severe" only); several levels
+        give models pooled across them.
     settle : float
         Seconds after the failure (after 0 for records without failure) where the fitting segment starts:
         the post-failure transient is excluded.
@@ -295,7 +327,11 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     models : sequence of str, optional
         Which models to fit: channel names (scalar AR) and/or ``"var"``; default all channels and ``"var"``.
     max_lags, var_max_lags : int
-        Largest AR / VAR order searched; the order is the BIC minimum (paper eq. 5) on a common sample.
+        Largest AR / VAR order searched (on a common sample of the pooled records).
+    order : {"bic", "rss_sss"} or int
+        ``"bic"``: the BIC minimum (paper eq. 5); ``"rss_sss"``: the order where the RSS/SSS curve (eq. 6)
+        stabilises (:attr:`tsfdi.OrderSelection.stabilized`, the paper's Fig. 8 reading); an int: that order
+        for every model (at most the search bound).
     steady_window : float
         Rolling-variance window (s) of the steady-state check.
     steady_factor : float
@@ -309,9 +345,11 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
 
     Notes
     -----
-    Segments of several fitting records of one state are joined end to end; the ``lags`` residuals straddling
-    each junction are a negligible part of the estimation sample. Order selection follows the paper: BIC (eq. 5)
-    over orders ``1..max_lags``, with RSS/SSS (eq. 6) reported in the table.
+    The segments of the fitting records of one state are passed to the model as a list of records: the
+    least-squares regressions are stacked (no junction between records) and the Gram matrices of the order
+    selection add up. Order selection follows the paper: BIC (eq. 5) or the RSS/SSS stabilisation (eq. 6)
+    over orders ``1..max_lags``; :attr:`Baselines.table` also reports the median Ljung-Box ``Q`` (20 lags) of
+    the in-sample residuals over 20 s blocks, a check of their whiteness.
 
     References
     ----------
@@ -325,6 +363,10 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     var_max_lags = int_like(var_max_lags, "var_max_lags", minimum=1)
     steady_window = float_like(steady_window, "steady_window", minimum=0.0, strict_min=True)
     steady_factor = float_like(steady_factor, "steady_factor", minimum=0.0, strict_min=True)
+    if isinstance(order, str):
+        order = option(order, "order", ("bic", "rss_sss"))
+    else:
+        order = int_like(order, "order", minimum=1, maximum=max(max_lags, var_max_lags))
     if isinstance(data, Mapping) and not is_xarray(data):
         if not data:
             raise ValueError("data is an empty mapping: give one signal per state")
@@ -344,19 +386,24 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     if fit_turbulence is not None:
         levels = [fit_turbulence] if isinstance(fit_turbulence, str) else list(fit_turbulence)
         ok &= np.isin(rec.turbulence, levels)
+    per_cell = None
     if isinstance(fit_records, str):
         fit_records = option(fit_records, "fit_records", ("first", "all"))
+        per_cell = 1 if fit_records == "first" else None
         if fit_records == "all":
             chosen = np.flatnonzero(ok)
-        else:
-            seen, chosen = set(), []
-            for i in np.flatnonzero(ok):
-                key = (rec.state[i], rec.turbulence[i])
-                if key not in seen:
-                    seen.add(key)
-                    chosen.append(i)
-            chosen = np.array(chosen, dtype=int)
-    else:
+    elif isinstance(fit_records, (int, np.integer)) and not isinstance(fit_records, bool):
+        per_cell = int_like(fit_records, "fit_records", minimum=1)
+    if per_cell is not None:
+        seen: dict = {}
+        chosen = []
+        for i in np.flatnonzero(ok):
+            key = (rec.state[i], rec.turbulence[i])
+            if seen.get(key, 0) < per_cell:
+                seen[key] = seen.get(key, 0) + 1
+                chosen.append(i)
+        chosen = np.array(chosen, dtype=int)
+    elif not isinstance(fit_records, str):
         wanted = list(fit_records)
         pos = {v: i for i, v in enumerate(rec.ids.tolist())}
         bad = [w for w in wanted if w not in pos]
@@ -376,16 +423,18 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         idx = [i for i in chosen if rec.state[i] == state]
         if not idx:
             raise ValueError(f"no valid fitting record for state {state!r}")
-        seg = np.concatenate([_segment(rec, i, settle, duration) for i in idx])
-        segments[state] = seg
+        segs = [_segment(rec, i, settle, duration) for i in idx]
+        segments[state] = segs
         for m in names:
             if m == "var":
-                sel = select_order(pd.DataFrame(seg, columns=list(rec.channels)), var_max_lags, "var")
+                sel = select_order([pd.DataFrame(g, columns=list(rec.channels)) for g in segs], var_max_lags, "var")
             else:
                 j = rec.channels.index(m)
-                sel = select_order(pd.Series(seg[:, j], name=m), max_lags, "ar")
+                sel = select_order([pd.Series(g[:, j], name=m) for g in segs], max_lags, "ar")
             sels[(m, state)] = sel
-            out[m][state] = sel.fit()
+            p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
+                min(order, sel.max_lags)
+            out[m][state] = sel.fit(p)
     # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
     V = int(round(steady_window * rec.fs))
     step = max(1, int(round(0.1 * rec.fs)))
@@ -735,27 +784,37 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
 def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, models: Sequence[str] | None = None,
                      methods: Sequence[str] = METHODS, windows: Sequence[float] = (5.0, 10.0, 20.0),
                      rules: Sequence[str] = ("paper", "likelihood", "pvalue"), lags: Any = None, settle: float = 10.0,
-                     progress: bool = True) -> tuple[dict, Evaluation]:
-    """The whole study of paper 003 on a hexacopter dataset: baselines per turbulence level, then evaluation.
+                     fit_records: int = 10, pool: str = "level", order: Any = 20, max_lags: int = 20,
+                     var_max_lags: int = 20, progress: bool = True) -> tuple[dict, Evaluation]:
+    """The whole study of paper 003 on a hexacopter dataset: pooled baselines, then evaluation.
 
-    For every turbulence level the first valid record of each state fits the baselines (whole post-settle part
-    of the record; see :func:`fit_baselines`), and every other valid record of that level is evaluated with
-    the models of its own level (condition-scheduled baselines).
+    The first ``fit_records`` valid records of each state and turbulence level fit the baselines (whole
+    post-settle part of each record, pooled without junctions; see :func:`fit_baselines`); every other valid
+    record is evaluated. With ``pool="level"`` each level has its own models and every record is tested with
+    the models of its level (condition-scheduled baselines); with ``pool="all"`` one set of models is fitted on
+    the fitting records of all levels.
 
     Parameters
     ----------
     data : xarray.Dataset, optional
         Default the shipped :func:`tsfdi.datasets.load_hexacopter`.
     records_per_case : int, optional
-        Use only the first ``records_per_case`` records of each (state, turbulence) cell (at least 2: one fits,
-        the others are evaluated); default all.
+        Use only the first ``records_per_case`` records of each (state, turbulence) cell (more than
+        ``fit_records``: those fit, the others are evaluated); default all.
     models, methods, windows, rules, lags, settle, progress :
         As in :func:`evaluate`; ``models`` defaults to every channel and ``"var"``.
+    fit_records : int
+        Fitting records per state and turbulence level (reduced to ``records_per_case - 1`` when fewer).
+    pool : {"level", "all"}
+        Models per turbulence level, or one set pooled across levels.
+    order, max_lags, var_max_lags :
+        Order choice and search bounds of :func:`fit_baselines`. Default order 20: on the shipped data BIC on
+        the pooled records picks VAR(12-15) whose in-sample residuals are still correlated (docs/results.md).
 
     Returns
     -------
     baselines : dict
-        Turbulence level -> :class:`Baselines`.
+        Turbulence level -> :class:`Baselines` (with ``pool="all"`` every level maps to the same object).
     evaluation : Evaluation
     """
     if data is None:
@@ -766,8 +825,11 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
 
     if not isinstance(data, xr.Dataset):
         raise TypeError(f"data must be a hexacopter xarray.Dataset, got {type(data).__name__}")
+    fit_records = int_like(fit_records, "fit_records", minimum=1)
+    pool = option(pool, "pool", ("level", "all"))
     if records_per_case is not None:
         n = int_like(records_per_case, "records_per_case", minimum=2)
+        fit_records = min(fit_records, n - 1)
         st, tb = data["state"].values, data["turbulence"].values
         keep, count = [], {}
         for i in range(data.sizes["record"]):
@@ -783,8 +845,13 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
         from tsfdi.exceptions import UnstableModelWarning
 
         warnings.simplefilter("ignore", UnstableModelWarning)
-        bases = {lvl: fit_baselines(sig, fit_turbulence=lvl, duration=None, settle=settle, models=names)
-                 for lvl in levels}
+        kw = dict(duration=None, settle=settle, models=names, fit_records=fit_records, order=order,
+                  max_lags=max_lags, var_max_lags=var_max_lags)
+        if pool == "level":
+            bases = {lvl: fit_baselines(sig, fit_turbulence=lvl, **kw) for lvl in levels}
+        else:
+            one = fit_baselines(sig, **kw)
+            bases = dict.fromkeys(levels, one)
     ev = evaluate(sig, bases, models=names, methods=methods, windows=windows, rules=rules, lags=lags,
                   settle=settle, progress=progress)
     return bases, ev
@@ -797,9 +864,11 @@ def baselines_table(baselines: Any) -> pd.DataFrame:
         return baselines.table
     if not isinstance(baselines, Mapping) or not all(isinstance(b, Baselines) for b in baselines.values()):
         raise TypeError("baselines must be a Baselines or a mapping turbulence level -> Baselines")
-    frames = []
-    for lvl, b in baselines.items():
+    frames, seen = [], {}
+    for lvl, b in baselines.items():       # one Baselines shared by several levels (pooled) is listed once
+        seen.setdefault(id(b), (b, []))[1].append(str(lvl))
+    for b, lvls in seen.values():
         t = b.table
-        t.insert(0, "turbulence", lvl)
+        t.insert(0, "turbulence", lvls[0] if len(lvls) == 1 else "+".join(lvls))
         frames.append(t)
     return pd.concat(frames, ignore_index=True)
