@@ -13,14 +13,15 @@ from tsfdi.cli import main
 
 def test_demo_reduced(tmp_path, capsys):
     out = tmp_path / "demo"
-    rc = main(["demo", "--out", str(out), "--records-per-case", "2", "--models", "var", "--windows", "20",
-               "--methods", "whiteness", "--no-progress"])
+    rc = main(["demo", "--out", str(out), "--records-per-case", "3", "--fit-records", "2", "--order", "bic",
+               "--models", "var", "--windows", "20", "--methods", "whiteness", "--no-progress"])
     assert rc == 0
     text = capsys.readouterr().out
     assert "Table 2 analogue" in text and "Table 4 analogue, 20 s windows, rule 'paper'" in text
     assert "Detection with the healthy model" in text
     report = (out / "report.md").read_text()
     assert "| turbulence | state | model |" in report
+    assert "| 2 |" in report                     # two pooled fitting records per state and level
     figs = sorted(p.name for p in (out / "figures").glob("*.png"))
     assert "variance_evolution.png" in figs and "order_selection_var_healthy.png" in figs
     assert "confusion_var_whiteness_20s_paper.png" in figs

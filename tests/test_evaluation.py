@@ -150,6 +150,15 @@ def test_hexacopter_signals():
         hexacopter_signals(ds["roll"])
     with pytest.raises(ValueError, match="yaw"):
         hexacopter_signals(ds, yaw="heading")
+    # a dataset with the body yaw rate r: the yaw_rate channel is r itself, every sample kept
+    ds_r = ds.assign(r=(("record", "time"), np.arange(12.0).reshape(2, 6) * 5.0))
+    da_r = hexacopter_signals(ds_r)
+    np.testing.assert_allclose(da_r["time"].values, t)
+    np.testing.assert_allclose(da_r.values[..., 2], ds_r["r"].values)
+    np.testing.assert_allclose(da_r.values[..., 1], ds["pitch"].values)
+    np.testing.assert_allclose(hexacopter_signals(ds_r, yaw="angle").values[..., 2], ds["yaw"].values)
+    with pytest.raises(ValueError, match="r"):
+        hexacopter_signals(ds_r.drop_vars("roll"))
 
 
 def test_bad_input(synthetic, fitted):

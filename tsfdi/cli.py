@@ -73,6 +73,12 @@ def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", default=None, help="hexacopter netCDF file (default: the shipped data/hexacopter.nc)")
     p.add_argument("--records-per-case", type=int, default=None,
                    help="use only the first N records of each state and turbulence level (N >= 2; default all)")
+    p.add_argument("--fit-records", type=int, default=10,
+                   help="baseline records per state and turbulence level, pooled (default 10; excluded from the "
+                        "evaluation)")
+    p.add_argument("--pool", choices=("level", "all"), default="level",
+                   help="baseline models per turbulence level (default) or one set across levels")
+    p.add_argument("--order", default="20", help="model order: an integer (default 20), 'bic' or 'rss_sss'")
     p.add_argument("--windows", default="5,10,20", help="comma-separated window lengths in s")
     p.add_argument("--models", default=None, help="comma-separated models: roll, pitch, yaw_rate, var (default all)")
     p.add_argument("--methods", default="whiteness,variance", help="comma-separated: whiteness, variance")
@@ -207,8 +213,10 @@ def _demo(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     data = load_hexacopter(args.data)
     windows = [float(w) for w in _csv_list(args.windows)]
+    order = int(args.order) if args.order.strip().isdigit() else args.order.strip()
     bases, ev = hexacopter_study(data, records_per_case=args.records_per_case, models=_csv_list(args.models),
-                                 methods=_csv_list(args.methods), windows=windows, progress=not args.no_progress)
+                                 methods=_csv_list(args.methods), windows=windows, fit_records=args.fit_records,
+                                 pool=args.pool, order=order, progress=not args.no_progress)
     text = demo_report(bases, ev)
     print(text)
     out = Path(args.out)

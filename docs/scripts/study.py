@@ -255,14 +255,14 @@ Correct unique identification in percent of windows (minimum over the three roto
 
 ## What limits severe turbulence
 
-The fault models' residuals are not white even *in sample* in severe turbulence: for the rotor 1 model, the
-pitch channel of each severe fitting record (its own in-sample residuals) has:
+The fault models' residuals are not white even *in sample* in severe turbulence. Rotor 1 model, in-sample residuals
+of each of its severe fitting records (median Q over 20 s blocks per channel), with what the record did:
 
 """ + _markdown(sev) + f"""
 
 Reading of this table and of the two above: in severe turbulence the pitch residuals of the rotor 1 model are
 correlated *in sample* on every fitting record, whether its heading slipped by whole turns or not, while roll and
-yaw rate are near the chi2(20) median. Pooling more records or raising the order from the BIC choice to 20 does
+yaw rate are much closer to the chi2(20) median. Pooling more records or raising the order from the BIC choice to 20 does
 not whiten them (order table: severe rotor 1 and rotor 6 keep the largest in-sample Q), so neither the estimation
 error nor the yaw-rate bursts of the heading slips are what limits the paper's rule there: the post-failure pitch
 dynamics in severe turbulence are not those of one linear Gaussian VAR, and a whiteness test at alpha = 1e-3
