@@ -25,10 +25,14 @@ from tsfdi._validation import float_like, int_like, option, probability
 from tsfdi.monitoring import RULES, Monitor, _rolling_variance, apply_rule, window_statistics
 
 __all__ = ["Baselines", "Evaluation", "Records", "baselines_table", "evaluate", "fit_baselines", "hexacopter_signals",
-           "hexacopter_study", "PAPER_ALPHA", "METHODS", "RULES"]
+           "hexacopter_study", "PAPER_ALPHA", "METHODS", "RULES", "THRESHOLDS"]
 
 #: Identification methods: the residual variance F test and the residual whiteness (Ljung-Box) test.
 METHODS = ("whiteness", "variance")
+
+#: Test thresholds: the null distribution's quantile (chi-square / F, the paper) or calibrated on held-out
+#: in-state residuals (empirical, paper 002 Fig. 2).
+THRESHOLDS = ("chi2", "empirical")
 
 #: Type I risk of each method and model family in the paper's Table 3 (scalar AR on roll / pitch / yaw, VAR).
 PAPER_ALPHA = {("variance", "roll"): 1e-6, ("variance", "pitch"): 1e-12, ("variance", "yaw"): 1e-12,
@@ -213,6 +217,11 @@ class Baselines:
         Identifiers of the records used for fitting (excluded from :func:`evaluate`).
     fs : float
         Sampling frequency in Hz.
+    heldout : dict
+        ``(model name, state)`` -> list of out-of-sample residual records, one per fitting record of that state:
+        the residuals of the record through the model refitted (same order) on the state's *other* fitting
+        records (leave one record out; filled by ``fit_baselines(..., calibrate=True)``, else empty). They
+        calibrate data-driven test thresholds (:meth:`calibrated_tests`).
     """
 
     models: dict
@@ -225,6 +234,8 @@ class Baselines:
     fit_records: tuple
     fs: float
     segments: dict = field(default_factory=dict, repr=False)
+    heldout: dict = field(default_factory=dict, repr=False)
+    _calibrated: dict = field(default_factory=dict, repr=False)
 
     def model_channels(self, model: str) -> list[int]:
         """Channel positions a model uses (all for ``"var"``)."""
@@ -258,13 +269,74 @@ class Baselines:
         return pd.DataFrame(rows)
 
     def monitor(self, model: str = "var", *, window: float = 20.0, step: float = 1.0, method: str = "whiteness",
-                alpha: float | None = None, lags: int | None = None, rule: str = "paper") -> Monitor:
-        """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models, tests and thresholds."""
-        test = _make_test(method, model, alpha, lags, window, self.fs)
+                alpha: float | None = None, lags: int | None = None, rule: str = "paper",
+                thresholds: str = "chi2") -> Monitor:
+        """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models, tests and thresholds
+        (``thresholds="empirical"``: each model's test calibrated by :meth:`calibrated_tests`)."""
+        thresholds = option(thresholds, "thresholds", THRESHOLDS)
         chans = self.model_channels(model)
+        if thresholds == "empirical":
+            tests = self.calibrated_tests(model, method, window, alpha=alpha, lags=lags)
+            test: Any = {f: tests[f] for f in self.faults}
+            det = tests[self.healthy]
+        else:
+            test = _make_test(method, model, alpha, lags, window, self.fs)
+            det = None
         return Monitor(self.models[model][self.healthy], {f: self.models[model][f] for f in self.faults},
-                       window=window, step=step, fs=self.fs, test=test,
+                       window=window, step=step, fs=self.fs, test=test, detection_test=det,
                        steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
+
+    def calibrated_tests(self, model: str, method: str, window: float, *, alpha: float | None = None,
+                         lags: int | None = None, step: int = 1) -> dict:
+        """Per state, the ``method`` test of ``model`` for ``window``-second windows with its threshold calibrated on
+        that state's leave-one-record-out residuals (:attr:`heldout`).
+
+        Parameters
+        ----------
+        model, method, window, alpha, lags :
+            As in :func:`evaluate` (default alpha: the paper's Table 3, default lags: 20).
+        step : int
+            Samples between calibration windows (default every sample).
+
+        Returns
+        -------
+        dict
+            State -> calibrated :class:`~tsfdi.LjungBox` / :class:`~tsfdi.FTest` (``threshold="empirical"``).
+
+        Notes
+        -----
+        Hansen et al. (paper 002, Fig. 2) set the threshold at the :math:`1-\alpha` quantile of the statistic in
+        normal operation. Here "normal" is each model's own state, and the statistics are computed out of sample
+        (a record the model was not fitted on), as on the evaluation records: every fitting record in turn is
+        left out, the model (same order) is refitted on the others and the left-out record's residual windows
+        give statistics. The evaluation records are never used.
+        """
+        method = option(method, "method", METHODS)
+        if model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
+        window = float_like(window, "window", minimum=0.0, strict_min=True)
+        step = int_like(step, "step", minimum=1)
+        key = (model, method, window, alpha, lags, step)
+        if key in self._calibrated:
+            return self._calibrated[key]
+        if not self.heldout:
+            raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
+                             "to calibrate thresholds")
+        W = int(round(window * self.fs))
+        out = {}
+        for state in (self.healthy,) + self.faults:
+            res = self.models[model][state]
+            test = _make_test(method, model, alpha, lags, window, self.fs, threshold="empirical")
+            n = W - int(res.lags)
+            recs = self.heldout[(model, state)]
+            try:
+                test.calibrate([e for e in recs if e.shape[0] >= n], window=n, step=step, **test.reference(res))
+            except ValueError as err:
+                raise ValueError(f"cannot calibrate the {method} test of model {model!r}, state {state!r}, "
+                                 f"{window:g} s windows: {err}") from None
+            out[state] = test
+        self._calibrated[key] = out
+        return out
 
     def __repr__(self) -> str:
         return (f"Baselines(models={list(self.models)}, healthy={self.healthy!r}, faults={self.faults}, "
@@ -294,7 +366,8 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                   fs: float | None = None, healthy: str = "healthy", fit_records: Any = "first",
                   fit_turbulence: Any = None, settle: float = 10.0, duration: float | None = 20.0,
                   models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 20,
-                  order: Any = "bic", steady_window: float = 10.0, steady_factor: float = 1.0) -> Baselines:
+                  order: Any = "bic", steady_window: float = 10.0, steady_factor: float = 1.0,
+                  calibrate: bool = False) -> Baselines:
     r"""Baseline phase: fit a scalar AR model per channel and a VAR on all channels for every state.
 
     Parameters
@@ -338,6 +411,11 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         Thresholds are ``steady_factor`` times the largest rolling variance of each channel over the steady
         parts (from ``settle`` after the failure) of the fault-state fitting records (the paper's rule with
         factor 1).
+    calibrate : bool
+        Also compute, for every model and state with at least two fitting records, the leave-one-record-out
+        residuals (:attr:`Baselines.heldout`) that calibrate data-driven thresholds
+        (``evaluate(..., thresholds="empirical")``): each fitting record in turn through the model refitted on
+        the state's other fitting records.
 
     Returns
     -------
@@ -367,6 +445,8 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         order = option(order, "order", ("bic", "rss_sss"))
     else:
         order = int_like(order, "order", minimum=1, maximum=max(max_lags, var_max_lags))
+    if not isinstance(calibrate, (bool, np.bool_)):
+        raise TypeError(f"calibrate must be a bool, got {calibrate!r}")
     if isinstance(data, Mapping) and not is_xarray(data):
         if not data:
             raise ValueError("data is an empty mapping: give one signal per state")
@@ -435,6 +515,15 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
             p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
                 min(order, sel.max_lags)
             out[m][state] = sel.fit(p)
+    heldout: dict = {}
+    if calibrate:
+        for state, segs in segments.items():
+            if len(segs) < 2:
+                raise ValueError(f"calibrate=True needs at least two fitting records per state; state {state!r} "
+                                 f"has {len(segs)}")
+            for m in names:
+                heldout[(m, state)] = _leave_one_out(out[m][state], segs,
+                                                     None if m == "var" else rec.channels.index(m))
     # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
     V = int(round(steady_window * rec.fs))
     step = max(1, int(round(0.1 * rec.fs)))
@@ -447,7 +536,21 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     thr = steady_factor * np.max(peaks, axis=0) if peaks else np.full(len(rec.channels), np.inf)
     return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
                      steady_thresholds=thr, steady_window=steady_window,
-                     fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments)
+                     fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments, heldout=heldout)
+
+
+def _leave_one_out(res: Any, segs: list, channel: int | None) -> list:
+    """Residuals of each segment through the model (same order, trend, hold-back) refitted on the others."""
+    spec = res.model
+    recs = [g if channel is None else g[:, channel] for g in segs]
+    kw = {"trend": spec.trend, "hold_back": spec.hold_back}
+    out = []
+    for j in range(len(recs)):
+        others = [r for i, r in enumerate(recs) if i != j]
+        fit = type(spec)(others if len(others) > 1 else others[0], int(res.lags), **kw).fit()
+        e = np.asarray(fit.residuals(recs[j]), dtype=np.float64)
+        out.append(e.reshape(e.shape[0], -1))
+    return out
 
 
 # ---------------------------------------------------------------------------------------------------- evaluation
@@ -456,15 +559,18 @@ def _default_lags(window: float, fs: float) -> int:
     return int(min(20, max(2, round(window * fs) // 10)))
 
 
-def _make_test(method: str, model: str, alpha: float | None, lags: int | None, window: float, fs: float):
+def _make_test(method: str, model: str, alpha: float | None, lags: int | None, window: float, fs: float,
+               threshold: str = "chi2"):
     from tsfdi.detection.variance import FTest
     from tsfdi.detection.whiteness import LjungBox
 
     method = option(method, "method", METHODS)
     a = _paper_alpha(method, model) if alpha is None else probability(alpha, "alpha")
+    emp = threshold == "empirical"
     if method == "variance":
-        return FTest(alpha=a)
-    return LjungBox(lags=_default_lags(window, fs) if lags is None else int_like(lags, "lags", minimum=1), alpha=a)
+        return FTest(alpha=a, threshold="empirical" if emp else "f")
+    return LjungBox(lags=_default_lags(window, fs) if lags is None else int_like(lags, "lags", minimum=1), alpha=a,
+                    threshold="empirical" if emp else "chi2")
 
 
 @dataclass(frozen=True, eq=False)
@@ -490,6 +596,13 @@ class Evaluation:
         window length -> Ljung-Box lags.
     records : pandas.DataFrame
         The records evaluated (id, state, turbulence) and those skipped with the reason.
+    thresholds : {"chi2", "empirical"}
+        How the test thresholds were set.
+    calibration : pandas.DataFrame
+        Per turbulence level (baselines), model, method, window length, state and channel: the null
+        distribution's critical value (``distribution``) and, with ``thresholds="empirical"``, the calibrated
+        one (``empirical``), its calibration sample size and estimate (``"empirical"`` quantile or ``"gpd"``
+        tail).
     """
 
     identification: pd.DataFrame
@@ -500,6 +613,8 @@ class Evaluation:
     lags: dict
     records: pd.DataFrame
     nchan: dict = field(default_factory=dict)
+    thresholds: str = "chi2"
+    calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     # -- identification
     def confusion(self, rule: str = "paper") -> pd.DataFrame:
@@ -619,7 +734,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
              methods: Sequence[str] = ("whiteness",), windows: Sequence[float] = (5.0, 10.0, 20.0),
              turbulence: Any = None, step: float = 1.0, settle: float = 10.0, alpha: Any = None, lags: Any = None,
              rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True, progress: bool = True,
-             states: Any = None, failure_times: Any = None, fs: float | None = None) -> Evaluation:
+             states: Any = None, failure_times: Any = None, fs: float | None = None,
+             thresholds: str = "chi2") -> Evaluation:
     r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
 
     Parameters
@@ -657,6 +773,13 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         Show a tqdm progress bar over records.
     states, failure_times, fs :
         Per-record labels and sampling frequency for a sequence of signals.
+    thresholds : {"chi2", "empirical"}
+        ``"chi2"`` (the paper): each test's critical value from its null distribution (chi-square for the
+        Ljung-Box test, F for the variance test). ``"empirical"``: every model (healthy and each fault) has its
+        own thresholds, the per-channel :math:`1-\alpha` quantiles of its test statistic on its own
+        leave-one-record-out fitting residuals (:meth:`Baselines.calibrated_tests`; needs
+        ``fit_baselines(..., calibrate=True)``), and p-values are empirical (paper 002, Fig. 2). Evaluation
+        records are never used for calibration.
 
     Returns
     -------
@@ -710,6 +833,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     if not use.any():
         raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
 
+    thresholds = option(thresholds, "thresholds", THRESHOLDS)
     alphas, lag_of, tests = {}, {}, {}
     for m in models:
         for meth in methods:
@@ -741,8 +865,14 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                 for w in wins:
                     W = int(round(w * rec.fs))
                     test = tests[(m, meth, w)]
+                    if thresholds == "empirical":
+                        cal = base.calibrated_tests(m, meth, w, alpha=test.alpha,
+                                                    lags=getattr(test, "lags", None))
+                        test_h, test_f = cal[healthy], {f: cal[f] for f in faults}
+                    else:
+                        test_h = test_f = test
                     if detection:
-                        d = window_statistics(x, {"h": base.models[m][healthy]}, test, window=W,
+                        d = window_statistics(x, {"h": base.models[m][healthy]}, {"h": test_h}, window=W,
                                               step=step_n)["decisions"]["h"]
                         starts = np.arange(0, x.shape[0] - W + 1, step_n)
                         st, en = starts / rec.fs, (starts + W) / rec.fs
@@ -753,7 +883,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                             "pre": ~is_fault | (en <= ft), "alarm": d["reject"]}))
                     if not is_fault:
                         continue
-                    ws = window_statistics(x, fault_models, test, window=W, step=step_n)
+                    ws = window_statistics(x, fault_models, test_f, window=W, step=step_n)
                     starts = ws["starts"]
                     keep = starts / rec.fs >= ft + settle
                     if not keep.any():
@@ -777,15 +907,51 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     det = pd.concat(det_parts, ignore_index=True) if det_parts else pd.DataFrame(
         columns=["record", "state", "turbulence", "model", "method", "window", "start", "end", "failure_time",
                  "fault_true", "pre", "alarm"])
+    cal_rows = []
+    for lvl, b in ([("", first)] if by_level is None else by_level.items()):
+        for (m, meth, w), t in tests.items():
+            chans = [b.channels[c] for c in b.model_channels(m)]
+            cal = b.calibrated_tests(m, meth, w, alpha=t.alpha, lags=getattr(t, "lags", None)) \
+                if thresholds == "empirical" else {}
+            for state in (healthy,) + faults:
+                res = b.models[m][state]
+                n = int(round(w * rec.fs)) - int(res.lags)
+                if meth == "whiteness":
+                    dist = np.full(len(chans), _special_chi2(t, len(chans)))
+                else:
+                    dist = _special_f(t, res, n, len(chans))
+                for c, ch in enumerate(chans):
+                    row = {"turbulence": lvl, "model": m, "method": meth, "window": w, "state": state,
+                           "channel": ch, "distribution": float(dist[c])}
+                    if state in cal:
+                        row["empirical"] = float(cal[state].threshold_[c])
+                        row["calibration_size"] = int(cal[state].calibration_[c].size)
+                        row["estimate"] = cal[state].thresholds_[c].method_
+                    cal_rows.append(row)
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
-                      records=recs, nchan={m: len(first.model_channels(m)) for m in models})
+                      records=recs, nchan={m: len(first.model_channels(m)) for m in models}, thresholds=thresholds,
+                      calibration=pd.DataFrame(cal_rows))
+
+
+def _special_chi2(test: Any, k: int) -> float:
+    from scipy import special
+
+    return float(special.chdtri(float(test.lags - test.model_df), test._channel_alpha(test.alpha, k, test.correction)))
+
+
+def _special_f(test: Any, res: Any, n: int, k: int) -> np.ndarray:
+    from scipy import special
+
+    df0 = np.asarray(test.reference(res)["reference_df"], dtype=float)
+    nu = float(n - 1 if test.demean else n)
+    return special.fdtri(nu, df0, 1.0 - test._channel_alpha(test.alpha, k, test.correction))
 
 
 def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, models: Sequence[str] | None = None,
                      methods: Sequence[str] = METHODS, windows: Sequence[float] = (5.0, 10.0, 20.0),
                      rules: Sequence[str] = ("paper", "likelihood", "pvalue"), lags: Any = None, settle: float = 10.0,
                      fit_records: int = 10, pool: str = "level", order: Any = 20, max_lags: int = 20,
-                     var_max_lags: int = 20, progress: bool = True) -> tuple[dict, Evaluation]:
+                     var_max_lags: int = 20, progress: bool = True, thresholds: str = "chi2") -> tuple[dict, Evaluation]:
     """The whole study of paper 003 on a hexacopter dataset: pooled baselines, then evaluation.
 
     The first ``fit_records`` valid records of each state and turbulence level fit the baselines (whole
@@ -810,6 +976,9 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
     order, max_lags, var_max_lags :
         Order choice and search bounds of :func:`fit_baselines`. Default order 20: on the shipped data BIC on
         the pooled records picks VAR(12-15) whose in-sample residuals are still correlated (docs/results.md).
+    thresholds : {"chi2", "empirical"}
+        Test thresholds (:func:`evaluate`); ``"empirical"`` fits the baselines with ``calibrate=True``
+        (leave-one-record-out residuals of the fitting records).
 
     Returns
     -------
@@ -827,6 +996,7 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
         raise TypeError(f"data must be a hexacopter xarray.Dataset, got {type(data).__name__}")
     fit_records = int_like(fit_records, "fit_records", minimum=1)
     pool = option(pool, "pool", ("level", "all"))
+    thresholds = option(thresholds, "thresholds", THRESHOLDS)
     if records_per_case is not None:
         n = int_like(records_per_case, "records_per_case", minimum=2)
         fit_records = min(fit_records, n - 1)
@@ -846,14 +1016,14 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
 
         warnings.simplefilter("ignore", UnstableModelWarning)
         kw = dict(duration=None, settle=settle, models=names, fit_records=fit_records, order=order,
-                  max_lags=max_lags, var_max_lags=var_max_lags)
+                  max_lags=max_lags, var_max_lags=var_max_lags, calibrate=thresholds == "empirical")
         if pool == "level":
             bases = {lvl: fit_baselines(sig, fit_turbulence=lvl, **kw) for lvl in levels}
         else:
             one = fit_baselines(sig, **kw)
             bases = dict.fromkeys(levels, one)
     ev = evaluate(sig, bases, models=names, methods=methods, windows=windows, rules=rules, lags=lags,
-                  settle=settle, progress=progress)
+                  settle=settle, progress=progress, thresholds=thresholds)
     return bases, ev
 
 

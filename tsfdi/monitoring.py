@@ -443,6 +443,29 @@ def _model_channels(res: Any, values: np.ndarray) -> np.ndarray:
     return np.asarray(e, dtype=np.float64).reshape(-1, neqs)
 
 
+def _window_statistic(test: Any, e: np.ndarray, res: Any, n: int, starts: np.ndarray, step: int, name: str,
+                      p: int) -> np.ndarray | None:
+    """Statistic of every window (``n`` residual samples at ``starts``) from prefix sums, or None when the test
+    has no windowed form (then it is applied window by window)."""
+    from tsfdi.detection.variance import FTest
+    from tsfdi.detection.whiteness import LjungBox
+
+    if isinstance(test, LjungBox) and test.multivariate is None:
+        if n <= test.lags:
+            raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model "
+                             f"{name!r}, got {n + p}")
+        return _ljungbox_windows(e, test.lags, n, step, test.demean)
+    if isinstance(test, FTest) and test.alternative == "greater":
+        return test.window_statistic(e, n, step, **test.reference(res))
+    return None
+
+
+def _ljungbox_windows(e: np.ndarray, lags: int, n: int, step: int, demean: bool) -> np.ndarray:
+    from tsfdi.detection.whiteness import ljungbox_windows
+
+    return ljungbox_windows(e, lags, n, step, demean=demean)
+
+
 def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, step: int = 1,
                       common: int | None = None) -> dict:
     r"""Residual test of every model on every sliding window of one record, all windows at once.
@@ -457,9 +480,11 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
     signal : array_like, DataFrame or DataArray, shape (nobs, k) or (nobs,)
     models : mapping
         Name -> fitted AR / VAR results with ``k`` channels.
-    test : LjungBox or FTest
+    test : LjungBox, FTest or mapping
         Per-channel test (``LjungBox(multivariate=None)`` or ``FTest(alternative="greater")``); other tests
-        are applied window by window through their ``test`` method.
+        are applied window by window through their ``test`` method. A mapping name -> test gives each model its
+        own test (e.g. thresholds calibrated on that model's healthy residuals, ``threshold="empirical"``:
+        the calibrated threshold and empirical p-values are used).
     window, step : int
         Window length and step in samples.
     common : int, optional
@@ -474,8 +499,7 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         ``loglik`` (n_models, n_windows) Gaussian log-likelihood per sample of each model's residuals on the
         common samples with the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
     """
-    from tsfdi.detection.variance import FTest
-    from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
+    from tsfdi.detection.whiteness import LjungBox
 
     sig = as_signal(signal, "signal", allow_constant=True)
     x = sig.values
@@ -493,50 +517,42 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
     nwin, k = starts.size, sig.nchan
     decisions: dict = {}
     loglik = np.empty((len(models), nwin))
+    if isinstance(test, Mapping):
+        missing = [name for name in models if name not in test]
+        if missing:
+            raise ValueError(f"test is a mapping but has no test for the model(s) {missing}")
     for j, (name, res) in enumerate(models.items()):
         p = orders[name]
         e = _model_channels(res, x)
         n = window - p
-        if isinstance(test, LjungBox) and test.multivariate is None:
-            if n <= test.lags:
-                raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model "
-                                 f"{name!r}, got {window}")
-            stat = ljungbox_windows(e, test.lags, n, step, demean=test.demean)
-            df = float(test.lags - test.model_df)
-            a = test._channel_alpha(test.alpha, k, test.correction)
-            thr = np.full(k, _special.chdtri(df, a))
-            pv = _special.chdtrc(df, stat)
-        elif isinstance(test, FTest) and test.alternative == "greater":
-            ref = test.reference(res)
-            var0, df0 = np.asarray(ref["reference_variance"]), np.asarray(ref["reference_df"])
-            zero = np.zeros((1, k))
-            c2 = np.concatenate([zero, np.cumsum(e * e, axis=0)])[starts + n] - \
-                np.concatenate([zero, np.cumsum(e * e, axis=0)])[starts]
-            if test.demean:
-                c1 = np.concatenate([zero, np.cumsum(e, axis=0)])
-                s1 = c1[starts + n] - c1[starts]
-                nu = n - 1
-                var_u = (c2 - s1 * s1 / n) / nu
-            else:
-                nu = n
-                var_u = c2 / n
-            stat = var_u / var0
-            a = test._channel_alpha(test.alpha, k, test.correction)
-            thr = _special.fdtri(float(nu), df0, 1.0 - a)
-            pv = _special.fdtrc(float(nu), df0, stat)
-        else:
-            ds = [test.test(e[s:s + n], **test.reference(res)) for s in starts]
+        test_j = test[name] if isinstance(test, Mapping) else test
+        stat = _window_statistic(test_j, e, res, n, starts, step, name, p)
+        if stat is None:
+            ds = [test_j.test(e[s:s + n], **test_j.reference(res)) for s in starts]
             stat = np.array([d.statistic for d in ds])
             pv = np.array([d.pvalue for d in ds])
             thr = ds[0].threshold if ds else np.full(k, np.nan)
             rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
-            decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr),
-                               "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}
-            stat = None
-        if stat is not None:
+        else:
+            if getattr(test_j, "empirical", False):
+                test_j._check_calibrated(k)
+                thr = np.asarray(test_j.threshold_, dtype=float)
+                pv = test_j.empirical_pvalue(stat)
+            elif isinstance(test_j, LjungBox):
+                df = float(test_j.lags - test_j.model_df)
+                a = test_j._channel_alpha(test_j.alpha, k, test_j.correction)
+                thr = np.full(k, _special.chdtri(df, a))
+                pv = _special.chdtrc(df, stat)
+            else:
+                ref = test_j.reference(res)
+                df0 = np.asarray(ref["reference_df"])
+                nu = float(n - 1 if test_j.demean else n)
+                a = test_j._channel_alpha(test_j.alpha, k, test_j.correction)
+                thr = _special.fdtri(nu, df0, 1.0 - a)
+                pv = _special.fdtrc(nu, df0, stat)
             rej_c = stat > thr
-            decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr, dtype=float),
-                               "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}
+        decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr, dtype=float),
+                           "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}
         # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
         off = pmax - p
         m = window - pmax
@@ -683,9 +699,10 @@ class Monitor:
         Seconds between window starts (default: 1 s as in the paper, at least one sample).
     fs : float
         Sampling frequency in Hz.
-    test : ResidualTest, optional
+    test : ResidualTest or mapping, optional
         Identification test, :class:`~tsfdi.LjungBox` (default ``LjungBox(lags=25, alpha=1e-3)``) or
-        :class:`~tsfdi.FTest`.
+        :class:`~tsfdi.FTest`; or a mapping model name -> test (each fault model with its own calibrated
+        thresholds, ``threshold="empirical"``; then ``detection_test`` is required).
     detection_test : ResidualTest, optional
         Detection test on the healthy model's residuals (default: ``test``).
     steady_thresholds : array_like, shape (k,), optional
@@ -734,7 +751,14 @@ class Monitor:
         self.window = self.window_n / self.fs
         self.step = self.step_n / self.fs
         test = LjungBox(lags=25, alpha=1e-3) if test is None else test
-        if not isinstance(test, ResidualTest):
+        if isinstance(test, Mapping):
+            test = dict(test)
+            missing = [n for n in self.models if n not in test]
+            if missing or not all(isinstance(t, ResidualTest) for t in test.values()):
+                raise ValueError(f"test as a mapping must hold a residual test for every model {list(self.models)}")
+            if detection_test is None:
+                raise TypeError("detection_test is required when test is a mapping (one test per fault model)")
+        elif not isinstance(test, ResidualTest):
             raise TypeError(f"test must be a residual test (LjungBox, FTest), got {type(test).__name__}")
         detection_test = test if detection_test is None else detection_test
         if not isinstance(detection_test, ResidualTest):

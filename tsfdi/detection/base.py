@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -9,7 +10,7 @@ import numpy as np
 from tsfdi._data import Signal, as_signal
 from tsfdi._validation import option, probability
 
-__all__ = ["ResidualTest"]
+__all__ = ["CalibratedTest", "ResidualTest"]
 
 
 class ResidualTest:
@@ -55,6 +56,154 @@ class ResidualTest:
     @staticmethod
     def _channel_alpha(alpha: float, k: int, correction: str | None) -> float:
         return alpha / k if correction == "bonferroni" else alpha
+
+
+class CalibratedTest(ResidualTest):
+    """A residual test whose threshold is either its null distribution's quantile or comes from data.
+
+    With ``threshold="empirical"`` (or an :class:`~tsfdi.EmpiricalThreshold`) the test must be
+    :meth:`calibrate`-d on statistics from normal operation before :meth:`test`; it then stores ``threshold_``
+    (per channel) and reports empirical p-values (Hansen et al., paper 002, Fig. 2).
+    """
+
+    threshold: Any = None
+    #: Name of the distributional threshold (``"chi2"`` for the Ljung-Box test, ``"f"`` for the F test).
+    _analytic = "analytic"
+
+    def _threshold_option(self, threshold: Any) -> Any:
+        """Validate the ``threshold`` option: the analytic name, ``"empirical"`` or an EmpiricalThreshold."""
+        from tsfdi.detection.glrt import EmpiricalThreshold
+
+        if isinstance(threshold, EmpiricalThreshold):
+            if abs(threshold.false_alarm - self.alpha) > 1e-12 * self.alpha:
+                raise ValueError(f"threshold.false_alarm ({threshold.false_alarm:g}) must equal alpha "
+                                 f"({self.alpha:g}): the calibrated threshold is the 1 - alpha quantile")
+            return threshold
+        if isinstance(threshold, str):
+            return option(threshold, "threshold", (self._analytic, "empirical"))
+        raise TypeError(f"threshold must be {self._analytic!r}, 'empirical' or an EmpiricalThreshold, got "
+                        f"{type(threshold).__name__}")
+
+    @property
+    def empirical(self) -> bool:
+        """Whether the threshold comes from data (:meth:`calibrate`) rather than the null distribution."""
+        return not isinstance(self.threshold, str) or self.threshold == "empirical"
+
+    @property
+    def calibrated(self) -> bool:
+        """Whether :meth:`calibrate` has been run."""
+        return hasattr(self, "threshold_")
+
+    def window_statistic(self, resid: Any, window: int, step: int = 1, **reference: Any) -> np.ndarray:
+        """Statistic of every sliding window of a residual record, shape ``(n_windows, k)``."""
+        raise NotImplementedError(f"{type(self).__name__} has no windowed statistic")  # pragma: no cover
+
+    def calibrate(self, resid: Any = None, *, window: int | None = None, step: int = 1, statistic: Any = None,
+                  **reference: Any) -> ResidualTest:
+        r"""Estimate the per-channel threshold from the statistic under normal operation; returns ``self``.
+
+        Parameters
+        ----------
+        resid : array_like, Series, DataFrame, DataArray or sequence of them, optional
+            Healthy (in-state) residual records, each ``(nobs, k)``: residuals of *new* records driven through
+            the fixed model (out of sample, like the data the test will see). The statistic of every window of
+            ``window`` samples, ``step`` apart, of every record is the calibration sample.
+        window : int
+            Window length in residual samples (required with ``resid``).
+        step : int
+            Samples between calibration windows.
+        statistic : array_like, shape (n,) or (n, k), optional
+            The calibration sample itself (instead of ``resid``): values of the test statistic under
+            normal operation, one column per channel.
+        **reference :
+            Extra keyword arguments of the windowed statistic (the F test's ``reference_variance``).
+
+        Returns
+        -------
+        self
+            With ``threshold_`` (ndarray, shape (k,)), ``thresholds_`` (one calibrated
+            :class:`~tsfdi.EmpiricalThreshold` per channel) and ``calibration_`` (the sorted sample per
+            channel, for the empirical p-value).
+
+        Raises
+        ------
+        ValueError
+            If the test was built with the distributional threshold, or if the sample is too small for the
+            per-channel ``alpha`` (the message says how many statistics are needed).
+
+        Notes
+        -----
+        Hansen et al. (paper 002, Fig. 2) take the threshold from the empirical distribution of the detection
+        statistic in normal operation. Channel ``c`` rejects when its statistic exceeds the :math:`1-\alpha`
+        quantile of its calibration sample (a generalised Pareto tail fit when the sample holds fewer than
+        ``min_exceedances / alpha`` values, see :class:`~tsfdi.EmpiricalThreshold`). The p-value is the
+        empirical exceedance fraction with the usual +1 correction,
+        :math:`p = (1 + \#\{s_i \ge s\}) / (n + 1)`. Windows that overlap are dependent, so the effective
+        sample is smaller than ``n``: calibrate on many records.
+        """
+        if not self.empirical:
+            raise ValueError(f"threshold is {self.threshold!r}: build the test with threshold='empirical' (or an "
+                             "EmpiricalThreshold) to calibrate it")
+        from tsfdi.detection.glrt import EmpiricalThreshold
+
+        if statistic is None:
+            if resid is None:
+                raise TypeError("calibrate needs resid (healthy residual records) or statistic")
+            if window is None:
+                raise TypeError("calibrate needs window (residual samples per window) with resid")
+            recs = list(resid) if isinstance(resid, (list, tuple)) else [resid]
+            if not recs:
+                raise ValueError("resid is an empty sequence")
+            stat = np.concatenate([np.asarray(self.window_statistic(r, window, step, **reference)) for r in recs])
+        else:
+            if resid is not None:
+                raise TypeError("give resid or statistic, not both")
+            stat = as_signal(statistic, "statistic", allow_constant=True).values
+        stat = np.asarray(stat, dtype=np.float64)
+        stat = stat.reshape(stat.shape[0], -1)
+        k = stat.shape[1]
+        a = self._channel_alpha(self.alpha, k, getattr(self, "correction", None))
+        tpl = self.threshold if isinstance(self.threshold, EmpiricalThreshold) else EmpiricalThreshold(a)
+        ths = []
+        for c in range(k):
+            et = copy.copy(tpl)
+            et.false_alarm = a
+            for attr in ("threshold_", "sample_", "gpd_", "method_", "nobs_"):
+                et.__dict__.pop(attr, None)
+            try:
+                et.calibrate(stat[:, c])
+            except ValueError as err:
+                raise ValueError(f"statistic (calibration sample of channel {c}) is too small: {err}") from None
+            ths.append(et)
+        self.thresholds_ = ths
+        self.threshold_ = np.array([t.threshold_ for t in ths])
+        self.calibration_ = [t.sample_ for t in ths]
+        return self
+
+    def _check_calibrated(self, k: int) -> None:
+        if not self.calibrated:
+            raise ValueError(f"{type(self).__name__} has threshold='empirical' but is not calibrated: call "
+                             "calibrate(healthy residuals, window=...) first")
+        if self.threshold_.shape[0] != k:
+            raise ValueError(f"resid has {k} channel(s) but the test was calibrated on {self.threshold_.shape[0]}")
+
+    def empirical_pvalue(self, statistic: Any) -> np.ndarray:
+        """Fraction of calibration statistics at or above ``statistic`` (per channel, last axis), with the +1
+        correction: ``(1 + #{s_i >= s}) / (n + 1)``."""
+        s = np.asarray(statistic, dtype=np.float64)
+        k = self.threshold_.shape[0]
+        s2 = s.reshape(-1, k)
+        out = np.empty_like(s2)
+        for c, g in enumerate(self.calibration_):
+            ge = g.size - np.searchsorted(g, s2[:, c], side="left")
+            out[:, c] = (1.0 + ge) / (g.size + 1.0)
+        return out.reshape(s.shape)
+
+    def _empirical_details(self) -> dict:
+        return {"threshold_method": "empirical",
+                "threshold_estimate": [t.method_ for t in self.thresholds_],
+                "calibration_size": int(self.calibration_[0].size),
+                "pvalue_method": "empirical: (1 + #{calibration >= statistic}) / (n + 1)"}
 
 
 def baseline_variance(results: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -7,14 +7,14 @@ from typing import Any
 import numpy as np
 from scipy import special
 
-from tsfdi._validation import option
-from tsfdi.detection.base import ResidualTest, baseline_variance
+from tsfdi._validation import int_like, option
+from tsfdi.detection.base import CalibratedTest, baseline_variance
 from tsfdi.detection.decision import Decision
 
 __all__ = ["FTest"]
 
 
-class FTest(ResidualTest):
+class FTest(CalibratedTest):
     r"""Residual variance F test (Dutta et al., eqs. 8-11).
 
     Parameters
@@ -32,6 +32,15 @@ class FTest(ResidualTest):
     correction : {None, "bonferroni"}
         For vector residuals, test each of the ``k`` channels at ``alpha / k`` so that the signal-level
         false-alarm rate is at most ``alpha``. ``None`` (the paper) uses ``alpha`` per channel.
+    threshold : {"f", "empirical"} or EmpiricalThreshold
+        ``"f"`` (the paper): the F quantile of eq. 10. ``"empirical"`` (``alternative="greater"`` only): the
+        :math:`1-\alpha` quantile of the variance ratio on healthy (in-state) residual windows, estimated by
+        :meth:`calibrate` (Hansen et al., paper 002, Fig. 2); decisions then report it and the empirical p-value.
+
+    Attributes
+    ----------
+    threshold_ : ndarray, shape (k,)
+        Calibrated threshold per channel (after :meth:`calibrate`, empirical threshold only).
 
     Notes
     -----
@@ -51,23 +60,53 @@ class FTest(ResidualTest):
     References
     ----------
     Dutta, McKay, Kopsaftopoulos, Gandhi, *Statistical Time Series Methods for Multicopter Fault Detection
-    and Identification*, eqs. 8-11.
+    and Identification*, eqs. 8-11. Hansen, Blanke, Adrian (paper 002), Fig. 2 (empirical threshold).
     """
 
     name = "F test (residual variance)"
+    _analytic = "f"
 
     def __init__(self, alpha: float = 0.05, *, alternative: str = "greater", demean: bool = False,
-                 correction: str | None = None) -> None:
+                 correction: str | None = None, threshold: Any = "f") -> None:
         self.alpha = self._check_alpha(alpha)
         self.alternative = option(alternative, "alternative", ("greater", "two-sided"))
         if not isinstance(demean, (bool, np.bool_)):
             raise TypeError(f"demean must be a bool, got {demean!r}")
         self.demean = bool(demean)
         self.correction = self._check_correction(correction)
+        self.threshold = self._threshold_option(threshold)
+        if self.empirical and self.alternative != "greater":
+            raise ValueError("threshold='empirical' needs alternative='greater' (one upper quantile)")
 
     def __repr__(self) -> str:
+        thr = "" if self.threshold == "f" else ", threshold='empirical'" + (
+            f" (calibrated on {self.calibration_[0].size})" if self.calibrated else " (not calibrated)")
         return (f"FTest(alpha={self.alpha:g}, alternative={self.alternative!r}, demean={self.demean}, "
-                f"correction={self.correction!r})")
+                f"correction={self.correction!r}{thr})")
+
+    def window_statistic(self, resid: Any, window: int, step: int = 1, reference_variance: Any = None,
+                         **_: Any) -> np.ndarray:
+        """Variance ratio ``F`` of every sliding window (``window`` residual samples, ``step`` apart) against
+        ``reference_variance``, shape (n_windows, k), from prefix sums."""
+        sig = self._resid(resid, 3 if self.demean else 2)
+        if reference_variance is None:
+            raise TypeError("FTest.window_statistic needs reference_variance (the baseline's unbiased variance)")
+        e = sig.values
+        k = sig.nchan
+        ref = _per_channel(reference_variance, "reference_variance", k)
+        window = int_like(window, "window", minimum=3 if self.demean else 2, maximum=sig.nobs)
+        step = int_like(step, "step", minimum=1)
+        starts = np.arange(0, sig.nobs - window + 1, step)
+        zero = np.zeros((1, k))
+        c2 = np.concatenate([zero, np.cumsum(e * e, axis=0)])
+        ss = c2[starts + window] - c2[starts]
+        if self.demean:
+            c1 = np.concatenate([zero, np.cumsum(e, axis=0)])
+            s1 = c1[starts + window] - c1[starts]
+            var_u = (ss - s1 * s1 / window) / (window - 1)
+        else:
+            var_u = ss / window
+        return var_u / ref
 
     @property
     def null_hypothesis(self) -> str:  # type: ignore[override]
@@ -121,8 +160,15 @@ class FTest(ResidualTest):
         a = self._channel_alpha(self.alpha, k, self.correction)
         dfn = np.full(k, float(nu))
         details: dict = {"variance": var_u, "reference_variance": ref, "alternative": self.alternative,
-                         "demean": self.demean, "channel_alpha": a, "correction": self.correction}
-        if self.alternative == "greater":
+                         "demean": self.demean, "channel_alpha": a, "correction": self.correction,
+                         "threshold_method": "f"}
+        if self.empirical:
+            self._check_calibrated(k)
+            thr = self.threshold_
+            pv = self.empirical_pvalue(f)
+            rej = f > thr
+            details.update(self._empirical_details())
+        elif self.alternative == "greater":
             thr = special.fdtri(dfn, df0, 1.0 - a)
             pv = special.fdtrc(dfn, df0, f)
             rej = f > thr

@@ -11,7 +11,7 @@ import numba
 
 from tsfdi._data import as_signal
 from tsfdi._validation import int_like, option
-from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.base import CalibratedTest
 from tsfdi.detection.decision import Decision
 
 __all__ = ["LjungBox", "autocovariance", "ljungbox_windows"]
@@ -79,7 +79,7 @@ def _check_variance(c0: np.ndarray, channels: list) -> None:
                          "autocorrelations are undefined")
 
 
-class LjungBox(ResidualTest):
+class LjungBox(CalibratedTest):
     r"""Ljung-Box residual uncorrelatedness test (Dutta et al., eqs. 12-14).
 
     Parameters
@@ -100,6 +100,17 @@ class LjungBox(ResidualTest):
         Subtract the sample mean before computing autocorrelations (as statsmodels ``acf`` does).
     correction : {None, "bonferroni"}
         Per-channel alpha ``alpha / k`` for vector residuals so the signal-level risk is at most ``alpha``.
+    threshold : {"chi2", "empirical"} or EmpiricalThreshold
+        ``"chi2"`` (the paper): the critical value :math:`\chi^2_{1-\alpha}(r - \text{model\_df})` and its
+        p-value. ``"empirical"`` (or an :class:`~tsfdi.EmpiricalThreshold` whose ``false_alarm`` is ``alpha``,
+        to set its tail options): the :math:`1-\alpha` quantile of the statistic on healthy (in-state)
+        residual windows, estimated by :meth:`calibrate` (Hansen et al., paper 002, Fig. 2); decisions then
+        report that threshold and the empirical p-value.
+
+    Attributes
+    ----------
+    threshold_ : ndarray, shape (k,)
+        Calibrated threshold per channel (after :meth:`calibrate`, empirical threshold only).
 
     Notes
     -----
@@ -120,20 +131,26 @@ class LjungBox(ResidualTest):
     baseline's estimation error: :math:`E[Q] \approx r + p N_u / N_0` for an AR(p) baseline (checked by Monte
     Carlo in ``tests/detection/test_whiteness.py``). With :math:`N_0 = N_u` (the papers' 2,000 / 2,000) the
     false-alarm rate is therefore above ``alpha``; the chi-square(r) level is accurate when the baseline record
-    is much longer than the tested one (or use a smaller ``alpha``, as the papers do).
+    is much longer than the tested one (or use a smaller ``alpha``, as the papers do). A threshold calibrated on
+    out-of-sample residual windows (``threshold="empirical"``) absorbs that estimation error and mild
+    misspecification: its false-alarm rate is ``alpha`` whatever the statistic's distribution, provided the
+    calibration residuals come from the same process as the tested ones.
 
     References
     ----------
     Dutta et al., eqs. 12-14. Ljung, G. M. and Box, G. E. P. (1978), Biometrika 65, 297-303.
     Hosking, J. R. M. (1980), JASA 75, 602-608. Li, W. K. and McLeod, A. I. (1981), JRSS B 43, 231-239.
+    Hansen, Blanke, Adrian (paper 002), Fig. 2: threshold from the statistic's distribution in normal operation.
     """
+
+    _analytic = "chi2"
 
     name = "Ljung-Box (residual uncorrelatedness)"
     null_hypothesis = "residuals are uncorrelated up to the tested lag (healthy / model fits)"
     alternative_hypothesis = "residuals are autocorrelated (fault / model does not fit)"
 
     def __init__(self, lags: int = 20, alpha: float = 0.05, model_df: int = 0, *, multivariate: str | None = None,
-                 demean: bool = True, correction: str | None = None) -> None:
+                 demean: bool = True, correction: str | None = None, threshold: Any = "chi2") -> None:
         self.lags = int_like(lags, "lags", minimum=1)
         self.alpha = self._check_alpha(alpha)
         self.model_df = int_like(model_df, "model_df", minimum=0)
@@ -146,10 +163,30 @@ class LjungBox(ResidualTest):
             raise TypeError(f"demean must be a bool, got {demean!r}")
         self.demean = bool(demean)
         self.correction = self._check_correction(correction)
+        self.threshold = self._threshold_option(threshold)
 
     def __repr__(self) -> str:
+        thr = "" if self.threshold == "chi2" else ", threshold='empirical'" + (
+            f" (calibrated on {self.calibration_[0].size})" if self.calibrated else " (not calibrated)")
         return (f"LjungBox(lags={self.lags}, alpha={self.alpha:g}, model_df={self.model_df}, "
-                f"multivariate={self.multivariate!r}, correction={self.correction!r})")
+                f"multivariate={self.multivariate!r}, correction={self.correction!r}{thr})")
+
+    def window_statistic(self, resid: Any, window: int, step: int = 1, **_: Any) -> np.ndarray:
+        """``Q`` of every sliding window (``window`` residual samples, ``step`` apart), shape (n_windows, k):
+        :func:`ljungbox_windows` per channel, or the joint statistic (one column) with ``multivariate``."""
+        if self.multivariate is None:
+            return ljungbox_windows(resid, self.lags, window, step, demean=self.demean)
+        sig = self._prepare(resid)
+        window = int_like(window, "window", minimum=self.lags + 1, maximum=sig.nobs)
+        step = int_like(step, "step", minimum=1)
+        x = sig.values
+        out = []
+        for a in range(0, sig.nobs - window + 1, step):
+            xt = x[a:a + window].T
+            if self.demean:
+                xt = xt - xt.mean(axis=1)[:, None]
+            out.append(self._joint_q(np.ascontiguousarray(xt.T), window, sig.nchan))
+        return np.array(out)[:, None]
 
     def _prepare(self, resid: Any):
         sig = as_signal(resid, "resid", min_nobs=1, allow_constant=True)
@@ -184,20 +221,26 @@ class LjungBox(ResidualTest):
         k = q.shape[0]
         df = float(self.lags - self.model_df)
         a = self._channel_alpha(self.alpha, k, self.correction)
-        key = (df, a)
-        if getattr(self, "_thr_key", None) != key:      # options are fixed; cache the critical value
-            self._thr_key, self._thr = key, float(special.chdtri(df, a))
-        thr = self._thr
-        pv = special.chdtrc(df, q)
+        details = {"lags": self.lags, "model_df": self.model_df, "channel_alpha": a, "correction": self.correction}
+        if self.empirical:
+            self._check_calibrated(k)
+            thr = self.threshold_
+            pv = self.empirical_pvalue(q)
+            details.update(self._empirical_details())
+        else:
+            key = (df, a)
+            if getattr(self, "_thr_key", None) != key:      # options are fixed; cache the critical value
+                self._thr_key, self._thr = key, float(special.chdtri(df, a))
+            thr = np.full(k, self._thr)
+            pv = special.chdtrc(df, q)
+            details["threshold_method"] = "chi2"
         rej = q > thr
-        return Decision(statistic=q, threshold=np.full(k, thr), pvalue=pv, alpha=self.alpha,
+        return Decision(statistic=q, threshold=thr, pvalue=pv, alpha=self.alpha,
                         reject=bool(rej.any()), df=np.full(k, df), nobs=n, null_hypothesis=self.null_hypothesis,
-                        alternative_hypothesis=self.alternative_hypothesis,
-                        details={"lags": self.lags, "model_df": self.model_df, "channel_alpha": a,
-                                 "correction": self.correction},
+                        alternative_hypothesis=self.alternative_hypothesis, details=details,
                         channel_reject=rej, channels=channels, test="LjungBox")
 
-    def _multivariate(self, x: np.ndarray, n: int, s: int) -> Decision:
+    def _joint_q(self, x: np.ndarray, n: int, s: int) -> float:
         h = self.lags
         c0 = x.T @ x / n
         try:
@@ -215,18 +258,30 @@ class LjungBox(ResidualTest):
             q = n * n * np.sum(terms / (n - np.arange(1, h + 1)))
         else:
             q = n * np.sum(terms) + s * s * h * (h + 1) / (2.0 * n)
+        return float(q)
+
+    def _multivariate(self, x: np.ndarray, n: int, s: int) -> Decision:
+        h = self.lags
+        q = self._joint_q(x, n, s)
         df = float(s * s * h - self.model_df)
         if df < 1:
             raise ValueError(f"model_df must be < s**2 * lags = {s * s * h} for the multivariate test, "
                              f"got {self.model_df}")
-        thr = special.chdtri(df, self.alpha)
-        pv = special.chdtrc(df, q)
+        details = {"lags": h, "model_df": self.model_df, "method": self.multivariate, "nchan": s}
+        if self.empirical:
+            self._check_calibrated(1)
+            thr = float(self.threshold_[0])
+            pv = float(self.empirical_pvalue(np.array([q]))[0])
+            details.update(self._empirical_details())
+        else:
+            thr = special.chdtri(df, self.alpha)
+            pv = special.chdtrc(df, q)
+            details["threshold_method"] = "chi2"
         return Decision(statistic=np.array([q]), threshold=np.array([thr]), pvalue=np.array([pv]),
                         alpha=self.alpha, reject=bool(q > thr), df=np.array([df]), nobs=n,
                         null_hypothesis="residual auto- and cross-correlations are zero up to the tested lag",
                         alternative_hypothesis="some residual auto- or cross-correlation is non-zero",
-                        details={"lags": h, "model_df": self.model_df, "method": self.multivariate,
-                                 "nchan": s},
+                        details=details,
                         channel_reject=np.array([q > thr]), channels=("joint",), test="LjungBox")
 
     def test_windows(self, resid: Any, window: int, step: int = 1) -> list[Decision]:
