@@ -198,6 +198,78 @@ def crossing_times(df, name, grid):
     return out
 
 
+
+# --------------------------------------------------------------------------- configuration C (roll-effectiveness GLRT)
+#: roll-effectiveness channel (issue 4, "change in dynamics rather than level"), all settings fixed in advance
+#: except the threshold grid (see the module docstring, configuration C)
+GAIN = dict(y="field.angular_velocity.x", u="delta_roll", block=10, fast=0.95, slow=0.995, lag=20, P0=1e2,
+            grid=np.round(np.arange(2.0, 4.01, 0.25), 2))
+
+
+def roll_gain_statistic(df, y=None, u=None):
+    """Normalised drop of the roll-rate response to the roll tracking error, one value per 0.5 s block.
+
+    The IMU rate and the tracking error are averaged over non-overlapping blocks of ``GAIN["block"]`` samples
+    (0.5 s; the merged IMU updates at ~2.6 Hz, so per-sample models fit forward-fill steps). Two
+    :class:`tsfdi.RecursiveARX` models ``p[k] = c - a1 p[k-1] + b1 delta_roll[k]`` run on the blocks, a fast one
+    (forgetting 0.95, ~10 s memory) and a slow reference (0.995, ~100 s). The statistic is the GLRT-like
+    z-value of the fast gain against the slow gain ``lag`` blocks (10 s) earlier, so the reference has not yet
+    seen a recent change::
+
+        z[k] = (b1_fast[k] - b1_slow[k - lag]) / sqrt(P_fast,b1b1[k] s2[k])
+
+    with ``s2`` the exponentially weighted variance of the fast model's a-priori errors (same forgetting):
+    ``P s2`` is the covariance of the forgetting-factor estimate (paper 002, RLS with forgetting;
+    Ljung, *System Identification*, 1999, sec. 11.2), so ``z`` is large only when the manoeuvres excite the
+    roll loop enough to estimate the gain. Returned as ``-z`` (a loss of aileron effectiveness lowers the
+    gain) with the time (s from the first row) of each block's last sample.
+    """
+    from tsfdi.models.recursive import RecursiveARX
+
+    g = GAIN
+    yv = df[y or g["y"]].to_numpy(dtype=float)
+    uv = df[u or g["u"]].to_numpy(dtype=float)
+    b = g["block"]
+    n = yv.size // b
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN blocks at the start (IMU NaN)
+        yb = np.nanmean(yv[:n * b].reshape(n, b), axis=1)
+        ub = np.nanmean(uv[:n * b].reshape(n, b), axis=1)
+    fast = RecursiveARX(1, 1, 0, g["fast"], g["P0"], trend="c", nonfinite="skip")
+    slow = RecursiveARX(1, 1, 0, g["slow"], g["P0"], trend="c", nonfinite="skip")
+    ib = fast.param_names.index("b1")
+    bf = np.full(n, np.nan)
+    vf = np.full(n, np.nan)
+    bs = np.full(n, np.nan)
+    s2 = np.nan
+    lam = g["fast"]
+    for k in range(n):
+        e = fast.update(yb[k], ub[k])
+        slow.update(yb[k], ub[k])
+        if np.isfinite(e):
+            s2 = e * e if np.isnan(s2) else lam * s2 + (1.0 - lam) * e * e
+        bf[k] = fast.theta_[ib]
+        vf[k] = fast.P_[ib, ib] * s2
+        bs[k] = slow.theta_[ib]
+    ref = np.full(n, np.nan)
+    ref[g["lag"]:] = bs[:-g["lag"]]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = (bf - ref) / np.sqrt(vf)
+    t = (df.index[np.arange(n) * b + b - 1] - df.index[0]).total_seconds().to_numpy()
+    return t, -z
+
+
+def gain_crossing_times(df, grid):
+    """First block time (s) the roll-gain statistic exceeds each threshold of ``grid`` after the baseline."""
+    t, s = roll_gain_statistic(df)
+    s = np.where(t >= ARM_AFTER_S, np.nan_to_num(s, nan=-np.inf), -np.inf)
+    out = np.full(len(grid), np.nan)
+    for j, c in enumerate(grid):
+        k = np.flatnonzero(s > c)
+        if k.size:
+            out[j] = t[k[0]]
+    return out
+
 # --------------------------------------------------------------------------- scoring
 def outcomes(onset, alarm):
     """Outcome and detection time per flight for first-alarm times ``alarm`` (nan: none)."""
@@ -344,6 +416,14 @@ def main():
     # B5: the wider candidate set (with the control-effectiveness channels), channel set chosen in the folds
     alarm_b5, chosen5, _, label_fit5, _ = lofo(onset, times_all, grids)
     res_b5, det_b5 = outcomes(onset, alarm_b5)
+    # C: B's candidates plus the roll-effectiveness GLRT (configuration C), channel set chosen in the folds
+    times_c = {c: times_all[c] for c in BASE_CHANNELS}
+    times_c["roll_gain"] = np.array([gain_crossing_times(df, GAIN["grid"]) for df in flights])
+    grids_c = {c: grids[c] for c in BASE_CHANNELS}
+    grids_c["roll_gain"] = GAIN["grid"]
+    alarm_c, chosen_c, alarm_cfit, label_cfit, _ = lofo(onset, times_c, grids_c)
+    res_c, det_c = outcomes(onset, alarm_c)
+    res_cf, det_cf = outcomes(onset, alarm_cfit)
     times = {c: times_all[c] for c in BASE_CHANNELS}
     grids = {c: grids[c] for c in BASE_CHANNELS}
     alarm_b, chosen, alarm_fit, label_fit, idx_fit = lofo(onset, times, grids)
@@ -360,7 +440,7 @@ def main():
              for i in range(len(flights))]
     per = pd.DataFrame({"flight": tab.flight.str.replace("carbonZ_", ""), "fault": fault, "onset_s": onset,
                         "A": res_a, "A_det_s": det_a.round(2), "B_lofo": res_b, "B_det_s": det_b.round(2),
-                        "B5_lofo": res_b5, "B5_det_s": det_b5.round(2),
+                        "B5_lofo": res_b5, "B5_det_s": det_b5.round(2), "C_lofo": res_c, "C_det_s": det_c.round(2),
                         "B_fit": res_f, "Bfit_det_s": det_f.round(2), "Bfit_alarm_s": alarm_fit.round(2),
                         "Bfit_channel": which})
     print("\nPer flight (A: paper 001 settings; B_lofo: physical channels, held-out; B_fit: all-flight thresholds)")
@@ -370,6 +450,9 @@ def main():
     print("\nB5: the same with the two control-effectiveness channels among the candidates (count)")
     print(pd.Series(chosen5).value_counts().to_string())
     print(f"B5 all-flight choice (in-sample): {label_fit5}")
+    print("\nC: the same with the roll-effectiveness GLRT among the candidates (count)")
+    print(pd.Series(chosen_c).value_counts().to_string())
+    print(f"C all-flight choice (in-sample): {label_cfit}")
     fit = {c: (grids[c][k] if k < len(grids[c]) else None) for c, k in idx_fit.items()}
     same = set(fit) == set(ALFA_SETTINGS) and all(
         fit[c] is not None and abs(fit[c] - ALFA_SETTINGS[c]) < 1e-9 for c in ALFA_SETTINGS)
@@ -384,6 +467,9 @@ def main():
             "B5 (B plus roll/pitch effectiveness candidates, chosen by leave-one-flight-out, held-out)":
                 (fault, res_b5, det_b5),
             "B-fit (same, thresholds fitted on all 45 flights: in-sample, optimistic)": (fault, res_f, det_f),
+            "C (B plus the roll-effectiveness GLRT candidate, chosen by leave-one-flight-out, held-out)":
+                (fault, res_c, det_c),
+            "C-fit (C's all-flight choice: in-sample, optimistic)": (fault, res_cf, det_cf),
     }.items():
         print(f"\nTable I-like summary, configuration {name}")
         print(table(f, r, d).to_string())
