@@ -298,3 +298,27 @@ def test_alfa_lofo_chooses_the_channel_set_inside_the_folds():
     res, det = B.outcomes(np.array([0.0, 0.0]), np.array([1.0, 7.0]))
     m = B.metrics(res, det)
     assert m["mean_det_s"] == 4.0 and m["mean_det_5s"] == 1.0 and m["TP_5s"] == 1
+
+
+def test_real_alfa_roll_gain_channel_with_the_shipped_threshold():
+    """Configuration C's roll-effectiveness GLRT: an aileron failure alarms within 10 s, a healthy flight never."""
+    B = _alfa_benchmark()
+    from tsfdi.datasets.alfa import list_alfa, load_alfa
+
+    tab = list_alfa(B.ROOT).set_index("flight")
+    thr = [B.ALFA_GAIN_THRESHOLD]
+    for flight, max_delay in {"carbonZ_2018-09-11-17-27-13_2_both_ailerons_failure": 10.0,
+                              "carbonZ_2018-10-05-14-37-22_2_right_aileron_failure": 10.0,
+                              "carbonZ_2018-10-05-14-37-22_1_no_failure": None}.items():
+        df = B.prepare(load_alfa(tab.loc[flight, "merged_path"]))
+        t, s = B.roll_gain_statistic(df)
+        assert t.size == len(df) // B.GAIN["block"] and np.all(np.diff(t) > 0)
+        alarm = B.gain_crossing_times(df, thr)[0]
+        if max_delay is None:
+            assert np.isnan(alarm)
+        else:
+            onset = df.attrs["onset_s"]
+            assert onset <= alarm <= onset + max_delay, (alarm, onset)
+            # the statistic stays below the threshold over the whole healthy part after the baseline phase
+            pre = (t >= B.ARM_AFTER_S) & (t < onset)
+            assert np.nanmax(s[pre]) < thr[0]
