@@ -213,3 +213,57 @@ def test_fit_baselines_pooled_records(synthetic):
         tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, order="aic")
     with pytest.raises(ValueError, match="fit_records"):
         tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, fit_records=0)
+
+
+def test_empirical_thresholds_leave_one_out(synthetic):
+    """fit_baselines(calibrate=True): leave-one-record-out residuals; evaluate(thresholds="empirical") uses each
+    model's thresholds calibrated on them (never on evaluation records)."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
+              var_max_lags=4, steady_window=5.0, fit_records=3, models=["var", "y0"])
+    b = tsfdi.fit_baselines(recs, calibrate=True, **kw)
+    assert set(b.heldout) == {(m, s) for m in ("var", "y0") for s in ("healthy", "f1", "f2")}
+    # record 1 of f1 left out: VAR(2) refitted on the other two f1 fitting records
+    segs = b.segments["f1"]
+    ref = tsfdi.VAR([segs[0], segs[2]], 2, hold_back=4).fit().residuals(segs[1])
+    np.testing.assert_allclose(b.heldout[("var", "f1")][1], np.asarray(ref), rtol=1e-10)
+    y0 = tsfdi.AR([segs[1][:, 0], segs[2][:, 0]], 2, hold_back=4).fit().residuals(segs[0][:, 0])
+    np.testing.assert_allclose(b.heldout[("y0", "f1")][0][:, 0], np.asarray(y0), rtol=1e-10)
+    cal = b.calibrated_tests("var", "whiteness", 5.0, alpha=0.01)
+    assert set(cal) == {"healthy", "f1", "f2"} and all(t.empirical for t in cal.values())
+    st = np.concatenate([tsfdi.detection.ljungbox_windows(e, 20, 500 - 2, 1) for e in b.heldout[("var", "f2")]])
+    np.testing.assert_allclose(cal["f2"].threshold_, np.quantile(st, 0.99, axis=0))
+    assert b.calibrated_tests("var", "whiteness", 5.0, alpha=0.01) is cal         # cached
+    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",),
+                        methods=("whiteness", "variance"), windows=(5.0,), settle=5.0, alpha=0.01,
+                        progress=False, thresholds="empirical")
+    assert ev.thresholds == "empirical"
+    assert not set(ev.identification["record"]) & set(b.fit_records)
+    c = ev.calibration.set_index(["method", "state", "channel"]).sort_index()
+    np.testing.assert_allclose(c.loc[("whiteness", "f2"), "empirical"], cal["f2"].threshold_)
+    np.testing.assert_allclose(c.loc[("whiteness", "f2"), "distribution"], stats.chi2.ppf(0.99, 20))
+    # detection decisions are those of the calibrated healthy test on each window
+    rec5 = recs[4]                                                               # healthy, evaluated
+    d = ev.detection[(ev.detection["record"] == 4) & (ev.detection["method"] == "whiteness")]
+    e = np.asarray(b.models["var"]["healthy"].residuals(rec5))
+    first = cal["healthy"].test(e[:500 - 2])
+    assert bool(d["alarm"].iloc[0]) == first.reject
+    # chi-square run on the same baselines gives the distributional thresholds
+    ev2 = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=(5.0,),
+                         settle=5.0, alpha=0.01, progress=False)
+    assert ev2.thresholds == "chi2" and "empirical" not in ev2.calibration
+    mon = b.monitor("var", window=5.0, alpha=0.01, thresholds="empirical")
+    assert mon.test["f1"] is cal["f1"] and mon.detection_test is cal["healthy"]
+    out = mon.run(recs[5])
+    assert out.detection_time is not None
+    fitted_plain = tsfdi.fit_baselines(recs, **kw)
+    with pytest.raises(ValueError, match="calibrate=True"):
+        tsfdi.evaluate(recs, fitted_plain, states=states, failure_times=ft, fs=FS, windows=(5.0,), settle=5.0,
+                       progress=False, thresholds="empirical")
+    with pytest.raises(ValueError, match="thresholds"):
+        tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=(5.0,), progress=False,
+                       thresholds="gpd")
+    with pytest.raises(ValueError, match="at least 200000 are needed"):
+        b.calibrated_tests("var", "whiteness", 5.0, alpha=1e-6)
+    with pytest.raises(TypeError, match="calibrate"):
+        tsfdi.fit_baselines(recs, calibrate="yes", **kw)
