@@ -8,7 +8,8 @@ Steps: baselines per turbulence level (first 10 valid records of each state and 
 VAR(20) / AR(20): Table 2 analogue), then evaluation of every other record with 1 s sliding windows of 5 / 10 / 20 s for the
 scalar AR models (roll, pitch, yaw rate) and the VAR, residual variance (F test) and whiteness (Ljung-Box) methods,
 the paper's decision rule and two rules resolving ambiguous windows (Table 4 analogues, rates, detection), then the
-Monitor end to end on every evaluated fault record.
+Monitor end to end on every evaluated fault record; then the VAR / AR whiteness study again with thresholds
+calibrated per model on leave-one-record-out residuals of its fitting records (paper 002 Fig. 2), side by side.
 """
 
 import os
@@ -25,6 +26,7 @@ import pandas as pd  # noqa: E402
 
 import tsfdi  # noqa: E402
 from tsfdi.cli import _markdown, demo_report, write_figures  # noqa: E402
+from tsfdi.detection import EmpiricalThreshold  # noqa: E402
 from tsfdi.datasets import load_hexacopter  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
 from tsfdi.evaluation import hexacopter_signals, hexacopter_study  # noqa: E402
@@ -160,11 +162,74 @@ def targets(ev) -> list[str]:
     return lines
 
 
+def side_by_side(ev, ev_e) -> pd.DataFrame:
+    """VAR + whiteness, correct unique identification (percent of windows) per level, rotor, window and rule with the
+    chi-square and the calibrated thresholds."""
+    rows = []
+    for name, e in (("chi2", ev), ("empirical", ev_e)):
+        df = e.identification
+        df = df[(df["model"] == "var") & (df["method"] == "whiteness")]
+        for (lvl, w, st), g in df.groupby(["turbulence", "window", "state"], sort=False):
+            for rule in e.rules:
+                rows.append({"turbulence": lvl, "window": w, "rule": rule, "true": st, "thresholds": name,
+                             "correct": 100.0 * (g[f"label_{rule}"] == st).mean()})
+    t = pd.DataFrame(rows).pivot_table(index=["turbulence", "window", "rule", "true"], columns="thresholds",
+                                       values="correct", sort=False)
+    return t.round(2)
+
+
+def calibrated_lines(ev_e) -> list[str]:
+    """Target lines for the calibrated-threshold run (VAR + whiteness)."""
+    r = ev_e.rates()["correct"]
+    v20 = r.xs(("var", "whiteness", 20.0, "paper"), level=("model", "method", "window", "rule"))
+    lines = [f"- VAR + whiteness, calibrated thresholds, paper rule, 20 s: correct unique identification "
+             f"{', '.join(f'{k} {v:.2f}%' for k, v in v20.items())} -> target >= 99.6% per rotor "
+             f"**{'met' if (v20 >= 99.6).all() else 'not met'}**."]
+    df = ev_e.identification
+    df = df[(df["model"] == "var") & (df["window"] == 20.0)]
+    for lvl in dict.fromkeys(df["turbulence"]):
+        g = df[df["turbulence"] == lvl]
+        c = {f: 100.0 * (g.loc[g["state"] == f, "label_paper"] == f).mean() for f in ev_e.faults}
+        lines.append(f"  - **{lvl}**: {', '.join(f'{k} {v:.2f}%' for k, v in c.items())} "
+                     f"(>= 99.6%: **{'met' if min(c.values()) >= 99.6 else 'not met'}**).")
+    d = ev_e.detection_rates()
+    for w in sorted(d.index.get_level_values("window").unique()):
+        row = d.loc[("var", "whiteness", w)]
+        lines.append(f"- Detection (VAR, whiteness, calibrated, {w:g} s): false alarms {row['false_alarm']:.2f}% of "
+                     f"{int(row['healthy_windows'])} healthy windows vs expectation "
+                     f"{row['expected_false_alarm']:.4f}% -> "
+                     f"**{'met' if row['false_alarm'] <= row['expected_false_alarm'] else 'not met'}**; "
+                     f"missed faults {row['missed_fault']:.2f}% of post-failure windows, median delay "
+                     f"{row['delay_median']:.1f} s.")
+    det = ev_e.detection
+    det = det[(det["model"] == "var") & (det["state"] == "healthy")]
+    fa = det.groupby(["window", "turbulence"], sort=False)["alarm"].mean().unstack() * 100.0
+    lines.append("- Detection false alarms per level (percent of healthy windows, calibrated): " + "; ".join(
+        f"{w:g} s: " + ", ".join(f"{lvl} {v:.2f}%" for lvl, v in row.items()) for w, row in fa.iterrows()) + ".")
+    return lines
+
+
+def threshold_table(ev_e) -> pd.DataFrame:
+    """Calibrated Ljung-Box thresholds of the VAR models at 20 s against chi2(20) (per channel)."""
+    c = ev_e.calibration
+    c = c[(c["model"] == "var") & (c["method"] == "whiteness") & (c["window"] == 20.0)]
+    t = c.pivot_table(index=["turbulence", "state"], columns="channel", values="empirical", sort=False)
+    t.columns = [f"Q threshold {ch}" for ch in t.columns]
+    t["chi2(20) threshold"] = c.groupby(["turbulence", "state"], sort=False)["distribution"].first()
+    t["calibration windows per channel"] = c.groupby(["turbulence", "state"], sort=False)["calibration_size"].first()
+    return t.round(2)
+
+
 def main() -> None:
     warnings.simplefilter("ignore", UnstableModelWarning)
     t0 = time.perf_counter()
     data = load_hexacopter()
     bases, ev = hexacopter_study(data, progress="--progress" in sys.argv)
+    bases_e, ev_e = hexacopter_study(data, methods=("whiteness",), thresholds="empirical",
+                                     progress="--progress" in sys.argv)
+    counts = sorted({sum(e.shape[0] // (2000 - 20) for e in b.heldout[("var", st)])
+                     for b in bases_e.values() for st in (b.healthy,) + b.faults})
+    indep = f"{counts[0]}-{counts[-1]}" if len(counts) > 1 else str(counts[0])
     report = demo_report(bases, ev, markdown=True)
     mon = monitor_table(bases, data)
     var_tab = variants(data)
@@ -217,6 +282,8 @@ Set-up (what differs from the paper, and why):
 
 ## Targets of issue 6
 
+### Chi-square thresholds (the paper's tests)
+
 All levels together:
 
 """ + "\n".join(targets(ev)) + """
@@ -224,6 +291,42 @@ All levels together:
 Per turbulence level:
 
 """ + "\n".join(level_lines(ev)) + """
+
+### Calibrated thresholds (leave-one-record-out, paper 002 Fig. 2)
+
+Every model (healthy and each rotor, per level) gets its own per-channel Ljung-Box threshold: the 1 - alpha
+quantile (alpha = 1e-3 per channel, as above) of the statistic on windows of its *own* fitting records, each
+computed out of sample: each of the 10 fitting records in turn is left out, the model (same order) is refitted on
+the other 9 and the left-out record's residual windows (every sample a window start) give statistics
+(`fit_baselines(..., calibrate=True)`, `evaluate(..., thresholds="empirical")`). Evaluation records are never used.
+p-values are empirical. The variance method is not calibrated: the paper's alphas (1e-6 to 1e-12) would need
+far more healthy windows than 10 records hold (the library says how many).
+
+""" + "\n".join(calibrated_lines(ev_e)) + """
+
+Calibrated thresholds of the VAR models (20 s windows, 20 lags) against the chi-square critical value:
+
+""" + _markdown(threshold_table(ev_e)) + """
+
+Table 4 analogue, VAR + whiteness, 20 s windows, paper rule, calibrated thresholds (percent of windows of each
+true failure accepted as rotor1/rotor2/rotor6):
+
+""" + _markdown(ev_e.table4(20.0, "paper").loc[["var"]]) + """
+
+Chi-square and calibrated thresholds side by side (VAR + whiteness, correct unique identification, percent of
+windows):
+
+""" + _markdown(side_by_side(ev, ev_e)) + """
+
+Reading: the calibration sample counts every window start, so consecutive windows overlap almost entirely. The
+held-out records of one model hold only """ + indep + """ non-overlapping 20 s windows, while an empirical
+1 - 1e-3 quantile needs """ + f"{20 / 1e-3:.0f}" + """ independent statistics (20 expected exceedances) and even the
+generalised Pareto tail fit """ + f"{EmpiricalThreshold(1e-3).samples_needed()}" + """: the record-to-record
+spread of the statistic dominates the estimated tail. Fault models whose held-out residuals are strongly correlated
+on some fitting record get thresholds far above chi2(20) (table above) and then accept windows of other failures
+(Table 4 analogue above: off-diagonal acceptance), so the paper's rule gives ambiguous windows; the healthy
+models' calibrated thresholds lie near chi2(20) and their false-alarm rates on the evaluation records (lines above)
+are not lower than with chi-square thresholds.
 
 Reading: pooling 10 baseline records per state and level and using order 20 make the VAR residuals of the
 matching state close to white in light turbulence, where the paper's rule nearly reaches its target. In moderate
