@@ -39,12 +39,14 @@ def test_output_structure_units_and_coords():
 
 @pytest.mark.parametrize("rotor", [1, 2, 6])
 def test_failure_in_severe_turbulence_keeps_flying(rotor):
-    """Failure at 10 s, severe turbulence, 8 seeds: all fly the remaining 50 s with attitude and
+    """Failure at 10 s, severe turbulence, 16 seeds: all fly the remaining 50 s with attitude and
     altitude bounded, and roll/pitch are stationary after the transient (variances of 30-45 s and 45-60 s
     agree: median ratio within [0.5, 2] -- 15 s of severe turbulence with a 7 s gust correlation time give
-    variance estimates with few degrees of freedom -- and means within 3 standard deviations)."""
+    variance estimates with few degrees of freedom: in healthy severe flight 10 % of the single-record
+    ratios are below 0.4 and 10 % above 3.7, so the median needs 16 records -- and means within 3 standard
+    deviations)."""
     ds = simulate_hexacopter(duration=60.0, turbulence="severe", failed_rotor=rotor, failure_time=10.0,
-                             seed=list(range(11, 19)))
+                             seed=list(range(11, 27)))
     flying = ~ds["lost_control"].values
     assert flying.all()
     for name in ("roll", "pitch"):
@@ -77,10 +79,18 @@ def test_front_rotor_failure_mainly_pitches(shipped):
 
 @pytest.mark.parametrize("state", ["rotor2", "rotor6"])
 def test_side_rotor_failure_moves_roll_and_pitch(shipped, state):
+    """Both roll and pitch deviate clearly more than in healthy flight at the same turbulence level (the
+    failed rotor sits at 60 deg from the nose: roll and pitch moments sin 60 and cos 60 of its thrust):
+    twice the healthy median in light turbulence, where the gusts do not hide the direct response, and
+    1.3 times at every level (the stiff attitude loop keeps the pitch response near 0.1 rad)."""
     healthy = _flying(shipped, "healthy")
     s = _flying(shipped, state)
-    for name in ("roll", "pitch"):
-        assert np.median(_dev(s, name)) > 2 * np.median(_dev(healthy, name)), name
+    for level in ("light", "moderate", "severe"):
+        factor = 2.0 if level == "light" else 1.3
+        for name in ("roll", "pitch"):
+            a = _dev(s.where(s.turbulence == level, drop=True), name)
+            b = _dev(healthy.where(healthy.turbulence == level, drop=True), name)
+            assert np.median(a) > factor * np.median(b), (level, name)
     # roll deviation of side rotors is larger than that of the front rotor
     assert np.median(_dev(s, "roll")) > 1.5 * np.median(_dev(_flying(shipped, "rotor1"), "roll"))
 
@@ -101,14 +111,28 @@ def test_heading_drifts_in_opposite_directions_for_rotors_1_and_2(shipped):
 def test_yaw_rate_settles_after_failure(shipped, state):
     """After the transient the yaw-rate loop holds the heading again in light and moderate turbulence
     (|mean r| over 30-60 s: median below 0.05 rad/s, 90 % of the records below 0.2 rad/s); in severe turbulence the heading
-    slips by whole turns now and then (the yaw moment the five rotors can make is one-sided near the
-    trim), but the median drift stays below 0.3 rad/s."""
+    slips by whole turns now and then in some records (the yaw moment the five rotors can make is one-sided near the
+    trim), but the median drift stays below 0.15 rad/s."""
     s = _flying(shipped, state)
     r = s["r"].values[:, 3000:].mean(axis=1)
     turb = s.turbulence.values
     calm = np.abs(r[turb != "severe"])
     assert np.median(calm) < 0.05 and np.quantile(calm, 0.9) < 0.2, calm
-    assert np.median(np.abs(r[turb == "severe"])) < 0.3
+    assert np.median(np.abs(r[turb == "severe"])) < 0.15
+
+
+@pytest.mark.parametrize("state, heading_bound", [("rotor1", 1.0), ("rotor2", 1.0), ("rotor6", 4.5)])
+def test_heading_slips_bounded_in_severe_turbulence(shipped, state, heading_bound):
+    """Severe turbulence, after the transient (30-60 s): the median heading change over the 20 records
+    stays below ``heading_bound`` (rad) and the yaw rate below 2.5 rad/s in 99 % of the samples. With the
+    earlier speed-linear mixer and softer attitude loop the medians were 1.4 / 1.8 / 7.5 rad and the 99 %
+    quantiles 4.4 / 3.0 / 3.2 rad/s (rotors 1 / 2 / 6); now 0.50 / 0.70 / 3.5 rad and 2.4 / 1.7 / 2.0 rad/s. Rotor 6 slips
+    most: its opposite rotor 3 still reaches the idle speed in strong gusts (a planar PNPNPN hexacopter
+    with a failed rotor has a small yaw margin, see the module notes)."""
+    s = shipped.where((shipped.state == state) & (shipped.turbulence == "severe"), drop=True)
+    change = np.abs(s["yaw"].values[:, -1] - s["yaw"].values[:, 3000])
+    assert np.median(change) < heading_bound, change
+    assert np.quantile(np.abs(s["r"].values[:, 3000:]), 0.99) < 2.5
 
 
 @pytest.mark.parametrize("state, name", [("rotor1", "pitch"), ("rotor2", "roll"), ("rotor6", "roll")])
@@ -227,7 +251,8 @@ def _failed_trim(rotor, speed=5.0):
         x = np.zeros(18)
         x[2], x[3], x[4] = -5.0, ph, th
         x[6:9] = speed * np.array([np.cos(th), np.sin(ph) * np.sin(th), np.cos(ph) * np.sin(th)])
-        x[12:] = om0 - np.sin(az) * omr + np.cos(az) * omp + sign * omy
+        # thrust-linear mixer of the controller (rotor speeds squared affine in the four controls)
+        x[12:] = np.sqrt(np.maximum(om0 ** 2 + 2 * om0 * (-np.sin(az) * omr + np.cos(az) * omp + sign * omy), 0))
         return x
 
     def f(z):
@@ -251,8 +276,9 @@ def test_yaw_margin_after_failure_is_small_and_heading_dependent():
 
 
 def test_ground_contact_is_a_loss():
-    """At 0.5 m the sink after a rotor-1 failure reaches the ground: flagged, NaN from then on."""
-    ds = simulate_hexacopter(duration=5.0, altitude=0.5, turbulence="none", failed_rotor=1, failure_time=1.0)
+    """At 0.3 m the sink after a rotor-1 failure (about 0.46 m without turbulence) reaches the ground:
+    flagged, NaN from then on."""
+    ds = simulate_hexacopter(duration=5.0, altitude=0.3, turbulence="none", failed_rotor=1, failure_time=1.0)
     assert bool(ds["lost_control"][0])
     t = float(ds["lost_control_time"][0])
     assert 1.0 < t < 5.0 and np.isnan(ds["roll"].values[0, -1])

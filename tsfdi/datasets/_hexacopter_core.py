@@ -241,29 +241,39 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     elif omy < -ylim:
         omy = -ylim
         yclip = -1
-    # fixed mixer, saturation-aware: collective, roll and pitch are clipped to the speed limits first;
-    # the yaw term is then added to each rotor and clipped to what that rotor has left. A rotor near a
-    # limit (or a dead rotor whose command the pitch/roll loops drive up) delivers less of the yaw term
-    # while the others keep theirs; the yaw-rate integrator freezes while less than ``yaw_freeze`` of
-    # the commanded yaw term reaches the rotors (anti-windup).
+    # fixed mixer, thrust-linear and saturation-aware. The four controls are rotor-speed deviations (rad/s,
+    # eq. 2) about the collective speed Omega_0; they are mixed in thrust (Omega^2), linearised at Omega_0,
+    #     Omega_c,i^2 = Omega_0^2 + 2 Omega_0 (-sin(psi_i) Omega_R + cos(psi_i) Omega_P -/+ Omega_Y),
+    # so that a control changes the thrust and torque of every rotor by the same amount whatever its speed
+    # (the thrust linearisation of flight-control firmware; near Omega_0 it is eq. 2). A rotor running
+    # slow -- the one opposite a failed rotor -- then does not lose its share of the moments. Collective,
+    # roll and pitch are clipped to the speed limits first; the yaw term is then added to each rotor and
+    # clipped to what that rotor has left. A rotor near a limit (or a dead rotor whose command the
+    # pitch/roll loops drive up) delivers less of the yaw term while the others keep theirs; the yaw-rate
+    # integrator freezes while less than ``yaw_freeze`` of the commanded yaw term reaches the rotors
+    # (anti-windup).
+    lo = wmin * wmin
+    hi = wmax * wmax
+    two_om0 = 2.0 * om0
     asked = 0.0
     given = 0.0
     for i in range(6):
         ang = i * (math.pi / 3.0)
-        b = om0 - math.sin(ang) * omr + math.cos(ang) * omp
-        if b < wmin:
-            b = wmin
-        elif b > wmax:
-            b = wmax
+        b2 = om0 * om0 + two_om0 * (-math.sin(ang) * omr + math.cos(ang) * omp)
+        if b2 < lo:
+            b2 = lo
+        elif b2 > hi:
+            b2 = hi
         my = -1.0 if i % 2 == 0 else 1.0
-        c = b + my * omy
-        if c < wmin:
-            c = wmin
-        elif c > wmax:
-            c = wmax
-        wcmd[i] = c
+        c2 = b2 + two_om0 * my * omy
+        if c2 < lo:
+            c2 = lo
+        elif c2 > hi:
+            c2 = hi
+        wcmd[i] = math.sqrt(c2)
         asked += abs(omy)
-        given += abs(c - b)
+        if om0 > 0.0:
+            given += abs(c2 - b2) / two_om0
     alpha = given / asked if asked > 0.0 else 1.0
     ctrl[0] = om0
     ctrl[1] = omr
