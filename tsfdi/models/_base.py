@@ -107,10 +107,10 @@ class LinearTimeSeriesModel:
         """Number of estimation rows contributed by each record."""
         return [r.nobs - self.hold_back for r in self.records]
 
-    def _design_all(self, start: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Regressor and target of all records, stacked (each record keeps its own first ``start`` samples)."""
-        start = self.hold_back if start is None else start
-        parts = [self._design(r.values, None if self.u_records is None else self.u_records[i].values, start)
+    def _design_all(self) -> tuple[np.ndarray, np.ndarray]:
+        """Regressor and target of all records, stacked (each record holds back its own first samples)."""
+        parts = [self._design(r.values, None if self.u_records is None else self.u_records[i].values,
+                              self.hold_back)
                  for i, r in enumerate(self.records)]
         if len(parts) == 1:
             return parts[0]
@@ -180,7 +180,6 @@ class LinearTimeSeriesResults:
         params.setflags(write=False)
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "_params2d", params.reshape(params.shape[0], -1))
-        object.__setattr__(self, "_frozen", True)
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
@@ -190,16 +189,17 @@ class LinearTimeSeriesResults:
 
     # --- in-sample quantities ----------------------------------------------------------------------
     @cached_property
-    def _fitted_design(self) -> tuple[np.ndarray, np.ndarray]:
-        m = self.model
-        return m._design_all()
-
-    @cached_property
-    def _resid_array(self) -> np.ndarray:
-        X, Y = self._fitted_design
+    def _resid_and_sss(self) -> tuple[np.ndarray, float]:
+        """In-sample residuals and the signal sum of squares of the estimation sample (the regressor is
+        rebuilt here and not kept, so a results object does not hold an ``nobs x df_eq`` matrix)."""
+        X, Y = self.model._design_all()
         e = Y - X @ self._params2d
         e.setflags(write=False)
-        return e
+        return e, float(np.sum(Y * Y))
+
+    @property
+    def _resid_array(self) -> np.ndarray:
+        return self._resid_and_sss[0]
 
     @property
     def lags(self) -> int:
@@ -241,8 +241,7 @@ class LinearTimeSeriesResults:
 
     @cached_property
     def _criteria(self) -> dict[str, float]:
-        X, Y = self._fitted_design
-        return selection.criteria(self._sse[None], float(np.sum(Y * Y)), self.nobs, np.array([self.df_model]),
+        return selection.criteria(self._sse[None], self._resid_and_sss[1], self.nobs, np.array([self.df_model]),
                                   self.neqs, self.model.criterion)
 
     @property
