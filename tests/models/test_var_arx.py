@@ -168,3 +168,23 @@ def test_arx_kinds_and_save(tmp_path, kind):
     np.testing.assert_array_equal(back.params, res.params)
     np.testing.assert_array_equal(to_numpy(back.resid), to_numpy(res.resid))
     assert "ARX" in repr(res.model) and "b1" in res.summary()
+
+
+def test_arx_simulate(kind):
+    y, u = arx_data(n=20000)
+    res = tsfdi.ARX(y, u, 2, 2, 1, "c").fit()
+    uo = as_kind(u, kind, name="u")
+    clean = res.simulate(uo, sigma2=0.0)
+    assert_kind(clean, kind, 1)
+    # the noise-free response satisfies the model exactly: its one-step prediction errors are zero
+    np.testing.assert_allclose(to_numpy(res.residuals(to_numpy(clean), u)), 0.0, atol=1e-10)
+    sim = res.simulate(u, rng=5)
+    np.testing.assert_array_equal(sim, res.simulate(u, rng=5))
+    refit = tsfdi.ARX(sim, u, 2, 2, 1, "c").fit()
+    np.testing.assert_allclose(refit.a, res.a, atol=0.01)
+    np.testing.assert_allclose(refit.b, res.b, atol=0.01)
+    np.testing.assert_allclose(refit.sigma2, res.sigma2, rtol=0.05)
+    with pytest.raises(ValueError, match=r"u has 1 input\(s\) but the model was fitted with 2"):
+        res.simulate(u[:, 0])
+    with pytest.raises(ValueError, match="sigma2 must be >= 0"):
+        res.simulate(u, sigma2=-1.0)

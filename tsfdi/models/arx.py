@@ -5,8 +5,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy import signal as sps
 
-from tsfdi._validation import int_like
+from tsfdi._data import as_signal
+from tsfdi._validation import check_rng, float_like
 from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
 
 __all__ = ["ARX", "ARXResults"]
@@ -81,13 +83,37 @@ class ARXResults(ScalarOutputResults):
         usig = self._new_input(u, sig.nobs)
         return sig.wrap(self._residuals_array(sig.values, usig.values), self.model.max_lag)
 
-    def _new_input(self, u: Any, nobs: int):
-        from tsfdi._data import as_signal
+    def simulate(self, u: Any, rng: Any = None, *, sigma2: float | None = None) -> Any:
+        """Simulate the output of the fitted model driven by the input ``u`` and Gaussian innovations.
 
+        ``A(q) y[t] = c + sum_m B_m(q) u_m[t] + e[t]`` with zero initial conditions, ``e ~ N(0, sigma2)``.
+
+        Parameters
+        ----------
+        u : array_like (nobs,) or (nobs, n_inputs), Series, DataFrame or DataArray
+            Input signal.
+        rng : None, int or numpy.random.Generator
+        sigma2 : float, optional
+            Innovation variance (default :attr:`sigma2`; ``0`` gives the noise-free response).
+
+        Returns
+        -------
+        The simulated output, ``len(u)`` samples in the kind of ``u``.
+        """
+        usig = self._new_input(u)
+        var = self.sigma2 if sigma2 is None else float_like(sigma2, "sigma2", minimum=0.0)
+        e = check_rng(rng).standard_normal(usig.nobs) * np.sqrt(var) + self.intercept
+        a = np.r_[1.0, self.a]
+        y = sps.lfilter([1.0], a, e)
+        for m, b in enumerate(self.b):
+            y += sps.lfilter(np.r_[np.zeros(self.model.nk), b], a, usig.values[:, m])
+        return usig.wrap(y, 0, vector=False, name="y")
+
+    def _new_input(self, u: Any, nobs: int | None = None):
         usig = as_signal(u, "u", allow_constant=True)
         if usig.nchan != self.model.n_inputs:
             raise ValueError(f"u has {usig.nchan} input(s) but the model was fitted with {self.model.n_inputs}")
-        if usig.nobs != nobs:
+        if nobs is not None and usig.nobs != nobs:
             raise ValueError(f"u has {usig.nobs} samples but y has {nobs}: they must match")
         return usig
 
