@@ -1,8 +1,8 @@
 """Numba-compiled kernels of the hexacopter simulator (one record per call, no Python objects).
 
-The equations are documented in :mod:`tsfdi.datasets.hexacopter`. The parameter vector layout is
-defined by :data:`PARAM_NAMES` (built in :mod:`tsfdi.datasets._hexacopter_params`) and the gain vector by
-:data:`GAIN_NAMES`. Each record is integrated independently, in scalar code, so a record's result does not
+The equations are documented in :mod:`tsfdi.datasets.hexacopter`. The parameter and gain vectors are
+``HexacopterParameters.to_array()`` and ``ControllerGains.to_array()`` (field order of those dataclasses in
+:mod:`tsfdi.datasets._hexacopter_params`). Each record is integrated independently, in scalar code, so a record's result does not
 depend on which other records are simulated with it (bit-for-bit regeneration of subsets).
 """
 
@@ -45,6 +45,26 @@ def dryden_recursion(Ad, F, C, x0, e):
 
 
 @njit(cache=True)
+def _ned_velocity(x):
+    phi = x[3]
+    th = x[4]
+    psi = x[5]
+    u = x[6]
+    v = x[7]
+    w = x[8]
+    sph = math.sin(phi)
+    cph = math.cos(phi)
+    sth = math.sin(th)
+    cth = math.cos(th)
+    sps = math.sin(psi)
+    cps = math.cos(psi)
+    vn = cth * cps * u + (sph * sth * cps - cph * sps) * v + (cph * sth * cps + sph * sps) * w
+    ve = cth * sps * u + (sph * sth * sps + cph * cps) * v + (cph * sth * sps - sph * cps) * w
+    vd = -sth * u + sph * cth * v + cph * cth * w
+    return vn, ve, vd
+
+
+@njit(cache=True)
 def _deriv(x, wcmd, g, P, alive, dx):
     # parameters
     m = P[0]
@@ -65,7 +85,6 @@ def _deriv(x, wcmd, g, P, alive, dx):
     kn = P[15]
     phi = x[3]
     th = x[4]
-    psi = x[5]
     u = x[6]
     v = x[7]
     w = x[8]
@@ -76,8 +95,6 @@ def _deriv(x, wcmd, g, P, alive, dx):
     cph = math.cos(phi)
     sth = math.sin(th)
     cth = math.cos(th)
-    sps = math.sin(psi)
-    cps = math.cos(psi)
     ur = u - g[0]
     vr = v - g[1]
     wr = w - g[2]
@@ -153,31 +170,9 @@ def _deriv(x, wcmd, g, P, alive, dx):
     dx[4] = q * cph - r * sph
     dx[5] = (q * sph + r * cph) / cth
     # position: NED velocity = R v
-    dx[0] = cth * cps * u + (sph * sth * cps - cph * sps) * v + (cph * sth * cps + sph * sps) * w
-    dx[1] = cth * sps * u + (sph * sth * sps + cph * cps) * v + (cph * sth * sps - sph * cps) * w
-    dx[2] = -sth * u + sph * cth * v + cph * cth * w
+    dx[0], dx[1], dx[2] = _ned_velocity(x)
     for i in range(6):
         dx[12 + i] = (wcmd[i] - x[12 + i]) / tau
-
-
-@njit(cache=True)
-def _ned_velocity(x):
-    phi = x[3]
-    th = x[4]
-    psi = x[5]
-    u = x[6]
-    v = x[7]
-    w = x[8]
-    sph = math.sin(phi)
-    cph = math.cos(phi)
-    sth = math.sin(th)
-    cth = math.cos(th)
-    sps = math.sin(psi)
-    cps = math.cos(psi)
-    vn = cth * cps * u + (sph * sth * cps - cph * sps) * v + (cph * sth * cps + sph * sps) * w
-    ve = cth * sps * u + (sph * sth * sps + cph * cps) * v + (cph * sth * sps - sph * cps) * w
-    vd = -sth * u + sph * cth * v + cph * cth * w
-    return vn, ve, vd
 
 
 @njit(cache=True)
@@ -288,7 +283,6 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     ctrl[9] = kzi * ez
     ctrl[10] = katti * e_ph
     ctrl[11] = katti * e_th
-    # yaw integrator frozen while the mixer cannot deliver the yaw term (alpha < 1)
     # yaw-rate integrator: runs while the yaw term reaches the rotors and is not limited; while it is
     # limited (or the rotors cannot deliver it) only unwinding is allowed (anti-windup)
     di = G[12] * e_r

@@ -78,7 +78,8 @@ _KT = 0.514444
 
 
 def _stable_factor(q: np.ndarray) -> np.ndarray:
-    """Symmetric square-root factor ``F`` with ``F F^T = q`` for a PSD matrix (tiny negatives clipped)."""
+    """Square-root factor ``F`` (eigenvectors times root eigenvalues) with ``F F^T = q`` for a PSD matrix
+    (tiny negative eigenvalues clipped)."""
     q = 0.5 * (q + q.T)
     w, v = np.linalg.eigh(q)
     w = np.clip(w, 0.0, None)
@@ -258,23 +259,28 @@ class DrydenTurbulence:
         dt = float_like(dt, "dt", minimum=0.0, strict_min=True)
         rng = check_rng(rng)
         nrec = 1 if records is None else int_like(records, "records", minimum=1)
+        sampler = self._sampler(dt)
         out = np.empty((nrec, n, 6))
         for i in range(nrec):
-            out[i] = self._simulate_one(n, dt, rng)
+            out[i] = _draw(sampler, n, rng)
         return out[0] if records is None else out
 
-    def _simulate_one(self, n: int, dt: float, rng: np.random.Generator) -> np.ndarray:
+    def _sampler(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(A_d, F, C, S0)`` for :func:`_draw`: the discretisation and the factor of the stationary covariance
+        (computed once per model and step, not once per record)."""
         Ad, F = self.discretize(dt)
         _, _, C = self.state_space()
-        x0 = _stable_factor(self.stationary_covariance()) @ rng.standard_normal(8)
-        e = rng.standard_normal((n, 8))
-        return _dryden_recursion(Ad, F, C, x0, e)
+        return Ad, F, C, _stable_factor(self.stationary_covariance())
 
 
-def _dryden_recursion(Ad, F, C, x0, e):
-    """``x[k+1] = Ad x[k] + F e[k]``, returns ``C x[k]`` for k = 0..n-1 (numba-compiled loop)."""
+def _draw(sampler: tuple, n: int, rng: np.random.Generator) -> np.ndarray:
+    """One realisation of ``n`` samples: ``x0 = S0 z`` (stationary start), then ``x[k+1] = A_d x[k] + F e[k]``,
+    returning ``C x[k]`` for k = 0..n-1 (numba-compiled loop). Draws 8 then ``n * 8`` normals from ``rng``."""
     from tsfdi.datasets._hexacopter_core import dryden_recursion
 
+    Ad, F, C, S0 = sampler
+    x0 = S0 @ rng.standard_normal(8)
+    e = rng.standard_normal((n, 8))
     return dryden_recursion(np.ascontiguousarray(Ad), np.ascontiguousarray(F), np.ascontiguousarray(C),
                             np.ascontiguousarray(x0, dtype=float), np.ascontiguousarray(e, dtype=float))
 

@@ -125,7 +125,7 @@ from scipy import optimize, signal
 from tsfdi._validation import check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
 from tsfdi.datasets._hexacopter_params import ControllerGains, HexacopterParameters
-from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, _dryden_recursion, _stable_factor
+from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, _draw
 
 __all__ = ["HexacopterParameters", "ControllerGains", "trim", "simulate_hexacopter", "make_hexacopter_dataset",
            "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file"]
@@ -189,7 +189,8 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
         return x
 
     def resid(z):
-        d = _core.derivative(build(z), build(z)[12:], g0, P, alive)
+        x = build(z)
+        d = _core.derivative(x, x[12:], g0, P, alive)
         return [d[6], d[8], d[10] * params.iyy]
 
     om_h = np.sqrt(params.mass * params.gravity / (6 * params.k_thrust))
@@ -275,12 +276,12 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         raise ValueError(f"fs must divide the integration rate 1/dt = {1 / dt:g} Hz, got fs={fs:g}")
     q = int(round(q))
 
-    def as_list(v, name):
+    def as_list(v):
         if isinstance(v, (str, bytes)) or np.ndim(v) == 0:
             return None
         return list(np.asarray(v).tolist())
 
-    lists = {k: as_list(v, k) for k, v in
+    lists = {k: as_list(v) for k, v in
              {"turbulence": turbulence, "failed_rotor": failed_rotor, "failure_time": failure_time,
               "seed": seed}.items()}
     lengths = {len(v) for v in lists.values() if v is not None}
@@ -316,7 +317,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     limits = np.array(LOSS_LIMITS)
     models = {lvl: DrydenTurbulence(altitude=altitude, airspeed=max(speed, 1.0), span=span, intensity=lvl)
               for lvl in INTENSITIES}
-    disc = {lvl: (m.discretize(dt), m.state_space()[2], m.stationary_covariance()) for lvl, m in models.items()}
+    samplers = {lvl: m._sampler(dt) for lvl, m in models.items()}
     nout = n // q
     data = np.empty((records, nout, _core.N_OUT))
     lost_step = np.empty(records, dtype=np.int64)
@@ -326,10 +327,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         gusts = np.zeros((nb, n, 6))
         for j, i in enumerate(idx):
             if turb[i] != "none":
-                (Ad, F), C, Pinf = disc[turb[i]]
-                rng = check_rng(seeds[i])
-                x0 = _stable_factor(Pinf) @ rng.standard_normal(8)
-                gusts[j] = _dryden_recursion(Ad, F, C, x0, rng.standard_normal((n, 8)))
+                gusts[j] = _draw(samplers[turb[i]], n, check_rng(seeds[i]))
         x0 = np.tile(tr["state"], (nb, 1))
         i0 = np.tile(tr["integrators"], (nb, 1))
         ref = np.tile([speed, 0.0, tr["state"][2], 0.0], (nb, 1))
