@@ -158,6 +158,23 @@ def test_identify_windows_equals_identify(models):
     np.testing.assert_allclose(wins.pvalue[2, 1], wins[2].decisions["rotor1"].pvalue)
 
 
+def test_identify_windows_empirical_threshold_arrays_match_windows():
+    """The all-windows arrays of a calibrated LjungBox carry its empirical p-values and thresholds, as identify
+    does on each window (they used to hold chi-square p-values)."""
+    rng = np.random.default_rng(7)
+    y = rng.standard_normal(1200)
+    res = tsfdi.AR(y[:600], lags=2).fit()
+    test = tsfdi.LjungBox(lags=5, alpha=0.05, threshold="empirical").calibrate(
+        [res.residuals(rng.standard_normal(4000))], window=98)
+    wins = identify_windows(y, {"h": res}, test, window=100, step=100)
+    for w in range(len(wins)):
+        ref = tsfdi.identify(y[w * 100:w * 100 + 100], {"h": res}, test).decisions["h"]
+        np.testing.assert_allclose(wins.pvalue[w, 0], ref.pvalue, rtol=1e-12)
+        np.testing.assert_allclose(wins.threshold[w, 0], ref.threshold, rtol=1e-12)
+        assert wins.accepted[w, 0] == (not ref.reject)
+    assert np.all(wins.pvalue >= 1.0 / (test.calibration_[0].size + 1))
+
+
 def test_data_kinds(kind, models):
     rng = np.random.default_rng(105)
     y = simulate("healthy", 1500, rng)

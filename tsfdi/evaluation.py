@@ -916,10 +916,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             for state in (healthy,) + faults:
                 res = b.models[m][state]
                 n = int(round(w * rec.fs)) - int(res.lags)
-                if meth == "whiteness":
-                    dist = np.full(len(chans), _special_chi2(t, len(chans)))
-                else:
-                    dist = _special_f(t, res, n, len(chans))
+                dist = t._null_threshold(len(chans), n, **t.reference(res))
                 for c, ch in enumerate(chans):
                     row = {"turbulence": lvl, "model": m, "method": meth, "window": w, "state": state,
                            "channel": ch, "distribution": float(dist[c])}
@@ -931,20 +928,6 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
                       records=recs, nchan={m: len(first.model_channels(m)) for m in models}, thresholds=thresholds,
                       calibration=pd.DataFrame(cal_rows))
-
-
-def _special_chi2(test: Any, k: int) -> float:
-    from scipy import special
-
-    return float(special.chdtri(float(test.lags - test.model_df), test._channel_alpha(test.alpha, k, test.correction)))
-
-
-def _special_f(test: Any, res: Any, n: int, k: int) -> np.ndarray:
-    from scipy import special
-
-    df0 = np.asarray(test.reference(res)["reference_df"], dtype=float)
-    nu = float(n - 1 if test.demean else n)
-    return special.fdtri(nu, df0, 1.0 - test._channel_alpha(test.alpha, k, test.correction))
 
 
 def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, models: Sequence[str] | None = None,

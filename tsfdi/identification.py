@@ -15,13 +15,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import special
 
 from tsfdi._data import as_signal
 from tsfdi._validation import int_like
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
-from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
+from tsfdi.detection.whiteness import LjungBox
 
 __all__ = ["detect", "identify", "identify_windows", "Identification", "WindowedIdentification"]
 
@@ -306,14 +305,13 @@ def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = N
                 raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for "
                                  f"models {name!r}, got {window}")
             e = np.asarray(res.residuals(sig.values if sig.vector else sig.values[:, 0]), dtype=np.float64)
-            qs.append(ljungbox_windows(e, test.lags, window - p, step, demean=test.demean))
+            qs.append(test.window_statistic(e, window - p, step))
             nres.append(window - p)
         q = np.stack(qs, axis=1)                                   # (W, M, k)
-        template = [test._decision(np.ones(sig.nchan), n, chans) for n in nres]
-        thr = np.stack([np.broadcast_to(t.threshold, (sig.nchan,)) for t in template])[None]
-        df = template[0].df[0]
-        arrays = {"statistic": q, "threshold": np.broadcast_to(thr, q.shape), "pvalue": special.chdtrc(df, q),
+        thr, pv = test._threshold_pvalue(q)                        # chi-square or calibrated, as in test()
+        arrays = {"statistic": q, "threshold": np.broadcast_to(thr, q.shape), "pvalue": pv,
                   "channel_reject": q > thr}
+
         def make(i: int, stat_row: np.ndarray) -> Decision:
             return test._decision(stat_row, nres[i], chans)
 

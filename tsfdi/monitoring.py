@@ -8,6 +8,7 @@ pair and of the whole system with time stamps.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,7 +20,8 @@ from tsfdi._validation import float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
 from tsfdi.models.recursive import RecursiveARX
 
-__all__ = ["OnlineDetector", "OnlineDetection"]
+__all__ = ["OnlineDetector", "OnlineDetection", "Monitor", "MonitorResult", "MonitorEvent", "window_statistics",
+           "rolling_variance", "RULES"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -376,12 +378,6 @@ class OnlineDetector:
 # (Dutta et al., paper 003, Fig. 3 and the Fig. 7 discussion).
 # =====================================================================================================================
 
-from collections.abc import Mapping  # noqa: E402
-
-from scipy import special as _special  # noqa: E402
-
-__all__ += ["Monitor", "MonitorResult", "MonitorEvent", "window_statistics", "rolling_variance", "RULES"]
-
 #: Decision rules of :class:`Monitor` and :func:`tsfdi.evaluate`. ``"paper"``: a model is accepted when its residual
 #: test does not reject; one accepted model is an identification, several are ambiguous, none is no decision
 #: (Dutta et al.). ``"likelihood"``: among the accepted models (all models when none is accepted) take the one whose
@@ -443,9 +439,9 @@ def _model_channels(res: Any, values: np.ndarray) -> np.ndarray:
     return np.asarray(e, dtype=np.float64).reshape(-1, neqs)
 
 
-def _window_statistic(test: Any, e: np.ndarray, res: Any, n: int, starts: np.ndarray, step: int, name: str,
-                      p: int) -> np.ndarray | None:
-    """Statistic of every window (``n`` residual samples at ``starts``) from prefix sums, or None when the test
+def _window_statistic(test: Any, e: np.ndarray, n: int, step: int, name: str, p: int,
+                      reference: dict) -> np.ndarray | None:
+    """Statistic of every window (``n`` residual samples, ``step`` apart) from prefix sums, or None when the test
     has no windowed form (then it is applied window by window)."""
     from tsfdi.detection.variance import FTest
     from tsfdi.detection.whiteness import LjungBox
@@ -454,16 +450,9 @@ def _window_statistic(test: Any, e: np.ndarray, res: Any, n: int, starts: np.nda
         if n <= test.lags:
             raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model "
                              f"{name!r}, got {n + p}")
-        return _ljungbox_windows(e, test.lags, n, step, test.demean)
-    if isinstance(test, FTest) and test.alternative == "greater":
-        return test.window_statistic(e, n, step, **test.reference(res))
-    return None
-
-
-def _ljungbox_windows(e: np.ndarray, lags: int, n: int, step: int, demean: bool) -> np.ndarray:
-    from tsfdi.detection.whiteness import ljungbox_windows
-
-    return ljungbox_windows(e, lags, n, step, demean=demean)
+    elif not (isinstance(test, FTest) and test.alternative == "greater"):
+        return None
+    return test.window_statistic(e, n, step, **reference)
 
 
 def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, step: int = 1,
@@ -499,8 +488,6 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         ``loglik`` (n_models, n_windows) Gaussian log-likelihood per sample of each model's residuals on the
         common samples with the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
     """
-    from tsfdi.detection.whiteness import LjungBox
-
     sig = as_signal(signal, "signal", allow_constant=True)
     x = sig.values
     window = int_like(window, "window", minimum=2)
@@ -526,30 +513,16 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         e = _model_channels(res, x)
         n = window - p
         test_j = test[name] if isinstance(test, Mapping) else test
-        stat = _window_statistic(test_j, e, res, n, starts, step, name, p)
+        ref = test_j.reference(res)
+        stat = _window_statistic(test_j, e, n, step, name, p, ref)
         if stat is None:
-            ds = [test_j.test(e[s:s + n], **test_j.reference(res)) for s in starts]
+            ds = [test_j.test(e[s:s + n], **ref) for s in starts]
             stat = np.array([d.statistic for d in ds])
             pv = np.array([d.pvalue for d in ds])
             thr = ds[0].threshold if ds else np.full(k, np.nan)
             rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
         else:
-            if getattr(test_j, "empirical", False):
-                test_j._check_calibrated(k)
-                thr = np.asarray(test_j.threshold_, dtype=float)
-                pv = test_j.empirical_pvalue(stat)
-            elif isinstance(test_j, LjungBox):
-                df = float(test_j.lags - test_j.model_df)
-                a = test_j._channel_alpha(test_j.alpha, k, test_j.correction)
-                thr = np.full(k, _special.chdtri(df, a))
-                pv = _special.chdtrc(df, stat)
-            else:
-                ref = test_j.reference(res)
-                df0 = np.asarray(ref["reference_df"])
-                nu = float(n - 1 if test_j.demean else n)
-                a = test_j._channel_alpha(test_j.alpha, k, test_j.correction)
-                thr = _special.fdtri(nu, df0, 1.0 - a)
-                pv = _special.fdtrc(nu, df0, stat)
+            thr, pv = test_j._threshold_pvalue(stat, n, **ref)
             rej_c = stat > thr
         decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr, dtype=float),
                            "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}

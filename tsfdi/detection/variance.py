@@ -108,6 +108,29 @@ class FTest(CalibratedTest):
             var_u = ss / window
         return var_u / ref
 
+    def _null_threshold(self, k: int, nobs: int, reference_df: Any = None, **_: Any) -> np.ndarray:
+        """Upper critical value :math:`f_{1-\\alpha}(N_u, N_0 - d)` of eq. 10 per channel for ``nobs`` current
+        residual samples (:math:`N_u = ` ``nobs - 1`` with ``demean``), shape (k,)."""
+        if reference_df is None:
+            raise TypeError("FTest needs reference_df (the baseline's N0 - d); tsfdi.detect/identify take it from "
+                            "the model")
+        df0 = _per_channel(reference_df, "reference_df", k)
+        nu = float(nobs - 1 if self.demean else nobs)
+        return special.fdtri(nu, df0, 1.0 - self._channel_alpha(self.alpha, k, self.correction))
+
+    def _threshold_pvalue(self, f: np.ndarray, nobs: int, reference_df: Any = None,
+                          **_: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Threshold (k,) and p-values (shape of ``f``, channels on the last axis) of the one-sided test of
+        ``nobs``-sample variance ratios: calibrated threshold and empirical p-value, or the F ones (eq. 10)."""
+        f = np.asarray(f, dtype=np.float64)
+        k = f.shape[-1]
+        if self.empirical:
+            self._check_calibrated(k)
+            return self.threshold_, self.empirical_pvalue(f)
+        df0 = _per_channel(reference_df, "reference_df", k)
+        nu = float(nobs - 1 if self.demean else nobs)
+        return self._null_threshold(k, nobs, df0), special.fdtrc(nu, df0, f)
+
     @property
     def null_hypothesis(self) -> str:  # type: ignore[override]
         if self.alternative == "greater":
@@ -162,16 +185,11 @@ class FTest(CalibratedTest):
         details: dict = {"variance": var_u, "reference_variance": ref, "alternative": self.alternative,
                          "demean": self.demean, "channel_alpha": a, "correction": self.correction,
                          "threshold_method": "f"}
-        if self.empirical:
-            self._check_calibrated(k)
-            thr = self.threshold_
-            pv = self.empirical_pvalue(f)
+        if self.empirical or self.alternative == "greater":
+            thr, pv = self._threshold_pvalue(f, n, reference_df=df0)
             rej = f > thr
-            details.update(self._empirical_details())
-        elif self.alternative == "greater":
-            thr = special.fdtri(dfn, df0, 1.0 - a)
-            pv = special.fdtrc(dfn, df0, f)
-            rej = f > thr
+            if self.empirical:
+                details.update(self._empirical_details())
         else:
             thr = special.fdtri(dfn, df0, 1.0 - a / 2)
             lower = special.fdtri(dfn, df0, a / 2)

@@ -217,23 +217,33 @@ class LjungBox(CalibratedTest):
             return self._decision(_ljungbox_q(acov, n), n, tuple(sig.channels))
         return self._multivariate(np.ascontiguousarray(xt.T), n, sig.nchan)
 
+    def _null_threshold(self, k: int, nobs: int | None = None, **_: Any) -> np.ndarray:
+        """Critical value :math:`\\chi^2_{1-\\alpha}(r - \\text{model\\_df})` of eq. 14 for ``k`` channels (the
+        per-channel ``alpha`` after ``correction``), shape (k,); ``nobs`` is not used."""
+        df = float(self.lags - self.model_df)
+        a = self._channel_alpha(self.alpha, k, self.correction)
+        key = (df, a)
+        if getattr(self, "_thr_key", None) != key:      # options are fixed; cache the critical value
+            self._thr_key, self._thr = key, float(special.chdtri(df, a))
+        return np.full(k, self._thr)
+
+    def _threshold_pvalue(self, q: np.ndarray, nobs: int | None = None, **_: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Threshold (k,) and p-values (shape of ``q``, channels on the last axis) of per-channel statistics:
+        calibrated threshold and empirical p-value, or the chi-square ones (eqs. 13-14)."""
+        q = np.asarray(q, dtype=np.float64)
+        k = q.shape[-1]
+        if self.empirical:
+            self._check_calibrated(k)
+            return self.threshold_, self.empirical_pvalue(q)
+        return self._null_threshold(k), special.chdtrc(float(self.lags - self.model_df), q)
+
     def _decision(self, q: np.ndarray, n: int, channels: tuple) -> Decision:
         k = q.shape[0]
         df = float(self.lags - self.model_df)
         a = self._channel_alpha(self.alpha, k, self.correction)
         details = {"lags": self.lags, "model_df": self.model_df, "channel_alpha": a, "correction": self.correction}
-        if self.empirical:
-            self._check_calibrated(k)
-            thr = self.threshold_
-            pv = self.empirical_pvalue(q)
-            details.update(self._empirical_details())
-        else:
-            key = (df, a)
-            if getattr(self, "_thr_key", None) != key:      # options are fixed; cache the critical value
-                self._thr_key, self._thr = key, float(special.chdtri(df, a))
-            thr = np.full(k, self._thr)
-            pv = special.chdtrc(df, q)
-            details["threshold_method"] = "chi2"
+        thr, pv = self._threshold_pvalue(q)
+        details.update(self._empirical_details() if self.empirical else {"threshold_method": "chi2"})
         rej = q > thr
         return Decision(statistic=q, threshold=thr, pvalue=pv, alpha=self.alpha,
                         reject=bool(rej.any()), df=np.full(k, df), nobs=n, null_hypothesis=self.null_hypothesis,
