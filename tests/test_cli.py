@@ -80,3 +80,17 @@ def test_cli_errors(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["simulate", "--help"])
     assert exc.value.code == 0
+
+
+def test_fit_start_stop_are_times_on_the_record_clock(tmp_path, capsys):
+    # a record whose clock starts at 100 s: --start 110 --stop 130 selects 20 s = 2000 samples, not an empty slice
+    x = record("f1", 4000, np.random.default_rng(5))
+    p = tmp_path / "late.csv"
+    pd.DataFrame({"time": 100.0 + np.arange(x.shape[0]) / FS, "a": x[:, 0], "b": x[:, 1]}).to_csv(p, index=False)
+    assert main(["fit", str(p), "--out", str(tmp_path / "m.npz"), "--lags", "2", "--start", "110",
+                 "--stop", "130"]) == 0
+    assert "(1980 samples)" in capsys.readouterr().out    # 2000 rows minus the max_lags=20 hold-back
+    # a start before the first sample keeps the record from its beginning (no wrap to the end)
+    assert main(["fit", str(p), "--out", str(tmp_path / "m.npz"), "--lags", "2", "--start", "0",
+                 "--stop", "110"]) == 0
+    assert "(980 samples)" in capsys.readouterr().out

@@ -65,7 +65,6 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-
 # ----------------------------------------------------------------------------------------------------- demo
 def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="tsfdi-demo", help="output folder for the figures and tables (default "
@@ -180,13 +179,13 @@ def write_figures(bases: dict, ev, data, out) -> list:
                                      labels=[s for s, i in test_rec.items() if i is not None and s != b.healthy],
                                      channels=list(b.channels)), "variance_evolution.png")
     if "var" in b.models:
+        from tsfdi.identification import identify
+
+        mon = b.monitor("var", window=20.0)
         for f in b.faults:
             i = test_rec.get(f)
             if i is None:
                 continue
-            mon = b.monitor("var", window=20.0)
-            from tsfdi.identification import identify
-
             x = sig.isel(record=i).values[3000:5000]
             ident = identify(x, {g: b.models["var"][g] for g in b.faults}, mon.test)
             save(ident.plot(), f"identification_bars_var_{f}.png")
@@ -273,6 +272,11 @@ def _read_signal(path: str, columns: list[str] | None, fs: float | None):
     return df.astype(float), float(fs)
 
 
+def _first_time(df) -> float:
+    """Time (s) of the first row: the ``time`` index when there is one, else 0."""
+    return float(df.index[0]) if df.index.name == "time" else 0.0
+
+
 def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", help="CSV (optional 'time' column) or netCDF file with one record")
     p.add_argument("--out", required=True, help="output .npz file for the fitted model")
@@ -294,8 +298,10 @@ def _fit(args: argparse.Namespace) -> int:
     from tsfdi.selection import select_order
 
     df, fs = _read_signal(args.data, _csv_list(args.columns), args.fs)
-    a = 0 if args.start is None else int(round(args.start * fs))
-    b = None if args.stop is None else int(round(args.stop * fs))
+    # --start / --stop are times on the record's clock, which need not start at 0
+    t0 = _first_time(df)
+    a = 0 if args.start is None else max(0, int(round((args.start - t0) * fs)))
+    b = None if args.stop is None else max(0, int(round((args.stop - t0) * fs)))
     df = df.iloc[a:b]
     model = args.model or ("ar" if df.shape[1] == 1 else "var")
     if model == "ar" and df.shape[1] != 1:
@@ -361,15 +367,14 @@ def _identify(args: argparse.Namespace) -> int:
     rej = np.array([ws["decisions"][n]["reject"] for n in names])
     pmin = np.array([ws["decisions"][n]["pvalue"].min(axis=1) for n in names])
     lab = apply_rule(rej, ws["loglik"], pmin, args.rule)
-    t0 = float(df.index[0]) if df.index.name == "time" else 0.0
+    t0 = _first_time(df)
     table = pd.DataFrame({"start": t0 + ws["starts"] / fs, "end": t0 + (ws["starts"] + W) / fs})
     for j, n in enumerate(names):
         table[f"pvalue_{n}"] = pmin[j]
         table[f"accept_{n}"] = ~rej[j]
-    table["status"] = np.where(lab >= 0, "identified", np.where(lab == -2, "ambiguous", "none"))
-    if args.rule != "paper":
-        paper = apply_rule(rej, ws["loglik"], pmin, "paper")
-        table["status"] = np.where(paper >= 0, "identified", np.where(paper == -2, "ambiguous", "none"))
+    # the status is that of the paper rule (how many models accept), whichever rule picks the label
+    paper = lab if args.rule == "paper" else apply_rule(rej, ws["loglik"], pmin, "paper")
+    table["status"] = np.where(paper >= 0, "identified", np.where(paper == -2, "ambiguous", "none"))
     table["label"] = [names[i] if i >= 0 else "" for i in lab]
     with pd.option_context("display.width", 160, "display.max_rows", 200):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
