@@ -436,11 +436,15 @@ class RecursiveARX:
         return float(self._fst[_F_M2] / (nw - 1)) if nw >= 2 else float("nan")
 
     # ------------------------------------------------------------------ processing
+    def _no_input(self, n: int) -> np.ndarray:
+        """Zero inputs for ``u=None``, which only a model without input coefficients accepts."""
+        if self.nb > 0:
+            raise ValueError("u is required when nb > 0")
+        return np.zeros((n, self.n_inputs))
+
     def _prepare_u(self, u: Any, n: int, name: str = "u") -> np.ndarray:
         if u is None:
-            if self.nb > 0:
-                raise ValueError("u is required when nb > 0")
-            return np.zeros((n, self.n_inputs))
+            return self._no_input(n)
         if self.n_inputs == 1:
             su = as_signal(u, name, min_nobs=1, allow_constant=True, finite=False)
         else:
@@ -495,9 +499,7 @@ class RecursiveARX:
         except (TypeError, ValueError):
             raise TypeError(f"y must be a real number, got {y!r}") from None
         if u is None:
-            if self.nb > 0:
-                raise ValueError("u is required when nb > 0")
-            uv = np.zeros((1, self.n_inputs))
+            uv = self._no_input(1)
         else:
             try:
                 uv = np.asarray(u, dtype=np.float64).reshape(1, -1)
