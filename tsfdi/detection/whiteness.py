@@ -118,9 +118,9 @@ class LjungBox(CalibratedTest):
 
     .. math:: Q = N (N + 2) \sum_{\tau=1}^{r} \frac{\hat\rho[\tau]^2}{N - \tau} \sim \chi^2(r - \text{model\_df})
 
-    and H0 is accepted when :math:`Q \le \chi^2_{1-\alpha}(r)` (eq. 14). With ``model_df = 0`` the statistic and
-    p-value equal statsmodels ``acorr_ljungbox``. The autocovariances cost O(N r) (lag products) or
-    O(N log N) (FFT), never O(N^2).
+    and H0 is accepted when :math:`Q \le \chi^2_{1-\alpha}(r - \text{model\_df})` (eq. 14 has
+    ``model_df = 0``). With ``model_df = 0`` the statistic and p-value equal statsmodels ``acorr_ljungbox``.
+    The autocovariances cost O(N r) (lag products) or O(N log N) (FFT), never O(N^2).
 
     Multivariate (``s`` channels, :math:`C_k = N^{-1}\sum_t e_t e_{t-k}^T`):
     Hosking (1980) :math:`Q = N^2 \sum_{k=1}^{r} (N-k)^{-1} \mathrm{tr}(C_k^T C_0^{-1} C_k C_0^{-1})`;
