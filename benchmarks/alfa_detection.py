@@ -216,6 +216,11 @@ def crossing_times(df, name, grid):
     arm = int(round(ARM_AFTER_S * FS))
     t = (df.index - df.index[0]).total_seconds().to_numpy()
     s = np.where(np.arange(s.size) >= arm, np.nan_to_num(s, nan=-np.inf), -np.inf)
+    return first_crossings(t, s, grid)
+
+
+def first_crossings(t, s, grid):
+    """``t`` at the first sample where ``s`` exceeds each threshold of ``grid`` (nan: never)."""
     out = np.full(len(grid), np.nan)
     for j, c in enumerate(grid):
         k = np.flatnonzero(s > c)
@@ -289,12 +294,7 @@ def gain_crossing_times(df, grid):
     """First block time (s) the roll-gain statistic exceeds each threshold of ``grid`` after the baseline."""
     t, s = roll_gain_statistic(df)
     s = np.where(t >= ARM_AFTER_S, np.nan_to_num(s, nan=-np.inf), -np.inf)
-    out = np.full(len(grid), np.nan)
-    for j, c in enumerate(grid):
-        k = np.flatnonzero(s > c)
-        if k.size:
-            out[j] = t[k[0]]
-    return out
+    return first_crossings(t, s, grid)
 
 # --------------------------------------------------------------------------- scoring
 def outcomes(onset, alarm):
