@@ -120,6 +120,17 @@ def test_confusion_closed_form():
     assert d["missed_fault"] == pytest.approx(50.0)         # 2 post-failure windows, 1 alarm
     assert d["missed_records"] == 1                          # record 2: no alarm after the failure
     assert d["delay_median"] == pytest.approx(4.0)           # first alarm window ends at 10 s, failure at 6 s
+    # only the window starting at 0 s of the healthy record does not overlap another: the alarm at 1 s is not
+    # an independent trial
+    assert (d["disjoint_windows"], d["disjoint_alarms"], d["false_alarm_pvalue"]) == (1, 0, 1.0)
+    det2 = det.assign(start=[0, 5, 10, 15] + det["start"].tolist()[4:], alarm=[True, False, False, True]
+                      + det["alarm"].tolist()[4:])
+    d2 = Evaluation(identification=ident, detection=det2, faults=("a", "b"), rules=("paper", "likelihood"),
+                    alphas={("var", "whiteness"): 0.01}, lags={5.0: 20}, records=recs,
+                    nchan={"var": 3}).detection_rates().loc[("var", "whiteness", 5.0)]
+    p0 = 1 - 0.99 ** 3
+    assert (d2["disjoint_windows"], d2["disjoint_alarms"]) == (4, 2)
+    assert d2["false_alarm_pvalue"] == pytest.approx(1 - (1 - p0) ** 4 - 4 * p0 * (1 - p0) ** 3)
     with pytest.raises(ValueError, match="window"):
         ev.table4(7.0)
 

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from tsfdi._data import as_signal, is_xarray
 from tsfdi._validation import float_like, int_like, option, probability
@@ -678,6 +679,12 @@ class Evaluation:
     def detection_rates(self) -> pd.DataFrame:
         """Per model, method and window length: ``false_alarm`` (percent of healthy-record windows flagged),
         ``expected_false_alarm`` (percent, ``1 - (1 - alpha)^k`` for ``k`` channels tested at ``alpha``),
+        ``disjoint_windows`` and ``disjoint_alarms`` (the healthy windows that do not overlap: in each record those
+        starting at a multiple of the window length from its first window, and how many of them are flagged),
+        ``false_alarm_pvalue`` (binomial probability of at least ``disjoint_alarms`` alarms in
+        ``disjoint_windows`` independent windows at the expected rate: sliding windows 1 s apart share most of
+        their samples, so one excursion flags a run of them and only the disjoint ones can be counted as
+        independent trials; small values mean more false alarms than the expectation allows),
         ``missed_fault`` (percent of fault-record windows starting after the failure not flagged),
         ``missed_records`` (fault records with no alarm after the failure), ``delay_median`` and ``delay_max``
         (s, from the failure to the end of the first flagged window ending after it)."""
@@ -686,6 +693,9 @@ class Evaluation:
         rows = []
         for key, g in det.groupby(keys, sort=False):
             h = g[g["state"] == self._healthy]
+            first = h.groupby("record", sort=False)["start"].transform("min")
+            lag = (h["start"] - first) / key[2]
+            disjoint = h[np.isclose(lag, np.round(lag))]
             f = g[(g["state"] != self._healthy) & g["fault_true"]]
             post = g[(g["state"] != self._healthy) & ~g["pre"]]
             delays = []
@@ -698,9 +708,13 @@ class Evaluation:
                     missed += 1
             a = self.alphas[(key[0], key[1])]
             k = self.nchan.get(key[0], 1)
+            p0 = 1.0 - (1.0 - a) ** k
+            n_dis, x_dis = len(disjoint), int(disjoint["alarm"].sum())
             rows.append({"model": key[0], "method": key[1], "window": key[2],
                          "false_alarm": 100.0 * h["alarm"].mean() if len(h) else np.nan,
-                         "expected_false_alarm": 100.0 * (1.0 - (1.0 - a) ** k), "healthy_windows": len(h),
+                         "expected_false_alarm": 100.0 * p0, "healthy_windows": len(h),
+                         "disjoint_windows": n_dis, "disjoint_alarms": x_dis,
+                         "false_alarm_pvalue": float(stats.binom.sf(x_dis - 1, n_dis, p0)) if n_dis else np.nan,
                          "missed_fault": 100.0 * (1.0 - f["alarm"].mean()) if len(f) else np.nan,
                          "missed_records": missed,
                          "delay_median": float(np.median(delays)) if delays else np.nan,
