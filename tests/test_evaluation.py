@@ -77,6 +77,7 @@ def test_evaluate_synthetic(synthetic, fitted):
     n_disjoint = 4 * 8
     assert row["expected_false_alarm"] == pytest.approx(100 * p0)
     assert row["false_alarm"] / 100 <= stats.binom.ppf(0.999, n_disjoint, p0) / n_disjoint + 1e-12
+    assert row["disjoint_windows"] == n_disjoint and row["false_alarm_pvalue"] > 1e-3
     assert row["missed_records"] == 0
     assert 0 < row["delay_median"] <= 5.0
     assert "Identification" in ev.summary()
