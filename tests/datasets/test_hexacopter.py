@@ -275,6 +275,41 @@ def test_yaw_margin_after_failure_is_small_and_heading_dependent():
     assert 0 < w2[4] < 60
 
 
+@pytest.mark.parametrize("rotor", [1, 2, 6])
+def test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop(rotor):
+    """Du et al. (2015): at hover a PNPNPN hexacopter with a failed rotor balances all four axes only with the
+    opposite rotor stopped. The regular aircraft (idle speed 60 rad/s) therefore turns continuously after
+    the failure (and wobbles while it turns); with reversible rotors the opposite rotor can go to zero and
+    the aircraft holds heading and level attitude."""
+    from tsfdi.datasets._hexacopter_params import HexacopterParameters
+
+    kw = dict(duration=30.0, speed=0.0, turbulence="none", failed_rotor=rotor, failure_time=5.0)
+    regular = simulate_hexacopter(**kw)
+    rev = simulate_hexacopter(**kw, params=HexacopterParameters(reversible_rotors=True))
+    assert not bool(regular["lost_control"][0]) and not bool(rev["lost_control"][0])
+    assert np.max(np.abs(rev["roll"].values[0, -1000:])) < 0.02
+    assert np.abs(regular["yaw"].values[0, -1]) > 3.0
+    assert np.abs(regular["r"].values[0, -1000:]).mean() > 0.05
+    assert np.abs(rev["yaw"].values[0, -1]) < 0.05
+    assert np.abs(rev["r"].values[0, -1000:]).mean() < 0.005
+
+
+def test_reversible_rotor_thrust_changes_sign():
+    """A reversed rotor pushes down (T = k_T Omega |Omega|); a regular one at a negative command gives no thrust."""
+    from tsfdi.datasets import _hexacopter_core as core
+    from tsfdi.datasets._hexacopter_params import HexacopterParameters
+
+    x = np.zeros(18)
+    x[12] = -300.0
+    alive = np.ones(6, dtype=np.int64)
+    for rev, extra in ((False, 0.0), (True, 1.57e-5 * 300.0 ** 2)):
+        p = HexacopterParameters(reversible_rotors=rev)
+        dx = core.derivative(x, x[12:], np.zeros(6), p.to_array(), alive)
+        assert dx[8] == pytest.approx(p.gravity + extra / p.mass, rel=1e-12)
+    with pytest.raises(TypeError, match="reversible_rotors"):
+        HexacopterParameters(reversible_rotors=1)
+
+
 def test_ground_contact_is_a_loss():
     """At 0.3 m the sink after a rotor-1 failure (about 0.46 m without turbulence) reaches the ground:
     flagged, NaN from then on."""

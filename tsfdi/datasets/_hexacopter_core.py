@@ -83,6 +83,7 @@ def _deriv(x, wcmd, g, P, alive, dx):
     cda = P[13]
     rho = P[14]
     kn = P[15]
+    rev = P[18] > 0.0
     phi = x[3]
     th = x[4]
     u = x[6]
@@ -113,7 +114,7 @@ def _deriv(x, wcmd, g, P, alive, dx):
         yi = arm * math.sin(ang)
         zi = -hr
         om = x[12 + i]
-        if om < 0.0:
+        if om < 0.0 and not rev:
             om = 0.0
         if alive[i] == 0:
             continue
@@ -121,17 +122,18 @@ def _deriv(x, wcmd, g, P, alive, dx):
         # r - r_g relative to the air (rotor 1 clockwise seen from above, directions alternating)
         spin = 1.0 if i % 2 == 0 else -1.0
         om = om + spin * rr
-        if om < 0.0:
+        if om < 0.0 and not rev:
             om = 0.0
+        aom = abs(om)
         # hub velocity relative to air: v_rel + omega_rel x r_i
         vhx = ur + qr * zi - rr * yi
         vhy = vr + rr * xi - pr * zi
         vhz = wr + pr * yi - qr * xi
-        T = kT * om * om + cw * om * vhz
-        if T < 0.0:
+        T = kT * om * aom + cw * aom * vhz
+        if T < 0.0 and not rev:
             T = 0.0
-        fx = -ch * om * vhx
-        fy = -ch * om * vhy
+        fx = -ch * aom * vhx
+        fy = -ch * aom * vhy
         fz = -T
         Fx += fx
         Fy += fy
@@ -141,10 +143,10 @@ def _deriv(x, wcmd, g, P, alive, dx):
         My += zi * fx - xi * fz
         Mz += xi * fy - yi * fx
         # blade-flapping moment: disc tilts away from the relative wind
-        Mx += -kf * om * vhy
-        My += kf * om * vhx
+        Mx += -kf * aom * vhy
+        My += kf * aom * vhx
         # reaction torque, opposite to the rotor's spin (yaw damping -2 k_Q om r through om)
-        Mz += -spin * kQ * om * om
+        Mz += -spin * kQ * om * aom
     # fuselage drag and weathervane yaw moment
     vmag = math.sqrt(ur * ur + vr * vr + wr * wr)
     Fx += -0.5 * rho * cda * vmag * ur
@@ -247,8 +249,9 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     # pitch/roll loops drive up) delivers less of the yaw term while the others keep theirs; the yaw-rate
     # integrator freezes while less than ``yaw_freeze`` of the commanded yaw term reaches the rotors
     # (anti-windup).
-    lo = wmin * wmin
     hi = wmax * wmax
+    # signed squared speeds: a reversible rotor may be commanded down to -omega_max
+    lo = -hi if P[18] > 0.0 else wmin * wmin
     two_om0 = 2.0 * om0
     asked = 0.0
     given = 0.0
@@ -265,7 +268,7 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
             c2 = lo
         elif c2 > hi:
             c2 = hi
-        wcmd[i] = math.sqrt(c2)
+        wcmd[i] = math.sqrt(c2) if c2 >= 0.0 else -math.sqrt(-c2)
         asked += abs(omy)
         if om0 > 0.0:
             given += abs(c2 - b2) / two_om0

@@ -69,6 +69,16 @@ class HexacopterParameters:
     omega_min, omega_max : float
         60 and 900 rad/s: rotor speed limits (idle and full throttle; full thrust 12.7 N per rotor, so
         the thrust-to-weight ratio is 3.2).
+    reversible_rotors : bool
+        False (default, the regular hexacopter): a rotor turns one way only, between ``omega_min`` and
+        ``omega_max``, and its thrust is never negative. True: a what-if with bidirectional motors
+        (reversible "3D" speed controllers and symmetric propellers): speeds in ``[-omega_max, omega_max]``,
+        thrust :math:`k_T \\Omega |\\Omega|` and torque :math:`k_Q \\Omega |\\Omega|` change sign with the
+        speed (inflow, rotor drag and flapping scale with :math:`|\\Omega|`, a first-order simplification
+        for the reversed rotor, which only runs slowly in the cases studied). After a failure the rotor
+        opposite the failed one can then push down instead of stopping at its idle speed, so the post-failure
+        plant has no switching at the idle floor; ``docs/results.md`` uses it to measure how much of the
+        non-white fault-model residuals that switching causes.
     """
 
     mass: float = 2.4
@@ -89,9 +99,14 @@ class HexacopterParameters:
     k_weathervane: float = 8e-4
     omega_min: float = 60.0
     omega_max: float = 900.0
+    reversible_rotors: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.reversible_rotors, (bool, np.bool_)):
+            raise TypeError(f"reversible_rotors must be a bool, got {self.reversible_rotors!r}")
         for f in fields(self):
+            if f.name == "reversible_rotors":
+                continue
             v = getattr(self, f.name)
             if not np.isfinite(v) or (v < 0) or (v == 0 and f.name not in
                                                  {"rotor_height", "k_inflow", "k_rotor_drag", "k_flapping",
@@ -101,7 +116,7 @@ class HexacopterParameters:
             raise ValueError(f"omega_min must be < omega_max, got {self.omega_min} >= {self.omega_max}")
 
     def to_array(self) -> np.ndarray:
-        return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+        return np.array([float(getattr(self, f.name)) for f in fields(self)], dtype=float)
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -94,6 +94,9 @@ shipped design loses the aircraft; a configuration that does is flagged in ``los
 loop whose set point follows the aircraft (bounded heading error), a thrust shift that lifts the lowest
 rotor off the idle speed and a lower idle speed (0-50 rad/s; 60 rad/s is 6.7 % of full speed, the order
 of the idle of multirotor ESC firmware) were tried and measured: none reduced the slips further.
+``HexacopterParameters(reversible_rotors=True)`` removes the idle floor altogether (bidirectional motors,
+a what-if outside the regular aircraft): the opposite rotor can then stop or push down, the hover heading is
+held after a failure (tested), and ``docs/results.md`` compares the identification study on both.
 
 **Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz; the controller and the gusts are held
 constant over a step (sampled-data controller at 1 kHz). Each record is integrated on its own
