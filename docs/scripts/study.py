@@ -9,7 +9,8 @@ VAR(20) / AR(20): Table 2 analogue), then evaluation of every other record with 
 scalar AR models (roll, pitch, yaw rate) and the VAR, residual variance (F test) and whiteness (Ljung-Box) methods,
 the paper's decision rule and two rules resolving ambiguous windows (Table 4 analogues, rates, detection), then the
 Monitor end to end on every evaluated fault record; then the VAR / AR whiteness study again with thresholds
-calibrated per model on leave-one-record-out residuals of its fitting records (paper 002 Fig. 2), side by side.
+calibrated per model on leave-one-record-out residuals of its fitting records (paper 002 Fig. 2), side by side;
+then the VAR + whiteness study once more on the design regenerated with reversible rotors (no idle floor).
 """
 
 import os
@@ -18,6 +19,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import ast  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -28,7 +30,8 @@ import pandas as pd  # noqa: E402
 import tsfdi  # noqa: E402
 from tsfdi.cli import _markdown, demo_report, write_figures  # noqa: E402
 from tsfdi.detection import EmpiricalThreshold  # noqa: E402
-from tsfdi.datasets import load_hexacopter  # noqa: E402
+from tsfdi.datasets import HexacopterParameters, load_hexacopter, make_hexacopter_dataset  # noqa: E402
+from tsfdi.datasets.hexacopter import encode_for_file  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
 from tsfdi.evaluation import hexacopter_signals, hexacopter_study  # noqa: E402
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
@@ -157,6 +160,34 @@ def idle_floor_table(data) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index(["turbulence", "state"]).round(1)
 
 
+def reversible_table(ev) -> tuple[pd.DataFrame, int]:
+    """The shipped design regenerated with reversible rotors (same seeds and command line, with
+    ``HexacopterParameters(reversible_rotors=True)``; packed like the shipped file) and studied like the shipped
+    data. Per level and failure, VAR + whiteness at 20 s, paper rule: correct unique identification and how often
+    the matching model is rejected, for both. Returns the table and the number of lost records."""
+    ds = make_hexacopter_dataset(20, seed=2024, params=HexacopterParameters(reversible_rotors=True))
+    lost = int(ds["lost_control"].sum())
+    ds, enc = encode_for_file(ds)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "reversible.nc"
+        ds.to_netcdf(path, engine="h5netcdf", encoding=enc)
+        rev = load_hexacopter(path)
+    _, ev_r = hexacopter_study(rev, models=["var"], methods=["whiteness"], windows=(20.0,), rules=("paper",),
+                               progress=False)
+    rows = []
+    for name, e in (("shipped", ev), ("reversible", ev_r)):
+        df = e.identification
+        df = df[(df["model"] == "var") & (df["method"] == "whiteness") & (df["window"] == 20.0)]
+        for (lvl, st), g in df.groupby(["turbulence", "state"], sort=False):
+            rows.append({"turbulence": lvl, "state": st, "rotors": name,
+                         "correct unique (%)": 100.0 * (g["label_paper"] == st).mean(),
+                         "matching model rejected (%)": 100.0 * (~g[f"acc_{st}"].astype(bool)).mean()})
+    t = pd.DataFrame(rows).pivot_table(index=["turbulence", "state"], columns="rotors", sort=False,
+                                       values=["correct unique (%)", "matching model rejected (%)"])
+    t.columns = [f"{a}, {b}" for a, b in t.columns]
+    return t.round(1), lost
+
+
 def targets(ev) -> list[str]:
     r = ev.rates()["correct"]
     lines = []
@@ -260,6 +291,7 @@ def main() -> None:
     var_tab = variants(data)
     sev = severe_table(bases, data)
     idle = idle_floor_table(data)
+    rev, rev_lost = reversible_table(ev)
     sel_rows = []
     for lvl, b in bases.items():
         for st in (b.healthy,) + b.faults:
@@ -410,6 +442,22 @@ rotor is at idle about half of the time (rotor 1 and rotor 6 in severe turbulenc
 and the matching VAR's residuals are least white; where it is at idle most of the time (rotor 2) one regime
 dominates. The likelihood rule needs only the matching model to fit best, not white residuals, and meets the 5 s
 target on every level.
+
+The switching measured: the same design regenerated with **reversible rotors** (a what-if outside the paper's
+aircraft: bidirectional motors, `HexacopterParameters(reversible_rotors=True)`, so the opposite rotor can push
+down instead of stopping at its idle speed; same seeds, packed like the shipped file; lost records: """ + f"{rev_lost}" + """),
+fitted and evaluated exactly as above. VAR + whiteness, 20 s windows, paper rule:
+
+""" + _markdown(rev) + """
+
+Reading: without the idle floor the matching model is never rejected more often, and far less often for rotors
+1 and 6 in severe turbulence, whose opposite rotor sat at idle about half of the time (table above); for rotor 2,
+whose opposite rotor sat at idle most of the time (one regime dominates), little changes. So the switching at the
+idle floor is the main cause of the low severe-turbulence rates of rotors 1 and 6. It is not the only limit:
+correct unique identification stays below 99.6% everywhere, and in light turbulence it falls for rotors 2 and 6,
+because without the floor the three failures differ less and other models accept the same windows (ambiguity).
+What keeps the rest of the matching-model rejections (the aircraft's other non-linearities, e.g. drag and inflow
+that depend on the relative wind, are candidates) was not measured.
 
 ## What was investigated
 
