@@ -181,7 +181,7 @@ def reversible_table(ev) -> tuple[pd.DataFrame, int]:
         for (lvl, st), g in df.groupby(["turbulence", "state"], sort=False):
             rows.append({"turbulence": lvl, "state": st, "rotors": name,
                          "correct unique (%)": 100.0 * (g["label_paper"] == st).mean(),
-                         "matching model rejected (%)": 100.0 * (~g[f"acc_{st}"].astype(bool)).mean()})
+                         "matching model rejected (%)": 100.0 * (~g[f"acc_{st}"]).mean()})
     t = pd.DataFrame(rows).pivot_table(index=["turbulence", "state"], columns="rotors", sort=False,
                                        values=["correct unique (%)", "matching model rejected (%)"])
     t.columns = [f"{a}, {b}" for a, b in t.columns]

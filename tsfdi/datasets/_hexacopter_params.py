@@ -116,7 +116,7 @@ class HexacopterParameters:
             raise ValueError(f"omega_min must be < omega_max, got {self.omega_min} >= {self.omega_max}")
 
     def to_array(self) -> np.ndarray:
-        return np.array([float(getattr(self, f.name)) for f in fields(self)], dtype=float)
+        return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
 
     def to_dict(self) -> dict:
         return asdict(self)
