@@ -115,6 +115,25 @@ def variants(data) -> pd.DataFrame:
     return pd.DataFrame(rows).round(2)
 
 
+def alpha_table(bases, data) -> pd.DataFrame:
+    """Detection (VAR + whiteness, healthy model) on the healthy evaluation records at several per-channel alphas:
+    false-alarm rate of all windows and of the disjoint ones against the expectation ``1 - (1 - alpha)^3``."""
+    sig = hexacopter_signals(data)
+    rows = []
+    for a in (1e-4, 1e-3, 1e-2, 5e-2):
+        ev = tsfdi.evaluate(sig, bases, models=["var"], methods=["whiteness"], alpha=a, rules=["paper"],
+                            progress=False)
+        for w, r in ev.detection_rates().loc[("var", "whiteness")].iterrows():
+            n, x = int(r["disjoint_windows"]), int(r["disjoint_alarms"])
+            rows.append({"alpha per channel": a, "window (s)": w,
+                         "expected false alarms (%)": round(r["expected_false_alarm"], 3),
+                         "false alarms, all windows (%)": round(r["false_alarm"], 2),
+                         "disjoint windows flagged": f"{x} of {n}",
+                         "expected disjoint": round(n * r["expected_false_alarm"] / 100.0, 2),
+                         "binomial p": float(f"{r['false_alarm_pvalue']:.2g}")})
+    return pd.DataFrame(rows).set_index(["alpha per channel", "window (s)"])
+
+
 def severe_table(bases, data) -> pd.DataFrame:
     """Severe turbulence, rotor 1 model: per fitting record, in-sample Ljung-Box Q (20 lags, 20 s blocks) of each
     channel, heading turns over 20-60 s, pitch standard deviation."""
@@ -308,6 +327,7 @@ def main() -> None:
     report = demo_report(bases, ev, markdown=True)
     mon = monitor_table(bases, data)
     var_tab = variants(data)
+    alpha_tab = alpha_table(bases, data)
     sev = severe_table(bases, data)
     idle = idle_floor_table(data)
     rev, rev_steady, rev_lost = what_if_tables(bases, ev)
@@ -432,6 +452,20 @@ Correct unique identification in percent of windows (minimum over the three roto
 (expectation 0.3%). Each row is a full re-run of the baselines and the evaluation.
 
 """ + _markdown(var_tab.set_index(["fit_records", "pool", "order"])) + """
+
+## Detection false alarms against alpha (VAR, whiteness method)
+
+The healthy model's Ljung-Box test (20 lags, every channel, paper rule) on the healthy evaluation records, at
+several per-channel alphas; the expectation is ``1 - (1 - alpha)^3`` for the three channels, and the binomial
+p-value counts the disjoint windows as independent trials:
+
+""" + _markdown(alpha_tab) + """
+
+Reading: except at the smallest alpha with 20 s windows (no window flagged) the false-alarm rate is above its
+expectation at every alpha and window length, so no choice of alpha meets the detection target at 5 s and 10 s:
+the test is anti-conservative throughout, not only in the far tail. The healthy VAR's residuals on new records
+are not as white as the chi-square reference assumes, and thresholds calibrated on the fitting records do not
+fix that either (calibrated section above).
 
 ## What limits severe turbulence
 
