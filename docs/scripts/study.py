@@ -10,8 +10,9 @@ scalar AR models (roll, pitch, yaw rate) and the VAR, residual variance (F test)
 the paper's decision rule and two rules resolving ambiguous windows (Table 4 analogues, rates, detection), then the
 Monitor end to end on every evaluated fault record; then the VAR / AR whiteness study again with thresholds
 calibrated per model on leave-one-record-out residuals of its fitting records (paper 002 Fig. 2), side by side;
-then the VAR + whiteness study once more on the design regenerated as what-if aircraft (reversible rotors,
-no idle floor; then also without drag, then also without flapping).
+then the healthy-model detection at four per-channel alphas; then the VAR + whiteness study once more on the
+design regenerated as what-if aircraft (reversible rotors, no idle floor; then also without drag, then also
+without flapping).
 """
 
 import os
