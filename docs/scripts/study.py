@@ -195,10 +195,10 @@ def what_if_tables(bases, ev) -> tuple[dict, pd.DataFrame, dict]:
     """The shipped design regenerated as each :data:`WHAT_IF` aircraft and studied like the shipped data.
 
     Returns (1) per level and failure, VAR + whiteness at 20 s, paper rule: tables of correct unique
-    identification and of how often the matching model is rejected (keys), one column per aircraft; (2) the severe-turbulence steady-state
-    variance thresholds of roll and pitch (largest 10 s rolling variance from 10 s after the failure over the
-    fault fitting records; the paper's Fig. 7 discussion gives 1e-3 and 1e-4 rad^2 for its aircraft); (3) lost
-    records per what-if."""
+    identification and of how often the matching model is rejected (keys), one column per aircraft; (2) the
+    severe-turbulence steady-state variance thresholds of roll and pitch (largest 10 s rolling variance from 10 s
+    after the failure over the fault fitting records; the paper's Fig. 7 discussion gives 1e-3 and 1e-4 rad^2 for
+    its aircraft); (3) lost records per what-if."""
     evs, thr, lost = {"shipped": ev}, {"shipped": bases["severe"].steady_thresholds}, {}
     for name, kw in WHAT_IF.items():
         ds = make_hexacopter_dataset(20, seed=2024, params=HexacopterParameters(**kw))
@@ -220,8 +220,8 @@ def what_if_tables(bases, ev) -> tuple[dict, pd.DataFrame, dict]:
                          "correct unique (%)": 100.0 * (g["label_paper"] == st).mean(),
                          "matching model rejected (%)": 100.0 * (~g[f"acc_{st}"]).mean()})
     df = pd.DataFrame(rows)
-    t = {v: df.pivot_table(index=["turbulence", "state"], columns="aircraft", values=v, sort=False)[list(evs)].round(1)
-         for v in ("correct unique (%)", "matching model rejected (%)")}
+    t = {v: df.pivot_table(index=["turbulence", "state"], columns="aircraft", values=v, sort=False)[list(evs)]
+         .round(1) for v in ("correct unique (%)", "matching model rejected (%)")}
     steady = pd.DataFrame({name: {"roll (rad^2)": v[0], "pitch (rad^2)": v[1]} for name, v in thr.items()}).T
     steady.index.name = "aircraft"
     return t, steady.apply(lambda c: c.map(lambda v: float(f"{v:.2g}"))), lost
