@@ -57,9 +57,10 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
     yaw : {"rate", "angle"}
         ``"rate"`` (default): the body yaw rate, channel ``yaw_rate``: the dataset's ``r`` variable when it has
         one, else the heading increment times ``fs`` (the first sample is then dropped so every channel has the
-        same time axis). After a rotor failure the heading of the simulated hexacopter drifts and, in severe
-        turbulence, now and then slips by whole turns (marginal yaw authority with one dead rotor), so the
-        heading angle is not stationary; the yaw rate is. ``"angle"``: the raw heading.
+        same time axis). The heading is the integral of the yaw rate under a slow heading loop (time constant
+        about 3 s, 300 samples), so at 100 Hz it is close to a unit-root process and an AR/VAR of order 20
+        does not whiten it; with the regular aircraft it also slips by whole turns in severe turbulence.
+        ``"angle"``: the raw heading.
 
     Returns
     -------

@@ -1,7 +1,10 @@
 """Parameter set and controller gains of the simulated hexacopter.
 
-The aircraft is a regular hexacopter of the 2-3 kg class of the paper (Dutta et al., Fig. 1): the arm is half
-the hub-to-hub distance 0.6096 m that the paper uses as the Dryden span. Each value carries its source or
+The aircraft is a planar PNPNPN hexacopter of the 2-3 kg class of the paper (Dutta et al., Fig. 1): the arm is
+half the hub-to-hub distance 0.6096 m that the paper uses as the Dryden span. The shipped design has bidirectional
+rotors and no rotor drag or weathervane moment, so that after a rotor failure it holds heading and flies in a
+regime where its dynamics are close to linear, as the paper's aircraft does; :data:`REGULAR_HEXACOPTER` is the
+regular aircraft with one-way rotors (``docs/results.md`` compares the two). Each value carries its source or
 reason in the field's comment; the constants are typical of 10-inch propellers on ~700 kV motors
 (thrust and torque coefficients as in the UIUC propeller database for 10x4.5 propellers, rotor drag and
 flapping coefficients of the order identified by Martin & Salaun (2010) and Mahony, Kumar & Corke (2012)
@@ -22,7 +25,7 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-__all__ = ["HexacopterParameters", "ControllerGains"]
+__all__ = ["HexacopterParameters", "ControllerGains", "REGULAR_HEXACOPTER"]
 
 
 @dataclass(frozen=True)
@@ -54,8 +57,12 @@ class HexacopterParameters:
         (blade-element slope dT/dw ~ 0.36 N/(m/s) at hover); it gives heave and roll/pitch damping and makes
         vertical and angular gusts act on the aircraft.
     k_rotor_drag : float
-        1.2e-4 N s/m: rotor H-force -k_rotor_drag Omega v_hub (in-plane air-relative hub velocity); about
-        0.36 N/(m/s) for the six rotors at hover, the order reported for rotor drag of small multirotors.
+        0 (shipped design): rotor H-force -k_rotor_drag Omega v_hub (in-plane air-relative hub velocity).
+        1.2e-4 N s/m (0.36 N/(m/s) for the six rotors at hover) is the order reported for small multirotors and
+        is the value of :data:`REGULAR_HEXACOPTER`. Off in the shipped design because, measured on the same
+        design (``docs/results.md``, "The shipped aircraft and its alternatives"), it makes the post-failure
+        roll / pitch / yaw-rate dynamics of rotors 2 and 6 (mirror images with the same spin) so alike that
+        the paper's whiteness rule cannot tell them apart; the paper's aircraft could.
     k_flapping : float
         4e-6 N s: blade-flapping moment k_flapping Omega (-v_y, v_x) of a rotor whose disc tilts away from
         the relative wind (0.06 N m at 5 m/s for six rotors).
@@ -64,21 +71,28 @@ class HexacopterParameters:
     air_density : float
         1.225 kg/m^3 (ISA sea level).
     k_weathervane : float
-        8e-4 N s^2: yaw moment ``k_weathervane |v_h| v_y`` of the body, legs and arms in sideslip (turns the
-        nose into the relative wind; a side area of ~0.03 m^2 a few cm behind the centre of gravity).
+        0 (shipped design): yaw moment ``k_weathervane |v_h| v_y`` of the body, legs and arms in sideslip
+        (turns the nose into the relative wind). 8e-4 N s^2 (a side area of ~0.03 m^2 a few cm behind the
+        centre of gravity) in :data:`REGULAR_HEXACOPTER`. Off in the shipped design: it is quadratic in the
+        relative wind, and in severe gusts it makes the post-failure yaw dynamics visibly nonlinear
+        (measured in ``docs/results.md``).
     omega_min, omega_max : float
-        60 and 900 rad/s: rotor speed limits (idle and full throttle; full thrust 12.7 N per rotor, so
-        the thrust-to-weight ratio is 3.2).
+        60 and 1100 rad/s: rotor speed limits (idle -- regular rotors only -- and full throttle: 19 N per
+        rotor, a thrust-to-weight ratio of 4.8, a 10-inch propeller at 10,500 rpm on a 6S battery). After a
+        failure four rotors carry the aircraft; with 900 rad/s (:data:`REGULAR_HEXACOPTER`, ratio 3.2) they
+        reach full speed in severe gusts, and that clipping is the largest nonlinearity left in the
+        post-failure dynamics (measured in ``docs/results.md``).
     reversible_rotors : bool
-        False (default, the regular hexacopter): a rotor turns one way only, between ``omega_min`` and
-        ``omega_max``, and its thrust is never negative. True: a what-if with bidirectional motors
-        (reversible "3D" speed controllers and symmetric propellers): speeds in ``[-omega_max, omega_max]``,
-        thrust :math:`k_T \\Omega |\\Omega|` and torque :math:`k_Q \\Omega |\\Omega|` change sign with the
-        speed (inflow, rotor drag and flapping scale with :math:`|\\Omega|`, a first-order simplification
-        for the reversed rotor, which only runs slowly in the cases studied). After a failure the rotor
-        opposite the failed one can then push down instead of stopping at its idle speed, so the post-failure
-        plant has no switching at the idle floor; ``docs/results.md`` uses it to measure how much of the
-        non-white fault-model residuals that switching causes.
+        True (shipped design): bidirectional motors (reversible "3D" speed controllers and symmetric
+        propellers): speeds in ``[-omega_max, omega_max]``, thrust :math:`k_T \\Omega |\\Omega|` and torque
+        :math:`k_Q \\Omega |\\Omega|` change sign with the speed (inflow, rotor drag and flapping scale with
+        :math:`|\\Omega|`, a first-order simplification for the reversed rotor, which only runs slowly in the
+        cases studied). A planar PNPNPN hexacopter with one rotor failed holds heading only with the opposite
+        rotor at zero thrust (Du et al. 2015); a reversible rotor can go there, so after the failure the
+        aircraft holds heading with a small, stationary yaw variance, as the paper's does (Figs. 6-7 and its
+        yaw steady-state threshold of 3e-4 rad^2). False (:data:`REGULAR_HEXACOPTER`): a rotor turns one way
+        only, between ``omega_min`` and ``omega_max``, and its thrust is never negative; the opposite rotor
+        then switches on and off its idle floor in gusts and the heading slips in severe turbulence.
     """
 
     mass: float = 2.4
@@ -92,14 +106,14 @@ class HexacopterParameters:
     k_torque: float = 2.5e-7
     motor_time_constant: float = 0.03
     k_inflow: float = 7.2e-4
-    k_rotor_drag: float = 1.2e-4
+    k_rotor_drag: float = 0.0
     k_flapping: float = 4e-6
     drag_area: float = 0.04
     air_density: float = 1.225
-    k_weathervane: float = 8e-4
+    k_weathervane: float = 0.0
     omega_min: float = 60.0
-    omega_max: float = 900.0
-    reversible_rotors: bool = False
+    omega_max: float = 1100.0
+    reversible_rotors: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.reversible_rotors, (bool, np.bool_)):
@@ -120,6 +134,14 @@ class HexacopterParameters:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+
+#: The regular hexacopter: unidirectional rotors with a 60 rad/s idle floor, 900 rad/s full speed
+#: (thrust-to-weight 3.2), rotor drag and the weathervane moment. It was tsfdi's shipped design until its
+#: post-failure dynamics were measured to be nonlinear (``docs/results.md``);
+#: ``simulate_hexacopter(params=REGULAR_HEXACOPTER)`` simulates it.
+REGULAR_HEXACOPTER = HexacopterParameters(reversible_rotors=False, omega_max=900.0, k_rotor_drag=1.2e-4,
+                                          k_weathervane=8e-4)
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 This is tsfdi's own generator of the data the study of Dutta et al. ("Statistical Time Series Methods for
 Multicopter Fault Detection and Identification", sections "Hexacopter model and data generation" and
-"Data Generation", Table 1) is built on: a regular hexacopter flying at 5 m/s through Dryden turbulence,
+"Data Generation", Table 1) is built on: a hexacopter flying at 5 m/s through Dryden turbulence,
 healthy or with rotor 1, 2 or 6 failed at 10 s, 60 s records at 1 kHz decimated to 100 Hz.
 
 Notes
@@ -25,20 +25,22 @@ the air :math:`\\mathbf v_h = (\\mathbf v - \\mathbf v_g) + (\\boldsymbol\\omega
 \\times \\mathbf r_i` (gusts :math:`\\mathbf v_g = (u_g, v_g, w_g)`, :math:`\\boldsymbol\\omega_g = (p_g, q_g,
 r_g)` from :mod:`tsfdi.datasets.dryden`, applied in body axes as in MIL-F-8785C):
 
-- thrust :math:`T_i = k_T \\bar\\Omega_i^2 + k_w \\bar\\Omega_i v_{h,z}` (>= 0), torque
-  :math:`Q_i = k_Q \\bar\\Omega_i^2`, where :math:`\\bar\\Omega_i = \\Omega_i + s_i (r - r_g)` is the rotor
+- thrust :math:`T_i = k_T \\bar\\Omega_i |\\bar\\Omega_i| + k_w |\\bar\\Omega_i| v_{h,z}`, torque
+  :math:`Q_i = k_Q \\bar\\Omega_i |\\bar\\Omega_i|` (bidirectional rotors, the shipped design; with one-way
+  rotors, ``reversible_rotors=False``, the speed stays in ``[omega_min, omega_max]`` and the thrust >= 0), where
+  :math:`\\bar\\Omega_i = \\Omega_i + s_i (r - r_g)` is the rotor
   speed relative to the air (:math:`s_i = +1` for the clockwise rotors; the motor holds
   :math:`\\Omega_i` relative to the turning airframe). This gives the rotor yaw damping
   :math:`-2 k_Q \\Omega_i r` per rotor (Mahony, Kumar & Corke 2012 model the rotor aerodynamics in the
   air-relative frame); with the rotor drag below, whose hub velocities include :math:`r \\times
-  \\mathbf r_i`, the yaw damping is :math:`\\approx 6 (k_h \\Omega \\ell^2 + 2 k_Q \\Omega)
-  \\approx 0.035` N m s at hover (``arm`` :math:`\\ell`), a yaw time constant :math:`I_{zz}/0.035 \\approx
-  2.3` s: weak, as for every multirotor, so the controller must provide the yaw stiffness;
+  \\mathbf r_i`, the yaw damping is :math:`\\approx 6 (k_h \\Omega \\ell^2 + 2 k_Q \\Omega)`: 0.035 N m s
+  at hover with rotor drag (``arm`` :math:`\\ell`; :data:`REGULAR_HEXACOPTER`), 0.0015 N m s without (the
+  shipped design): weak, as for every multirotor, so the controller must provide the yaw stiffness;
 - rotor drag (H-force) :math:`-k_h \\Omega_i (v_{h,x}, v_{h,y})`;
 - blade-flapping moment :math:`k_f \\Omega_i (-v_{h,y}, v_{h,x}, 0)`;
 
-so linear gusts move the attitude through drag and flapping, and angular gusts through the differential
-inflow and the rotor drag of each hub. The body adds drag :math:`-\\rho C_D A |\\mathbf v_r| \\mathbf v_r/2`
+so linear gusts move the attitude through flapping (and rotor drag where it is on), vertical and angular gusts
+through the differential inflow of the hubs. The body adds drag :math:`-\\rho C_D A |\\mathbf v_r| \\mathbf v_r/2`
 and a weathervane yaw moment :math:`k_n |v_{r,h}| v_{r,y}`. A failed rotor's thrust, torque, drag and
 flapping are zero from the failure time on.
 
@@ -71,32 +73,23 @@ loop drives up does not take the yaw authority of the five others). The yaw-rate
 while :math:`\\Omega_Y` is limited or less than 75 % of the yaw term reaches the rotors (anti-windup). One
 gain set (:class:`ControllerGains`) serves every record and turbulence level.
 
-*What a failure does here.* A planar PNPNPN hexacopter with one rotor failed can hold all four axes at
-hover only with the opposite rotor stopped (Du et al. 2015; Michieletto et al. 2018): there is no margin
-for yaw. In forward flight the nose-up moment of rotor drag and blade flapping gives a margin that depends
-on the direction of the relative wind: at 5 m/s and heading north the opposite rotor runs at about
-140 rad/s after rotor 1 fails, against the 60 rad/s idle speed; after rotor 2 fails it would need 38 rad/s
-(it has to turn a little away from north); after rotor 6 fails about 230 rad/s. At other headings, and at
-lower airspeed, the margin shrinks or vanishes, and severe gusts (standard deviation 2.5-4 m/s at 5 m
-altitude against the 5 m/s flight speed) move the relative wind that far. After the failure the heading
+*What a failure does here.* A planar PNPNPN hexacopter with one rotor failed can hold all four axes only
+with the opposite rotor at (about) zero thrust (Du et al. 2015; Michieletto et al. 2018). The shipped design has
+bidirectional rotors, so the opposite rotor can go there (and push down in gusts): after the failure the heading
 deviates -- nose right for rotor 1 (clockwise, its reaction torque is lost), nose left for rotors 2 and 6
-(the paper's Fig. 6) -- and the heading loop holds it again: in light and moderate turbulence the mean yaw
-rate over 30-60 s is below 0.05 rad/s in most records. In severe turbulence the gusts take the yaw margin
-away now and then and the heading slips by whole turns in some records, in the direction of the lost
-torque: median heading change over 30-60 s 0.5 (rotor 1), 0.7 (rotor 2) and 3.5 rad (rotor 6), 99 % of
-the yaw rates below 2.4, 1.7 and 2.0 rad/s (the speed-linear mixer and the softer attitude loop of earlier
-versions gave 1.4, 1.8 and 7.5 rad and 4.4, 3.0 and 3.2 rad/s; on 64 fresh seeds per rotor 0.85, 1.0 and
-3.5 rad against 1.8, 6.1 and 8.7 rad, and no aircraft lost against 1 of 192). Rotor 6 keeps the largest slips: its
-opposite rotor 3 carries the roll moment the failure needs and reaches the idle speed in strong gusts.
-Roll, pitch, body rates and the controls become stationary again after the transient in every case
-(tests in ``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading. No record of the
-shipped design loses the aircraft; a configuration that does is flagged in ``lost_control``. A heading
-loop whose set point follows the aircraft (bounded heading error), a thrust shift that lifts the lowest
-rotor off the idle speed and a lower idle speed (0-50 rad/s; 60 rad/s is 6.7 % of full speed, the order
-of the idle of multirotor ESC firmware) were tried and measured: none reduced the slips further.
-``HexacopterParameters(reversible_rotors=True)`` removes the idle floor altogether (bidirectional motors,
-a what-if outside the regular aircraft): the opposite rotor can then stop or push down, the hover heading is
-held after a failure (tested), and ``docs/results.md`` compares the identification study on both.
+(the paper's Fig. 6), by about 0.9 rad within 2 s -- and the heading loop brings it back and holds it at every
+turbulence level: over 30-60 s the heading of the shipped failure records changes by 0.34 rad at most and
+99 % of the yaw rates stay below 0.22 rad/s in severe turbulence. Four rotors then carry the aircraft; the
+1100 rad/s full speed leaves them a margin for severe gusts. So the post-failure roll, pitch and yaw rate
+are stationary and close to linear -- the regime the paper's method assumes. With the regular aircraft
+(:data:`REGULAR_HEXACOPTER`: one-way rotors with a 60 rad/s idle floor, 900 rad/s full speed, rotor drag and
+the weathervane moment) the opposite rotor runs near its idle speed and switches on and off the floor in
+gusts; the yaw margin then depends on the direction of the relative wind, and in severe turbulence the
+heading slips by whole turns in some records. ``docs/results.md`` ("The shipped aircraft and its
+alternatives") measures what each of these differences does to the identification. Roll, pitch, body rates
+and the controls become stationary again after the transient in every case (tests in
+``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading. No record of the shipped design loses
+the aircraft; a configuration that does is flagged in ``lost_control``.
 
 **Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz; the controller and the gusts are held
 constant over a step (sampled-data controller at 1 kHz). Each record is integrated on its own
@@ -127,10 +120,11 @@ from scipy import optimize, signal
 
 from tsfdi._validation import check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
-from tsfdi.datasets._hexacopter_params import ControllerGains, HexacopterParameters
+from tsfdi.datasets._hexacopter_params import REGULAR_HEXACOPTER, ControllerGains, HexacopterParameters
 from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, _draw
 
-__all__ = ["HexacopterParameters", "ControllerGains", "trim", "simulate_hexacopter", "make_hexacopter_dataset",
+__all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "trim", "simulate_hexacopter",
+           "make_hexacopter_dataset",
            "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file"]
 
 #: Output channels and their units.
@@ -402,15 +396,15 @@ def _state_rotor(state: str) -> int:
 
 #: Packing of the shipped file: int32 counts of these steps (units of the variable per count), zlib + shuffle.
 #: The smallest one-step prediction error (AR(10) residual standard deviation) of each variable over the
-#: healthy light-turbulence records of the shipped design is roll 3.0e-5 rad, pitch 2.5e-5 rad, yaw
-#: 4.8e-6 rad, r 5.5e-4 rad/s, collective 0.10, roll/pitch control 0.36 / 0.30, yaw control 0.055 rad/s. The
+#: healthy light-turbulence records of the shipped design is roll 2.9e-5 rad, pitch 2.4e-5 rad, yaw
+#: 2.5e-7 rad, r 2.2e-5 rad/s, collective 0.10, roll/pitch control 0.35 / 0.28, yaw control 0.0022 rad/s. The
 #: attitude and yaw-rate steps are below 1/20 of it (rounding, standard deviation step/sqrt(12), adds
 #: < 0.03 % to the residual variance), the control steps below 1/10 (< 0.1 %). Tested in
 #: ``tests/datasets/test_hexacopter.py::test_packing_step_far_below_ar_residual``. The body rates p, q
 #: (and the other channels) are in every file written without ``--shipped``; in the shipped file they would
 #: pass the 20 MB budget.
-PACK_SCALE = {"roll": 1e-6, "pitch": 1e-6, "yaw": 2e-7, "p": 5e-5, "q": 5e-5, "r": 2e-5,
-              "collective": 2e-3, "roll_control": 1e-2, "pitch_control": 1e-2, "yaw_control": 2e-3}
+PACK_SCALE = {"roll": 1e-6, "pitch": 1e-6, "yaw": 1e-8, "p": 5e-5, "q": 5e-5, "r": 1e-6,
+              "collective": 2e-3, "roll_control": 1e-2, "pitch_control": 1e-2, "yaw_control": 1e-4}
 #: Variables of the shipped file: the paper's attitude signals, the yaw rate and the four controls of eq. 2.
 SHIPPED_VARIABLES = ("roll", "pitch", "yaw", "r", "collective", "roll_control", "pitch_control", "yaw_control")
 _INT32_FILL = -2147483648
