@@ -227,6 +227,49 @@ def test_fit_baselines_pooled_records(synthetic):
         tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, fit_records=0)
 
 
+def test_select_alpha_leave_one_out(synthetic):
+    """Baselines.select_alpha: the paper's rule on held-out fitting windows for each candidate alpha; the
+    acceptances are those of the chi-square Ljung-Box test on the same residual windows."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
+              var_max_lags=4, steady_window=5.0, fit_records=3, models=["var"])
+    b = tsfdi.fit_baselines(recs, calibrate=True, **kw)
+    alphas = (1e-2, 1e-4, 1e-300)
+    tab = b.select_alpha("var", "whiteness", 5.0, alphas, step=1.0)
+    assert list(tab.index) == list(alphas)
+    np.testing.assert_allclose(tab[["correct", "wrong", "ambiguous", "none"]].sum(axis=1), 100.0)
+    # windows: every fault fitting record cut into 5 s windows 1 s apart, over 2 faults x 3 records
+    n = [(e.shape[0] - (500 - 2)) // 100 + 1 for f in b.faults for e in b.heldout[("var", f)]]
+    assert (tab["windows"] == sum(n)).all()
+    # at alpha ~ 0 no test rejects: every window accepts every model
+    assert tab.loc[1e-300, "ambiguous"] == 100.0
+    # the first window of every fault fitting record, recomputed with LjungBox: through its own state's model
+    # refitted without it (held out) and through the other state's model (never fitted on it)
+    for a in alphas[:2]:
+        test = tsfdi.LjungBox(lags=20, alpha=a)
+        count = dict.fromkeys(("correct", "wrong", "ambiguous", "none"), 0)
+        for f in b.faults:
+            for j, seg in enumerate(b.segments[f]):
+                acc = {g: not test.test((b.heldout[("var", f)][j] if g == f else
+                                         np.asarray(b.models["var"][g].residuals(seg)))[:500 - 2]).reject
+                       for g in b.faults}
+                hit = [g for g, ok in acc.items() if ok]
+                count["none" if not hit else "ambiguous" if len(hit) > 1 else
+                      "correct" if hit[0] == f else "wrong"] += 1
+        one = b.select_alpha("var", "whiteness", 5.0, [a], step=1000.0)   # one window per record
+        assert one.loc[a, "windows"] == 6
+        for k, v in count.items():
+            assert one.loc[a, k] == pytest.approx(100.0 * v / 6)
+    best = tab["correct"].max()
+    assert tab.attrs["selected"] == max(a for a in alphas if tab.loc[a, "correct"] >= best)
+    with pytest.raises(ValueError, match="alphas"):
+        b.select_alpha("var", "whiteness", 5.0, [0.0])
+    with pytest.raises(ValueError, match="model"):
+        b.select_alpha("nope", "whiteness", 5.0)
+    with pytest.raises(ValueError, match="calibrate=True"):
+        tsfdi.fit_baselines(recs, **kw).select_alpha("var", "whiteness", 5.0)
+
+
 def test_empirical_thresholds_leave_one_out(synthetic):
     """fit_baselines(calibrate=True): leave-one-record-out residuals; evaluate(thresholds="empirical") uses each
     model's thresholds calibrated on them (never on evaluation records)."""

@@ -188,6 +188,50 @@ def what_if_tables(bases, ev) -> tuple[dict, pd.DataFrame, dict]:
     return t, steady.apply(lambda c: c.map(lambda v: float(f"{v:.2g}"))), lost
 
 
+#: candidate per-channel alphas for the leave-one-record-out choice: the range of the paper's Table 3
+LOO_ALPHAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12)
+
+
+def loo_alpha(bases_e, data) -> tuple[pd.DataFrame, list[str]]:
+    """Per turbulence level, the VAR + whiteness alpha chosen on the fitting records (leave one record out,
+    :meth:`tsfdi.Baselines.select_alpha`, 20 s windows) and the evaluation records identified and monitored at it.
+    Returns the table and the target lines."""
+    sig = hexacopter_signals(data)
+    rows, idents = [], []
+    for lvl, b in bases_e.items():
+        tab = b.select_alpha("var", "whiteness", 20.0, LOO_ALPHAS)
+        a = tab.attrs["selected"]
+        ev = tsfdi.evaluate(sig, bases_e, models=["var"], methods=["whiteness"], alpha=a, turbulence=lvl,
+                            rules=["paper"], progress=False)
+        idents.append(ev.identification)
+        r = ev.rates()["correct"].xs(("var", "whiteness", "paper"), level=("model", "method", "rule"))
+        d = ev.detection_rates().loc[("var", "whiteness")]
+        for w in sorted(d.index):
+            rows.append({"turbulence": lvl, "alpha per channel": a,
+                         "held-out correct at 20 s, alpha 1e-3 (%)": round(float(tab.loc[1e-3, "correct"]), 2),
+                         "held-out correct at 20 s (%)": round(float(tab.loc[a, "correct"]), 2),
+                         "held-out windows": int(tab.loc[a, "windows"]), "window (s)": w,
+                         **{f: round(float(r.loc[(w, f)]), 2) for f in ev.faults},
+                         "false alarms (%)": round(float(d.loc[w, "false_alarm"]), 2),
+                         "expected (%)": float(f"{d.loc[w, 'expected_false_alarm']:.2g}"),
+                         "disjoint flagged": (f"{int(d.loc[w, 'disjoint_alarms'])} of "
+                                              f"{int(d.loc[w, 'disjoint_windows'])}"),
+                         "binomial p": float(f"{d.loc[w, 'false_alarm_pvalue']:.2g}"),
+                         "missed faults (%)": round(float(d.loc[w, "missed_fault"]), 2),
+                         "median delay (s)": float(d.loc[w, "delay_median"])})
+    df = pd.concat(idents)
+    df = df[df["window"] == 20.0]
+    rates = {f: 100.0 * (df.loc[df["state"] == f, "label_paper"] == f).mean() for f in sorted(set(df["state"]))}
+    low = min(100.0 * (g["label_paper"] == st).mean() for (_, st), g in df.groupby(["turbulence", "state"]))
+    ok = all(v >= 99.6 for v in rates.values())
+    lines = [f"- VAR + whiteness, paper rule, 20 s, alpha chosen per level on the fitting records: correct unique "
+             f"identification " + ", ".join(f"{f} {v:.2f}%" for f, v in rates.items())
+             + f" (lowest level and rotor {low:.2f}%) -> target >= 99.6% per rotor "
+             + ("**met**." if ok else "**not met**.")]
+    return pd.DataFrame(rows).set_index(["turbulence", "alpha per channel", "held-out correct at 20 s, alpha 1e-3 (%)",
+                                         "held-out correct at 20 s (%)", "held-out windows", "window (s)"]), lines
+
+
 def targets(ev) -> list[str]:
     r = ev.rates()["correct"]
     lines = []
@@ -291,6 +335,7 @@ def main() -> None:
     var_tab = variants(data)
     alpha_tab = alpha_table(bases, data)
     alt, alt_steady, alt_lost = what_if_tables(bases, ev)
+    loo_tab, loo_lines = loo_alpha(bases_e, data)
     sel_rows = []
     for lvl, b in bases.items():
         for st in (b.healthy,) + b.faults:
@@ -356,6 +401,27 @@ All levels together:
 Per turbulence level:
 
 """ + "\n".join(level_lines(ev)) + """
+
+### Alpha chosen on the fitting records (leave one record out)
+
+The paper sets each method's alpha (Table 3: 1e-3 to 1e-12) to minimise the confusion between failures. Here it
+is chosen per turbulence level from the fitting records alone (`Baselines.select_alpha`): every fault fitting
+record is cut into 20 s windows 1 s apart and driven through its own state's VAR refitted without it and through
+the other failures' VARs, which never saw it; the paper's rule identifies each window at every candidate alpha
+(""" + ", ".join(f"{a:g}" for a in LOO_ALPHAS) + """), and the largest alpha with the highest held-out correct rate
+is kept. The evaluation records are then identified at that alpha (all window lengths), and the healthy model
+detects at it.
+
+""" + "\n".join(loo_lines) + """
+
+""" + _markdown(loo_tab) + """
+
+Reading: out-of-sample residuals carry the baselines' estimation error, so at the nominal 1e-3 the matching
+model is rejected more often than 1e-3 -- on the held-out fitting windows as on the evaluation records; the
+windows the paper's rule misses there are windows with no model accepted. A smaller alpha accepts the matching
+model on those windows while the other failures' models, whose residuals are far from white, stay rejected. The
+healthy model detecting at the chosen alpha: false alarms and missed faults in the table (the false-alarm rate
+against the expectation is the subject of the detection sections).
 
 ### Calibrated thresholds (leave-one-record-out, paper 002 Fig. 2)
 
