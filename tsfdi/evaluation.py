@@ -399,7 +399,7 @@ class Baselines:
                          np.asarray(res.residuals(seg if chan is None else seg[:, chan]), dtype=np.float64))
                     e = e.reshape(e.shape[0], -1)
                     n = W - int(res.lags)
-                    if e.shape[0] < n:
+                    if e.shape[0] < n:      # record shorter than one window: skipped (for/else below)
                         break
                     ref = test.reference(res)
                     stat = test.window_statistic(e, n, step_n, **ref)
