@@ -58,7 +58,7 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
         ``"rate"`` (default): the body yaw rate, channel ``yaw_rate``: the dataset's ``r`` variable when it has
         one, else the heading increment times ``fs`` (the first sample is then dropped so every channel has the
         same time axis). The heading is the integral of the yaw rate under a slow heading loop (time constant
-        about 3 s, 300 samples), so at 100 Hz it is close to a unit-root process and an AR/VAR of order 20
+        1 / k_heading, about 3 s), so at 100 Hz it is close to a unit-root process and an AR/VAR of order 20
         does not whiten it; with the regular aircraft it also slips by whole turns in severe turbulence.
         ``"angle"``: the raw heading.
 
