@@ -10,7 +10,8 @@ scalar AR models (roll, pitch, yaw rate) and the VAR, residual variance (F test)
 the paper's decision rule and two rules resolving ambiguous windows (Table 4 analogues, rates, detection), then the
 Monitor end to end on every evaluated fault record; then the VAR / AR whiteness study again with thresholds
 calibrated per model on leave-one-record-out residuals of its fitting records (paper 002 Fig. 2), side by side;
-then the healthy-model detection at four per-channel alphas; then the VAR + whiteness study once more on the
+then the healthy-model detection at four per-channel alphas, and with the Ljung-Box test's exact finite-sample
+null (simulated white noise) at three; then the VAR + whiteness study once more on the
 design regenerated with each choice of the shipped aircraft undone (full speed, rotor drag, weathervane moment,
 one-way rotors: the regular aircraft).
 """
@@ -132,6 +133,58 @@ def alpha_table(bases, data) -> pd.DataFrame:
                          "disjoint windows flagged": f"{x} of {n}",
                          "expected disjoint": round(n * r["expected_false_alarm"] / 100.0, 2),
                          "binomial p": float(f"{r['false_alarm_pvalue']:.2g}")})
+    return pd.DataFrame(rows).set_index(["alpha per channel", "window (s)"])
+
+
+#: Simulated white-noise windows per window length for the Ljung-Box null (:func:`white_noise_null`)
+NULL_DRAWS = 200_000
+
+
+def white_noise_null(bases, data, alphas=(1e-3, 1e-2, 5e-2), draws=None, seed=2026) -> pd.DataFrame:
+    """The healthy VAR's Ljung-Box detection against the test's exact finite-sample null.
+
+    The null distribution of ``Q`` for ``n`` iid Gaussian residuals and 20 lags is simulated (``draws`` windows
+    per window length, fixed seed). It gives the size of the chi-square test on white noise and the exact
+    critical value; the healthy model then detects on the healthy evaluation records with that critical value
+    (a :class:`tsfdi.LjungBox` calibrated on the simulated statistics)."""
+    from tsfdi.detection import LjungBox, ljungbox_windows
+    from tsfdi.monitoring import window_statistics
+    from scipy import stats
+
+    draws = NULL_DRAWS if draws is None else draws
+    sig = hexacopter_signals(data)
+    rng = np.random.default_rng(seed)
+    first = next(iter(bases.values()))
+    fs, lags = first.fs, 20
+    rows = []
+    for w in (5.0, 10.0, 20.0):
+        W = int(round(w * fs))
+        n = W - int(first.models["var"][first.healthy].lags)
+        null = ljungbox_windows(rng.standard_normal((n * draws, 1)), lags, n, n).ravel()
+        for a in alphas:
+            test = LjungBox(lags=lags, alpha=a, threshold="empirical").calibrate(
+                statistic=np.repeat(null[:, None], len(first.channels), axis=1))
+            alarms, disjoint = [], []
+            for lvl, b in bases.items():
+                for i in range(sig.sizes["record"]):
+                    if (str(sig["turbulence"].values[i]) != lvl or str(sig["state"].values[i]) != b.healthy
+                            or bool(sig["lost_control"].values[i]) or sig["record"].values[i] in b.fit_records):
+                        continue
+                    d = window_statistics(sig.isel(record=i).values, {"h": b.models["var"][b.healthy]},
+                                          {"h": test}, window=W, step=int(round(fs)))["decisions"]["h"]["reject"]
+                    alarms.append(d)
+                    disjoint.append(d[::int(round(w))])
+            al, dj = np.concatenate(alarms), np.concatenate(disjoint)
+            p0 = 1.0 - (1.0 - a) ** len(first.channels)
+            rows.append({"alpha per channel": a, "window (s)": w,
+                         "chi2 test on white noise: size / alpha": round(
+                             float(np.mean(null > stats.chi2.ppf(1.0 - a, lags))) / a, 2),
+                         "critical value chi2": round(float(stats.chi2.ppf(1.0 - a, lags)), 2),
+                         "critical value exact": round(float(test.threshold_[0]), 2),
+                         "expected false alarms (%)": round(100.0 * p0, 3),
+                         "false alarms, exact null (%)": round(100.0 * al.mean(), 2),
+                         "disjoint windows flagged": f"{int(dj.sum())} of {dj.size}",
+                         "binomial p": float(f"{stats.binom.sf(int(dj.sum()) - 1, dj.size, p0):.2g}")})
     return pd.DataFrame(rows).set_index(["alpha per channel", "window (s)"])
 
 
@@ -334,6 +387,12 @@ def main() -> None:
     mon = monitor_table(bases, data)
     var_tab = variants(data)
     alpha_tab = alpha_table(bases, data)
+    null_tab = white_noise_null(bases, data)
+    size5 = null_tab.loc[(1e-3, 5.0), "chi2 test on white noise: size / alpha"]
+    size20 = null_tab.loc[(1e-3, 20.0), "chi2 test on white noise: size / alpha"]
+    big = null_tab.index.get_level_values(0) > 1e-3
+    sig_big, n_big = int((null_tab.loc[big, "binomial p"] < 0.05).sum()), int(big.sum())
+    sig_small, n_small = int((null_tab.loc[~big, "binomial p"] < 0.05).sum()), int((~big).sum())
     alt, alt_steady, alt_lost = what_if_tables(bases, ev)
     loo_tab, loo_lines = loo_alpha(bases_e, data)
     sel_rows = []
@@ -499,6 +558,24 @@ Counted on disjoint windows the excess at the paper's alpha (1e-3) and below is 
 1e-2 and 5e-2, where the tail is sampled best, it is significant in most cells: the statistic on new healthy
 records is spread wider than chi2(20) (the baseline's estimation error and slight misfit; notes of
 `tsfdi.LjungBox`), and thresholds calibrated on the fitting records do not fix that (calibrated section above).
+
+### How much of the excess is the chi-square approximation
+
+The chi-square(20) law of the Ljung-Box statistic is asymptotic. For the windows here (5, 10 and 20 s: the window's
+samples less the VAR order, with 20 lags) its upper tail is too light even for residuals that are exactly iid Gaussian: the
+null distribution of ``Q`` was simulated (""" + f"{NULL_DRAWS}" + """ windows of iid Gaussian noise per length, fixed seed), which
+gives the chi-square test's size on white noise and the exact critical value. The healthy VAR then detects on
+the healthy evaluation records with that exact critical value (a `tsfdi.LjungBox(threshold="empirical")`
+calibrated on the simulated statistics):
+
+""" + _markdown(null_tab) + f"""
+
+Reading: at alpha 1e-3 per channel the chi-square test itself rejects white noise {size5:g} times as often as
+alpha on 5 s windows ({size20:g} times on 20 s windows), so a part of the false-alarm excess above is the test's
+finite-sample law, not the model. With the exact critical values the remaining excess is the baselines' misfit
+of new healthy records: on the disjoint windows it is significant (binomial p < 0.05) in {sig_big} of
+{n_big} cells at alpha 1e-2 and 5e-2, where the tail is sampled well, and in {sig_small} of {n_small} at 1e-3.
+""" + """
 
 ## The shipped aircraft and its alternatives
 

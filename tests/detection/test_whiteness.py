@@ -121,6 +121,28 @@ def test_false_alarm_rate_iid_vector_and_bonferroni():
     assert lo / reps <= joint <= hi / reps, joint
 
 
+@pytest.mark.slow
+def test_chi2_tail_too_light_for_short_windows_and_simulated_null_fixes_it():
+    """Documented in LjungBox: 480 iid Gaussian samples, 20 lags -- the chi2(20) test rejects more often than
+    alpha in the far tail; a threshold calibrated on simulated white-noise statistics holds alpha on fresh noise."""
+    rng = np.random.default_rng(25)
+    n, lags, alpha, reps = 480, 20, 0.01, 40_000
+    q = ljungbox_windows(rng.standard_normal((n * reps, 1)), lags, n, n)
+    chi2 = tsfdi.LjungBox(lags, alpha)
+    rej = np.mean(q[:, 0] > chi2._null_threshold(1)[0])
+    lo, hi = stats.binom.interval(0.999, reps, alpha)
+    assert rej > hi / reps, rej                        # chi2 test over-sized on white noise
+    exact = tsfdi.LjungBox(lags, alpha, threshold="empirical").calibrate(statistic=q)
+    fresh = ljungbox_windows(rng.standard_normal((n * reps, 1)), lags, n, n)
+    rej = np.mean(fresh[:, 0] > exact.threshold_[0])
+    assert lo / reps <= rej <= hi / reps, rej
+    # longer windows: the chi2 law is close (size within the binomial band at 1980 samples)
+    n = 1980
+    q = ljungbox_windows(rng.standard_normal((n * 10_000, 1)), lags, n, n)
+    lo, hi = stats.binom.interval(0.999, 10_000, alpha)
+    assert lo / 10_000 <= np.mean(q[:, 0] > chi2._null_threshold(1)[0]) <= hi / 10_000
+
+
 def test_power_changed_dynamics():
     rng = np.random.default_rng(3)
     res = tsfdi.AR(_ar2(rng, 5000, 1)[0], 2).fit()
