@@ -43,16 +43,23 @@ ROOT = Path(__file__).resolve().parents[2]
 FIGS = ROOT / "docs" / "figures" / "study"
 
 
+def evaluated(sig, level, baselines):
+    """(position, state) of the records of ``level`` that :func:`tsfdi.evaluate` evaluates with ``baselines``:
+    valid and not fitting records."""
+    for i in range(sig.sizes["record"]):
+        if (str(sig["turbulence"].values[i]) == level and not bool(sig["lost_control"].values[i])
+                and sig["record"].values[i] not in baselines.fit_records):
+            yield i, str(sig["state"].values[i])
+
+
 def monitor_table(bases, data) -> pd.DataFrame:
     """Monitor (VAR, whiteness, 5 s windows, likelihood rule) on every evaluated fault record."""
     sig = hexacopter_signals(data)
     rows = []
     for lvl, b in bases.items():
         mon = b.monitor("var", window=5.0, rule="likelihood")
-        for i in range(sig.sizes["record"]):
-            st, tb = str(sig["state"].values[i]), str(sig["turbulence"].values[i])
-            if tb != lvl or st == b.healthy or bool(sig["lost_control"].values[i]) \
-                    or sig["record"].values[i] in b.fit_records:
+        for i, st in evaluated(sig, lvl, b):
+            if st == b.healthy:
                 continue
             res = mon.run(sig.isel(record=i).values)
             ident = res.windows[res.windows["status"] != ""]
@@ -166,9 +173,8 @@ def white_noise_null(bases, data, alphas=(1e-3, 1e-2, 5e-2), draws=None, seed=20
                 statistic=np.repeat(null[:, None], len(first.channels), axis=1))
             alarms, disjoint = [], []
             for lvl, b in bases.items():
-                for i in range(sig.sizes["record"]):
-                    if (str(sig["turbulence"].values[i]) != lvl or str(sig["state"].values[i]) != b.healthy
-                            or bool(sig["lost_control"].values[i]) or sig["record"].values[i] in b.fit_records):
+                for i, st in evaluated(sig, lvl, b):
+                    if st != b.healthy:
                         continue
                     d = window_statistics(sig.isel(record=i).values, {"h": b.models["var"][b.healthy]},
                                           {"h": test}, window=W, step=int(round(fs)))["decisions"]["h"]["reject"]
