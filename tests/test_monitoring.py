@@ -117,6 +117,78 @@ def test_window_statistics_equal_tests_on_slices(models, failure_record):
     assert ws["loglik"][1, 3] == pytest.approx(expected, rel=1e-9)
 
 
+def test_window_statistics_bank(models, failure_record):
+    """A bank (list of models of one order) accepts a window when any member accepts; its decision is its best
+    member's there and its likelihood score the largest of its members'."""
+    x = failure_record
+    W, S = 400, 100
+    lb = LjungBox(lags=15, alpha=1e-3)
+    members = [models["healthy"], models["f2"], models["f1"]]
+    one = window_statistics(x, {f"m{i}": m for i, m in enumerate(members)}, lb, window=W, step=S)
+    ws = window_statistics(x, {"bank": members, "f1": models["f1"]}, lb, window=W, step=S)
+    d = ws["decisions"]["bank"]
+    rej = np.array([one["decisions"][f"m{i}"]["reject"] for i in range(3)])
+    np.testing.assert_array_equal(d["reject"], rej.all(axis=0))
+    assert d["reject"].any() and not d["reject"].all()          # the record switches from healthy to f1
+    for w, m in enumerate(d["member"]):
+        ref = one["decisions"][f"m{m}"]
+        np.testing.assert_array_equal(d["statistic"][w], ref["statistic"][w])
+        np.testing.assert_array_equal(d["threshold"][w], ref["threshold"][w])
+        if not d["reject"][w]:                                   # an accepting member is reported
+            assert not ref["reject"][w]
+            pm = [one["decisions"][f"m{i}"]["pvalue"][w].min() for i in range(3) if not rej[i, w]]
+            assert ref["pvalue"][w].min() == max(pm)
+    np.testing.assert_allclose(ws["loglik"][0], one["loglik"].max(axis=0))
+    np.testing.assert_allclose(ws["loglik"][1], one["loglik"][2])
+    # a one-member bank is the model itself
+    solo = window_statistics(x, {"h": [models["healthy"]]}, lb, window=W, step=S)["decisions"]["h"]
+    for key in ("statistic", "pvalue", "reject", "threshold"):
+        np.testing.assert_array_equal(solo[key], one["decisions"]["m0"][key])
+    assert (solo["member"] == 0).all()
+    # a Monitor with banks gives the events of the plain models when every bank has one member
+    plain = _monitor(models).run(x)
+    banked = _monitor({k: [m] for k, m in models.items()}).run(x)
+    assert banked.events == plain.events
+    with pytest.raises(ValueError, match="empty bank"):
+        window_statistics(x, {"b": []}, lb, window=W)
+    with pytest.raises(ValueError, match="share one order"):
+        window_statistics(x, {"b": [models["f1"], VAR(x, 3).fit()]}, lb, window=W)
+    with pytest.raises(TypeError, match=r"models\['b'\]"):
+        window_statistics(x, {"b": [models["f1"], "f2"]}, lb, window=W)
+
+
+@pytest.mark.slow
+def test_bank_holds_alpha_where_the_pooled_model_does_not():
+    """Records of one state that differ (AR(1) with coefficient 0.2, 0.5 or 0.8): the model pooled over them
+    averages the dynamics and its residuals on a new record are correlated; a bank of one model per record
+    rejects a new record's window at most at about alpha (binomial 99.9 % bound over independent records)."""
+    from scipy import stats
+
+    rng = np.random.default_rng(2026)
+    phis = (0.2, 0.5, 0.8)
+
+    def ar1(phi, n):
+        e = rng.standard_normal(n + 200)
+        y = np.zeros_like(e)
+        for t in range(1, e.size):
+            y[t] = phi * y[t - 1] + e[t]
+        return y[200:]
+
+    fitting = [ar1(phi, 5000) for phi in phis for _ in range(2)]
+    pooled = tsfdi.AR(fitting, 1).fit()
+    bank = [tsfdi.AR(y, 1).fit() for y in fitting]
+    alpha, trials = 0.05, 300
+    lb = LjungBox(lags=10, alpha=alpha)
+    rejects = {"pooled": 0, "bank": 0}
+    for _ in range(trials):
+        y = ar1(phis[rng.integers(3)], 500)
+        d = window_statistics(y, {"pooled": pooled, "bank": bank}, lb, window=500)["decisions"]
+        for k in rejects:
+            rejects[k] += int(d[k]["reject"][0])
+    assert rejects["bank"] <= stats.binom.ppf(0.999, trials, alpha), rejects
+    assert rejects["pooled"] >= 0.5 * trials, rejects
+
+
 def test_rolling_variance(kind):
     x = np.random.default_rng(3).standard_normal((500, 2)) * [1.0, 3.0] + 5.0
     v = rolling_variance(as_kind(x, kind), 100, 30)

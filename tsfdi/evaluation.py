@@ -238,6 +238,7 @@ class Baselines:
     segments: dict = field(default_factory=dict, repr=False)
     heldout: dict = field(default_factory=dict, repr=False)
     _calibrated: dict = field(default_factory=dict, repr=False)
+    _banks: dict = field(default_factory=dict, repr=False)
 
     def model_channels(self, model: str) -> list[int]:
         """Channel positions a model uses (all for ``"var"``)."""
@@ -272,11 +273,14 @@ class Baselines:
 
     def monitor(self, model: str = "var", *, window: float = 20.0, step: float = 1.0, method: str = "whiteness",
                 alpha: float | None = None, lags: int | None = None, rule: str = "paper",
-                thresholds: str = "chi2") -> Monitor:
+                thresholds: str = "chi2", bank: bool = False) -> Monitor:
         """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models, tests and thresholds
-        (``thresholds="empirical"``: each model's test calibrated by :meth:`calibrated_tests`)."""
+        (``thresholds="empirical"``: each model's test calibrated by :meth:`calibrated_tests`; ``bank=True``:
+        every state is the :meth:`bank` of its per-record models)."""
         thresholds = option(thresholds, "thresholds", THRESHOLDS)
+        _check_bank(bank, thresholds)
         chans = self.model_channels(model)
+        states = self.state_models(model, bank)
         if thresholds == "empirical":
             tests = self.calibrated_tests(model, method, window, alpha=alpha, lags=lags)
             test: Any = {f: tests[f] for f in self.faults}
@@ -284,9 +288,45 @@ class Baselines:
         else:
             test = _make_test(method, model, alpha, lags, window, self.fs)
             det = None
-        return Monitor(self.models[model][self.healthy], {f: self.models[model][f] for f in self.faults},
+        return Monitor(states[self.healthy], {f: states[f] for f in self.faults},
                        window=window, step=step, fs=self.fs, test=test, detection_test=det,
                        steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
+
+    def bank(self, model: str, state: str) -> tuple:
+        r"""The bank of ``state``: ``model`` refitted on each of the state's fitting records on its own.
+
+        The pooled model of :attr:`models` averages the dynamics of its fitting records. Records of one state
+        differ (in turbulence each flies its own trim and gusts, so its linearised dynamics differ a little), and
+        on a new record the pooled model's residuals are less white than the chi-square law says. A bank keeps one
+        model per fitting record (same order, trend and hold-back as the pooled model); a window is explained by
+        the state when *any* member accepts it (:func:`~tsfdi.monitoring.window_statistics`). If the new record
+        behaves like one of the fitting records, the member fitted on it rejects with probability about
+        ``alpha``, and the bank (which rejects only when every member does) at most that: the false-alarm rate
+        stays near its expectation where the pooled model's does not (docs/results.md, "Banks of per-record
+        models").
+
+        Returns
+        -------
+        tuple of fitted results
+            One per fitting record of ``state``, in the order of :attr:`fit_records`.
+        """
+        if model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
+        if state not in self.models[model]:
+            raise ValueError(f"state must be one of {list(self.models[model])}, got {state!r}")
+        key = (model, state)
+        if key not in self._banks:
+            res = self.models[model][state]
+            spec = res.model
+            chans = self.model_channels(model)
+            segs = [g[:, chans] if model == "var" else g[:, chans[0]] for g in self.segments[state]]
+            self._banks[key] = tuple(type(spec)(g, int(res.lags), trend=spec.trend, hold_back=spec.hold_back).fit()
+                                     for g in segs)
+        return self._banks[key]
+
+    def state_models(self, model: str, bank: bool = False) -> dict:
+        """State -> the pooled fitted model of ``model`` (the paper), or with ``bank=True`` its :meth:`bank`."""
+        return {s: (self.bank(model, s) if bank else self.models[model][s]) for s in (self.healthy,) + self.faults}
 
     def calibrated_tests(self, model: str, method: str, window: float, *, alpha: float | None = None,
                          lags: int | None = None, step: int = 1) -> dict:
@@ -342,7 +382,7 @@ class Baselines:
 
     def select_alpha(self, model: str = "var", method: str = "whiteness", window: float = 20.0,
                      alphas: Sequence[float] = (1e-3, 1e-4, 1e-5, 1e-6), *, lags: int | None = None,
-                     step: float = 1.0) -> pd.DataFrame:
+                     step: float = 1.0, bank: bool = False) -> pd.DataFrame:
         """Choose the identification alpha on the fitting records, leaving each record out (paper's rule).
 
         Every fitting record of every fault state is cut into ``window``-second windows ``step`` s apart and
@@ -359,6 +399,9 @@ class Baselines:
             Candidate per-channel alphas, each in (0, 1).
         step : float
             Seconds between window starts.
+        bank : bool
+            Identify with the states' :meth:`bank` instead of their pooled models: the held-out record's own
+            state is its bank without the member fitted on that record (no ``calibrate=True`` needed).
 
         Returns
         -------
@@ -378,7 +421,8 @@ class Baselines:
         method = option(method, "method", METHODS)
         if model not in self.models:
             raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        if not self.heldout:
+        _check_bank(bank, "chi2")
+        if not bank and not self.heldout:
             raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
                              "to select alpha")
         window = float_like(window, "window", minimum=0.0, strict_min=True)
@@ -393,19 +437,30 @@ class Baselines:
         for state in self.faults:
             for j, seg in enumerate(self.segments[state]):
                 per_model = []
+                x = seg if chan is None else seg[:, chan]
                 for f in self.faults:
                     res = self.models[model][f]
-                    e = (self.heldout[(model, state)][j] if f == state else
-                         np.asarray(res.residuals(seg if chan is None else seg[:, chan]), dtype=np.float64))
-                    e = e.reshape(e.shape[0], -1)
                     n = W - int(res.lags)
-                    if e.shape[0] < n:      # record shorter than one window: skipped (for/else below)
+                    if seg.shape[0] - int(res.lags) < n:    # record shorter than one window: skipped (for/else)
                         break
-                    ref = test.reference(res)
-                    stat = test.window_statistic(e, n, step_n, **ref)
-                    pval = test._threshold_pvalue(stat, n, **ref)[1]
-                    # accepted at alpha when every channel's p-value exceeds it: (windows, alphas)
-                    per_model.append(np.all(pval[:, :, None] > alphas[None, None, :], axis=1))
+                    if bank:
+                        members = [(r, None) for i, r in enumerate(self.bank(model, f)) if f != state or i != j]
+                        if not members:
+                            raise ValueError(f"select_alpha with bank=True needs at least two fitting records per "
+                                             f"state; state {f!r} has one")
+                    else:
+                        members = [(res, self.heldout[(model, state)][j] if f == state else None)]
+                    acc = False
+                    for r, e in members:
+                        e = np.asarray(r.residuals(x) if e is None else e, dtype=np.float64)
+                        e = e.reshape(e.shape[0], -1)
+                        ref = test.reference(r)
+                        stat = test.window_statistic(e, n, step_n, **ref)
+                        pval = test._threshold_pvalue(stat, n, **ref)[1]
+                        # accepted at alpha when every channel's p-value exceeds it: (windows, alphas); a bank
+                        # accepts when any member does
+                        acc = acc | np.all(pval[:, :, None] > alphas[None, None, :], axis=1)
+                    per_model.append(acc)
                 else:
                     m = min(a.shape[0] for a in per_model)
                     accepted.append(np.stack([a[:m] for a in per_model], axis=-1))
@@ -429,6 +484,14 @@ class Baselines:
     def __repr__(self) -> str:
         return (f"Baselines(models={list(self.models)}, healthy={self.healthy!r}, faults={self.faults}, "
                 f"fit_records={len(self.fit_records)})")
+
+
+def _check_bank(bank: Any, thresholds: str) -> None:
+    if not isinstance(bank, (bool, np.bool_)):
+        raise TypeError(f"bank must be a bool, got {bank!r}")
+    if bank and thresholds == "empirical":
+        raise ValueError("bank=True needs thresholds='chi2': the calibrated thresholds belong to the pooled models "
+                         "(their leave-one-record-out residuals), not to the members of a bank")
 
 
 def _resid_list(res: Any) -> list:
@@ -686,6 +749,8 @@ class Evaluation:
         The records evaluated (id, state, turbulence) and those skipped with the reason.
     thresholds : {"chi2", "empirical"}
         How the test thresholds were set.
+    bank : bool
+        Whether every state was the bank of its per-record models (:meth:`Baselines.bank`).
     calibration : pandas.DataFrame
         Per turbulence level (baselines), model, method, window length, state and channel: the null
         distribution's critical value (``distribution``) and, with ``thresholds="empirical"``, the calibrated
@@ -702,6 +767,7 @@ class Evaluation:
     records: pd.DataFrame
     nchan: dict = field(default_factory=dict)
     thresholds: str = "chi2"
+    bank: bool = False
     calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     # -- identification
@@ -836,7 +902,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
              turbulence: Any = None, step: float = 1.0, settle: float = 10.0, alpha: Any = None, lags: Any = None,
              rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True, progress: bool = True,
              states: Any = None, failure_times: Any = None, fs: float | None = None,
-             thresholds: str = "chi2") -> Evaluation:
+             thresholds: str = "chi2", bank: bool = False) -> Evaluation:
     r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
 
     Parameters
@@ -881,6 +947,11 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         leave-one-record-out fitting residuals (:meth:`Baselines.calibrated_tests`; needs
         ``fit_baselines(..., calibrate=True)``), and p-values are empirical (paper 002, Fig. 2). Evaluation
         records are never used for calibration.
+    bank : bool
+        ``False`` (the paper): every state is its model pooled over its fitting records. ``True``: every state
+        (healthy and each fault) is the bank of its models fitted on each fitting record alone
+        (:meth:`Baselines.bank`), accepted on a window when any member accepts; detection alarms when every
+        healthy member rejects. Needs ``thresholds="chi2"``.
 
     Returns
     -------
@@ -935,6 +1006,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
 
     thresholds = option(thresholds, "thresholds", THRESHOLDS)
+    _check_bank(bank, thresholds)
     alphas, lag_of, tests = {}, {}, {}
     for m in models:
         for meth in methods:
@@ -961,7 +1033,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         base = first if by_level is None else by_level[rec.turbulence[i]]
         for m in models:
             x = x_all[:, base.model_channels(m)]
-            fault_models = {f: base.models[m][f] for f in faults}
+            per_state = base.state_models(m, bank)
+            fault_models = {f: per_state[f] for f in faults}
             for meth in methods:
                 for w in wins:
                     W = int(round(w * rec.fs))
@@ -973,7 +1046,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                     else:
                         test_h = test_f = test
                     if detection:
-                        d = window_statistics(x, {"h": base.models[m][healthy]}, {"h": test_h}, window=W,
+                        d = window_statistics(x, {"h": per_state[healthy]}, {"h": test_h}, window=W,
                                               step=step_n)["decisions"]["h"]
                         starts = np.arange(0, x.shape[0] - W + 1, step_n)
                         st, en = starts / rec.fs, (starts + W) / rec.fs
@@ -1028,14 +1101,15 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                     cal_rows.append(row)
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
                       records=recs, nchan={m: len(first.model_channels(m)) for m in models}, thresholds=thresholds,
-                      calibration=pd.DataFrame(cal_rows))
+                      bank=bool(bank), calibration=pd.DataFrame(cal_rows))
 
 
 def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, models: Sequence[str] | None = None,
                      methods: Sequence[str] = METHODS, windows: Sequence[float] = (5.0, 10.0, 20.0),
                      rules: Sequence[str] = ("paper", "likelihood", "pvalue"), lags: Any = None, settle: float = 10.0,
                      fit_records: int = 10, pool: str = "level", order: Any = 20, max_lags: int = 20,
-                     var_max_lags: int = 20, progress: bool = True, thresholds: str = "chi2") -> tuple[dict, Evaluation]:
+                     var_max_lags: int = 20, progress: bool = True, thresholds: str = "chi2",
+                     bank: bool = False) -> tuple[dict, Evaluation]:
     """The whole study of paper 003 on a hexacopter dataset: pooled baselines, then evaluation.
 
     The first ``fit_records`` valid records of each state and turbulence level fit the baselines (whole
@@ -1063,6 +1137,8 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
     thresholds : {"chi2", "empirical"}
         Test thresholds (:func:`evaluate`); ``"empirical"`` fits the baselines with ``calibrate=True``
         (leave-one-record-out residuals of the fitting records).
+    bank : bool
+        Every state as the bank of its per-record models (:func:`evaluate`, :meth:`Baselines.bank`).
 
     Returns
     -------
@@ -1107,7 +1183,7 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
             one = fit_baselines(sig, **kw)
             bases = dict.fromkeys(levels, one)
     ev = evaluate(sig, bases, models=names, methods=methods, windows=windows, rules=rules, lags=lags,
-                  settle=settle, progress=progress, thresholds=thresholds)
+                  settle=settle, progress=progress, thresholds=thresholds, bank=bank)
     return bases, ev
 
 

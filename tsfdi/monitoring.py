@@ -455,6 +455,25 @@ def _window_statistic(test: Any, e: np.ndarray, n: int, step: int, name: str, p:
     return test.window_statistic(e, n, step, **reference)
 
 
+def _members(what: str, res: Any) -> tuple:
+    """The fitted models standing for one state (``what`` names the argument in errors): one result, or the
+    members of a bank (a list or tuple)."""
+    if isinstance(res, (list, tuple)):
+        if not res:
+            raise ValueError(f"{what} is an empty bank: give at least one fitted model")
+        for r in res:
+            if not hasattr(r, "residuals"):
+                raise TypeError(f"{what} must hold fitted results, got {type(r).__name__}")
+        if len({int(r.lags) for r in res}) > 1:
+            raise ValueError(f"the members of the bank {what} must share one order, got lags "
+                             f"{sorted({int(r.lags) for r in res})}")
+        return tuple(res)
+    if not hasattr(res, "residuals"):
+        raise TypeError(f"{what} must be fitted results or a list of them (a bank), got "
+                        f"{type(res).__name__}")
+    return (res,)
+
+
 def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, step: int = 1,
                       common: int | None = None) -> dict:
     r"""Residual test of every model on every sliding window of one record, all windows at once.
@@ -468,12 +487,16 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
     ----------
     signal : array_like, DataFrame or DataArray, shape (nobs, k) or (nobs,)
     models : mapping
-        Name -> fitted AR / VAR results with ``k`` channels.
+        Name -> fitted AR / VAR results with ``k`` channels, or a list of them of one order: a *bank* standing
+        for one state by several models (e.g. one per fitting record, :meth:`tsfdi.Baselines.bank`). A bank
+        accepts a window when any member accepts it; its decision on a window is that of its best member
+        there (accepting before rejecting, then the largest smallest-channel p-value, then the smallest
+        largest statistic-to-threshold ratio), and its likelihood score the largest of its members'.
     test : LjungBox, FTest or mapping
         Per-channel test (``LjungBox(multivariate=None)`` or ``FTest(alternative="greater")``); other tests
         are applied window by window through their ``test`` method. A mapping name -> test gives each model its
         own test (e.g. thresholds calibrated on that model's healthy residuals, ``threshold="empirical"``:
-        the calibrated threshold and empirical p-values are used).
+        the calibrated threshold and empirical p-values are used); the members of a bank share its test.
     window, step : int
         Window length and step in samples.
     common : int, optional
@@ -484,7 +507,8 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
     -------
     dict
         ``starts`` (n_windows,) window starts; and per model name arrays ``statistic``, ``pvalue``,
-        ``channel_reject`` (n_windows, k), ``reject`` (n_windows,), ``threshold`` (k,) under ``"decisions"``;
+        ``channel_reject``, ``threshold`` (n_windows, k), ``reject`` and ``member`` (n_windows,: the bank
+        member whose decision is reported, 0 for a single model) under ``"decisions"``;
         ``loglik`` (n_models, n_windows) Gaussian log-likelihood per sample of each model's residuals on the
         common samples with the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
     """
@@ -496,7 +520,8 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         raise TypeError("models must be a non-empty mapping name -> fitted results")
     if window > sig.nobs:
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
-    orders = {name: int(res.lags) for name, res in models.items()}
+    banks = {name: _members(f"models[{name!r}]", res) for name, res in models.items()}
+    orders = {name: int(ms[0].lags) for name, ms in banks.items()}
     pmax = max(orders.values()) if common is None else int_like(common, "common", minimum=0)
     if window - pmax < 3:
         raise ValueError(f"window ({window}) must exceed the largest model order ({pmax}) by at least 3 samples")
@@ -508,38 +533,54 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         missing = [name for name in models if name not in test]
         if missing:
             raise ValueError(f"test is a mapping but has no test for the model(s) {missing}")
-    for j, (name, res) in enumerate(models.items()):
+    for j, (name, members) in enumerate(banks.items()):
         p = orders[name]
-        e = _model_channels(res, x)
         n = window - p
         test_j = test[name] if isinstance(test, Mapping) else test
-        ref = test_j.reference(res)
-        stat = _window_statistic(test_j, e, n, step, name, p, ref)
-        if stat is None:
-            ds = [test_j.test(e[s:s + n], **ref) for s in starts]
-            stat = np.array([d.statistic for d in ds])
-            pv = np.array([d.pvalue for d in ds])
-            thr = ds[0].threshold if ds else np.full(k, np.nan)
-            rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
-        else:
-            thr, pv = test_j._threshold_pvalue(stat, n, **ref)
-            rej_c = stat > thr
-        decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": np.asarray(thr, dtype=float),
-                           "channel_reject": rej_c, "reject": rej_c.any(axis=1), "nobs": n}
-        # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
-        off = pmax - p
-        m = window - pmax
-        ee = (e[:, :, None] * e[:, None, :]).reshape(e.shape[0], k * k)
-        cs = np.concatenate([np.zeros((1, k * k)), np.cumsum(ee, axis=0)])
-        c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
-        lo, hi = starts + off, starts + off + m
-        mu = (c1[hi] - c1[lo]) / m
-        cov = ((cs[hi] - cs[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
-        sign, logdet = np.linalg.slogdet(cov)
-        logdet = np.where(sign > 0, logdet, np.inf)
-        loglik[j] = -0.5 * (logdet + k * np.log(2 * np.pi) + k)
+        per = [_member_statistics(res, x, test_j, starts, n, step, name, p, pmax, window) for res in members]
+        stat, pv, thr, rej_c, ll = (np.stack([m[i] for m in per]) for i in range(5))
+        acc = ~rej_c.any(axis=2)                                         # (members, n_windows)
+        ratio = np.max(stat / np.where(thr > 0, thr, np.inf), axis=2)
+        best = np.lexsort((-ratio, np.nan_to_num(pv.min(axis=2), nan=-1.0), acc), axis=0)[-1]
+        w = np.arange(nwin)
+        decisions[name] = {"statistic": stat[best, w], "pvalue": pv[best, w], "threshold": thr[best, w],
+                           "channel_reject": rej_c[best, w], "reject": ~acc.any(axis=0), "member": best,
+                           "nobs": n}
+        loglik[j] = ll.max(axis=0)
     return {"starts": starts, "decisions": decisions, "loglik": loglik, "names": tuple(models), "channels":
             tuple(sig.channels)}
+
+
+def _member_statistics(res: Any, x: np.ndarray, test: Any, starts: np.ndarray, n: int, step: int, name: str,
+                       p: int, pmax: int, window: int) -> tuple:
+    """One fitted model on every window: statistic, p-value, threshold, channel rejection (n_windows, k) and the
+    likelihood score (n_windows,) of :func:`window_statistics`."""
+    e = _model_channels(res, x)
+    nwin, k = starts.size, e.shape[1]
+    ref = test.reference(res)
+    stat = _window_statistic(test, e, n, step, name, p, ref)
+    if stat is None:
+        ds = [test.test(e[s:s + n], **ref) for s in starts]
+        stat = np.array([d.statistic for d in ds]).reshape(nwin, k)
+        pv = np.array([d.pvalue for d in ds]).reshape(nwin, k)
+        thr = np.array([d.threshold for d in ds], dtype=float).reshape(nwin, -1)
+        rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
+    else:
+        thr, pv = test._threshold_pvalue(stat, n, **ref)
+        rej_c = stat > thr
+    thr = np.broadcast_to(np.asarray(thr, dtype=float), rej_c.shape)
+    # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
+    off = pmax - p
+    m = window - pmax
+    ee = (e[:, :, None] * e[:, None, :]).reshape(e.shape[0], k * k)
+    cs = np.concatenate([np.zeros((1, k * k)), np.cumsum(ee, axis=0)])
+    c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
+    lo, hi = starts + off, starts + off + m
+    mu = (c1[hi] - c1[lo]) / m
+    cov = ((cs[hi] - cs[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
+    sign, logdet = np.linalg.slogdet(cov)
+    logdet = np.where(sign > 0, logdet, np.inf)
+    return stat, pv, thr, rej_c, -0.5 * (logdet + k * np.log(2 * np.pi) + k)
 
 
 def apply_rule(reject: np.ndarray, loglik: np.ndarray, pvalue: np.ndarray, rule: str = "paper") -> np.ndarray:
@@ -662,10 +703,12 @@ class Monitor:
 
     Parameters
     ----------
-    baseline : fitted results
-        Healthy model :math:`M_0` (AR or VAR results).
+    baseline : fitted results or list of them
+        Healthy model :math:`M_0` (AR or VAR results), or a bank of healthy models (e.g. one per healthy
+        fitting record, :meth:`tsfdi.Baselines.bank`): the window is healthy when any member accepts it
+        (:func:`window_statistics`).
     models : mapping
-        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels.
+        Name -> fitted fault models :math:`M_1, M_2, \dots` (or banks), with the baseline's channels.
     window : float
         Window length in seconds (samples when ``fs = 1``).
     step : float
@@ -705,20 +748,23 @@ class Monitor:
         from tsfdi.detection.whiteness import LjungBox
 
         self.fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
-        if not hasattr(baseline, "residuals"):
-            raise TypeError(f"baseline must be fitted results (AR or VAR) with a residuals() method, got "
-                            f"{type(baseline).__name__}")
+        if isinstance(baseline, (list, tuple)) and baseline:
+            first = _members("baseline", baseline)[0]
+        elif hasattr(baseline, "residuals"):
+            first = baseline
+        else:
+            raise TypeError(f"baseline must be fitted results (AR or VAR) with a residuals() method or a list of "
+                            f"them (a bank), got {type(baseline).__name__}")
+        self.nchan = int(getattr(first, "neqs", 1))
         if not isinstance(models, Mapping) or not models:
             raise TypeError("models must be a non-empty mapping name -> fitted fault models")
         for name, res in models.items():
-            if not hasattr(res, "residuals"):
-                raise TypeError(f"models[{name!r}] must be fitted results, got {type(res).__name__}")
-            if int(getattr(res, "neqs", 1)) != int(getattr(baseline, "neqs", 1)):
-                raise ValueError(f"models[{name!r}] has {getattr(res, 'neqs', 1)} channel(s) but baseline has "
-                                 f"{getattr(baseline, 'neqs', 1)}")
+            for r in _members(f"models[{name!r}]", res):
+                if int(getattr(r, "neqs", 1)) != self.nchan:
+                    raise ValueError(f"models[{name!r}] has {getattr(r, 'neqs', 1)} channel(s) but baseline has "
+                                     f"{self.nchan}")
         self.baseline = baseline
         self.models = dict(models)
-        self.nchan = int(getattr(baseline, "neqs", 1))
         self.window_n = _seconds_to_samples(window, "window", self.fs, minimum=3)
         self.step_n = max(1, int(round(self.fs))) if step is None else _seconds_to_samples(step, "step", self.fs)
         self.window = self.window_n / self.fs
@@ -800,7 +846,7 @@ class Monitor:
             var = x[lo:i0 + W].var(axis=0) if lo >= 0 else np.full(self.nchan, np.nan)
             fault = bool(d0["reject"][w])
             row = {"start": self._t(start), "end": self._t(end),
-                   "detect_statistic": float(np.max(d0["statistic"][w] / d0["threshold"])),
+                   "detect_statistic": float(np.max(d0["statistic"][w] / d0["threshold"][w])),
                    "detect_pvalue": float(np.min(d0["pvalue"][w])), "fault": fault}
             for c in range(self.nchan):
                 row[f"variance_{c}"] = float(var[c])

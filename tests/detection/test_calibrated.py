@@ -166,7 +166,7 @@ def test_window_statistics_per_model_tests():
             assert ws["decisions"][name]["statistic"][w, 0] == pytest.approx(d.statistic[0], rel=1e-8)
             assert ws["decisions"][name]["pvalue"][w, 0] == pytest.approx(d.pvalue[0])
             assert ws["decisions"][name]["reject"][w] == d.reject
-        np.testing.assert_array_equal(ws["decisions"][name]["threshold"], tests[name].threshold_)
+            assert ws["decisions"][name]["threshold"][w, 0] == tests[name].threshold_[0]
     with pytest.raises(ValueError, match="no test for the model"):
         window_statistics(x, models, {"a": tests["a"]}, window=200, step=50)
 
