@@ -538,6 +538,12 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         n = window - p
         test_j = test[name] if isinstance(test, Mapping) else test
         per = [_member_statistics(res, x, test_j, starts, n, step, name, p, pmax, window) for res in members]
+        if len(per) == 1:
+            stat, pv, thr, rej_c, ll = per[0]
+            decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": thr, "channel_reject": rej_c,
+                               "reject": rej_c.any(axis=1), "member": np.zeros(nwin, dtype=np.intp), "nobs": n}
+            loglik[j] = ll
+            continue
         stat, pv, thr, rej_c, ll = (np.stack([m[i] for m in per]) for i in range(5))
         acc = ~rej_c.any(axis=2)                                         # (members, n_windows)
         ratio = np.max(stat / np.where(thr > 0, thr, np.inf), axis=2)
