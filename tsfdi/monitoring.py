@@ -538,12 +538,6 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         n = window - p
         test_j = test[name] if isinstance(test, Mapping) else test
         per = [_member_statistics(res, x, test_j, starts, n, step, name, p, pmax, window) for res in members]
-        if len(per) == 1:
-            stat, pv, thr, rej_c, ll = per[0]
-            decisions[name] = {"statistic": stat, "pvalue": pv, "threshold": thr, "channel_reject": rej_c,
-                               "reject": rej_c.any(axis=1), "member": np.zeros(nwin, dtype=np.intp), "nobs": n}
-            loglik[j] = ll
-            continue
         stat, pv, thr, rej_c, ll = (np.stack([m[i] for m in per]) for i in range(5))
         acc = ~rej_c.any(axis=2)                                         # (members, n_windows)
         ratio = np.max(stat / np.where(thr > 0, thr, np.inf), axis=2)
@@ -754,14 +748,7 @@ class Monitor:
         from tsfdi.detection.whiteness import LjungBox
 
         self.fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
-        if isinstance(baseline, (list, tuple)) and baseline:
-            first = _members("baseline", baseline)[0]
-        elif hasattr(baseline, "residuals"):
-            first = baseline
-        else:
-            raise TypeError(f"baseline must be fitted results (AR or VAR) with a residuals() method or a list of "
-                            f"them (a bank), got {type(baseline).__name__}")
-        self.nchan = int(getattr(first, "neqs", 1))
+        self.nchan = int(getattr(_members("baseline", baseline)[0], "neqs", 1))
         if not isinstance(models, Mapping) or not models:
             raise TypeError("models must be a non-empty mapping name -> fitted fault models")
         for name, res in models.items():

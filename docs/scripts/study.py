@@ -297,10 +297,10 @@ def loo_alpha(bases_e, data, bank: bool = False) -> tuple[pd.DataFrame, list[str
     # detection over all levels: alarms on healthy windows against the sum of the per-level expectations
     tab = pd.DataFrame(rows)
     det = pd.concat(dets)
-    healthy = next(iter(bases_e.values())).healthy
+    first = next(iter(bases_e.values()))
     chosen = dict(zip(tab["turbulence"], tab["alpha per channel"]))
-    for w, g in det[det["state"] == healthy].groupby("window"):
-        expected = sum(100.0 * (1.0 - (1.0 - chosen[lvl]) ** 3) * len(h)
+    for w, g in det[det["state"] == first.healthy].groupby("window"):
+        expected = sum(100.0 * (1.0 - (1.0 - chosen[lvl]) ** len(first.channels)) * len(h)
                        for lvl, h in g.groupby("turbulence")) / len(g)
         fa = 100.0 * g["alarm"].mean()
         lines.append(f"- Detection ({what}healthy model at the chosen alpha, {w:g} s): false alarms {fa:.2f}% "
