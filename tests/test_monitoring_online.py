@@ -322,3 +322,17 @@ def test_real_alfa_roll_gain_channel_with_the_shipped_threshold():
             # the statistic stays below the threshold over the whole healthy part after the baseline phase
             pre = (t >= B.ARM_AFTER_S) & (t < onset)
             assert np.nanmax(s[pre]) < thr[0]
+
+
+def test_keipour_subset_has_table_i_counts_and_rejects_others():
+    """The inferred 22 test flights of paper 001 match Table I per failure type; a changed table is an error."""
+    B = _alfa_benchmark()
+    from tsfdi.datasets.alfa import list_alfa
+
+    tab = list_alfa(B.ROOT)
+    mask, kind = B.keipour_flights(tab)
+    assert mask.sum() == 22 and kind.shape == (len(tab),)
+    assert (kind == "rudder+ailerons").sum() == 1
+    assert set(tab.flight[mask].str.slice(8, 18)) <= {d for d in tab.flight.str.slice(8, 18) if d <= "2018-09-11"}
+    with pytest.raises(RuntimeError, match="Table I"):
+        B.keipour_flights(tab.drop(index=tab.index[mask][0]))
