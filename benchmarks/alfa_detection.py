@@ -105,7 +105,10 @@ C. *B plus a roll-effectiveness GLRT* (issue 4, "change in dynamics rather than 
    onset on all 7 aileron flights; vetoing thrust alarms while the airspeed error falls fast, the altitude
    error rises or the aircraft descends (commanded descent) removed at most one of the five false alarms
    at the cost of detections. The detections of C on aileron flights take 5-18 s (the gain is only
-   estimable in the next turn), which is why its mean detection time is above 2 s.
+   estimable in the next turn), which is why its mean detection time is above 2 s. The script prints, for
+   each stuck-surface flight, when the surface's own attitude tracking error first leaves the range it had
+   before the onset on that flight (``departure_s``): for the ailerons this takes 4-28 s or never happens;
+   on these flights a stuck aileron changes little until the next turn.
 
 Keipour's 22 flights. Paper 001's Table I is over 22 flights that it does not list. The flights of this copy
 recorded up to 2018-09-11, with the engine failures restricted to the 7 kept with commanded and measured
@@ -351,6 +354,17 @@ def keipour_flights(tab):
     return mask.to_numpy(), kind
 
 
+def departure_s(df, column, onset):
+    """Seconds after ``onset`` until ``|df[column]|`` first exceeds its largest value between the end of the
+    baseline phase and the onset (nan: never). An indication of when a failure becomes visible in that signal
+    at all, not a bound for every detector."""
+    t = (df.index - df.index[0]).total_seconds().to_numpy()
+    v = np.abs(df[column].to_numpy(dtype=float))
+    pre = np.nanmax(v[(t >= ARM_AFTER_S) & (t < onset)])
+    k = np.flatnonzero((t >= onset) & (v > pre))
+    return t[k[0]] - onset if k.size else np.nan
+
+
 # --------------------------------------------------------------------------- scoring
 def outcomes(onset, alarm):
     """Outcome and detection time per flight for first-alarm times ``alarm`` (nan: none)."""
@@ -489,6 +503,16 @@ def main():
             sep.append(f"{c} on {f}: pre-onset max >= max within 5 s after onset in {pre_gt} of {idx.size}")
     print("\nSeparation of the effectiveness channels (a flight counted here cannot be detected within 5 s by\n"
           "the channel without an alarm before its onset):\n  " + "\n  ".join(sep))
+
+    # how soon a stuck surface shows in its own tracking error at all
+    rows = []
+    for i in np.flatnonzero(np.isin(fault, ["ailerons", "elevator"]) | tab.flight.str.contains("aileron")):
+        col = "delta_pitch" if fault[i] == "elevator" else "delta_roll"
+        rows.append((tab.flight[i].replace("carbonZ_", ""), col, departure_s(flights[i], col, onset[i])))
+    dep = pd.DataFrame(rows, columns=["flight", "tracking error", "leaves pre-onset range after (s)"])
+    print("\nStuck surfaces: time after the onset at which the surface's attitude tracking error first leaves the\n"
+          f"range it had on the same flight between {ARM_AFTER_S:g} s and the onset (nan: never before the end)")
+    print(dep.to_string(index=False, float_format="{:.2f}".format))
 
     # B: physical channels, thresholds by leave-one-flight-out
     grids = {c: CHANNELS[c]["grid"] for c in CHANNELS}

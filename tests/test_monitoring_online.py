@@ -337,3 +337,13 @@ def test_keipour_subset_has_table_i_counts_and_rejects_others():
     assert set(engine) == set(tab.flight[tab.engine_path.notna()])  # the 7 commanded / measured flights
     with pytest.raises(RuntimeError, match="Table I"):
         B.keipour_flights(tab.drop(index=tab.index[mask][0]))
+
+
+def test_departure_is_the_first_exceedance_of_the_pre_onset_range():
+    B = _alfa_benchmark()
+    t = np.arange(0.0, 40.0, 0.5)
+    v = np.where(t < 30.0, np.sin(t), 0.0)
+    v[t == 34.0] = -1.5                              # |v| exceeds the pre-onset max (<= 1) 4 s after onset
+    df = pd.DataFrame({"x": v}, index=pd.to_datetime(t, unit="s"))
+    assert B.departure_s(df, "x", 30.0) == 4.0
+    assert np.isnan(B.departure_s(df.assign(x=np.where(t < 30.0, v, 0.5)), "x", 30.0))
