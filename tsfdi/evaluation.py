@@ -23,7 +23,7 @@ from scipy import stats
 
 from tsfdi._data import as_signal, is_xarray
 from tsfdi._validation import float_like, int_like, option, probability
-from tsfdi.monitoring import RULES, Monitor, _rolling_variance, apply_rule, window_statistics
+from tsfdi.monitoring import RULES, Monitor, _bank_residuals, _banks, _rolling_variance, _window_statistics, apply_rule
 
 __all__ = ["Baselines", "Evaluation", "Records", "baselines_table", "evaluate", "fit_baselines", "hexacopter_signals",
            "hexacopter_study", "PAPER_ALPHA", "METHODS", "RULES", "THRESHOLDS"]
@@ -1032,9 +1032,15 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         is_fault = state != healthy
         base = first if by_level is None else by_level[rec.turbulence[i]]
         for m in models:
-            x = x_all[:, base.model_channels(m)]
+            sig = as_signal(x_all[:, base.model_channels(m)], "signal", allow_constant=True)
+            x = sig.values
             per_state = base.state_models(m, bank)
-            fault_models = {f: per_state[f] for f in faults}
+            # each record is filtered once through every (member) model; the windows of every length and
+            # method are slices of these residuals
+            banks_h = _banks({"h": per_state[healthy]})
+            resid_h = _bank_residuals(banks_h, x) if detection else None
+            banks_f = _banks({f: per_state[f] for f in faults})
+            resid_f = _bank_residuals(banks_f, x) if is_fault else None
             for meth in methods:
                 for w in wins:
                     W = int(round(w * rec.fs))
@@ -1046,8 +1052,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                     else:
                         test_h = test_f = test
                     if detection:
-                        d = window_statistics(x, {"h": per_state[healthy]}, {"h": test_h}, window=W,
-                                              step=step_n)["decisions"]["h"]
+                        d = _window_statistics(x, sig.channels, banks_h, resid_h, {"h": test_h}, window=W,
+                                               step=step_n)["decisions"]["h"]
                         starts = np.arange(0, x.shape[0] - W + 1, step_n)
                         st, en = starts / rec.fs, (starts + W) / rec.fs
                         det_parts.append(pd.DataFrame({
@@ -1057,7 +1063,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                             "pre": ~is_fault | (en <= ft), "alarm": d["reject"]}))
                     if not is_fault:
                         continue
-                    ws = window_statistics(x, fault_models, test_f, window=W, step=step_n)
+                    ws = _window_statistics(x, sig.channels, banks_f, resid_f, test_f, window=W, step=step_n)
                     starts = ws["starts"]
                     keep = starts / rec.fs >= ft + settle
                     if not keep.any():

@@ -513,31 +513,62 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
         common samples with the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
     """
     sig = as_signal(signal, "signal", allow_constant=True)
-    x = sig.values
-    window = int_like(window, "window", minimum=2)
-    step = int_like(step, "step", minimum=1)
+    banks = _banks(models)
+    return _window_statistics(sig.values, tuple(sig.channels), banks, _bank_residuals(banks, sig.values), test,
+                              window=window, step=step, common=common)
+
+
+def _banks(models: Mapping) -> dict:
+    """Name -> tuple of fitted members (one for a single model), validated as :func:`window_statistics` needs."""
     if not isinstance(models, Mapping) or not models:
         raise TypeError("models must be a non-empty mapping name -> fitted results")
-    if window > sig.nobs:
-        raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
-    banks = {name: _members(f"models[{name!r}]", res) for name, res in models.items()}
+    return {name: _members(f"models[{name!r}]", res) for name, res in models.items()}
+
+
+def _bank_residuals(banks: dict, x: np.ndarray) -> dict:
+    """Residuals of the whole record ``x`` through every member with their prefix sums, name -> tuple of
+    ``(e, c1, c2)``: ``e`` (nobs - p, k), ``c1`` and ``c2`` the cumulative sums of ``e`` and of its lag-0 products
+    ``e_i e_j`` (leading zero row). Computed once per record, then shared by every window length and test of
+    :func:`_window_statistics`."""
+    out = {}
+    for name, members in banks.items():
+        out[name] = []
+        for res in members:
+            e = _model_channels(res, x)
+            k = e.shape[1]
+            c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
+            c2 = np.concatenate([np.zeros((1, k * k)), np.cumsum((e[:, :, None] * e[:, None, :]).reshape(-1, k * k),
+                                                                 axis=0)])
+            out[name].append((e, c1, c2))
+    return out
+
+
+def _window_statistics(x: np.ndarray, channels: tuple, banks: dict, resid: dict, test: Any, *, window: int,
+                       step: int = 1, common: int | None = None) -> dict:
+    """:func:`window_statistics` from validated ``banks`` and their residuals on ``x`` (:func:`_bank_residuals`)."""
+    nobs = x.shape[0]
+    window = int_like(window, "window", minimum=2)
+    step = int_like(step, "step", minimum=1)
+    if window > nobs:
+        raise ValueError(f"window must be <= the signal length {nobs}, got {window}")
     orders = {name: int(ms[0].lags) for name, ms in banks.items()}
     pmax = max(orders.values()) if common is None else int_like(common, "common", minimum=0)
     if window - pmax < 3:
         raise ValueError(f"window ({window}) must exceed the largest model order ({pmax}) by at least 3 samples")
-    starts = np.arange(0, sig.nobs - window + 1, step)
-    nwin, k = starts.size, sig.nchan
+    starts = np.arange(0, nobs - window + 1, step)
+    nwin = starts.size
     decisions: dict = {}
-    loglik = np.empty((len(models), nwin))
+    loglik = np.empty((len(banks), nwin))
     if isinstance(test, Mapping):
-        missing = [name for name in models if name not in test]
+        missing = [name for name in banks if name not in test]
         if missing:
             raise ValueError(f"test is a mapping but has no test for the model(s) {missing}")
     for j, (name, members) in enumerate(banks.items()):
         p = orders[name]
         n = window - p
         test_j = test[name] if isinstance(test, Mapping) else test
-        per = [_member_statistics(res, x, test_j, starts, n, step, name, p, pmax, window) for res in members]
+        per = [_member_statistics(res, r, test_j, starts, n, step, name, p, pmax, window)
+               for res, r in zip(members, resid[name])]
         stat, pv, thr, rej_c, ll = (np.stack([m[i] for m in per]) for i in range(5))
         acc = ~rej_c.any(axis=2)                                         # (members, n_windows)
         ratio = np.max(stat / np.where(thr > 0, thr, np.inf), axis=2)
@@ -547,15 +578,15 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
                            "channel_reject": rej_c[best, w], "reject": ~acc.any(axis=0), "member": best,
                            "nobs": n}
         loglik[j] = ll.max(axis=0)
-    return {"starts": starts, "decisions": decisions, "loglik": loglik, "names": tuple(models), "channels":
-            tuple(sig.channels)}
+    return {"starts": starts, "decisions": decisions, "loglik": loglik, "names": tuple(banks), "channels": channels}
 
 
-def _member_statistics(res: Any, x: np.ndarray, test: Any, starts: np.ndarray, n: int, step: int, name: str,
+def _member_statistics(res: Any, resid: tuple, test: Any, starts: np.ndarray, n: int, step: int, name: str,
                        p: int, pmax: int, window: int) -> tuple:
-    """One fitted model on every window: statistic, p-value, threshold, channel rejection (n_windows, k) and the
-    likelihood score (n_windows,) of :func:`window_statistics`."""
-    e = _model_channels(res, x)
+    """One fitted model with its record residuals and their prefix sums (:func:`_bank_residuals`) on every
+    window: statistic, p-value, threshold, channel rejection (n_windows, k) and the likelihood score
+    (n_windows,) of :func:`window_statistics`."""
+    e, c1, c2 = resid
     nwin, k = starts.size, e.shape[1]
     ref = test.reference(res)
     stat = _window_statistic(test, e, n, step, name, p, ref)
@@ -572,12 +603,9 @@ def _member_statistics(res: Any, x: np.ndarray, test: Any, starts: np.ndarray, n
     # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
     off = pmax - p
     m = window - pmax
-    ee = (e[:, :, None] * e[:, None, :]).reshape(e.shape[0], k * k)
-    cs = np.concatenate([np.zeros((1, k * k)), np.cumsum(ee, axis=0)])
-    c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
     lo, hi = starts + off, starts + off + m
     mu = (c1[hi] - c1[lo]) / m
-    cov = ((cs[hi] - cs[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
+    cov = ((c2[hi] - c2[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
     sign, logdet = np.linalg.slogdet(cov)
     logdet = np.where(sign > 0, logdet, np.inf)
     return stat, pv, thr, rej_c, -0.5 * (logdet + k * np.log(2 * np.pi) + k)
