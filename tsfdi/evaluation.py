@@ -1052,7 +1052,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                     else:
                         test_h = test_f = test
                     if detection:
-                        d = _window_statistics(x, sig.channels, banks_h, resid_h, {"h": test_h}, window=W,
+                        d = _window_statistics(sig.nobs, sig.channels, banks_h, resid_h, {"h": test_h}, window=W,
                                                step=step_n)["decisions"]["h"]
                         starts = np.arange(0, x.shape[0] - W + 1, step_n)
                         st, en = starts / rec.fs, (starts + W) / rec.fs
@@ -1063,7 +1063,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                             "pre": ~is_fault | (en <= ft), "alarm": d["reject"]}))
                     if not is_fault:
                         continue
-                    ws = _window_statistics(x, sig.channels, banks_f, resid_f, test_f, window=W, step=step_n)
+                    ws = _window_statistics(sig.nobs, sig.channels, banks_f, resid_f, test_f, window=W, step=step_n)
                     starts = ws["starts"]
                     keep = starts / rec.fs >= ft + settle
                     if not keep.any():

@@ -514,7 +514,7 @@ def window_statistics(signal: Any, models: Mapping, test: Any, *, window: int, s
     """
     sig = as_signal(signal, "signal", allow_constant=True)
     banks = _banks(models)
-    return _window_statistics(sig.values, tuple(sig.channels), banks, _bank_residuals(banks, sig.values), test,
+    return _window_statistics(sig.nobs, tuple(sig.channels), banks, _bank_residuals(banks, sig.values), test,
                               window=window, step=step, common=common)
 
 
@@ -543,10 +543,10 @@ def _bank_residuals(banks: dict, x: np.ndarray) -> dict:
     return out
 
 
-def _window_statistics(x: np.ndarray, channels: tuple, banks: dict, resid: dict, test: Any, *, window: int,
+def _window_statistics(nobs: int, channels: tuple, banks: dict, resid: dict, test: Any, *, window: int,
                        step: int = 1, common: int | None = None) -> dict:
-    """:func:`window_statistics` from validated ``banks`` and their residuals on ``x`` (:func:`_bank_residuals`)."""
-    nobs = x.shape[0]
+    """:func:`window_statistics` of a record of ``nobs`` samples from validated ``banks`` and their residuals on
+    it (:func:`_bank_residuals`)."""
     window = int_like(window, "window", minimum=2)
     step = int_like(step, "step", minimum=1)
     if window > nobs:
