@@ -1052,9 +1052,9 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                     else:
                         test_h = test_f = test
                     if detection:
-                        d = _window_statistics(sig.nobs, sig.channels, banks_h, resid_h, {"h": test_h}, window=W,
-                                               step=step_n)["decisions"]["h"]
-                        starts = np.arange(0, x.shape[0] - W + 1, step_n)
+                        wh = _window_statistics(sig.nobs, sig.channels, banks_h, resid_h, {"h": test_h}, window=W,
+                                                step=step_n)
+                        d, starts = wh["decisions"]["h"], wh["starts"]
                         st, en = starts / rec.fs, (starts + W) / rec.fs
                         det_parts.append(pd.DataFrame({
                             "record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
