@@ -12,6 +12,8 @@ the onset is FP, an alarm at or after it TP (detection time = alarm - onset), no
 failure: any alarm FP, none TN. precision = TP / (TP + FP), recall = TP / (TP + FN), accuracy =
 (TP + TN) / flights (the definitions of Keipour et al., Table I). ``TP_5s``: true positives whose detection
 time is at most 5 s (an alarm long after the onset is counted TP by these definitions but is of little use).
+The scoring is the library's (``tsfdi.evaluation``: ``first_alarm``, ``score_records``,
+``detection_metrics``); this script only renames and formats its columns.
 
 Configurations
 --------------
@@ -139,7 +141,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from tsfdi.datasets.alfa import list_alfa, load_alfa  # noqa: E402
-from tsfdi.monitoring import OnlineDetector  # noqa: E402
+from tsfdi.evaluation import detection_metrics, first_alarm, score_records  # noqa: E402
+from tsfdi.online import OnlineDetector  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "alfa"
 FS = 20.0
@@ -155,7 +158,7 @@ PAPER_NB = int(round(1.0 * FS))
 
 def paper_detector():
     return OnlineDetector(list(PAPER_PAIRS), na=0, nb=PAPER_NB, nk=0, forgetting_factor=1.0, P0=1e4, threshold=4.5,
-                          glrt=None, halt_on_alarm=True, nonfinite="skip")
+                          glrt=None, freeze_on_alarm=True, nonfinite="skip")
 
 
 # --------------------------------------------------------------------------- configuration B (physical)
@@ -222,7 +225,7 @@ def prepare(df):
 
 def channel_detector(name, threshold):
     ch = CHANNELS[name]
-    return OnlineDetector([name], threshold=threshold, halt_on_alarm=True, nonfinite="skip",
+    return OnlineDetector([name], threshold=threshold, freeze_on_alarm=True, nonfinite="skip",
                           arm_after=int(round(ARM_AFTER_S * FS)), **ch["options"])
 
 
@@ -233,10 +236,8 @@ def run_channel(df, name, threshold):
 
 
 def first_alarm_s(df, det_result):
-    fa = det_result.first_alarms
-    pos = fa["position"].to_numpy()
-    pos = pos[pos >= 0]
-    return (df.index[pos.min()] - df.index[0]).total_seconds() if pos.size else np.nan
+    """Seconds from the first row of ``df`` to the detector's first alarm on any pair (nan: none)."""
+    return first_alarm(det_result.alarm, time=df.index, origin=df.index[0])
 
 
 def crossing_times(df, name, grid):
@@ -366,40 +367,22 @@ def departure_s(df, column, onset):
 
 
 # --------------------------------------------------------------------------- scoring
-def outcomes(onset, alarm):
-    """Outcome and detection time per flight for first-alarm times ``alarm`` (nan: none)."""
-    res, det = [], []
-    for on, a in zip(onset, alarm):
-        if not np.isfinite(on):
-            res.append("TN" if np.isnan(a) else "FP")
-            det.append(np.nan)
-        elif np.isnan(a):
-            res.append("FN")
-            det.append(np.nan)
-        elif a < on:
-            res.append("FP")
-            det.append(np.nan)
-        else:
-            res.append("TP")
-            det.append(a - on)
-    return np.array(res), np.array(det)
+# Per-flight outcomes and the Table I metrics come from tsfdi.evaluation (score_records,
+# detection_metrics); the script only renames and formats the columns.
+#: true positives detected within this time (s) after the onset are counted separately (TP_5s, mean_det_5s)
+USEFUL_DELAY_S = 5.0
+#: detection_metrics' columns -> this script's column names, in the printed order
+TABLE_COLUMNS = {"records": "flights", "TP": "TP", "FP": "FP", "FN": "FN", "TN": "TN", "TP_within": "TP_5s",
+                 "precision": "precision", "recall": "recall", "accuracy": "accuracy", "mean_delay": "mean_det_s",
+                 "longest_delay": "max_det_s", "mean_delay_within": "mean_det_5s"}
 
 
-def metrics(res, det):
-    tp, fp, fn, tn = ((res == k).sum() for k in ("TP", "FP", "FN", "TN"))
-    d = det[res == "TP"]
-    d5 = d[d <= 5.0]
-    return dict(flights=len(res), TP=tp, FP=fp, FN=fn, TN=tn, TP_5s=int(d5.size),
-                precision=tp / (tp + fp) if tp + fp else np.nan, recall=tp / (tp + fn) if tp + fn else np.nan,
-                accuracy=(tp + tn) / len(res) if len(res) else np.nan,
-                mean_det_s=d.mean() if d.size else np.nan, max_det_s=d.max() if d.size else np.nan,
-                mean_det_5s=d5.mean() if d5.size else np.nan)
-
-
-def table(fault, res, det, kinds=FAULTS):
-    rows = {f: metrics(res[fault == f], det[fault == f]) for f in kinds if (fault == f).any()}
-    rows["all"] = metrics(res, det)
-    t = pd.DataFrame(rows).T
+def table(scores, by="kind", kinds=FAULTS):
+    """Table I-like summary of per-flight ``scores`` (``score_records``), one row per failure type of ``kinds``
+    that has flights (groups ``by``), then "all"; the numbers formatted for printing."""
+    m = detection_metrics(scores, by=by, max_delay=USEFUL_DELAY_S)
+    t = m.reindex([k for k in kinds if k in m.index] + ["all"])[list(TABLE_COLUMNS)]
+    t = t.rename(columns=TABLE_COLUMNS).rename_axis(None).astype(float)
     for c, f in {"precision": "{:.3f}", "recall": "{:.3f}", "accuracy": "{:.3f}", "mean_det_s": "{:.2f}",
                  "max_det_s": "{:.2f}", "mean_det_5s": "{:.2f}"}.items():
         t[c] = [f.format(v) if pd.notna(v) else "-" for v in t[c]]
@@ -460,6 +443,11 @@ def main():
     flights = [prepare(load_alfa(p)) for p in tab.merged_path]
     onset = tab.onset_s.to_numpy(dtype=float)
     fault = tab.fault.to_numpy()
+
+    def score(alarm):
+        """Outcome and detection time of every flight for the first-alarm times ``alarm`` (s, nan: none)."""
+        return score_records(onset, alarm, records=tab.flight, kind=fault)
+
     print(f"{len(flights)} flights ({(fault != 'none').sum()} with a failure) from {ROOT}")
     print(FIXED_IN_ADVANCE)
     pd.set_option("display.width", 200)
@@ -470,22 +458,20 @@ def main():
     ycols = [v[0] for v in PAPER_PAIRS.values()]
     ucols = [v[1] for v in PAPER_PAIRS.values()]
     alarm_a = np.array([first_alarm_s(df, paper_detector().run(df[ycols], df[ucols])) for df in flights])
-    res_a, det_a = outcomes(onset, alarm_a)
+    sc_a = score(alarm_a)
 
     # A-K: Keipour's pairing on the engine commanded / measured flights
     eng = tab[tab.engine_path.notna()]
-    res_k, det_k = [], []
+    onset_k, alarm_k = [], []
     for _, r in eng.iterrows():
         df = load_alfa(r.engine_path)
         y = pd.DataFrame({a: df[f"{a}_measured"] - df[f"{a}_commanded"] for a in PAPER_PAIRS})
         u = df[[f"{a}_commanded" for a in PAPER_PAIRS]]
         det = paper_detector()
         out = det.run(y.set_axis(list(PAPER_PAIRS), axis=1), u)
-        a = first_alarm_s(df, out)
-        rr, dd = outcomes([df.attrs["onset_s"]], [a])
-        res_k.append(rr[0])
-        det_k.append(dd[0])
-    res_k, det_k = np.array(res_k), np.array(det_k)
+        onset_k.append(df.attrs["onset_s"])
+        alarm_k.append(first_alarm_s(df, out))
+    sc_k = score_records(onset_k, alarm_k, records=eng.flight, kind=["engine"] * len(eng))
 
     # separation of the effectiveness channels: largest statistic before the onset vs within 5 s after it
     sep = []
@@ -519,20 +505,18 @@ def main():
     times_all = {c: np.array([crossing_times(df, c, grids[c]) for df in flights]) for c in CHANNELS}
     # B5: the wider candidate set (with the control-effectiveness channels), channel set chosen in the folds
     alarm_b5, chosen5, _, label_fit5, _ = lofo(onset, times_all, grids)
-    res_b5, det_b5 = outcomes(onset, alarm_b5)
+    sc_b5 = score(alarm_b5)
     # C: B's candidates plus the roll-effectiveness GLRT (configuration C), channel set chosen in the folds
     times_c = {c: times_all[c] for c in BASE_CHANNELS}
     times_c["roll_gain"] = np.array([gain_crossing_times(df, GAIN["grid"]) for df in flights])
     grids_c = {c: grids[c] for c in BASE_CHANNELS}
     grids_c["roll_gain"] = GAIN["grid"]
     alarm_c, chosen_c, alarm_cfit, label_cfit, _ = lofo(onset, times_c, grids_c)
-    res_c, det_c = outcomes(onset, alarm_c)
-    res_cf, det_cf = outcomes(onset, alarm_cfit)
+    sc_c, sc_cf = score(alarm_c), score(alarm_cfit)
     times = {c: times_all[c] for c in BASE_CHANNELS}
     grids = {c: grids[c] for c in BASE_CHANNELS}
     alarm_b, chosen, alarm_fit, label_fit, idx_fit = lofo(onset, times, grids)
-    res_b, det_b = outcomes(onset, alarm_b)
-    res_f, det_f = outcomes(onset, alarm_fit)
+    sc_b, sc_f = score(alarm_b), score(alarm_fit)
     # check: the detector run with the all-flight thresholds alarms exactly at the read-off crossing times
     for df, a in zip(flights, alarm_fit):
         runs = [first_alarm_s(df, run_channel(df, c, grids[c][k])) for c, k in idx_fit.items() if k < len(grids[c])]
@@ -542,10 +526,14 @@ def main():
     fit_t = {c: (times[c][:, k] if k < len(grids[c]) else np.full(len(flights), np.nan)) for c, k in idx_fit.items()}
     which = [min(((fit_t[c][i], c) for c in fit_t if np.isfinite(fit_t[c][i])), default=(np.nan, "-"))[1]
              for i in range(len(flights))]
+
+    def cols(sc, outcome, det):
+        return {outcome: sc["outcome"].to_numpy(), det: sc["delay"].to_numpy().round(2)}
+
     per = pd.DataFrame({"flight": tab.flight.str.replace("carbonZ_", ""), "fault": fault, "onset_s": onset,
-                        "A": res_a, "A_det_s": det_a.round(2), "B_lofo": res_b, "B_det_s": det_b.round(2),
-                        "B5_lofo": res_b5, "B5_det_s": det_b5.round(2), "C_lofo": res_c, "C_det_s": det_c.round(2),
-                        "B_fit": res_f, "Bfit_det_s": det_f.round(2), "Bfit_alarm_s": alarm_fit.round(2),
+                        **cols(sc_a, "A", "A_det_s"), **cols(sc_b, "B_lofo", "B_det_s"),
+                        **cols(sc_b5, "B5_lofo", "B5_det_s"), **cols(sc_c, "C_lofo", "C_det_s"),
+                        **cols(sc_f, "B_fit", "Bfit_det_s"), "Bfit_alarm_s": alarm_fit.round(2),
                         "Bfit_channel": which})
     print("\nPer flight (A: paper 001 settings; B_lofo: physical channels, held-out; B_fit: all-flight thresholds)")
     print(per.to_string(index=False))
@@ -563,21 +551,17 @@ def main():
         fit[c] is not None and abs(fit[c] - ALFA_SETTINGS[c]) < 1e-9 for c in ALFA_SETTINGS)
     print(f"B-fit thresholds (all 45 flights, in-sample): {label_fit}; shipped ALFA_SETTINGS {ALFA_SETTINGS} "
           f"{'equal' if same else 'DIFFER from'} them")
-    for name, (f, r, d) in {
-            "A (fixed, paper 001 settings, roll and pitch pairs, 45 merged flights)": (fault, res_a, det_a),
-            "A-K (fixed, paper 001 settings, Keipour's commanded/measured pairing, 7 engine flights)":
-                (np.array(["engine"] * len(res_k)), res_k, det_k),
-            "B (physical channels, channel set + thresholds by leave-one-flight-out, held-out outcomes)":
-                (fault, res_b, det_b),
-            "B5 (B plus roll/pitch effectiveness candidates, chosen by leave-one-flight-out, held-out)":
-                (fault, res_b5, det_b5),
-            "B-fit (same, thresholds fitted on all 45 flights: in-sample, optimistic)": (fault, res_f, det_f),
-            "C (B plus the roll-effectiveness GLRT candidate, chosen by leave-one-flight-out, held-out)":
-                (fault, res_c, det_c),
-            "C-fit (C's all-flight choice: in-sample, optimistic)": (fault, res_cf, det_cf),
+    for name, sc in {
+            "A (fixed, paper 001 settings, roll and pitch pairs, 45 merged flights)": sc_a,
+            "A-K (fixed, paper 001 settings, Keipour's commanded/measured pairing, 7 engine flights)": sc_k,
+            "B (physical channels, channel set + thresholds by leave-one-flight-out, held-out outcomes)": sc_b,
+            "B5 (B plus roll/pitch effectiveness candidates, chosen by leave-one-flight-out, held-out)": sc_b5,
+            "B-fit (same, thresholds fitted on all 45 flights: in-sample, optimistic)": sc_f,
+            "C (B plus the roll-effectiveness GLRT candidate, chosen by leave-one-flight-out, held-out)": sc_c,
+            "C-fit (C's all-flight choice: in-sample, optimistic)": sc_cf,
     }.items():
         print(f"\nTable I-like summary, configuration {name}")
-        print(table(f, r, d).to_string())
+        print(table(sc).to_string())
     # like-for-like: the same outcomes restricted to (by inference) Keipour et al.'s 22 test flights
     sub, kind = keipour_flights(tab)
     kinds = ["engine", "ailerons", "rudder", "rudder+ailerons", "elevator", "none"]
@@ -587,10 +571,10 @@ def main():
     print("Paper 001, Table I, as published (their detector and their 25 Hz commanded / measured signals):")
     print(ref.to_string(na_rep="-"))
     print("all: " + ", ".join(f"{k} {v:g}" for k, v in KEIPOUR_TOTALS.items()))
-    for name, (r, d) in {"A (paper 001 settings on this copy)": (res_a, det_a),
-                         "C (held-out outcomes of the 45-flight leave-one-flight-out)": (res_c, det_c)}.items():
+    for name, sc in {"A (paper 001 settings on this copy)": sc_a,
+                     "C (held-out outcomes of the 45-flight leave-one-flight-out)": sc_c}.items():
         print(f"\nSame 22 flights, configuration {name}")
-        print(table(kind[sub], r[sub], d[sub], kinds).to_string())
+        print(table(sc[sub], kind[sub], kinds).to_string())
 
     print("\nTargets: precision >= 0.90, recall >= 0.90, mean detection time <= 2.0 s "
           "(Keipour et al., 22 flights: 0.882 / 0.882 / 2.02 s)")

@@ -7,7 +7,10 @@ measured in the same run on a few records: the window-by-window path (each windo
 through each model and tested with ``LjungBox.test``, i.e. ``tsfdi.identify`` per window) and statsmodels
 ``acorr_ljungbox`` per window and channel. Prints medians and ratios.
 
-Run: ``python benchmarks/evaluate_speed.py``
+Last, ``evaluate`` (pooled and banks) and ``Monitor.run`` against the same calls on the commit before the windowed
+engine (``previous_commit.py``; ``--against REF`` picks another commit). Target: not slower.
+
+Run: ``python benchmarks/evaluate_speed.py [--against REF]``
 """
 
 import os
@@ -22,10 +25,12 @@ import numpy as np  # noqa: E402
 
 import tsfdi  # noqa: E402
 from tsfdi.datasets import load_hexacopter  # noqa: E402
-from tsfdi.evaluation import hexacopter_signals  # noqa: E402
+from tsfdi.datasets.hexacopter import hexacopter_signals  # noqa: E402
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 
-WINDOWS = (5.0, 10.0, 20.0)
+WINDOWS = ("5s", "10s", "20s")
+#: the paper's whiteness test of the VAR: Ljung-Box, 20 lags, alpha 1e-3 per channel (Table 3)
+WHITENESS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3)}
 
 
 def main() -> None:
@@ -42,7 +47,7 @@ def main() -> None:
     times = []
     for _ in range(3):
         t0 = time.perf_counter()
-        ev = tsfdi.evaluate(sig, bases, models=("var",), methods=("whiteness",), windows=WINDOWS, progress=False)
+        ev = tsfdi.evaluate(sig, bases, models=("var",), tests=WHITENESS, windows=WINDOWS, progress=False)
         times.append(time.perf_counter() - t0)
     n_eval = int(ev.records["evaluated"].sum())
     n_win = len(ev.detection)
@@ -50,7 +55,7 @@ def main() -> None:
     t_fast = statistics.median(times)
     print(f"tsfdi.evaluate: {n_eval} of {n_rec} records evaluated (others: fitting records / lost control), "
           f"{n_win} windows x healthy model + {len(ev.identification)} windows x 3 fault models "
-          f"= {n_tests} VAR residual tests over windows {WINDOWS} s")
+          f"= {n_tests} VAR residual tests over windows {WINDOWS}")
     print(f"  median of 3 runs: {t_fast:.2f} s  (runs: {', '.join(f'{t:.2f}' for t in times)})  "
           f"-> {'PASS' if t_fast < 30 else 'FAIL'} (< 30 s)")
     per_test_fast = t_fast / n_tests
@@ -63,7 +68,7 @@ def main() -> None:
     times_all = []
     for _ in range(3):
         t0 = time.perf_counter()
-        ev_all = tsfdi.evaluate(sig, all_bases, models=("var",), methods=("whiteness",), windows=WINDOWS,
+        ev_all = tsfdi.evaluate(sig, all_bases, models=("var",), tests=WHITENESS, windows=WINDOWS,
                                 progress=False)
         times_all.append(time.perf_counter() - t0)
     t_all = statistics.median(times_all)
@@ -75,7 +80,7 @@ def main() -> None:
     times_bank = []
     for _ in range(3):
         t0 = time.perf_counter()
-        ev_b = tsfdi.evaluate(sig, bases, models=("var",), methods=("whiteness",), windows=WINDOWS, progress=False,
+        ev_b = tsfdi.evaluate(sig, bases, models=("var",), tests=WHITENESS, windows=WINDOWS, progress=False,
                               bank=True)
         times_bank.append(time.perf_counter() - t0)
     members = sum(len(b.bank("var", s)) for b in bases.values() for s in (b.healthy,) + b.faults)
@@ -93,11 +98,11 @@ def main() -> None:
     times_cal = []
     for _ in range(3):
         t0 = time.perf_counter()
-        tsfdi.evaluate(sig, cal_bases, models=("var",), methods=("whiteness",), windows=WINDOWS, progress=False,
-                       thresholds="empirical")
+        tsfdi.evaluate(sig, cal_bases, models=("var",), windows=WINDOWS, progress=False,
+                       tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, threshold="empirical")})
         times_cal.append(time.perf_counter() - t0)
     print(f"fit_baselines(calibrate=True) (adds 10 leave-one-out refits per state and level): {t_fit_cal:.2f} s; "
-          f"tsfdi.evaluate(thresholds='empirical'): runs {', '.join(f'{t:.2f}' for t in times_cal)} s (first run "
+          f"tsfdi.evaluate(LjungBox(threshold='empirical')): runs {', '.join(f'{t:.2f}' for t in times_cal)} s (first run "
           f"calibrates 3 levels x 4 models x 3 windows), median {statistics.median(times_cal):.2f} s -> "
           f"{'PASS' if times_cal[0] < 30 else 'FAIL'} (first run < 30 s)")
 
@@ -143,4 +148,14 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    import argparse
+
+    from previous_commit import REFERENCE, compare
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", default=REFERENCE, help=f"earlier commit to compare with (default {REFERENCE})")
+    args = parser.parse_args()
     main()
+    compare({"evaluate": ("evaluate, VAR(20) whiteness, 5/10/20 s, 120 records", 3),
+             "evaluate_bank": ("evaluate(bank=True), 120 members, 5/10/20 s", 2),
+             "monitor": ("Monitor.run, VAR, 5 s windows, 20 severe records", 3)}, args.against)

@@ -10,7 +10,10 @@
    lag 50: ``tsfdi.identification.identify_windows`` (filter once, lag products by cumulative sums) against
    statsmodels ``AutoRegResults.apply(window)`` + ``acorr_ljungbox`` per window and model. Target: >= 100x.
 
-Run: ``python benchmarks/identify_speed.py``. Prints medians and ratios.
+4. ``identify_windows`` (Ljung-Box and F test) against the same calls on the commit before the windowed engine
+   (``previous_commit.py``; ``--against REF`` picks another commit). Target: not slower.
+
+Run: ``python benchmarks/identify_speed.py [--against REF]``. Prints medians and ratios.
 """
 
 import os
@@ -88,7 +91,7 @@ def bench_identify(rng):
 
 def bench_glrt(rng):
     x = rng.standard_normal(60_000)
-    gl = tsfdi.GLRT(500, sigma=1.0)
+    gl = tsfdi.GLRT(500, scale=1.0)
     g = np.asarray(gl.statistic(x))
     glrt_direct(x[:1000], 500, 1.0)  # compile
     t_fast = median_time(lambda: gl.statistic(x), repeat=7)
@@ -139,7 +142,16 @@ def bench_windows(rng):
 
 
 if __name__ == "__main__":
+    import argparse
+
+    from previous_commit import REFERENCE, compare
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", default=REFERENCE, help=f"earlier commit to compare with (default {REFERENCE})")
+    args = parser.parse_args()
     rng = np.random.default_rng(0)
     bench_identify(rng)
     bench_glrt(rng)
     bench_windows(rng)
+    compare({"identify_windows": ("identify_windows, 4 AR(30), 41 windows, Ljung-Box lag 50", 7),
+             "identify_windows_ftest": ("identify_windows, 4 AR(30), 41 windows, F test", 7)}, args.against)

@@ -8,7 +8,9 @@ import pytest
 import xarray as xr
 from _synthetic_fdi import FS, record
 
+import tsfdi
 from tsfdi.cli import main
+from tsfdi.identification import identify, identify_windows
 
 
 def test_demo_reduced(tmp_path, capsys):
@@ -22,6 +24,14 @@ def test_demo_reduced(tmp_path, capsys):
     report = (out / "report.md").read_text()
     assert "| turbulence | state | model |" in report
     assert "| 2 |" in report                     # two pooled fitting records per state and level
+    # the numbers of the study on the shipped data (unchanged by the windowed engine / time-span refactor)
+    assert "| light | rotor2 | VAR | roll,pitch,yaw_rate | VAR(10) | 90 | 2 | 7960 | 265.33 | 7e-05 | 21.21 | True |" \
+        in report
+    assert "| var | whiteness | 43.33/0.00/0.00 | 0.00/43.33/0.00 | 0.00/0.00/51.67 |" in report
+    assert "| var | whiteness | 100.00/0.00/0.00 | 0.00/100.00/0.00 | 0.00/0.00/100.00 |" in report
+    assert "| var | whiteness | 20 | 23.577 | 0.3 | 123 | 9 | 2 | 0 | 0 | 0 | 10 | 10 |" in report
+    ident = pd.read_csv(out / "identification_windows.csv.gz")
+    assert len(ident) == 180 and set(ident["window"]) == {20.0}
     figs = sorted(p.name for p in (out / "figures").glob("*.png"))
     assert "variance_evolution.png" in figs and "order_selection_var_healthy.png" in figs
     assert "confusion_var_whiteness_20s_paper.png" in figs
@@ -63,6 +73,72 @@ def test_fit_identify_round_trip(tmp_path, capsys, fmt):
     assert (t["label"] == "f2").mean() >= 0.9
     assert (~t["accept_f1"]).all()
     capsys.readouterr()
+
+
+@pytest.fixture(scope="module")
+def saved_models(tmp_path_factory):
+    """Two VAR(2) models saved by ``tsfdi fit`` and a current f2 record (CSV with a time column from 100 s)."""
+    d = tmp_path_factory.mktemp("identify")
+    rng = np.random.default_rng(31)
+    paths = {}
+    for s in ("f1", "f2"):
+        _write(record(s, 4000, rng), d / f"{s}.csv", "csv")
+        paths[s] = d / f"{s}.npz"
+        assert main(["fit", str(d / f"{s}.csv"), "--out", str(paths[s]), "--max-lags", "6"]) == 0
+    x = record("f2", 3000, rng, failure=1000, healthy_state="f1")       # f1 for 10 s, then f2
+    cur = d / "current.csv"
+    pd.DataFrame({"time": 100.0 + np.arange(x.shape[0]) / FS, "a": x[:, 0], "b": x[:, 1]}).to_csv(cur, index=False)
+    return d, paths, cur, x
+
+
+@pytest.mark.parametrize("method", ["whiteness", "variance"])
+@pytest.mark.parametrize("rule", ["paper", "likelihood", "pvalue"])
+def test_identify_is_identify_windows(saved_models, capsys, method, rule):
+    """`tsfdi identify` prints and writes identify_windows of the record: window times on the record's clock,
+    smallest channel p-value and acceptance of every model, the paper's status and the rule's label."""
+    d, paths, cur, x = saved_models
+    out = d / f"ident_{method}_{rule}.csv"
+    rc = main(["identify", str(cur), "--models", f"f1={paths['f1']}", str(paths["f2"]), "--window", "10",
+               "--step", "2", "--method", method, "--rule", rule, "--alpha", "1e-3", "--lags", "15",
+               "--out", str(out)])
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert f"wrote {out}" in printed and "status" in printed
+    t = pd.read_csv(out, keep_default_na=False)
+    assert list(t.columns) == ["start", "end", "pvalue_f1", "accept_f1", "pvalue_f2", "accept_f2", "status", "label"]
+    models = {"f1": tsfdi.load(paths["f1"]), "f2": tsfdi.load(paths["f2"])}   # name of a bare path: its stem
+    test = tsfdi.LjungBox(lags=15, alpha=1e-3) if method == "whiteness" else tsfdi.FTest(alpha=1e-3)
+    wins = identify_windows(x, models, test, window="10s", step="2s", fs=FS)
+    assert len(t) == len(wins) == (30 - 10) // 2 + 1
+    np.testing.assert_allclose(t["start"], 100.0 + wins.starts / FS, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(t["end"], 100.0 + wins.stops / FS, rtol=0, atol=1e-9)
+    for j, n in enumerate(("f1", "f2")):
+        np.testing.assert_array_equal(t[f"pvalue_{n}"], wins.windows.min_pvalue[:, j])     # CSV round trip exact
+        np.testing.assert_array_equal(t[f"accept_{n}"], wins.accepted[:, j])
+    assert t["status"].tolist() == wins.status
+    assert t["label"].tolist() == [lab or "" for lab in wins.decide(rule)]
+    # and identify_windows is identify on each window's slice of the record
+    for w in (0, 5, len(wins) - 1):
+        s0, s1 = int(wins.starts[w]), int(wins.stops[w])
+        ref = identify(x[s0:s1], models, test)
+        assert ref.status == t["status"][w]
+        for n in ("f1", "f2"):
+            assert bool(t[f"accept_{n}"][w]) == (n in ref.accepted)
+            assert t[f"pvalue_{n}"][w] == pytest.approx(ref.decisions[n].pvalue.min(), rel=1e-6, abs=1e-300)
+        if rule == "paper":
+            assert t["label"][w] == (ref.label or "")
+    if method == "whiteness":                   # f1 for 10 s then f2: the windows follow the record
+        assert t["label"].iloc[0] in ("f1", "") and t["label"].iloc[-1] == "f2"
+
+
+def test_identify_whole_record_by_default(saved_models, capsys):
+    d, paths, cur, x = saved_models
+    assert main(["identify", str(cur), "--models", f"f1={paths['f1']}", f"f2={paths['f2']}"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 2 and lines[0].split()[:2] == ["start", "end"]          # header and one window
+    models = {n: tsfdi.load(p) for n, p in paths.items()}
+    ref = identify(x, models, tsfdi.LjungBox(lags=20, alpha=1e-3))
+    assert lines[1].split()[:2] == ["100", "130"] and ref.status in lines[1]
 
 
 def test_cli_errors(tmp_path, capsys):

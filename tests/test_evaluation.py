@@ -1,4 +1,5 @@
-"""fit_baselines (Table 2 analogue), evaluate (Table 4 analogue, rates, detection) and their helpers."""
+"""evaluate (Table 4 analogue, rates, detection), Evaluation and hexacopter_signals; the baselines are tested in
+test_baselines.py."""
 
 from __future__ import annotations
 
@@ -6,12 +7,14 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
-from _synthetic_fdi import FS, dataset, record
-from conftest import as_kind
+from _synthetic_fdi import FS, dataset
 from scipy import stats
 
 import tsfdi
-from tsfdi.evaluation import Evaluation, hexacopter_signals
+from tsfdi import FTest, LjungBox
+from tsfdi.datasets.hexacopter import hexacopter_signals
+from tsfdi.evaluation import Evaluation
+from tsfdi.windows import ResidualWindows, decide
 
 
 @pytest.fixture(scope="module")
@@ -24,37 +27,18 @@ def synthetic():
 def fitted(synthetic):
     recs, states, ft = synthetic
     b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
-                            var_max_lags=6, steady_window=5.0)
+                            var_max_lags=6, steady_window="5s")
     return b
-
-
-def test_baselines_table_and_exclusion(synthetic, fitted):
-    b = fitted
-    assert b.healthy == "healthy" and b.faults == ("f1", "f2")
-    assert b.fit_records == (0, 5, 10)          # first record of each state
-    t = b.table
-    assert list(t.columns[:6]) == ["state", "model", "signals", "order", "lags", "parameters"]
-    assert len(t) == 3 * 3                      # 3 states x (2 scalar AR + VAR)
-    var = t[t["model"] == "VAR"].set_index("state")
-    # the systems are VAR(2): BIC finds order 2; parameters s^2 p; SPP = nobs s / parameters
-    assert (var["lags"] == 2).all() and (var["parameters"] == 8).all()
-    np.testing.assert_allclose(var["spp"], var["nobs"] * 2 / 8)
-    # the table's order equals tsfdi.select_order on the same segment
-    seg = b.segments["f1"][0]
-    assert b.models["y0"]["f1"].lags == tsfdi.select_order(seg[:, 0], 6, "ar").selected
-    assert (t["records"] == 1).all() and np.isfinite(t["q_insample"]).all()
-    # steady threshold: max 5 s rolling variance (0.1 s step) of the post-settle fault fitting records
-    recs, _, _ = synthetic
-    post = [recs[i][1500:] for i in (5, 10)]
-    ref = np.max([tsfdi.monitoring.rolling_variance(p, 500, 10).max(axis=0) for p in post], axis=0)
-    np.testing.assert_allclose(b.steady_thresholds, ref, rtol=1e-10)
 
 
 def test_evaluate_synthetic(synthetic, fitted):
     recs, states, ft = synthetic
     ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var", "y0"),
-                        methods=("whiteness", "variance"), windows=(5.0, 20.0), settle=5.0,
-                        alpha=1e-3, rules=("paper", "likelihood", "pvalue"), progress=False)
+                        tests={"whiteness": LjungBox(lags=20, alpha=1e-3), "variance": FTest(alpha=1e-3)},
+                        windows=("5s", "20s"), settle=5.0, rules=("paper", "likelihood", "pvalue"), progress=False)
+    assert ev.thresholds == "theoretical" and not ev.bank
+    assert ev.alphas == {(m, meth): 1e-3 for m in ("var", "y0") for meth in ("whiteness", "variance")}
+    assert ev.lags == {5.0: 20, 20.0: 20} and ev.nchan == {"var": 2, "y0": 1}
     # fitting records are excluded
     assert not set(ev.identification["record"]) & set(fitted.fit_records)
     assert set(ev.records.loc[~ev.records["evaluated"], "skipped"]) == {"fitting record"}
@@ -136,15 +120,6 @@ def test_confusion_closed_form():
         ev.table4(7.0)
 
 
-def test_fit_baselines_data_kinds(kind):
-    rng = np.random.default_rng(7)
-    segs = {s: as_kind(record(s, 3000, rng), kind) for s in ("healthy", "f1", "f2")}
-    b = tsfdi.fit_baselines(segs, max_lags=4, var_max_lags=4, models=["var"])
-    assert b.faults == ("f1", "f2")
-    assert all(b.models["var"][s].lags == 2 for s in segs)
-    assert b.monitor("var", window=10.0, lags=10).nchan == 2
-
-
 def test_hexacopter_signals():
     t = np.arange(6) / 100.0
     ds = xr.Dataset({v: (("record", "time"), np.arange(12.0).reshape(2, 6) * k)
@@ -175,18 +150,17 @@ def test_hexacopter_signals():
 
 def test_bad_input(synthetic, fitted):
     recs, states, ft = synthetic
-    with pytest.raises(ValueError, match="states"):
-        tsfdi.fit_baselines(recs, fs=FS)
-    with pytest.raises(ValueError, match="healthy"):
-        tsfdi.fit_baselines(recs, states=states, healthy="nominal", fs=FS)
-    with pytest.raises(ValueError, match="models"):
-        tsfdi.fit_baselines(recs, states=states, fs=FS, models=["altitude"])
     with pytest.raises(TypeError, match="baselines"):
         tsfdi.evaluate(recs, {"x": 1}, states=states, fs=FS)
     with pytest.raises(ValueError, match="models"):
         tsfdi.evaluate(recs, fitted, states=states, fs=FS, models=("roll",))
-    with pytest.raises(ValueError, match="methods"):
-        tsfdi.evaluate(recs, fitted, states=states, fs=FS, methods=("spectral",))
+    with pytest.raises(TypeError, match="tests"):
+        tsfdi.evaluate(recs, fitted, states=states, fs=FS, tests=("spectral",))
+    with pytest.raises(TypeError, match="tests"):
+        tsfdi.evaluate(recs, fitted, states=states, fs=FS, tests={"spectral": "whiteness"})
+    with pytest.raises(TypeError, match="tests"):
+        tsfdi.evaluate(recs, fitted, states=states, fs=FS, models=("var", "y0"),
+                       tests={"whiteness": {"var": LjungBox(lags=20)}})
     with pytest.raises(ValueError, match="Hz"):
         tsfdi.evaluate(recs, fitted, states=states, fs=50.0)
     with pytest.raises(ValueError, match="channels"):
@@ -194,194 +168,102 @@ def test_bad_input(synthetic, fitted):
     with pytest.raises(TypeError, match="data"):
         tsfdi.evaluate("records.csv", fitted)
     with pytest.raises(ValueError, match="alpha"):
-        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, alpha=2.0, progress=False)
-
-
-def test_fit_baselines_pooled_records(synthetic):
-    """fit_records=n pools the first n records of each state without junctions (= the list fit of the models);
-    order options; in-sample whiteness column."""
-    from scipy import stats
-
-    recs, states, ft = synthetic
-    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
-                            var_max_lags=6, fit_records=3, models=["var"])
-    assert b.fit_records == (0, 1, 2, 5, 6, 7, 10, 11, 12)
-    segs = [recs[i][1500:] for i in (5, 6, 7)]
-    ref = tsfdi.select_order(segs, 6, "var")
-    np.testing.assert_allclose(b.models["var"]["f1"].params, ref.fit().params, rtol=1e-10)
-    t = b.table.set_index("state")
-    assert (t["records"] == 3).all() and (t["lags"] == 2).all()
-    # in-sample residuals of the true order are white: median Q over 20 s blocks near the chi2(20) median
-    q = t["q_insample"].to_numpy()
-    assert np.all(np.abs(q - stats.chi2.median(20)) < 4.0), q
-    fixed = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None,
-                                max_lags=6, var_max_lags=6, fit_records=3, models=["var"], order=4)
-    assert fixed.models["var"]["f1"].lags == 4
-    np.testing.assert_allclose(fixed.models["var"]["f1"].params, ref.fit(4).params, rtol=1e-10)
-    stab = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None,
-                               max_lags=6, var_max_lags=6, fit_records=3, models=["var"], order="rss_sss")
-    assert stab.models["var"]["f1"].lags == ref.stabilized
-    with pytest.raises(ValueError, match="order"):
-        tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, order="aic")
-    with pytest.raises(ValueError, match="fit_records"):
-        tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, fit_records=0)
-
-
-def test_select_alpha_leave_one_out(synthetic):
-    """Baselines.select_alpha: the paper's rule on held-out fitting windows for each candidate alpha; the
-    acceptances are those of the chi-square Ljung-Box test on the same residual windows."""
-    recs, states, ft = synthetic
-    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
-              var_max_lags=4, steady_window=5.0, fit_records=3, models=["var"])
-    b = tsfdi.fit_baselines(recs, calibrate=True, **kw)
-    alphas = (1e-2, 1e-4, 1e-300)
-    tab = b.select_alpha("var", "whiteness", 5.0, alphas, step=1.0)
-    assert list(tab.index) == list(alphas)
-    np.testing.assert_allclose(tab[["correct", "wrong", "ambiguous", "none"]].sum(axis=1), 100.0)
-    # windows: every fault fitting record cut into 5 s windows 1 s apart, over 2 faults x 3 records
-    n = [(e.shape[0] - (500 - 2)) // 100 + 1 for f in b.faults for e in b.heldout[("var", f)]]
-    assert (tab["windows"] == sum(n)).all()
-    # at alpha ~ 0 no test rejects: every window accepts every model
-    assert tab.loc[1e-300, "ambiguous"] == 100.0
-    # the first window of every fault fitting record, recomputed with LjungBox: through its own state's model
-    # refitted without it (held out) and through the other state's model (never fitted on it)
-    for a in alphas[:2]:
-        test = tsfdi.LjungBox(lags=20, alpha=a)
-        count = dict.fromkeys(("correct", "wrong", "ambiguous", "none"), 0)
-        for f in b.faults:
-            for j, seg in enumerate(b.segments[f]):
-                acc = {g: not test.test((b.heldout[("var", f)][j] if g == f else
-                                         np.asarray(b.models["var"][g].residuals(seg)))[:500 - 2]).reject
-                       for g in b.faults}
-                hit = [g for g, ok in acc.items() if ok]
-                count["none" if not hit else "ambiguous" if len(hit) > 1 else
-                      "correct" if hit[0] == f else "wrong"] += 1
-        one = b.select_alpha("var", "whiteness", 5.0, [a], step=1000.0)   # one window per record
-        assert one.loc[a, "windows"] == 6
-        for k, v in count.items():
-            assert one.loc[a, k] == pytest.approx(100.0 * v / 6)
-    best = tab["correct"].max()
-    assert tab.attrs["selected"] == max(a for a in alphas if tab.loc[a, "correct"] >= best)
-    with pytest.raises(ValueError, match="alphas"):
-        b.select_alpha("var", "whiteness", 5.0, [0.0])
-    with pytest.raises(ValueError, match="model"):
-        b.select_alpha("nope", "whiteness", 5.0)
-    with pytest.raises(ValueError, match="calibrate=True"):
-        tsfdi.fit_baselines(recs, **kw).select_alpha("var", "whiteness", 5.0)
-
-
-def test_empirical_thresholds_leave_one_out(synthetic):
-    """fit_baselines(calibrate=True): leave-one-record-out residuals; evaluate(thresholds="empirical") uses each
-    model's thresholds calibrated on them (never on evaluation records)."""
-    recs, states, ft = synthetic
-    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
-              var_max_lags=4, steady_window=5.0, fit_records=3, models=["var", "y0"])
-    b = tsfdi.fit_baselines(recs, calibrate=True, **kw)
-    assert set(b.heldout) == {(m, s) for m in ("var", "y0") for s in ("healthy", "f1", "f2")}
-    # record 1 of f1 left out: VAR(2) refitted on the other two f1 fitting records
-    segs = b.segments["f1"]
-    ref = tsfdi.VAR([segs[0], segs[2]], 2, hold_back=4).fit().residuals(segs[1])
-    np.testing.assert_allclose(b.heldout[("var", "f1")][1], np.asarray(ref), rtol=1e-10)
-    y0 = tsfdi.AR([segs[1][:, 0], segs[2][:, 0]], 2, hold_back=4).fit().residuals(segs[0][:, 0])
-    np.testing.assert_allclose(b.heldout[("y0", "f1")][0][:, 0], np.asarray(y0), rtol=1e-10)
-    cal = b.calibrated_tests("var", "whiteness", 5.0, alpha=0.01)
-    assert set(cal) == {"healthy", "f1", "f2"} and all(t.empirical for t in cal.values())
-    st = np.concatenate([tsfdi.detection.ljungbox_windows(e, 20, 500 - 2, 1) for e in b.heldout[("var", "f2")]])
-    np.testing.assert_allclose(cal["f2"].threshold_, np.quantile(st, 0.99, axis=0))
-    assert b.calibrated_tests("var", "whiteness", 5.0, alpha=0.01) is cal         # cached
-    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",),
-                        methods=("whiteness", "variance"), windows=(5.0,), settle=5.0, alpha=0.01,
-                        progress=False, thresholds="empirical")
-    assert ev.thresholds == "empirical"
-    assert not set(ev.identification["record"]) & set(b.fit_records)
-    c = ev.calibration.set_index(["method", "state", "channel"]).sort_index()
-    np.testing.assert_allclose(c.loc[("whiteness", "f2"), "empirical"], cal["f2"].threshold_)
-    np.testing.assert_allclose(c.loc[("whiteness", "f2"), "distribution"], stats.chi2.ppf(0.99, 20))
-    # detection decisions are those of the calibrated healthy test on each window
-    rec5 = recs[4]                                                               # healthy, evaluated
-    d = ev.detection[(ev.detection["record"] == 4) & (ev.detection["method"] == "whiteness")]
-    e = np.asarray(b.models["var"]["healthy"].residuals(rec5))
-    first = cal["healthy"].test(e[:500 - 2])
-    assert bool(d["alarm"].iloc[0]) == first.reject
-    # chi-square run on the same baselines gives the distributional thresholds
-    ev2 = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=(5.0,),
-                         settle=5.0, alpha=0.01, progress=False)
-    assert ev2.thresholds == "chi2" and "empirical" not in ev2.calibration
-    mon = b.monitor("var", window=5.0, alpha=0.01, thresholds="empirical")
-    assert mon.test["f1"] is cal["f1"] and mon.detection_test is cal["healthy"]
-    out = mon.run(recs[5])
-    assert out.detection_time is not None
-    fitted_plain = tsfdi.fit_baselines(recs, **kw)
-    with pytest.raises(ValueError, match="calibrate=True"):
-        tsfdi.evaluate(recs, fitted_plain, states=states, failure_times=ft, fs=FS, windows=(5.0,), settle=5.0,
-                       progress=False, thresholds="empirical")
-    with pytest.raises(ValueError, match="thresholds"):
-        tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=(5.0,), progress=False,
-                       thresholds="gpd")
-    with pytest.raises(ValueError, match="at least 200000 are needed"):
-        b.calibrated_tests("var", "whiteness", 5.0, alpha=1e-6)
-    with pytest.raises(TypeError, match="calibrate"):
-        tsfdi.fit_baselines(recs, calibrate="yes", **kw)
-
-
-def test_bank_per_record_models(synthetic):
-    """Baselines.bank refits each state's model on each fitting record alone; evaluate / select_alpha / monitor
-    with bank=True test every state by its bank (a window is accepted when any member accepts)."""
-    from tsfdi.monitoring import window_statistics
-
-    recs, states, ft = synthetic
-    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
-              var_max_lags=4, steady_window=5.0, fit_records=3, models=["var", "y0"])
-    b = tsfdi.fit_baselines(recs, **kw)
-    bank = b.bank("var", "f1")
-    assert len(bank) == 3 and b.bank("var", "f1") is bank                         # cached
-    for seg, res in zip(b.segments["f1"], bank):
-        np.testing.assert_allclose(res.params, tsfdi.VAR(seg, 2, hold_back=4).fit().params, rtol=1e-10)
-    np.testing.assert_allclose(b.bank("y0", "f2")[1].params,
-                               tsfdi.AR(b.segments["f2"][1][:, 0], 2, hold_back=4).fit().params, rtol=1e-10)
-    assert b.state_models("var")["f1"] is b.models["var"]["f1"]
-    assert b.state_models("var", bank=True)["f1"] is bank
-    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=(5.0,),
-                        settle=5.0, alpha=0.01, progress=False, bank=True)
-    assert ev.bank
-    # detection alarms of a healthy evaluation record: every healthy member rejects
-    ws = window_statistics(recs[4], {f"m{i}": m for i, m in enumerate(b.bank("var", "healthy"))},
-                           tsfdi.LjungBox(lags=20, alpha=0.01), window=500, step=100)
-    alarms = np.all([d["reject"] for d in ws["decisions"].values()], axis=0)
-    det = ev.detection[ev.detection["record"] == 4]
-    np.testing.assert_array_equal(det["alarm"].to_numpy(), alarms)
-    # identification of a fault window: accepted by a state when one of its members accepts
-    row = ev.identification[ev.identification["record"] == 8].iloc[0]
-    s0 = int(round(row["start"] * FS))
-    for f in b.faults:
-        acc = any(not tsfdi.LjungBox(lags=20, alpha=0.01).test(np.asarray(m.residuals(recs[8][s0:s0 + 500]))).reject
-                  for m in b.bank("var", f))
-        assert row[f"acc_{f}"] == acc
-    mon = b.monitor("var", window=5.0, alpha=0.01, bank=True)
-    assert mon.baseline is b.bank("var", "healthy") and mon.models["f2"] is b.bank("var", "f2")
-    # select_alpha with banks: the held-out record's own state is its bank without that record's member
-    tab = b.select_alpha("var", "whiteness", 5.0, (1e-2, 1e-300), bank=True)
-    np.testing.assert_allclose(tab[["correct", "wrong", "ambiguous", "none"]].sum(axis=1), 100.0)
-    assert tab.loc[1e-300, "ambiguous"] == 100.0
-    one = b.select_alpha("var", "whiteness", 5.0, [1e-2], step=1000.0, bank=True)    # one window per record
-    test = tsfdi.LjungBox(lags=20, alpha=1e-2)
-    count = dict.fromkeys(("correct", "wrong", "ambiguous", "none"), 0)
-    for f in b.faults:
-        for j, seg in enumerate(b.segments[f]):
-            hit = [g for g in b.faults
-                   if any(not test.test(np.asarray(m.residuals(seg))[:500 - 2]).reject
-                          for i, m in enumerate(b.bank("var", g)) if g != f or i != j)]
-            count["none" if not hit else "ambiguous" if len(hit) > 1 else
-                  "correct" if hit[0] == f else "wrong"] += 1
-    for k, v in count.items():
-        assert one.loc[1e-2, k] == pytest.approx(100.0 * v / 6)
-    with pytest.raises(ValueError, match="thresholds='chi2'"):
-        tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=(5.0,), progress=False,
-                       thresholds="empirical", bank=True)
+        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, tests=LjungBox(lags=20, alpha=2.0),
+                       progress=False)
+    # windows and step: ints count samples, time spans need the sampling frequency, floats are refused
+    with pytest.raises(TypeError, match="windows"):
+        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=(5.0,), progress=False)
+    with pytest.raises(TypeError, match="step"):
+        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=("5s",), step=1.0,
+                       progress=False)
+    with pytest.raises(ValueError, match="windows"):
+        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=("1ms",), progress=False)
     with pytest.raises(TypeError, match="bank"):
-        b.monitor("var", window=5.0, bank="yes")
-    with pytest.raises(ValueError, match="state"):
-        b.bank("var", "f9")
-    first = tsfdi.fit_baselines(recs, **{**kw, "fit_records": 1})
-    with pytest.raises(ValueError, match="two fitting records"):
-        first.select_alpha("var", "whiteness", 5.0, bank=True)
+        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=("5s",), bank="yes",
+                       progress=False)
+
+
+def test_windows_as_time_spans_or_samples(synthetic, fitted):
+    """windows / step follow pandas rolling: "5s" at 100 Hz and 500 samples give the same evaluation; a single test
+    is labelled by its class name; tests may differ per model."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, models=("var", "y0"), settle=5.0, progress=False)
+    lb = LjungBox(lags=20, alpha=1e-3)
+    ref = tsfdi.evaluate(recs, fitted, tests={"whiteness": lb}, windows=("5s",), step="1s", **kw)
+    got = tsfdi.evaluate(recs, fitted, tests={"whiteness": lb}, windows=(500,), step=100, **kw)
+    pd.testing.assert_frame_equal(got.identification, ref.identification, check_exact=True)
+    pd.testing.assert_frame_equal(got.detection, ref.detection, check_exact=True)
+    pd.testing.assert_frame_equal(got.calibration, ref.calibration, check_exact=True)
+    assert sorted(ref.identification["window"].unique()) == [5.0]
+    one = tsfdi.evaluate(recs, fitted, tests=lb, windows=pd.Timedelta(seconds=5), **kw)
+    assert set(one.identification["method"]) == {"LjungBox"}
+    pd.testing.assert_frame_equal(one.identification.drop(columns="method"),
+                                  ref.identification.drop(columns="method"), check_exact=True)
+    # per model tests: the y0 rows of {"var": lb, "y0": lb} are those of lb for every model
+    per = tsfdi.evaluate(recs, fitted, tests={"whiteness": {"var": lb, "y0": LjungBox(lags=20, alpha=1e-3)}},
+                         windows=("5s",), **kw)
+    pd.testing.assert_frame_equal(per.identification, ref.identification, check_exact=True)
+    # the default test is the paper's whiteness test at alpha = 1e-3
+    dflt = tsfdi.evaluate(recs, fitted, windows=("5s",), **kw)
+    pd.testing.assert_frame_equal(dflt.identification, ref.identification, check_exact=True)
+
+
+def test_identification_rows_are_the_engine_windows(synthetic, fitted):
+    """Each identification row: the acceptances and labels of the windowed engine on the record."""
+    recs, states, ft = synthetic
+    lb = LjungBox(lags=20, alpha=1e-3)
+    ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var",), tests=lb,
+                        windows=("5s",), settle=5.0, rules=("paper", "likelihood", "pvalue"), progress=False)
+    i = 8                                                            # an evaluated f1 record
+    rows = ev.identification[ev.identification["record"] == i]
+    ws = ResidualWindows({f: fitted.models["var"][f] for f in fitted.faults}).fit(recs[i]).statistics(
+        lb, window=500, step=100)
+    keep = ws.starts >= 1500
+    np.testing.assert_allclose(rows["start"].to_numpy(), ws.starts[keep] / FS)
+    for j, f in enumerate(fitted.faults):
+        np.testing.assert_array_equal(rows[f"acc_{f}"].to_numpy(), ws.accepted[keep, j])
+    names = np.array(list(fitted.faults) + ["ambiguous", "none"], dtype=object)
+    for rule in ("paper", "likelihood", "pvalue"):
+        lab = decide(ws.accepted[keep], rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
+        np.testing.assert_array_equal(rows[f"label_{rule}"].to_numpy(), names[np.where(lab >= 0, lab, lab + 4)])
+    det = ev.detection[ev.detection["record"] == i]
+    wh = ResidualWindows({"h": fitted.models["var"]["healthy"]}).fit(recs[i]).statistics(lb, window=500, step=100)
+    np.testing.assert_array_equal(det["alarm"].to_numpy(), wh.reject[:, 0])
+
+
+def test_paper_tests_have_the_alphas_of_table_3():
+    """study.paper_tests: method -> {model -> test} at the paper's Table 3 alphas, as evaluate takes them."""
+    from tsfdi.study import PAPER_ALPHA, paper_tests
+
+    models = ["roll", "pitch", "yaw_rate", "var", "altitude"]
+    tests = paper_tests(models)
+    assert list(tests) == ["whiteness", "variance"] and all(list(t) == models for t in tests.values())
+    for m in models:
+        key = "yaw" if m.startswith("yaw") else m
+        lb, ft = tests["whiteness"][m], tests["variance"][m]
+        assert isinstance(lb, LjungBox) and lb.lags == 20 and lb.threshold == "theoretical"
+        assert isinstance(ft, FTest) and ft.threshold == "theoretical"
+        assert lb.alpha == PAPER_ALPHA.get(("whiteness", key), 1e-3)
+        assert ft.alpha == PAPER_ALPHA.get(("variance", key), 1e-8)
+    assert tests["variance"]["pitch"].alpha == 1e-12 and tests["variance"]["var"].alpha == 1e-8
+    emp = paper_tests(["var"], ("whiteness",), lags=10, threshold="empirical")
+    assert list(emp) == ["whiteness"] and emp["whiteness"]["var"].lags == 10 and emp["whiteness"]["var"].empirical
+    with pytest.raises(ValueError, match="methods"):
+        paper_tests(["var"], ("spectral",))
+
+
+def test_evaluate_with_paper_tests(synthetic, fitted):
+    """Per-model tests (label -> {model -> test}): each model's rows use its own test and alpha."""
+    from tsfdi.study import paper_tests
+
+    recs, states, ft = synthetic
+    tests = paper_tests(["var", "y0"])
+    ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var", "y0"), tests=tests,
+                        windows=("5s",), settle=5.0, progress=False)
+    assert ev.alphas == {("var", "whiteness"): 1e-3, ("y0", "whiteness"): 1e-3, ("var", "variance"): 1e-8,
+                         ("y0", "variance"): 1e-8}
+    for m in ("var", "y0"):
+        one = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=(m,),
+                             tests={"variance": FTest(alpha=1e-8)}, windows=(500,), settle=5.0, progress=False)
+        sub = ev.identification.query("model == @m and method == 'variance'").reset_index(drop=True)
+        pd.testing.assert_frame_equal(sub, one.identification, check_exact=True)

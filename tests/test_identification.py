@@ -158,6 +158,42 @@ def test_identify_windows_equals_identify(models):
     np.testing.assert_allclose(wins.pvalue[2, 1], wins[2].decisions["rotor1"].pvalue)
 
 
+def test_identify_windows_time_spans_follow_pandas_rolling(models):
+    """window / step: an int counts samples, a time span is converted with the time index or fs; floats refused."""
+    import pandas as pd
+
+    rng = np.random.default_rng(105)
+    y = simulate("rotor1", 3000, rng)
+    by_samples = identify_windows(y, models, tsfdi.LjungBox(30, 1e-3), window=2000, step=500)
+    df = pd.DataFrame(y, index=pd.date_range("2026-01-01", periods=3000, freq="10ms"))
+    by_index = identify_windows(df, models, tsfdi.LjungBox(30, 1e-3), window="20s", step=pd.Timedelta("5s"))
+    by_fs = identify_windows(y, models, tsfdi.LjungBox(30, 1e-3), window="20s", step="5s", fs=100.0)
+    for other in (by_index, by_fs):
+        np.testing.assert_array_equal(other.starts, by_samples.starts)
+        np.testing.assert_array_equal(other.statistic, by_samples.statistic)
+        assert other.labels == by_samples.labels
+    with pytest.raises(TypeError, match="window"):
+        identify_windows(y, models, tsfdi.LjungBox(30), window=2000.0)
+    with pytest.raises(ValueError, match="window.*sampling frequency"):
+        identify_windows(y, models, tsfdi.LjungBox(30), window="20s")
+    with pytest.raises(ValueError, match="step"):
+        identify_windows(y, models, tsfdi.LjungBox(30), window=2000, step=0)
+
+
+def test_identify_windows_decide_rules(models):
+    """decide(rule) labels every window; the paper rule's labels are the single accepted model."""
+    rng = np.random.default_rng(106)
+    y = simulate("rotor2", 3000, rng)
+    wins = identify_windows(y, models, tsfdi.LjungBox(30, 1e-3), window=1000, step=500)
+    assert wins.decide("paper") == wins.labels
+    lik = wins.decide("likelihood")
+    assert all(lab in models for lab in lik)
+    assert [lab for lab, st in zip(lik, wins.status) if st == "identified"] == \
+        [lab for lab in wins.labels if lab is not None]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        wins.test = None
+
+
 def test_identify_windows_empirical_threshold_arrays_match_windows():
     """The all-windows arrays of a calibrated LjungBox carry its empirical p-values and thresholds, as identify
     does on each window (they used to hold chi-square p-values)."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import datetime
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -10,7 +12,8 @@ from conftest import as_kind
 
 import tsfdi
 from tsfdi import VAR, FTest, LjungBox
-from tsfdi.monitoring import MonitorEvent, apply_rule, rolling_variance, window_statistics
+from tsfdi.monitoring import MonitorEvent, rolling_variance
+from tsfdi.windows import AMBIGUOUS, NONE, ResidualWindows, WindowStatistics, decide, status
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +29,7 @@ def failure_record():
 
 
 def _monitor(models, **kw):
-    opts = dict(window=5.0, step=1.0, fs=FS, test=LjungBox(lags=20, alpha=1e-4), steady_window=5.0)
+    opts = dict(window="5s", step="1s", fs=FS, test=LjungBox(lags=20, alpha=1e-4), steady_window="5s")
     opts.update(kw)
     return tsfdi.Monitor(models["healthy"], {"f1": models["f1"], "f2": models["f2"]}, **opts)
 
@@ -75,7 +78,7 @@ def test_without_thresholds_identifies_from_detection(models, failure_record):
 
 def test_streaming_equals_batch(models, failure_record):
     thr = 3.0 * failure_record[1500:].var(axis=0)
-    mon = _monitor(models, steady_thresholds=thr, steady_window=8.0, rule="likelihood")
+    mon = _monitor(models, steady_thresholds=thr, steady_window="8s", rule="likelihood")
     batch = mon.run(failure_record)
     mon.reset()
     streamed = []
@@ -92,29 +95,123 @@ def test_data_kinds_give_same_events(models, failure_record, kind):
     assert all(isinstance(e, MonitorEvent) for e in got)
 
 
+def _stats(x, models, test, **kw):
+    """Every model's test on every window of ``x`` (the windowed engine, filtered once)."""
+    return ResidualWindows(models).fit(x).statistics(test, **kw)
+
+
 def test_window_statistics_equal_tests_on_slices(models, failure_record):
     x = failure_record
     W, S = 400, 150
     lb = LjungBox(lags=15, alpha=1e-3)
     ft = FTest(alpha=1e-3)
     for test in (lb, ft):
-        ws = window_statistics(x, models, test, window=W, step=S)
-        assert ws["starts"].tolist() == list(range(0, x.shape[0] - W + 1, S))
-        for name, res in models.items():
-            d = ws["decisions"][name]
-            for w in (0, 7, len(ws["starts"]) - 1):
-                s = ws["starts"][w]
+        ws = _stats(x, models, test, window=W, step=S)
+        assert isinstance(ws, WindowStatistics)
+        assert ws.starts.tolist() == list(range(0, x.shape[0] - W + 1, S))
+        assert (ws.window, ws.step, ws.models, len(ws)) == (W, S, tuple(models), len(ws.starts))
+        assert ws.nobs == tuple(W - res.lags for res in models.values())
+        k = x.shape[1]
+        for arr in (ws.statistic, ws.threshold, ws.pvalue, ws.channel_reject):
+            assert arr.shape == (len(ws), len(models), k)
+        for arr in (ws.reject, ws.member, ws.loglik):
+            assert arr.shape == (len(ws), len(models))
+        for j, (name, res) in enumerate(models.items()):
+            for w in (0, 7, len(ws.starts) - 1):
+                s = ws.starts[w]
                 ref = test.test(np.asarray(res.residuals(x[s:s + W])), **test.reference(res))
-                np.testing.assert_allclose(d["statistic"][w], ref.statistic, rtol=1e-8)
-                np.testing.assert_allclose(d["pvalue"][w], ref.pvalue, rtol=1e-6, atol=1e-300)
-                assert bool(d["reject"][w]) == ref.reject
+                np.testing.assert_allclose(ws.statistic[w, j], ref.statistic, rtol=1e-8)
+                np.testing.assert_allclose(ws.pvalue[w, j], ref.pvalue, rtol=1e-6, atol=1e-300)
+                assert bool(ws.reject[w, j]) == ref.reject
+                np.testing.assert_array_equal(ws.channel_reject[w, j], ref.channel_reject)
+        np.testing.assert_array_equal(ws.accepted, ~ws.reject)
+        np.testing.assert_array_equal(ws.min_pvalue, ws.pvalue.min(axis=2))
     # likelihood score on the common samples [s + pmax, s + W): -(log det S + k log 2 pi + k) / 2
-    ws = window_statistics(x, models, lb, window=W, step=S)
-    s = ws["starts"][3]
+    ws = _stats(x, models, lb, window=W, step=S)
+    s = ws.starts[3]
     e = np.asarray(models["f1"].residuals(x[s:s + W]))
     cov = np.cov(e.T, bias=True)
     expected = -0.5 * (np.linalg.slogdet(cov)[1] + 2 * np.log(2 * np.pi) + 2)
-    assert ws["loglik"][1, 3] == pytest.approx(expected, rel=1e-9)
+    assert ws.loglik[3, 1] == pytest.approx(expected, rel=1e-9)
+    assert np.isnan(_stats(x, models, lb, window=W, step=S, loglik=False).loglik).all()
+
+
+def test_window_statistics_is_frozen(models, failure_record):
+    ws = _stats(failure_record, models, LjungBox(lags=15, alpha=1e-3), window=400, step=150)
+    with pytest.raises(AttributeError):
+        ws.window = 10
+    with pytest.raises(AttributeError):
+        ws.reject = ~ws.reject
+    assert ws.window == 400
+    assert "WindowStatistics(" in repr(ws)
+
+
+def test_window_statistics_labels_and_status(models, failure_record):
+    """The labels of WindowStatistics are decide() on its acceptances and scores; its status the count rule."""
+    ws = _stats(failure_record, models, LjungBox(lags=15, alpha=1e-3), window=400, step=100)
+    for rule in ("paper", "likelihood", "pvalue"):
+        np.testing.assert_array_equal(ws.labels(rule), decide(ws.accepted, rule, loglik=ws.loglik,
+                                                              pvalue=ws.min_pvalue))
+    np.testing.assert_array_equal(ws.status, status(ws.accepted.sum(axis=1)))
+    paper = ws.labels("paper")
+    np.testing.assert_array_equal(ws.status == "identified", paper >= 0)
+    np.testing.assert_array_equal(ws.status == "ambiguous", paper == AMBIGUOUS)
+    np.testing.assert_array_equal(ws.status == "none", paper == NONE)
+
+
+def test_fit_residuals_equals_fit(models, failure_record):
+    """Residuals computed elsewhere give the statistics of the engine's own filtering when they are the same."""
+    x = failure_record
+    for test in (LjungBox(lags=15, alpha=1e-3), FTest(alpha=1e-3)):
+        ref = _stats(x, models, test, window=400, step=150)
+        given = {name: [np.asarray(res.residuals(x))] for name, res in models.items()}
+        got = ResidualWindows(models).fit_residuals(given, x.shape[0]).statistics(test, window=400, step=150)
+        for attr in ("starts", "statistic", "threshold", "pvalue", "channel_reject", "reject", "member", "loglik"):
+            np.testing.assert_array_equal(getattr(got, attr), getattr(ref, attr), err_msg=attr)
+        assert (got.nobs, got.models, got.channels) == (ref.nobs, ref.models, ref.channels)
+    # a bank takes one residual array per member; a single array stands for a one-member bank
+    bank = {"bank": [models["healthy"], models["f1"]], "f2": models["f2"]}
+    lb = LjungBox(lags=15, alpha=1e-3)
+    ref = _stats(x, bank, lb, window=400, step=150)
+    given = {"bank": [np.asarray(m.residuals(x)) for m in bank["bank"]], "f2": np.asarray(models["f2"].residuals(x))}
+    got = ResidualWindows(bank).fit_residuals(given, x.shape[0]).statistics(lb, window=400, step=150)
+    for attr in ("statistic", "pvalue", "reject", "member", "loglik"):
+        np.testing.assert_array_equal(getattr(got, attr), getattr(ref, attr), err_msg=attr)
+    with pytest.raises(ValueError, match="f2"):
+        ResidualWindows(models).fit_residuals({"healthy": given["f2"], "f1": given["f2"]}, x.shape[0])
+    with pytest.raises(ValueError, match="one array per bank member"):
+        ResidualWindows(bank).fit_residuals({"bank": given["f2"], "f2": given["f2"]}, x.shape[0])
+    with pytest.raises(ValueError, match="shape"):
+        ResidualWindows(models).fit_residuals({n: [np.asarray(r.residuals(x))[1:]] for n, r in models.items()},
+                                              x.shape[0])
+    with pytest.raises(ValueError, match="not fitted"):
+        ResidualWindows(models).statistics(lb, window=400)
+
+
+@pytest.mark.parametrize("method", ["hosking", "li-mcleod"])
+def test_multivariate_ljungbox_through_the_engine(models, failure_record, method):
+    """A joint portmanteau test (one "joint" component) is applied window by window: each window's decision is
+    the test on that window's slice of the record's residuals."""
+    x = failure_record
+    W, S = 400, 250
+    test = LjungBox(lags=10, alpha=1e-3, multivariate=method)
+    ws = _stats(x, models, test, window=W, step=S)
+    assert ws.statistic.shape == (len(ws), len(models), 1)
+    assert ws.decisions is not None and len(ws.decisions) == len(ws)
+    for j, (name, res) in enumerate(models.items()):
+        e = np.asarray(res.residuals(x))
+        for w, s in enumerate(ws.starts):
+            ref = test.test(e[s:s + W - res.lags])
+            # the same residuals as the window's own filtering
+            np.testing.assert_allclose(e[s:s + W - res.lags], np.asarray(res.residuals(x[s:s + W])), rtol=1e-12)
+            np.testing.assert_array_equal(ws.statistic[w, j], ref.statistic)
+            np.testing.assert_array_equal(ws.pvalue[w, j], ref.pvalue)
+            np.testing.assert_array_equal(ws.threshold[w, j], ref.threshold)
+            assert bool(ws.reject[w, j]) == ref.reject
+            assert ws.decisions[w][j].channels == ("joint",)
+            np.testing.assert_array_equal(ws.decisions[w][j].statistic, ref.statistic)
+    # the failure record switches from healthy to f1: the joint test sees it
+    assert not ws.reject[0, 0] and ws.reject[-1, 0]
 
 
 def test_window_statistics_bank(models, failure_record):
@@ -124,37 +221,35 @@ def test_window_statistics_bank(models, failure_record):
     W, S = 400, 100
     lb = LjungBox(lags=15, alpha=1e-3)
     members = [models["healthy"], models["f2"], models["f1"]]
-    one = window_statistics(x, {f"m{i}": m for i, m in enumerate(members)}, lb, window=W, step=S)
-    ws = window_statistics(x, {"bank": members, "f1": models["f1"]}, lb, window=W, step=S)
-    d = ws["decisions"]["bank"]
-    rej = np.array([one["decisions"][f"m{i}"]["reject"] for i in range(3)])
-    np.testing.assert_array_equal(d["reject"], rej.all(axis=0))
-    assert d["reject"].any() and not d["reject"].all()          # the record switches from healthy to f1
-    for w, m in enumerate(d["member"]):
-        ref = one["decisions"][f"m{m}"]
-        np.testing.assert_array_equal(d["statistic"][w], ref["statistic"][w])
-        np.testing.assert_array_equal(d["threshold"][w], ref["threshold"][w])
-        if not d["reject"][w]:                                   # an accepting member is reported
-            assert not ref["reject"][w]
-            pm = [one["decisions"][f"m{i}"]["pvalue"][w].min() for i in range(3) if not rej[i, w]]
-            assert ref["pvalue"][w].min() == max(pm)
-    np.testing.assert_allclose(ws["loglik"][0], one["loglik"].max(axis=0))
-    np.testing.assert_allclose(ws["loglik"][1], one["loglik"][2])
+    one = _stats(x, {f"m{i}": m for i, m in enumerate(members)}, lb, window=W, step=S)
+    ws = _stats(x, {"bank": members, "f1": models["f1"]}, lb, window=W, step=S)
+    rej = one.reject.T                                            # (members, n_windows)
+    np.testing.assert_array_equal(ws.reject[:, 0], rej.all(axis=0))
+    assert ws.reject[:, 0].any() and not ws.reject[:, 0].all()    # the record switches from healthy to f1
+    for w, m in enumerate(ws.member[:, 0]):
+        np.testing.assert_array_equal(ws.statistic[w, 0], one.statistic[w, m])
+        np.testing.assert_array_equal(ws.threshold[w, 0], one.threshold[w, m])
+        if not ws.reject[w, 0]:                                   # an accepting member is reported
+            assert not one.reject[w, m]
+            pm = [one.pvalue[w, i].min() for i in range(3) if not rej[i, w]]
+            assert one.pvalue[w, m].min() == max(pm)
+    np.testing.assert_allclose(ws.loglik[:, 0], one.loglik.max(axis=1))
+    np.testing.assert_allclose(ws.loglik[:, 1], one.loglik[:, 2])
     # a one-member bank is the model itself
-    solo = window_statistics(x, {"h": [models["healthy"]]}, lb, window=W, step=S)["decisions"]["h"]
+    solo = _stats(x, {"h": [models["healthy"]]}, lb, window=W, step=S)
     for key in ("statistic", "pvalue", "reject", "threshold"):
-        np.testing.assert_array_equal(solo[key], one["decisions"]["m0"][key])
-    assert (solo["member"] == 0).all()
+        np.testing.assert_array_equal(getattr(solo, key)[:, 0], getattr(one, key)[:, 0])
+    assert (solo.member == 0).all()
     # a Monitor with banks gives the events of the plain models when every bank has one member
     plain = _monitor(models).run(x)
     banked = _monitor({k: [m] for k, m in models.items()}).run(x)
     assert banked.events == plain.events
     with pytest.raises(ValueError, match="empty bank"):
-        window_statistics(x, {"b": []}, lb, window=W)
+        _stats(x, {"b": []}, lb, window=W)
     with pytest.raises(ValueError, match="share one order"):
-        window_statistics(x, {"b": [models["f1"], VAR(x, 3).fit()]}, lb, window=W)
+        _stats(x, {"b": [models["f1"], VAR(x, 3).fit()]}, lb, window=W)
     with pytest.raises(TypeError, match=r"models\['b'\]"):
-        window_statistics(x, {"b": [models["f1"], "f2"]}, lb, window=W)
+        _stats(x, {"b": [models["f1"], "f2"]}, lb, window=W)
 
 
 @pytest.mark.slow
@@ -182,9 +277,9 @@ def test_bank_holds_alpha_where_the_pooled_model_does_not():
     rejects = {"pooled": 0, "bank": 0}
     for _ in range(trials):
         y = ar1(phis[rng.integers(3)], 500)
-        d = window_statistics(y, {"pooled": pooled, "bank": bank}, lb, window=500)["decisions"]
-        for k in rejects:
-            rejects[k] += int(d[k]["reject"][0])
+        ws = _stats(y, {"pooled": pooled, "bank": bank}, lb, window=500)
+        for j, k in enumerate(ws.models):
+            rejects[k] += int(ws.reject[0, j])
     assert rejects["bank"] <= stats.binom.ppf(0.999, trials, alpha), rejects
     assert rejects["pooled"] >= 0.5 * trials, rejects
 
@@ -196,7 +291,9 @@ def test_rolling_variance(kind):
     np.testing.assert_allclose(v, ref, rtol=1e-10)
 
 
-def test_apply_rule_closed_form():
+def test_decide_closed_form():
+    """The decision rules on hand-made acceptances and scores (the former apply_rule(reject, loglik, pvalue) with
+    (n_models, n_windows) inputs is decide(~reject.T, rule, loglik=loglik.T, pvalue=pvalue.T))."""
     reject = np.array([[False, False, True, True, False],
                        [True, False, True, False, False],
                        [True, True, True, True, False]])
@@ -206,25 +303,116 @@ def test_apply_rule_closed_form():
     pval = np.array([[0.5, 0.1, 1e-9, 0.0, 0.2],
                      [0.0, 0.3, 1e-8, 0.4, 0.1],
                      [0.0, 0.0, 1e-3, 0.0, 0.3]])
-    assert apply_rule(reject, loglik, pval, "paper").tolist() == [0, -2, -1, 1, -2]
+    acc = ~reject.T
+    assert decide(acc, "paper", loglik=loglik.T, pvalue=pval.T).tolist() == [0, -2, -1, 1, -2]
+    assert decide(acc).tolist() == [0, -2, -1, 1, -2]                 # "paper" is the default and needs no score
+    assert (NONE, AMBIGUOUS) == (-1, -2)
     # likelihood: best among the accepted, or among all when none is accepted
-    assert apply_rule(reject, loglik, pval, "likelihood").tolist() == [0, 1, 0, 1, 1]
-    assert apply_rule(reject, loglik, pval, "pvalue").tolist() == [0, 1, 2, 1, 2]
+    assert decide(acc, "likelihood", loglik=loglik.T, pvalue=pval.T).tolist() == [0, 1, 0, 1, 1]
+    assert decide(acc, "pvalue", loglik=loglik.T, pvalue=pval.T).tolist() == [0, 1, 2, 1, 2]
+    # the status counts the accepted models whatever the rule
+    assert status(acc.sum(axis=1)).tolist() == ["identified", "ambiguous", "none", "identified", "ambiguous"]
+    # one window as a 1-D input
+    assert int(decide([False, True, False])) == 1 and int(decide([True, True])) == AMBIGUOUS
+    assert int(decide([False, False], "likelihood", loglik=[1.0, 2.0])) == 1
+    # a NaN score never wins; all-NaN is no decision
+    assert int(decide([True, True], "likelihood", loglik=[np.nan, -5.0])) == 1
+    assert int(decide([True, True], "pvalue", pvalue=[np.nan, np.nan])) == NONE
+    with pytest.raises(ValueError, match="loglik"):
+        decide(acc, "likelihood")
+    with pytest.raises(ValueError, match="pvalue"):
+        decide(acc, "pvalue")
+    with pytest.raises(ValueError, match="shape"):
+        decide(acc, "likelihood", loglik=loglik)
+    with pytest.raises(ValueError, match="rule"):
+        decide(acc, "vote")
+
+
+def test_window_and_step_as_time_span_or_samples(models, failure_record):
+    """window / step / steady_window follow pandas rolling: "5s" at 100 Hz is 500 samples, any spelling."""
+    thr = 3.0 * failure_record[1500:].var(axis=0)
+    span = _monitor(models, steady_thresholds=thr)
+    assert (span.window, span.step, span.steady_window) == (500, 100, 500)
+    ref = span.run(failure_record)
+    for kw in (dict(window=500, step=100, steady_window=500),
+               dict(window=pd.Timedelta(seconds=5), step=np.int64(100), steady_window="5000ms"),
+               dict(window=datetime.timedelta(seconds=5), step="1s", steady_window=500)):
+        mon = _monitor(models, steady_thresholds=thr, **kw)
+        assert (mon.window, mon.step, mon.steady_window) == (500, 100, 500)
+        got = mon.run(failure_record)
+        assert got.events == ref.events
+        pd.testing.assert_frame_equal(got.windows, ref.windows)
+    # the defaults with fs: 1 s step, 10 s variance window
+    mon = tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window="2s", fs=FS)
+    assert (mon.window, mon.step, mon.steady_window) == (200, 100, 1000)
+    # without fs, times are in samples: the events of the same windows, every time multiplied by fs
+    samples = _monitor(models, steady_thresholds=thr, window=500, step=100, steady_window=500, fs=None)
+    assert samples.fs is None
+    got = samples.run(failure_record)
+    assert [(e.kind, e.label, e.status, e.accepted) for e in got.events] == \
+        [(e.kind, e.label, e.status, e.accepted) for e in ref.events]
+    for a, b in zip(got.events, ref.events):
+        assert a.time == pytest.approx(b.time * FS)
+        np.testing.assert_allclose(a.window, np.multiply(b.window, FS))
+    assert got.detection_time == pytest.approx(ref.detection_time * FS)
+
+
+def test_numpy_timedelta64_is_a_time_span(models):
+    h, f = models["healthy"], {"f1": models["f1"]}
+    for span in (np.timedelta64(5, "s"), np.timedelta64(5_000_000_000, "ns")):
+        mon = tsfdi.Monitor(h, f, window=span, fs=FS)
+        assert mon.window == 500
+
+
+def test_window_vocabulary_errors(models):
+    h, f = models["healthy"], {"f1": models["f1"]}
+    # a float is neither samples nor a time span: refused, naming the argument
+    with pytest.raises(TypeError, match="window"):
+        tsfdi.Monitor(h, f, window=5.0, fs=FS)
+    with pytest.raises(TypeError, match="step"):
+        tsfdi.Monitor(h, f, window=500, step=1.0, fs=FS)
+    with pytest.raises(TypeError, match="steady_window"):
+        tsfdi.Monitor(h, f, window=500, step=100, steady_window=5.0, fs=FS)
+    with pytest.raises(TypeError, match="window"):
+        tsfdi.Monitor(h, f, window=True, fs=FS)
+    # a time span needs the sampling frequency
+    with pytest.raises(ValueError, match="window"):
+        tsfdi.Monitor(h, f, window="5s", step=100, steady_window=500)
+    with pytest.raises(ValueError, match="step"):
+        tsfdi.Monitor(h, f, window=500, step="1s", steady_window=500)
+    with pytest.raises(ValueError, match="steady_window"):
+        tsfdi.Monitor(h, f, window=500, step=100, steady_window="10s")
+    # the defaults are time spans too (1 s step, 10 s variance window)
+    with pytest.raises(ValueError, match="step"):
+        tsfdi.Monitor(h, f, window=500)
+    with pytest.raises(ValueError, match="steady_window"):
+        tsfdi.Monitor(h, f, window=500, step=100)
+    with pytest.raises(ValueError, match="window"):
+        tsfdi.Monitor(h, f, window="five seconds", fs=FS)
+    with pytest.raises(ValueError, match="window"):
+        tsfdi.Monitor(h, f, window=2, step=1, steady_window=500)
+
+
+def test_bad_baseline_is_named(models):
+    with pytest.raises(TypeError, match="baseline"):
+        tsfdi.Monitor(object(), {"f1": models["f1"]}, window="5s", fs=FS)
 
 
 def test_bad_input(models, failure_record):
-    with pytest.raises(TypeError, match="baseline"):
-        tsfdi.Monitor(object(), {"f1": models["f1"]}, window=5.0, fs=FS)
+    with pytest.raises(TypeError, match="fitted results"):
+        tsfdi.Monitor(object(), {"f1": models["f1"]}, window="5s", fs=FS)
+    with pytest.raises(TypeError, match="fitted results"):
+        tsfdi.Monitor(models["healthy"], {"f1": object()}, window="5s", fs=FS)
     with pytest.raises(TypeError, match="models"):
-        tsfdi.Monitor(models["healthy"], [models["f1"]], window=5.0, fs=FS)
+        tsfdi.Monitor(models["healthy"], [models["f1"]], window="5s", fs=FS)
     with pytest.raises(ValueError, match="window"):
-        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window=0.01, fs=FS)
+        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window="10ms", fs=FS)
     with pytest.raises(ValueError, match="rule"):
-        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window=5.0, fs=FS, rule="vote")
+        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window="5s", fs=FS, rule="vote")
     with pytest.raises(ValueError, match="steady_thresholds"):
-        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window=5.0, fs=FS, steady_thresholds=[1.0])
+        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window="5s", fs=FS, steady_thresholds=[1.0])
     with pytest.raises(TypeError, match="test"):
-        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window=5.0, fs=FS, test="whiteness")
+        tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window="5s", fs=FS, test="whiteness")
     mon = _monitor(models)
     with pytest.raises(ValueError, match="channel"):
         mon.run(failure_record[:, :1])
@@ -233,7 +421,19 @@ def test_bad_input(models, failure_record):
     with pytest.raises(ValueError, match="NaN"):
         mon.run(bad)
     with pytest.raises(ValueError, match="window"):
-        window_statistics(failure_record[:100], models, LjungBox(lags=10), window=200)
+        _stats(failure_record[:100], models, LjungBox(lags=10), window=200)
+    with pytest.raises(ValueError, match="order"):
+        _stats(failure_record, models, LjungBox(lags=10), window=4)
+    with pytest.raises(ValueError, match="lags"):
+        _stats(failure_record, models, LjungBox(lags=10), window=12)
+    with pytest.raises(TypeError, match="test"):
+        _stats(failure_record, models, "whiteness", window=200)
+    with pytest.raises(ValueError, match="no test"):
+        _stats(failure_record, models, {"f1": LjungBox(lags=10)}, window=200)
+    with pytest.raises(ValueError, match="channel"):
+        ResidualWindows(models).fit(failure_record[:, :1])
+    with pytest.raises(TypeError, match="models"):
+        ResidualWindows([models["f1"]])
 
 
 def test_plots(models, failure_record):

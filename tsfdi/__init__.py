@@ -1,25 +1,57 @@
-"""tsfdi: statistical time-series fault detection and identification."""
+"""tsfdi: statistical time-series fault detection and identification.
 
-from tsfdi.detection import GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, ZScore
-from tsfdi.evaluation import Baselines, Evaluation, evaluate, fit_baselines, hexacopter_signals
+The flow, one module per step: models (:mod:`tsfdi.models`, order selection in :mod:`tsfdi.selection`) ->
+residual tests (:mod:`tsfdi.detection`) -> the windowed engine (:mod:`tsfdi.windows`) -> detection and
+identification (:mod:`tsfdi.identification`) -> the sliding-window monitor of paper 003 (:mod:`tsfdi.monitoring`)
+and the online detectors of papers 001/002 (:mod:`tsfdi.online`) -> baselines of many records
+(:mod:`tsfdi.baselines`) -> evaluation (:mod:`tsfdi.evaluation`). :mod:`tsfdi.datasets`, :mod:`tsfdi.plotting`
+and :mod:`tsfdi.study` are imported on first use.
+"""
+
+import importlib
+
+from tsfdi.baselines import Baselines, Records, fit_baselines
+from tsfdi.detection import GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, ResidualTest, ZScore
+from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
-from tsfdi.identification import Identification, detect, identify, identify_windows
-from tsfdi.io import load
-from tsfdi.models import AR, ARX, VAR, ARResults, ARXResults, RecursiveARX, VARResults
-from tsfdi.monitoring import Monitor, MonitorResult, OnlineDetector
-from tsfdi.plotting import plot_acf
+from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
+from tsfdi.models import (AR, ARX, VAR, ARResults, ARXResults, RecursiveARX, RecursiveARXResults, VARResults,
+                          load)
+from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
+from tsfdi.online import OnlineDetection, OnlineDetector
 from tsfdi.selection import OrderSelection, select_order
+from tsfdi.windows import ResidualWindows, WindowStatistics
 
 __version__ = "0.1.0"
 
 __all__ = [
     # models and order selection
-    "AR", "ARX", "VAR", "RecursiveARX", "ARResults", "ARXResults", "VARResults", "OrderSelection",
-    "select_order", "load",
+    "AR", "ARX", "VAR", "RecursiveARX", "ARResults", "ARXResults", "VARResults", "RecursiveARXResults",
+    "OrderSelection", "select_order", "load",
     # residual tests and decisions
-    "Decision", "FTest", "LjungBox", "GLRT", "EmpiricalThreshold", "ZScore",
-    # detection, identification, monitoring, evaluation
-    "detect", "identify", "identify_windows", "Identification", "Monitor", "MonitorResult", "OnlineDetector",
-    "evaluate", "Evaluation", "fit_baselines", "Baselines", "hexacopter_signals",
-    "plot_acf", "TsfdiWarning", "__version__",
+    "ResidualTest", "Decision", "FTest", "LjungBox", "GLRT", "EmpiricalThreshold", "ZScore",
+    # windowed engine, detection, identification
+    "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",
+    "WindowedIdentification",
+    # monitoring, online detection, baselines, evaluation
+    "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "Records", "fit_baselines",
+    "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
+    # imported on first use
+    "datasets", "plotting", "study", "plot_acf",
+    "TsfdiWarning", "__version__",
 ]
+
+_LAZY_MODULES = ("datasets", "plotting", "study")
+
+
+def __getattr__(name: str):
+    """``tsfdi.datasets``, ``tsfdi.plotting`` and ``tsfdi.study`` (and ``tsfdi.plot_acf``) on first use."""
+    if name in _LAZY_MODULES:
+        return importlib.import_module(f"tsfdi.{name}")
+    if name == "plot_acf":
+        return importlib.import_module("tsfdi.plotting").plot_acf
+    raise AttributeError(f"module 'tsfdi' has no attribute {name!r}")
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(__all__))

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["Signal", "as_signal", "is_xarray"]
+__all__ = ["Signal", "as_signal", "is_xarray", "rolling_variance", "sampling_frequency", "window_samples"]
 
 
 def is_xarray(obj: Any) -> bool:
@@ -215,3 +215,102 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
             raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
     return Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
                   channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)
+
+
+def sampling_frequency(signal: Signal, fs: Any = None) -> float | None:
+    """Sampling frequency in Hz: ``fs`` when given, else read from the signal's time index, else ``None``.
+
+    A ``DatetimeIndex`` / ``TimedeltaIndex`` gives ``1 / median(spacing)`` in seconds; a numeric index named
+    ``"time"`` (pandas) or a numeric xarray time coordinate is taken to be in seconds. A ``RangeIndex`` or a
+    numpy array carries no time.
+    """
+    if fs is not None:
+        from tsfdi._validation import float_like
+
+        return float_like(fs, "fs", minimum=0.0, strict_min=True)
+    idx = signal.index
+    if idx is None or len(idx) < 2 or isinstance(idx, pd.RangeIndex):
+        return None
+    if isinstance(idx, (pd.DatetimeIndex, pd.TimedeltaIndex)):
+        dt = float(np.median(np.asarray((idx[1:] - idx[:-1]).total_seconds())))
+    elif pd.api.types.is_numeric_dtype(idx.dtype) and (signal.kind == "xarray" or idx.name == "time"):
+        dt = float(np.median(np.diff(np.asarray(idx, dtype=np.float64))))
+    else:
+        return None
+    return 1.0 / dt if dt > 0 else None
+
+
+def window_samples(value: Any, name: str, fs: float | None, *, minimum: int = 1) -> int:
+    """A window length or step in samples, following pandas' ``rolling`` convention.
+
+    An ``int`` counts samples; a time span (``"2s"``, ``pandas.Timedelta``, ``datetime.timedelta``,
+    ``numpy.timedelta64``) is converted with the sampling frequency ``fs`` (Hz) and rounded to the nearest
+    sample. Floats are refused: say ``"2.5s"`` for a time span.
+    """
+    import datetime
+    import numbers
+
+    if isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be an int (samples) or a time span such as '2s', got {value!r}")
+    # numpy counts timedelta64 as an integer type: time spans are recognised first
+    if not isinstance(value, (str, pd.Timedelta, datetime.timedelta, np.timedelta64)) and isinstance(
+            value, (numbers.Integral, np.integer)):
+        n = int(value)
+    elif isinstance(value, (str, pd.Timedelta, datetime.timedelta, np.timedelta64)):
+        try:
+            span = pd.Timedelta(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be an int (samples) or a time span such as '2s', got {value!r}") from None
+        if span is pd.NaT:
+            raise ValueError(f"{name} must be a time span such as '2s', got {value!r}")
+        if fs is None:
+            raise ValueError(f"{name} = {value!r} is a time span but the sampling frequency is unknown: give fs "
+                             "or a signal with a time index, or count samples with an int")
+        n = int(round(span.total_seconds() * fs))
+        if n < minimum:
+            raise ValueError(f"{name} = {value!r} is {n} sample(s) at fs = {fs:g} Hz; at least {minimum} are "
+                             "needed")
+    else:
+        raise TypeError(f"{name} must be an int (samples) or a time span such as '2s', got {value!r} "
+                        f"({type(value).__name__})")
+    if n < minimum:
+        raise ValueError(f"{name} must be >= {minimum} samples, got {n}")
+    return n
+
+
+def rolling_variance(signal: Any, window: int, step: int = 1) -> np.ndarray:
+    """Variance of every channel over sliding windows (Dutta et al., Fig. 7).
+
+    Parameters
+    ----------
+    signal : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, k)
+    window : int
+        Window length in samples.
+    step : int
+        Samples between window starts.
+
+    Returns
+    -------
+    ndarray, shape (n_windows, k)
+        Variance (``ddof=0``) of window ``w`` = samples ``[w * step, w * step + window)``, from prefix sums of the
+        globally centred signal.
+    """
+    from tsfdi._validation import int_like
+
+    sig = as_signal(signal, "signal", allow_constant=True)
+    window = int_like(window, "window", minimum=2)
+    step = int_like(step, "step", minimum=1)
+    return _rolling_variance(sig.values, window, step)
+
+
+def _rolling_variance(x: np.ndarray, window: int, step: int) -> np.ndarray:
+    n_all = x.shape[0]
+    if window > n_all:
+        raise ValueError(f"window must be <= the signal length {n_all}, got {window}")
+    x = x - x.mean(axis=0)
+    zero = np.zeros((1, x.shape[1]))
+    s1 = np.concatenate([zero, np.cumsum(x, axis=0)])
+    s2 = np.concatenate([zero, np.cumsum(x * x, axis=0)])
+    starts = np.arange(0, n_all - window + 1, step)
+    m = (s1[starts + window] - s1[starts]) / window
+    return np.maximum((s2[starts + window] - s2[starts]) / window - m * m, 0.0)

@@ -89,141 +89,26 @@ def _csv_list(text: str | None) -> list[str] | None:
     return None if text is None else [t.strip() for t in text.split(",") if t.strip()]
 
 
-def _markdown(df) -> str:
-    """A pipe table of a DataFrame (index levels as leading columns), without the optional tabulate package."""
-    flat = df.reset_index()
-
-    def cell(v):
-        if isinstance(v, float):
-            return f"{v:.6g}"
-        return str(v)
-
-    head = "| " + " | ".join(str(c) for c in flat.columns) + " |"
-    rule = "|" + "|".join("---" for _ in flat.columns) + "|"
-    rows = ["| " + " | ".join(cell(v) for v in row) + " |" for row in flat.itertuples(index=False)]
-    return "\n".join([head, rule] + rows)
-
-
-def demo_report(bases: dict, ev, *, markdown: bool = False) -> str:
-    """Text of the demo: Table 2 analogue, Table 4 analogues (paper and improved rules), rates, detection."""
-    import pandas as pd
-
-    from tsfdi.evaluation import baselines_table
-
-    def show(df: pd.DataFrame) -> str:
-        return _markdown(df) if markdown else df.to_string()
-
-    out = []
-    t2 = baselines_table(bases)[["turbulence", "state", "model", "signals", "order", "parameters", "records", "nobs",
-                                 "spp", "rss_sss", "q_insample", "stable"]]
-    out.append("## Table 2 analogue: baseline models (pooled fitting records; q_insample: median in-sample "
-               "Ljung-Box Q, 20 lags, 20 s blocks)\n")
-    out.append(show(t2.set_index(["turbulence", "state", "model", "signals"]).round(
-        {"spp": 2, "rss_sss": 5, "q_insample": 2})))
-    for w in sorted(ev.identification["window"].unique()):
-        for rule in ev.rules:
-            what = "accepted" if rule == "paper" else "labelled"
-            out.append(f"\n## Table 4 analogue, {w:g} s windows, rule '{rule}'\n\nPercent of the windows of each true "
-                       f"failure (columns) {what} as {' / '.join(ev.faults)}.\n")
-            out.append(show(ev.table4(w, rule)))
-    r = ev.rates()["correct"].unstack("true").unstack("rule")
-    r.columns = [f"{t} ({rule})" for t, rule in r.columns]
-    out.append("\n## Correct unique identification (percent of windows)\n")
-    out.append(show(r.round(2)))
-    out.append("\n## Detection with the healthy model\n")
-    out.append(show(ev.detection_rates().round(3)))
-    return "\n".join(out) + "\n"
-
-
-def write_figures(bases: dict, ev, data, out) -> list:
-    """Figures of the study under ``out`` (Path): order selection, residual ACF, variance evolution, identification
-    bars, confusion heatmaps. Returns the written paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from tsfdi.evaluation import hexacopter_signals
-    from tsfdi.plotting.acf import plot_acf
-    from tsfdi.plotting.monitoring import plot_confusion, plot_variance_evolution
-
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-
-    def save(fig, name):
-        p = out / name
-        fig.savefig(p, dpi=90)
-        plt.close(fig)
-        written.append(p)
-
-    level = "severe" if "severe" in bases else next(iter(bases))
-    b = bases[level]
-    if ("var", b.healthy) in b.selections:
-        save(b.selections[("var", b.healthy)].plot(), "order_selection_var_healthy.png")
-    ch = b.channels[1] if len(b.channels) > 1 else b.channels[0]
-    if (ch, b.healthy) in b.selections:
-        save(b.selections[(ch, b.healthy)].plot(), f"order_selection_ar_{ch}_healthy.png")
-    sig = hexacopter_signals(data)
-    st, tb = sig["state"].values, sig["turbulence"].values
-    valid = ~sig["lost_control"].values if "lost_control" in sig.coords else np.ones(sig.sizes["record"], bool)
-    fit = set(b.fit_records)
-    test_rec = {s: next((i for i in range(sig.sizes["record"]) if st[i] == s and tb[i] == level and valid[i]
-                         and sig["record"].values[i] not in fit), None) for s in (b.healthy,) + b.faults}
-    if "var" in b.models and test_rec[b.healthy] is not None:
-        x = sig.isel(record=test_rec[b.healthy]).values[2000:4000]
-        save(plot_acf(np.asarray(b.models["var"][b.healthy].residuals(x)), lags=40), "acf_var_healthy.png")
-    recs = [sig.isel(record=i).values for s, i in test_rec.items() if i is not None and s != b.healthy]
-    if recs:
-        save(plot_variance_evolution(recs, fs=b.fs, thresholds=b.steady_thresholds, failure_time=10.0,
-                                     labels=[s for s, i in test_rec.items() if i is not None and s != b.healthy],
-                                     channels=list(b.channels)), "variance_evolution.png")
-    if "var" in b.models:
-        from tsfdi.identification import identify
-
-        mon = b.monitor("var", window=20.0)
-        for f in b.faults:
-            i = test_rec.get(f)
-            if i is None:
-                continue
-            x = sig.isel(record=i).values[3000:5000]
-            ident = identify(x, {g: b.models["var"][g] for g in b.faults}, mon.test)
-            save(ident.plot(), f"identification_bars_var_{f}.png")
-    confs = {rule: ev.confusion(rule).sort_index() for rule in ev.rules[:2]}
-    for key in confs["paper"].index.droplevel("true").unique():
-        model, method, w = key
-        if model != "var":
-            continue
-        for rule, conf in confs.items():
-            c = conf.loc[key]
-            save(plot_confusion(c, title=f"{model}, {method}, {w:g} s, rule {rule}"),
-                 f"confusion_{model}_{method}_{int(w)}s_{rule}.png")
-    return written
-
-
 @command("demo", "run the whole Dutta et al. study on the shipped hexacopter data: baselines (Table 2), "
                  "identification (Table 4), detection rates and figures", _demo_args)
 def _demo(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from tsfdi.datasets import load_hexacopter
-    from tsfdi.evaluation import hexacopter_study
+    from tsfdi.datasets.hexacopter import hexacopter_signals
+    from tsfdi.study import demo_report, hexacopter_study, paper_tests, write_report
 
     t0 = time.perf_counter()
     data = load_hexacopter(args.data)
-    windows = [float(w) for w in _csv_list(args.windows)]
+    windows = [f"{float(w)}s" for w in _csv_list(args.windows)]
     order = int(args.order) if args.order.strip().isdigit() else args.order.strip()
-    bases, ev = hexacopter_study(data, records_per_case=args.records_per_case, models=_csv_list(args.models),
-                                 methods=_csv_list(args.methods), windows=windows, fit_records=args.fit_records,
-                                 pool=args.pool, order=order, progress=not args.no_progress)
-    text = demo_report(bases, ev)
-    print(text)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "report.md").write_text(demo_report(bases, ev, markdown=True))
-    ev.identification.to_csv(out / "identification_windows.csv.gz", index=False)
-    nfig = 0 if args.no_figures else len(write_figures(bases, ev, data, out / "figures"))
-    print(f"wrote {out / 'report.md'} and {nfig} figure(s) under {out / 'figures'} in "
+    models = _csv_list(args.models)
+    tests = paper_tests(models or list(hexacopter_signals(data)["channel"].values) + ["var"],
+                        _csv_list(args.methods))
+    bases, ev = hexacopter_study(data, records_per_case=args.records_per_case, models=models, tests=tests,
+                                 windows=windows, fit_records=args.fit_records, pool=args.pool, order=order,
+                                 progress=not args.no_progress)
+    print(demo_report(bases, ev))
+    written = write_report(bases, ev, data, args.out, figures=not args.no_figures)
+    print(f"wrote {written[0]} and {len(written) - 2} figure(s) under {written[0].parent / 'figures'} in "
           f"{time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -340,12 +225,11 @@ def _identify_args(p: argparse.ArgumentParser) -> None:
 def _identify(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    import numpy as np
     import pandas as pd
 
     from tsfdi.detection import FTest, LjungBox
-    from tsfdi.io import load
-    from tsfdi.monitoring import apply_rule, window_statistics
+    from tsfdi.identification import identify_windows
+    from tsfdi.models import load
 
     df, fs = _read_signal(args.data, _csv_list(args.columns), args.fs)
     models = {}
@@ -362,20 +246,15 @@ def _identify(args: argparse.Namespace) -> int:
     if any(int(getattr(m, "neqs", 1)) != x.shape[1] for m in models.values()):
         raise ValueError(f"the data has {x.shape[1]} column(s) {list(df.columns)} but the models have "
                          f"{sorted({int(getattr(m, 'neqs', 1)) for m in models.values()})}: choose --columns")
-    ws = window_statistics(x, models, test, window=W, step=S)
-    names = list(models)
-    rej = np.array([ws["decisions"][n]["reject"] for n in names])
-    pmin = np.array([ws["decisions"][n]["pvalue"].min(axis=1) for n in names])
-    lab = apply_rule(rej, ws["loglik"], pmin, args.rule)
+    wins = identify_windows(x, models, test, window=W, step=S)
     t0 = _first_time(df)
-    table = pd.DataFrame({"start": t0 + ws["starts"] / fs, "end": t0 + (ws["starts"] + W) / fs})
-    for j, n in enumerate(names):
-        table[f"pvalue_{n}"] = pmin[j]
-        table[f"accept_{n}"] = ~rej[j]
+    table = pd.DataFrame({"start": t0 + wins.starts / fs, "end": t0 + wins.stops / fs})
+    for j, n in enumerate(wins.models):
+        table[f"pvalue_{n}"] = wins.windows.min_pvalue[:, j]
+        table[f"accept_{n}"] = wins.accepted[:, j]
     # the status is that of the paper rule (how many models accept), whichever rule picks the label
-    paper = lab if args.rule == "paper" else apply_rule(rej, ws["loglik"], pmin, "paper")
-    table["status"] = np.where(paper >= 0, "identified", np.where(paper == -2, "ambiguous", "none"))
-    table["label"] = [names[i] if i >= 0 else "" for i in lab]
+    table["status"] = wins.status
+    table["label"] = [lab or "" for lab in wins.decide(args.rule)]
     with pd.option_context("display.width", 160, "display.max_rows", 200):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     if args.out:

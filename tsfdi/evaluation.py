@@ -1,18 +1,30 @@
-"""Baseline phase and evaluation of the whole method over many records (Dutta et al., paper 003, Tables 2-4).
+"""Evaluation of the whole method over many records (Dutta et al., paper 003, Table 4) and per-record scoring.
 
-:func:`fit_baselines` fits, for every aircraft state, a scalar AR model on each channel and a VAR model on all
-channels with the order chosen by BIC (:func:`tsfdi.select_order`), and estimates the steady-state
-rolling-variance thresholds; :attr:`Baselines.table` is the analogue of the paper's Table 2.
-:func:`evaluate` then runs detection with the healthy model and identification with the fault models on every
-sliding window of every record that was *not* used for fitting, for the models x methods x window lengths x
-turbulence levels asked for, and returns an :class:`Evaluation` holding the per-window outcomes, the Table 4
-analogue (percent of windows of each true failure accepted as each rotor), unique-correct, ambiguity and
-no-decision rates, detection false-alarm and missed-fault rates and detection delays.
+:func:`evaluate` runs detection with the healthy model and identification with the fault models on every sliding
+window of every record that was *not* used for fitting, for the models x tests x window lengths x turbulence levels
+asked for, and returns an :class:`Evaluation` holding the per-window outcomes, the Table 4 analogue (percent of
+windows of each true failure accepted as each rotor), unique-correct, ambiguity and no-decision rates, detection
+false-alarm and missed-fault rates and detection delays.
+
+Per-record detection scoring (Keipour et al., paper 001, Table I) scores a detector once per record, from its
+*first* alarm:
+
+- a record with a fault (an onset time): an alarm before the onset is a false positive (FP), an alarm at or
+  after it a true positive (TP) whose detection delay is ``first_alarm - onset``, no alarm a false negative (FN);
+- a fault-free record (no onset): any alarm is a false positive (FP), no alarm a true negative (TN);
+- precision = TP / (TP + FP), recall = TP / (TP + FN), accuracy = (TP + TN) / records, and the mean detection
+  delay over the true positives.
+
+:func:`first_alarm` reads the first alarm off a per-sample or per-window boolean alarm (for instance
+``OnlineDetection.alarm`` or ``MonitorResult.windows["fault"]``), :func:`score_records` turns onsets and first
+alarms into one outcome and delay per record and :func:`detection_metrics` counts them, per group (fault kind) and
+over all records. Nothing there depends on a data set: times are plain numbers in one consistent unit (seconds in
+the examples), NaN meaning "no fault" (onset) or "no alarm" (first alarm).
 """
 
 from __future__ import annotations
 
-import warnings
+import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,707 +33,14 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from tsfdi._data import as_signal, is_xarray
-from tsfdi._validation import float_like, int_like, option, probability
-from tsfdi.monitoring import RULES, Monitor, _bank_residuals, _banks, _rolling_variance, _window_statistics, apply_rule
-
-__all__ = ["Baselines", "Evaluation", "Records", "baselines_table", "evaluate", "fit_baselines", "hexacopter_signals",
-           "hexacopter_study", "PAPER_ALPHA", "METHODS", "RULES", "THRESHOLDS"]
-
-#: Identification methods: the residual variance F test and the residual whiteness (Ljung-Box) test.
-METHODS = ("whiteness", "variance")
-
-#: Test thresholds: the null distribution's quantile (chi-square / F, the paper) or calibrated on held-out
-#: in-state residuals (empirical, paper 002 Fig. 2).
-THRESHOLDS = ("chi2", "empirical")
-
-#: Type I risk of each method and model family in the paper's Table 3 (scalar AR on roll / pitch / yaw, VAR).
-PAPER_ALPHA = {("variance", "roll"): 1e-6, ("variance", "pitch"): 1e-12, ("variance", "yaw"): 1e-12,
-               ("variance", "var"): 1e-8, ("whiteness", "roll"): 1e-3, ("whiteness", "pitch"): 1e-3,
-               ("whiteness", "yaw"): 1e-3, ("whiteness", "var"): 1e-3}
-
-
-def _paper_alpha(method: str, model: str) -> float:
-    key = "yaw" if model.startswith("yaw") else model
-    return PAPER_ALPHA.get((method, key), 1e-3 if method == "whiteness" else 1e-8)
-
-
-# ------------------------------------------------------------------------------------------------------------- data
-def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
-    """Roll, pitch and yaw channels of a hexacopter dataset as one ``(record, time, channel)`` DataArray.
-
-    Parameters
-    ----------
-    data : xarray.Dataset
-        As returned by :func:`tsfdi.datasets.load_hexacopter` (variables ``roll``, ``pitch``, ``yaw``).
-    yaw : {"rate", "angle"}
-        ``"rate"`` (default): the body yaw rate, channel ``yaw_rate``: the dataset's ``r`` variable when it has
-        one, else the heading increment times ``fs`` (the first sample is then dropped so every channel has the
-        same time axis). The heading is the integral of the yaw rate under a slow heading loop (time constant
-        1 / k_heading, about 3 s), so at 100 Hz it is close to a unit-root process and an AR/VAR of order 20
-        does not whiten it; with the regular aircraft it also slips by whole turns in severe turbulence.
-        ``"angle"``: the raw heading.
-
-    Returns
-    -------
-    xarray.DataArray
-        Dims ``(record, time, channel)`` with the dataset's record coordinates.
-    """
-    import xarray as xr
-
-    if not isinstance(data, xr.Dataset):
-        raise TypeError(f"data must be an xarray.Dataset with roll, pitch and yaw variables, got "
-                        f"{type(data).__name__}")
-    yaw = option(yaw, "yaw", ("rate", "angle"))
-    use_r = yaw == "rate" and "r" in data
-    missing = [v for v in ("roll", "pitch", "r" if use_r else "yaw") if v not in data]
-    if missing:
-        raise ValueError(f"data lacks the variable(s) {missing}")
-    t = np.asarray(data["time"].values, dtype=float)
-    fs = 1.0 / float(np.median(np.diff(t)))
-    arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64)
-            for v in ("roll", "pitch", "r" if use_r else "yaw")]
-    if use_r:
-        names = ["roll", "pitch", "yaw_rate"]
-    elif yaw == "rate":
-        arrs = [a[:, 1:] for a in arrs[:2]] + [np.diff(arrs[2], axis=1) * fs]
-        t = t[1:]
-        names = ["roll", "pitch", "yaw_rate"]
-    else:
-        names = ["roll", "pitch", "yaw"]
-    vals = np.stack(arrs, axis=-1)
-    coords = {k: (("record",), np.asarray(c.values)) for k, c in data.coords.items()
-              if c.dims == ("record",) and k != "record"}
-    coords["record"] = np.asarray(data["record"].values)
-    coords["time"] = t
-    coords["channel"] = names
-    if "lost_control" in data:
-        coords["lost_control"] = (("record",), np.asarray(data["lost_control"].values, dtype=bool))
-    return xr.DataArray(vals, dims=("record", "time", "channel"), coords=coords, name="attitude")
-
-
-@dataclass(frozen=True, eq=False)
-class Records:
-    """Many records of the same channels, normalised from an xarray object or a sequence of signals.
-
-    Attributes
-    ----------
-    values : list of ndarray, each (nobs, k)
-    state, turbulence : ndarray of str
-    failure_time : ndarray of float (NaN for healthy records)
-    ids : ndarray
-        Record identifiers.
-    valid : ndarray of bool
-        False for records that cannot be used (lost control: NaN after the loss).
-    channels : tuple of str
-    fs : float
-    """
-
-    values: list
-    state: np.ndarray
-    turbulence: np.ndarray
-    failure_time: np.ndarray
-    ids: np.ndarray
-    valid: np.ndarray
-    channels: tuple
-    fs: float
-
-    @classmethod
-    def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
-                  fs: float | None = None, name: str = "data") -> Records:
-        """Build from a hexacopter ``Dataset``, a ``(record, time, channel)`` DataArray or a sequence of
-        signals (numpy / pandas / xarray, each ``(nobs, k)``) with ``states`` (and optional ``failure_times``,
-        ``turbulence``) given per record."""
-        if isinstance(data, Records):
-            return data
-        import xarray as xr
-
-        if isinstance(data, xr.Dataset):
-            data = hexacopter_signals(data)
-        if isinstance(data, xr.DataArray) and data.ndim == 3 and "record" in data.dims:
-            da = data.transpose("record", "time", ...)
-            t = np.asarray(da["time"].values, dtype=float)
-            fs_ = 1.0 / float(np.median(np.diff(t))) if fs is None else float_like(fs, "fs", minimum=0.0,
-                                                                                    strict_min=True)
-            n = da.sizes["record"]
-
-            def coord(key, given, default):
-                if given is not None:
-                    return np.asarray(given)
-                return np.asarray(da[key].values) if key in da.coords else np.full(n, default)
-
-            st = coord("state", states, None)
-            if st[0] is None:
-                raise ValueError(f"{name} needs a 'state' coordinate (or pass states=)")
-            lost = np.asarray(da["lost_control"].values, dtype=bool) if "lost_control" in da.coords else \
-                np.zeros(n, bool)
-            vals = [np.asarray(v, dtype=np.float64) for v in da.values]
-            valid = ~lost & np.array([np.all(np.isfinite(v)) for v in vals])
-            chans = tuple(str(c) for c in da[da.dims[2]].values)
-            return cls(vals, st.astype(str), coord("turbulence", turbulence, "").astype(str),
-                       coord("failure_time", failure_times, np.nan).astype(float),
-                       np.asarray(da["record"].values) if "record" in da.coords else np.arange(n), valid, chans, fs_)
-        if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
-            raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
-                            f"non-empty sequence of signals, got {type(data).__name__}")
-        if states is None:
-            raise ValueError(f"states is required when {name} is a sequence of signals (one state per record)")
-        sigs = [as_signal(d, f"{name}[{i}]", vector=True) for i, d in enumerate(data)]
-        k = {s.nchan for s in sigs}
-        if len(k) != 1:
-            raise ValueError(f"every record of {name} must have the same number of channels, got {sorted(k)}")
-        n = len(sigs)
-        st = np.asarray(states).astype(str)
-        if st.shape != (n,):
-            raise ValueError(f"states must have one entry per record ({n}), got shape {st.shape}")
-        ft = np.full(n, np.nan) if failure_times is None else np.asarray(failure_times, dtype=float)
-        tb = np.full(n, "") if turbulence is None else np.asarray(turbulence).astype(str)
-        if ft.shape != (n,) or tb.shape != (n,):
-            raise ValueError(f"failure_times and turbulence must have one entry per record ({n})")
-        fs_ = 1.0 if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
-        return cls([s.values for s in sigs], st, tb, ft, np.arange(n), np.ones(n, bool), tuple(sigs[0].channels),
-                   fs_)
-
-
-def _segment(rec: Records, i: int, settle: float, duration: float | None) -> np.ndarray:
-    ft = rec.failure_time[i]
-    t0 = (ft if np.isfinite(ft) else 0.0) + settle
-    a = int(round(t0 * rec.fs))
-    b = None if duration is None else a + int(round(duration * rec.fs))
-    seg = rec.values[i][a:b]
-    if b is not None and seg.shape[0] < b - a:
-        raise ValueError(f"record {rec.ids[i]} is too short for a {duration} s segment starting at {t0} s")
-    return seg
-
-
-# ---------------------------------------------------------------------------------------------------- baselines
-@dataclass(frozen=True, eq=False)
-class Baselines:
-    """Baseline models of every state (outcome of :func:`fit_baselines`).
-
-    Attributes
-    ----------
-    models : dict
-        Model name (a channel name for a scalar AR, ``"var"`` for the VAR) -> {state -> fitted results}.
-    selections : dict
-        ``(model name, state)`` -> :class:`~tsfdi.OrderSelection`.
-    channels : tuple of str
-        Channel names of the records.
-    healthy : str
-        Name of the healthy state.
-    faults : tuple of str
-        Names of the fault states (the identification candidates).
-    steady_thresholds : ndarray, shape (k,)
-        Rolling-variance threshold of each channel below which a post-failure signal is steady.
-    steady_window : float
-        Rolling-variance window in seconds.
-    fit_records : tuple
-        Identifiers of the records used for fitting (excluded from :func:`evaluate`).
-    fs : float
-        Sampling frequency in Hz.
-    heldout : dict
-        ``(model name, state)`` -> list of out-of-sample residual records, one per fitting record of that state:
-        the residuals of the record through the model refitted (same order) on the state's *other* fitting
-        records (leave one record out; filled by ``fit_baselines(..., calibrate=True)``, else empty). They
-        calibrate data-driven test thresholds (:meth:`calibrated_tests`).
-    """
-
-    models: dict
-    selections: dict
-    channels: tuple
-    healthy: str
-    faults: tuple
-    steady_thresholds: np.ndarray
-    steady_window: float
-    fit_records: tuple
-    fs: float
-    segments: dict = field(default_factory=dict, repr=False)
-    heldout: dict = field(default_factory=dict, repr=False)
-    _calibrated: dict = field(default_factory=dict, repr=False)
-    _banks: dict = field(default_factory=dict, repr=False)
-
-    def model_channels(self, model: str) -> list[int]:
-        """Channel positions a model uses (all for ``"var"``)."""
-        if model == "var":
-            return list(range(len(self.channels)))
-        if model not in self.channels:
-            raise ValueError(f"model must be 'var' or one of the channels {self.channels}, got {model!r}")
-        return [self.channels.index(model)]
-
-    @property
-    def table(self) -> pd.DataFrame:
-        """Table 2 analogue: one row per (state, model) with the order, parameters, SPP, RSS/SSS and BIC.
-
-        SPP is the paper's samples per parameter: estimation samples x channels / estimated AR parameters.
-        ``records`` is the number of pooled fitting records; ``q_insample`` the median Ljung-Box ``Q`` (20 lags)
-        of the in-sample residuals over 20 s blocks (``20 * fs`` samples; the whole record when shorter) and
-        channels, to compare with the median of chi2(20), about 19.3.
-        """
-        rows = []
-        for state in (self.healthy,) + self.faults:
-            for name, per_state in self.models.items():
-                res = per_state[state]
-                vec = name == "var"
-                rows.append({"state": state, "model": "VAR" if vec else "AR",
-                             "signals": ",".join(self.channels) if vec else name,
-                             "order": f"{'VAR' if vec else 'AR'}({res.lags})", "lags": int(res.lags),
-                             "parameters": int(res.df_model), "records": len(_resid_list(res)),
-                             "nobs": int(res.nobs), "spp": float(res.spp), "rss_sss": float(res.rss_sss),
-                             "bic": float(res.bic), "q_insample": _insample_q(res, int(round(20 * self.fs))),
-                             "stable": bool(res.is_stable)})
-        return pd.DataFrame(rows)
-
-    def monitor(self, model: str = "var", *, window: float = 20.0, step: float = 1.0, method: str = "whiteness",
-                alpha: float | None = None, lags: int | None = None, rule: str = "paper",
-                thresholds: str = "chi2", bank: bool = False) -> Monitor:
-        """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models, tests and thresholds
-        (``thresholds="empirical"``: each model's test calibrated by :meth:`calibrated_tests`; ``bank=True``:
-        every state is the :meth:`bank` of its per-record models)."""
-        thresholds = option(thresholds, "thresholds", THRESHOLDS)
-        _check_bank(bank, thresholds)
-        chans = self.model_channels(model)
-        states = self.state_models(model, bank)
-        if thresholds == "empirical":
-            tests = self.calibrated_tests(model, method, window, alpha=alpha, lags=lags)
-            test: Any = {f: tests[f] for f in self.faults}
-            det = tests[self.healthy]
-        else:
-            test = _make_test(method, model, alpha, lags, window, self.fs)
-            det = None
-        return Monitor(states[self.healthy], {f: states[f] for f in self.faults},
-                       window=window, step=step, fs=self.fs, test=test, detection_test=det,
-                       steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
-
-    def bank(self, model: str, state: str) -> tuple:
-        r"""The bank of ``state``: ``model`` refitted on each of the state's fitting records on its own.
-
-        The pooled model of :attr:`models` averages the dynamics of its fitting records. Records of one state
-        differ (in turbulence each flies its own trim and gusts, so its linearised dynamics differ a little), and
-        on a new record the pooled model's residuals are less white than the chi-square law says. A bank keeps one
-        model per fitting record (same order, trend and hold-back as the pooled model); a window is explained by
-        the state when *any* member accepts it (:func:`~tsfdi.monitoring.window_statistics`). If the new record
-        behaves like one of the fitting records, the member fitted on it rejects with probability about
-        ``alpha``, and the bank (which rejects only when every member does) at most that: the false-alarm rate
-        stays near its expectation where the pooled model's does not (docs/results.md, "Banks of per-record
-        models").
-
-        Returns
-        -------
-        tuple of fitted results
-            One per fitting record of ``state``, in the order of :attr:`fit_records`.
-        """
-        if model not in self.models:
-            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        if state not in self.models[model]:
-            raise ValueError(f"state must be one of {list(self.models[model])}, got {state!r}")
-        key = (model, state)
-        if key not in self._banks:
-            res = self.models[model][state]
-            spec = res.model
-            chans = self.model_channels(model)
-            segs = [g[:, chans] if model == "var" else g[:, chans[0]] for g in self.segments[state]]
-            self._banks[key] = tuple(type(spec)(g, int(res.lags), trend=spec.trend, hold_back=spec.hold_back).fit()
-                                     for g in segs)
-        return self._banks[key]
-
-    def state_models(self, model: str, bank: bool = False) -> dict:
-        """State -> the pooled fitted model of ``model`` (the paper), or with ``bank=True`` its :meth:`bank`."""
-        return {s: (self.bank(model, s) if bank else self.models[model][s]) for s in (self.healthy,) + self.faults}
-
-    def calibrated_tests(self, model: str, method: str, window: float, *, alpha: float | None = None,
-                         lags: int | None = None, step: int = 1) -> dict:
-        """Per state, the ``method`` test of ``model`` for ``window``-second windows with its threshold calibrated on
-        that state's leave-one-record-out residuals (:attr:`heldout`).
-
-        Parameters
-        ----------
-        model, method, window, alpha, lags :
-            As in :func:`evaluate` (default alpha: the paper's Table 3, default lags: 20).
-        step : int
-            Samples between calibration windows (default every sample).
-
-        Returns
-        -------
-        dict
-            State -> calibrated :class:`~tsfdi.LjungBox` / :class:`~tsfdi.FTest` (``threshold="empirical"``).
-
-        Notes
-        -----
-        Hansen et al. (paper 002, Fig. 2) set the threshold at the :math:`1-\alpha` quantile of the statistic in
-        normal operation. Here "normal" is each model's own state, and the statistics are computed out of sample
-        (a record the model was not fitted on), as on the evaluation records: every fitting record in turn is
-        left out, the model (same order) is refitted on the others and the left-out record's residual windows
-        give statistics. The evaluation records are never used.
-        """
-        method = option(method, "method", METHODS)
-        if model not in self.models:
-            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        window = float_like(window, "window", minimum=0.0, strict_min=True)
-        step = int_like(step, "step", minimum=1)
-        key = (model, method, window, alpha, lags, step)
-        if key in self._calibrated:
-            return self._calibrated[key]
-        if not self.heldout:
-            raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
-                             "to calibrate thresholds")
-        W = int(round(window * self.fs))
-        out = {}
-        for state in (self.healthy,) + self.faults:
-            res = self.models[model][state]
-            test = _make_test(method, model, alpha, lags, window, self.fs, threshold="empirical")
-            n = W - int(res.lags)
-            recs = self.heldout[(model, state)]
-            try:
-                test.calibrate([e for e in recs if e.shape[0] >= n], window=n, step=step, **test.reference(res))
-            except ValueError as err:
-                raise ValueError(f"cannot calibrate the {method} test of model {model!r}, state {state!r}, "
-                                 f"{window:g} s windows: {err}") from None
-            out[state] = test
-        self._calibrated[key] = out
-        return out
-
-    def select_alpha(self, model: str = "var", method: str = "whiteness", window: float = 20.0,
-                     alphas: Sequence[float] = (1e-3, 1e-4, 1e-5, 1e-6), *, lags: int | None = None,
-                     step: float = 1.0, bank: bool = False) -> pd.DataFrame:
-        """Choose the identification alpha on the fitting records, leaving each record out (paper's rule).
-
-        Every fitting record of every fault state is cut into ``window``-second windows ``step`` s apart and
-        driven through each fault model: through its own state's model refitted without it (:attr:`heldout`)
-        and through the other states' models, which never saw it. Each window is then identified by the paper's
-        rule (a model is accepted when every channel's test accepts at ``alpha``) for every candidate alpha.
-        The evaluation records are not used, so the choice can be evaluated on them honestly.
-
-        Parameters
-        ----------
-        model, method, window, lags :
-            As in :func:`evaluate`.
-        alphas : sequence of float
-            Candidate per-channel alphas, each in (0, 1).
-        step : float
-            Seconds between window starts.
-        bank : bool
-            Identify with the states' :meth:`bank` instead of their pooled models: the held-out record's own
-            state is its bank without the member fitted on that record (no ``calibrate=True`` needed).
-
-        Returns
-        -------
-        pandas.DataFrame
-            Indexed by alpha: percent of held-out windows identified uniquely and correctly (``correct``),
-            uniquely but wrongly (``wrong``), ambiguous (``ambiguous``), with no model accepted (``none``), and
-            the number of windows. ``attrs["selected"]`` is the alpha with the highest ``correct`` rate (the
-            largest such alpha on ties: the least conservative test that identifies best).
-
-        Notes
-        -----
-        Dutta et al. (paper 003, Table 3) set each method's alpha (1e-3 to 1e-12) so as to minimise the
-        confusion between failures. Out-of-sample residuals carry the baseline's estimation error, so at the
-        nominal alpha the matching model is rejected more often than alpha (notes of :class:`~tsfdi.LjungBox`);
-        this choice measures that on held-out records instead of assuming it away.
-        """
-        method = option(method, "method", METHODS)
-        if model not in self.models:
-            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        _check_bank(bank, "chi2")
-        if not bank and not self.heldout:
-            raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
-                             "to select alpha")
-        window = float_like(window, "window", minimum=0.0, strict_min=True)
-        step_n = max(1, int(round(float_like(step, "step", minimum=0.0, strict_min=True) * self.fs)))
-        alphas = np.array([probability(a, "alphas") for a in np.atleast_1d(alphas)], dtype=float)
-        if alphas.size == 0:
-            raise ValueError("alphas must hold at least one value")
-        chan = None if model == "var" else self.channels.index(model)
-        W = int(round(window * self.fs))
-        test = _make_test(method, model, float(alphas[0]), lags, window, self.fs)
-        accepted, truth = [], []
-        for state in self.faults:
-            for j, seg in enumerate(self.segments[state]):
-                per_model = []
-                x = seg if chan is None else seg[:, chan]
-                for f in self.faults:
-                    res = self.models[model][f]
-                    n = W - int(res.lags)
-                    if seg.shape[0] - int(res.lags) < n:    # record shorter than one window: skipped (for/else)
-                        break
-                    if bank:
-                        members = [(r, None) for i, r in enumerate(self.bank(model, f)) if f != state or i != j]
-                        if not members:
-                            raise ValueError(f"select_alpha with bank=True needs at least two fitting records per "
-                                             f"state; state {f!r} has one")
-                    else:
-                        members = [(res, self.heldout[(model, state)][j] if f == state else None)]
-                    acc = False
-                    for r, e in members:
-                        e = np.asarray(r.residuals(x) if e is None else e, dtype=np.float64)
-                        e = e.reshape(e.shape[0], -1)
-                        ref = test.reference(r)
-                        stat = test.window_statistic(e, n, step_n, **ref)
-                        pval = test._threshold_pvalue(stat, n, **ref)[1]
-                        # accepted at alpha when every channel's p-value exceeds it: (windows, alphas); a bank
-                        # accepts when any member does
-                        acc = acc | np.all(pval[:, :, None] > alphas[None, None, :], axis=1)
-                    per_model.append(acc)
-                else:
-                    m = min(a.shape[0] for a in per_model)
-                    accepted.append(np.stack([a[:m] for a in per_model], axis=-1))
-                    truth.append(np.full(m, self.faults.index(state)))
-        if not accepted:
-            raise ValueError(f"no fitting record is longer than a {window:g} s window")
-        acc = np.concatenate(accepted)          # (windows, alphas, faults)
-        true = np.concatenate(truth)
-        n_acc = acc.sum(axis=-1)
-        unique = n_acc == 1
-        right = acc[np.arange(acc.shape[0]), :, true]
-        table = pd.DataFrame({"correct": 100.0 * (unique & right).mean(axis=0),
-                              "wrong": 100.0 * (unique & ~right).mean(axis=0),
-                              "ambiguous": 100.0 * (n_acc > 1).mean(axis=0),
-                              "none": 100.0 * (n_acc == 0).mean(axis=0),
-                              "windows": acc.shape[0]}, index=pd.Index(alphas, name="alpha"))
-        best = table["correct"].max()
-        table.attrs["selected"] = float(alphas[table["correct"].to_numpy() >= best].max())
-        return table
-
-    def __repr__(self) -> str:
-        return (f"Baselines(models={list(self.models)}, healthy={self.healthy!r}, faults={self.faults}, "
-                f"fit_records={len(self.fit_records)})")
-
-
-def _check_bank(bank: Any, thresholds: str) -> None:
-    if not isinstance(bank, (bool, np.bool_)):
-        raise TypeError(f"bank must be a bool, got {bank!r}")
-    if bank and thresholds == "empirical":
-        raise ValueError("bank=True needs thresholds='chi2': the calibrated thresholds belong to the pooled models "
-                         "(their leave-one-record-out residuals), not to the members of a bank")
-
-
-def _resid_list(res: Any) -> list:
-    e = res.resid
-    return [np.asarray(r, dtype=np.float64) for r in e] if isinstance(e, list) else [np.asarray(e, np.float64)]
-
-
-def _insample_q(res: Any, block: int, lags: int = 20) -> float:
-    """Median Ljung-Box Q of the in-sample residuals over non-overlapping blocks and channels."""
-    from tsfdi.detection.whiteness import ljungbox_windows
-
-    qs = []
-    for e in _resid_list(res):
-        e = e.reshape(e.shape[0], -1)
-        n = min(block, e.shape[0])
-        if n <= lags + 1:
-            continue
-        qs.append(ljungbox_windows(e, lags, n, n).ravel())
-    return float(np.median(np.concatenate(qs))) if qs else float("nan")
-
-
-def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
-                  fs: float | None = None, healthy: str = "healthy", fit_records: Any = "first",
-                  fit_turbulence: Any = None, settle: float = 10.0, duration: float | None = 20.0,
-                  models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 20,
-                  order: Any = "bic", steady_window: float = 10.0, steady_factor: float = 1.0,
-                  calibrate: bool = False) -> Baselines:
-    r"""Baseline phase: fit a scalar AR model per channel and a VAR on all channels for every state.
-
-    Parameters
-    ----------
-    data : xarray.Dataset, xarray.DataArray or mapping or sequence of signals
-        A hexacopter dataset (:func:`tsfdi.datasets.load_hexacopter`; converted by :func:`hexacopter_signals`),
-        a ``(record, time, channel)`` DataArray with ``state`` (and ``failure_time``, ``turbulence``)
-        coordinates, a sequence of ``(nobs, k)`` signals with ``states=`` (numpy, pandas or xarray each), or a
-        mapping state -> signal (one steady-state segment per state, used whole).
-    states, failure_times, turbulence : array_like, optional
-        Per-record labels for a sequence of signals.
-    fs : float, optional
-        Sampling frequency in Hz (from the time coordinate for xarray input, else 1).
-    healthy : str
-        Name of the healthy state; every other state is a fault state.
-    fit_records : "first", "all", int or sequence
-        Records used for fitting: the first valid record of each (state, turbulence) cell (default), every
-        valid record, the first ``n`` valid records of each cell (an int), or explicit record identifiers. They
-        are listed in :attr:`Baselines.fit_records` and excluded by :func:`evaluate`. The records of one state
-        are pooled: their regressions are stacked (each record holds back its own first samples, no junction
-        between records), which shrinks the estimation error of the parameters.
-    fit_turbulence : str or sequence, optional
-        Restrict fitting records to these turbulence levels (the paper fits on "severe" only); several levels
-        give models pooled across them.
-    settle : float
-        Seconds after the failure (after 0 for records without failure) where the fitting segment starts:
-        the post-failure transient is excluded.
-    duration : float or None
-        Length of the fitting segment in seconds (the paper's 20 s); ``None`` uses the rest of the record.
-    models : sequence of str, optional
-        Which models to fit: channel names (scalar AR) and/or ``"var"``; default all channels and ``"var"``.
-    max_lags, var_max_lags : int
-        Largest AR / VAR order searched (on a common sample of the pooled records).
-    order : {"bic", "rss_sss"} or int
-        ``"bic"``: the BIC minimum (paper eq. 5); ``"rss_sss"``: the order where the RSS/SSS curve (eq. 6)
-        stabilises (:attr:`tsfdi.OrderSelection.stabilized`, the paper's Fig. 8 reading); an int: that order
-        for every model (at most the search bound).
-    steady_window : float
-        Rolling-variance window (s) of the steady-state check.
-    steady_factor : float
-        Thresholds are ``steady_factor`` times the largest rolling variance of each channel over the steady
-        parts (from ``settle`` after the failure) of the fault-state fitting records (the paper's rule with
-        factor 1).
-    calibrate : bool
-        Also compute, for every model and state with at least two fitting records, the leave-one-record-out
-        residuals (:attr:`Baselines.heldout`) that calibrate data-driven thresholds
-        (``evaluate(..., thresholds="empirical")``): each fitting record in turn through the model refitted on
-        the state's other fitting records.
-
-    Returns
-    -------
-    Baselines
-
-    Notes
-    -----
-    The segments of the fitting records of one state are passed to the model as a list of records: the
-    least-squares regressions are stacked (no junction between records) and the Gram matrices of the order
-    selection add up. Order selection follows the paper: BIC (eq. 5) or the RSS/SSS stabilisation (eq. 6)
-    over orders ``1..max_lags``; :attr:`Baselines.table` also reports the median Ljung-Box ``Q`` (20 lags) of
-    the in-sample residuals over 20 s blocks, a check of their whiteness.
-
-    References
-    ----------
-    Dutta et al. (paper 003), section "Parametric Model Identification", Table 2 and the Fig. 7 discussion.
-    """
-    from tsfdi.selection import select_order
-
-    settle = float_like(settle, "settle", minimum=0.0)
-    duration = None if duration is None else float_like(duration, "duration", minimum=0.0, strict_min=True)
-    max_lags = int_like(max_lags, "max_lags", minimum=1)
-    var_max_lags = int_like(var_max_lags, "var_max_lags", minimum=1)
-    steady_window = float_like(steady_window, "steady_window", minimum=0.0, strict_min=True)
-    steady_factor = float_like(steady_factor, "steady_factor", minimum=0.0, strict_min=True)
-    if isinstance(order, str):
-        order = option(order, "order", ("bic", "rss_sss"))
-    else:
-        order = int_like(order, "order", minimum=1, maximum=max(max_lags, var_max_lags))
-    if not isinstance(calibrate, (bool, np.bool_)):
-        raise TypeError(f"calibrate must be a bool, got {calibrate!r}")
-    if isinstance(data, Mapping) and not is_xarray(data):
-        if not data:
-            raise ValueError("data is an empty mapping: give one signal per state")
-        names = list(data)
-        data = [data[s] for s in names]
-        states, failure_times, turbulence = names, None, None
-        fit_records, settle, duration = "all", 0.0, None
-    rec = Records.from_data(data, states=states, failure_times=failure_times, turbulence=turbulence, fs=fs)
-    uniq = list(dict.fromkeys(rec.state.tolist()))
-    if healthy not in uniq:
-        raise ValueError(f"healthy state {healthy!r} not found among the states {uniq}")
-    faults = tuple(s for s in uniq if s != healthy)
-    if not faults:
-        raise ValueError("data has no fault state: at least one state other than the healthy one is needed")
-    # which records fit
-    ok = rec.valid.copy()
-    if fit_turbulence is not None:
-        levels = [fit_turbulence] if isinstance(fit_turbulence, str) else list(fit_turbulence)
-        ok &= np.isin(rec.turbulence, levels)
-    per_cell = None
-    if isinstance(fit_records, str):
-        fit_records = option(fit_records, "fit_records", ("first", "all"))
-        per_cell = 1 if fit_records == "first" else None
-        if fit_records == "all":
-            chosen = np.flatnonzero(ok)
-    elif isinstance(fit_records, (int, np.integer)) and not isinstance(fit_records, bool):
-        per_cell = int_like(fit_records, "fit_records", minimum=1)
-    if per_cell is not None:
-        seen: dict = {}
-        chosen = []
-        for i in np.flatnonzero(ok):
-            key = (rec.state[i], rec.turbulence[i])
-            if seen.get(key, 0) < per_cell:
-                seen[key] = seen.get(key, 0) + 1
-                chosen.append(i)
-        chosen = np.array(chosen, dtype=int)
-    elif not isinstance(fit_records, str):
-        wanted = list(fit_records)
-        pos = {v: i for i, v in enumerate(rec.ids.tolist())}
-        bad = [w for w in wanted if w not in pos]
-        if bad:
-            raise ValueError(f"fit_records {bad} are not record identifiers of data")
-        chosen = np.array([pos[w] for w in wanted], dtype=int)
-        if not np.all(rec.valid[chosen]):
-            raise ValueError("fit_records contains records that lost control or hold NaN")
-    names = list(rec.channels) + ["var"] if models is None else list(models)
-    for m in names:
-        if m != "var" and m not in rec.channels:
-            raise ValueError(f"models must hold channel names {rec.channels} or 'var', got {m!r}")
-    out: dict = {m: {} for m in names}
-    sels: dict = {}
-    segments: dict = {}
-    for state in (healthy,) + faults:
-        idx = [i for i in chosen if rec.state[i] == state]
-        if not idx:
-            raise ValueError(f"no valid fitting record for state {state!r}")
-        segs = [_segment(rec, i, settle, duration) for i in idx]
-        segments[state] = segs
-        for m in names:
-            if m == "var":
-                sel = select_order([pd.DataFrame(g, columns=list(rec.channels)) for g in segs], var_max_lags, "var")
-            else:
-                j = rec.channels.index(m)
-                sel = select_order([pd.Series(g[:, j], name=m) for g in segs], max_lags, "ar")
-            sels[(m, state)] = sel
-            p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
-                min(order, sel.max_lags)
-            out[m][state] = sel.fit(p)
-    heldout: dict = {}
-    if calibrate:
-        for state, segs in segments.items():
-            if len(segs) < 2:
-                raise ValueError(f"calibrate=True needs at least two fitting records per state; state {state!r} "
-                                 f"has {len(segs)}")
-            for m in names:
-                heldout[(m, state)] = _leave_one_out(out[m][state], segs,
-                                                     None if m == "var" else rec.channels.index(m))
-    # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
-    V = int(round(steady_window * rec.fs))
-    step = max(1, int(round(0.1 * rec.fs)))
-    peaks = []
-    for i in chosen:
-        if rec.state[i] in faults:
-            post = _segment(rec, i, settle, None)
-            if post.shape[0] >= V:
-                peaks.append(_rolling_variance(post, V, step).max(axis=0))
-    thr = steady_factor * np.max(peaks, axis=0) if peaks else np.full(len(rec.channels), np.inf)
-    return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
-                     steady_thresholds=thr, steady_window=steady_window,
-                     fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments, heldout=heldout)
-
-
-def _leave_one_out(res: Any, segs: list, channel: int | None) -> list:
-    """Residuals of each segment through the model (same order, trend, hold-back) refitted on the others."""
-    spec = res.model
-    recs = [g if channel is None else g[:, channel] for g in segs]
-    kw = {"trend": spec.trend, "hold_back": spec.hold_back}
-    out = []
-    for j in range(len(recs)):
-        others = [r for i, r in enumerate(recs) if i != j]
-        fit = type(spec)(others if len(others) > 1 else others[0], int(res.lags), **kw).fit()
-        e = np.asarray(fit.residuals(recs[j]), dtype=np.float64)
-        out.append(e.reshape(e.shape[0], -1))
-    return out
-
-
-# ---------------------------------------------------------------------------------------------------- evaluation
-def _default_lags(window: float, fs: float) -> int:
-    """Ljung-Box lags for a window: 20, fewer for short windows (at least 10 samples per lag)."""
-    return int(min(20, max(2, round(window * fs) // 10)))
-
-
-def _make_test(method: str, model: str, alpha: float | None, lags: int | None, window: float, fs: float,
-               threshold: str = "chi2"):
-    from tsfdi.detection.variance import FTest
-    from tsfdi.detection.whiteness import LjungBox
-
-    method = option(method, "method", METHODS)
-    a = _paper_alpha(method, model) if alpha is None else probability(alpha, "alpha")
-    emp = threshold == "empirical"
-    if method == "variance":
-        return FTest(alpha=a, threshold="empirical" if emp else "f")
-    return LjungBox(lags=_default_lags(window, fs) if lags is None else int_like(lags, "lags", minimum=1), alpha=a,
-                    threshold="empirical" if emp else "chi2")
+from tsfdi._data import as_signal, window_samples
+from tsfdi._validation import float_like, option
+from tsfdi.baselines import Baselines, Records
+from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.whiteness import LjungBox
+from tsfdi.windows import RULES, NONE, AMBIGUOUS, ResidualWindows, decide
+
+__all__ = ["OUTCOMES", "Evaluation", "detection_metrics", "evaluate", "first_alarm", "score_records"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -742,18 +61,18 @@ class Evaluation:
     faults : tuple of str
     rules : tuple of str
     alphas : dict
-        ``(model, method)`` -> alpha used.
+        ``(model, method)`` -> alpha of the test (per window and channel).
     lags : dict
-        window length -> Ljung-Box lags.
+        window length (s) -> Ljung-Box lags.
     records : pandas.DataFrame
         The records evaluated (id, state, turbulence) and those skipped with the reason.
-    thresholds : {"chi2", "empirical"}
-        How the test thresholds were set.
+    thresholds : {"theoretical", "empirical"}
+        How the test thresholds were set (``"empirical"`` when any test was calibrated).
     bank : bool
         Whether every state was the bank of its per-record models (:meth:`Baselines.bank`).
     calibration : pandas.DataFrame
         Per turbulence level (baselines), model, method, window length, state and channel: the null
-        distribution's critical value (``distribution``) and, with ``thresholds="empirical"``, the calibrated
+        distribution's critical value (``distribution``) and, for a test with ``threshold="empirical"``, the calibrated
         one (``empirical``), its calibration sample size and estimate (``"empirical"`` quantile or ``"gpd"``
         tail).
     """
@@ -766,7 +85,7 @@ class Evaluation:
     lags: dict
     records: pd.DataFrame
     nchan: dict = field(default_factory=dict)
-    thresholds: str = "chi2"
+    thresholds: str = "theoretical"
     bank: bool = False
     calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
 
@@ -897,61 +216,76 @@ class Evaluation:
                 f"faults={self.faults}, rules={self.rules})")
 
 
-def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",),
-             methods: Sequence[str] = ("whiteness",), windows: Sequence[float] = (5.0, 10.0, 20.0),
-             turbulence: Any = None, step: float = 1.0, settle: float = 10.0, alpha: Any = None, lags: Any = None,
-             rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True, progress: bool = True,
-             states: Any = None, failure_times: Any = None, fs: float | None = None,
-             thresholds: str = "chi2", bank: bool = False) -> Evaluation:
+def _named_tests(tests: Any, models: list) -> dict:
+    """``(model, label) -> ResidualTest`` from a test, or a mapping label -> test or label -> {model -> test}."""
+    if tests is None:
+        tests = {"whiteness": LjungBox(lags=20, alpha=1e-3)}
+    elif isinstance(tests, ResidualTest):
+        tests = {type(tests).__name__: tests}
+    if not isinstance(tests, Mapping) or not tests:
+        raise TypeError("tests must be a residual test or a non-empty mapping label -> test (or label -> {model -> "
+                        f"test}}), got {type(tests).__name__}")
+    out = {}
+    for m in models:
+        for label, t in tests.items():
+            tm = t.get(m) if isinstance(t, Mapping) else t
+            if not isinstance(tm, ResidualTest):
+                raise TypeError(f"tests[{label!r}] must be a residual test or a mapping model -> test holding one for "
+                                f"every model; got {type(tm).__name__} for model {m!r}")
+            out[(m, str(label))] = tm
+    return out
+
+
+def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",), tests: Any = None,
+             windows: Sequence[Any] = ("5s", "10s", "20s"), turbulence: Any = None, step: Any = "1s",
+             settle: float = 10.0, rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True,
+             progress: bool = True, states: Any = None, failure_times: Any = None, fs: float | None = None,
+             bank: bool = False) -> Evaluation:
     r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
 
     Parameters
     ----------
     data : xarray.Dataset, xarray.DataArray or sequence of signals
-        Records as accepted by :func:`fit_baselines`; the records in ``baselines.fit_records`` and records that
-        lost control (NaN) are skipped.
+        Records as accepted by :func:`~tsfdi.fit_baselines`; the records in ``baselines.fit_records`` and records
+        that lost control (NaN) are skipped.
     baselines : Baselines or mapping
-        From :func:`fit_baselines`, or a mapping turbulence level -> :class:`Baselines` (condition-scheduled
-        baselines: each record is tested with the models of its own turbulence level; levels not in the mapping
-        are skipped).
+        From :func:`~tsfdi.fit_baselines`, or a mapping turbulence level -> :class:`~tsfdi.Baselines`
+        (condition-scheduled baselines: each record is tested with the models of its own turbulence level; levels
+        not in the mapping are skipped).
     models : sequence of str
         Model names of ``baselines`` (channel names for scalar AR, ``"var"``).
-    methods : sequence of {"whiteness", "variance"}
-        Ljung-Box residual uncorrelatedness test or residual variance F test.
-    windows : sequence of float
-        Window lengths in seconds.
+    tests : ResidualTest or mapping, optional
+        The residual tests, each applied to every model: one test, or a mapping label -> test, or label ->
+        {model -> test} (e.g. the paper's Table 3 alphas per model, :func:`tsfdi.study.paper_tests`). The label
+        is the ``method`` of the result tables (a single test is labelled by its class name). Default
+        ``{"whiteness": LjungBox(lags=20, alpha=1e-3)}``. Each channel is tested at the test's ``alpha`` (type I
+        risk per window and channel) and a model is accepted only if every channel accepts (paper's rule for
+        vector residuals). A test built with ``threshold="empirical"`` is calibrated for every model (healthy and
+        each fault) on that model's own leave-one-record-out fitting residuals
+        (:meth:`Baselines.calibrated_tests`; needs ``fit_baselines(..., calibrate=True)``) and gives empirical
+        p-values (paper 002, Fig. 2); evaluation records are never used for calibration.
+    windows : sequence of int or time span
+        Window lengths, as in pandas ``rolling``: an int counts samples, a time span (``"5s"``) is converted with
+        the records' sampling frequency. The result tables give them in seconds.
     turbulence : str or sequence, optional
         Turbulence levels to evaluate (default all).
-    step : float
-        Seconds between window starts (the paper's 1 s).
+    step : int or time span
+        Distance between window starts (the paper's ``"1s"``).
     settle : float
-        Identification windows start at least ``settle`` s after the failure (post-failure steady state).
-    alpha : float or dict, optional
-        Type I risk for every test, or a dict ``(model, method) -> alpha``; default the paper's Table 3
-        (:data:`PAPER_ALPHA`). Each channel is tested at ``alpha`` and a model is accepted only if every channel
-        accepts (paper's rule for vector residuals).
-    lags : int or dict, optional
-        Ljung-Box lags, or a dict window length -> lags; default 20 (at least 10 samples per lag).
+        Identification windows start at least ``settle`` seconds after the failure (post-failure steady state).
     rules : sequence of str
-        Decision rules (:data:`tsfdi.monitoring.RULES`); ``"paper"`` is always included.
+        Decision rules (:data:`tsfdi.windows.RULES`); ``"paper"`` is always included.
     detection : bool
         Also test every window of every record with the healthy model (false alarms, missed faults, delays).
     progress : bool
         Show a tqdm progress bar over records.
     states, failure_times, fs :
         Per-record labels and sampling frequency for a sequence of signals.
-    thresholds : {"chi2", "empirical"}
-        ``"chi2"`` (the paper): each test's critical value from its null distribution (chi-square for the
-        Ljung-Box test, F for the variance test). ``"empirical"``: every model (healthy and each fault) has its
-        own thresholds, the per-channel :math:`1-\alpha` quantiles of its test statistic on its own
-        leave-one-record-out fitting residuals (:meth:`Baselines.calibrated_tests`; needs
-        ``fit_baselines(..., calibrate=True)``), and p-values are empirical (paper 002, Fig. 2). Evaluation
-        records are never used for calibration.
     bank : bool
         ``False`` (the paper): every state is its model pooled over its fitting records. ``True``: every state
         (healthy and each fault) is the bank of its models fitted on each fitting record alone
         (:meth:`Baselines.bank`), accepted on a window when any member accepts; detection alarms when every
-        healthy member rejects. Needs ``thresholds="chi2"``.
+        healthy member rejects. Needs tests with the theoretical threshold.
 
     Returns
     -------
@@ -959,8 +293,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
 
     Notes
     -----
-    Every record is filtered once through each model and all windows' statistics come from prefix sums
-    (:func:`tsfdi.monitoring.window_statistics`, :func:`tsfdi.detection.ljungbox_windows`).
+    Every record is filtered once through each model (and bank member) and all windows' statistics come from
+    prefix sums (:class:`tsfdi.windows.ResidualWindows`).
     """
     if isinstance(baselines, Baselines):
         by_level = None
@@ -982,12 +316,21 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     for m in models:
         if m not in first.models:
             raise ValueError(f"models must be among the fitted models {list(first.models)}, got {m!r}")
-    methods = [option(m, "methods", METHODS) for m in ([methods] if isinstance(methods, str) else methods)]
-    wins = [float_like(w, "windows", minimum=0.0, strict_min=True) for w in np.atleast_1d(windows)]
-    if not models or not methods or not wins:
-        raise ValueError("models, methods and windows must each hold at least one entry")
+    if not isinstance(windows, (list, tuple)):
+        windows = [windows]
+    wins = {window_samples(w, "windows", rec.fs, minimum=2): None for w in windows}
+    if not models or not wins:
+        raise ValueError("models and windows must each hold at least one entry")
+    tests = _named_tests(tests, models)
+    methods = list(dict.fromkeys(meth for _, meth in tests))
+    if not isinstance(bank, (bool, np.bool_)):
+        raise TypeError(f"bank must be a bool, got {bank!r}")
+    empirical = any(t.empirical for t in tests.values())
+    if bank and empirical:
+        raise ValueError("bank=True needs tests with the theoretical threshold: the calibrated thresholds belong to "
+                         "the pooled models (their leave-one-record-out residuals), not to the members of a bank")
     rules = tuple(dict.fromkeys(["paper"] + [option(r, "rules", RULES) for r in rules]))
-    step_n = max(1, int(round(float_like(step, "step", minimum=0.0, strict_min=True) * rec.fs)))
+    step_n = window_samples(step, "step", rec.fs)
     settle = float_like(settle, "settle", minimum=0.0)
     healthy, faults = first.healthy, first.faults
     fit = set(first.fit_records) if by_level is None else {r for b in by_level.values() for r in b.fit_records}
@@ -1005,19 +348,16 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     if not use.any():
         raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
 
-    thresholds = option(thresholds, "thresholds", THRESHOLDS)
-    _check_bank(bank, thresholds)
-    alphas, lag_of, tests = {}, {}, {}
-    for m in models:
-        for meth in methods:
-            a = alpha.get((m, meth)) if isinstance(alpha, Mapping) else alpha
-            for w in wins:
-                lg = lags.get(w) if isinstance(lags, Mapping) else lags
-                t = _make_test(meth, m, a, lg, w, rec.fs)
-                tests[(m, meth, w)] = t
-                alphas[(m, meth)] = t.alpha
-                if meth == "whiteness":
-                    lag_of[w] = t.lags
+    alphas = {key: t.alpha for key, t in tests.items()}
+    lag_of = {round(W / rec.fs, 9): t.lags for W in wins for t in tests.values() if isinstance(t, LjungBox)}
+
+    def state_tests(base: Baselines, m: str, meth: str, W: int) -> tuple:
+        """The detection test and the fault models' tests (calibrated per state for an empirical test)."""
+        t = tests[(m, meth)]
+        if not t.empirical:
+            return t, t
+        cal = base.calibrated_tests(m, t, W)
+        return cal[healthy], {f: cal[f] for f in faults}
 
     ident_parts, det_parts = [], []
     idx = np.flatnonzero(use)
@@ -1026,6 +366,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         from tqdm.auto import tqdm
 
         iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
+    label_names = np.array(list(faults) + ["ambiguous", "none"], dtype=object)
     for i in iterator:
         x_all = rec.values[i]
         state, ft = rec.state[i], rec.failure_time[i]
@@ -1033,53 +374,42 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         base = first if by_level is None else by_level[rec.turbulence[i]]
         for m in models:
             sig = as_signal(x_all[:, base.model_channels(m)], "signal", allow_constant=True)
-            x = sig.values
             per_state = base.state_models(m, bank)
             # each record is filtered once through every (member) model; the windows of every length and
-            # method are slices of these residuals
-            banks_h = _banks({"h": per_state[healthy]})
-            resid_h = _bank_residuals(banks_h, x) if detection else None
-            banks_f = _banks({f: per_state[f] for f in faults})
-            resid_f = _bank_residuals(banks_f, x) if is_fault else None
+            # test are slices of these residuals
+            rw_h = ResidualWindows({"h": per_state[healthy]})
+            rw_f = ResidualWindows({f: per_state[f] for f in faults})
+            if detection:
+                rw_h.fit(sig.values, channels=sig.channels)
+            if is_fault:
+                rw_f.fit(sig.values, channels=sig.channels)
             for meth in methods:
-                for w in wins:
-                    W = int(round(w * rec.fs))
-                    test = tests[(m, meth, w)]
-                    if thresholds == "empirical":
-                        cal = base.calibrated_tests(m, meth, w, alpha=test.alpha,
-                                                    lags=getattr(test, "lags", None))
-                        test_h, test_f = cal[healthy], {f: cal[f] for f in faults}
-                    else:
-                        test_h = test_f = test
+                for W in wins:
+                    w = round(W / rec.fs, 9)
+                    test_h, test_f = state_tests(base, m, meth, W)
                     if detection:
-                        wh = _window_statistics(sig.nobs, sig.channels, banks_h, resid_h, {"h": test_h}, window=W,
-                                                step=step_n)
-                        d, starts = wh["decisions"]["h"], wh["starts"]
-                        st, en = starts / rec.fs, (starts + W) / rec.fs
+                        wh = rw_h.statistics(test_h, window=W, step=step_n, loglik=False)
+                        st, en = wh.starts / rec.fs, (wh.starts + W) / rec.fs
                         det_parts.append(pd.DataFrame({
                             "record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
                             "method": meth, "window": w, "start": st, "end": en,
                             "failure_time": ft, "fault_true": is_fault & (st >= ft),
-                            "pre": ~is_fault | (en <= ft), "alarm": d["reject"]}))
+                            "pre": ~is_fault | (en <= ft), "alarm": wh.reject[:, 0]}))
                     if not is_fault:
                         continue
-                    ws = _window_statistics(sig.nobs, sig.channels, banks_f, resid_f, test_f, window=W, step=step_n)
-                    starts = ws["starts"]
-                    keep = starts / rec.fs >= ft + settle
+                    ws = rw_f.statistics(test_f, window=W, step=step_n)
+                    keep = ws.starts / rec.fs >= ft + settle
                     if not keep.any():
                         continue
-                    rej = np.array([ws["decisions"][f]["reject"] for f in faults])[:, keep]
-                    pmin = np.array([ws["decisions"][f]["pvalue"].min(axis=1) for f in faults])[:, keep]
-                    ll = ws["loglik"][:, keep]
+                    acc = ws.accepted[keep]
                     cols = {"record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
-                            "method": meth, "window": w, "start": starts[keep] / rec.fs}
+                            "method": meth, "window": w, "start": ws.starts[keep] / rec.fs}
                     for j, f in enumerate(faults):
-                        cols[f"acc_{f}"] = ~rej[j]
-                    names = np.array(list(faults) + ["ambiguous", "none"], dtype=object)
+                        cols[f"acc_{f}"] = acc[:, j]
                     for rule in rules:
-                        lab = apply_rule(rej, ll, pmin, rule)
-                        cols[f"label_{rule}"] = names[np.where(lab >= 0, lab, np.where(lab == -2, len(faults),
-                                                                                       len(faults) + 1))]
+                        lab = decide(acc, rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
+                        cols[f"label_{rule}"] = label_names[np.where(lab >= 0, lab, np.where(
+                            lab == AMBIGUOUS, len(faults), len(faults) + 1))]
                     ident_parts.append(pd.DataFrame(cols))
     ident = pd.concat(ident_parts, ignore_index=True) if ident_parts else pd.DataFrame(
         columns=["record", "state", "turbulence", "model", "method", "window", "start"]
@@ -1089,122 +419,491 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                  "fault_true", "pre", "alarm"])
     cal_rows = []
     for lvl, b in ([("", first)] if by_level is None else by_level.items()):
-        for (m, meth, w), t in tests.items():
+        for (m, meth), t in tests.items():
             chans = [b.channels[c] for c in b.model_channels(m)]
-            cal = b.calibrated_tests(m, meth, w, alpha=t.alpha, lags=getattr(t, "lags", None)) \
-                if thresholds == "empirical" else {}
-            for state in (healthy,) + faults:
-                res = b.models[m][state]
-                n = int(round(w * rec.fs)) - int(res.lags)
-                dist = t._null_threshold(len(chans), n, **t.reference(res))
-                for c, ch in enumerate(chans):
-                    row = {"turbulence": lvl, "model": m, "method": meth, "window": w, "state": state,
-                           "channel": ch, "distribution": float(dist[c])}
-                    if state in cal:
-                        row["empirical"] = float(cal[state].threshold_[c])
-                        row["calibration_size"] = int(cal[state].calibration_[c].size)
-                        row["estimate"] = cal[state].thresholds_[c].method_
-                    cal_rows.append(row)
+            for W in wins:
+                cal = b.calibrated_tests(m, t, W) if t.empirical else {}
+                for state in (healthy,) + faults:
+                    res = b.models[m][state]
+                    dist = t.null_threshold(len(chans), W - int(res.lags), **t.reference(res))
+                    for c, ch in enumerate(chans):
+                        row = {"turbulence": lvl, "model": m, "method": meth, "window": round(W / rec.fs, 9),
+                               "state": state, "channel": ch, "distribution": float(dist[c])}
+                        if state in cal:
+                            row["empirical"] = float(cal[state].threshold_[c])
+                            row["calibration_size"] = int(cal[state].calibration_[c].size)
+                            row["estimate"] = cal[state].thresholds_[c].method_
+                        cal_rows.append(row)
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
-                      records=recs, nchan={m: len(first.model_channels(m)) for m in models}, thresholds=thresholds,
-                      bank=bool(bank), calibration=pd.DataFrame(cal_rows))
+                      records=recs, nchan={m: len(first.model_channels(m)) for m in models},
+                      thresholds="empirical" if empirical else "theoretical", bank=bool(bank),
+                      calibration=pd.DataFrame(cal_rows))
 
 
-def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, models: Sequence[str] | None = None,
-                     methods: Sequence[str] = METHODS, windows: Sequence[float] = (5.0, 10.0, 20.0),
-                     rules: Sequence[str] = ("paper", "likelihood", "pvalue"), lags: Any = None, settle: float = 10.0,
-                     fit_records: int = 10, pool: str = "level", order: Any = 20, max_lags: int = 20,
-                     var_max_lags: int = 20, progress: bool = True, thresholds: str = "chi2",
-                     bank: bool = False) -> tuple[dict, Evaluation]:
-    """The whole study of paper 003 on a hexacopter dataset: pooled baselines, then evaluation.
+# ------------------------------------------------------------------------------------ per-record scoring
+#: Per-record outcomes of :func:`score_records` (Keipour et al., paper 001, Table I).
+OUTCOMES = ("TP", "FP", "FN", "TN")
 
-    The first ``fit_records`` valid records of each state and turbulence level fit the baselines (whole
-    post-settle part of each record, pooled without junctions; see :func:`fit_baselines`); every other valid
-    record is evaluated. With ``pool="level"`` each level has its own models and every record is tested with
-    the models of its level (condition-scheduled baselines); with ``pool="all"`` one set of models is fitted on
-    the fitting records of all levels.
+
+# ----------------------------------------------------------------------------------------------- input checks
+def _is_missing(v: Any) -> bool:
+    """``None``, ``pandas.NA``, ``NaT`` or a float NaN."""
+    if v is None or v is pd.NA or v is pd.NaT:
+        return True
+    return isinstance(v, (float, np.floating)) and bool(np.isnan(v))
+
+
+def _scoring_times(value: Any, name: str) -> np.ndarray:
+    """One number per record as a float64 array (NaN allowed, inf not) or raise naming ``name``."""
+    if isinstance(value, pd.DataFrame):
+        raise TypeError(f"{name} must be 1-D (one value per record), got a DataFrame")
+    if isinstance(value, (pd.Series, pd.Index)):
+        if pd.api.types.is_bool_dtype(value.dtype):
+            raise TypeError(f"{name} must hold numbers (times), got booleans")
+        if pd.api.types.is_numeric_dtype(value.dtype):
+            arr = value.to_numpy(dtype=np.float64, na_value=np.nan)
+        else:
+            arr = value.to_numpy()  # datetime64 / timedelta64 kept (and refused below), else object
+    else:
+        try:
+            arr = np.asarray(value)
+        except (ValueError, TypeError) as exc:  # ragged nested sequences
+            raise ValueError(f"{name} must be 1-D (one value per record): {exc}") from None
+    kind = arr.dtype.kind
+    if kind == "b":
+        raise TypeError(f"{name} must hold numbers (times), got booleans")
+    if kind in "mM":
+        raise TypeError(f"{name} must hold numbers in one unit (e.g. seconds since the record start), got "
+                        f"{arr.dtype} values; convert them first (first_alarm(..., time=...) returns seconds)")
+    if kind in "iuf":
+        arr = arr.astype(np.float64)
+    elif kind == "O":
+        out = np.empty(arr.shape, dtype=np.float64)
+        for i, v in enumerate(arr.flat):
+            if _is_missing(v):
+                out.flat[i] = np.nan
+            elif isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)):
+                out.flat[i] = float(v)
+            else:
+                raise TypeError(f"{name} must hold numbers or NaN, got {v!r} ({type(v).__name__}) at position {i}")
+        arr = out
+    else:
+        raise TypeError(f"{name} must hold numbers, got dtype {arr.dtype}")
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be 1-D (one value per record), got shape {arr.shape}")
+    bad = np.flatnonzero(np.isinf(arr))
+    if bad.size:
+        raise ValueError(f"{name} must be finite or NaN, got {arr[bad[0]]} at position {int(bad[0])}")
+    return arr
+
+
+def _scoring_index(n: int, records: Any, pandas_inputs: dict) -> pd.Index:
+    """The record index: ``records``, else the index shared by the pandas inputs, else ``0..n-1``."""
+    idx, src = None, None
+    for name, obj in pandas_inputs.items():
+        if isinstance(obj, pd.Series):
+            if idx is None:
+                idx, src = obj.index, name
+            elif not obj.index.equals(idx):
+                raise ValueError(f"{name}'s index does not match {src}'s index; align them (e.g. "
+                                 f"{name}.reindex({src}.index)) or pass plain arrays")
+    if records is None:
+        return idx if idx is not None else pd.RangeIndex(n, name="record")
+    if isinstance(records, (str, bytes)) or np.ndim(records) != 1:
+        raise ValueError(f"records must be 1-D (one label per record), got {records!r}")
+    if isinstance(records, pd.Index):
+        out = records
+    elif isinstance(records, pd.Series):
+        out = pd.Index(records.to_numpy(), name=records.name)
+    else:
+        out = pd.Index(list(records), name="record")
+    if len(out) != n:
+        raise ValueError(f"records has {len(out)} labels but onset has {n} values (one per record)")
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ first alarm
+def _alarm_flags(values: np.ndarray) -> np.ndarray:
+    """Boolean alarm array from ``values`` (bool, 0/1 numbers); NaN / missing values raise."""
+    kind = values.dtype.kind
+    if kind == "b":
+        return values
+    if kind in "iuf":
+        nan = np.flatnonzero(np.isnan(values).ravel()) if kind == "f" else np.empty(0, int)
+        if nan.size:
+            raise ValueError(f"alarm must be boolean, got NaN at flat position {int(nan[0])}; decide what a "
+                             f"missing sample means (e.g. alarm.fillna(False)) before scoring")
+        other = np.flatnonzero(~np.isin(values.ravel(), (0, 1)))
+        if other.size:
+            raise ValueError(f"alarm must be boolean (or 0 / 1), got {values.ravel()[other[0]]!r} at flat position "
+                             f"{int(other[0])}")
+        return values != 0
+    if kind == "O":
+        out = np.empty(values.shape, dtype=bool)
+        for i, v in enumerate(values.flat):
+            if _is_missing(v):
+                raise ValueError(f"alarm must be boolean, got a missing value ({v!r}) at flat position {i}; decide "
+                                 f"what a missing sample means (e.g. alarm.fillna(False)) before scoring")
+            if isinstance(v, (bool, np.bool_)) or (isinstance(v, numbers.Real) and v in (0, 1)):
+                out.flat[i] = bool(v)
+            else:
+                raise TypeError(f"alarm must be boolean, got {v!r} ({type(v).__name__}) at flat position {i}")
+        return out
+    raise TypeError(f"alarm must be boolean, got dtype {values.dtype}")
+
+
+def first_alarm(alarm: Any, time: Any = None, *, origin: Any = None) -> float:
+    """Time (or position) of the first alarm of one record.
 
     Parameters
     ----------
-    data : xarray.Dataset, optional
-        Default the shipped :func:`tsfdi.datasets.load_hexacopter`.
-    records_per_case : int, optional
-        Use only the first ``records_per_case`` records of each (state, turbulence) cell (more than
-        ``fit_records``: those fit, the others are evaluated); default all.
-    models, methods, windows, rules, lags, settle, progress :
-        As in :func:`evaluate`; ``models`` defaults to every channel and ``"var"``.
-    fit_records : int
-        Fitting records per state and turbulence level (reduced to ``records_per_case - 1`` when fewer).
-    pool : {"level", "all"}
-        Models per turbulence level, or one set pooled across levels.
-    order, max_lags, var_max_lags :
-        Order choice and search bounds of :func:`fit_baselines`. Default order 20: on the shipped data BIC on
-        the pooled records picks VAR(12-15) whose in-sample residuals are still correlated (docs/results.md).
-    thresholds : {"chi2", "empirical"}
-        Test thresholds (:func:`evaluate`); ``"empirical"`` fits the baselines with ``calibrate=True``
-        (leave-one-record-out residuals of the fitting records).
-    bank : bool
-        Every state as the bank of its per-record models (:func:`evaluate`, :meth:`Baselines.bank`).
+    alarm : array_like of bool, shape (nobs,) or (nobs, k), pandas.Series or pandas.DataFrame
+        Per-sample or per-window alarm flags, for instance ``OnlineDetection.alarm`` (one column per pair) or
+        ``MonitorResult.windows["fault"]``. A 2-D alarm raises the record's alarm at the first row where any
+        column alarms. ``0`` / ``1`` numbers are accepted; NaN or missing values are an error (decide first what
+        a missing sample means, e.g. ``alarm.fillna(False)``).
+    time : array_like, optional
+        Time of every row of ``alarm`` (same length): numbers, datetimes or timedeltas. Default: the index of a
+        pandas ``alarm``, else the row position.
+    origin : number, datetime or timedelta, optional
+        Subtracted from the alarm's time. Default: the first entry of the time axis for datetimes (so the result
+        is the time since the first sample), zero otherwise.
 
     Returns
     -------
-    baselines : dict
-        Turbulence level -> :class:`Baselines` (with ``pool="all"`` every level maps to the same object).
-    evaluation : Evaluation
+    float
+        ``time[k] - origin`` for the first alarming row ``k``: in seconds for a datetime / timedelta time axis,
+        in the unit of ``time`` for numbers, the row position ``k`` when there is no time axis. NaN if no row
+        alarms (including an empty record).
+
+    Raises
+    ------
+    TypeError
+        ``alarm`` is not boolean-like, ``time`` holds neither numbers, datetimes nor timedeltas (for example a
+        string index; pass ``time``), or ``origin`` does not match ``time``'s kind.
+    ValueError
+        ``alarm`` has NaN / missing values, values other than 0 / 1 or more than 2 dimensions; ``time`` has a
+        different length or missing values.
+
+    See Also
+    --------
+    score_records : Outcome and delay per record from onsets and first alarms.
+
+    Notes
+    -----
+    The first alarm is what Keipour et al. (paper 001, Table I) score per flight; pass it with the onset (in the
+    same unit, e.g. seconds since the record start) to :func:`score_records`.
+
+    Examples
+    --------
+    >>> import numpy as np, pandas as pd
+    >>> first_alarm([False, False, True, True])
+    2.0
+    >>> first_alarm(np.array([[0, 0], [0, 0], [0, 1]]), time=[0.0, 0.05, 0.1])
+    0.1
+    >>> idx = pd.date_range("2018-07-30 16:39", periods=4, freq="500ms")
+    >>> first_alarm(pd.Series([False, False, False, True], index=idx))
+    1.5
+    >>> first_alarm([False, False])
+    nan
     """
-    if data is None:
-        from tsfdi.datasets import load_hexacopter
+    index = None
+    if isinstance(alarm, (pd.Series, pd.DataFrame)):
+        index = alarm.index
+        values = alarm.to_numpy()
+    elif isinstance(alarm, (str, bytes)):
+        raise TypeError(f"alarm must be boolean, got a {type(alarm).__name__}")
+    else:
+        try:
+            values = np.asarray(alarm)
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"alarm must be a 1-D or 2-D array: {exc}") from None
+    if values.ndim not in (1, 2):
+        raise ValueError(f"alarm must be 1-D (nobs,) or 2-D (nobs, k), got shape {values.shape}")
+    flags = _alarm_flags(values)
+    if flags.ndim == 2:
+        flags = flags.any(axis=1)
+    n = flags.shape[0]
 
-        data = load_hexacopter()
-    import xarray as xr
-
-    if not isinstance(data, xr.Dataset):
-        raise TypeError(f"data must be a hexacopter xarray.Dataset, got {type(data).__name__}")
-    fit_records = int_like(fit_records, "fit_records", minimum=1)
-    pool = option(pool, "pool", ("level", "all"))
-    thresholds = option(thresholds, "thresholds", THRESHOLDS)
-    if records_per_case is not None:
-        n = int_like(records_per_case, "records_per_case", minimum=2)
-        fit_records = min(fit_records, n - 1)
-        st, tb = data["state"].values, data["turbulence"].values
-        keep, count = [], {}
-        for i in range(data.sizes["record"]):
-            key = (st[i], tb[i])
-            count[key] = count.get(key, 0) + 1
-            if count[key] <= n:
-                keep.append(i)
-        data = data.isel(record=keep)
-    levels = list(dict.fromkeys(np.asarray(data["turbulence"].values).astype(str).tolist()))
-    sig = hexacopter_signals(data)
-    names = list(sig["channel"].values) + ["var"] if models is None else list(models)
-    with warnings.catch_warnings():
-        from tsfdi.exceptions import UnstableModelWarning
-
-        warnings.simplefilter("ignore", UnstableModelWarning)
-        kw = dict(duration=None, settle=settle, models=names, fit_records=fit_records, order=order,
-                  max_lags=max_lags, var_max_lags=var_max_lags, calibrate=thresholds == "empirical")
-        if pool == "level":
-            bases = {lvl: fit_baselines(sig, fit_turbulence=lvl, **kw) for lvl in levels}
+    axis = None
+    if time is not None:
+        if isinstance(time, (str, bytes)) or np.ndim(time) != 1:
+            raise ValueError(f"time must be 1-D (one entry per row of alarm), got {time!r}")
+        axis, tname = pd.Index(time), "time"
+        if len(axis) != n:
+            raise ValueError(f"time has {len(axis)} entries but alarm has {n} rows")
+    elif index is not None:
+        axis, tname = index, "alarm's index (pass time= to override)"
+    if axis is not None:
+        if isinstance(axis, (pd.DatetimeIndex, pd.TimedeltaIndex)) or pd.api.types.is_numeric_dtype(axis.dtype):
+            if pd.api.types.is_bool_dtype(axis.dtype):
+                raise TypeError(f"{tname} must hold numbers, datetimes or timedeltas, got booleans")
+            if axis.hasnans:
+                raise ValueError(f"{tname} has missing values (NaN / NaT)")
         else:
-            one = fit_baselines(sig, **kw)
-            bases = dict.fromkeys(levels, one)
-    ev = evaluate(sig, bases, models=names, methods=methods, windows=windows, rules=rules, lags=lags,
-                  settle=settle, progress=progress, thresholds=thresholds, bank=bank)
-    return bases, ev
+            raise TypeError(f"{tname} must hold numbers, datetimes or timedeltas, got dtype {axis.dtype}")
+
+    hit = np.flatnonzero(flags)
+    if not hit.size:
+        return float("nan")
+    k = int(hit[0])
+    if axis is None:
+        return float(k) - (0.0 if origin is None else float_like(origin, "origin"))
+    if isinstance(axis, (pd.DatetimeIndex, pd.TimedeltaIndex)) and isinstance(origin, numbers.Number):
+        raise TypeError(f"origin must be a {'datetime' if isinstance(axis, pd.DatetimeIndex) else 'timedelta'} "
+                        f"for {tname} ({axis.dtype}), got the number {origin!r}")
+    if isinstance(axis, pd.DatetimeIndex):
+        try:
+            ref = axis[0] if origin is None else pd.Timestamp(origin)
+            return float((axis[k] - ref).total_seconds())
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"origin must be a datetime comparable with {tname} ({axis.dtype}): {exc}") from None
+    if isinstance(axis, pd.TimedeltaIndex):
+        try:
+            ref = pd.Timedelta(0) if origin is None else pd.Timedelta(origin)
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"origin must be a timedelta for a timedelta time axis: {exc}") from None
+        return float((axis[k] - ref).total_seconds())
+    return float(axis[k]) - (0.0 if origin is None else float_like(origin, "origin"))
 
 
-def baselines_table(baselines: Any) -> pd.DataFrame:
-    """Table 2 analogue of one :class:`Baselines` or of a mapping turbulence level -> Baselines (one
-    ``turbulence`` column added)."""
-    if isinstance(baselines, Baselines):
-        return baselines.table
-    if not isinstance(baselines, Mapping) or not all(isinstance(b, Baselines) for b in baselines.values()):
-        raise TypeError("baselines must be a Baselines or a mapping turbulence level -> Baselines")
-    frames, seen = [], {}
-    for lvl, b in baselines.items():       # one Baselines shared by several levels (pooled) is listed once
-        seen.setdefault(id(b), (b, []))[1].append(str(lvl))
-    for b, lvls in seen.values():
-        t = b.table
-        t.insert(0, "turbulence", lvls[0] if len(lvls) == 1 else "+".join(lvls))
-        frames.append(t)
-    return pd.concat(frames, ignore_index=True)
+# --------------------------------------------------------------------------------------------------- scoring
+def score_records(onset: Any, first_alarm: Any, *, records: Any = None, kind: Any = None) -> pd.DataFrame:
+    """Outcome (TP / FP / FN / TN) and detection delay of every record from its fault onset and first alarm.
+
+    The per-flight definitions of Keipour et al. (paper 001, Table I):
+
+    ========================  ===================================  =======  =======================
+    record                    first alarm                          outcome  delay
+    ========================  ===================================  =======  =======================
+    fault (onset finite)      before the onset                     FP       NaN
+    fault                     at or after the onset                TP       first_alarm - onset
+    fault                     none (NaN)                           FN       NaN
+    fault-free (onset NaN)    any                                  FP       NaN
+    fault-free                none (NaN)                           TN       NaN
+    ========================  ===================================  =======  =======================
+
+    Parameters
+    ----------
+    onset : array_like of float, shape (n_records,)
+        Fault onset time of every record; NaN (or ``None``) for a fault-free record. Numpy arrays, lists and
+        pandas Series are accepted.
+    first_alarm : array_like of float, shape (n_records,)
+        Time of the detector's first alarm on every record (see :func:`first_alarm`); NaN (or ``None``) for no
+        alarm. Same unit and same time origin as ``onset`` -- seconds since the record start in the examples,
+        but any consistent unit works (the delays are then in that unit).
+    records : array_like, optional
+        Record labels (the returned index). Default: the index of ``onset`` / ``first_alarm`` when they are
+        pandas Series (both Series must then have equal indexes), else ``0..n_records-1`` named ``"record"``.
+    kind : array_like, optional
+        A label per record (e.g. the fault type), stored as column ``kind`` for grouping in
+        :func:`detection_metrics` (``by="kind"``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per record, in input order, with columns ``onset`` and ``first_alarm`` (float, NaN: no fault /
+        no alarm), ``outcome`` (one of :data:`OUTCOMES`), ``delay`` (float, ``first_alarm - onset`` for a TP,
+        NaN otherwise) and, if given, ``kind``.
+
+    Raises
+    ------
+    TypeError
+        ``onset`` or ``first_alarm`` holds non-numbers (strings, booleans, datetimes: convert to a number of
+        seconds first).
+    ValueError
+        ``onset``, ``first_alarm``, ``records`` or ``kind`` is not 1-D, their lengths differ, a value is
+        infinite, or pandas inputs have different indexes.
+
+    See Also
+    --------
+    first_alarm : First alarm time of one record from a boolean alarm array.
+    detection_metrics : TP / FP / FN / TN counts, precision, recall, accuracy and delays.
+
+    References
+    ----------
+    A. Keipour, M. Mousaei, S. Scherer, "Automatic Real-time Anomaly Detection for Autonomous Aerial Vehicles",
+    ICRA 2019 (paper 001), Table I.
+
+    Examples
+    --------
+    >>> s = score_records([10.0, 10.0, 10.0, np.nan, np.nan], [12.5, 4.0, np.nan, 30.0, np.nan])
+    >>> s["outcome"].tolist()
+    ['TP', 'FP', 'FN', 'FP', 'TN']
+    >>> s["delay"].tolist()
+    [2.5, nan, nan, nan, nan]
+    """
+    on = _scoring_times(onset, "onset")
+    fa = _scoring_times(first_alarm, "first_alarm")
+    if fa.size != on.size:
+        raise ValueError(f"first_alarm has {fa.size} values but onset has {on.size} (one per record)")
+    n = on.size
+    if kind is not None:
+        if isinstance(kind, (str, bytes)) or np.ndim(kind) != 1:
+            raise ValueError(f"kind must be 1-D (one label per record), got {kind!r}")
+        if len(kind) != n:
+            raise ValueError(f"kind has {len(kind)} labels but onset has {n} values (one per record)")
+    index = _scoring_index(n, records, {"onset": onset, "first_alarm": first_alarm, "kind": kind})
+
+    fault, alarmed = ~np.isnan(on), ~np.isnan(fa)
+    tp = fault & alarmed & (fa >= on)
+    fp = alarmed & ~tp  # an alarm on a fault-free record or before the onset
+    fn = fault & ~alarmed
+    outcome = np.select([tp, fp, fn], ["TP", "FP", "FN"], "TN")
+    delay = np.where(tp, fa - on, np.nan)
+    out = pd.DataFrame({"onset": on, "first_alarm": fa, "outcome": outcome, "delay": delay}, index=index)
+    if kind is not None:
+        out["kind"] = kind.to_numpy() if isinstance(kind, (pd.Series, pd.Index)) else list(kind)
+    return out
+
+
+def _detection_row(outcome: np.ndarray, delay: np.ndarray, max_delay: float | None) -> dict:
+    """Counts, rates and delays of one group of records (paper 001, Table I)."""
+    n = outcome.size
+    tp, fp, fn, tn = (int(np.count_nonzero(outcome == k)) for k in OUTCOMES)
+    d = delay[outcome == "TP"]
+    nan = float("nan")
+    row = dict(records=n, TP=tp, FP=fp, FN=fn, TN=tn,
+               precision=tp / (tp + fp) if tp + fp else nan, recall=tp / (tp + fn) if tp + fn else nan,
+               accuracy=(tp + tn) / n if n else nan,
+               mean_delay=float(d.mean()) if d.size else nan, longest_delay=float(d.max()) if d.size else nan)
+    if max_delay is not None:
+        dw = d[d <= max_delay]
+        row.update(TP_within=int(dw.size), mean_delay_within=float(dw.mean()) if dw.size else nan)
+    return row
+
+
+def detection_metrics(scores: pd.DataFrame, *, by: Any = None, max_delay: float | None = None) -> pd.DataFrame:
+    """Counts, precision, recall, accuracy and detection delays of scored records, per group and overall.
+
+    Parameters
+    ----------
+    scores : pandas.DataFrame
+        As returned by :func:`score_records`: at least the columns ``outcome`` (one of :data:`OUTCOMES`) and
+        ``delay`` (finite for every TP).
+    by : str or array_like, optional
+        Groups: the name of a column of ``scores`` (e.g. ``"kind"``) or one label per record (positional; a
+        pandas Series must have ``scores``' index). One row per group -- in category order for a categorical,
+        else in sorted order (first appearance if the labels do not sort) -- then the ``"all"`` row. Default:
+        only the ``"all"`` row.
+    max_delay : float, optional
+        If given (>= 0, in the unit of the delays), also count the true positives detected within it
+        (``delay <= max_delay``) and their mean delay: a late alarm still counts as a TP by the definitions of
+        paper 001, but may be of little use.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per group plus ``"all"`` (index named after ``by``'s column or Series, else ``"group"``), with
+        columns
+
+        - ``records``, ``TP``, ``FP``, ``FN``, ``TN`` (int): number of records and of each outcome;
+        - ``precision`` = TP / (TP + FP), ``recall`` = TP / (TP + FN), ``accuracy`` = (TP + TN) / records
+          (float, NaN where the denominator is zero);
+        - ``mean_delay``, ``longest_delay`` (float): mean and largest detection delay of the true positives
+          (NaN without true positives);
+        - with ``max_delay``: ``TP_within`` (int) and ``mean_delay_within`` (float), the same restricted to
+          ``delay <= max_delay``.
+
+        Values are raw numbers (no rounding); ``attrs["max_delay"]`` holds ``max_delay``.
+
+    Raises
+    ------
+    TypeError
+        ``scores`` is not a DataFrame, ``delay`` holds non-numbers or ``max_delay`` is not a number.
+    ValueError
+        ``scores`` lacks ``outcome`` / ``delay``, has an unknown outcome or a TP without a finite, non-negative
+        delay; ``by`` names no column, has the wrong length, missing labels or a label ``"all"``; ``max_delay``
+        is negative or not finite.
+
+    See Also
+    --------
+    score_records : The per-record outcomes and delays.
+
+    References
+    ----------
+    A. Keipour, M. Mousaei, S. Scherer, "Automatic Real-time Anomaly Detection for Autonomous Aerial Vehicles",
+    ICRA 2019 (paper 001), Table I (precision, recall, accuracy and mean detection time over 22 flights).
+
+    Examples
+    --------
+    >>> s = score_records([10.0, 10.0, 10.0, np.nan, np.nan], [12.5, 4.0, np.nan, 30.0, np.nan],
+    ...                   kind=["engine", "engine", "rudder", "none", "none"])
+    >>> m = detection_metrics(s, by="kind", max_delay=2.0)
+    >>> m[["records", "TP", "FP", "FN", "TN", "TP_within"]]  # doctest: +NORMALIZE_WHITESPACE
+            records  TP  FP  FN  TN  TP_within
+    kind
+    engine        2   1   1   0   0          0
+    none          2   0   1   0   1          0
+    rudder        1   0   0   1   0          0
+    all           5   1   2   1   1          0
+    >>> m.loc["all", ["precision", "recall", "accuracy", "mean_delay"]].round(3).tolist()
+    [0.333, 0.5, 0.4, 2.5]
+    """
+    if not isinstance(scores, pd.DataFrame):
+        raise TypeError(f"scores must be a pandas.DataFrame as returned by score_records, got "
+                        f"{type(scores).__name__}")
+    missing = [c for c in ("outcome", "delay") if c not in scores.columns]
+    if missing:
+        raise ValueError(f"scores lacks the column(s) {missing} (use score_records)")
+    outcome = scores["outcome"].to_numpy(dtype=object)
+    unknown = sorted({repr(v) for v in outcome if not (isinstance(v, str) and v in OUTCOMES)})
+    if unknown:
+        raise ValueError(f"scores['outcome'] must hold only {', '.join(OUTCOMES)}, got {', '.join(unknown)}")
+    outcome = outcome.astype(str)
+    delay = _scoring_times(scores["delay"], "scores['delay']")
+    d_tp = delay[outcome == "TP"]
+    if np.isnan(d_tp).any() or (d_tp < 0).any():
+        raise ValueError("scores['delay'] must be finite and >= 0 for every TP record")
+    if max_delay is not None:
+        max_delay = float_like(max_delay, "max_delay", minimum=0.0)
+
+    n = len(scores)
+    groups: list = []
+    name = "group"
+    masks: list = []
+    if by is not None:
+        if isinstance(by, (str, bytes)) or np.ndim(by) == 0:
+            try:
+                present = by in scores.columns
+            except TypeError:
+                present = False
+            if not present:
+                raise ValueError(f"by must be a column of scores or one label per record; no column {by!r} in "
+                                 f"{list(scores.columns)}")
+            labels, name = scores[by], by
+        else:
+            if np.ndim(by) != 1:
+                raise ValueError(f"by must be 1-D (one label per record), got shape {np.shape(by)}")
+            if len(by) != n:
+                raise ValueError(f"by has {len(by)} labels but scores has {n} records")
+            if isinstance(by, pd.Series) and not by.index.equals(scores.index):
+                raise ValueError("by's index does not match scores' index; align it (by.reindex(scores.index)) or "
+                                 "pass a plain array")
+            labels = by if isinstance(by, (pd.Series, pd.Index)) else pd.Series(list(by), dtype=object)
+            name = getattr(by, "name", None) or "group"
+        labels = pd.Series(labels).reset_index(drop=True)
+        miss = np.flatnonzero(labels.isna().to_numpy())
+        if miss.size:
+            raise ValueError(f"by has missing labels ({miss.size} records, first at position {int(miss[0])})")
+        if isinstance(labels.dtype, pd.CategoricalDtype):
+            seen = set(labels)
+            groups = [c for c in labels.cat.categories if c in seen]
+        else:
+            groups = list(pd.unique(labels.to_numpy(dtype=object)))
+            try:
+                groups = sorted(groups)
+            except TypeError:
+                pass
+        if any(isinstance(g, str) and g == "all" for g in groups):
+            raise ValueError('by has a group labelled "all", which is the name of the overall row; rename it')
+        lab = labels.to_numpy(dtype=object)
+        masks = [lab == g for g in groups]
+
+    rows = [_detection_row(outcome[m], delay[m], max_delay) for m in masks]
+    rows.append(_detection_row(outcome, delay, max_delay))
+    out = pd.DataFrame(rows, index=pd.Index([*groups, "all"], name=name))
+    ints = ["records", *OUTCOMES] + (["TP_within"] if max_delay is not None else [])
+    out = out.astype({c: np.int64 for c in ints})
+    out.attrs["max_delay"] = max_delay
+    return out

@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from tsfdi._data import as_signal
-from tsfdi._validation import int_like
+from tsfdi._data import as_signal, sampling_frequency, window_samples
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
 
 __all__ = ["detect", "identify", "identify_windows", "Identification", "WindowedIdentification"]
 
@@ -97,14 +97,13 @@ class Identification:
     @property
     def label(self) -> str | None:
         """The single accepted model, else ``None``."""
-        acc = self.accepted
-        return acc[0] if len(acc) == 1 else None
+        i = int(decide([not d.reject for d in self.decisions.values()]))
+        return list(self.decisions)[i] if i >= 0 else None
 
     @property
     def status(self) -> str:
         """``"identified"`` (one model accepted), ``"ambiguous"`` (several) or ``"none"`` (no decision)."""
-        n = len(self.accepted)
-        return "identified" if n == 1 else ("ambiguous" if n > 1 else "none")
+        return str(status(len(self.accepted)))
 
     @property
     def ranking(self) -> tuple:
@@ -195,18 +194,23 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None, *, 
     return Identification(decisions=decisions, test=type(test).__name__)
 
 
+@dataclass(frozen=True, eq=False)
 class WindowedIdentification:
     """:func:`identify` on every sliding window of a record, held as arrays; windows as objects on demand.
 
+    A thin view of the windowed engine's :class:`~tsfdi.windows.WindowStatistics` (``windows``) under the
+    paper's decision rule.
+
     Attributes
     ----------
-    models : tuple of str
-        Candidate model names (axis 1 of the arrays).
-    channels : tuple of str
-    starts, stops : ndarray of int
-        Window ``w`` covers signal samples ``[starts[w], stops[w])``.
-    statistic, threshold, pvalue : ndarray, shape (n_windows, n_models, n_channels)
-    channel_reject : ndarray of bool, shape (n_windows, n_models, n_channels)
+    windows : WindowStatistics
+        Statistics, thresholds, p-values and rejections, shape (n_windows, n_models, n_channels).
+    test : ResidualTest
+        The test applied to every model.
+    references : tuple of dict
+        What the test takes from each fitted model (:meth:`~tsfdi.ResidualTest.reference`), in model order.
+    models, channels, starts, stops, statistic, threshold, pvalue, channel_reject :
+        Those of ``windows``; window ``w`` covers signal samples ``[starts[w], stops[w])``.
     accepted : ndarray of bool, shape (n_windows, n_models)
         Model accepted in the window (every channel accepts).
     labels : list
@@ -217,31 +221,35 @@ class WindowedIdentification:
     Indexing (``result[w]``) or iterating gives :class:`Identification` objects, built when asked for.
     """
 
-    def __init__(self, models: tuple, channels: tuple, starts: np.ndarray, window: int,
-                 decisions: list[dict] | None = None, *, arrays: dict | None = None,
-                 make_decision: Any = None, test: str = "") -> None:
-        self.models, self.channels, self.test = tuple(models), tuple(channels), test
-        self.starts = np.asarray(starts, dtype=np.int64)
-        self.stops = self.starts + int(window)
-        if decisions is not None:
-            def stack(attr):
-                return np.array([[getattr(d[m], attr) for m in self.models] for d in decisions])
-            arrays = {a: stack(a) for a in ("statistic", "threshold", "pvalue", "channel_reject")}
-            self._decisions = decisions
-        else:
-            self._decisions = None
-        self.statistic = arrays["statistic"]
-        self.threshold = arrays["threshold"]
-        self.pvalue = arrays["pvalue"]
-        self.channel_reject = arrays["channel_reject"]
-        self._make_decision = make_decision
-        self.accepted = ~self.channel_reject.any(axis=2)
-        n_acc = self.accepted.sum(axis=1)
-        self.status = ["identified" if a == 1 else ("ambiguous" if a > 1 else "none") for a in n_acc]
-        self.labels = [self.models[int(np.argmax(row))] if a == 1 else None for row, a in zip(self.accepted, n_acc)]
+    windows: WindowStatistics
+    test: ResidualTest
+    references: tuple = ()
+
+    models = property(lambda self: self.windows.models)
+    channels = property(lambda self: self.windows.channels)
+    starts = property(lambda self: self.windows.starts)
+    stops = property(lambda self: self.windows.starts + self.windows.window)
+    statistic = property(lambda self: self.windows.statistic)
+    threshold = property(lambda self: self.windows.threshold)
+    pvalue = property(lambda self: self.windows.pvalue)
+    channel_reject = property(lambda self: self.windows.channel_reject)
+    accepted = property(lambda self: self.windows.accepted)
+
+    @property
+    def status(self) -> list:
+        return self.windows.status.tolist()
+
+    @property
+    def labels(self) -> list:
+        return self.decide("paper")
+
+    def decide(self, rule: str = "paper") -> list:
+        """The label of every window by ``rule`` (:data:`tsfdi.windows.RULES`): a model name or ``None``."""
+        lab = self.windows.labels(rule)
+        return [self.models[i] if i >= 0 else None for i in lab]
 
     def __len__(self) -> int:
-        return self.starts.size
+        return len(self.windows)
 
     def __getitem__(self, w: int) -> Identification:
         w = int(w)
@@ -249,11 +257,14 @@ class WindowedIdentification:
             w += len(self)
         if not 0 <= w < len(self):
             raise IndexError(f"window index out of range (0..{len(self) - 1})")
-        if self._decisions is not None:
-            dec = self._decisions[w]
+        ws = self.windows
+        if ws.decisions is not None:
+            dec = dict(zip(self.models, ws.decisions[w]))
         else:
-            dec = {m: self._make_decision(i, self.statistic[w, i]) for i, m in enumerate(self.models)}
-        return Identification(decisions=dec, test=self.test, span=(int(self.starts[w]), int(self.stops[w])))
+            dec = {m: self.test.decision(ws.statistic[w, i], ws.nobs[i], self.channels, **self.references[i])
+                   for i, m in enumerate(self.models)}
+        return Identification(decisions=dec, test=type(self.test).__name__,
+                              span=(int(self.starts[w]), int(self.stops[w])))
 
     def __iter__(self):
         return (self[w] for w in range(len(self)))
@@ -265,19 +276,26 @@ class WindowedIdentification:
         return pd.DataFrame({"start": self.starts, "stop": self.stops, "status": self.status, "label": self.labels})
 
     def __repr__(self) -> str:
-        counts = {s: self.status.count(s) for s in ("identified", "ambiguous", "none")}
+        counts = {s: self.status.count(s) for s in STATUS}
         return f"WindowedIdentification(windows={len(self)}, models={self.models}, {counts})"
 
 
-def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = None, *, window: int,
-                     step: int = 1) -> WindowedIdentification:
+def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = None, *, window: Any,
+                     step: Any = 1, fs: float | None = None) -> WindowedIdentification:
     """:func:`identify` on every sliding window of one record.
 
-    Window ``w`` covers signal samples ``[w * step, w * step + window)``. For a per-channel
-    :class:`~tsfdi.LjungBox` the record is filtered once through each model (a fixed model's residuals of a
-    window are a slice of the record's residuals) and all windows' statistics come from
-    :func:`~tsfdi.detection.whiteness.ljungbox_windows` (O(N * lags) for all windows); other tests are
-    applied window by window.
+    Window ``w`` covers signal samples ``[w * step, w * step + window)``. The record is filtered once through each
+    model and every window's statistic comes from the windowed engine (:class:`tsfdi.windows.ResidualWindows`).
+
+    Parameters
+    ----------
+    signal, models, test :
+        As in :func:`identify`.
+    window, step : int or time span
+        As in pandas ``rolling``: an int counts samples, a time span (``"2s"``, ``pandas.Timedelta``) is converted
+        with the signal's time index or ``fs``.
+    fs : float, optional
+        Sampling frequency in Hz (default: read from the signal's time index when a time span is given).
 
     Returns
     -------
@@ -288,35 +306,12 @@ def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = N
     test = _check_test(test)
     models = _check_models(models)
     sig = as_signal(signal, "signal", allow_constant=True)
-    window = int_like(window, "window", minimum=2)
-    step = int_like(step, "step", minimum=1)
+    rate = sampling_frequency(sig, fs)
+    window = window_samples(window, "window", rate, minimum=2)
+    step = window_samples(step, "step", rate, minimum=1)
     if window > sig.nobs:
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
     for name, res in models.items():
         _check_model(res, name, sig.nchan, "models")
-    starts = np.arange(0, sig.nobs - window + 1, step)
-    names = tuple(models)
-    chans = tuple(sig.channels)
-    if isinstance(test, LjungBox) and test.multivariate is None:
-        qs, nres = [], []
-        for name, res in models.items():
-            p = int(res.lags)
-            if window - p <= test.lags:
-                raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for "
-                                 f"models {name!r}, got {window}")
-            e = np.asarray(res.residuals(sig.values if sig.vector else sig.values[:, 0]), dtype=np.float64)
-            qs.append(test.window_statistic(e, window - p, step))
-            nres.append(window - p)
-        q = np.stack(qs, axis=1)                                   # (W, M, k)
-        thr, pv = test._threshold_pvalue(q)                        # chi-square or calibrated, as in test()
-        arrays = {"statistic": q, "threshold": np.broadcast_to(thr, q.shape), "pvalue": pv,
-                  "channel_reject": q > thr}
-
-        def make(i: int, stat_row: np.ndarray) -> Decision:
-            return test._decision(stat_row, nres[i], chans)
-
-        return WindowedIdentification(names, chans, starts, window, arrays=arrays, make_decision=make,
-                                      test=type(test).__name__)
-    vals = sig.values if sig.vector else sig.values[:, 0]
-    decisions = [identify(vals[s0:s0 + window], models, test).decisions for s0 in starts]
-    return WindowedIdentification(names, chans, starts, window, decisions, test=type(test).__name__)
+    ws = ResidualWindows(models).fit(sig.values, channels=sig.channels).statistics(test, window=window, step=step)
+    return WindowedIdentification(ws, test, tuple(test.reference(res) for res in models.values()))

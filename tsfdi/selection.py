@@ -1,4 +1,7 @@
-"""Model order selection: information criteria as pure functions and :func:`select_order`.
+"""Model order selection: :func:`select_order` and its result :class:`OrderSelection`.
+
+The information criteria themselves are :func:`tsfdi.models.criteria.information_criteria`, shared with
+the results objects of the models.
 
 All candidate orders ``1..max_lags`` are fitted on the **same sample** (the first ``max_lags`` samples are
 held back for every order), so ``select_order(...).table.loc[p, "bic"]`` equals the ``bic`` of the model of
@@ -8,7 +11,7 @@ the counter-example, where they are computed on different samples.
 
 Nothing is refitted order by order. The regressor ``[const, -y[t-1], ..., -y[t-max_lags], y[t]]`` is
 grouped by lag, so one upper-triangular factor ``R`` of it gives every nested fit (see
-:func:`tsfdi.models._lstsq.nested_fits`). For AR and VAR models ``R`` is the Cholesky factor of the lag-product
+:func:`tsfdi.models.lstsq.nested_fits`). For AR and VAR models ``R`` is the Cholesky factor of the lag-product
 Gram matrix, computed in ``O(N max_lags)`` from lag products with end corrections; when that factor loses
 digits (ill-conditioned regressor) it is recomputed by a QR decomposition of the regressor.
 """
@@ -23,68 +26,11 @@ import numpy as np
 import pandas as pd
 
 from tsfdi._validation import float_like, int_like, option
-from tsfdi.models import _lstsq
+from tsfdi.models import AR, ARX, VAR
+from tsfdi.models.criteria import information_criteria
+from tsfdi.models.lstsq import lag_gram, nested_fits, triangular_factor
 
-__all__ = ["criteria", "select_order", "OrderSelection"]
-
-
-def criteria(sse: np.ndarray, sss: float, nobs: int, df_model: np.ndarray, neqs: int,
-             criterion: str = "logdet") -> dict[str, np.ndarray]:
-    """Fit criteria of one or several fits of an ``s``-channel linear time-series model.
-
-    Parameters
-    ----------
-    sse : ndarray, shape (q, s, s)
-        Residual cross-product matrices ``E'E`` of ``q`` fits.
-    sss : float
-        Signal sum of squares ``sum_t y[t]' y[t]`` over the estimation sample.
-    nobs : int
-        Number of residuals ``N``.
-    df_model : ndarray, shape (q,)
-        Number of regression coefficients ``d`` of each fit (all equations).
-    neqs : int
-        Number of channels ``s``.
-    criterion : {"logdet", "trace"}
-        How a vector model's residual covariance enters the BIC: its log-determinant (the likelihood,
-        statsmodels' ``VAR``) or the log of its trace (paper 003, "Vector AR Identification Method").
-        Identical for ``s = 1``.
-
-    Returns
-    -------
-    dict of ndarray
-        ``llf``, ``aic``, ``bic``, ``rss_sss`` (percent), ``spp``, ``sigma2``.
-
-    Notes
-    -----
-    With ``Sigma = E'E / N`` and ``k = d + s (s + 1) / 2`` free parameters (the noise covariance counted),
-
-    .. math::
-
-        \\ell = -\\tfrac{N}{2}\\,(s \\ln 2\\pi + \\ln\\det\\Sigma + s), \\quad
-        \\mathrm{AIC} = -2\\ell + 2k, \\quad \\mathrm{BIC} = -2\\ell + k \\ln N .
-
-    ``BIC / N = ln sigma_e^2 + k ln N / N + const`` is paper 003's eq. 5 (the constant ``ln 2 pi + 1`` does
-    not depend on the order, so both select the same order). The trace variant uses
-    ``N (ln(2 pi tr Sigma) + 1) + k ln N``. ``RSS/SSS = 100 sum e'e / sum y'y`` is eq. 6 in percent;
-    ``SPP = N s / d`` (paper 003 Table 2 uses the signal length for ``N``). ``sigma2`` is ``tr Sigma / s``.
-    """
-    sse = np.asarray(sse, dtype=float)
-    df_model = np.asarray(df_model, dtype=float)
-    sigma = sse / nobs
-    s = neqs
-    _, logdet = np.linalg.slogdet(sigma)
-    trace = np.trace(sigma, axis1=-2, axis2=-1)
-    llf = -0.5 * nobs * (s * np.log(2 * np.pi) + logdet + s)
-    k = df_model + s * (s + 1) / 2
-    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 1)
-    return {
-        "llf": llf,
-        "aic": -2 * llf + 2 * k,
-        "bic": fit_term + k * np.log(nobs),
-        "rss_sss": 100.0 * nobs * trace / sss,
-        "spp": nobs * s / df_model,
-        "sigma2": trace / s,
-    }
+__all__ = ["select_order", "OrderSelection"]
 
 
 def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, nk: int = 0, trend: str = "n",
@@ -108,7 +54,7 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     trend : {"n", "c"}
         No intercept or an intercept.
     criterion : {"logdet", "trace"}
-        BIC variant for vector models (see :func:`criteria`).
+        BIC variant for vector models (see :func:`tsfdi.models.criteria.information_criteria`).
     tol : float
         Relative tolerance of :attr:`OrderSelection.stabilized`: the RSS/SSS curve is considered stable
         from the smallest order ``p`` after which no order improves RSS/SSS by more than ``tol`` relative
@@ -123,8 +69,6 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     Paper 003 selects the order by the minimum of BIC (eq. 5) together with the stabilisation of RSS/SSS
     (eq. 6, Fig. 8).
     """
-    from tsfdi.models import AR, ARX, VAR
-
     family = option(model, "model", ("ar", "var", "arx"))
     max_lags = int_like(max_lags, "max_lags", minimum=1)
     tol = float_like(tol, "tol", minimum=0.0)
@@ -141,22 +85,22 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     const = bool(spec.k_const)
 
     def design() -> np.ndarray:
-        return np.hstack(spec._design_all())
+        return np.hstack(spec.design_all())
 
     if family == "arx":
         Z = design()
-        R = _lstsq.triangular_factor(Z.T @ Z, lambda: Z, s)
+        R = triangular_factor(Z.T @ Z, lambda: Z, s)
         group = 1 + spec.n_inputs
     else:   # the Gram matrix of several records is the sum of theirs
-        gram = sum(_lstsq.lag_gram(r.values, max_lags, const=const) for r in spec.records)
-        R = _lstsq.triangular_factor(gram, design, s)
+        gram = sum(lag_gram(r.values, max_lags, const=const) for r in spec.records)
+        R = triangular_factor(gram, design, s)
         group = s
     orders = np.arange(1, max_lags + 1)
     widths = spec.k_const + orders * group
-    sse = _lstsq.nested_fits(R, s, widths)
+    sse = nested_fits(R, s, widths)
     nobs = sum(spec.nobs_records)
     sss = float(np.sum(R[:, -s:] ** 2))   # = trace(Y'Y): columns of R have the norms of the columns of Z
-    values = criteria(sse, sss, nobs, widths * s, s, spec.criterion)
+    values = information_criteria(sse, sss, nobs, widths * s, s, spec.criterion)
     return OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
 
 
@@ -171,7 +115,7 @@ class OrderSelection:
     orders : ndarray
         Candidate orders ``1..max_lags``.
     values : dict of ndarray
-        Criteria per order (see :func:`criteria`).
+        Criteria per order (see :func:`tsfdi.models.criteria.information_criteria`).
     tol : float
         Relative tolerance of the RSS/SSS stabilisation rule.
     """
@@ -208,8 +152,6 @@ class OrderSelection:
         """Fit the model of ``order`` (default :attr:`selected`) on the common sample of the selection."""
         order = self.selected if order is None else int_like(order, "order", minimum=1, maximum=self.max_lags)
         spec = self.spec
-        from tsfdi.models import AR, ARX, VAR
-
         y = list(spec.records) if spec.multi else spec.data
         if isinstance(spec, ARX):
             u = list(spec.u_records) if spec.multi else spec.u_data

@@ -31,16 +31,19 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 import tsfdi  # noqa: E402
-from tsfdi.cli import _markdown, demo_report, write_figures  # noqa: E402
+from tsfdi.baselines import insample_q  # noqa: E402
 from tsfdi.detection import EmpiricalThreshold  # noqa: E402
 from tsfdi.datasets import (REGULAR_HEXACOPTER, HexacopterParameters, load_hexacopter,  # noqa: E402
                             make_hexacopter_dataset)
 from tsfdi.datasets.hexacopter import SHIPPED_VARIABLES, encode_for_file  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
-from tsfdi.evaluation import hexacopter_signals, hexacopter_study  # noqa: E402
+from tsfdi.datasets.hexacopter import hexacopter_signals  # noqa: E402
+from tsfdi.study import demo_report, hexacopter_study, markdown_table, paper_tests, write_figures  # noqa: E402
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
+#: the paper's whiteness test of the VAR (Ljung-Box, 20 lags, alpha 1e-3 per channel, Table 3)
+WHITENESS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3)}
 FIGS = ROOT / "docs" / "figures" / "study"
 
 
@@ -58,7 +61,7 @@ def monitor_table(bases, data) -> pd.DataFrame:
     sig = hexacopter_signals(data)
     rows = []
     for lvl, b in bases.items():
-        mon = b.monitor("var", window=5.0, rule="likelihood")
+        mon = b.monitor("var", window="5s", rule="likelihood")
         for i, st in evaluated(sig, lvl, b):
             if st == b.healthy:
                 continue
@@ -105,7 +108,7 @@ def variants(data) -> pd.DataFrame:
     rows = []
     for n, pool, order in [(1, "level", "bic"), (5, "level", "bic"), (10, "level", "bic"), (10, "level", 20),
                            (10, "all", 20), (10, "level", "rss_sss")]:
-        bases, ev = hexacopter_study(data, models=["var"], methods=["whiteness"], windows=(5.0, 20.0),
+        bases, ev = hexacopter_study(data, models=["var"], tests=WHITENESS, windows=("5s", "20s"),
                                      rules=("paper", "likelihood"), fit_records=n, pool=pool, order=order,
                                      progress=False)
         r = ev.rates()["correct"]
@@ -134,8 +137,8 @@ def alpha_table(bases, data) -> pd.DataFrame:
     for a in (1e-4, 1e-3, 1e-2, 5e-2):
         row = {}
         for bank in (False, True):
-            ev = tsfdi.evaluate(sig, bases, models=["var"], methods=["whiteness"], alpha=a, rules=["paper"],
-                                progress=False, bank=bank)
+            ev = tsfdi.evaluate(sig, bases, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
+                                rules=["paper"], progress=False, bank=bank)
             tag = ", bank" if bank else ""
             for w, r in ev.detection_rates().loc[("var", "whiteness")].iterrows():
                 n, x = int(r["disjoint_windows"]), int(r["disjoint_alarms"])
@@ -161,7 +164,6 @@ def white_noise_null(bases, data, alphas=(1e-3, 1e-2, 5e-2), draws=None, seed=20
     critical value; the healthy model then detects on the healthy evaluation records with that critical value
     (the threshold of a :class:`tsfdi.LjungBox` calibrated on the simulated statistics)."""
     from tsfdi.detection import LjungBox, ljungbox_windows
-    from tsfdi.monitoring import window_statistics
     from scipy import stats
 
     draws = NULL_DRAWS if draws is None else draws
@@ -176,8 +178,8 @@ def white_noise_null(bases, data, alphas=(1e-3, 1e-2, 5e-2), draws=None, seed=20
         n = W - int(first.models["var"][first.healthy].lags)
         null = ljungbox_windows(rng.standard_normal((n * draws, 1)), lags, n, n).ravel()
         # the healthy model's Q on every healthy evaluation record, computed once for all alphas
-        q = [window_statistics(sig.isel(record=i).values, {"h": b.models["var"][b.healthy]}, LjungBox(lags),
-                               window=W, step=step)["decisions"]["h"]["statistic"]
+        q = [tsfdi.ResidualWindows({"h": b.models["var"][b.healthy]}).fit(sig.isel(record=i).values).statistics(
+                 LjungBox(lags), window=W, step=step, loglik=False).statistic[:, 0]
              for lvl, b in bases.items() for i, st in evaluated(sig, lvl, b) if st == b.healthy]
         for a in alphas:
             crit = float(stats.chi2.ppf(1.0 - a, lags))
@@ -229,7 +231,7 @@ def what_if_tables(bases, ev) -> tuple[dict, pd.DataFrame, dict]:
             path = Path(tmp) / "what_if.nc"
             ds.to_netcdf(path, engine="h5netcdf", encoding=enc)
             data = load_hexacopter(path)
-        b, evs[name] = hexacopter_study(data, models=["var"], methods=["whiteness"], windows=(20.0,),
+        b, evs[name] = hexacopter_study(data, models=["var"], tests=WHITENESS, windows=("20s",),
                                         rules=("paper",), progress=False)
         thr[name] = b["severe"].steady_thresholds
     rows = []
@@ -263,10 +265,10 @@ def loo_alpha(bases_e, data, bank: bool = False) -> tuple[pd.DataFrame, list[str
     sig = hexacopter_signals(data)
     rows, idents, dets = [], [], []
     for lvl, b in bases_e.items():
-        tab = b.select_alpha("var", "whiteness", 20.0, LOO_ALPHAS, bank=bank)
+        tab = b.select_alpha("var", tsfdi.LjungBox(lags=20), "20s", LOO_ALPHAS, bank=bank)
         a = tab.attrs["selected"]
-        ev = tsfdi.evaluate(sig, bases_e, models=["var"], methods=["whiteness"], alpha=a, turbulence=lvl,
-                            rules=["paper"], progress=False, bank=bank)
+        ev = tsfdi.evaluate(sig, bases_e, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
+                            turbulence=lvl, rules=["paper"], progress=False, bank=bank)
         idents.append(ev.identification)
         dets.append(ev.detection)
         r = ev.rates()["correct"].xs(("var", "whiteness", "paper"), level=("model", "method", "rule"))
@@ -425,7 +427,8 @@ def main() -> None:
     t0 = time.perf_counter()
     data = load_hexacopter()
     bases, ev = hexacopter_study(data, progress="--progress" in sys.argv)
-    bases_e, ev_e = hexacopter_study(data, methods=("whiteness",), thresholds="empirical",
+    bases_e, ev_e = hexacopter_study(data, tests=paper_tests(["roll", "pitch", "yaw_rate", "var"], ["whiteness"],
+                                                             threshold="empirical"),
                                      progress="--progress" in sys.argv)
     counts = sorted({sum(e.shape[0] // (2000 - 20) for e in b.heldout[("var", st)])
                      for b in bases_e.values() for st in (b.healthy,) + b.faults})
@@ -452,7 +455,7 @@ def main() -> None:
                     f"chi-square): {'met' if improved and improved[0].endswith('**met**.') else 'not met'}.")
     fa_b = alpha_tab["false alarms, bank, all windows (%)"] <= alpha_tab["expected false alarms (%)"]
     bank_cells = f"{int(fa_b.sum())} of {fa_b.size}"
-    ev_b = tsfdi.evaluate(hexacopter_signals(data), bases, models=["var"], methods=["whiteness"],
+    ev_b = tsfdi.evaluate(hexacopter_signals(data), bases, models=["var"], tests=WHITENESS,
                           rules=("paper", "likelihood"), progress=False, bank=True)
     sel_rows = []
     for lvl, b in bases.items():
@@ -460,7 +463,7 @@ def main() -> None:
             sel = b.selections[("var", st)]
             row = {"turbulence": lvl, "state": st, "bic_order": sel.selected, "rss_sss_order": sel.stabilized}
             for p in (sel.selected, 20):
-                row[f"q_insample VAR({p if p == 20 else 'bic'})"] = tsfdi.evaluation._insample_q(sel.fit(p), 2000)
+                row[f"q_insample VAR({p if p == 20 else 'bic'})"] = insample_q(sel.fit(p), 2000)
             sel_rows.append(row)
     sel_tab = pd.DataFrame(sel_rows).set_index(["turbulence", "state"]).round(2)
 
@@ -534,7 +537,7 @@ detects at it.
 
 """ + "\n".join(loo_lines) + """
 
-""" + _markdown(loo_tab) + """
+""" + markdown_table(loo_tab) + """
 
 Reading: out-of-sample residuals carry the baselines' estimation error, so at the nominal 1e-3 the matching
 model is rejected more often than 1e-3 -- on the held-out fitting windows as on the evaluation records; the
@@ -550,14 +553,14 @@ own trim and gusts, so its linearised dynamics differ a little from the others',
 model's residuals are less white than chi2(20) says: that is the false-alarm excess of the detection sections
 below. A *bank* keeps one model per fitting record instead (`Baselines.bank`: the same VAR(20) fitted on each
 record alone) and accepts a window when any member accepts it (`evaluate(..., bank=True)`,
-`tsfdi.monitoring.window_statistics` with a list of models). When the new record behaves like one of the fitting
+`tsfdi.ResidualWindows` with a list of models). When the new record behaves like one of the fitting
 records, the member fitted on that record rejects with probability about alpha, and the bank, which rejects only
 when every member does, at most that. Every state is a bank here, the healthy one (detection) and each failure
 (identification).
 
 At the paper's alpha (1e-3 per channel, chi-square thresholds), all levels:
 
-""" + _markdown(bank_table(ev_b)) + """
+""" + markdown_table(bank_table(ev_b)) + """
 
 With the alpha chosen per level on the fitting records, the choice also made with banks
 (`select_alpha(..., bank=True)`: each held-out fault fitting record goes through its own state's bank without the
@@ -565,7 +568,7 @@ member fitted on it, and through the other failures' banks):
 
 """ + "\n".join(bank_lines) + """
 
-""" + _markdown(bank_tab) + """
+""" + markdown_table(bank_tab) + """
 
 ### Calibrated thresholds (leave-one-record-out, paper 002 Fig. 2)
 
@@ -573,7 +576,7 @@ Every model (healthy and each rotor, per level) gets its own per-channel Ljung-B
 quantile (alpha = 1e-3 per channel, as above) of the statistic on windows of its *own* fitting records, each
 computed out of sample: each of the 10 fitting records in turn is left out, the model (same order) is refitted on
 the other 9 and the left-out record's residual windows (every sample a window start) give statistics
-(`fit_baselines(..., calibrate=True)`, `evaluate(..., thresholds="empirical")`). Evaluation records are never used.
+(`fit_baselines(..., calibrate=True)`, `evaluate` with `LjungBox(..., threshold="empirical")`). Evaluation records are never used.
 p-values are empirical. The variance method is not calibrated: the paper's alphas (1e-6 to 1e-12) would need
 far more healthy windows than 10 records hold (the library says how many).
 
@@ -581,17 +584,17 @@ far more healthy windows than 10 records hold (the library says how many).
 
 Calibrated thresholds of the VAR models (20 s windows, 20 lags) against the chi-square critical value:
 
-""" + _markdown(threshold_table(ev_e)) + """
+""" + markdown_table(threshold_table(ev_e)) + """
 
 Table 4 analogue, VAR + whiteness, 20 s windows, paper rule, calibrated thresholds (percent of windows of each
 true failure accepted as rotor1/rotor2/rotor6):
 
-""" + _markdown(ev_e.table4(20.0, "paper").loc[["var"]]) + """
+""" + markdown_table(ev_e.table4(20.0, "paper").loc[["var"]]) + """
 
 Chi-square and calibrated thresholds side by side (VAR + whiteness, correct unique identification, percent of
 windows):
 
-""" + _markdown(side_by_side(ev, ev_e)) + """
+""" + markdown_table(side_by_side(ev, ev_e)) + """
 
 Reading: the calibration sample counts every window start, so consecutive windows overlap almost entirely. The
 held-out records of one model hold only """ + indep + """ non-overlapping 20 s windows, while an empirical
@@ -613,14 +616,14 @@ design choice of the aircraft changes this.
 Detection with the healthy model, steady-state check with the baseline variance thresholds (10 s rolling
 variance, Fig. 7), then identification of every window. Times relative to the failure.
 
-""" + _markdown(mon.round(2)) + "\n\n"
+""" + markdown_table(mon.round(2)) + "\n\n"
     tail = f"""
 
 ## Order choice on the pooled records (VAR)
 
 Median Ljung-Box Q (20 lags) of the in-sample residuals over 20 s blocks and channels; chi2(20) median 19.3.
 
-""" + _markdown(sel_tab) + """
+""" + markdown_table(sel_tab) + """
 
 ## Baseline choices compared (VAR, whiteness method)
 
@@ -628,7 +631,7 @@ Correct unique identification in percent of windows (minimum over the three roto
 20 s per level, the likelihood rule at 5 s over all levels, and the detection false-alarm rate at 20 s
 (expectation 0.3%). Each row is a full re-run of the baselines and the evaluation.
 
-""" + _markdown(var_tab.set_index(["fit_records", "pool", "order"])) + """
+""" + markdown_table(var_tab.set_index(["fit_records", "pool", "order"])) + """
 
 ## Detection false alarms against alpha (VAR, whiteness method)
 
@@ -636,7 +639,7 @@ The healthy model's Ljung-Box test (20 lags, every channel, paper rule) on the h
 several per-channel alphas; the expectation is ``1 - (1 - alpha)^3`` for the three channels, and the binomial
 p-value counts the disjoint windows as independent trials:
 
-""" + _markdown(alpha_tab) + """
+""" + markdown_table(alpha_tab) + """
 
 Reading: over all windows the pooled model's false-alarm rate is above its expectation at nearly every alpha and
 window length; the bank's is at or below it in """ + bank_cells + """ cells. For the pooled model, counted on
@@ -654,7 +657,7 @@ gives the chi-square test's size on white noise and the exact critical value. Th
 the healthy evaluation records with that exact critical value (a `tsfdi.LjungBox(threshold="empirical")`
 calibrated on the simulated statistics):
 
-""" + _markdown(null_tab) + f"""
+""" + markdown_table(null_tab) + f"""
 
 Reading: at alpha 1e-3 per channel the chi-square test itself rejects white noise {size5:g} times as often as
 alpha on 5 s windows ({size20:g} times on 20 s windows), so a part of the false-alarm excess above is the test's
@@ -672,20 +675,20 @@ time -- full rotor speed 900 rad/s instead of 1100 (thrust-to-weight 3.2 instead
 before). Packed like the shipped file (lost records: """ + "; ".join(f"{k}: {v}" for k, v in alt_lost.items()) + """),
 fitted and evaluated exactly as above. VAR + whiteness, 20 s windows, paper rule, correct unique identification (%):
 
-""" + _markdown(alt["correct unique (%)"]) + """
+""" + markdown_table(alt["correct unique (%)"]) + """
 
 How often the matching model is rejected (%):
 
-""" + _markdown(alt["matching model rejected (%)"]) + """
+""" + markdown_table(alt["matching model rejected (%)"]) + """
 
 How often another failure's model accepts the window (%):
 
-""" + _markdown(alt["another failure accepted (%)"]) + """
+""" + markdown_table(alt["another failure accepted (%)"]) + """
 
 Steady-state variance thresholds in severe turbulence (largest 10 s rolling variance from 10 s after the failure
 over the fault fitting records; the paper's aircraft: roll 1e-3, pitch 1e-4 rad^2):
 
-""" + _markdown(alt_steady) + """
+""" + markdown_table(alt_steady) + """
 
 Reading: each choice removes one cause of error of the paper's rule. At 900 rad/s the four rotors that carry the
 aircraft after a failure reach full speed in strong gusts; the clipping is a non-linearity the VAR cannot follow,

@@ -11,7 +11,6 @@ from scipy import special
 
 import tsfdi
 from tsfdi.detection import EmpiricalThreshold, FTest, LjungBox, ljungbox_windows
-from tsfdi.monitoring import window_statistics
 
 
 def ar2(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -102,9 +101,11 @@ def test_decision_reports_empirical_threshold_and_pvalue():
     np.testing.assert_array_equal(d.channel_reject, d.statistic > lb.threshold_)
     # the p-value of a statistic above every calibration value is 1 / (n + 1)
     assert lb.empirical_pvalue(np.array([1e9, 1e9]))[0] == pytest.approx(1 / 3001)
-    # chi-square tests say so too
-    assert LjungBox(5, 0.01).test(x).details["threshold_method"] == "chi2"
-    assert FTest(0.01).test(x, reference_variance=1.0, reference_df=100).details["threshold_method"] == "f"
+    # distributional (chi-square, F) thresholds say so too, under one name
+    assert LjungBox(5, 0.01).test(x).details["threshold_method"] == "theoretical"
+    assert FTest(0.01).test(x, reference_variance=1.0, reference_df=100).details["threshold_method"] == "theoretical"
+    assert FTest(0.01, alternative="two-sided").test(x, reference_variance=1.0,
+                                                     reference_df=100).details["threshold_method"] == "theoretical"
     # Bonferroni: each channel calibrated at alpha / k
     lbb = LjungBox(5, 0.02, threshold="empirical", correction="bonferroni").calibrate(statistic=stat)
     np.testing.assert_allclose(lbb.threshold_, np.quantile(stat, 0.99, axis=0))
@@ -147,28 +148,74 @@ def test_data_kinds(kind):
     np.testing.assert_allclose(a, np.quantile(st, 0.95, axis=0))
 
 
-def test_window_statistics_per_model_tests():
-    """window_statistics with one calibrated test per model equals the per-window decisions of each test."""
+def test_public_rules_per_model_tests():
+    """The public rules an engine applies to all windows at once (window_statistic + threshold_pvalue) equal the
+    per-window decisions of each model's calibrated test."""
     rng = np.random.default_rng(4)
     y = ar2(3000, rng)
     models = {"a": tsfdi.AR(y[:1500], 2).fit(), "b": tsfdi.AR(y[1500:], 3).fit()}
-    tests = {}
-    for name, res in models.items():
-        e = np.asarray(res.residuals(ar2(20000, rng)))
-        tests[name] = LjungBox(6, 0.05, threshold="empirical").calibrate(e, window=200 - res.lags, step=3)
     x = ar2(1000, rng)
-    ws = window_statistics(x, models, tests, window=200, step=50)
     for name, res in models.items():
+        n = 200 - res.lags
+        test = LjungBox(6, 0.05, threshold="empirical").calibrate(np.asarray(res.residuals(ar2(20000, rng))),
+                                                                  window=n, step=3)
         e = np.asarray(res.residuals(x)).reshape(-1, 1)
-        p = res.lags
-        for w, s in enumerate(ws["starts"]):
-            d = tests[name].test(e[s:s + 200 - p])
-            assert ws["decisions"][name]["statistic"][w, 0] == pytest.approx(d.statistic[0], rel=1e-8)
-            assert ws["decisions"][name]["pvalue"][w, 0] == pytest.approx(d.pvalue[0])
-            assert ws["decisions"][name]["reject"][w] == d.reject
-            assert ws["decisions"][name]["threshold"][w, 0] == tests[name].threshold_[0]
-    with pytest.raises(ValueError, match="no test for the model"):
-        window_statistics(x, models, {"a": tests["a"]}, window=200, step=50)
+        stat = test.window_statistic(e, n, 50)
+        thr, pv = test.threshold_pvalue(stat, n)
+        np.testing.assert_array_equal(thr, test.threshold_)
+        for w in range(stat.shape[0]):
+            d = test.test(e[50 * w:50 * w + n])
+            assert stat[w, 0] == pytest.approx(d.statistic[0], rel=1e-8)
+            assert pv[w, 0] == pytest.approx(d.pvalue[0])
+            assert (stat[w] > thr).any() == d.reject
+            d2 = test.decision(d.statistic, n, d.channels)
+            np.testing.assert_array_equal(d2.pvalue, d.pvalue)
+            assert d2.details == d.details and d2.reject == d.reject
+
+
+@pytest.mark.parametrize("demean", [False, True])
+def test_ftest_public_rules_equal_test(demean):
+    """FTest.threshold_pvalue / null_threshold / decision on a window's F give exactly what test() gives."""
+    rng = np.random.default_rng(6)
+    x = rng.standard_normal((400, 2)) * [1.0, 1.3]
+    ref = {"reference_variance": np.array([1.0, 1.1]), "reference_df": np.array([500.0, 480.0])}
+    for corr in (None, "bonferroni"):
+        ft = FTest(0.05, demean=demean, correction=corr)
+        d = ft.test(x[100:300], **ref)
+        stat = ft.window_statistic(x, 200, 100, **ref)
+        np.testing.assert_allclose(stat[1], d.statistic, rtol=1e-10)
+        thr, pv = ft.threshold_pvalue(stat, 200, **ref)
+        np.testing.assert_array_equal(thr, d.threshold)
+        np.testing.assert_allclose(pv[1], d.pvalue, rtol=1e-8)
+        thr1, pv1 = ft.threshold_pvalue(d.statistic, 200, **ref)
+        np.testing.assert_array_equal(thr1, d.threshold)
+        np.testing.assert_array_equal(pv1, d.pvalue)
+        np.testing.assert_array_equal(ft.null_threshold(2, 200, **ref), d.threshold)
+        nu = 199 if demean else 200
+        a = d.details["channel_alpha"]
+        np.testing.assert_allclose(d.threshold, special.fdtri(nu, ref["reference_df"], 1 - a))
+        d2 = ft.decision(d.statistic, 200, d.channels, details={"variance": d.details["variance"]}, **ref)
+        for f in ("statistic", "threshold", "pvalue", "df", "channel_reject"):
+            np.testing.assert_array_equal(getattr(d2, f), getattr(d, f))
+        assert list(d2.details) == list(d.details) and d2.test == "FTest" and d2.reject == d.reject
+        # two-sided: decision carries the lower limit as test() does
+        f2 = FTest(0.05, demean=demean, correction=corr, alternative="two-sided")
+        dt = f2.test(x[100:300], **ref)
+        dt2 = f2.decision(dt.statistic, 200, dt.channels, details={"variance": dt.details["variance"]}, **ref)
+        np.testing.assert_array_equal(dt2.pvalue, dt.pvalue)
+        np.testing.assert_array_equal(dt2.details["lower_threshold"], dt.details["lower_threshold"])
+        assert list(dt2.details) == list(dt.details)
+    # empirical: the calibrated threshold and the empirical p-value, nobs and reference_df not needed
+    fe = FTest(0.05, threshold="empirical").calibrate(rng.standard_normal((20000, 2)), window=200, step=10,
+                                                      reference_variance=1.0)
+    de = fe.test(x[:200], **ref)
+    thr, pv = fe.threshold_pvalue(de.statistic)
+    np.testing.assert_array_equal(thr, de.threshold)
+    np.testing.assert_array_equal(pv, de.pvalue)
+    with pytest.raises(TypeError, match="nobs"):
+        FTest(0.05).threshold_pvalue(de.statistic, reference_df=100)
+    with pytest.raises(TypeError, match="reference_df"):
+        FTest(0.05).null_threshold(2, 200)
 
 
 def test_bad_input():
@@ -185,6 +232,13 @@ def test_bad_input():
         LjungBox(5, 0.05, threshold=3.0)
     with pytest.raises(ValueError, match="threshold"):
         FTest(0.05, threshold="chi2")
+    for old in ("chi2", "f", "analytical"):       # one name for the distributional threshold: "theoretical"
+        with pytest.raises(ValueError, match="threshold must be one of 'theoretical', 'empirical'"):
+            LjungBox(5, 0.05, threshold=old)
+        with pytest.raises(ValueError, match="threshold must be one of 'theoretical', 'empirical'"):
+            FTest(0.05, threshold=old)
+    assert LjungBox(5, 0.05, threshold="theoretical").threshold == "theoretical"
+    assert FTest(0.05, threshold="THEORETICAL").threshold == "theoretical"
     with pytest.raises(ValueError, match="alternative='greater'"):
         FTest(0.05, alternative="two-sided", threshold="empirical")
     lb = LjungBox(5, 0.05, threshold="empirical").calibrate(statistic=rng.chisquare(5, (5000, 2)))

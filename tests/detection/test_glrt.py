@@ -17,7 +17,7 @@ def _rec(rng, n, phi=0.0):
     return sps.lfilter([1], [1, -phi], e)[500:] if phi else e[500:]
 
 
-def _brute(x, window, sigma):
+def _brute(x, window, scale):
     """Eq. 3 literally: max over change instants of the LLR maximised over the jump A."""
     g = np.empty(len(x))
     for k in range(len(x)):
@@ -25,7 +25,7 @@ def _brute(x, window, sigma):
         for j in range(max(0, k - window + 1), k + 1):
             seg = x[j:k + 1]
             a = seg.mean()  # ML jump
-            llr = np.sum(stats.norm.logpdf(seg, a, sigma) - stats.norm.logpdf(seg, 0, sigma))
+            llr = np.sum(stats.norm.logpdf(seg, a, scale) - stats.norm.logpdf(seg, 0, scale))
             best = max(best, llr)
         g[k] = best
     return g
@@ -35,25 +35,25 @@ def test_equals_likelihood_ratio_and_direct():
     rng = np.random.default_rng(0)
     x = rng.standard_normal(50) * 1.5
     x[35:] += 2.0
-    gl = tsfdi.GLRT(12, sigma=1.5)
+    gl = tsfdi.GLRT(12, scale=1.5)
     g = gl.statistic(x)
     np.testing.assert_allclose(g, _brute(x, 12, 1.5), rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(g, glrt_direct(x, 12, 1.5), rtol=1e-12, atol=1e-12)
     y = rng.standard_normal(20_000)
-    np.testing.assert_allclose(tsfdi.GLRT(200, sigma=1.0).statistic(y), glrt_direct(y, 200, 1.0), rtol=1e-9)
+    np.testing.assert_allclose(tsfdi.GLRT(200, scale=1.0).statistic(y), glrt_direct(y, 200, 1.0), rtol=1e-9)
 
 
 def test_change_instant_and_jump():
     rng = np.random.default_rng(1)
     x = rng.standard_normal(3000) * 0.5
     x[2000:] += 1.0
-    d = tsfdi.GLRT(100, sigma=0.5, alpha=1e-4).test(x)
+    d = tsfdi.GLRT(100, scale=0.5, alpha=1e-4).test(x)
     assert d.reject and d.channel_reject.tolist() == [True]
     first = d.details["first_alarm"][0]
     assert 2000 <= first <= 2020
     assert abs(d.details["change_index"][0] - 2000) <= 10
     assert 0.5 < d.details["jump"][0] < 2.0
-    scan = tsfdi.GLRT(100, sigma=0.5).scan(x)
+    scan = tsfdi.GLRT(100, scale=0.5).scan(x)
     k = 2099
     assert abs(scan.change_index[k, 0] - 2000) <= 5
     np.testing.assert_allclose(scan.jump[k, 0], x[scan.change_index[k, 0]:k + 1].mean())
@@ -65,7 +65,7 @@ def test_streaming_equals_batch():
     rng = np.random.default_rng(2)
     x = rng.standard_normal((700, 2))
     x[400:, 1] += 1.5
-    gl = tsfdi.GLRT(60, sigma=[1.0, 1.0], alpha=1e-3)
+    gl = tsfdi.GLRT(60, scale=[1.0, 1.0], alpha=1e-3)
     g = np.asarray(gl.statistic(x))
     st = gl.stream(nchan=2)
     out = np.array([st.update(v) for v in x[:300]])
@@ -73,11 +73,11 @@ def test_streaming_equals_batch():
                      st.extend(x[651:])])
     np.testing.assert_allclose(out, g, rtol=1e-12, atol=1e-12)
     assert st.k == 700 and st.first_alarm == int(np.flatnonzero((g > gl.threshold_).any(axis=1))[0])
-    s1 = tsfdi.GLRT(60, sigma=1.0).stream()
-    vals = [s1.update(v) for v in x[:, 1]]
-    assert isinstance(vals[0], float)
-    np.testing.assert_allclose(vals, g[:, 1], atol=1e-12)
-    sc = tsfdi.GLRT(60, sigma=1.0).scan(x[:, 1])
+    s1 = tsfdi.GLRT(60, scale=1.0).stream()
+    vals = np.array([s1.update(v) for v in x[:, 1]])
+    assert vals.shape == (700, 1)
+    np.testing.assert_allclose(vals[:, 0], g[:, 1], atol=1e-12)
+    sc = tsfdi.GLRT(60, scale=1.0).scan(x[:, 1])
     assert s1.change_index[0] == sc.change_index[-1, 0] and s1.jump[0] == pytest.approx(sc.jump[-1, 0])
     s1.reset()
     assert s1.k == 0 and s1.first_alarm is None
@@ -85,16 +85,16 @@ def test_streaming_equals_batch():
         s1.update(np.nan)
     with pytest.raises(ValueError, match="x"):
         s1.update([1.0, 2.0])
-    with pytest.raises(ValueError, match="sigma"):
+    with pytest.raises(ValueError, match="scale"):
         tsfdi.GLRT(10).stream()
-    assert isinstance(tsfdi.GLRT(10, sigma=1.0).stream(), GLRTStream)
+    assert isinstance(tsfdi.GLRT(10, scale=1.0).stream(), GLRTStream)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("phi", [0.0, 0.8])
 def test_empirical_threshold_false_alarm_within_factor_2(phi):
     """Calibrated on one healthy record, the rate on fresh healthy records is within 2x of P_F, for iid and
-    for AR(1) residuals; the analytical (iid) threshold holds its bound for iid and is far off for AR(1)."""
+    for AR(1) residuals; the theoretical (iid) threshold holds its bound for iid and is far off for AR(1)."""
     pf, window = 1e-3, 50
     rng = np.random.default_rng(30)
     gl = tsfdi.GLRT(window, threshold=tsfdi.EmpiricalThreshold(pf)).calibrate(_rec(rng, 200_000, phi))
@@ -102,8 +102,8 @@ def test_empirical_threshold_false_alarm_within_factor_2(phi):
     fresh = [_rec(rng, 100_000, phi) for _ in range(10)]
     rate = np.mean([gl.test(x).details["alarm_rate"][0] for x in fresh])
     assert pf / 2 <= rate <= 2 * pf, rate
-    analytical = tsfdi.GLRT(window, sigma=gl.sigma_, alpha=pf)
-    rate_an = np.mean([np.mean(np.asarray(analytical.statistic(x)) > analytical.threshold_) for x in fresh])
+    theoretical = tsfdi.GLRT(window, scale=gl.scale_, alpha=pf)
+    rate_an = np.mean([np.mean(np.asarray(theoretical.statistic(x)) > theoretical.threshold_) for x in fresh])
     if phi == 0.0:
         assert rate_an <= pf          # union bound: conservative for iid
     else:
@@ -141,7 +141,7 @@ def test_calibration_sample_too_small():
     with pytest.raises(ValueError, match="needed"):
         tsfdi.GLRT(10, threshold=tsfdi.EmpiricalThreshold(1e-6)).calibrate(np.random.default_rng(4).standard_normal(3000))
     with pytest.raises(ValueError, match="not calibrated"):
-        tsfdi.GLRT(10, sigma=1.0, threshold=tsfdi.EmpiricalThreshold(1e-3)).test(np.zeros(100))
+        tsfdi.GLRT(10, scale=1.0, threshold=tsfdi.EmpiricalThreshold(1e-3)).test(np.zeros(100))
 
 
 def test_empirical_quantile_value():
@@ -155,7 +155,7 @@ def test_data_kinds(kind):
     rng = np.random.default_rng(6)
     x = rng.standard_normal((400, 2))
     x[300:, 0] += 2
-    gl = tsfdi.GLRT(40, sigma=1.0, alpha=1e-3)
+    gl = tsfdi.GLRT(40, scale=1.0, alpha=1e-3)
     g = gl.statistic(as_kind(x, kind))
     assert_kind(g, kind, 2)
     np.testing.assert_allclose(to_numpy(g), np.asarray(gl.statistic(x)))
@@ -168,14 +168,14 @@ def test_data_kinds(kind):
     assert cal.threshold.method_ == "empirical"
 
 
-def test_detect_with_glrt_uses_baseline_sigma():
+def test_detect_with_glrt_uses_baseline_scale():
     rng = np.random.default_rng(7)
     y0 = sps.lfilter([1], [1, -0.5], rng.standard_normal(3000)) * 0.2
     res = tsfdi.AR(y0, 1).fit()
     y = sps.lfilter([1], [1, -0.5], rng.standard_normal(2000)) * 0.2
     y[1500:] += 0.5
     d = tsfdi.detect(y, res, tsfdi.GLRT(50, alpha=1e-4))
-    np.testing.assert_allclose(d.details["sigma"], np.sqrt(res.sigma2 * res.nobs / res.df_resid))
+    np.testing.assert_allclose(d.details["scale"], np.sqrt(res.sigma2 * res.nobs / res.df_resid))
     assert d.reject and 1450 <= d.details["change_index"][0] <= 1560
 
 
@@ -184,13 +184,13 @@ def test_bad_input():
     bad = x.copy()
     bad[10] = np.nan
     with pytest.raises(ValueError, match="resid"):
-        tsfdi.GLRT(10, sigma=1.0).test(bad)
+        tsfdi.GLRT(10, scale=1.0).test(bad)
     with pytest.raises(ValueError, match="healthy"):
         tsfdi.GLRT(10, threshold=tsfdi.EmpiricalThreshold(0.1)).calibrate(bad)
     with pytest.raises(ValueError, match="window"):
         tsfdi.GLRT(0)
-    with pytest.raises(ValueError, match="sigma"):
-        tsfdi.GLRT(10, sigma=-1.0)
+    with pytest.raises(ValueError, match="scale"):
+        tsfdi.GLRT(10, scale=-1.0)
     with pytest.raises(ValueError, match="threshold"):
         tsfdi.GLRT(10, threshold="bonferroni")
     with pytest.raises(ValueError, match="threshold"):
@@ -200,16 +200,84 @@ def test_bad_input():
             tsfdi.GLRT(10, alpha=a)
         with pytest.raises(ValueError, match="false_alarm"):
             tsfdi.EmpiricalThreshold(a)
-    with pytest.raises(ValueError, match="sigma"):
-        tsfdi.GLRT(10, sigma=[1.0, 2.0]).test(np.ones((50, 3)))
+    with pytest.raises(ValueError, match="scale"):
+        tsfdi.GLRT(10, scale=[1.0, 2.0]).test(np.ones((50, 3)))
 
 
 def test_scan_direct_and_threshold_kinds(kind):
     rng = np.random.default_rng(40)
     x = rng.standard_normal(500)
-    gl = tsfdi.GLRT(30, sigma=1.0)
+    gl = tsfdi.GLRT(30, scale=1.0)
     sc = gl.scan(as_kind(x, kind))
     np.testing.assert_allclose(sc.g[:, 0], glrt_direct(as_kind(x, kind), 30, 1.0))
     s = rng.exponential(size=5000)
     et = tsfdi.EmpiricalThreshold(0.01).calibrate(as_kind(s, kind))
     assert et.threshold_ == pytest.approx(np.quantile(s, 0.99))
+
+
+@pytest.mark.parametrize("k", [1, 3])
+def test_stream_update_always_returns_one_value_per_channel(k):
+    """update returns shape (k,) and extend (n, k) for every number of channels, k = 1 included."""
+    rng = np.random.default_rng(41)
+    x = rng.standard_normal((120, k))
+    x[80:] += 2.0
+    gl = tsfdi.GLRT(15, scale=1.0, alpha=1e-3)
+    ref = np.asarray(gl.statistic(x)).reshape(120, k)
+    st = gl.stream(k)
+    assert st.g.shape == (k,) and repr(st).startswith("GLRTStream(window=15, scale=")
+    first = st.update(x[0] if k > 1 else float(x[0, 0]))           # a plain float is one sample of one channel
+    assert isinstance(first, np.ndarray) and first.shape == (k,) and first.dtype == np.float64
+    ups = [st.update(v) for v in x[1:60]]
+    assert all(isinstance(u, np.ndarray) and u.shape == (k,) for u in ups)
+    assert st.g.shape == (k,)
+    last = ups[-1].copy()
+    ups[-1][:] = -1.0                                                 # the returned array is the caller's own
+    np.testing.assert_array_equal(st.g, last)
+    ups[-1] = last
+    block = st.extend(x[60:100, 0] if k == 1 else x[60:100])          # (n,) input for one channel, too
+    assert block.shape == (40, k)
+    assert st.extend(np.empty((0, k))).shape == (0, k)
+    if k == 1:
+        assert st.extend(np.empty(0)).shape == (0, 1)
+    rest = st.extend(x[100:])
+    out = np.vstack([first[None], np.array(ups), block, rest])
+    np.testing.assert_allclose(out, ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(st.g, rest[-1])
+    assert st.k == 120 and st.first_alarm is not None
+
+
+def test_theoretical_threshold_vocabulary():
+    """threshold="theoretical" is the one name of the distributional threshold; the old names are gone."""
+    gl = tsfdi.GLRT(20, scale=1.0, alpha=1e-3)
+    assert gl.threshold == "theoretical" and "threshold='theoretical'" in repr(gl) and "scale=[1.]" in repr(gl)
+    d = gl.test(np.random.default_rng(42).standard_normal(200))
+    assert d.details["threshold_method"] == "theoretical" and d.df[0] == 1.0
+    assert tsfdi.GLRT(20, threshold=3.0, scale=1.0).test(np.zeros(50)).details["threshold_method"] == "fixed"
+    for old in ("analytical", "chi2"):
+        with pytest.raises(ValueError, match="threshold"):
+            tsfdi.GLRT(20, threshold=old)
+    with pytest.raises(TypeError):
+        tsfdi.GLRT(20, sigma=1.0)  # the standard deviation is called scale
+
+
+def test_reference_gives_scale():
+    rng = np.random.default_rng(43)
+    res = tsfdi.AR(rng.standard_normal(500), 1).fit()
+    ref = tsfdi.GLRT(20).reference(res)
+    assert list(ref) == ["scale"]
+    np.testing.assert_allclose(ref["scale"], np.sqrt(res.sigma2 * res.nobs / res.df_resid))
+    assert tsfdi.GLRT(20, scale=2.0).reference(res) == {}
+    d = tsfdi.GLRT(20).test(rng.standard_normal(300), **ref)
+    np.testing.assert_array_equal(d.details["scale"], ref["scale"])
+
+
+def test_empirical_threshold_module():
+    """EmpiricalThreshold lives in detection.threshold (no test imports), exported by tsfdi.detection and tsfdi."""
+    from tsfdi.detection import threshold as threshold_module
+
+    assert tsfdi.detection.EmpiricalThreshold is threshold_module.EmpiricalThreshold is tsfdi.EmpiricalThreshold
+    et = tsfdi.EmpiricalThreshold(0.01)
+    with pytest.raises(ValueError, match="not calibrated"):
+        et.check_fitted()
+    et.calibrate(np.random.default_rng(44).exponential(size=5000))
+    et.check_fitted()

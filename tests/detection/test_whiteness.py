@@ -79,9 +79,7 @@ def test_windows_equal_statsmodels(window, step, lags):
         for c in range(2):
             ref, _ = _sm_q(x[starts[w]:starts[w] + window, c], lags)
             np.testing.assert_allclose(q[w, c], ref, rtol=1e-9)
-    decs = tsfdi.LjungBox(lags, 0.01).test_windows(x, window, step)
-    assert len(decs) == starts.size
-    np.testing.assert_allclose(decs[3].statistic, q[3])
+    np.testing.assert_array_equal(tsfdi.LjungBox(lags, 0.01).window_statistic(x, window, step), q)
 
 
 def _ar2(rng, n, reps, a=(-0.6, 0.2)):
@@ -219,5 +217,41 @@ def test_baseline_estimation_error_inflates_q_by_p_nu_over_n0():
 def test_more_data_kinds(kind):
     rng = np.random.default_rng(24)
     x = rng.standard_normal((600, 2))
-    decs = tsfdi.LjungBox(10, 0.05).test_windows(as_kind(x, kind), 200, 100)
-    np.testing.assert_allclose(decs[2].statistic, tsfdi.LjungBox(10).test(x[200:400]).statistic)
+    q = tsfdi.LjungBox(10, 0.05).window_statistic(as_kind(x, kind), 200, 100)
+    assert q.shape == (5, 2)
+    np.testing.assert_allclose(q[2], tsfdi.LjungBox(10).test(x[200:400]).statistic)
+
+
+def test_windowed_testing_is_not_duplicated():
+    """Windowed testing has one engine (statistics + the public rules); LjungBox no longer has its own."""
+    assert not hasattr(tsfdi.LjungBox, "test_windows")
+    assert not hasattr(tsfdi.LjungBox, "_threshold_pvalue") and not hasattr(tsfdi.LjungBox, "_decision")
+
+
+def test_public_rules_equal_test(kind):
+    """threshold_pvalue / null_threshold / decision applied to a window's Q give exactly what test() gives."""
+    rng = np.random.default_rng(25)
+    x = sps.lfilter([1], [1, -0.15], rng.standard_normal((700, 3)), axis=0)
+    for corr in (None, "bonferroni"):
+        lb = tsfdi.LjungBox(8, 0.05, model_df=1, correction=corr)
+        d = lb.test(as_kind(x[100:400], kind))
+        q = lb.window_statistic(as_kind(x, kind), 300, 100)          # window 1 is x[100:400]
+        thr, pv = lb.threshold_pvalue(q)
+        assert thr.shape == (3,) and pv.shape == q.shape
+        np.testing.assert_array_equal(thr, d.threshold)
+        np.testing.assert_allclose(q[1], d.statistic, rtol=1e-9)
+        np.testing.assert_allclose(pv[1], d.pvalue, rtol=1e-8)
+        thr1, pv1 = lb.threshold_pvalue(d.statistic, 300)                # on test()'s own statistic: identical
+        np.testing.assert_array_equal(thr1, d.threshold)
+        np.testing.assert_array_equal(pv1, d.pvalue)
+        np.testing.assert_array_equal(lb.null_threshold(3), d.threshold)
+        np.testing.assert_allclose(lb.null_threshold(3), stats.chi2.isf(d.details["channel_alpha"], 7), rtol=1e-10)
+        d2 = lb.decision(d.statistic, d.nobs, d.channels)
+        for f in ("statistic", "threshold", "pvalue", "df", "channel_reject"):
+            np.testing.assert_array_equal(getattr(d2, f), getattr(d, f))
+        assert (d2.reject, d2.nobs, d2.channels, d2.test, d2.alpha) == (d.reject, d.nobs, d.channels, "LjungBox",
+                                                                        d.alpha)
+        assert d2.details == d.details and d.details["threshold_method"] == "theoretical"
+    assert tsfdi.LjungBox(8).decision([1.0, 50.0], 300).channels == ("y0", "y1")
+    with pytest.raises(ValueError, match="statistic"):
+        tsfdi.LjungBox(8).decision(np.ones((2, 2)), 300)

@@ -10,6 +10,7 @@ from scipy import signal as sps
 from statsmodels.tsa.ar_model import AutoReg
 
 import tsfdi
+from tsfdi.models import load
 from tests.conftest import as_kind, assert_kind, to_numpy
 
 TRUE_A6 = np.poly(np.r_[0.9 * np.exp(1j * np.array([0.3, -0.3, 1.2, -1.2])), 0.7, -0.5]).real[1:]
@@ -128,7 +129,7 @@ def test_save_load_exact(tmp_path, kind, trend):
     obj = as_kind(signals()["ar6"], kind)
     res = tsfdi.AR(obj, 6, trend).fit()
     res.save(tmp_path / "m.npz")
-    back = tsfdi.load(tmp_path / "m.npz")
+    back = load(tmp_path / "m.npz")
     assert isinstance(back, tsfdi.ARResults)
     np.testing.assert_array_equal(back.params, res.params)
     assert back.sigma2 == res.sigma2 and back.bic == res.bic and back.trend == trend

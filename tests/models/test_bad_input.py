@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
 
 import tsfdi
+from tsfdi.models import load
+from tsfdi.models.archive import register
 from tests.conftest import as_kind
 
 rng = np.random.default_rng(0)
@@ -128,7 +132,19 @@ def test_bad_options():
 def test_load_rejects_other_files(tmp_path):
     np.savez(tmp_path / "x.npz", a=np.zeros(3))
     with pytest.raises(ValueError, match="not a tsfdi results archive"):
-        tsfdi.load(tmp_path / "x.npz")
+        load(tmp_path / "x.npz")
+    # a genuine archive whose family is unknown, or of a newer format version, is refused
+    tsfdi.AR(Y1, 2).fit().save(tmp_path / "m.npz")
+    with np.load(tmp_path / "m.npz") as f:
+        arrays = {k: f[k] for k in f.files}
+    meta = json.loads(str(arrays["meta"]))
+    for key, value, match in (("family", "ARMA", "unknown model family 'ARMA'"), ("version", 99, "newer tsfdi")):
+        arrays["meta"] = np.array(json.dumps({**meta, key: value}))
+        np.savez(tmp_path / "bad.npz", **arrays)
+        with pytest.raises(ValueError, match=match):
+            load(tmp_path / "bad.npz")
+    with pytest.raises(ValueError, match="no layout"):
+        register(type("ARMA", (), {}))
 
 
 def test_constant_new_signal_is_allowed_for_residuals():

@@ -7,14 +7,14 @@ import pandas as pd
 import pytest
 
 import tsfdi
-from tsfdi.models import _lstsq
+from tsfdi.models import load, lstsq
 from tests.conftest import as_kind, to_numpy
 from tests.models.test_ar import simulate_ar
 from tests.models.test_var_arx import arx_data, var_system
 
 
 def stacked(records, p, const):
-    parts = [_lstsq.lagged_design(np.atleast_2d(r.T).T, p, p, const=const) for r in records]
+    parts = [lstsq.lagged_design(np.atleast_2d(r.T).T, p, p, const=const) for r in records]
     return np.vstack([a for a, _ in parts]), np.vstack([b for _, b in parts])
 
 
@@ -66,7 +66,7 @@ def test_save_load_records(tmp_path, kind):
     y = var_system(4, 1000)[0]
     res = tsfdi.VAR([as_kind(y[:500], kind), as_kind(y[500:], kind)], 2, "c").fit()
     res.save(tmp_path / "r.npz")
-    back = tsfdi.load(tmp_path / "r.npz")
+    back = load(tmp_path / "r.npz")
     assert back.model.multi and len(back.model.records) == 2
     np.testing.assert_array_equal(back.params, res.params)
     for a, b in zip(back.resid, res.resid):

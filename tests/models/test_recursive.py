@@ -1,5 +1,7 @@
 """RecursiveARX: agreement with batch and exponentially weighted least squares, long-run stability,
-online detection, streaming equivalence, data kinds and bad input."""
+online detection, streaming equivalence, state snapshots, data kinds and bad input."""
+
+import dataclasses
 
 import numpy as np
 import pandas as pd
@@ -114,7 +116,7 @@ def test_million_samples_stay_finite_and_positive_definite():
 def test_abrupt_change_detected_with_bounded_delay_and_no_false_alarm():
     change = 3000
     y, u = simulate_arx(4000, 0, change_at=change)
-    res = RecursiveARX(2, 2, 1, forgetting_factor=0.995, halt_on_alarm=True).run(y, u)
+    res = RecursiveARX(2, 2, 1, forgetting_factor=0.995, freeze_on_alarm=True).run(y, u)
     assert res.model_stable[:200].any() and res.variance_stable[change - 1]
     assert not res.alarm[:change].any()
     assert change <= res.first_alarm <= change + 10
@@ -129,7 +131,7 @@ def test_abrupt_change_monte_carlo():
     change, false_alarms, delays = 3000, 0, []
     for seed in range(40):
         y, u = simulate_arx(4000, 100 + seed, change_at=change)
-        res = RecursiveARX(2, 2, 1, forgetting_factor=0.995, halt_on_alarm=True).run(y, u)
+        res = RecursiveARX(2, 2, 1, forgetting_factor=0.995, freeze_on_alarm=True).run(y, u)
         assert res.first_alarm is not None
         if res.first_alarm < change:
             false_alarms += 1
@@ -139,10 +141,10 @@ def test_abrupt_change_monte_carlo():
     assert max(delays) <= 10
 
 
-def test_halt_on_alarm_freezes_adaptation():
+def test_freeze_on_alarm_freezes_adaptation():
     change = 8000
     y, u = simulate_arx(10_000, 7, change_at=change, db=1.0)
-    m = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=True)
+    m = RecursiveARX(2, 2, 1, forgetting_factor=0.99, freeze_on_alarm=True)
     res = m.run(y, u)
     k = res.first_alarm
     assert k is not None and k >= change
@@ -151,8 +153,8 @@ def test_halt_on_alarm_freezes_adaptation():
     np.testing.assert_array_equal(params[k:], np.broadcast_to(params[k - 1], params[k:].shape))
     var = np.asarray(res.variance)
     assert np.all(var[k:] == var[k - 1])
-    # without halting the model adapts to the fault and the error variance grows
-    m2 = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=False)
+    # without freezing the model adapts to the fault and the error variance grows
+    m2 = RecursiveARX(2, 2, 1, forgetting_factor=0.99, freeze_on_alarm=False)
     res2 = m2.run(y, u)
     assert np.abs(np.asarray(res2.params)[-1, 2] - 1.8) < 0.05
     assert np.asarray(res2.variance)[-1] > var[-1]
@@ -205,8 +207,8 @@ def test_data_kinds(kind):
         uu = xr.DataArray(u, dims="time", coords={"time": index})
     else:
         yy, uu = y, u
-    res = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=True).run(yy, uu)
-    ref = RecursiveARX(2, 2, 1, forgetting_factor=0.99, halt_on_alarm=True).run(y, u)
+    res = RecursiveARX(2, 2, 1, forgetting_factor=0.99, freeze_on_alarm=True).run(yy, uu)
+    ref = RecursiveARX(2, 2, 1, forgetting_factor=0.99, freeze_on_alarm=True).run(y, u)
     np.testing.assert_array_equal(np.asarray(res.params), ref.params)
     np.testing.assert_array_equal(np.asarray(res.zscore), ref.zscore)
     assert res.first_alarm == ref.first_alarm and res.first_alarm >= 2500
@@ -271,6 +273,8 @@ def test_bad_arguments():
         RecursiveARX(1, 1, theta0=[1.0])
     with pytest.raises(ValueError, match="nonfinite"):
         RecursiveARX(1, 1, nonfinite="ignore")
+    with pytest.raises(TypeError, match="freeze_on_alarm"):
+        RecursiveARX(1, 1, freeze_on_alarm="yes")
     m = RecursiveARX(1, 1)
     with pytest.raises(ValueError, match="same length"):
         m.run(np.ones(10), np.ones(9))
@@ -320,3 +324,52 @@ def test_arm_after_and_freeze():
     assert not m.frozen
     with pytest.raises(ValueError, match="arm_after"):
         RecursiveARX(2, 2, arm_after=-1)
+
+
+def _assert_same_run(r1, r2):
+    for name in ("params", "resid", "variance", "mean", "zscore", "model_stable", "variance_stable", "alarm",
+                 "skipped"):
+        np.testing.assert_array_equal(np.asarray(getattr(r1, name)), np.asarray(getattr(r2, name)), err_msg=name)
+    assert (r1.first_alarm, r1.first_alarm_time, r1.n_skipped, r1.start) == \
+        (r2.first_alarm, r2.first_alarm_time, r2.n_skipped, r2.start)
+
+
+@pytest.mark.parametrize("freeze", [False, True])
+def test_get_state_set_state_resumes_exactly(freeze):
+    y, u = simulate_arx(4000, 0, change_at=3000)
+    y[2700] = np.nan   # a skipped sample in the second part: counters and buffers must be restored too
+    m = RecursiveARX(2, 2, 1, forgetting_factor=0.995, trend="c", freeze_on_alarm=True, nonfinite="skip")
+    m.run(y[:2500], u[:2500])
+    assert m.model_stable and m.variance_stable and not m.alarmed   # Welford state and gates are live
+    if freeze:
+        m.freeze()
+    s = m.get_state()
+    theta_id = id(m.theta_)
+    first = m.run(y[2500:], u[2500:])
+    assert first.n_skipped == 1 and (freeze or first.first_alarm is not None)
+    end = m.get_state()
+    m.set_state(s)
+    assert id(m.theta_) == theta_id and m.nobs == 2500 and m.n_skipped == 0 and not m.alarmed
+    assert m.frozen == freeze
+    again = m.run(y[2500:], u[2500:])
+    _assert_same_run(first, again)
+    for name in ("theta", "P", "y_history", "u_history", "counters", "error_stats"):
+        np.testing.assert_array_equal(getattr(m.get_state(), name), getattr(end, name), err_msg=name)
+    # the snapshot is a read-only copy, reusable, and restores into another estimator with the same options
+    assert not s.theta.flags.writeable and not s.counters.flags.writeable
+    other = RecursiveARX(2, 2, 1, forgetting_factor=0.995, trend="c", freeze_on_alarm=True, nonfinite="skip")
+    other.set_state(s)
+    _assert_same_run(first, other.run(y[2500:], u[2500:]))
+
+
+def test_set_state_rejects_foreign_states():
+    m = RecursiveARX(2, 2, 1)
+    with pytest.raises(TypeError, match="get_state"):
+        m.set_state({"theta": np.zeros(4)})
+    with pytest.raises(ValueError, match="theta"):
+        m.set_state(RecursiveARX(3, 2, 1).get_state())
+    # a failed restore leaves the estimator untouched (all shapes are checked before anything is copied)
+    bad = dataclasses.replace(m.get_state(), theta=np.ones(4), u_history=np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="u_history"):
+        m.set_state(bad)
+    np.testing.assert_array_equal(m.theta_, np.zeros(4))

@@ -8,7 +8,7 @@ from statsmodels.tsa.api import VAR as smVAR
 from statsmodels.tsa.ar_model import ar_select_order
 
 import tsfdi
-from tsfdi.models import _lstsq
+from tsfdi.models import lstsq
 from tests.conftest import as_kind
 from tests.models.test_ar import TRUE_A6, simulate_ar
 from tests.models.test_var_arx import arx_data
@@ -87,9 +87,9 @@ def test_gram_matches_explicit_cross_products():
     rng = np.random.default_rng(2)
     for s, const in [(1, False), (1, True), (3, True), (2, False)]:
         y = rng.standard_normal((300, s)).cumsum(0) * 0.1 + rng.standard_normal((300, s))
-        X, Y = _lstsq.lagged_design(y, 9, 9, const=const)
+        X, Y = lstsq.lagged_design(y, 9, 9, const=const)
         Z = np.hstack([X, Y])
-        np.testing.assert_allclose(_lstsq.lag_gram(y, 9, const=const), Z.T @ Z, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(lstsq.lag_gram(y, 9, const=const), Z.T @ Z, rtol=1e-12, atol=1e-9)
 
 
 @pytest.mark.filterwarnings("ignore::tsfdi.exceptions.UnstableModelWarning")  # a sinusoid is marginally stable
@@ -98,14 +98,14 @@ def test_qr_fallback_for_ill_conditioned_regressors():
     # (cond ~ 5e14) loses the digits and R must come from a QR of the regressor
     t = np.arange(3000)
     y = np.sin(0.05 * t) + 1e-7 * np.random.default_rng(0).standard_normal(t.size)
-    gram = _lstsq.lag_gram(y[:, None], 10, const=False)
+    gram = lstsq.lag_gram(y[:, None], 10, const=False)
     called = []
 
     def design():
         called.append(True)
-        return np.hstack(_lstsq.lagged_design(y[:, None], 10, 10, const=False))
+        return np.hstack(lstsq.lagged_design(y[:, None], 10, 10, const=False))
 
-    R = _lstsq.triangular_factor(gram, design)
+    R = lstsq.triangular_factor(gram, design)
     assert called, "the QR fallback was not used"
     Rq = np.linalg.qr(design(), mode="r")
     np.testing.assert_allclose(np.abs(np.diag(R)), np.abs(np.diag(Rq)), rtol=1e-8)

@@ -9,6 +9,7 @@ import statsmodels.api as sm
 from statsmodels.tsa.api import VAR as smVAR
 
 import tsfdi
+from tsfdi.models import load
 from tsfdi.models.var import _simulate_var
 from tests.conftest import as_kind, assert_kind, to_numpy
 
@@ -101,7 +102,7 @@ def test_var_save_load(tmp_path, kind, trend):
     obj = as_kind(var_system()[0][:500], kind)
     res = tsfdi.VAR(obj, 2, trend, criterion="trace").fit()
     res.save(tmp_path / "v.npz")
-    back = tsfdi.load(tmp_path / "v.npz")
+    back = load(tmp_path / "v.npz")
     np.testing.assert_array_equal(back.params, res.params)
     np.testing.assert_array_equal(back.sigma, res.sigma)
     assert back.bic == res.bic and back.model.criterion == "trace"
@@ -164,7 +165,7 @@ def test_arx_kinds_and_save(tmp_path, kind):
     assert_kind(res.residuals(yo, uo), kind, 1)
     np.testing.assert_allclose(res.params, tsfdi.ARX(y, u, 2, 2, 1).fit().params)
     res.save(tmp_path / "a.npz")
-    back = tsfdi.load(tmp_path / "a.npz")
+    back = load(tmp_path / "a.npz")
     np.testing.assert_array_equal(back.params, res.params)
     np.testing.assert_array_equal(to_numpy(back.resid), to_numpy(res.resid))
     assert "ARX" in repr(res.model) and "b1" in res.summary()

@@ -65,7 +65,7 @@ from scipy import linalg
 
 from tsfdi._validation import check_rng, float_like, int_like, option
 
-__all__ = ["DrydenTurbulence", "dryden_turbulence", "INTENSITIES", "COMPONENTS"]
+__all__ = ["DrydenTurbulence", "dryden_turbulence", "draw_gusts", "INTENSITIES", "COMPONENTS"]
 
 #: Wind speed at 20 ft (knots) for each turbulence intensity (MIL-F-8785C low altitude).
 INTENSITIES = {"light": 15.0, "moderate": 30.0, "severe": 45.0}
@@ -259,21 +259,21 @@ class DrydenTurbulence:
         dt = float_like(dt, "dt", minimum=0.0, strict_min=True)
         rng = check_rng(rng)
         nrec = 1 if records is None else int_like(records, "records", minimum=1)
-        sampler = self._sampler(dt)
+        sampler = self.sampler(dt)
         out = np.empty((nrec, n, 6))
         for i in range(nrec):
-            out[i] = _draw(sampler, n, rng)
+            out[i] = draw_gusts(sampler, n, rng)
         return out[0] if records is None else out
 
-    def _sampler(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(A_d, F, C, S0)`` for :func:`_draw`: the discretisation and the factor of the stationary covariance
-        (computed once per model and step, not once per record)."""
+    def sampler(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(A_d, F, C, S0)`` for :func:`draw_gusts`: the discretisation and the factor of the stationary
+        covariance (computed once per model and step, not once per record)."""
         Ad, F = self.discretize(dt)
         _, _, C = self.state_space()
         return Ad, F, C, _stable_factor(self.stationary_covariance())
 
 
-def _draw(sampler: tuple, n: int, rng: np.random.Generator) -> np.ndarray:
+def draw_gusts(sampler: tuple, n: int, rng: np.random.Generator) -> np.ndarray:
     """One realisation of ``n`` samples: ``x0 = S0 z`` (stationary start), then ``x[k+1] = A_d x[k] + F e[k]``,
     returning ``C x[k]`` for k = 0..n-1 (numba-compiled loop). Draws 8 then ``n * 8`` normals from ``rng``."""
     from tsfdi.datasets._hexacopter_core import dryden_recursion

@@ -121,7 +121,7 @@ from scipy import optimize, signal
 from tsfdi._validation import check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
 from tsfdi.datasets._hexacopter_params import REGULAR_HEXACOPTER, ControllerGains, HexacopterParameters
-from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, _draw
+from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, draw_gusts
 
 __all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "trim", "simulate_hexacopter",
            "make_hexacopter_dataset",
@@ -314,7 +314,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     limits = np.array(LOSS_LIMITS)
     models = {lvl: DrydenTurbulence(altitude=altitude, airspeed=max(speed, 1.0), span=span, intensity=lvl)
               for lvl in INTENSITIES}
-    samplers = {lvl: m._sampler(dt) for lvl, m in models.items()}
+    samplers = {lvl: m.sampler(dt) for lvl, m in models.items()}
     nout = n // q
     data = np.empty((records, nout, _core.N_OUT))
     lost_step = np.empty(records, dtype=np.int64)
@@ -324,7 +324,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         gusts = np.zeros((nb, n, 6))
         for j, i in enumerate(idx):
             if turb[i] != "none":
-                gusts[j] = _draw(samplers[turb[i]], n, check_rng(seeds[i]))
+                gusts[j] = draw_gusts(samplers[turb[i]], n, check_rng(seeds[i]))
         x0 = np.tile(tr["state"], (nb, 1))
         i0 = np.tile(tr["integrators"], (nb, 1))
         ref = np.tile([speed, 0.0, tr["state"][2], 0.0], (nb, 1))
@@ -429,3 +429,56 @@ def encode_for_file(ds, variables=SHIPPED_VARIABLES):
         enc[v] = {"dtype": "int32", "scale_factor": s, "_FillValue": _INT32_FILL, "zlib": True, "complevel": 9,
                   "shuffle": True, "chunksizes": (min(20, out.sizes["record"]), out.sizes["time"])}
     return out, enc
+
+
+def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
+    """Roll, pitch and yaw channels of a hexacopter dataset as one ``(record, time, channel)`` DataArray.
+
+    Parameters
+    ----------
+    data : xarray.Dataset
+        As returned by :func:`tsfdi.datasets.load_hexacopter` (variables ``roll``, ``pitch``, ``yaw``).
+    yaw : {"rate", "angle"}
+        ``"rate"`` (default): the body yaw rate, channel ``yaw_rate``: the dataset's ``r`` variable when it has
+        one, else the heading increment times ``fs`` (the first sample is then dropped so every channel has the
+        same time axis). The heading is the integral of the yaw rate under a slow heading loop (time constant
+        1 / k_heading, about 3 s), so at 100 Hz it is close to a unit-root process and an AR/VAR of order 20
+        does not whiten it; with the regular aircraft it also slips by whole turns in severe turbulence.
+        ``"angle"``: the raw heading.
+
+    Returns
+    -------
+    xarray.DataArray
+        Dims ``(record, time, channel)`` with the dataset's record coordinates.
+    """
+    import xarray as xr
+
+    if not isinstance(data, xr.Dataset):
+        raise TypeError(f"data must be an xarray.Dataset with roll, pitch and yaw variables, got "
+                        f"{type(data).__name__}")
+    yaw = option(yaw, "yaw", ("rate", "angle"))
+    use_r = yaw == "rate" and "r" in data
+    missing = [v for v in ("roll", "pitch", "r" if use_r else "yaw") if v not in data]
+    if missing:
+        raise ValueError(f"data lacks the variable(s) {missing}")
+    t = np.asarray(data["time"].values, dtype=float)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64)
+            for v in ("roll", "pitch", "r" if use_r else "yaw")]
+    if use_r:
+        names = ["roll", "pitch", "yaw_rate"]
+    elif yaw == "rate":
+        arrs = [a[:, 1:] for a in arrs[:2]] + [np.diff(arrs[2], axis=1) * fs]
+        t = t[1:]
+        names = ["roll", "pitch", "yaw_rate"]
+    else:
+        names = ["roll", "pitch", "yaw"]
+    vals = np.stack(arrs, axis=-1)
+    coords = {k: (("record",), np.asarray(c.values)) for k, c in data.coords.items()
+              if c.dims == ("record",) and k != "record"}
+    coords["record"] = np.asarray(data["record"].values)
+    coords["time"] = t
+    coords["channel"] = names
+    if "lost_control" in data:
+        coords["lost_control"] = (("record",), np.asarray(data["lost_control"].values, dtype=bool))
+    return xr.DataArray(vals, dims=("record", "time", "channel"), coords=coords, name="attitude")

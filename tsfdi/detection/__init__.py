@@ -2,7 +2,8 @@
 
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
-from tsfdi.detection.glrt import GLRT, EmpiricalThreshold, GLRTScan, GLRTStream, glrt_direct
+from tsfdi.detection.glrt import GLRT, GLRTScan, GLRTStream, glrt_direct
+from tsfdi.detection.threshold import EmpiricalThreshold
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, autocovariance, ljungbox_windows
 from tsfdi.detection.zscore import ZScore

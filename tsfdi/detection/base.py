@@ -9,6 +9,8 @@ import numpy as np
 
 from tsfdi._data import Signal, as_signal
 from tsfdi._validation import option, probability
+from tsfdi.detection.decision import Decision
+from tsfdi.detection.threshold import EmpiricalThreshold
 
 __all__ = ["CalibratedTest", "ResidualTest"]
 
@@ -21,6 +23,10 @@ class ResidualTest:
     imports a model: what it needs from a fitted baseline (reference variance, degrees of freedom) is passed
     as keyword arguments, and :meth:`reference` extracts those from any results object exposing the
     documented attributes (``sigma2`` or ``sigma``, ``nobs``, ``df_resid``), duck-typed.
+
+    ``alpha`` is a type I risk, but of what depends on the test: per tested window (per channel) for the windowed
+    tests (:class:`~tsfdi.LjungBox`, :class:`~tsfdi.FTest`), per sample for the sequential ones
+    (:class:`~tsfdi.GLRT`, :class:`~tsfdi.ZScore`); each test's docstring says which.
     """
 
     name = "residual test"
@@ -61,28 +67,147 @@ class ResidualTest:
 class CalibratedTest(ResidualTest):
     """A residual test whose threshold is either its null distribution's quantile or comes from data.
 
-    With ``threshold="empirical"`` (or an :class:`~tsfdi.EmpiricalThreshold`) the test must be
-    :meth:`calibrate`-d on statistics from normal operation before :meth:`test`; it then stores ``threshold_``
-    (per channel) and reports empirical p-values (Hansen et al., paper 002, Fig. 2).
+    With ``threshold="theoretical"`` the critical value and p-value come from the statistic's distribution
+    under H0 (:meth:`null_threshold`). With ``threshold="empirical"`` (or an :class:`~tsfdi.EmpiricalThreshold`)
+    the test must be :meth:`calibrate`-d on statistics from normal operation before :meth:`test`; it then stores
+    ``threshold_`` (per channel) and reports empirical p-values (Hansen et al., paper 002, Fig. 2).
+
+    The rules are public so that a windowed engine can apply them to many statistics at once:
+    :meth:`threshold_pvalue` (threshold and p-values of any array of statistics), :meth:`null_threshold` (the
+    distributional critical value) and :meth:`decision` (the :class:`~tsfdi.Decision` of one statistic per
+    channel); :meth:`test` is :meth:`decision` of the statistic of one window.
     """
 
     threshold: Any = None
-    #: Name of the distributional threshold (``"chi2"`` for the Ljung-Box test, ``"f"`` for the F test).
-    _analytic = "analytic"
+    alpha: float
+    #: Name of the distributional threshold option, the same for every test.
+    _theoretical = "theoretical"
 
     def _threshold_option(self, threshold: Any) -> Any:
-        """Validate the ``threshold`` option: the analytic name, ``"empirical"`` or an EmpiricalThreshold."""
-        from tsfdi.detection.glrt import EmpiricalThreshold
-
+        """Validate the ``threshold`` option: ``"theoretical"``, ``"empirical"`` or an EmpiricalThreshold."""
         if isinstance(threshold, EmpiricalThreshold):
             if abs(threshold.false_alarm - self.alpha) > 1e-12 * self.alpha:
                 raise ValueError(f"threshold.false_alarm ({threshold.false_alarm:g}) must equal alpha "
                                  f"({self.alpha:g}): the calibrated threshold is the 1 - alpha quantile")
             return threshold
         if isinstance(threshold, str):
-            return option(threshold, "threshold", (self._analytic, "empirical"))
-        raise TypeError(f"threshold must be {self._analytic!r}, 'empirical' or an EmpiricalThreshold, got "
+            return option(threshold, "threshold", (self._theoretical, "empirical"))
+        raise TypeError(f"threshold must be {self._theoretical!r}, 'empirical' or an EmpiricalThreshold, got "
                         f"{type(threshold).__name__}")
+
+    # ------------------------------------------------------------------ rules (public)
+    def null_threshold(self, k: int, nobs: int | None = None, **reference: Any) -> np.ndarray:
+        """Critical value of the statistic's null distribution per channel, shape (k,) (see the subclasses)."""
+        raise NotImplementedError(f"{type(self).__name__} has no null distribution")  # pragma: no cover
+
+    def _null_pvalue(self, statistic: np.ndarray, nobs: int | None = None, **reference: Any) -> np.ndarray:
+        """Upper-tail probability of ``statistic`` under the null distribution (same shape)."""
+        raise NotImplementedError(f"{type(self).__name__} has no null distribution")  # pragma: no cover
+
+    def _df(self, k: int, nobs: int, **reference: Any) -> np.ndarray:
+        """Degrees of freedom per channel for :class:`~tsfdi.Decision` (``df``)."""
+        raise NotImplementedError  # pragma: no cover
+
+    def _decision_details(self, k: int, **reference: Any) -> dict:
+        """Test-specific entries of ``Decision.details`` (options and per-channel alpha)."""
+        return {}
+
+    def threshold_pvalue(self, statistic: Any, nobs: int | None = None,
+                         **reference: Any) -> tuple[np.ndarray, np.ndarray]:
+        r"""Threshold and p-values of statistics of this test, channels on the last axis.
+
+        The single rule behind :meth:`test` and :meth:`decision`, applicable to a whole array of window
+        statistics (e.g. :meth:`window_statistic`) at once.
+
+        Parameters
+        ----------
+        statistic : array_like, shape (..., k)
+            Values of the test statistic (Ljung-Box :math:`Q`, F test variance ratio :math:`F`), one column
+            per channel.
+        nobs : int, optional
+            Number of residual samples behind each statistic (one window). Needed by the F test's
+            distributional threshold (:math:`N_u`); not used by the Ljung-Box test nor by a calibrated
+            (empirical) threshold.
+        **reference :
+            What the null distribution needs from the baseline model, as given by :meth:`reference` (the F
+            test's ``reference_df``, :math:`N_0 - d`); ignored by the empirical threshold.
+
+        Returns
+        -------
+        threshold : ndarray, shape (k,)
+            Critical value per channel; a channel rejects when its statistic exceeds it.
+        pvalue : ndarray, shape of ``statistic``
+            p-value of every statistic.
+
+        Raises
+        ------
+        ValueError
+            With the empirical threshold, if the test is not calibrated or was calibrated on another number
+            of channels.
+
+        Notes
+        -----
+        ``threshold="theoretical"``: :meth:`null_threshold` and the upper-tail probability of the null
+        distribution -- for the Ljung-Box test :math:`\chi^2_{1-lpha}(r - 	ext{model\_df})` and
+        :math:`P(\chi^2(r - 	ext{model\_df}) > Q)` (Dutta et al., paper 003, eqs. 13-14); for the F test
+        :math:`f_{1-lpha}(N_u, N_0 - d)` and :math:`P(\mathcal F(N_u, N_0 - d) > F)` (eqs. 9-10, one-sided;
+        the two-sided rule is in :meth:`decision`). ``alpha`` is the type I risk per tested window and channel
+        (``alpha / k`` with ``correction="bonferroni"``).
+
+        ``threshold="empirical"``: the calibrated ``threshold_`` and the empirical p-value
+        :math:`p = (1 + \#\{s_i \ge s\}) / (n + 1)` of the calibration sample (:meth:`calibrate`; Hansen et
+        al., paper 002, Fig. 2).
+        """
+        s = np.asarray(statistic, dtype=np.float64)
+        k = s.shape[-1]
+        if self.empirical:
+            self._check_calibrated(k)
+            return self.threshold_, self.empirical_pvalue(s)
+        return self.null_threshold(k, nobs, **reference), self._null_pvalue(s, nobs, **reference)
+
+    def decision(self, statistic: Any, nobs: int, channels: Any = None, *, details: dict | None = None,
+                 **reference: Any) -> Decision:
+        r"""The :class:`~tsfdi.Decision` of one statistic per channel (what :meth:`test` returns).
+
+        Parameters
+        ----------
+        statistic : array_like, shape (k,)
+            The test statistic of one window, one value per channel.
+        nobs : int
+            Number of residual samples it was computed from.
+        channels : sequence of str, optional
+            Channel names (default ``y0, y1, ...``).
+        details : dict, optional
+            Extra entries placed first in ``Decision.details`` (e.g. the F test's window variances).
+        **reference :
+            As for :meth:`threshold_pvalue` (the F test's ``reference_df``; ``reference_variance`` is reported
+            in the details).
+
+        Returns
+        -------
+        Decision
+            Channel ``c`` rejects when ``statistic[c] > threshold[c]`` (:meth:`threshold_pvalue`); the signal
+            rejects when any channel rejects. ``details["threshold_method"]`` is ``"theoretical"`` or
+            ``"empirical"`` (then with the calibration's details).
+
+        Notes
+        -----
+        Ljung-Box: accept H0 when :math:`Q \le \chi^2_{1-lpha}(r - 	ext{model\_df})` (Dutta et al., paper
+        003, eq. 14). F test: accept H0 when :math:`F \le f_{1-lpha}(N_u, N_0 - d)` (eq. 10).
+        """
+        stat = np.array(statistic, dtype=np.float64, ndmin=1)
+        if stat.ndim != 1:
+            raise ValueError(f"statistic must hold one value per channel, got shape {stat.shape}")
+        k = stat.shape[0]
+        thr, pv = self.threshold_pvalue(stat, nobs, **reference)
+        info = dict(details) if details else {}
+        info.update(self._decision_details(k, **reference))
+        info.update(self._empirical_details() if self.empirical else {"threshold_method": self._theoretical})
+        rej = stat > thr
+        return Decision(statistic=stat, threshold=thr, pvalue=pv, alpha=self.alpha, reject=bool(rej.any()),
+                        df=self._df(k, nobs, **reference), nobs=nobs, null_hypothesis=self.null_hypothesis,
+                        alternative_hypothesis=self.alternative_hypothesis, details=info, channel_reject=rej,
+                        channels=tuple(channels) if channels is not None else (), test=type(self).__name__)
 
     @property
     def empirical(self) -> bool:
@@ -144,8 +269,6 @@ class CalibratedTest(ResidualTest):
         if not self.empirical:
             raise ValueError(f"threshold is {self.threshold!r}: build the test with threshold='empirical' (or an "
                              "EmpiricalThreshold) to calibrate it")
-        from tsfdi.detection.glrt import EmpiricalThreshold
-
         if statistic is None:
             if resid is None:
                 raise TypeError("calibrate needs resid (healthy residual records) or statistic")

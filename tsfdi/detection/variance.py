@@ -20,7 +20,8 @@ class FTest(CalibratedTest):
     Parameters
     ----------
     alpha : float
-        Type I (false alarm) risk, in (0, 1), per channel.
+        Type I (false alarm) risk, in (0, 1): the type I risk per tested window (per channel). Over many
+        windows of a healthy record about ``alpha`` of them reject in each channel.
     alternative : {"greater", "two-sided"}
         ``"greater"`` (the paper): H1 is a variance *increase*, reject when
         :math:`F > f_{1-\alpha}(N_u, N_0 - d)`. ``"two-sided"``: reject when
@@ -32,8 +33,8 @@ class FTest(CalibratedTest):
     correction : {None, "bonferroni"}
         For vector residuals, test each of the ``k`` channels at ``alpha / k`` so that the signal-level
         false-alarm rate is at most ``alpha``. ``None`` (the paper) uses ``alpha`` per channel.
-    threshold : {"f", "empirical"} or EmpiricalThreshold
-        ``"f"`` (the paper): the F quantile of eq. 10. ``"empirical"`` (``alternative="greater"`` only): the
+    threshold : {"theoretical", "empirical"} or EmpiricalThreshold
+        ``"theoretical"`` (the paper): the F quantile of eq. 10. ``"empirical"`` (``alternative="greater"`` only): the
         :math:`1-\alpha` quantile of the variance ratio on healthy (in-state) residual windows, estimated by
         :meth:`calibrate` (Hansen et al., paper 002, Fig. 2); decisions then report it and the empirical p-value.
 
@@ -64,10 +65,9 @@ class FTest(CalibratedTest):
     """
 
     name = "F test (residual variance)"
-    _analytic = "f"
 
     def __init__(self, alpha: float = 0.05, *, alternative: str = "greater", demean: bool = False,
-                 correction: str | None = None, threshold: Any = "f") -> None:
+                 correction: str | None = None, threshold: Any = "theoretical") -> None:
         self.alpha = self._check_alpha(alpha)
         self.alternative = option(alternative, "alternative", ("greater", "two-sided"))
         if not isinstance(demean, (bool, np.bool_)):
@@ -79,7 +79,7 @@ class FTest(CalibratedTest):
             raise ValueError("threshold='empirical' needs alternative='greater' (one upper quantile)")
 
     def __repr__(self) -> str:
-        thr = "" if self.threshold == "f" else ", threshold='empirical'" + (
+        thr = "" if self.threshold == "theoretical" else ", threshold='empirical'" + (
             f" (calibrated on {self.calibration_[0].size})" if self.calibrated else " (not calibrated)")
         return (f"FTest(alpha={self.alpha:g}, alternative={self.alternative!r}, demean={self.demean}, "
                 f"correction={self.correction!r}{thr})")
@@ -108,28 +108,118 @@ class FTest(CalibratedTest):
             var_u = ss / window
         return var_u / ref
 
-    def _null_threshold(self, k: int, nobs: int, reference_df: Any = None, **_: Any) -> np.ndarray:
-        """Upper critical value :math:`f_{1-\\alpha}(N_u, N_0 - d)` of eq. 10 per channel for ``nobs`` current
-        residual samples (:math:`N_u = ` ``nobs - 1`` with ``demean``), shape (k,)."""
+    def null_threshold(self, k: int, nobs: int | None = None, reference_df: Any = None,
+                       **reference: Any) -> np.ndarray:
+        r"""Upper critical value of the F test under H0 (Dutta et al., paper 003, eqs. 9-10).
+
+        Parameters
+        ----------
+        k : int
+            Number of channels (with ``correction="bonferroni"`` each is tested at ``alpha / k``).
+        nobs : int
+            Current residual samples per window; :math:`N_u` = ``nobs`` (``nobs - 1`` with ``demean``).
+        reference_df : int or array_like, shape (k,)
+            Degrees of freedom :math:`N_0 - d` of the baseline variance (from :meth:`reference`).
+        **reference :
+            Other entries of :meth:`reference` (``reference_variance``), ignored.
+
+        Returns
+        -------
+        ndarray, shape (k,)
+            :math:`f_{1-\alpha}(N_u, N_0 - d)`, the :math:`1 - \alpha` quantile of the F law of the variance
+            ratio (eq. 9); ``alpha`` is the type I risk per tested window (per channel). H0 is accepted when
+            :math:`F \le f_{1-\alpha}(N_u, N_0 - d)` (eq. 10). One-sided (``alternative="greater"``); the
+            two-sided limits are in :meth:`decision`.
+        """
+        if reference_df is None:
+            raise TypeError("FTest needs reference_df (the baseline's N0 - d); tsfdi.detect/identify take it from "
+                            "the model")
+        if nobs is None:
+            raise TypeError("FTest needs nobs (the number of current residual samples per window) for its "
+                            "theoretical threshold")
+        df0 = _per_channel(reference_df, "reference_df", k)
+        return special.fdtri(self._nu(nobs), df0, 1.0 - self._channel_alpha(self.alpha, k, self.correction))
+
+    def _nu(self, nobs: int) -> float:
+        """:math:`N_u`: the current residual's degrees of freedom (``nobs - 1`` with ``demean``)."""
+        return float(nobs - 1 if self.demean else nobs)
+
+    def _null_pvalue(self, statistic: np.ndarray, nobs: int | None = None, reference_df: Any = None,
+                     **reference: Any) -> np.ndarray:
+        r""":math:`P(\mathcal F(N_u, N_0 - d) > F)` (eq. 9), same shape as ``statistic``."""
+        df0 = _per_channel(reference_df, "reference_df", statistic.shape[-1])
+        return special.fdtrc(self._nu(nobs), df0, statistic)
+
+    def _df(self, k: int, nobs: int, reference_df: Any = None, **reference: Any) -> np.ndarray:
+        df0 = np.full(k, np.nan) if reference_df is None else _per_channel(reference_df, "reference_df", k)
+        return np.column_stack([np.full(k, self._nu(nobs)), df0])
+
+    def _decision_details(self, k: int, reference_variance: Any = None, **reference: Any) -> dict:
+        details: dict = {} if reference_variance is None else {
+            "reference_variance": _per_channel(reference_variance, "reference_variance", k)}
+        details.update({"alternative": self.alternative, "demean": self.demean,
+                        "channel_alpha": self._channel_alpha(self.alpha, k, self.correction),
+                        "correction": self.correction})
+        return details
+
+    def decision(self, statistic: Any, nobs: int, channels: Any = None, *, details: dict | None = None,
+                 **reference: Any) -> Decision:
+        r"""The :class:`~tsfdi.Decision` of one variance ratio per channel (what :meth:`test` returns).
+
+        Parameters
+        ----------
+        statistic : array_like, shape (k,)
+            Variance ratios :math:`F = \hat\sigma_{0u}^2 / \hat\sigma_{00}^2` of one window, per channel.
+        nobs : int
+            Number of current residual samples in the window (:math:`N_u`, ``nobs - 1`` with ``demean``).
+        channels : sequence of str, optional
+            Channel names (default ``y0, y1, ...``).
+        details : dict, optional
+            Extra entries placed first in ``Decision.details`` (:meth:`test` passes the window variances).
+        **reference :
+            ``reference_df`` (:math:`N_0 - d`, needed by the theoretical threshold) and optionally
+            ``reference_variance`` (reported in the details), as given by :meth:`reference`.
+
+        Returns
+        -------
+        Decision
+            ``df`` holds :math:`(N_u, N_0 - d)` per channel. ``"greater"``: channel ``c`` rejects when
+            :math:`F_c > f_{1-\alpha}(N_u, N_0 - d)` (eq. 10), or the calibrated threshold
+            (:meth:`threshold_pvalue`). ``"two-sided"``: it rejects when :math:`F_c > f_{1-\alpha/2}` or
+            :math:`F_c < f_{\alpha/2}` (``details["lower_threshold"]``), with p-value
+            :math:`\min(1, 2 \min(P(\mathcal F \le F), P(\mathcal F > F)))`.
+
+        Notes
+        -----
+        Dutta et al. (paper 003), eqs. 8-11: the same rule serves detection (eq. 10, against the healthy
+        baseline) and identification (eq. 11, against each fault model's own baseline variance).
+        """
+        if self.empirical or self.alternative == "greater":
+            return super().decision(statistic, nobs, channels, details=details, **reference)
+        f = np.array(statistic, dtype=np.float64, ndmin=1)
+        if f.ndim != 1:
+            raise ValueError(f"statistic must hold one value per channel, got shape {f.shape}")
+        k = f.shape[0]
+        reference_df = reference.get("reference_df")
         if reference_df is None:
             raise TypeError("FTest needs reference_df (the baseline's N0 - d); tsfdi.detect/identify take it from "
                             "the model")
         df0 = _per_channel(reference_df, "reference_df", k)
-        nu = float(nobs - 1 if self.demean else nobs)
-        return special.fdtri(nu, df0, 1.0 - self._channel_alpha(self.alpha, k, self.correction))
-
-    def _threshold_pvalue(self, f: np.ndarray, nobs: int, reference_df: Any = None,
-                          **_: Any) -> tuple[np.ndarray, np.ndarray]:
-        """Threshold (k,) and p-values (shape of ``f``, channels on the last axis) of the one-sided test of
-        ``nobs``-sample variance ratios: calibrated threshold and empirical p-value, or the F ones (eq. 10)."""
-        f = np.asarray(f, dtype=np.float64)
-        k = f.shape[-1]
-        if self.empirical:
-            self._check_calibrated(k)
-            return self.threshold_, self.empirical_pvalue(f)
-        df0 = _per_channel(reference_df, "reference_df", k)
-        nu = float(nobs - 1 if self.demean else nobs)
-        return self._null_threshold(k, nobs, df0), special.fdtrc(nu, df0, f)
+        a = self._channel_alpha(self.alpha, k, self.correction)
+        dfn = np.full(k, self._nu(nobs))
+        info = dict(details) if details else {}
+        info.update(self._decision_details(k, **reference))
+        info["threshold_method"] = self._theoretical
+        thr = special.fdtri(dfn, df0, 1.0 - a / 2)
+        lower = special.fdtri(dfn, df0, a / 2)
+        pv = np.minimum(1.0, 2 * np.minimum(special.fdtr(dfn, df0, f), special.fdtrc(dfn, df0, f)))
+        rej = (f > thr) | (f < lower)
+        info["lower_threshold"] = lower
+        return Decision(statistic=f, threshold=thr, pvalue=pv, alpha=self.alpha, reject=bool(rej.any()),
+                        df=np.column_stack([dfn, df0]), nobs=nobs, null_hypothesis=self.null_hypothesis,
+                        alternative_hypothesis=self.alternative_hypothesis, details=info,
+                        channel_reject=rej, channels=tuple(channels) if channels is not None else (),
+                        test=type(self).__name__)
 
     @property
     def null_hypothesis(self) -> str:  # type: ignore[override]
@@ -163,6 +253,8 @@ class FTest(CalibratedTest):
         Returns
         -------
         Decision
+            :meth:`decision` of the variance ratio :math:`F` of ``resid`` (eq. 9); ``details["variance"]`` holds
+            :math:`\\hat\\sigma_{Vu}^2` per channel.
         """
         sig = self._resid(resid, 3 if self.demean else 2)
         e = sig.values
@@ -180,26 +272,8 @@ class FTest(CalibratedTest):
             nu = n
             var_u = np.einsum("ij,ij->j", e, e) / nu
         f = var_u / ref
-        a = self._channel_alpha(self.alpha, k, self.correction)
-        dfn = np.full(k, float(nu))
-        details: dict = {"variance": var_u, "reference_variance": ref, "alternative": self.alternative,
-                         "demean": self.demean, "channel_alpha": a, "correction": self.correction,
-                         "threshold_method": "f"}
-        if self.empirical or self.alternative == "greater":
-            thr, pv = self._threshold_pvalue(f, n, reference_df=df0)
-            rej = f > thr
-            if self.empirical:
-                details.update(self._empirical_details())
-        else:
-            thr = special.fdtri(dfn, df0, 1.0 - a / 2)
-            lower = special.fdtri(dfn, df0, a / 2)
-            pv = np.minimum(1.0, 2 * np.minimum(special.fdtr(dfn, df0, f), special.fdtrc(dfn, df0, f)))
-            rej = (f > thr) | (f < lower)
-            details["lower_threshold"] = lower
-        return Decision(statistic=f, threshold=thr, pvalue=pv, alpha=self.alpha, reject=bool(rej.any()),
-                        df=np.column_stack([dfn, df0]), nobs=n, null_hypothesis=self.null_hypothesis,
-                        alternative_hypothesis=self.alternative_hypothesis, details=details,
-                        channel_reject=rej, channels=tuple(sig.channels), test="FTest")
+        return self.decision(f, n, tuple(sig.channels), details={"variance": var_u}, reference_variance=ref,
+                             reference_df=df0)
 
 
 def _per_channel(value: Any, name: str, k: int) -> np.ndarray:

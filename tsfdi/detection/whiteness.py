@@ -87,7 +87,8 @@ class LjungBox(CalibratedTest):
     lags : int
         Maximum lag :math:`r` of the normalised autocorrelations tested.
     alpha : float
-        Type I (false alarm) risk in (0, 1), per channel.
+        Type I (false alarm) risk in (0, 1): the type I risk per tested window (per channel). Over many
+        windows of a healthy record about ``alpha`` of them reject in each channel.
     model_df : int
         Degrees of freedom subtracted from ``lags`` (scalar) or ``s**2 * lags`` (multivariate). Use 0 (the
         default, the papers' use) for residuals of a baseline model driven by *new* data; use the number of
@@ -100,12 +101,13 @@ class LjungBox(CalibratedTest):
         Subtract the sample mean before computing autocorrelations (as statsmodels ``acf`` does).
     correction : {None, "bonferroni"}
         Per-channel alpha ``alpha / k`` for vector residuals so the signal-level risk is at most ``alpha``.
-    threshold : {"chi2", "empirical"} or EmpiricalThreshold
-        ``"chi2"`` (the paper): the critical value :math:`\chi^2_{1-\alpha}(r - \text{model\_df})` and its
-        p-value. ``"empirical"`` (or an :class:`~tsfdi.EmpiricalThreshold` whose ``false_alarm`` is ``alpha``,
-        to set its tail options): the :math:`1-\alpha` quantile of the statistic on healthy (in-state)
-        residual windows, estimated by :meth:`calibrate` (Hansen et al., paper 002, Fig. 2); decisions then
-        report that threshold and the empirical p-value.
+    threshold : {"theoretical", "empirical"} or EmpiricalThreshold
+        ``"theoretical"`` (the paper): the chi-square critical value
+        :math:`\chi^2_{1-\alpha}(r - \text{model\_df})` and its p-value. ``"empirical"`` (or an
+        :class:`~tsfdi.EmpiricalThreshold` whose ``false_alarm`` is ``alpha``, to set its tail options): the
+        :math:`1-\alpha` quantile of the statistic on healthy (in-state) residual windows, estimated by
+        :meth:`calibrate` (Hansen et al., paper 002, Fig. 2); decisions then report that threshold and the
+        empirical p-value.
 
     Attributes
     ----------
@@ -151,14 +153,12 @@ class LjungBox(CalibratedTest):
     Hansen, Blanke, Adrian (paper 002), Fig. 2: threshold from the statistic's distribution in normal operation.
     """
 
-    _analytic = "chi2"
-
     name = "Ljung-Box (residual uncorrelatedness)"
     null_hypothesis = "residuals are uncorrelated up to the tested lag (healthy / model fits)"
     alternative_hypothesis = "residuals are autocorrelated (fault / model does not fit)"
 
     def __init__(self, lags: int = 20, alpha: float = 0.05, model_df: int = 0, *, multivariate: str | None = None,
-                 demean: bool = True, correction: str | None = None, threshold: Any = "chi2") -> None:
+                 demean: bool = True, correction: str | None = None, threshold: Any = "theoretical") -> None:
         self.lags = int_like(lags, "lags", minimum=1)
         self.alpha = self._check_alpha(alpha)
         self.model_df = int_like(model_df, "model_df", minimum=0)
@@ -174,7 +174,7 @@ class LjungBox(CalibratedTest):
         self.threshold = self._threshold_option(threshold)
 
     def __repr__(self) -> str:
-        thr = "" if self.threshold == "chi2" else ", threshold='empirical'" + (
+        thr = "" if self.threshold == "theoretical" else ", threshold='empirical'" + (
             f" (calibrated on {self.calibration_[0].size})" if self.calibrated else " (not calibrated)")
         return (f"LjungBox(lags={self.lags}, alpha={self.alpha:g}, model_df={self.model_df}, "
                 f"multivariate={self.multivariate!r}, correction={self.correction!r}{thr})")
@@ -222,12 +222,33 @@ class LjungBox(CalibratedTest):
         if self.multivariate is None:
             acov = _acov_t(xt, self.lags)
             _check_variance(acov[:, 0], sig.channels)
-            return self._decision(_ljungbox_q(acov, n), n, tuple(sig.channels))
+            return self.decision(_ljungbox_q(acov, n), n, tuple(sig.channels))
         return self._multivariate(np.ascontiguousarray(xt.T), n, sig.nchan)
 
-    def _null_threshold(self, k: int, nobs: int | None = None, **_: Any) -> np.ndarray:
-        """Critical value :math:`\\chi^2_{1-\\alpha}(r - \\text{model\\_df})` of eq. 14 for ``k`` channels (the
-        per-channel ``alpha`` after ``correction``), shape (k,); ``nobs`` is not used."""
+    def null_threshold(self, k: int, nobs: int | None = None, **reference: Any) -> np.ndarray:
+        r"""Critical value of the per-channel Ljung-Box test under H0 (Dutta et al., paper 003, eq. 14).
+
+        Parameters
+        ----------
+        k : int
+            Number of channels (with ``correction="bonferroni"`` each is tested at ``alpha / k``).
+        nobs : int, optional
+            Residual samples per window; not used (the chi-square law does not depend on it).
+        **reference :
+            Ignored (the test needs nothing from the baseline model).
+
+        Returns
+        -------
+        ndarray, shape (k,)
+            :math:`\chi^2_{1-\alpha}(r - \text{model\_df})`, the :math:`1 - \alpha` quantile of the
+            chi-square law of :math:`Q` (eq. 13) with :math:`r` = ``lags``; ``alpha`` is the type I risk per
+            tested window (per channel).
+
+        Notes
+        -----
+        The per-channel test (``multivariate=None``); the joint portmanteau statistic has
+        :math:`s^2 r - \text{model\_df}` degrees of freedom (see :meth:`test`).
+        """
         df = float(self.lags - self.model_df)
         a = self._channel_alpha(self.alpha, k, self.correction)
         key = (df, a)
@@ -235,28 +256,16 @@ class LjungBox(CalibratedTest):
             self._thr_key, self._thr = key, float(special.chdtri(df, a))
         return np.full(k, self._thr)
 
-    def _threshold_pvalue(self, q: np.ndarray, nobs: int | None = None, **_: Any) -> tuple[np.ndarray, np.ndarray]:
-        """Threshold (k,) and p-values (shape of ``q``, channels on the last axis) of per-channel statistics:
-        calibrated threshold and empirical p-value, or the chi-square ones (eqs. 13-14)."""
-        q = np.asarray(q, dtype=np.float64)
-        k = q.shape[-1]
-        if self.empirical:
-            self._check_calibrated(k)
-            return self.threshold_, self.empirical_pvalue(q)
-        return self._null_threshold(k), special.chdtrc(float(self.lags - self.model_df), q)
+    def _null_pvalue(self, statistic: np.ndarray, nobs: int | None = None, **reference: Any) -> np.ndarray:
+        r""":math:`P(\chi^2(r - \text{model\_df}) > Q)` (eq. 13), same shape as ``statistic``."""
+        return special.chdtrc(float(self.lags - self.model_df), statistic)
 
-    def _decision(self, q: np.ndarray, n: int, channels: tuple) -> Decision:
-        k = q.shape[0]
-        df = float(self.lags - self.model_df)
-        a = self._channel_alpha(self.alpha, k, self.correction)
-        details = {"lags": self.lags, "model_df": self.model_df, "channel_alpha": a, "correction": self.correction}
-        thr, pv = self._threshold_pvalue(q)
-        details.update(self._empirical_details() if self.empirical else {"threshold_method": "chi2"})
-        rej = q > thr
-        return Decision(statistic=q, threshold=thr, pvalue=pv, alpha=self.alpha,
-                        reject=bool(rej.any()), df=np.full(k, df), nobs=n, null_hypothesis=self.null_hypothesis,
-                        alternative_hypothesis=self.alternative_hypothesis, details=details,
-                        channel_reject=rej, channels=channels, test="LjungBox")
+    def _df(self, k: int, nobs: int, **reference: Any) -> np.ndarray:
+        return np.full(k, float(self.lags - self.model_df))
+
+    def _decision_details(self, k: int, **reference: Any) -> dict:
+        return {"lags": self.lags, "model_df": self.model_df,
+                "channel_alpha": self._channel_alpha(self.alpha, k, self.correction), "correction": self.correction}
 
     def _joint_q(self, x: np.ndarray, n: int, s: int) -> float:
         h = self.lags
@@ -294,25 +303,13 @@ class LjungBox(CalibratedTest):
         else:
             thr = special.chdtri(df, self.alpha)
             pv = special.chdtrc(df, q)
-            details["threshold_method"] = "chi2"
+            details["threshold_method"] = self._theoretical
         return Decision(statistic=np.array([q]), threshold=np.array([thr]), pvalue=np.array([pv]),
                         alpha=self.alpha, reject=bool(q > thr), df=np.array([df]), nobs=n,
                         null_hypothesis="residual auto- and cross-correlations are zero up to the tested lag",
                         alternative_hypothesis="some residual auto- or cross-correlation is non-zero",
                         details=details,
                         channel_reject=np.array([q > thr]), channels=("joint",), test="LjungBox")
-
-    def test_windows(self, resid: Any, window: int, step: int = 1) -> list[Decision]:
-        """Per-channel Ljung-Box decisions on sliding windows of one residual record.
-
-        Window ``w`` covers residual samples ``[w * step, w * step + window)``. The statistics come from
-        :func:`ljungbox_windows` (lag products updated with cumulative sums, O(N * lags) for all windows).
-        """
-        if self.multivariate is not None:
-            raise ValueError("test_windows supports the per-channel test only (multivariate must be None)")
-        sig = self._prepare(resid)
-        q = ljungbox_windows(sig.values, self.lags, window, step, demean=self.demean)
-        return [self._decision(q[w], window, tuple(sig.channels)) for w in range(q.shape[0])]
 
 
 def ljungbox_windows(resid: Any, lags: int, window: int, step: int = 1, *, demean: bool = True) -> np.ndarray:

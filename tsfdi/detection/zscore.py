@@ -65,8 +65,9 @@ class ZScore(ResidualTest):
               M_{2,n} = M_{2,n-1} + (x_n - \bar x_{n-1})(x_n - \bar x_n), \quad s_n^2 = \frac{M_{2,n}}{n-1},
 
     and :math:`z_t = (x_t - \bar x_{t-1}) / s_{t-1}`, i.e. each sample is scored against the statistics of the
-    samples before it. ``alpha`` of the decision is the nominal per-sample two-sided Gaussian rate; over
-    ``N`` samples the false-alarm probability of the record is about ``N * alpha`` for iid Gaussian residuals.
+    samples before it. ``alpha`` of the decision is the nominal per-sample two-sided Gaussian rate: alpha is the
+    false-alarm probability per sample, not per window. Over ``N`` samples the false-alarm probability of the
+    record is about ``N * alpha`` for iid Gaussian residuals.
     The recursive model :class:`tsfdi.RecursiveARX` runs the same test online, armed by its stability gates.
 
     References
@@ -91,7 +92,10 @@ class ZScore(ResidualTest):
 
     @property
     def alpha(self) -> float:
-        """Nominal per-sample two-sided Gaussian false-alarm rate of the threshold."""
+        """Nominal two-sided Gaussian false-alarm rate of ``threshold`` :math:`t`, :math:`2(1 - \\Phi(t))`.
+
+        alpha is the false-alarm probability per sample, not per window (nor per record).
+        """
         return float(special.erfc(self.threshold / np.sqrt(2.0)))
 
     def zscores(self, resid: Any) -> Any:

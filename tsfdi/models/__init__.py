@@ -1,8 +1,14 @@
-"""Time-series model families: one module per family, shared kernels in ``_lstsq``."""
+"""Time-series model families: one module per family.
+
+Shared pieces: ``lstsq`` (regressors, least squares, nested fits), ``criteria`` (information criteria),
+``archive`` (the ``.npz`` format of ``Results.save`` and :func:`load`).
+"""
 
 from tsfdi.models.ar import AR, ARResults
+from tsfdi.models.archive import load
 from tsfdi.models.arx import ARX, ARXResults
+from tsfdi.models.recursive import RecursiveARX, RecursiveARXResults, RecursiveARXState
 from tsfdi.models.var import VAR, VARResults
-from tsfdi.models.recursive import RecursiveARX, RecursiveARXResults
 
-__all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults", "RecursiveARX", "RecursiveARXResults"]
+__all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults", "RecursiveARX", "RecursiveARXResults",
+           "RecursiveARXState", "load"]

@@ -2,8 +2,8 @@
 
 A model spec validates and stores its data and options; :meth:`fit` estimates by least squares and returns
 an immutable results object whose derived quantities are cached properties computed from the model and the
-parameter matrix alone. This is what makes :func:`tsfdi.load` lossless: a results object is fully defined by
-its model (data + options) and its parameters.
+parameter matrix alone. This is what makes :func:`tsfdi.models.load` lossless: a results object is fully
+defined by its model (data + options) and its parameters.
 """
 
 from __future__ import annotations
@@ -16,11 +16,12 @@ import numpy as np
 import pandas as pd
 from scipy import signal as sps
 
-from tsfdi import selection
 from tsfdi._data import Signal, as_signal, is_xarray
 from tsfdi._validation import int_like, option
 from tsfdi.exceptions import UnstableModelWarning
-from tsfdi.models import _lstsq
+from tsfdi.models.archive import save as save_archive
+from tsfdi.models.criteria import information_criteria
+from tsfdi.models.lstsq import lagged_design, lstsq
 
 __all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
 
@@ -38,7 +39,8 @@ class LinearTimeSeriesModel:
     """Base of AR, VAR and ARX: ``y[t] + sum A_i y[t-i] = c + sum B_j u[t-nk-j+1] + e[t]``."""
 
     _vector: ClassVar[bool | None] = None   # False: scalar output required, True: 2-D output required
-    _results_class: ClassVar[type]
+    #: the results class :meth:`fit` returns (and :func:`tsfdi.models.load` rebuilds)
+    results_class: ClassVar[type]
 
     def __init__(self, y: Any, na: int, *, trend: str = "n", hold_back: int | None = None, u: Any = None,
                  nb: int = 0, nk: int = 0, criterion: str = "logdet", lag_name: str = "lags") -> None:
@@ -107,8 +109,16 @@ class LinearTimeSeriesModel:
         """Number of estimation rows contributed by each record."""
         return [r.nobs - self.hold_back for r in self.records]
 
-    def _design_all(self) -> tuple[np.ndarray, np.ndarray]:
-        """Regressor and target of all records, stacked (each record holds back its own first samples)."""
+    def design_all(self) -> tuple[np.ndarray, np.ndarray]:
+        """Regressor and target of all records, stacked (each record holds back its own first samples).
+
+        Returns
+        -------
+        X : ndarray, shape (sum of nobs_records, df_eq)
+            Regressor, columns grouped by lag: ``[const, -y[t-1], u[t-nk], -y[t-2], u[t-nk-1], ...]``.
+        Y : ndarray, shape (sum of nobs_records, neqs)
+            Target ``y[t]``.
+        """
         parts = [self._design(r.values, None if self.u_records is None else self.u_records[i].values,
                               self.hold_back)
                  for i, r in enumerate(self.records)]
@@ -147,12 +157,12 @@ class LinearTimeSeriesModel:
         return ylag, ulag
 
     def _design(self, y: np.ndarray, u: np.ndarray | None, start: int) -> tuple[np.ndarray, np.ndarray]:
-        return _lstsq.lagged_design(y, self.na, start, const=bool(self.k_const), u=u, nb=self.nb, nk=self.nk)
+        return lagged_design(y, self.na, start, const=bool(self.k_const), u=u, nb=self.nb, nk=self.nk)
 
     def fit(self) -> LinearTimeSeriesResults:
         """Estimate the parameters by least squares (QR / SVD, never the normal equations)."""
-        X, Y = self._design_all()
-        res = self._results_class(self, _lstsq.lstsq(X, Y))
+        X, Y = self.design_all()
+        res = self.results_class(self, lstsq(X, Y))
         res._warn_unstable()
         return res
 
@@ -192,7 +202,7 @@ class LinearTimeSeriesResults:
     def _resid_and_sss(self) -> tuple[np.ndarray, float]:
         """In-sample residuals and the signal sum of squares of the estimation sample (the regressor is
         rebuilt here and not kept, so a results object does not hold an ``nobs x df_eq`` matrix)."""
-        X, Y = self.model._design_all()
+        X, Y = self.model.design_all()
         e = Y - X @ self._params2d
         e.setflags(write=False)
         return e, float(np.sum(Y * Y))
@@ -200,6 +210,12 @@ class LinearTimeSeriesResults:
     @property
     def _resid_array(self) -> np.ndarray:
         return self._resid_and_sss[0]
+
+    @property
+    def params2d(self) -> np.ndarray:
+        """Parameter matrix (read-only), shape ``(df_eq, neqs)``: one column per equation, rows in regressor
+        order ``[const, lag-1 group, lag-2 group, ...]`` (what :meth:`save` stores)."""
+        return self._params2d
 
     @property
     def lags(self) -> int:
@@ -241,8 +257,8 @@ class LinearTimeSeriesResults:
 
     @cached_property
     def _criteria(self) -> dict[str, float]:
-        return selection.criteria(self._sse[None], self._resid_and_sss[1], self.nobs, np.array([self.df_model]),
-                                  self.neqs, self.model.criterion)
+        return information_criteria(self._sse[None], self._resid_and_sss[1], self.nobs, np.array([self.df_model]),
+                                    self.neqs, self.model.criterion)
 
     @property
     def llf(self) -> float:
@@ -366,10 +382,9 @@ class LinearTimeSeriesResults:
         return Y - X @ self._params2d
 
     def save(self, path: Any) -> None:
-        """Save the model (data and options) and its parameters to ``path`` (``.npz``) for :func:`tsfdi.load`."""
-        from tsfdi.io import save
-
-        save(self, path)
+        """Save the model (data and options) and its parameters to ``path`` (``.npz``) for
+        :func:`tsfdi.models.load`; see :mod:`tsfdi.models.archive`."""
+        save_archive(self, path)
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({type(self.model).__name__}, {self.model._lag_name}={self.model.na}, "

@@ -9,10 +9,12 @@ from scipy import signal as sps
 
 from tsfdi._validation import check_rng, int_like
 from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
+from tsfdi.models.archive import register
 
 __all__ = ["AR", "ARResults"]
 
 
+@register
 class AR(LinearTimeSeriesModel):
     """Scalar autoregression estimated by least squares.
 
@@ -99,4 +101,4 @@ class ARResults(ScalarOutputResults):
         return sps.lfilter([1.0], np.r_[1.0, self.ar_coefs], e)[burn:]
 
 
-AR._results_class = ARResults
+AR.results_class = ARResults

@@ -10,10 +10,12 @@ from scipy import signal as sps
 from tsfdi._data import as_signal
 from tsfdi._validation import check_rng, float_like
 from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
+from tsfdi.models.archive import register
 
 __all__ = ["ARX", "ARXResults"]
 
 
+@register
 class ARX(LinearTimeSeriesModel):
     """Scalar-output ARX model with one or several inputs, estimated by least squares.
 
@@ -118,4 +120,4 @@ class ARXResults(ScalarOutputResults):
         return usig
 
 
-ARX._results_class = ARXResults
+ARX.results_class = ARXResults

@@ -24,8 +24,12 @@ On top of the estimator sits the online detector of paper 001, section IV:
    change per sample stays below ``variance_tol`` for ``stable_samples`` consecutive samples;
 3. once both are stable, a sample whose Z-score ``(e(k) - mean) / s`` (mean and sample standard deviation
    of the errors before ``k``) exceeds ``threshold`` in absolute value is an alarm (paper 001 uses 4.5);
-4. with ``halt_on_alarm`` the parameters, ``P`` and the error statistics are frozen from the first alarm
-   on, so the model does not learn the fault (paper 002, section 2).
+4. with ``freeze_on_alarm`` the parameters, ``P`` and the error statistics are frozen from the first alarm
+   on, so the model does not learn the fault (paper 002, section 2: adaptation halted on alarm);
+   :meth:`RecursiveARX.freeze` does the same on request (for an alarm raised by another statistic).
+
+The whole estimator state can be snapshot and restored (:meth:`RecursiveARX.get_state` /
+:meth:`RecursiveARX.set_state`), e.g. to undo the samples of a suspected fault.
 """
 
 from __future__ import annotations
@@ -40,7 +44,7 @@ import numpy as np
 from tsfdi._data import as_signal
 from tsfdi._validation import float_like, int_like, option
 
-__all__ = ["RecursiveARX", "RecursiveARXResults"]
+__all__ = ["RecursiveARX", "RecursiveARXResults", "RecursiveARXState"]
 
 # bits of the per-sample flag array written by the kernel
 _MODEL_STABLE = 1
@@ -57,8 +61,9 @@ _F_MEAN, _F_M2 = range(2)
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
-def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_min, zthr, arm_after,
-                theta, P, ybuf, ubuf, ist, fst, out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
+def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, var_tol, var_min, zthr, arm_after,
+                theta, P, ybuf, ubuf, ist, fst,
+                out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
     """Process samples ``y[t], u[t, :]`` in order, updating the state arrays in place.
 
     ``ybuf[k] = y[t-1-k]`` (length ``max(na, 1)``), ``ubuf[j, k] = u_j[t-k]`` (``nk + nb`` columns).
@@ -146,7 +151,7 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
                         if ist[_I_ALARMED] == 0:
                             ist[_I_ALARMED] = 1
                             ist[_I_FIRST_ALARM] = ist[_I_SEEN] - 1
-                if not ((halt and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
+                if not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
                     # Welford (paper 001, eq. 8)
                     nw += 1
                     delta = e - mean
@@ -166,9 +171,9 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, halt, eps, n_stable, var_tol, var_
                     fst[_F_M2] = m2
                 if ist[_I_VAR_STABLE] == 1:
                     flags |= _VAR_STABLE
-            # parameter and covariance update (eqs. 6-7 / 15-16), skipped once halted: the alarmed sample
+            # parameter and covariance update (eqs. 6-7 / 15-16), skipped once frozen: the alarmed sample
             # itself does not enter the model
-            if not ((halt and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
+            if not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
                 for i in range(d):
                     theta[i] += px[i] * ge
                 c = 1.0 / np.sqrt(lam * s)
@@ -241,6 +246,40 @@ class RecursiveARXResults:
         return int(self.alarm.shape[0])
 
 
+@dataclass(frozen=True, eq=False)
+class RecursiveARXState:
+    """Snapshot of everything a :class:`RecursiveARX` needs to resume: from :meth:`RecursiveARX.get_state`,
+    for :meth:`RecursiveARX.set_state`.
+
+    The arrays are read-only copies, so one snapshot can be restored any number of times. The options
+    (orders, forgetting factor, thresholds, ...) are not part of the state: a snapshot is restored into the
+    estimator it came from or one built with the same options.
+
+    Attributes
+    ----------
+    theta : ndarray, shape (d,)
+        Parameter estimate.
+    P : ndarray, shape (d, d)
+        Covariance matrix of the recursion.
+    y_history : ndarray, shape (max(na, 1),)
+        Past outputs, most recent first (``y[t-1], y[t-2], ...``).
+    u_history : ndarray, shape (n_inputs, max(nk + nb, 1))
+        Past inputs per input, most recent first.
+    counters : ndarray of int64, shape (11,)
+        Sample counters and flags: samples seen and skipped, run of valid samples, the stability gates and
+        their counters, the number of errors in the running statistics, alarm state, first alarm, frozen.
+    error_stats : ndarray, shape (2,)
+        Welford running mean and sum of squared deviations of the prediction errors.
+    """
+
+    theta: np.ndarray
+    P: np.ndarray
+    y_history: np.ndarray
+    u_history: np.ndarray
+    counters: np.ndarray
+    error_stats: np.ndarray
+
+
 class RecursiveARX:
     """ARX model estimated online by recursive least squares with forgetting and Z-score alarms.
 
@@ -274,8 +313,9 @@ class RecursiveARX:
         Relative change of the running variance per sample below which it counts as stable.
     min_variance_samples : int, default 50
         Minimum number of prediction errors in the running variance before it can be stable.
-    halt_on_alarm : bool, default False
-        Freeze parameters, ``P`` and error statistics from the first alarm on (paper 002).
+    freeze_on_alarm : bool, default False
+        Freeze parameters, ``P`` and error statistics from the first alarm on (paper 002: adaptation halted
+        on alarm), as :meth:`freeze` does on request.
     nonfinite : {"raise", "skip"}, default "raise"
         Policy for NaN / inf in ``y`` or ``u``: "raise" raises ``ValueError`` naming the sample; "skip" leaves
         the sample out (no update, NaN error), counts it in ``n_skipped`` and restarts regression once the
@@ -311,7 +351,7 @@ class RecursiveARX:
     def __init__(self, na: int, nb: int, nk: int = 0, forgetting_factor: float = 1.0, P0: Any = 1e4,
                  n_inputs: int = 1, *, trend: str = "n", theta0: Any = None, threshold: float = 4.5,
                  eps: float = 1e-2, stable_samples: int = 25, variance_tol: float = 0.01,
-                 min_variance_samples: int = 50, halt_on_alarm: bool = False, nonfinite: str = "raise",
+                 min_variance_samples: int = 50, freeze_on_alarm: bool = False, nonfinite: str = "raise",
                  arm_after: int = 0):
         self.na = int_like(na, "na", minimum=0)
         self.nb = int_like(nb, "nb", minimum=0)
@@ -325,9 +365,9 @@ class RecursiveARX:
         self.stable_samples = int_like(stable_samples, "stable_samples", minimum=1)
         self.variance_tol = float_like(variance_tol, "variance_tol", minimum=0.0)
         self.min_variance_samples = int_like(min_variance_samples, "min_variance_samples", minimum=3)
-        if not isinstance(halt_on_alarm, (bool, np.bool_)):
-            raise TypeError(f"halt_on_alarm must be a bool, got {halt_on_alarm!r}")
-        self.halt_on_alarm = bool(halt_on_alarm)
+        if not isinstance(freeze_on_alarm, (bool, np.bool_)):
+            raise TypeError(f"freeze_on_alarm must be a bool, got {freeze_on_alarm!r}")
+        self.freeze_on_alarm = bool(freeze_on_alarm)
         self.nonfinite = option(nonfinite, "nonfinite", ("raise", "skip"))
         self.arm_after = int_like(arm_after, "arm_after", minimum=0)
         d = self.n_params
@@ -382,6 +422,39 @@ class RecursiveARX:
         self._ist[_I_FIRST_ALARM] = -1
         self._fst = np.zeros(2)
 
+    def get_state(self) -> RecursiveARXState:
+        """Snapshot of the estimator state (deep copies): parameters, ``P``, the regressor buffers, the sample
+        counters, the stability / alarm / frozen flags and the Welford error statistics.
+
+        ``s = m.get_state(); m.run(b); m.set_state(s); m.run(b)`` gives identical outputs from both runs.
+        """
+        def frozen_copy(a: np.ndarray) -> np.ndarray:
+            c = a.copy()
+            c.setflags(write=False)
+            return c
+
+        return RecursiveARXState(theta=frozen_copy(self.theta_), P=frozen_copy(self.P_),
+                                 y_history=frozen_copy(self._ybuf), u_history=frozen_copy(self._ubuf),
+                                 counters=frozen_copy(self._ist), error_stats=frozen_copy(self._fst))
+
+    def set_state(self, state: RecursiveARXState) -> None:
+        """Restore a snapshot taken by :meth:`get_state` (of this estimator or one with the same options).
+
+        The values are copied into the estimator's own arrays (``theta_`` and ``P_`` keep their identity);
+        the snapshot itself is not modified and can be restored again.
+        """
+        if not isinstance(state, RecursiveARXState):
+            raise TypeError(f"state must be a RecursiveARXState from get_state(), got {type(state).__name__}")
+        pairs = ((self.theta_, state.theta, "theta"), (self.P_, state.P, "P"),
+                 (self._ybuf, state.y_history, "y_history"), (self._ubuf, state.u_history, "u_history"),
+                 (self._ist, state.counters, "counters"), (self._fst, state.error_stats, "error_stats"))
+        for mine, theirs, name in pairs:
+            if np.shape(theirs) != mine.shape:
+                raise ValueError(f"state.{name} has shape {np.shape(theirs)}, this estimator needs {mine.shape}: "
+                                 "the state comes from an estimator with other orders / inputs")
+        for mine, theirs, _ in pairs:
+            np.copyto(mine, theirs)
+
     @property
     def nobs(self) -> int:
         """Samples given to the estimator since construction or :meth:`reset`."""
@@ -409,13 +482,15 @@ class RecursiveARX:
 
     @property
     def frozen(self) -> bool:
-        """Whether adaptation was stopped by :meth:`freeze`."""
+        """Whether adaptation was stopped by :meth:`freeze` (an alarm under ``freeze_on_alarm`` stops it too
+        but shows in :attr:`alarmed`, not here)."""
         return bool(self._ist[_I_FROZEN])
 
     def freeze(self) -> None:
         """Stop adapting from the next sample on: parameters, ``P`` and the error statistics stay as they are,
         prediction errors and Z-scores are still computed (used by detectors that alarm on a statistic other
-        than the model's own Z-score, paper 002's "halt the RLS" on their alarm). :meth:`reset` undoes it."""
+        than the model's own Z-score: paper 002's adaptation halted on their alarm; ``freeze_on_alarm`` does the
+        same on the model's own first alarm). :meth:`reset` undoes it."""
         self._ist[_I_FROZEN] = 1
 
     @property
@@ -474,7 +549,7 @@ class RecursiveARX:
         out_z = np.empty(n)
         out_flags = np.empty(n, dtype=np.int64)
         _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
-                    self.halt_on_alarm, self.eps, self.stable_samples, self.variance_tol,
+                    self.freeze_on_alarm, self.eps, self.stable_samples, self.variance_tol,
                     self.min_variance_samples, self.threshold, self.arm_after, self.theta_, self.P_, self._ybuf, self._ubuf,
                     self._ist, self._fst, out_params, out_err, out_var, out_mean, out_z, out_flags)
         return out_params, out_err, out_var, out_mean, out_z, out_flags

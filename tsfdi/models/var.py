@@ -8,10 +8,12 @@ import numpy as np
 
 from tsfdi._validation import check_rng, int_like
 from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
+from tsfdi.models.archive import register
 
 __all__ = ["VAR", "VARResults"]
 
 
+@register
 class VAR(LinearTimeSeriesModel):
     """Vector autoregression estimated by ordinary least squares, equation by equation.
 
@@ -32,7 +34,7 @@ class VAR(LinearTimeSeriesModel):
         Initial samples excluded from estimation (default ``lags``).
     criterion : {"logdet", "trace"}
         BIC variant: the likelihood's log-determinant of ``Sigma`` (standard) or the log of its trace
-        (paper 003, "Vector AR Identification Method"). See :func:`tsfdi.selection.criteria`.
+        (paper 003, "Vector AR Identification Method"). See :func:`tsfdi.models.criteria.information_criteria`.
     """
 
     _vector = True
@@ -118,4 +120,4 @@ def _simulate_var(coefs: np.ndarray, e: np.ndarray) -> np.ndarray:
     return y[p:]
 
 
-VAR._results_class = VARResults
+VAR.results_class = VARResults

@@ -49,8 +49,7 @@ def plot_variance_evolution(signals: Any, *, fs: float = 1.0, window: float = 10
     -------
     matplotlib.figure.Figure
     """
-    from tsfdi._data import as_signal
-    from tsfdi.monitoring import rolling_variance
+    from tsfdi._data import as_signal, rolling_variance
 
     is_one = not isinstance(signals, (list, tuple))
     sigs = [as_signal(s, "signals", allow_constant=True) for s in ([signals] if is_one else signals)]

@@ -6,9 +6,10 @@ import pytest
 import xarray as xr
 from scipy.signal import lfilter
 
+import tsfdi
 from tsfdi.detection.glrt import GLRT
 from tsfdi.models.recursive import RecursiveARX
-from tsfdi.monitoring import OnlineDetector
+from tsfdi.online import OnlineDetector
 
 
 def two_pairs(n=4000, change=3000, seed=0, bias=0.0, gain=0.0):
@@ -21,6 +22,20 @@ def two_pairs(n=4000, change=3000, seed=0, bias=0.0, gain=0.0):
     xb[change:] += bias + gain * u[change:, 1]
     yb = lfilter([1.0], [1.0, -0.5], xb)
     return np.column_stack([ya, yb]), u
+
+
+def test_module_and_exports():
+    import tsfdi
+    import tsfdi.monitoring
+    from tsfdi.online import OnlineDetection
+
+    assert tsfdi.OnlineDetector is OnlineDetector and tsfdi.OnlineDetection is OnlineDetection
+    assert not hasattr(tsfdi.monitoring, "OnlineDetector")
+    det = OnlineDetector(2, na=1, nb=1)
+    assert det.freeze_on_alarm and all(m.freeze_on_alarm for m in det.models)
+    # "mean" mode freezes the models itself (at the first alarm of the moving average), not through the model
+    assert mean_detector().freeze_on_alarm and not any(m.freeze_on_alarm for m in mean_detector().models)
+    assert not OnlineDetector(2, freeze_on_alarm=False).models[0].freeze_on_alarm
 
 
 def test_first_alarm_per_pair_and_overall():
@@ -47,11 +62,11 @@ def test_glrt_catches_a_small_bias_the_zscore_misses():
     zpos = z_only.first_alarms.loc["b", "position"]
     assert zpos == -1 or zpos > fb["position"]
     # the GLRT values equal a batch GLRT on the armed, mean-corrected prediction errors
-    m = RecursiveARX(1, 1, forgetting_factor=0.995, halt_on_alarm=True, nonfinite="skip")
+    m = RecursiveARX(1, 1, forgetting_factor=0.995, freeze_on_alarm=True, nonfinite="skip")
     res = m.run(y[:, 1], u[:, 1])
     arm = int(np.argmax(res.variance_stable))
     sigma = np.sqrt(res.variance[arm])
-    ref = GLRT(window=20, sigma=sigma).statistic(res.resid[arm + 1:] - res.mean[arm])
+    ref = GLRT(window=20, scale=sigma).statistic(res.resid[arm + 1:] - res.mean[arm])
     np.testing.assert_allclose(np.asarray(both.glrt)[arm + 1:, 1], ref, rtol=1e-10)
     assert both.first_alarms.loc["b", "armed_at"] == arm + 1
 
@@ -161,7 +176,7 @@ def test_mean_statistic_detects_a_level_drop_within_the_window_and_not_before():
         assert 2004 <= pos <= 2012
 
 
-def test_mean_statistic_halts_the_model_at_the_first_alarm():
+def test_mean_statistic_freezes_the_model_at_the_first_alarm():
     y, u = thrust_like()
     det = mean_detector()
     out = det.run(y, u)
@@ -172,9 +187,9 @@ def test_mean_statistic_halts_the_model_at_the_first_alarm():
     ref = RecursiveARX(0, 1, 0, 0.999, P0=1e2, n_inputs=2, trend="c", threshold=1e300, nonfinite="skip")
     ref.run(y[:first], u[:first])
     np.testing.assert_allclose(m.theta_, ref.theta_, rtol=1e-12)
-    # the fault is not learnt: the errors stay near -1 (the drop) to the end; without halting they fade
+    # the fault is not learnt: the errors stay near -1 (the drop) to the end; without freezing they fade
     assert np.asarray(out.resid)[-200:, 0].mean() < -0.8
-    free = mean_detector(halt_on_alarm=False).run(y, u)
+    free = mean_detector(freeze_on_alarm=False).run(y, u)
     assert np.asarray(free.resid)[-200:, 0].mean() > -0.5
 
 
@@ -239,8 +254,10 @@ def test_mean_statistic_bad_input():
         OnlineDetector(1, window=0)
     with pytest.raises(ValueError, match="arm_after"):
         OnlineDetector(1, arm_after=-1)
-    with pytest.raises(TypeError, match="halt_on_alarm"):
-        OnlineDetector(1, halt_on_alarm="yes")
+    with pytest.raises(TypeError, match="freeze_on_alarm"):
+        OnlineDetector(1, freeze_on_alarm="yes")
+    with pytest.raises(TypeError, match="halt_on_alarm"):           # the former name is not an option any more
+        OnlineDetector(1, halt_on_alarm=True)
     assert mean_detector().glrt is None and OnlineDetector(1).glrt is not None
 
 
@@ -291,13 +308,11 @@ def test_alfa_lofo_chooses_the_channel_set_inside_the_folds():
     np.testing.assert_array_equal(alarm, [11.0, 12.0, np.nan, np.nan])
     assert chosen == ["good 1, bad off"] * 4 and label_fit == "good 1, bad off"
     assert idx_fit == {"good": 0, "bad": 1}
-    res, det = B.outcomes(onset, alarm)
-    m = B.metrics(res, det)
-    assert (m["TP"], m["FP"], m["FN"], m["TN"], m["TP_5s"]) == (2, 0, 0, 2, 2)
-    assert m["mean_det_s"] == 1.5 and m["mean_det_5s"] == 1.5 and m["accuracy"] == 1.0
-    res, det = B.outcomes(np.array([0.0, 0.0]), np.array([1.0, 7.0]))
-    m = B.metrics(res, det)
-    assert m["mean_det_s"] == 4.0 and m["mean_det_5s"] == 1.0 and m["TP_5s"] == 1
+    m = tsfdi.detection_metrics(tsfdi.score_records(onset, alarm), max_delay=5.0).loc["all"]
+    assert (m["TP"], m["FP"], m["FN"], m["TN"], m["TP_within"]) == (2, 0, 0, 2, 2)
+    assert m["mean_delay"] == 1.5 and m["mean_delay_within"] == 1.5 and m["accuracy"] == 1.0
+    m = tsfdi.detection_metrics(tsfdi.score_records([0.0, 0.0], [1.0, 7.0]), max_delay=5.0).loc["all"]
+    assert m["mean_delay"] == 4.0 and m["mean_delay_within"] == 1.0 and m["TP_within"] == 1
 
 
 def test_real_alfa_roll_gain_channel_with_the_shipped_threshold():

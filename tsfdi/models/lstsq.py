@@ -25,7 +25,7 @@ from scipy import linalg
 
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "triangular_factor", "nested_fits"]
+__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits"]
 
 #: condition number of the regressor above which a fit warns (digits left < ~6)
 COND_WARN = 1e10

@@ -1,9 +1,13 @@
-"""Saving and loading fitted models (``Results.save(path)`` / :func:`tsfdi.load`).
+"""The archive format of fitted models: ``Results.save(path)`` and :func:`load`.
 
 A results object is fully defined by its model spec (data and options) and its parameter matrix, so a
 ``.npz`` archive holding the data, the index, the options and the parameters restores it exactly: the
 loaded object's parameters are the stored bytes and every derived quantity is recomputed from them by the
 same code. No pickle is used; the archive can be read with ``numpy.load`` alone.
+
+This module imports no model family: the families that can be archived (AR, VAR, ARX) register their
+class here with :func:`register` when their module is imported, so the results' ``save`` method (in the
+common base module) and :func:`load` share one format module without an import circle.
 """
 
 from __future__ import annotations
@@ -17,16 +21,41 @@ import pandas as pd
 
 from tsfdi._data import Signal
 
-__all__ = ["save", "load"]
+__all__ = ["FORMAT", "VERSION", "register", "save", "load"]
 
+#: value of the ``format`` field of the metadata
 FORMAT = "tsfdi-results"
+#: current format version; archives of a newer version are refused
 VERSION = 1
+
+# model classes by family name (the class name stored in the archive), filled by :func:`register`
+_families: dict[str, type] = {}
+
+# how each family's model spec is rebuilt from the stored data and options
+_BUILDERS = {
+    "AR": lambda cls, y, u, o: cls(y, o["na"], o["trend"], hold_back=o["hold_back"]),
+    "VAR": lambda cls, y, u, o: cls(y, o["na"], o["trend"], hold_back=o["hold_back"], criterion=o["criterion"]),
+    "ARX": lambda cls, y, u, o: cls(y, u, o["na"], o["nb"], o["nk"], o["trend"], hold_back=o["hold_back"]),
+}
+
+
+def register(model_class: type) -> type:
+    """Class decorator: make the model family ``model_class`` loadable by :func:`load`.
+
+    The family is stored in an archive by class name; only the families known to this module (AR, VAR,
+    ARX) can be registered.
+    """
+    name = model_class.__name__
+    if name not in _BUILDERS:
+        raise ValueError(f"the archive format has no layout for a model family named {name!r}")
+    _families[name] = model_class
+    return model_class
 
 
 def _signal_arrays(sig: Signal, prefix: str) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     arrays = {f"{prefix}values": sig.values}
-    meta: dict[str, Any] = {"kind": sig.kind, "vector": sig.vector, "channels": list(sig.channels),
-                            "name": sig.name if sig.name is None or isinstance(sig.name, (str, int, float)) else str(sig.name),
+    name = sig.name if sig.name is None or isinstance(sig.name, (str, int, float)) else str(sig.name)
+    meta: dict[str, Any] = {"kind": sig.kind, "vector": sig.vector, "channels": list(sig.channels), "name": name,
                             "time_dim": sig.time_dim, "channel_dim": sig.channel_dim, "index": None}
     idx = sig.index
     if idx is not None:
@@ -71,7 +100,10 @@ def _signal_from(arrays: Any, meta: dict[str, Any], prefix: str) -> Signal:
 
 
 def save(results: Any, path: Any) -> None:
-    """Write ``results`` (AR, VAR or ARX) to ``path`` as a ``.npz`` archive (the suffix is added if missing)."""
+    """Write ``results`` (AR, VAR or ARX) to ``path`` as a compressed ``.npz`` archive.
+
+    The file is written to exactly ``path``: no ``.npz`` suffix is added.
+    """
     model = results.model
     arrays: dict[str, np.ndarray] = {}
     ymeta, umeta = [], None
@@ -89,16 +121,25 @@ def save(results: Any, path: Any) -> None:
                             "options": {"na": model.na, "nb": model.nb, "nk": model.nk, "trend": model.trend,
                                         "hold_back": model.hold_back, "criterion": model.criterion},
                             "multi": model.multi, "y": ymeta, "u": umeta}
-    arrays["params"] = results._params2d
+    arrays["params"] = results.params2d
     arrays["meta"] = np.array(json.dumps(meta))
     with open(Path(path), "wb") as fh:
         np.savez_compressed(fh, **arrays)
 
 
 def load(path: Any) -> Any:
-    """Load a results object written by ``Results.save``; the round trip is exact."""
-    from tsfdi import models
+    """Load a results object written by ``Results.save``; the round trip is exact.
 
+    Parameters
+    ----------
+    path : str or path-like
+        A ``.npz`` archive written by ``save``.
+
+    Returns
+    -------
+    ARResults, VARResults or ARXResults
+        The results of the stored model with the stored parameters (not re-estimated).
+    """
     with np.load(Path(path), allow_pickle=False) as f:
         arrays = {k: f[k] for k in f.files}
     if "meta" not in arrays:
@@ -112,14 +153,9 @@ def load(path: Any) -> Any:
     us = None if meta["u"] is None else [_signal_from(arrays, m, f"u{i}_") for i, m in enumerate(meta["u"])]
     y = ys if meta["multi"] else ys[0]
     u = us if (us is None or meta["multi"]) else us[0]
-    o = meta["options"]
     family = meta["family"]
-    if family == "AR":
-        model = models.AR(y, o["na"], o["trend"], hold_back=o["hold_back"])
-    elif family == "VAR":
-        model = models.VAR(y, o["na"], o["trend"], hold_back=o["hold_back"], criterion=o["criterion"])
-    elif family == "ARX":
-        model = models.ARX(y, u, o["na"], o["nb"], o["nk"], o["trend"], hold_back=o["hold_back"])
-    else:
+    if family not in _families:
         raise ValueError(f"path {str(path)!r} holds an unknown model family {family!r}")
-    return model._results_class(model, arrays["params"])
+    cls = _families[family]
+    model = _BUILDERS[family](cls, y, u, meta["options"])
+    return model.results_class(model, arrays["params"])

@@ -1,0 +1,167 @@
+"""The same workloads timed on this tree and on an earlier commit of tsfdi, in one run.
+
+Used by ``identify_speed.py`` and ``evaluate_speed.py`` (``--against REF``, default :data:`REFERENCE`, the last
+commit before the windowed engine of issue 16). The earlier ``tsfdi`` package is exported with ``git archive`` into
+a temporary folder; each measurement is a fresh interpreter (``python previous_commit.py WORKLOAD``) with that folder
+or this repository first on ``PYTHONPATH``, the two trees alternating so that a slow spell of the machine hits
+both. A worker builds its inputs, runs the workload once to compile (numba) and warm caches, then times
+``repeat`` runs and prints their median; the comparison reports the median over rounds of each tree and the ratio
+previous / current (above 1: the current tree is faster).
+
+The workloads use only calls whose meaning did not change, spelled for each tree where the spelling did
+(``evaluate(methods=...)`` before, ``evaluate(tests=...)`` after).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The commit before the one-flow refactor (issue 16).
+REFERENCE = "899984e"
+
+
+def previous_tree(ref: str) -> Path:
+    """``tsfdi`` of commit ``ref`` unpacked under a temporary folder (kept for the process's lifetime)."""
+    out = Path(tempfile.mkdtemp(prefix=f"tsfdi-{ref}-"))
+    archive = out / "tree.tar"
+    subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", "-o", str(archive), ref, "tsfdi"], check=True)
+    with tarfile.open(archive) as tar:
+        tar.extractall(out, filter="data")
+    return out
+
+
+def _run(tree: Path, workload: str, repeat: int) -> float:
+    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), workload, str(repeat)], env=env,
+                          capture_output=True, text=True, cwd=str(tree))
+    if proc.returncode != 0:
+        raise RuntimeError(f"workload {workload} failed on {tree}:\n{proc.stderr[-3000:]}")
+    return float(json.loads(proc.stdout.strip().splitlines()[-1])["median_s"])
+
+
+def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3) -> None:
+    """Time every ``workloads`` entry (name -> (description, repeat)) on this tree and on ``against``; print a table.
+
+    A workload counts as not slower when the current median is at most 5 % above the previous one (timing noise of
+    this machine between interleaved runs)."""
+    prev = previous_tree(against)
+    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                          text=True).stdout.strip()
+    print(f"\nThis tree (HEAD {head} + working tree) against commit {against}, {rounds} interleaved rounds per tree, "
+          "each a fresh interpreter timing the median of its runs after a warm-up run:")
+    print(f"  {'workload':<58} {'previous':>10} {'current':>10} {'prev/curr':>10}  verdict")
+    for name, (what, repeat) in workloads.items():
+        old, new = [], []
+        for _ in range(rounds):
+            old.append(_run(prev, name, repeat))
+            new.append(_run(ROOT, name, repeat))
+        mo, mn = statistics.median(old), statistics.median(new)
+        verdict = "not slower" if mn <= 1.05 * mo else "SLOWER"
+        print(f"  {what:<58} {mo * 1e3:8.1f}ms {mn * 1e3:8.1f}ms {mo / mn:9.2f}x  {verdict}")
+
+
+# ------------------------------------------------------------------------------------------------- workloads
+def _windows_inputs():
+    import numpy as np
+    from scipy import signal as sps
+
+    import tsfdi
+
+    rng = np.random.default_rng(0)
+    fs = 100
+    y_train = [sps.lfilter([1.0], [1.0, -0.6 - 0.05 * i, 0.2], rng.standard_normal(20_000)) for i in range(4)]
+    record = sps.lfilter([1.0], [1.0, -0.7, 0.2], rng.standard_normal(60 * fs))
+    models = {f"M{i}": tsfdi.AR(y, 30).fit() for i, y in enumerate(y_train)}
+    return record, models, tsfdi.LjungBox(50, 1e-3), 20 * fs, fs
+
+
+def identify_windows_workload():
+    import tsfdi
+
+    record, models, test, window, step = _windows_inputs()
+    return lambda: tsfdi.identify_windows(record, models, test, window=window, step=step)
+
+
+def identify_windows_ftest_workload():
+    import tsfdi
+
+    record, models, _, window, step = _windows_inputs()
+    test = tsfdi.FTest(1e-8)
+    return lambda: tsfdi.identify_windows(record, models, test, window=window, step=step)
+
+
+def _hexacopter():
+    import warnings
+
+    import tsfdi
+    from tsfdi.datasets import load_hexacopter
+    from tsfdi.exceptions import UnstableModelWarning
+
+    warnings.simplefilter("ignore", UnstableModelWarning)
+    try:
+        from tsfdi.datasets.hexacopter import hexacopter_signals
+    except ImportError:                                     # before issue 16
+        from tsfdi.evaluation import hexacopter_signals
+    sig = hexacopter_signals(load_hexacopter())
+    bases = {lvl: tsfdi.fit_baselines(sig, fit_turbulence=lvl, duration=None, models=["var"], fit_records=10,
+                                      order=20) for lvl in ("light", "moderate", "severe")}
+    new = hasattr(tsfdi, "ResidualWindows")
+    kw = ({"tests": {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3)}, "windows": ("5s", "10s", "20s")} if new
+          else {"methods": ("whiteness",), "windows": (5.0, 10.0, 20.0)})
+    return sig, bases, kw
+
+
+def evaluate_workload():
+    import tsfdi
+
+    sig, bases, kw = _hexacopter()
+    return lambda: tsfdi.evaluate(sig, bases, models=("var",), progress=False, **kw)
+
+
+def evaluate_bank_workload():
+    import tsfdi
+
+    sig, bases, kw = _hexacopter()
+    return lambda: tsfdi.evaluate(sig, bases, models=("var",), progress=False, bank=True, **kw)
+
+
+def monitor_workload():
+    sig, bases, _ = _hexacopter()
+    b = bases["severe"]
+    try:
+        mon = b.monitor("var", window="5s", rule="likelihood")
+    except TypeError:                                       # before issue 16: seconds as floats
+        mon = b.monitor("var", window=5.0, rule="likelihood")
+    recs = [sig.isel(record=i).values for i in range(int(sig.sizes["record"]))
+            if str(sig["turbulence"].values[i]) == "severe" and not bool(sig["lost_control"].values[i])][:20]
+    return lambda: [mon.run(x) for x in recs]
+
+
+WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
+             "evaluate": evaluate_workload, "evaluate_bank": evaluate_bank_workload, "monitor": monitor_workload}
+
+
+def _worker(name: str, repeat: int) -> None:
+    fn = WORKLOADS[name]()
+    fn()                                                    # compile and warm up
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    print(json.dumps({"median_s": statistics.median(times)}))
+
+
+if __name__ == "__main__":
+    _worker(sys.argv[1], int(sys.argv[2]))

@@ -1,0 +1,335 @@
+"""fit_baselines (Table 2 analogue), Baselines.monitor / calibrated_tests / select_alpha / bank (tsfdi.baselines)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from _synthetic_fdi import FS, dataset, record
+from conftest import as_kind
+from scipy import stats
+
+import tsfdi
+from tsfdi import FTest, LjungBox
+from tsfdi.baselines import Baselines, Records, fit_baselines, insample_q
+from tsfdi.windows import ResidualWindows
+
+
+@pytest.fixture(scope="module")
+def synthetic():
+    """5 records per state, 40 s at 100 Hz, failure at 10 s."""
+    return dataset(5, 4000, 1000, np.random.default_rng(5))
+
+
+@pytest.fixture(scope="module")
+def fitted(synthetic):
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, steady_window="5s")
+    return b
+
+
+def test_module_exports():
+    assert tsfdi.fit_baselines is fit_baselines and tsfdi.Baselines is Baselines and tsfdi.Records is Records
+
+
+def test_baselines_table_and_exclusion(synthetic, fitted):
+    b = fitted
+    assert b.healthy == "healthy" and b.faults == ("f1", "f2")
+    assert b.fit_records == (0, 5, 10)          # first record of each state
+    assert b.steady_window == 500               # samples
+    t = b.table
+    assert list(t.columns[:6]) == ["state", "model", "signals", "order", "lags", "parameters"]
+    assert len(t) == 3 * 3                      # 3 states x (2 scalar AR + VAR)
+    var = t[t["model"] == "VAR"].set_index("state")
+    # the systems are VAR(2): BIC finds order 2; parameters s^2 p; SPP = nobs s / parameters
+    assert (var["lags"] == 2).all() and (var["parameters"] == 8).all()
+    np.testing.assert_allclose(var["spp"], var["nobs"] * 2 / 8)
+    # the table's order equals tsfdi.select_order on the same segment
+    seg = b.segments["f1"][0]
+    assert b.models["y0"]["f1"].lags == tsfdi.select_order(seg[:, 0], 6, "ar").selected
+    assert (t["records"] == 1).all() and np.isfinite(t["q_insample"]).all()
+    # q_insample: median Ljung-Box Q (20 lags) over 20 s blocks of the in-sample residuals
+    res = b.models["var"]["f1"]
+    assert var.loc["f1", "q_insample"] == insample_q(res, 2000)
+    (e,) = res.resid                            # one fitting record: one residual array
+    q = [tsfdi.LjungBox(lags=20).test(e[a:a + 2000]).statistic for a in range(0, e.shape[0] - 1999, 2000)]
+    assert len(q) == 1 and insample_q(res, 2000) == pytest.approx(np.median(q), rel=1e-10)
+    # a block longer than the record: the whole record
+    assert insample_q(res, 10**6) == pytest.approx(np.median(tsfdi.LjungBox(lags=20).test(e).statistic), rel=1e-10)
+    # steady threshold: max 5 s rolling variance (0.1 s step) of the post-settle fault fitting records
+    recs, _, _ = synthetic
+    post = [recs[i][1500:] for i in (5, 10)]
+    ref = np.max([tsfdi.monitoring.rolling_variance(p, 500, 10).max(axis=0) for p in post], axis=0)
+    np.testing.assert_allclose(b.steady_thresholds, ref, rtol=1e-10)
+
+
+def test_steady_window_as_samples_or_time_span(synthetic, fitted):
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6, var_max_lags=6,
+              models=["var"])
+    b = tsfdi.fit_baselines(recs, steady_window=500, **kw)
+    assert b.steady_window == 500
+    np.testing.assert_array_equal(b.steady_thresholds, fitted.steady_thresholds)
+    with pytest.raises(TypeError, match="steady_window"):
+        tsfdi.fit_baselines(recs, steady_window=5.0, **kw)
+    with pytest.raises(ValueError, match="steady_window"):
+        tsfdi.fit_baselines(recs, steady_window="1ms", **kw)
+
+
+def test_fit_baselines_data_kinds(kind):
+    rng = np.random.default_rng(7)
+    segs = {s: as_kind(record(s, 3000, rng), kind) for s in ("healthy", "f1", "f2")}
+    b = tsfdi.fit_baselines(segs, max_lags=4, var_max_lags=4, models=["var"])
+    assert b.faults == ("f1", "f2")
+    assert all(b.models["var"][s].lags == 2 for s in segs)
+    # a sequence of signals without fs is sampled at 1 Hz: "10s" is 10 samples
+    mon = b.monitor("var", window="10s", test=LjungBox(lags=10, alpha=1e-3))
+    assert mon.nchan == 2 and (mon.window, mon.step, mon.steady_window) == (10, 1, 10)
+
+
+def test_monitor_from_baselines(synthetic, fitted):
+    """Baselines.monitor: the healthy and fault models, the steady-state thresholds and the test given."""
+    recs, _, _ = synthetic
+    b = fitted
+    mon = b.monitor("var")
+    assert (mon.window, mon.step, mon.steady_window, mon.fs) == (2000, 100, 500, FS)
+    assert repr(mon.test) == repr(LjungBox(lags=20, alpha=1e-3)) and mon.detection_test is mon.test
+    assert mon.baseline is b.models["var"]["healthy"] and mon.models["f1"] is b.models["var"]["f1"]
+    np.testing.assert_array_equal(mon.steady_thresholds, b.steady_thresholds)
+    test = FTest(alpha=1e-4)
+    m5 = b.monitor("var", window="5s", step=50, test=test, rule="likelihood")
+    assert (m5.window, m5.step, m5.rule) == (500, 50, "likelihood") and m5.test is test
+    ref = tsfdi.Monitor(b.models["var"]["healthy"], {f: b.models["var"][f] for f in b.faults}, window=500, step=50,
+                        fs=FS, test=test, steady_thresholds=b.steady_thresholds, steady_window=500, rule="likelihood")
+    assert m5.run(recs[5]).events == ref.run(recs[5]).events
+    y0 = b.monitor("y0", window=500)
+    assert y0.nchan == 1 and y0.steady_thresholds.tolist() == [b.steady_thresholds[0]]
+    with pytest.raises(TypeError, match="test"):
+        b.monitor("var", test="whiteness")
+    with pytest.raises(TypeError, match="window"):
+        b.monitor("var", window=20.0)
+    with pytest.raises(ValueError, match="model"):
+        b.monitor("roll")
+
+
+def test_bad_input(synthetic):
+    recs, states, ft = synthetic
+    with pytest.raises(ValueError, match="states"):
+        tsfdi.fit_baselines(recs, fs=FS)
+    with pytest.raises(ValueError, match="healthy"):
+        tsfdi.fit_baselines(recs, states=states, healthy="nominal", fs=FS)
+    with pytest.raises(ValueError, match="models"):
+        tsfdi.fit_baselines(recs, states=states, fs=FS, models=["altitude"])
+
+
+def test_fit_baselines_pooled_records(synthetic):
+    """fit_records=n pools the first n records of each state without junctions (= the list fit of the models);
+    order options; in-sample whiteness column."""
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, fit_records=3, models=["var"])
+    assert b.fit_records == (0, 1, 2, 5, 6, 7, 10, 11, 12)
+    segs = [recs[i][1500:] for i in (5, 6, 7)]
+    ref = tsfdi.select_order(segs, 6, "var")
+    np.testing.assert_allclose(b.models["var"]["f1"].params, ref.fit().params, rtol=1e-10)
+    t = b.table.set_index("state")
+    assert (t["records"] == 3).all() and (t["lags"] == 2).all()
+    # in-sample residuals of the true order are white: median Q over 20 s blocks near the chi2(20) median
+    q = t["q_insample"].to_numpy()
+    assert np.all(np.abs(q - stats.chi2.median(20)) < 4.0), q
+    fixed = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None,
+                                max_lags=6, var_max_lags=6, fit_records=3, models=["var"], order=4)
+    assert fixed.models["var"]["f1"].lags == 4
+    np.testing.assert_allclose(fixed.models["var"]["f1"].params, ref.fit(4).params, rtol=1e-10)
+    stab = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None,
+                               max_lags=6, var_max_lags=6, fit_records=3, models=["var"], order="rss_sss")
+    assert stab.models["var"]["f1"].lags == ref.stabilized
+    with pytest.raises(ValueError, match="order"):
+        tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, order="aic")
+    with pytest.raises(ValueError, match="fit_records"):
+        tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, fit_records=0)
+
+
+def test_select_alpha_leave_one_out(synthetic):
+    """Baselines.select_alpha: the paper's rule on held-out fitting windows for each candidate alpha; the
+    acceptances are those of the chi-square Ljung-Box test on the same residual windows."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
+              var_max_lags=4, steady_window="5s", fit_records=3, models=["var"])
+    b = tsfdi.fit_baselines(recs, calibrate=True, **kw)
+    alphas = (1e-2, 1e-4, 1e-300)
+    tab = b.select_alpha("var", LjungBox(lags=20), "5s", alphas, step="1s")
+    assert list(tab.index) == list(alphas)
+    np.testing.assert_allclose(tab[["correct", "wrong", "ambiguous", "none"]].sum(axis=1), 100.0)
+    # windows: every fault fitting record cut into 5 s windows 1 s apart, over 2 faults x 3 records
+    n = [(e.shape[0] - (500 - 2)) // 100 + 1 for f in b.faults for e in b.heldout[("var", f)]]
+    assert (tab["windows"] == sum(n)).all()
+    # at alpha ~ 0 no test rejects: every window accepts every model
+    assert tab.loc[1e-300, "ambiguous"] == 100.0
+    # the same windows in samples; the test's own alpha does not matter, LjungBox(lags=20) is the default
+    for same in (b.select_alpha("var", LjungBox(lags=20, alpha=0.3), 500, alphas, step=100),
+                 b.select_alpha("var", None, "5s", alphas)):
+        pd.testing.assert_frame_equal(same, tab, check_exact=True)
+        assert same.attrs == tab.attrs
+    # the first window of every fault fitting record, recomputed with LjungBox: through its own state's model
+    # refitted without it (held out) and through the other state's model (never fitted on it)
+    for a in alphas[:2]:
+        test = tsfdi.LjungBox(lags=20, alpha=a)
+        count = dict.fromkeys(("correct", "wrong", "ambiguous", "none"), 0)
+        for f in b.faults:
+            for j, seg in enumerate(b.segments[f]):
+                acc = {g: not test.test((b.heldout[("var", f)][j] if g == f else
+                                         np.asarray(b.models["var"][g].residuals(seg)))[:500 - 2]).reject
+                       for g in b.faults}
+                hit = [g for g, ok in acc.items() if ok]
+                count["none" if not hit else "ambiguous" if len(hit) > 1 else
+                      "correct" if hit[0] == f else "wrong"] += 1
+        one = b.select_alpha("var", LjungBox(lags=20), "5s", [a], step="1000s")   # one window per record
+        assert one.loc[a, "windows"] == 6
+        for k, v in count.items():
+            assert one.loc[a, k] == pytest.approx(100.0 * v / 6)
+    best = tab["correct"].max()
+    assert tab.attrs["selected"] == max(a for a in alphas if tab.loc[a, "correct"] >= best)
+    with pytest.raises(ValueError, match="alphas"):
+        b.select_alpha("var", LjungBox(lags=20), "5s", [0.0])
+    with pytest.raises(ValueError, match="model"):
+        b.select_alpha("nope", LjungBox(lags=20), "5s")
+    with pytest.raises(TypeError, match="test"):
+        b.select_alpha("var", "whiteness", "5s")
+    with pytest.raises(ValueError, match="empirical"):
+        b.select_alpha("var", LjungBox(lags=20, threshold="empirical"), "5s")
+    with pytest.raises(TypeError, match="window"):
+        b.select_alpha("var", LjungBox(lags=20), 5.0)
+    with pytest.raises(TypeError, match="step"):
+        b.select_alpha("var", LjungBox(lags=20), "5s", step=1.0)
+    with pytest.raises(ValueError, match="calibrate=True"):
+        tsfdi.fit_baselines(recs, **kw).select_alpha("var", LjungBox(lags=20), "5s")
+
+
+def test_empirical_thresholds_leave_one_out(synthetic):
+    """fit_baselines(calibrate=True): leave-one-record-out residuals; evaluate with tests built with
+    threshold="empirical" uses each model's thresholds calibrated on them (never on evaluation records)."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
+              var_max_lags=4, steady_window="5s", fit_records=3, models=["var", "y0"])
+    b = tsfdi.fit_baselines(recs, calibrate=True, **kw)
+    assert set(b.heldout) == {(m, s) for m in ("var", "y0") for s in ("healthy", "f1", "f2")}
+    # record 1 of f1 left out: VAR(2) refitted on the other two f1 fitting records
+    segs = b.segments["f1"]
+    ref = tsfdi.VAR([segs[0], segs[2]], 2, hold_back=4).fit().residuals(segs[1])
+    np.testing.assert_allclose(b.heldout[("var", "f1")][1], np.asarray(ref), rtol=1e-10)
+    y0 = tsfdi.AR([segs[1][:, 0], segs[2][:, 0]], 2, hold_back=4).fit().residuals(segs[0][:, 0])
+    np.testing.assert_allclose(b.heldout[("y0", "f1")][0][:, 0], np.asarray(y0), rtol=1e-10)
+    lb = LjungBox(lags=20, alpha=0.01, threshold="empirical")
+    cal = b.calibrated_tests("var", lb, "5s")
+    assert set(cal) == {"healthy", "f1", "f2"} and all(t.empirical for t in cal.values())
+    assert not lb.calibrated and all(t is not lb for t in cal.values())          # the given test is not modified
+    st = np.concatenate([tsfdi.detection.ljungbox_windows(e, 20, 500 - 2, 1) for e in b.heldout[("var", "f2")]])
+    np.testing.assert_allclose(cal["f2"].threshold_, np.quantile(st, 0.99, axis=0))
+    # cached: the same test (an equal one too), window and step, whether the window is a time span or samples
+    assert b.calibrated_tests("var", lb, "5s") is cal
+    assert b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01, threshold="empirical"), 500) is cal
+    assert b.calibrated_tests("var", lb, "5s", step=2) is not cal
+    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",),
+                        tests={"whiteness": lb, "variance": FTest(alpha=0.01, threshold="empirical")},
+                        windows=("5s",), settle=5.0, progress=False)
+    assert ev.thresholds == "empirical"
+    assert not set(ev.identification["record"]) & set(b.fit_records)
+    c = ev.calibration.set_index(["method", "state", "channel"]).sort_index()
+    np.testing.assert_allclose(c.loc[("whiteness", "f2"), "empirical"], cal["f2"].threshold_)
+    np.testing.assert_allclose(c.loc[("whiteness", "f2"), "distribution"], stats.chi2.ppf(0.99, 20))
+    # detection decisions are those of the calibrated healthy test on each window
+    rec5 = recs[4]                                                               # healthy, evaluated
+    d = ev.detection[(ev.detection["record"] == 4) & (ev.detection["method"] == "whiteness")]
+    e = np.asarray(b.models["var"]["healthy"].residuals(rec5))
+    first = cal["healthy"].test(e[:500 - 2])
+    assert bool(d["alarm"].iloc[0]) == first.reject
+    # the theoretical threshold on the same baselines gives the distributional thresholds
+    ev2 = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=("5s",),
+                         tests={"whiteness": LjungBox(lags=20, alpha=0.01)}, settle=5.0, progress=False)
+    assert ev2.thresholds == "theoretical" and "empirical" not in ev2.calibration
+    mon = b.monitor("var", window="5s", test=lb)
+    assert mon.test["f1"] is cal["f1"] and mon.detection_test is cal["healthy"]
+    out = mon.run(recs[5])
+    assert out.detection_time is not None
+    fitted_plain = tsfdi.fit_baselines(recs, **kw)
+    with pytest.raises(ValueError, match="calibrate=True"):
+        tsfdi.evaluate(recs, fitted_plain, states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0,
+                       progress=False, tests=lb)
+    with pytest.raises(ValueError, match="calibrate=True"):
+        fitted_plain.monitor("var", window="5s", test=lb)
+    with pytest.raises(ValueError, match="threshold"):
+        tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=("5s",), progress=False,
+                       tests=LjungBox(lags=20, threshold="gpd"))
+    with pytest.raises(ValueError, match="at least 200000 are needed"):
+        b.calibrated_tests("var", LjungBox(lags=20, alpha=1e-6, threshold="empirical"), "5s")
+    with pytest.raises(ValueError, match="empirical"):
+        b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01), "5s")
+    with pytest.raises(TypeError, match="calibrate"):
+        tsfdi.fit_baselines(recs, calibrate="yes", **kw)
+
+
+def test_bank_per_record_models(synthetic):
+    """Baselines.bank refits each state's model on each fitting record alone; evaluate / select_alpha / monitor
+    with bank=True test every state by its bank (a window is accepted when any member accepts)."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
+              var_max_lags=4, steady_window="5s", fit_records=3, models=["var", "y0"])
+    b = tsfdi.fit_baselines(recs, **kw)
+    bank = b.bank("var", "f1")
+    assert len(bank) == 3 and b.bank("var", "f1") is bank                         # cached
+    for seg, res in zip(b.segments["f1"], bank):
+        np.testing.assert_allclose(res.params, tsfdi.VAR(seg, 2, hold_back=4).fit().params, rtol=1e-10)
+    np.testing.assert_allclose(b.bank("y0", "f2")[1].params,
+                               tsfdi.AR(b.segments["f2"][1][:, 0], 2, hold_back=4).fit().params, rtol=1e-10)
+    assert b.state_models("var")["f1"] is b.models["var"]["f1"]
+    assert b.state_models("var", bank=True)["f1"] is bank
+    lb = tsfdi.LjungBox(lags=20, alpha=0.01)
+    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=("5s",),
+                        tests={"whiteness": lb}, settle=5.0, progress=False, bank=True)
+    assert ev.bank
+    # detection alarms of a healthy evaluation record: every healthy member rejects
+    ws = ResidualWindows({f"m{i}": m for i, m in enumerate(b.bank("var", "healthy"))}).fit(recs[4]).statistics(
+        lb, window=500, step=100)
+    alarms = ws.reject.all(axis=1)
+    det = ev.detection[ev.detection["record"] == 4]
+    np.testing.assert_array_equal(det["alarm"].to_numpy(), alarms)
+    # identification of a fault window: accepted by a state when one of its members accepts
+    row = ev.identification[ev.identification["record"] == 8].iloc[0]
+    s0 = int(round(row["start"] * FS))
+    for f in b.faults:
+        acc = any(not tsfdi.LjungBox(lags=20, alpha=0.01).test(np.asarray(m.residuals(recs[8][s0:s0 + 500]))).reject
+                  for m in b.bank("var", f))
+        assert row[f"acc_{f}"] == acc
+    mon = b.monitor("var", window="5s", test=lb, bank=True)
+    assert mon.baseline is b.bank("var", "healthy") and mon.models["f2"] is b.bank("var", "f2")
+    # select_alpha with banks: the held-out record's own state is its bank without that record's member
+    tab = b.select_alpha("var", LjungBox(lags=20), "5s", (1e-2, 1e-300), bank=True)
+    np.testing.assert_allclose(tab[["correct", "wrong", "ambiguous", "none"]].sum(axis=1), 100.0)
+    assert tab.loc[1e-300, "ambiguous"] == 100.0
+    one = b.select_alpha("var", LjungBox(lags=20), "5s", [1e-2], step="1000s", bank=True)  # one window per record
+    test = tsfdi.LjungBox(lags=20, alpha=1e-2)
+    count = dict.fromkeys(("correct", "wrong", "ambiguous", "none"), 0)
+    for f in b.faults:
+        for j, seg in enumerate(b.segments[f]):
+            hit = [g for g in b.faults
+                   if any(not test.test(np.asarray(m.residuals(seg))[:500 - 2]).reject
+                          for i, m in enumerate(b.bank("var", g)) if g != f or i != j)]
+            count["none" if not hit else "ambiguous" if len(hit) > 1 else
+                  "correct" if hit[0] == f else "wrong"] += 1
+    for k, v in count.items():
+        assert one.loc[1e-2, k] == pytest.approx(100.0 * v / 6)
+    emp = LjungBox(lags=20, alpha=0.01, threshold="empirical")
+    with pytest.raises(ValueError, match="theoretical"):
+        tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=("5s",), progress=False,
+                       tests=emp, bank=True)
+    with pytest.raises(ValueError, match="theoretical"):
+        b.monitor("var", window="5s", test=emp, bank=True)
+    with pytest.raises(TypeError, match="bank"):
+        b.monitor("var", window="5s", bank="yes")
+    with pytest.raises(ValueError, match="state"):
+        b.bank("var", "f9")
+    first = tsfdi.fit_baselines(recs, **{**kw, "fit_records": 1})
+    with pytest.raises(ValueError, match="two fitting records"):
+        first.select_alpha("var", LjungBox(lags=20), "5s", bank=True)

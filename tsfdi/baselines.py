@@ -1,0 +1,639 @@
+"""Baseline phase of paper 003: models of every state fitted on many records (Dutta et al., Table 2, Fig. 7).
+
+:func:`fit_baselines` fits, for every aircraft state, a scalar AR model on each channel and a VAR model on all
+channels with the order chosen by BIC (:func:`tsfdi.select_order`), and estimates the steady-state rolling-variance
+thresholds; :attr:`Baselines.table` is the analogue of the paper's Table 2. :class:`Records` normalises many records
+of the same channels (an xarray object or a sequence of signals).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tsfdi._data import as_signal, is_xarray, rolling_variance, window_samples
+from tsfdi._validation import float_like, int_like, option, probability
+from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
+from tsfdi.monitoring import Monitor
+from tsfdi.selection import select_order
+from tsfdi.windows import ResidualWindows
+
+__all__ = ["Baselines", "Records", "fit_baselines", "insample_q"]
+
+
+@dataclass(frozen=True, eq=False)
+class Records:
+    """Many records of the same channels, normalised from an xarray object or a sequence of signals.
+
+    Attributes
+    ----------
+    values : list of ndarray, each (nobs, k)
+    state, turbulence : ndarray of str
+    failure_time : ndarray of float (NaN for healthy records)
+    ids : ndarray
+        Record identifiers.
+    valid : ndarray of bool
+        False for records that cannot be used (lost control: NaN after the loss).
+    channels : tuple of str
+    fs : float
+    """
+
+    values: list
+    state: np.ndarray
+    turbulence: np.ndarray
+    failure_time: np.ndarray
+    ids: np.ndarray
+    valid: np.ndarray
+    channels: tuple
+    fs: float
+
+    @classmethod
+    def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
+                  fs: float | None = None, name: str = "data") -> Records:
+        """Build from a hexacopter ``Dataset``, a ``(record, time, channel)`` DataArray or a sequence of
+        signals (numpy / pandas / xarray, each ``(nobs, k)``) with ``states`` (and optional ``failure_times``,
+        ``turbulence``) given per record."""
+        if isinstance(data, Records):
+            return data
+        import xarray as xr
+
+        if isinstance(data, xr.Dataset):
+            from tsfdi.datasets.hexacopter import hexacopter_signals
+
+            data = hexacopter_signals(data)
+        if isinstance(data, xr.DataArray) and data.ndim == 3 and "record" in data.dims:
+            da = data.transpose("record", "time", ...)
+            t = np.asarray(da["time"].values, dtype=float)
+            fs_ = 1.0 / float(np.median(np.diff(t))) if fs is None else float_like(fs, "fs", minimum=0.0,
+                                                                                    strict_min=True)
+            n = da.sizes["record"]
+
+            def coord(key, given, default):
+                if given is not None:
+                    return np.asarray(given)
+                return np.asarray(da[key].values) if key in da.coords else np.full(n, default)
+
+            st = coord("state", states, None)
+            if st[0] is None:
+                raise ValueError(f"{name} needs a 'state' coordinate (or pass states=)")
+            lost = np.asarray(da["lost_control"].values, dtype=bool) if "lost_control" in da.coords else \
+                np.zeros(n, bool)
+            vals = [np.asarray(v, dtype=np.float64) for v in da.values]
+            valid = ~lost & np.array([np.all(np.isfinite(v)) for v in vals])
+            chans = tuple(str(c) for c in da[da.dims[2]].values)
+            return cls(vals, st.astype(str), coord("turbulence", turbulence, "").astype(str),
+                       coord("failure_time", failure_times, np.nan).astype(float),
+                       np.asarray(da["record"].values) if "record" in da.coords else np.arange(n), valid, chans, fs_)
+        if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
+            raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
+                            f"non-empty sequence of signals, got {type(data).__name__}")
+        if states is None:
+            raise ValueError(f"states is required when {name} is a sequence of signals (one state per record)")
+        sigs = [as_signal(d, f"{name}[{i}]", vector=True) for i, d in enumerate(data)]
+        k = {s.nchan for s in sigs}
+        if len(k) != 1:
+            raise ValueError(f"every record of {name} must have the same number of channels, got {sorted(k)}")
+        n = len(sigs)
+        st = np.asarray(states).astype(str)
+        if st.shape != (n,):
+            raise ValueError(f"states must have one entry per record ({n}), got shape {st.shape}")
+        ft = np.full(n, np.nan) if failure_times is None else np.asarray(failure_times, dtype=float)
+        tb = np.full(n, "") if turbulence is None else np.asarray(turbulence).astype(str)
+        if ft.shape != (n,) or tb.shape != (n,):
+            raise ValueError(f"failure_times and turbulence must have one entry per record ({n})")
+        fs_ = 1.0 if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
+        return cls([s.values for s in sigs], st, tb, ft, np.arange(n), np.ones(n, bool), tuple(sigs[0].channels),
+                   fs_)
+
+
+def _segment(rec: Records, i: int, settle: float, duration: float | None) -> np.ndarray:
+    ft = rec.failure_time[i]
+    t0 = (ft if np.isfinite(ft) else 0.0) + settle
+    a = int(round(t0 * rec.fs))
+    b = None if duration is None else a + int(round(duration * rec.fs))
+    seg = rec.values[i][a:b]
+    if b is not None and seg.shape[0] < b - a:
+        raise ValueError(f"record {rec.ids[i]} is too short for a {duration} s segment starting at {t0} s")
+    return seg
+
+
+# ---------------------------------------------------------------------------------------------------- baselines
+@dataclass(frozen=True, eq=False)
+class Baselines:
+    """Baseline models of every state (outcome of :func:`fit_baselines`).
+
+    Attributes
+    ----------
+    models : dict
+        Model name (a channel name for a scalar AR, ``"var"`` for the VAR) -> {state -> fitted results}.
+    selections : dict
+        ``(model name, state)`` -> :class:`~tsfdi.OrderSelection`.
+    channels : tuple of str
+        Channel names of the records.
+    healthy : str
+        Name of the healthy state.
+    faults : tuple of str
+        Names of the fault states (the identification candidates).
+    steady_thresholds : ndarray, shape (k,)
+        Rolling-variance threshold of each channel below which a post-failure signal is steady.
+    steady_window : int
+        Rolling-variance window in samples.
+    fit_records : tuple
+        Identifiers of the records used for fitting (excluded from :func:`evaluate`).
+    fs : float
+        Sampling frequency in Hz.
+    heldout : dict
+        ``(model name, state)`` -> list of out-of-sample residual records, one per fitting record of that state:
+        the residuals of the record through the model refitted (same order) on the state's *other* fitting
+        records (leave one record out; filled by ``fit_baselines(..., calibrate=True)``, else empty). They
+        calibrate data-driven test thresholds (:meth:`calibrated_tests`).
+    """
+
+    models: dict
+    selections: dict
+    channels: tuple
+    healthy: str
+    faults: tuple
+    steady_thresholds: np.ndarray
+    steady_window: int
+    fit_records: tuple
+    fs: float
+    segments: dict = field(default_factory=dict, repr=False)
+    heldout: dict = field(default_factory=dict, repr=False)
+    _calibrated: dict = field(default_factory=dict, repr=False)
+    _banks: dict = field(default_factory=dict, repr=False)
+
+    def model_channels(self, model: str) -> list[int]:
+        """Channel positions a model uses (all for ``"var"``)."""
+        if model == "var":
+            return list(range(len(self.channels)))
+        if model not in self.channels:
+            raise ValueError(f"model must be 'var' or one of the channels {self.channels}, got {model!r}")
+        return [self.channels.index(model)]
+
+    @property
+    def table(self) -> pd.DataFrame:
+        """Table 2 analogue: one row per (state, model) with the order, parameters, SPP, RSS/SSS and BIC.
+
+        SPP is the paper's samples per parameter: estimation samples x channels / estimated AR parameters.
+        ``records`` is the number of pooled fitting records; ``q_insample`` the median Ljung-Box ``Q`` (20 lags)
+        of the in-sample residuals over 20 s blocks (``20 * fs`` samples; the whole record when shorter) and
+        channels, to compare with the median of chi2(20), about 19.3.
+        """
+        rows = []
+        for state in (self.healthy,) + self.faults:
+            for name, per_state in self.models.items():
+                res = per_state[state]
+                vec = name == "var"
+                rows.append({"state": state, "model": "VAR" if vec else "AR",
+                             "signals": ",".join(self.channels) if vec else name,
+                             "order": f"{'VAR' if vec else 'AR'}({res.lags})", "lags": int(res.lags),
+                             "parameters": int(res.df_model), "records": len(_resid_list(res)),
+                             "nobs": int(res.nobs), "spp": float(res.spp), "rss_sss": float(res.rss_sss),
+                             "bic": float(res.bic), "q_insample": insample_q(res, int(round(20 * self.fs))),
+                             "stable": bool(res.is_stable)})
+        return pd.DataFrame(rows)
+
+    def monitor(self, model: str = "var", *, window: Any = "20s", step: Any = "1s", test: ResidualTest | None = None,
+                rule: str = "paper", bank: bool = False) -> Monitor:
+        """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models and steady-state thresholds.
+
+        ``test`` (default ``LjungBox(lags=20, alpha=1e-3)``) detects with the healthy model and identifies with the
+        fault models; with ``threshold="empirical"`` each model gets its own copy calibrated by
+        :meth:`calibrated_tests`. ``bank=True``: every state is the :meth:`bank` of its per-record models.
+        """
+        test = _check_test(test)
+        _check_bank(bank, test)
+        chans = self.model_channels(model)
+        states = self.state_models(model, bank)
+        if test.empirical:
+            tests = self.calibrated_tests(model, test, window)
+            ident: Any = {f: tests[f] for f in self.faults}
+            det = tests[self.healthy]
+        else:
+            ident = det = test
+        return Monitor(states[self.healthy], {f: states[f] for f in self.faults},
+                       window=window, step=step, fs=self.fs, test=ident, detection_test=det,
+                       steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
+
+    def bank(self, model: str, state: str) -> tuple:
+        r"""The bank of ``state``: ``model`` refitted on each of the state's fitting records on its own.
+
+        The pooled model of :attr:`models` averages the dynamics of its fitting records. Records of one state
+        differ (in turbulence each flies its own trim and gusts, so its linearised dynamics differ a little), and
+        on a new record the pooled model's residuals are less white than the chi-square law says. A bank keeps one
+        model per fitting record (same order, trend and hold-back as the pooled model); a window is explained by
+        the state when *any* member accepts it (:class:`~tsfdi.windows.ResidualWindows`). If the new record
+        behaves like one of the fitting records, the member fitted on it rejects with probability about
+        ``alpha``, and the bank (which rejects only when every member does) at most that: the false-alarm rate
+        stays near its expectation where the pooled model's does not (docs/results.md, "Banks of per-record
+        models").
+
+        Returns
+        -------
+        tuple of fitted results
+            One per fitting record of ``state``, in the order of :attr:`fit_records`.
+        """
+        if model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
+        if state not in self.models[model]:
+            raise ValueError(f"state must be one of {list(self.models[model])}, got {state!r}")
+        key = (model, state)
+        if key not in self._banks:
+            res = self.models[model][state]
+            spec = res.model
+            chans = self.model_channels(model)
+            segs = [g[:, chans] if model == "var" else g[:, chans[0]] for g in self.segments[state]]
+            self._banks[key] = tuple(type(spec)(g, int(res.lags), trend=spec.trend, hold_back=spec.hold_back).fit()
+                                     for g in segs)
+        return self._banks[key]
+
+    def state_models(self, model: str, bank: bool = False) -> dict:
+        """State -> the pooled fitted model of ``model`` (the paper), or with ``bank=True`` its :meth:`bank`."""
+        return {s: (self.bank(model, s) if bank else self.models[model][s]) for s in (self.healthy,) + self.faults}
+
+    def calibrated_tests(self, model: str, test: ResidualTest, window: Any, *, step: Any = 1) -> dict:
+        r"""Per state, a copy of ``test`` for windows of ``window`` with its threshold calibrated on that state's
+        leave-one-record-out residuals (:attr:`heldout`).
+
+        Parameters
+        ----------
+        model : str
+            A fitted model name (a channel for a scalar AR, ``"var"``).
+        test : LjungBox or FTest
+            Built with ``threshold="empirical"`` (or an :class:`~tsfdi.EmpiricalThreshold`); it is not modified.
+        window, step : int or time span
+            Window length and step between calibration windows (an int counts samples; ``"20s"`` a time span).
+
+        Returns
+        -------
+        dict
+            State -> calibrated copy of ``test``.
+
+        Notes
+        -----
+        Hansen et al. (paper 002, Fig. 2) set the threshold at the :math:`1-\alpha` quantile of the statistic in
+        normal operation. Here "normal" is each model's own state, and the statistics are computed out of sample
+        (a record the model was not fitted on), as on the evaluation records: every fitting record in turn is
+        left out, the model (same order) is refitted on the others and the left-out record's residual windows
+        give statistics. The evaluation records are never used.
+        """
+        import copy
+
+        test = _check_test(test)
+        if not test.empirical:
+            raise ValueError("test must be built with threshold='empirical' (or an EmpiricalThreshold) to be "
+                             "calibrated")
+        if model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
+        W = window_samples(window, "window", self.fs, minimum=2)
+        step = window_samples(step, "step", self.fs)
+        key = (model, repr(test), W, step)
+        if key in self._calibrated:
+            return self._calibrated[key]
+        if not self.heldout:
+            raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
+                             "to calibrate thresholds")
+        out = {}
+        for state in (self.healthy,) + self.faults:
+            res = self.models[model][state]
+            t = copy.deepcopy(test)
+            n = W - int(res.lags)
+            recs = self.heldout[(model, state)]
+            try:
+                t.calibrate([e for e in recs if e.shape[0] >= n], window=n, step=step, **t.reference(res))
+            except ValueError as err:
+                raise ValueError(f"cannot calibrate {type(test).__name__} of model {model!r}, state {state!r}, "
+                                 f"{W}-sample windows: {err}") from None
+            out[state] = t
+        self._calibrated[key] = out
+        return out
+
+    def select_alpha(self, model: str = "var", test: ResidualTest | None = None, window: Any = "20s",
+                     alphas: Sequence[float] = (1e-3, 1e-4, 1e-5, 1e-6), *, step: Any = "1s",
+                     bank: bool = False) -> pd.DataFrame:
+        """Choose the identification alpha on the fitting records, leaving each record out (paper's rule).
+
+        Every fitting record of every fault state is cut into windows of ``window``, ``step`` apart, and driven
+        through each fault model: through its own state's model refitted without it (:attr:`heldout`) and through
+        the other states' models, which never saw it. Each window is then identified by the paper's rule (a model
+        is accepted when every channel's test accepts at ``alpha``) for every candidate alpha. The evaluation
+        records are not used, so the choice can be evaluated on them honestly.
+
+        Parameters
+        ----------
+        model : str
+            A fitted model name.
+        test : LjungBox or FTest, optional
+            The test whose alpha is chosen (default ``LjungBox(lags=20)``); its own alpha is not used.
+        window, step : int or time span
+            Window length and step (an int counts samples; ``"20s"`` a time span).
+        alphas : sequence of float
+            Candidate per-channel alphas, each in (0, 1).
+        bank : bool
+            Identify with the states' :meth:`bank` instead of their pooled models: the held-out record's own
+            state is its bank without the member fitted on that record (no ``calibrate=True`` needed).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Indexed by alpha: percent of held-out windows identified uniquely and correctly (``correct``),
+            uniquely but wrongly (``wrong``), ambiguous (``ambiguous``), with no model accepted (``none``), and
+            the number of windows. ``attrs["selected"]`` is the alpha with the highest ``correct`` rate (the
+            largest such alpha on ties: the least conservative test that identifies best).
+
+        Notes
+        -----
+        Dutta et al. (paper 003, Table 3) set each method's alpha (1e-3 to 1e-12) so as to minimise the
+        confusion between failures. Out-of-sample residuals carry the baseline's estimation error, so at the
+        nominal alpha the matching model is rejected more often than alpha (notes of :class:`~tsfdi.LjungBox`);
+        this choice measures that on held-out records instead of assuming it away. A model (a bank: any member)
+        accepts a window at ``alpha`` when its smallest channel p-value exceeds ``alpha``.
+        """
+        test = _check_test(test)
+        if model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
+        _check_bank(bank, test)
+        if test.empirical:
+            raise ValueError("select_alpha chooses the alpha of a test with the theoretical threshold; got a test "
+                             "with threshold='empirical'")
+        if not bank and not self.heldout:
+            raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
+                             "to select alpha")
+        W = window_samples(window, "window", self.fs, minimum=2)
+        step = window_samples(step, "step", self.fs)
+        alphas = np.array([probability(a, "alphas") for a in np.atleast_1d(alphas)], dtype=float)
+        if alphas.size == 0:
+            raise ValueError("alphas must hold at least one value")
+        chan = None if model == "var" else self.channels.index(model)
+        accepted, truth = [], []
+        for state in self.faults:
+            for j, seg in enumerate(self.segments[state]):
+                x = seg if chan is None else seg[:, chan]
+                if seg.shape[0] < W:                    # record shorter than one window: skipped
+                    continue
+                models, given = {}, {}
+                for f in self.faults:
+                    if bank:
+                        members = [r for i, r in enumerate(self.bank(model, f)) if f != state or i != j]
+                        if not members:
+                            raise ValueError(f"select_alpha with bank=True needs at least two fitting records per "
+                                             f"state; state {f!r} has one")
+                        models[f] = members
+                        given[f] = [r.residuals(x) for r in members]
+                    else:
+                        res = self.models[model][f]
+                        models[f] = res
+                        given[f] = self.heldout[(model, state)][j] if f == state else res.residuals(x)
+                ws = ResidualWindows(models).fit_residuals(given, seg.shape[0]).statistics(
+                    test, window=W, step=step, loglik=False)
+                # accepted at alpha when every channel's p-value exceeds it (a bank: its best member, the largest
+                # smallest-channel p-value): (windows, alphas, faults)
+                accepted.append(ws.min_pvalue[:, None, :] > alphas[None, :, None])
+                truth.append(np.full(len(ws), self.faults.index(state)))
+        if not accepted:
+            raise ValueError(f"no fitting record is longer than a {W}-sample window")
+        acc = np.concatenate(accepted)          # (windows, alphas, faults)
+        true = np.concatenate(truth)
+        n_acc = acc.sum(axis=-1)
+        unique = n_acc == 1
+        right = acc[np.arange(acc.shape[0]), :, true]
+        table = pd.DataFrame({"correct": 100.0 * (unique & right).mean(axis=0),
+                              "wrong": 100.0 * (unique & ~right).mean(axis=0),
+                              "ambiguous": 100.0 * (n_acc > 1).mean(axis=0),
+                              "none": 100.0 * (n_acc == 0).mean(axis=0),
+                              "windows": acc.shape[0]}, index=pd.Index(alphas, name="alpha"))
+        best = table["correct"].max()
+        table.attrs["selected"] = float(alphas[table["correct"].to_numpy() >= best].max())
+        return table
+
+    def __repr__(self) -> str:
+        return (f"Baselines(models={list(self.models)}, healthy={self.healthy!r}, faults={self.faults}, "
+                f"fit_records={len(self.fit_records)})")
+
+
+def _check_test(test: Any) -> ResidualTest:
+    if test is None:
+        return LjungBox(lags=20, alpha=1e-3)
+    if not isinstance(test, ResidualTest):
+        raise TypeError(f"test must be a residual test (LjungBox, FTest, ...), got {type(test).__name__}")
+    return test
+
+
+def _check_bank(bank: Any, test: ResidualTest) -> None:
+    if not isinstance(bank, (bool, np.bool_)):
+        raise TypeError(f"bank must be a bool, got {bank!r}")
+    if bank and getattr(test, "empirical", False):
+        raise ValueError("bank=True needs a test with the theoretical threshold: the calibrated thresholds belong to "
+                         "the pooled models (their leave-one-record-out residuals), not to the members of a bank")
+
+
+def _resid_list(res: Any) -> list:
+    e = res.resid
+    return [np.asarray(r, dtype=np.float64) for r in e] if isinstance(e, list) else [np.asarray(e, np.float64)]
+
+
+def insample_q(res: Any, block: int, lags: int = 20) -> float:
+    """Median Ljung-Box Q of the in-sample residuals over non-overlapping blocks and channels."""
+
+    qs = []
+    for e in _resid_list(res):
+        e = e.reshape(e.shape[0], -1)
+        n = min(block, e.shape[0])
+        if n <= lags + 1:
+            continue
+        qs.append(ljungbox_windows(e, lags, n, n).ravel())
+    return float(np.median(np.concatenate(qs))) if qs else float("nan")
+
+
+def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
+                  fs: float | None = None, healthy: str = "healthy", fit_records: Any = "first",
+                  fit_turbulence: Any = None, settle: float = 10.0, duration: float | None = 20.0,
+                  models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 20,
+                  order: Any = "bic", steady_window: Any = "10s", steady_factor: float = 1.0,
+                  calibrate: bool = False) -> Baselines:
+    r"""Baseline phase: fit a scalar AR model per channel and a VAR on all channels for every state.
+
+    Parameters
+    ----------
+    data : xarray.Dataset, xarray.DataArray or mapping or sequence of signals
+        A hexacopter dataset (:func:`tsfdi.datasets.load_hexacopter`; converted by :func:`hexacopter_signals`),
+        a ``(record, time, channel)`` DataArray with ``state`` (and ``failure_time``, ``turbulence``)
+        coordinates, a sequence of ``(nobs, k)`` signals with ``states=`` (numpy, pandas or xarray each), or a
+        mapping state -> signal (one steady-state segment per state, used whole).
+    states, failure_times, turbulence : array_like, optional
+        Per-record labels for a sequence of signals.
+    fs : float, optional
+        Sampling frequency in Hz (from the time coordinate for xarray input, else 1).
+    healthy : str
+        Name of the healthy state; every other state is a fault state.
+    fit_records : "first", "all", int or sequence
+        Records used for fitting: the first valid record of each (state, turbulence) cell (default), every
+        valid record, the first ``n`` valid records of each cell (an int), or explicit record identifiers. They
+        are listed in :attr:`Baselines.fit_records` and excluded by :func:`evaluate`. The records of one state
+        are pooled: their regressions are stacked (each record holds back its own first samples, no junction
+        between records), which shrinks the estimation error of the parameters.
+    fit_turbulence : str or sequence, optional
+        Restrict fitting records to these turbulence levels (the paper fits on "severe" only); several levels
+        give models pooled across them.
+    settle : float
+        Seconds after the failure (after 0 for records without failure) where the fitting segment starts:
+        the post-failure transient is excluded.
+    duration : float or None
+        Length of the fitting segment in seconds (the paper's 20 s); ``None`` uses the rest of the record.
+    models : sequence of str, optional
+        Which models to fit: channel names (scalar AR) and/or ``"var"``; default all channels and ``"var"``.
+    max_lags, var_max_lags : int
+        Largest AR / VAR order searched (on a common sample of the pooled records).
+    order : {"bic", "rss_sss"} or int
+        ``"bic"``: the BIC minimum (paper eq. 5); ``"rss_sss"``: the order where the RSS/SSS curve (eq. 6)
+        stabilises (:attr:`tsfdi.OrderSelection.stabilized`, the paper's Fig. 8 reading); an int: that order
+        for every model (at most the search bound).
+    steady_window : int or time span
+        Rolling-variance window of the steady-state check (an int counts samples; default ``"10s"``).
+    steady_factor : float
+        Thresholds are ``steady_factor`` times the largest rolling variance of each channel over the steady
+        parts (from ``settle`` after the failure) of the fault-state fitting records (the paper's rule with
+        factor 1).
+    calibrate : bool
+        Also compute, for every model and state with at least two fitting records, the leave-one-record-out
+        residuals (:attr:`Baselines.heldout`) that calibrate data-driven thresholds (:meth:`Baselines.calibrated_tests`,
+        a test with ``threshold="empirical"`` in :func:`~tsfdi.evaluate`): each fitting record in turn through the
+        model refitted on the state's other fitting records.
+
+    Returns
+    -------
+    Baselines
+
+    Notes
+    -----
+    The segments of the fitting records of one state are passed to the model as a list of records: the
+    least-squares regressions are stacked (no junction between records) and the Gram matrices of the order
+    selection add up. Order selection follows the paper: BIC (eq. 5) or the RSS/SSS stabilisation (eq. 6)
+    over orders ``1..max_lags``; :attr:`Baselines.table` also reports the median Ljung-Box ``Q`` (20 lags) of
+    the in-sample residuals over 20 s blocks, a check of their whiteness.
+
+    References
+    ----------
+    Dutta et al. (paper 003), section "Parametric Model Identification", Table 2 and the Fig. 7 discussion.
+    """
+    settle = float_like(settle, "settle", minimum=0.0)
+    duration = None if duration is None else float_like(duration, "duration", minimum=0.0, strict_min=True)
+    max_lags = int_like(max_lags, "max_lags", minimum=1)
+    var_max_lags = int_like(var_max_lags, "var_max_lags", minimum=1)
+    steady_factor = float_like(steady_factor, "steady_factor", minimum=0.0, strict_min=True)
+    if isinstance(order, str):
+        order = option(order, "order", ("bic", "rss_sss"))
+    else:
+        order = int_like(order, "order", minimum=1, maximum=max(max_lags, var_max_lags))
+    if not isinstance(calibrate, (bool, np.bool_)):
+        raise TypeError(f"calibrate must be a bool, got {calibrate!r}")
+    if isinstance(data, Mapping) and not is_xarray(data):
+        if not data:
+            raise ValueError("data is an empty mapping: give one signal per state")
+        names = list(data)
+        data = [data[s] for s in names]
+        states, failure_times, turbulence = names, None, None
+        fit_records, settle, duration = "all", 0.0, None
+    rec = Records.from_data(data, states=states, failure_times=failure_times, turbulence=turbulence, fs=fs)
+    V = window_samples(steady_window, "steady_window", rec.fs, minimum=2)
+    uniq = list(dict.fromkeys(rec.state.tolist()))
+    if healthy not in uniq:
+        raise ValueError(f"healthy state {healthy!r} not found among the states {uniq}")
+    faults = tuple(s for s in uniq if s != healthy)
+    if not faults:
+        raise ValueError("data has no fault state: at least one state other than the healthy one is needed")
+    # which records fit
+    ok = rec.valid.copy()
+    if fit_turbulence is not None:
+        levels = [fit_turbulence] if isinstance(fit_turbulence, str) else list(fit_turbulence)
+        ok &= np.isin(rec.turbulence, levels)
+    per_cell = None
+    if isinstance(fit_records, str):
+        fit_records = option(fit_records, "fit_records", ("first", "all"))
+        per_cell = 1 if fit_records == "first" else None
+        if fit_records == "all":
+            chosen = np.flatnonzero(ok)
+    elif isinstance(fit_records, (int, np.integer)) and not isinstance(fit_records, bool):
+        per_cell = int_like(fit_records, "fit_records", minimum=1)
+    if per_cell is not None:
+        seen: dict = {}
+        chosen = []
+        for i in np.flatnonzero(ok):
+            key = (rec.state[i], rec.turbulence[i])
+            if seen.get(key, 0) < per_cell:
+                seen[key] = seen.get(key, 0) + 1
+                chosen.append(i)
+        chosen = np.array(chosen, dtype=int)
+    elif not isinstance(fit_records, str):
+        wanted = list(fit_records)
+        pos = {v: i for i, v in enumerate(rec.ids.tolist())}
+        bad = [w for w in wanted if w not in pos]
+        if bad:
+            raise ValueError(f"fit_records {bad} are not record identifiers of data")
+        chosen = np.array([pos[w] for w in wanted], dtype=int)
+        if not np.all(rec.valid[chosen]):
+            raise ValueError("fit_records contains records that lost control or hold NaN")
+    names = list(rec.channels) + ["var"] if models is None else list(models)
+    for m in names:
+        if m != "var" and m not in rec.channels:
+            raise ValueError(f"models must hold channel names {rec.channels} or 'var', got {m!r}")
+    out: dict = {m: {} for m in names}
+    sels: dict = {}
+    segments: dict = {}
+    for state in (healthy,) + faults:
+        idx = [i for i in chosen if rec.state[i] == state]
+        if not idx:
+            raise ValueError(f"no valid fitting record for state {state!r}")
+        segs = [_segment(rec, i, settle, duration) for i in idx]
+        segments[state] = segs
+        for m in names:
+            if m == "var":
+                sel = select_order([pd.DataFrame(g, columns=list(rec.channels)) for g in segs], var_max_lags, "var")
+            else:
+                j = rec.channels.index(m)
+                sel = select_order([pd.Series(g[:, j], name=m) for g in segs], max_lags, "ar")
+            sels[(m, state)] = sel
+            p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
+                min(order, sel.max_lags)
+            out[m][state] = sel.fit(p)
+    heldout: dict = {}
+    if calibrate:
+        for state, segs in segments.items():
+            if len(segs) < 2:
+                raise ValueError(f"calibrate=True needs at least two fitting records per state; state {state!r} "
+                                 f"has {len(segs)}")
+            for m in names:
+                heldout[(m, state)] = _leave_one_out(out[m][state], segs,
+                                                     None if m == "var" else rec.channels.index(m))
+    # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
+    step = max(1, int(round(0.1 * rec.fs)))
+    peaks = []
+    for i in chosen:
+        if rec.state[i] in faults:
+            post = _segment(rec, i, settle, None)
+            if post.shape[0] >= V:
+                peaks.append(rolling_variance(post, V, step).max(axis=0))
+    thr = steady_factor * np.max(peaks, axis=0) if peaks else np.full(len(rec.channels), np.inf)
+    return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
+                     steady_thresholds=thr, steady_window=V,
+                     fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments, heldout=heldout)
+
+
+def _leave_one_out(res: Any, segs: list, channel: int | None) -> list:
+    """Residuals of each segment through the model (same order, trend, hold-back) refitted on the others."""
+    spec = res.model
+    recs = [g if channel is None else g[:, channel] for g in segs]
+    kw = {"trend": spec.trend, "hold_back": spec.hold_back}
+    out = []
+    for j in range(len(recs)):
+        others = [r for i, r in enumerate(recs) if i != j]
+        fit = type(spec)(others if len(others) > 1 else others[0], int(res.lags), **kw).fit()
+        e = np.asarray(fit.residuals(recs[j]), dtype=np.float64)
+        out.append(e.reshape(e.shape[0], -1))
+    return out

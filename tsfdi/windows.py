@@ -1,0 +1,390 @@
+r"""The windowed engine: every residual test on every sliding window of a record, and the decision rule.
+
+Everything in tsfdi that tests windows (``identify_windows``, ``Monitor``, ``evaluate``,
+``Baselines.select_alpha``, the command line) runs through :class:`ResidualWindows` and :func:`decide`.
+
+The split follows a cost fitted once and queried per segment: :meth:`ResidualWindows.fit` drives a record once
+through each model (or each member of a bank) and keeps the residuals with their prefix sums;
+:meth:`ResidualWindows.statistics` then gives, for any window length, step and test, the statistic, threshold,
+p-value and rejection of every window, and a Gaussian log-likelihood score, in one frozen
+:class:`WindowStatistics`. For a fixed model the residuals of a signal window are a slice of the record's
+residuals (samples ``[s + p, s + W)`` of window ``[s, s + W)`` for an order-``p`` model), so the Ljung-Box and
+F statistics of all windows come from prefix sums
+(:func:`~tsfdi.detection.ljungbox_windows`, :meth:`~tsfdi.FTest.window_statistic`); other tests are applied
+window by window through their ``test`` method.
+
+The decision rule of Dutta et al. (paper 003): a model is *accepted* when its residual test does not reject
+(every channel accepts); one accepted model is an identification, several are ambiguous, none is no decision.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from tsfdi._validation import int_like, option
+from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.variance import FTest
+from tsfdi.detection.whiteness import LjungBox
+
+__all__ = ["RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
+
+#: Decision rules. ``"paper"``: one accepted model is an identification, several are ambiguous, none is no decision
+#: (Dutta et al.). ``"likelihood"``: among the accepted models (all models when none is accepted) the one whose
+#: residuals have the largest Gaussian log-likelihood on the window (smallest log-determinant of the window's residual
+#: covariance, on samples common to every model). ``"pvalue"``: the same with the largest signal-level p-value (the
+#: smallest channel p-value of each model).
+RULES = ("paper", "likelihood", "pvalue")
+
+#: Label codes of :func:`decide` that are not a model index, and the status of each outcome.
+NONE, AMBIGUOUS = -1, -2
+STATUS = ("identified", "ambiguous", "none")
+
+
+def decide(accepted: Any, rule: str = "paper", *, loglik: Any = None, pvalue: Any = None) -> np.ndarray:
+    """Label per window from the models' acceptances: the one decision rule of tsfdi (see :data:`RULES`).
+
+    Parameters
+    ----------
+    accepted : array_like of bool, shape (n_windows, n_models) or (n_models,)
+        Whether each model's residual test accepts on each window.
+    rule : {"paper", "likelihood", "pvalue"}
+    loglik, pvalue : array_like, shape like ``accepted``
+        Scores for the ``"likelihood"`` and ``"pvalue"`` rules (see :class:`WindowStatistics`).
+
+    Returns
+    -------
+    ndarray of int, shape (n_windows,) (or a 0-d array for 1-D input)
+        Index of the identified model; ``-1`` no decision, ``-2`` ambiguous (``"paper"`` only).
+    """
+    rule = option(rule, "rule", RULES)
+    acc = np.asarray(accepted, dtype=bool)
+    nacc = acc.sum(axis=-1)
+    if rule == "paper":
+        return np.where(nacc == 1, np.argmax(acc, axis=-1), np.where(nacc == 0, NONE, AMBIGUOUS)).astype(int)
+    score = loglik if rule == "likelihood" else pvalue
+    if score is None:
+        raise ValueError(f"rule {rule!r} needs {'loglik' if rule == 'likelihood' else 'pvalue'}")
+    score = np.asarray(score, dtype=float)
+    if score.shape != acc.shape:
+        raise ValueError(f"the scores of rule {rule!r} must have the shape of accepted {acc.shape}, got {score.shape}")
+    score = np.where(np.isnan(score), -np.inf, score)
+    masked = np.where(acc | (nacc == 0)[..., None], score, -np.inf)
+    out = np.argmax(masked, axis=-1).astype(int)
+    return np.where(np.isfinite(masked.max(axis=-1)), out, NONE)
+
+
+def status(n_accepted: Any) -> np.ndarray:
+    """``"identified"`` (one accepted model), ``"ambiguous"`` (several) or ``"none"`` per window, from the number
+    of accepted models (the paper's rule, whatever rule picks the label)."""
+    n = np.asarray(n_accepted)
+    return np.where(n == 1, STATUS[0], np.where(n > 1, STATUS[1], STATUS[2]))
+
+
+@dataclass(frozen=True, eq=False)
+class WindowStatistics:
+    r"""Residual test of every model on every sliding window of one record (:meth:`ResidualWindows.statistics`).
+
+    Attributes
+    ----------
+    models : tuple of str
+        Model (or bank) names, axis 1 of the arrays.
+    channels : tuple of str
+    starts : ndarray of int, shape (n_windows,)
+        Window ``w`` covers signal samples ``[starts[w], starts[w] + window)``.
+    window, step : int
+        Window length and step in samples.
+    nobs : tuple of int
+        Residual samples per window of each model (``window`` minus the model's order).
+    statistic, threshold, pvalue : ndarray, shape (n_windows, n_models, n_channels)
+    channel_reject : ndarray of bool, shape (n_windows, n_models, n_channels)
+    reject : ndarray of bool, shape (n_windows, n_models)
+        The model (a bank: every member) rejects the window.
+    member : ndarray of int, shape (n_windows, n_models)
+        The bank member whose decision is reported (0 for a single model).
+    loglik : ndarray, shape (n_windows, n_models)
+        Gaussian log-likelihood per sample of each model's residuals on the samples common to every model, with
+        the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)` (a bank: its best member).
+    decisions : tuple or None
+        For tests applied window by window, the :class:`~tsfdi.Decision` of every window and model
+        (``decisions[w][j]``); ``None`` when the statistics come from prefix sums.
+    """
+
+    models: tuple
+    channels: tuple
+    starts: np.ndarray
+    window: int
+    step: int
+    nobs: tuple
+    statistic: np.ndarray
+    threshold: np.ndarray
+    pvalue: np.ndarray
+    channel_reject: np.ndarray
+    reject: np.ndarray
+    member: np.ndarray
+    loglik: np.ndarray
+    decisions: tuple | None = None
+
+    def __len__(self) -> int:
+        return int(self.starts.size)
+
+    @property
+    def accepted(self) -> np.ndarray:
+        """Bool (n_windows, n_models): the model accepts the window."""
+        return ~self.reject
+
+    @property
+    def min_pvalue(self) -> np.ndarray:
+        """Signal-level p-value (smallest channel p-value) per window and model."""
+        return self.pvalue.min(axis=2)
+
+    @property
+    def status(self) -> np.ndarray:
+        """``"identified" | "ambiguous" | "none"`` per window (:func:`status`)."""
+        return status(self.accepted.sum(axis=1))
+
+    def labels(self, rule: str = "paper") -> np.ndarray:
+        """Model index per window by ``rule`` (:func:`decide`; -1 none, -2 ambiguous)."""
+        return decide(self.accepted, rule, loglik=self.loglik, pvalue=self.min_pvalue)
+
+    def __repr__(self) -> str:
+        return f"WindowStatistics(windows={len(self)}, window={self.window}, step={self.step}, models={self.models})"
+
+
+def _members(what: str, res: Any) -> tuple:
+    """The fitted models standing for one state (``what`` names the argument in errors): one result, or the
+    members of a bank (a list or tuple of one order)."""
+    items = tuple(res) if isinstance(res, (list, tuple)) else (res,)
+    if not items:
+        raise ValueError(f"{what} is an empty bank: give at least one fitted model")
+    for r in items:
+        if not hasattr(r, "residuals"):
+            raise TypeError(f"{what} must be fitted results or a list of them (a bank), got {type(r).__name__}")
+    if len({int(r.lags) for r in items}) > 1:
+        raise ValueError(f"the members of the bank {what} must share one order, got lags "
+                         f"{sorted({int(r.lags) for r in items})}")
+    return items
+
+
+def _prefix(e: np.ndarray) -> tuple:
+    """Cumulative sums of ``e`` and of its lag-0 products ``e_i e_j`` (leading zero row)."""
+    k = e.shape[1]
+    c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
+    c2 = np.concatenate([np.zeros((1, k * k)), np.cumsum((e[:, :, None] * e[:, None, :]).reshape(-1, k * k), axis=0)])
+    return c1, c2
+
+
+class ResidualWindows:
+    r"""One record driven once through every model, then tested on sliding windows of any length.
+
+    Parameters
+    ----------
+    models : mapping
+        Name -> fitted AR / VAR results, or a list of them of one order: a *bank* standing for one state by several
+        models (e.g. one per fitting record, :meth:`tsfdi.Baselines.bank`). A bank accepts a window when any
+        member accepts it; its decision on a window is that of its best member there (accepting before rejecting,
+        then the largest smallest-channel p-value, then the smallest largest statistic-to-threshold ratio), and its
+        likelihood score the largest of its members'.
+
+    Examples
+    --------
+    >>> rw = ResidualWindows({"healthy": m0, "rotor1": m1}).fit(x)          # doctest: +SKIP
+    >>> ws = rw.statistics(tsfdi.LjungBox(lags=20, alpha=1e-3), window=500, step=100)   # doctest: +SKIP
+    >>> ws.labels("paper")                                                  # doctest: +SKIP
+    """
+
+    def __init__(self, models: Mapping) -> None:
+        if not isinstance(models, Mapping) or not models:
+            raise TypeError("models must be a non-empty mapping name -> fitted results (or banks of them)")
+        self.banks = {name: _members(f"models[{name!r}]", res) for name, res in models.items()}
+        self.orders = {name: int(ms[0].lags) for name, ms in self.banks.items()}
+        nchan = {int(getattr(r, "neqs", 1)) for ms in self.banks.values() for r in ms}
+        if len(nchan) > 1:
+            raise ValueError(f"every model must have the same number of channels, got {sorted(nchan)}")
+        self.nchan = nchan.pop()
+        self._resid: dict | None = None
+        self.nobs_: int | None = None
+        self.channels_: tuple = ()
+
+    def fit(self, signal: Any, *, channels: Any = None) -> ResidualWindows:
+        """Filter the record through every model (and bank member) once and keep the residuals' prefix sums.
+
+        Parameters
+        ----------
+        signal : ndarray, shape (nobs, k)
+            The record, validated by the caller (float64, finite, ``k`` = the models' channels).
+        channels : sequence of str, optional
+            Channel names (default ``y0, y1, ...``).
+
+        Returns
+        -------
+        self
+        """
+        x = np.asarray(signal, dtype=np.float64)
+        x = x.reshape(x.shape[0], -1)
+        if x.shape[1] != self.nchan:
+            raise ValueError(f"signal has {x.shape[1]} channel(s) but the models were fitted on {self.nchan}")
+        resid = {}
+        for name, members in self.banks.items():
+            out = []
+            for res in members:
+                e = res.residuals(x if self.nchan > 1 else x[:, 0])
+                out.append(np.asarray(e, dtype=np.float64).reshape(-1, self.nchan))
+            resid[name] = out
+        return self._set(resid, x.shape[0], channels)
+
+    def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
+        """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model refitted without
+        it) instead of filtering: ``residuals`` maps every name to one array per bank member, each
+        ``(nobs - order, k)``.
+
+        Returns
+        -------
+        self
+        """
+        nobs = int_like(nobs, "nobs", minimum=1)
+        resid = {}
+        for name, members in self.banks.items():
+            if name not in residuals:
+                raise ValueError(f"residuals has no entry for the model {name!r}")
+            recs = residuals[name]
+            recs = list(recs) if isinstance(recs, (list, tuple)) else [recs]
+            if len(recs) != len(members):
+                raise ValueError(f"residuals[{name!r}] must hold one array per bank member ({len(members)}), got "
+                                 f"{len(recs)}")
+            out = []
+            for e in recs:
+                e = np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
+                if e.shape != (nobs - self.orders[name], self.nchan):
+                    raise ValueError(f"residuals[{name!r}] must have shape {(nobs - self.orders[name], self.nchan)}, "
+                                     f"got {e.shape}")
+                out.append(e)
+            resid[name] = out
+        return self._set(resid, nobs, channels)
+
+    def _set(self, resid: dict, nobs: int, channels: Any) -> ResidualWindows:
+        self._resid = resid
+        self._prefix: dict = {}          # (name, member) -> prefix sums of the likelihood score, made when first asked
+        self.nobs_ = nobs
+        self.channels_ = tuple(str(c) for c in channels) if channels is not None else tuple(
+            f"y{i}" for i in range(self.nchan))
+        if len(self.channels_) != self.nchan:
+            raise ValueError(f"channels must name the {self.nchan} channel(s), got {list(self.channels_)}")
+        return self
+
+    def statistics(self, test: Any, *, window: int, step: int = 1, common: int | None = None,
+                   loglik: bool = True) -> WindowStatistics:
+        """Every model's residual test on every window of ``window`` samples, ``step`` apart.
+
+        Parameters
+        ----------
+        test : ResidualTest or mapping
+            The test applied to every model's residuals, or a mapping name -> test (each model with its own test,
+            e.g. thresholds calibrated on that model's healthy residuals); the members of a bank share its test.
+        window, step : int
+            Window length and step in signal samples.
+        common : int, optional
+            Largest model order over which the likelihood score is aligned (default: the largest order); the
+            score of every model uses signal samples ``[s + common, s + window)``.
+        loglik : bool
+            Compute the likelihood score (``False``: NaN, saves a determinant per window).
+
+        Returns
+        -------
+        WindowStatistics
+        """
+        if self._resid is None:
+            raise ValueError("ResidualWindows is not fitted: call fit(signal) first")
+        window = int_like(window, "window", minimum=2)
+        step = int_like(step, "step", minimum=1)
+        nobs = self.nobs_
+        if window > nobs:
+            raise ValueError(f"window must be <= the signal length {nobs}, got {window}")
+        pmax = max(self.orders.values()) if common is None else int_like(common, "common", minimum=0)
+        if window - pmax < 3:
+            raise ValueError(f"window ({window}) must exceed the largest model order ({pmax}) by at least 3 samples")
+        if isinstance(test, Mapping):
+            missing = [name for name in self.banks if name not in test]
+            if missing:
+                raise ValueError(f"test is a mapping but has no test for the model(s) {missing}")
+            bad = [name for name in self.banks if not isinstance(test[name], ResidualTest)]
+        else:
+            bad = [] if isinstance(test, ResidualTest) else ["test"]
+        if bad:
+            raise TypeError(f"test must be a residual test (LjungBox, FTest, GLRT, ...) or a mapping name -> test; "
+                            f"not one for {bad}")
+        starts = np.arange(0, nobs - window + 1, step)
+        nwin, k = starts.size, self.nchan
+        w = np.arange(nwin)
+        parts, nres, decisions = [], [], []
+        for name, members in self.banks.items():
+            p = self.orders[name]
+            n = window - p
+            test_j = test[name] if isinstance(test, Mapping) else test
+            per = []
+            for i, (res, e) in enumerate(zip(members, self._resid[name])):
+                pre = None
+                if loglik:
+                    if (name, i) not in self._prefix:
+                        self._prefix[(name, i)] = _prefix(e)
+                    pre = self._prefix[(name, i)]
+                per.append(self._member(res, e, pre, test_j, starts, n, step, name, p, pmax, window))
+            if len(per) == 1:                                                # a single model: no member to choose
+                stat, pv, thr, rej_c, ll = per[0][:5]
+                parts.append((stat, pv, thr, rej_c, rej_c.any(axis=1), np.zeros(nwin, dtype=np.int64), ll))
+            else:
+                stat, pv, thr, rej_c, ll = (np.stack([m[i] for m in per]) for i in range(5))
+                acc = ~rej_c.any(axis=2)                                     # (members, n_windows)
+                ratio = np.max(stat / np.where(thr > 0, thr, np.inf), axis=2)
+                best = np.lexsort((-ratio, np.nan_to_num(pv.min(axis=2), nan=-1.0), acc), axis=0)[-1]
+                parts.append((stat[best, w], pv[best, w], thr[best, w], rej_c[best, w], ~acc.any(axis=0), best,
+                              ll.max(axis=0)))
+            nres.append(n)
+            decisions.append([m[5] for m in per][0] if len(per) == 1 else None)
+        stat, pv, thr, rej_c, rej, member, ll = (np.stack([pt[i] for pt in parts], axis=1) for i in range(7))
+        dec = None
+        if all(d is not None for d in decisions):
+            dec = tuple(tuple(d[i] for d in decisions) for i in range(nwin))
+        return WindowStatistics(models=tuple(self.banks), channels=self.channels_, starts=starts, window=window,
+                                step=step, nobs=tuple(nres), statistic=stat, threshold=thr, pvalue=pv,
+                                channel_reject=rej_c, reject=rej, member=member, loglik=ll, decisions=dec)
+
+    @staticmethod
+    def _member(res: Any, e: np.ndarray, prefix: tuple | None, test: Any, starts: np.ndarray, n: int, step: int,
+                name: str, p: int, pmax: int, window: int) -> tuple:
+        """One fitted model with its record residuals ``e`` on every window: statistic, p-value, threshold, channel
+        rejection (n_windows, k), the likelihood score (n_windows,; NaN without the residuals' ``prefix`` sums)
+        and the window decisions (or None)."""
+        nwin, k = starts.size, e.shape[1]
+        ref = test.reference(res)
+        if isinstance(test, LjungBox) and test.multivariate is None and n <= test.lags:
+            raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model {name!r}, "
+                             f"got {window}")
+        ds = None
+        if (isinstance(test, LjungBox) and test.multivariate is None) or (
+                isinstance(test, FTest) and test.alternative == "greater"):
+            stat = test.window_statistic(e, n, step, **ref)
+            thr, pv = test.threshold_pvalue(stat, n, **ref)
+            rej_c = stat > thr
+        else:
+            ds = [test.test(e[s:s + n], **ref) for s in starts]
+            stat = np.array([d.statistic for d in ds]).reshape(nwin, -1)
+            pv = np.array([d.pvalue for d in ds]).reshape(nwin, -1)
+            thr = np.array([d.threshold for d in ds], dtype=float).reshape(nwin, -1)
+            rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
+        thr = np.broadcast_to(np.asarray(thr, dtype=float), rej_c.shape)
+        if prefix is None:
+            return stat, pv, thr, rej_c, np.full(nwin, np.nan), ds
+        c1, c2 = prefix
+        # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
+        off = pmax - p
+        m = window - pmax
+        lo, hi = starts + off, starts + off + m
+        mu = (c1[hi] - c1[lo]) / m
+        cov = ((c2[hi] - c2[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
+        sign, logdet = np.linalg.slogdet(cov)
+        logdet = np.where(sign > 0, logdet, np.inf)
+        return stat, pv, thr, rej_c, -0.5 * (logdet + k * np.log(2 * np.pi) + k), ds
