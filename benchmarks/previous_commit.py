@@ -113,7 +113,7 @@ def _hexacopter():
         from tsfdi.datasets.hexacopter import hexacopter_signals
     except ImportError:                                     # before issue 16
         from tsfdi.evaluation import hexacopter_signals
-    sig = hexacopter_signals(load_hexacopter())
+    sig = hexacopter_signals(load_hexacopter(ROOT / "data" / "hexacopter.nc"))   # this repository's copy
     bases = {lvl: tsfdi.fit_baselines(sig, fit_turbulence=lvl, duration=None, models=["var"], fit_records=10,
                                       order=20) for lvl in ("light", "moderate", "severe")}
     new = hasattr(tsfdi, "ResidualWindows")

@@ -231,6 +231,9 @@ def test_empirical_thresholds_leave_one_out(synthetic):
     assert b.calibrated_tests("var", lb, "5s") is cal
     assert b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01, threshold="empirical"), 500) is cal
     assert b.calibrated_tests("var", lb, "5s", step=2) is not cal
+    # a test with other options is calibrated anew, even where its repr does not show them
+    other = b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01, threshold="empirical", demean=False), "5s")
+    assert other is not cal and not other[b.healthy].demean
     ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",),
                         tests={"whiteness": lb, "variance": FTest(alpha=0.01, threshold="empirical")},
                         windows=("5s",), settle=5.0, progress=False)

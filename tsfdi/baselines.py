@@ -293,7 +293,10 @@ class Baselines:
             raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
         W = window_samples(window, "window", self.fs, minimum=2)
         step = window_samples(step, "step", self.fs)
-        key = (model, repr(test), W, step)
+        # the test's options (not its fitted state nor its private memos) identify its calibration
+        options = tuple(sorted((k, repr(vars(v)) if hasattr(v, "__dict__") else repr(v))
+                               for k, v in vars(test).items() if not (k.endswith("_") or k.startswith("_"))))
+        key = (model, type(test).__name__, options, W, step)
         if key in self._calibrated:
             return self._calibrated[key]
         if not self.heldout:
