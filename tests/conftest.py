@@ -1,4 +1,4 @@
-"""Shared test helpers: the three data kinds and the location of ../shared/data."""
+"""Shared test helpers: the three data kinds, the location of ../shared/data, the synthetic 4-state data set."""
 
 from __future__ import annotations
 
@@ -9,6 +9,9 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
+from _synthetic_fdi import FS, dataset
+
+import tsfdi
 
 matplotlib.use("Agg")
 
@@ -59,3 +62,18 @@ def shared_data() -> Path:
     if not path.is_dir():
         raise FileNotFoundError(f"shared data folder missing: {path} (tests need ../shared/data next to the repo)")
     return path
+
+
+# the synthetic 4-state data set of test_baselines.py and test_evaluation.py, fitted once per module
+@pytest.fixture(scope="module")
+def synthetic():
+    """5 records per state, 40 s at 100 Hz, failure at 10 s."""
+    return dataset(5, 4000, 1000, np.random.default_rng(5))
+
+
+@pytest.fixture(scope="module")
+def fitted(synthetic):
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, steady_window="5s")
+    return b

@@ -15,20 +15,6 @@ from tsfdi.baselines import Baselines, Records, fit_baselines, insample_q
 from tsfdi.windows import ResidualWindows
 
 
-@pytest.fixture(scope="module")
-def synthetic():
-    """5 records per state, 40 s at 100 Hz, failure at 10 s."""
-    return dataset(5, 4000, 1000, np.random.default_rng(5))
-
-
-@pytest.fixture(scope="module")
-def fitted(synthetic):
-    recs, states, ft = synthetic
-    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6,
-                            var_max_lags=6, steady_window="5s")
-    return b
-
-
 def test_module_exports():
     assert tsfdi.fit_baselines is fit_baselines and tsfdi.Baselines is Baselines and tsfdi.Records is Records
 
