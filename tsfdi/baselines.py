@@ -21,7 +21,7 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
 from tsfdi.monitoring import Monitor
 from tsfdi.selection import select_order
-from tsfdi.windows import ResidualWindows
+from tsfdi.windows import ResidualWindows, status
 
 __all__ = ["Baselines", "Records", "fit_baselines", "insample_q"]
 
@@ -403,13 +403,13 @@ class Baselines:
             raise ValueError(f"no fitting record is longer than a {W}-sample window")
         acc = np.concatenate(accepted)          # (windows, alphas, faults)
         true = np.concatenate(truth)
-        n_acc = acc.sum(axis=-1)
-        unique = n_acc == 1
+        st = status(acc.sum(axis=-1))                                       # (windows, alphas)
+        unique = st == "identified"
         right = acc[np.arange(acc.shape[0]), :, true]
         table = pd.DataFrame({"correct": 100.0 * (unique & right).mean(axis=0),
                               "wrong": 100.0 * (unique & ~right).mean(axis=0),
-                              "ambiguous": 100.0 * (n_acc > 1).mean(axis=0),
-                              "none": 100.0 * (n_acc == 0).mean(axis=0),
+                              "ambiguous": 100.0 * (st == "ambiguous").mean(axis=0),
+                              "none": 100.0 * (st == "none").mean(axis=0),
                               "windows": acc.shape[0]}, index=pd.Index(alphas, name="alpha"))
         best = table["correct"].max()
         table.attrs["selected"] = float(alphas[table["correct"].to_numpy() >= best].max())
