@@ -21,7 +21,7 @@ from tsfdi._validation import int_like, option
 from tsfdi.exceptions import UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import information_criteria
-from tsfdi.models.lstsq import lagged_design, lstsq
+from tsfdi.models.lstsq import gram_solve, lag_gram, lagged_design, lstsq
 
 __all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
 
@@ -165,6 +165,154 @@ class LinearTimeSeriesModel:
         res = self.results_class(self, lstsq(X, Y))
         res._warn_unstable()
         return res
+
+    # --- held-out residuals ------------------------------------------------------------------------
+    def held_out_residuals(self, blocks: int | None = None) -> list:
+        """Residuals of each record (or block) through the model fitted on all the *other* records (blocks).
+
+        The in-sample residuals :attr:`~LinearTimeSeriesResults.resid` are those of the data the model was
+        fitted on, so they are smaller than the residuals of a new flight: the model has partly fitted their
+        noise. A detection threshold taken from the empirical distribution of a statistic in normal
+        operation (paper 002, Hansen et al., Fig. 2) must be read on residuals that the baseline has not
+        seen. Holding out each record in turn gives that null sample from the normal records alone: record
+        ``j`` is filtered by the model fitted on the others, exactly as a baseline filters a new flight.
+
+        With ``X_i``, ``Y_i`` the regressor and target of record ``i`` (:meth:`design_all`; same lags,
+        trend and ``hold_back`` as this spec), ``G = sum_i X_i' X_i`` and ``h = sum_i X_i' Y_i``, the
+        coefficients without record ``j`` are
+
+        .. math::  B_{(-j)} = \\left(G - X_j' X_j\\right)^{-1} \\left(h - X_j' Y_j\\right),
+
+        so the Gram matrices are accumulated once and each held-out fit costs one ``df_eq x df_eq`` solve,
+        not a refit. The result equals ``type(self)(other records, ...).fit().residuals(record_j)``.
+        The Gram blocks of an AR / VAR come from the lag products of the signal
+        (:func:`~tsfdi.models.lstsq.lag_gram`), of an ARX from its explicit regressor. When a downdated
+        Gram matrix is too ill-conditioned for the normal equations (a column keeps less than
+        ``GRAM_RELATIVE_FLOOR`` of its energy, see :func:`~tsfdi.models.lstsq.gram_solve`) that one fit is
+        redone by the SVD solver on the explicit regressor of the other records, with an
+        :class:`~tsfdi.exceptions.IllConditionedWarning` if it is ill-conditioned.
+
+        The residuals are those of :meth:`residuals` (the results class filters the held-out data with the
+        held-out coefficients), so they follow the package's sign convention
+        ``y[t] + sum_i A_i y[t-i] = c + sum_j B_j u[t-nk-j+1] + e[t]``.
+
+        With one record, or when ``blocks`` is given, the regression rows of each record are cut into
+        ``blocks`` contiguous blocks of (nearly) equal size, and each block is held out in turn: its
+        residuals are those of its own rows through the fit on all the other rows (of every record). The
+        lagged regressors at the start of a block come from the samples before it, as in the full-record
+        regression, so the blocks' residuals concatenated cover exactly the rows of :attr:`resid`. Rows
+        next to a held-out block keep the block's samples as regressors; leave a margin of a few lags
+        out of any statistic if that matters.
+
+        Parameters
+        ----------
+        blocks : int, optional
+            Number of contiguous blocks each record is cut into (``>= 2``). Default: ``None``, one held-out
+            series per record when the spec has several records, 10 blocks for a single record. Every
+            block must hold at least ``df_eq + 1`` regression rows.
+
+        Returns
+        -------
+        list
+            In record order, in the caller's data kind (numpy / pandas / xarray, the record's index kept):
+
+            * several records, ``blocks=None``: one series per record, the residuals of ``residuals()``
+              (samples ``max_lag .. nobs - 1`` of the record, index from position ``max_lag``);
+            * one record: one series per block (samples ``hold_back + a .. hold_back + b - 1`` for the
+              block's rows ``a .. b - 1``, index from that position);
+            * several records and ``blocks`` given: one list of block series per record.
+
+        Raises
+        ------
+        ValueError
+            ``blocks`` not an integer >= 2; a block with fewer than ``df_eq + 1`` rows; a record (block)
+            whose removal leaves a singular regression (fewer rows than coefficients, or collinear
+            regressors), named in the message.
+
+        Examples
+        --------
+        >>> spec = tsfdi.VAR(normal_records, lags=8, trend="c")      # doctest: +SKIP
+        >>> baseline = spec.fit()                                    # doctest: +SKIP
+        >>> null = spec.held_out_residuals()    # doctest: +SKIP
+        """
+        if blocks is not None:
+            try:
+                blocks = int_like(blocks, "blocks", minimum=2)
+            except TypeError as exc:
+                raise ValueError(str(exc)) from None
+        elif len(self.records) == 1:
+            blocks = 10
+        k = self.df_eq
+        nrows = self.nobs_records
+        # the held-out parts: (record, first row, end row) in the record's regression rows
+        if blocks is None:
+            parts = [[(0, n)] for n in nrows]
+        else:
+            parts = []
+            for i, n in enumerate(nrows):
+                if n // blocks < k + 1:
+                    raise ValueError(
+                        f"blocks={blocks} leaves {n // blocks} regression row(s) per block in {self._record_name(i)} "
+                        f"({n} rows); each block needs at least df_eq + 1 = {k + 1}: use fewer blocks")
+                edges = np.r_[0, np.cumsum([len(c) for c in np.array_split(np.arange(n), blocks)])]
+                parts.append(list(zip(edges[:-1].tolist(), edges[1:].tolist())))
+        grams = [self._part_grams(i, p) for i, p in enumerate(parts)]
+        total = sum(g.sum(axis=0) for g in grams)
+        out = []
+        for i, record_parts in enumerate(parts):
+            series = []
+            for b, (lo, hi) in enumerate(record_parts):
+                what = (self._record_name(i) if blocks is None
+                        else f"block {b} (rows {lo}..{hi - 1}) of {self._record_name(i)}")
+                coef = None
+                if sum(nrows) - (hi - lo) >= k:
+                    coef = gram_solve(total - grams[i][b], k, lambda: self._design_without(i, lo, hi),
+                                      what=f"the regressor without {what}", stacklevel=4)
+                if coef is None:
+                    raise ValueError(f"removing {what} leaves a singular regression: the other "
+                                     f"{'records' if blocks is None else 'rows'} do not determine the {k} "
+                                     "coefficients per equation (too few rows or collinear regressors)")
+                res = self.results_class(self, coef)
+                rec = self.records[i]
+                if blocks is None:
+                    lo_s, hi_s = self.max_lag, rec.nobs
+                else:
+                    lo_s, hi_s = self.hold_back + lo, self.hold_back + hi
+                a = lo_s - self.max_lag
+                u = None if self.u_records is None else self.u_records[i].values[a:hi_s]
+                series.append(rec.wrap(res._residuals_array(rec.values[a:hi_s], u), lo_s))
+            out.append(series if blocks is not None else series[0])
+        return out[0] if (blocks is not None and len(self.records) == 1) else out
+
+    def _record_name(self, i: int) -> str:
+        return f"y[{i}]" if self.multi else "y"
+
+    def _record_design(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        u = None if self.u_records is None else self.u_records[i].values
+        return self._design(self.records[i].values, u, self.hold_back)
+
+    def _part_grams(self, i: int, parts: list[tuple[int, int]]) -> np.ndarray:
+        """Gram matrices of ``[X | Y]`` over the regression rows ``lo .. hi - 1`` of record ``i``, one per part.
+
+        An AR / VAR reads them from the lag products of the samples (:func:`lag_gram`, no regressor built);
+        an ARX from its explicit regressor.
+        """
+        if self.nb == 0:
+            y, p, h = self.records[i].values, self.na, self.hold_back
+            return np.stack([lag_gram(y[h + lo - p:h + hi], p, const=bool(self.k_const)) for lo, hi in parts])
+        X, Y = self._record_design(i)
+        Z = np.hstack([X, Y])
+        return np.stack([Z[lo:hi].T @ Z[lo:hi] for lo, hi in parts])
+
+    def _design_without(self, i: int, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        """Stacked regressor and target of all records without rows ``lo .. hi - 1`` of record ``i``."""
+        xs, ys = [], []
+        for r in range(len(self.records)):
+            X, Y = self._record_design(r)
+            keep = np.r_[0:lo, hi:X.shape[0]] if r == i else slice(None)
+            xs.append(X[keep])
+            ys.append(Y[keep])
+        return np.vstack(xs), np.vstack(ys)
 
     def __repr__(self) -> str:
         records = f", records={len(self.records)}" if self.multi else ""

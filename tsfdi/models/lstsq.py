@@ -25,7 +25,7 @@ from scipy import linalg
 
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits"]
+__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits", "gram_solve"]
 
 #: condition number of the regressor above which a fit warns (digits left < ~6)
 COND_WARN = 1e10
@@ -259,3 +259,42 @@ def nested_fits(R: np.ndarray, n_targets: int, widths: np.ndarray) -> np.ndarray
     outer = Rt[:, :, None] * Rt[:, None, :]
     suffix = np.cumsum(outer[::-1], axis=0)[::-1]
     return suffix[np.asarray(widths)]
+
+
+def gram_solve(gram: np.ndarray, k: int, design: callable, *, what: str = "the regressor",
+               stacklevel: int = 3) -> np.ndarray | None:
+    """Least-squares coefficients of ``Y`` on ``X`` from the Gram matrix of ``Z = [X | Y]``.
+
+    ``B = (X'X)^{-1} X'Y`` by a Cholesky factor of the leading ``k x k`` block of ``gram`` (the normal
+    equations), accepted only when every column of ``X`` keeps more than ``GRAM_RELATIVE_FLOOR`` of its
+    energy after projection on the columns before it (as :func:`triangular_factor`). Otherwise the
+    coefficients are recomputed from the explicit regressor ``design() -> (X, Y)`` by :func:`lstsq`'s SVD
+    solver, which warns (naming ``what``) when ``X`` is ill-conditioned.
+
+    Returns
+    -------
+    ndarray, shape (k, s), or None
+        ``None`` when ``X`` is rank deficient (fewer rows than columns, or singular values below
+        ``eps * max(X.shape)`` times the largest, numpy's rank rule).
+    """
+    gxx = gram[:k, :k]
+    try:
+        R = linalg.cholesky(gxx, lower=False, check_finite=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.diag(R) ** 2 / np.diag(gxx)
+        if np.all(np.isfinite(R)) and rel.min() > GRAM_RELATIVE_FLOOR:
+            return linalg.cho_solve((R, False), gram[:k, k:], check_finite=False)
+    except linalg.LinAlgError:
+        pass
+    X, Y = design()
+    if X.shape[0] < k:
+        return None
+    coef, _, rank, sv = linalg.lstsq(X, Y, cond=np.finfo(float).eps * max(X.shape), lapack_driver="gelsd",
+                                     check_finite=False)
+    if rank < k:
+        return None
+    cond = sv[0] / sv[-1]
+    if cond > COND_WARN:
+        warnings.warn(f"{what} is ill-conditioned (condition number {cond:.3g}); the estimates are not reliable",
+                      IllConditionedWarning, stacklevel=stacklevel)
+    return coef
