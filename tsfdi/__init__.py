@@ -11,12 +11,13 @@ and :mod:`tsfdi.study` are imported on first use.
 import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
-from tsfdi.detection import GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, ResidualTest, ZScore
+from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, ResidualTest, ScaledChi2Threshold,
+                             ZScore)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
-from tsfdi.models import (AR, ARX, VAR, ARResults, ARXResults, RecursiveARX, RecursiveARXResults, VARResults,
-                          load)
+from tsfdi.models import (AR, ARX, VAR, ARResults, ARXResults, HeldOutResiduals, RecursiveARX, RecursiveARXResults,
+                          VARResults, load)
 from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
 from tsfdi.online import OnlineDetection, OnlineDetector
 from tsfdi.selection import OrderSelection, select_order
@@ -27,9 +28,9 @@ __version__ = "0.1.0"
 __all__ = [
     # models and order selection
     "AR", "ARX", "VAR", "RecursiveARX", "ARResults", "ARXResults", "VARResults", "RecursiveARXResults",
-    "OrderSelection", "select_order", "load",
+    "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # residual tests and decisions
-    "ResidualTest", "Decision", "FTest", "LjungBox", "GLRT", "EmpiricalThreshold", "ZScore",
+    "ResidualTest", "Decision", "FTest", "LjungBox", "GLRT", "EmpiricalThreshold", "ScaledChi2Threshold", "ZScore",
     # windowed engine, detection, identification
     "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",
     "WindowedIdentification",

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 import xarray as xr
 from scipy import signal as sps
-from scipy import special
+from scipy import special, stats
 
 import tsfdi
 from tsfdi.detection import EmpiricalThreshold, FTest, LjungBox, ljungbox_windows
@@ -100,7 +100,7 @@ def test_decision_reports_empirical_threshold_and_pvalue():
     assert d.details["threshold_method"] == "empirical" and d.details["calibration_size"] == 3000
     np.testing.assert_array_equal(d.channel_reject, d.statistic > lb.threshold_)
     # the p-value of a statistic above every calibration value is 1 / (n + 1)
-    assert lb.empirical_pvalue(np.array([1e9, 1e9]))[0] == pytest.approx(1 / 3001)
+    assert lb.calibrated_pvalue(np.array([1e9, 1e9]))[0] == pytest.approx(1 / 3001)
     # distributional (chi-square, F) thresholds say so too, under one name
     assert LjungBox(5, 0.01).test(x).details["threshold_method"] == "theoretical"
     assert FTest(0.01).test(x, reference_variance=1.0, reference_df=100).details["threshold_method"] == "theoretical"
@@ -224,8 +224,11 @@ def test_bad_input():
         LjungBox(5, 1e-3, threshold="empirical").calibrate(statistic=rng.chisquare(5, 500))
     with pytest.raises(ValueError, match="not calibrated"):
         LjungBox(5, 0.05, threshold="empirical").test(rng.standard_normal(100))
-    with pytest.raises(ValueError, match="threshold='empirical'"):
-        LjungBox(5, 0.05).calibrate(statistic=rng.chisquare(5, 5000))
+    # calibrating a theoretical test fits the scaled chi-square law: chi2(5) data give back about chi2(5)
+    lb = LjungBox(5, 0.05).calibrate(statistic=rng.chisquare(5, 5000))
+    assert lb.threshold == "calibrated" and lb.threshold_[0] == pytest.approx(stats.chi2.ppf(0.95, 5), rel=0.03)
+    with pytest.raises(ValueError, match="at least 30 are needed"):
+        LjungBox(5, 0.05).calibrate(statistic=rng.chisquare(5, 29))
     with pytest.raises(ValueError, match="false_alarm"):
         LjungBox(5, 0.05, threshold=EmpiricalThreshold(0.01))
     with pytest.raises(TypeError, match="threshold"):
@@ -233,9 +236,9 @@ def test_bad_input():
     with pytest.raises(ValueError, match="threshold"):
         FTest(0.05, threshold="chi2")
     for old in ("chi2", "f", "analytical"):       # one name for the distributional threshold: "theoretical"
-        with pytest.raises(ValueError, match="threshold must be one of 'theoretical', 'empirical'"):
+        with pytest.raises(ValueError, match="threshold must be one of 'theoretical', 'calibrated', 'empirical'"):
             LjungBox(5, 0.05, threshold=old)
-        with pytest.raises(ValueError, match="threshold must be one of 'theoretical', 'empirical'"):
+        with pytest.raises(ValueError, match="threshold must be one of 'theoretical', 'calibrated', 'empirical'"):
             FTest(0.05, threshold=old)
     assert LjungBox(5, 0.05, threshold="theoretical").threshold == "theoretical"
     assert FTest(0.05, threshold="THEORETICAL").threshold == "theoretical"
@@ -248,7 +251,11 @@ def test_bad_input():
         LjungBox(5, 0.05, threshold="empirical").calibrate(rng.standard_normal(500))
     with pytest.raises(TypeError, match="needs resid"):
         LjungBox(5, 0.05, threshold="empirical").calibrate()
-    with pytest.raises(TypeError, match="reference_variance"):
-        FTest(0.05, threshold="empirical").calibrate(rng.standard_normal(500), window=50)
+    # without a baseline variance the F test divides by the pooled mean square of its calibration residuals
+    e = 2.0 * rng.standard_normal(2000)
+    f = FTest(0.05).calibrate(e, window=50)
+    assert f.reference_variance_[0] == pytest.approx(np.mean(e * e)) and f.threshold == "calibrated"
+    with pytest.raises(ValueError, match="alternative='greater'"):
+        FTest(0.05, alternative="two-sided").calibrate(e, window=50)
     with pytest.raises(ValueError, match="window"):
         LjungBox(5, 0.05, threshold="empirical").calibrate(rng.standard_normal(500), window=4)

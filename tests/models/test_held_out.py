@@ -185,8 +185,9 @@ def test_blocks_index_and_single_record_in_list():
 def test_blocks_with_several_records():
     records = var_records()
     spec = tsfdi.VAR(records, 2, "c")
-    held = spec.held_out_residuals(blocks=3)
-    assert len(held) == 3 and all(len(h) == 3 for h in held)
+    flat = spec.held_out_residuals(blocks=3)
+    assert len(flat) == 9 and flat.lags == spec.max_lag            # one flat list, blocks in record order
+    held = [flat[3 * i:3 * i + 3] for i in range(3)]
     X, Y = spec.design_all()
     bounds = np.r_[0, np.cumsum(spec.nobs_records)]
     for i, rec_blocks in enumerate(held):

@@ -10,7 +10,7 @@ import numpy as np
 from tsfdi._data import Signal, as_signal
 from tsfdi._validation import option, probability
 from tsfdi.detection.decision import Decision
-from tsfdi.detection.threshold import EmpiricalThreshold
+from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
 
 __all__ = ["CalibratedTest", "ResidualTest"]
 
@@ -49,7 +49,7 @@ class ResidualTest:
     def _check_correction(correction: Any) -> str | None:
         if correction is None:
             return None
-        return option(correction, "correction", ("bonferroni",))
+        return option(correction, "correction", ("bonferroni", "sidak"))
 
     @staticmethod
     def _resid(resid: Any, min_nobs: int, what: str = "") -> Signal:
@@ -61,7 +61,19 @@ class ResidualTest:
 
     @staticmethod
     def _channel_alpha(alpha: float, k: int, correction: str | None) -> float:
-        return alpha / k if correction == "bonferroni" else alpha
+        """Per-channel risk: ``alpha`` (None), ``alpha / k`` (Bonferroni) or ``1 - (1 - alpha)^(1/k)`` (Sidak)."""
+        if correction == "bonferroni":
+            return alpha / k
+        if correction == "sidak":
+            return -np.expm1(np.log1p(-alpha) / k)
+        return alpha
+
+    @staticmethod
+    def family_alpha(channel_alpha: float, k: int) -> tuple[float, float]:
+        r"""Size of the signal-level decision "some channel rejects" of ``k`` channels tested at
+        ``channel_alpha`` each: :math:`1 - (1 - lpha_c)^k` when the channels are independent, and the bound
+        :math:`\min(1, k lpha_c)` that holds whatever their dependence (Bonferroni)."""
+        return float(-np.expm1(k * np.log1p(-channel_alpha))), float(min(1.0, k * channel_alpha))
 
 
 class CalibratedTest(ResidualTest):
@@ -84,16 +96,17 @@ class CalibratedTest(ResidualTest):
     _theoretical = "theoretical"
 
     def _threshold_option(self, threshold: Any) -> Any:
-        """Validate the ``threshold`` option: ``"theoretical"``, ``"empirical"`` or an EmpiricalThreshold."""
-        if isinstance(threshold, EmpiricalThreshold):
+        """Validate the ``threshold`` option: ``"theoretical"``, ``"calibrated"``, ``"empirical"`` or an
+        estimator (:class:`~tsfdi.EmpiricalThreshold`, :class:`~tsfdi.ScaledChi2Threshold`)."""
+        if isinstance(threshold, (EmpiricalThreshold, ScaledChi2Threshold)):
             if abs(threshold.false_alarm - self.alpha) > 1e-12 * self.alpha:
                 raise ValueError(f"threshold.false_alarm ({threshold.false_alarm:g}) must equal alpha "
                                  f"({self.alpha:g}): the calibrated threshold is the 1 - alpha quantile")
             return threshold
         if isinstance(threshold, str):
-            return option(threshold, "threshold", (self._theoretical, "empirical"))
-        raise TypeError(f"threshold must be {self._theoretical!r}, 'empirical' or an EmpiricalThreshold, got "
-                        f"{type(threshold).__name__}")
+            return option(threshold, "threshold", (self._theoretical, "calibrated", "empirical"))
+        raise TypeError(f"threshold must be {self._theoretical!r}, 'calibrated', 'empirical' or an "
+                        f"EmpiricalThreshold / ScaledChi2Threshold, got {type(threshold).__name__}")
 
     # ------------------------------------------------------------------ rules (public)
     def null_threshold(self, k: int, nobs: int | None = None, **reference: Any) -> np.ndarray:
@@ -162,7 +175,7 @@ class CalibratedTest(ResidualTest):
         k = s.shape[-1]
         if self.empirical:
             self._check_calibrated(k)
-            return self.threshold_, self.empirical_pvalue(s)
+            return self.threshold_, self.calibrated_pvalue(s)
         return self.null_threshold(k, nobs, **reference), self._null_pvalue(s, nobs, **reference)
 
     def decision(self, statistic: Any, nobs: int, channels: Any = None, *, details: dict | None = None,
@@ -202,17 +215,26 @@ class CalibratedTest(ResidualTest):
         thr, pv = self.threshold_pvalue(stat, nobs, **reference)
         info = dict(details) if details else {}
         info.update(self._decision_details(k, **reference))
-        info.update(self._empirical_details() if self.empirical else {"threshold_method": self._theoretical})
+        info.update(self._calibration_details() if self.empirical else {"threshold_method": self._theoretical})
+        info["family_alpha"], info["family_alpha_bound"] = self.family_alpha(
+            self._channel_alpha(self.alpha, k, getattr(self, "correction", None)), k)
         rej = stat > thr
         return Decision(statistic=stat, threshold=thr, pvalue=pv, alpha=self.alpha, reject=bool(rej.any()),
                         df=self._df(k, nobs, **reference), nobs=nobs, null_hypothesis=self.null_hypothesis,
                         alternative_hypothesis=self.alternative_hypothesis, details=info, channel_reject=rej,
                         channels=tuple(channels) if channels is not None else (), test=type(self).__name__)
 
+    def _threshold_name(self) -> str:
+        """The threshold option as a name (an estimator object by its kind)."""
+        if isinstance(self.threshold, str):
+            return self.threshold
+        return "calibrated" if isinstance(self.threshold, ScaledChi2Threshold) else "empirical"
+
     @property
     def empirical(self) -> bool:
-        """Whether the threshold comes from data (:meth:`calibrate`) rather than the null distribution."""
-        return not isinstance(self.threshold, str) or self.threshold == "empirical"
+        """Whether the threshold comes from data (``"calibrated"`` or ``"empirical"``, :meth:`calibrate`) rather
+        than the null distribution."""
+        return not isinstance(self.threshold, str) or self.threshold != self._theoretical
 
     @property
     def calibrated(self) -> bool:
@@ -224,84 +246,129 @@ class CalibratedTest(ResidualTest):
         raise NotImplementedError(f"{type(self).__name__} has no windowed statistic")  # pragma: no cover
 
     def calibrate(self, resid: Any = None, *, window: int | None = None, step: int = 1, statistic: Any = None,
-                  **reference: Any) -> ResidualTest:
-        r"""Estimate the per-channel threshold from the statistic under normal operation; returns ``self``.
+                  independent: int | None = None, **reference: Any) -> ResidualTest:
+        r"""Set the per-channel threshold from the statistic under normal operation; returns ``self``.
 
         Parameters
         ----------
         resid : array_like, Series, DataFrame, DataArray or sequence of them, optional
-            Healthy (in-state) residual records, each ``(nobs, k)``: residuals of *new* records driven through
-            the fixed model (out of sample, like the data the test will see). The statistic of every window of
-            ``window`` samples, ``step`` apart, of every record is the calibration sample.
+            Healthy residual records, each ``(nobs, k)``: residuals of records driven through a model that was
+            *not* fitted on them, like the data the test will see -- the held-out residuals of
+            :meth:`tsfdi.VAR.held_out_residuals` (each record through the model fitted on the others). The
+            statistic of every window of every record is the null sample.
         window : int
-            Window length in residual samples (required with ``resid``).
+            Window length. With held-out residuals of a model spec (which carry the model's order ``lags``) it
+            counts *signal* samples, as in :func:`tsfdi.detect` (a window of ``window`` signal samples has
+            ``window - lags`` residuals); for other residual records it counts residual samples.
         step : int
-            Samples between calibration windows.
+            Samples between calibration windows (1: every window; overlapping windows are dependent, see Notes).
         statistic : array_like, shape (n,) or (n, k), optional
-            The calibration sample itself (instead of ``resid``): values of the test statistic under
-            normal operation, one column per channel.
+            The null sample itself (instead of ``resid``): values of the test statistic under normal operation,
+            one column per channel.
+        independent : int, optional
+            With ``statistic``: how many of its windows do not overlap (default all).
         **reference :
             Extra keyword arguments of the windowed statistic (the F test's ``reference_variance``).
 
         Returns
         -------
         self
-            With ``threshold_`` (ndarray, shape (k,)), ``thresholds_`` (one calibrated
-            :class:`~tsfdi.EmpiricalThreshold` per channel) and ``calibration_`` (the sorted sample per
-            channel, for the empirical p-value).
+            With ``threshold_`` (ndarray, shape (k,)), ``thresholds_`` (one fitted estimator per channel) and
+            ``calibration_`` (the sorted null sample per channel). A test built with ``threshold="theoretical"``
+            becomes ``threshold="calibrated"``.
 
         Raises
         ------
         ValueError
-            If the test was built with the distributional threshold, or if the sample is too small for the
-            per-channel ``alpha`` (the message says how many statistics are needed).
+            If the null sample is too small for the per-channel ``alpha`` (the message says how many
+            independent windows are needed).
 
         Notes
         -----
-        Hansen et al. (paper 002, Fig. 2) take the threshold from the empirical distribution of the detection
-        statistic in normal operation. Channel ``c`` rejects when its statistic exceeds the :math:`1-\alpha`
-        quantile of its calibration sample (a generalised Pareto tail fit when the sample holds fewer than
-        ``min_exceedances / alpha`` values, see :class:`~tsfdi.EmpiricalThreshold`). The p-value is the
-        empirical exceedance fraction with the usual +1 correction,
-        :math:`p = (1 + \#\{s_i \ge s\}) / (n + 1)`. Windows that overlap are dependent, so the effective
-        sample is smaller than ``n``: calibrate on many records.
+        Hansen et al. (paper 002, Fig. 2) take the threshold from the distribution of the detection statistic in
+        normal operation for a required false-alarm probability. Two estimators of the per-channel
+        :math:`1 - lpha` quantile (:meth:`_channel_alpha` with ``correction``):
+
+        - ``threshold="calibrated"`` (or ``"theoretical"`` before calibration): scaled chi-square laws
+          :math:`c_j\,\chi^2(\nu_j)` fitted to each record's windows by their first two moments, mixed over the
+          records, with a bootstrap bound over records (:class:`~tsfdi.ScaledChi2Threshold`); it reaches
+          ``alpha = 1e-3`` from a few hundred windows of a few records;
+        - ``threshold="empirical"``: the empirical quantile, or a generalised Pareto tail fit
+          (:class:`~tsfdi.EmpiricalThreshold`), with the empirical p-value
+          :math:`p = (1 + \#\{s_i \ge s\}) / (n + 1)`; it needs about ``20 / alpha`` windows.
+
+        Windows ``step`` apart overlap when ``step < window``: they are dependent, which leaves the moments and
+        quantiles consistent but does not add information, so the support checks count the non-overlapping
+        windows (``floor(len / window)`` per record). The signal-level decision "some channel rejects" has size
+        ``Decision.details["family_alpha"]`` (:meth:`family_alpha`); ``correction="bonferroni"`` or ``"sidak"``
+        make it at most ``alpha``.
         """
-        if not self.empirical:
-            raise ValueError(f"threshold is {self.threshold!r}: build the test with threshold='empirical' (or an "
-                             "EmpiricalThreshold) to calibrate it")
+        if getattr(self, "alternative", "greater") != "greater":
+            raise ValueError("calibrate needs alternative='greater': the calibrated threshold is one upper quantile")
         if statistic is None:
             if resid is None:
                 raise TypeError("calibrate needs resid (healthy residual records) or statistic")
             if window is None:
-                raise TypeError("calibrate needs window (residual samples per window) with resid")
+                raise TypeError("calibrate needs window (samples per window) with resid")
+            lags = int(getattr(resid, "lags", 0) or 0)
             recs = list(resid) if isinstance(resid, (list, tuple)) else [resid]
             if not recs:
                 raise ValueError("resid is an empty sequence")
-            stat = np.concatenate([np.asarray(self.window_statistic(r, window, step, **reference)) for r in recs])
+            n = int(window) - lags
+            if n < 2:
+                raise ValueError(f"window ({window}) must exceed the model order of the held-out residuals ({lags})")
+            reference = self._calibration_reference(recs, reference)
+            stats_, groups, n_ind = [], [], 0
+            for i, r in enumerate(recs):
+                nr = as_signal(r, f"resid[{i}]", allow_constant=True).nobs
+                if nr < n:
+                    continue                                   # a record shorter than one window gives none
+                stats_.append(np.asarray(self.window_statistic(r, n, step, **reference)))
+                groups.append(np.full(stats_[-1].shape[0], i))
+                n_ind += nr // n
+            if not stats_:
+                raise ValueError(f"resid: no record holds a window of {n} residual samples")
+            stat = np.concatenate(stats_)
+            groups = np.concatenate(groups) if len(stats_) > 1 else None
         else:
             if resid is not None:
                 raise TypeError("give resid or statistic, not both")
             stat = as_signal(statistic, "statistic", allow_constant=True).values
+            n_ind = None if independent is None else int(independent)
+            groups = None
         stat = np.asarray(stat, dtype=np.float64)
         stat = stat.reshape(stat.shape[0], -1)
         k = stat.shape[1]
+        if self.threshold == self._theoretical:
+            self.threshold = "calibrated"
         a = self._channel_alpha(self.alpha, k, getattr(self, "correction", None))
-        tpl = self.threshold if isinstance(self.threshold, EmpiricalThreshold) else EmpiricalThreshold(a)
+        if isinstance(self.threshold, (EmpiricalThreshold, ScaledChi2Threshold)):
+            tpl = self.threshold
+        else:
+            tpl = ScaledChi2Threshold(a) if self.threshold == "calibrated" else EmpiricalThreshold(a)
         ths = []
         for c in range(k):
-            et = copy.copy(tpl)
-            et.false_alarm = a
-            for attr in ("threshold_", "sample_", "gpd_", "method_", "nobs_"):
-                et.__dict__.pop(attr, None)
+            est = copy.copy(tpl)
+            est.false_alarm = a
+            for attr in [v for v in vars(est) if v.endswith("_")]:
+                est.__dict__.pop(attr, None)
             try:
-                et.calibrate(stat[:, c])
+                if isinstance(est, ScaledChi2Threshold):
+                    est.calibrate(stat[:, c], independent=n_ind, groups=groups)
+                else:
+                    est.calibrate(stat[:, c])
             except ValueError as err:
                 raise ValueError(f"statistic (calibration sample of channel {c}) is too small: {err}") from None
-            ths.append(et)
+            ths.append(est)
         self.thresholds_ = ths
         self.threshold_ = np.array([t.threshold_ for t in ths])
         self.calibration_ = [t.sample_ for t in ths]
+        self.calibration_windows_ = (int(stat.shape[0]), n_ind)
         return self
+
+    def _calibration_reference(self, recs: list, reference: dict) -> dict:
+        """What the windowed statistic needs on the calibration records (the F test's reference variance)."""
+        return reference
 
     def _check_calibrated(self, k: int) -> None:
         if not self.calibrated:
@@ -310,23 +377,30 @@ class CalibratedTest(ResidualTest):
         if self.threshold_.shape[0] != k:
             raise ValueError(f"resid has {k} channel(s) but the test was calibrated on {self.threshold_.shape[0]}")
 
-    def empirical_pvalue(self, statistic: Any) -> np.ndarray:
-        """Fraction of calibration statistics at or above ``statistic`` (per channel, last axis), with the +1
-        correction: ``(1 + #{s_i >= s}) / (n + 1)``."""
+    def calibrated_pvalue(self, statistic: Any) -> np.ndarray:
+        """p-value of ``statistic`` (per channel, last axis) under the calibrated null: the fitted law's upper tail
+        (``"calibrated"``) or the empirical exceedance fraction ``(1 + #{s_i >= s}) / (n + 1)`` (``"empirical"``)."""
         s = np.asarray(statistic, dtype=np.float64)
         k = self.threshold_.shape[0]
         s2 = s.reshape(-1, k)
         out = np.empty_like(s2)
-        for c, g in enumerate(self.calibration_):
-            ge = g.size - np.searchsorted(g, s2[:, c], side="left")
-            out[:, c] = (1.0 + ge) / (g.size + 1.0)
+        for c, est in enumerate(self.thresholds_):
+            out[:, c] = est.pvalue(s2[:, c])
         return out.reshape(s.shape)
 
-    def _empirical_details(self) -> dict:
-        return {"threshold_method": "empirical",
-                "threshold_estimate": [t.method_ for t in self.thresholds_],
-                "calibration_size": int(self.calibration_[0].size),
-                "pvalue_method": "empirical: (1 + #{calibration >= statistic}) / (n + 1)"}
+    def _calibration_details(self) -> dict:
+        method = self.thresholds_[0].method_ if isinstance(self.thresholds_[0], ScaledChi2Threshold) else None
+        out = {"threshold_method": "calibrated" if method == "scaled-chi2" else "empirical",
+               "threshold_estimate": [t.method_ for t in self.thresholds_],
+               "calibration_size": int(self.calibration_[0].size),
+               "calibration_independent": self.calibration_windows_[1]}
+        if method == "scaled-chi2":
+            out["null_law"] = [{"scale": t.scale_, "df": t.df_} for t in self.thresholds_]
+            out["calibration_records"] = self.thresholds_[0].records_
+            out["pvalue_method"] = "calibrated: mixture over records of P(chi2(df_j) > statistic / scale_j)"
+        else:
+            out["pvalue_method"] = "empirical: (1 + #{calibration >= statistic}) / (n + 1)"
+        return out
 
 
 def baseline_variance(results: Any) -> tuple[np.ndarray, np.ndarray]:

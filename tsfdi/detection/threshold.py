@@ -1,7 +1,9 @@
-"""Data-driven threshold of a detection statistic (Hansen, Blanke, Adrian, paper 002, Fig. 2).
+"""Data-driven thresholds of a detection statistic (Hansen, Blanke, Adrian, paper 002, Fig. 2).
 
-:class:`EmpiricalThreshold` is shared by the GLRT and by the calibrated residual tests
-(:class:`~tsfdi.detection.base.CalibratedTest`); it depends on no test, so every detection module may import it.
+:class:`EmpiricalThreshold` (the empirical quantile, or a generalised Pareto tail) is shared by the GLRT and the
+calibrated residual tests; :class:`ScaledChi2Threshold` fits a scaled chi-square law to a windowed statistic
+(Ljung-Box :math:`Q`, F test variance ratio), which reaches small ``alpha`` from a few hundred windows. They depend
+on no test, so every detection module may import them.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import numpy as np
 from tsfdi._data import as_signal
 from tsfdi._validation import float_like, int_like, probability
 
-__all__ = ["EmpiricalThreshold"]
+__all__ = ["EmpiricalThreshold", "ScaledChi2Threshold"]
 
 
 def _ceil(v: float) -> int:
@@ -141,6 +143,14 @@ class EmpiricalThreshold:
         self.nobs_ = n
         return self
 
+    def pvalue(self, value: Any) -> np.ndarray:
+        r"""Empirical p-value of ``value`` against the calibration sample, with the +1 correction:
+        :math:`(1 + \#\{s_i \ge s\}) / (n + 1)`."""
+        self.check_fitted()
+        v = np.asarray(value, dtype=np.float64)
+        g = self.sample_
+        return (1.0 + g.size - np.searchsorted(g, v, side="left")) / (g.size + 1.0)
+
     def exceedance(self, value: Any) -> np.ndarray:
         """Estimated probability that the healthy statistic exceeds ``value`` (empirical, or the tail fit
         above its location)."""
@@ -168,3 +178,172 @@ class EmpiricalThreshold:
         from tsfdi.plotting.decision import plot_threshold
 
         return plot_threshold(self, ax=ax, **kwargs)
+
+
+def _mixture_quantile(scale: np.ndarray, df: np.ndarray, alpha: float) -> np.ndarray:
+    """``t`` with ``mean_j P(c_j chi2(nu_j) > t) = alpha`` for every row of ``scale`` / ``df`` (shape (B, M)), by
+    bisection on ``log t`` (vectorised over the rows)."""
+    from scipy import special
+
+    lo = np.log(np.min(scale * special.chdtri(df, np.minimum(1.0, alpha * scale.shape[1])), axis=1) + 1e-300)
+    hi = np.log(np.max(scale * special.chdtri(df, alpha / scale.shape[1]), axis=1))
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        above = special.chdtrc(df, np.exp(mid)[:, None] / scale).mean(axis=1) > alpha
+        lo, hi = np.where(above, mid, lo), np.where(above, hi, mid)
+    return np.exp(0.5 * (lo + hi))
+
+
+class ScaledChi2Threshold:
+    r"""Threshold of a windowed statistic from scaled chi-square laws fitted to its null sample, record by record.
+
+    Parameters
+    ----------
+    false_alarm : float
+        Required false-alarm probability per tested window (per channel), in (0, 1).
+    min_windows : int
+        Fewest *independent* (non-overlapping) windows the null sample must hold (default 30).
+    confidence : float
+        With several records: the threshold is the ``confidence`` quantile of its bootstrap distribution over
+        records (default 0.9), so that a new record's false-alarm rate exceeds ``false_alarm`` only with
+        probability about ``1 - confidence`` over the choice of calibration records.
+    n_boot : int
+        Bootstrap replicates (fixed seed: the result is reproducible).
+
+    Attributes
+    ----------
+    threshold_ : float
+        The calibrated threshold, after :meth:`calibrate`.
+    scale_, df_ : ndarray
+        The fitted :math:`c_j` and :math:`\nu_j` of every record (one entry without records).
+    point_threshold_ : float
+        The threshold of the fitted mixture itself (before the bootstrap bound).
+    method_ : str
+        ``"scaled-chi2"``.
+    sample_ : ndarray
+        The null sample (sorted).
+    nobs_, independent_, records_ : int
+        Windows in the sample, how many of them do not overlap, and the number of records.
+    empirical_check_ : float or None
+        The empirical :math:`1 - P_F` quantile of the sample when it holds at least ``10 / P_F`` independent
+        windows (a check of the fitted law), else ``None``.
+
+    Notes
+    -----
+    Under H0 with a known model the Ljung-Box statistic of a window is :math:`\chi^2(r)` (Dutta et al., paper 003,
+    eq. 13) and the F test's variance ratio is :math:`\chi^2(N_u) / N_u` (eq. 9, :math:`N_0 \to \infty`): both are
+    scaled chi-square variables :math:`c\,\chi^2(\nu)`. A baseline estimated from other records carries
+    estimation error, and the records of one fleet differ a little (paper 002: aircraft "of the same type but with
+    small differences"): on a new record the statistic is inflated and more variable than the nominal law, which
+    is why paper 003 takes a very small alpha to "compensate" for model uncertainty. Paper 002 (Fig. 2) instead
+    takes the threshold from the statistic's distribution in normal operation for a required :math:`P_F`.
+
+    Here that distribution is estimated from held-out windows (records driven through a model not fitted on them)
+    without needing :math:`\gg 1 / P_F` of them. Each record :math:`j` gets its own law
+    :math:`c_j\,\chi^2(\nu_j)` by the method of moments (Satterthwaite): with the mean :math:`m_j` and variance
+    :math:`v_j` of its windows, :math:`c_j = v_j / (2 m_j)` and :math:`\nu_j = 2 m_j^2 / v_j`. A new record is
+    a draw from the fleet, so the null law is the mixture and the threshold :math:`t` solves
+
+    .. math:: \frac{1}{M} \sum_{j=1}^{M} P\big(\chi^2(\nu_j) > t / c_j\big) = P_F .
+
+    With few records the mixture misses part of the fleet's spread; the records are therefore resampled
+    (``n_boot`` bootstrap replicates) and the ``confidence`` quantile of the replicate thresholds is used. The
+    p-value of :math:`s` is the mixture's upper tail scaled by :math:`P_F / \bar p(t)`, so that it is below
+    :math:`P_F` exactly when :math:`s` exceeds the threshold. Without records (one pooled sample) a single law is
+    fitted to all windows and no bound is applied. Overlapping windows are dependent: they leave the moment
+    estimates consistent but add no independent information, so the support check counts non-overlapping windows
+    only. Monte Carlo checks of the realised size on new records of a simulated fleet are in
+    ``tests/detection/test_calibration_mc.py``.
+    """
+
+    method_ = "scaled-chi2"
+
+    def __init__(self, false_alarm: float = 1e-3, *, min_windows: int = 30, confidence: float = 0.9,
+                 n_boot: int = 200) -> None:
+        self.false_alarm = probability(false_alarm, "false_alarm")
+        self.min_windows = int_like(min_windows, "min_windows", minimum=5)
+        self.confidence = float_like(confidence, "confidence", minimum=0.5, maximum=1.0, strict_max=True)
+        self.n_boot = int_like(n_boot, "n_boot", minimum=10)
+
+    def __repr__(self) -> str:
+        fitted = f", threshold_={self.threshold_:.5g}, records_={self.records_}" if hasattr(self, "threshold_") else ""
+        return f"ScaledChi2Threshold(false_alarm={self.false_alarm:g}{fitted})"
+
+    def calibrate(self, statistic: Any, independent: int | None = None, groups: Any = None) -> ScaledChi2Threshold:
+        """Fit the null law to healthy values of the statistic; returns ``self``.
+
+        Parameters
+        ----------
+        statistic : array_like
+            Values of the windowed statistic under normal operation (one channel), non-negative.
+        independent : int, optional
+            How many of those windows do not overlap (default: all of them).
+        groups : array_like, optional
+            The record of every window (same length as ``statistic``): one law per record and a mixture over
+            records (see Notes). ``None``: one law for the pooled sample.
+
+        Raises
+        ------
+        ValueError
+            If fewer than ``min_windows`` independent windows are given (the message says how many are needed),
+            if a record holds fewer than 3 windows, or if the statistic is negative or does not vary.
+        """
+        from scipy import special
+
+        stat = np.asarray(as_signal(statistic, "statistic", allow_constant=True).values, dtype=np.float64).ravel()
+        n = stat.size
+        n_ind = n if independent is None else int_like(independent, "independent", minimum=0, maximum=n)
+        if n_ind < self.min_windows:
+            raise ValueError(f"statistic holds {n_ind} independent (non-overlapping) windows, at least "
+                             f"{self.min_windows} are needed to fit the null law: give more or longer healthy "
+                             "records")
+        if stat.min() < 0:
+            raise ValueError("statistic must be non-negative (a Ljung-Box Q or a variance ratio)")
+        if groups is None:
+            parts = [stat]
+        else:
+            groups = np.asarray(groups).ravel()
+            if groups.shape != stat.shape:
+                raise ValueError(f"groups must label every window ({n}), got {groups.size} labels")
+            parts = [stat[groups == g] for g in dict.fromkeys(groups.tolist())]
+            small = [i for i, p in enumerate(parts) if p.size < 3]
+            if small:
+                raise ValueError(f"records {small} hold fewer than 3 windows: use shorter windows or merge records")
+        m = np.array([p.mean() for p in parts])
+        v = np.array([p.var(ddof=1) for p in parts])
+        if not (np.all(m > 0) and np.all(v > 0)):
+            raise ValueError("statistic does not vary on some healthy record: no null law can be fitted")
+        self.scale_ = v / (2.0 * m)
+        self.df_ = 2.0 * m * m / v
+        pf = self.false_alarm
+        self.point_threshold_ = float(_mixture_quantile(self.scale_[None, :], self.df_[None, :], pf)[0])
+        if len(parts) > 1:
+            rng = np.random.default_rng(0)
+            idx = rng.integers(0, len(parts), size=(self.n_boot, len(parts)))
+            boot = _mixture_quantile(self.scale_[idx], self.df_[idx], pf)
+            self.threshold_ = float(max(self.point_threshold_, np.quantile(boot, self.confidence)))
+        else:
+            self.threshold_ = self.point_threshold_
+        tail = special.chdtrc(self.df_, self.threshold_ / self.scale_).mean()
+        self._pvalue_factor = pf / tail if tail > 0 else 1.0
+        self.empirical_check_ = float(np.quantile(stat, 1.0 - pf)) if n_ind * pf >= 10 else None
+        self.sample_ = np.sort(stat)
+        self.nobs_ = n
+        self.independent_ = n_ind
+        self.records_ = len(parts)
+        return self
+
+    def check_fitted(self) -> None:
+        """Raise ``ValueError`` unless :meth:`calibrate` has been run."""
+        if not hasattr(self, "threshold_"):
+            raise ValueError("ScaledChi2Threshold is not calibrated: call calibrate(healthy statistic) first")
+
+    def pvalue(self, value: Any) -> np.ndarray:
+        """The fitted mixture's upper tail at ``value``, scaled so that it equals ``false_alarm`` at the threshold
+        (capped at 1)."""
+        from scipy import special
+
+        self.check_fitted()
+        v = np.asarray(value, dtype=np.float64)
+        tail = special.chdtrc(self.df_, v[..., None] / self.scale_).mean(axis=-1)
+        return np.minimum(1.0, tail * self._pvalue_factor)

@@ -79,8 +79,8 @@ class FTest(CalibratedTest):
             raise ValueError("threshold='empirical' needs alternative='greater' (one upper quantile)")
 
     def __repr__(self) -> str:
-        thr = "" if self.threshold == "theoretical" else ", threshold='empirical'" + (
-            f" (calibrated on {self.calibration_[0].size})" if self.calibrated else " (not calibrated)")
+        thr = "" if self.threshold == "theoretical" else f", threshold={self._threshold_name()!r}" + (
+            f" (calibrated on {self.calibration_[0].size} windows)" if self.calibrated else " (not calibrated)")
         return (f"FTest(alpha={self.alpha:g}, alternative={self.alternative!r}, demean={self.demean}, "
                 f"correction={self.correction!r}{thr})")
 
@@ -89,6 +89,8 @@ class FTest(CalibratedTest):
         """Variance ratio ``F`` of every sliding window (``window`` residual samples, ``step`` apart) against
         ``reference_variance``, shape (n_windows, k), from prefix sums."""
         sig = self._resid(resid, 3 if self.demean else 2)
+        if hasattr(self, "reference_variance_"):       # a calibrated test carries the variance it was calibrated with
+            reference_variance = self.reference_variance_
         if reference_variance is None:
             raise TypeError("FTest.window_statistic needs reference_variance (the baseline's unbiased variance)")
         e = sig.values
@@ -259,11 +261,13 @@ class FTest(CalibratedTest):
         sig = self._resid(resid, 3 if self.demean else 2)
         e = sig.values
         k = sig.nchan
-        if reference_variance is None or reference_df is None:
+        if hasattr(self, "reference_variance_"):       # a calibrated test carries the variance it was calibrated with
+            reference_variance = self.reference_variance_
+        if reference_variance is None or (reference_df is None and not self.empirical):
             raise TypeError("FTest.test needs reference_variance and reference_df (the baseline's unbiased "
                             "residual variance and N0 - d); tsfdi.detect/identify take them from the model")
         ref = _per_channel(reference_variance, "reference_variance", k)
-        df0 = _per_channel(reference_df, "reference_df", k)
+        extra = {} if reference_df is None else {"reference_df": _per_channel(reference_df, "reference_df", k)}
         n = e.shape[0]
         if self.demean:
             nu = n - 1
@@ -273,7 +277,19 @@ class FTest(CalibratedTest):
             var_u = np.einsum("ij,ij->j", e, e) / nu
         f = var_u / ref
         return self.decision(f, n, tuple(sig.channels), details={"variance": var_u}, reference_variance=ref,
-                             reference_df=df0)
+                             **extra)
+
+    def _calibration_reference(self, recs: list, reference: dict) -> dict:
+        """The variance the calibrated test divides by, kept as ``reference_variance_``: the given
+        ``reference_variance`` (a baseline's), else the pooled mean square of the calibration residuals per
+        channel (held-out residuals need no baseline variance: the calibrated law absorbs the scale)."""
+        ref = reference.get("reference_variance")
+        sigs = [self._resid(r, 2) for r in recs]
+        if ref is None:
+            ss = sum(np.einsum("ij,ij->j", s.values, s.values) for s in sigs)
+            ref = ss / sum(s.nobs for s in sigs)
+        self.reference_variance_ = _per_channel(ref, "reference_variance", sigs[0].nchan)
+        return {**reference, "reference_variance": self.reference_variance_}
 
 
 def _per_channel(value: Any, name: str, k: int) -> np.ndarray:

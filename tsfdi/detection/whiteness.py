@@ -174,8 +174,8 @@ class LjungBox(CalibratedTest):
         self.threshold = self._threshold_option(threshold)
 
     def __repr__(self) -> str:
-        thr = "" if self.threshold == "theoretical" else ", threshold='empirical'" + (
-            f" (calibrated on {self.calibration_[0].size})" if self.calibrated else " (not calibrated)")
+        thr = "" if self.threshold == "theoretical" else f", threshold={self._threshold_name()!r}" + (
+            f" (calibrated on {self.calibration_[0].size} windows)" if self.calibrated else " (not calibrated)")
         return (f"LjungBox(lags={self.lags}, alpha={self.alpha:g}, model_df={self.model_df}, "
                 f"multivariate={self.multivariate!r}, correction={self.correction!r}{thr})")
 
@@ -298,8 +298,8 @@ class LjungBox(CalibratedTest):
         if self.empirical:
             self._check_calibrated(1)
             thr = float(self.threshold_[0])
-            pv = float(self.empirical_pvalue(np.array([q]))[0])
-            details.update(self._empirical_details())
+            pv = float(self.calibrated_pvalue(np.array([q]))[0])
+            details.update(self._calibration_details())
         else:
             thr = special.chdtri(df, self.alpha)
             pv = special.chdtrc(df, q)

@@ -4,6 +4,7 @@ Shared pieces: ``lstsq`` (regressors, least squares, nested fits), ``criteria`` 
 ``archive`` (the ``.npz`` format of ``Results.save`` and :func:`load`).
 """
 
+from tsfdi.models._base import HeldOutResiduals
 from tsfdi.models.ar import AR, ARResults
 from tsfdi.models.archive import load
 from tsfdi.models.arx import ARX, ARXResults
@@ -11,4 +12,4 @@ from tsfdi.models.recursive import RecursiveARX, RecursiveARXResults, RecursiveA
 from tsfdi.models.var import VAR, VARResults
 
 __all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults", "RecursiveARX", "RecursiveARXResults",
-           "RecursiveARXState", "load"]
+           "RecursiveARXState", "HeldOutResiduals", "load"]

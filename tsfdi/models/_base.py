@@ -23,7 +23,21 @@ from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import information_criteria
 from tsfdi.models.lstsq import gram_solve, lag_gram, lagged_design, lstsq
 
-__all__ = ["LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
+__all__ = ["HeldOutResiduals", "LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
+
+
+class HeldOutResiduals(list):
+    """Held-out residual series (:meth:`LinearTimeSeriesModel.held_out_residuals`), a list that knows the model
+    order: ``lags`` is how many signal samples precede a record's first residual, so that a test calibrated on
+    them (:meth:`tsfdi.LjungBox.calibrate`) counts its ``window`` in signal samples, as :func:`tsfdi.detect`
+    does."""
+
+    def __init__(self, series: list, *, lags: int) -> None:
+        super().__init__(series)
+        self.lags = int(lags)
+
+    def __repr__(self) -> str:
+        return f"HeldOutResiduals({len(self)} series, lags={self.lags})"
 
 
 def _is_record_list(y: Any) -> bool:
@@ -213,14 +227,15 @@ class LinearTimeSeriesModel:
 
         Returns
         -------
-        list
-            In record order, in the caller's data kind (numpy / pandas / xarray, the record's index kept):
+        HeldOutResiduals
+            A list of residual series in record order (blocks in order within a record), in the caller's data
+            kind (numpy / pandas / xarray, the record's index kept), with ``lags`` (the model's ``max_lag``) so
+            that :meth:`tsfdi.LjungBox.calibrate` counts its ``window`` in signal samples:
 
-            * several records, ``blocks=None``: one series per record, the residuals of ``residuals()``
+            * ``blocks=None`` and several records: one series per record, the residuals of ``residuals()``
               (samples ``max_lag .. nobs - 1`` of the record, index from position ``max_lag``);
-            * one record: one series per block (samples ``hold_back + a .. hold_back + b - 1`` for the
-              block's rows ``a .. b - 1``, index from that position);
-            * several records and ``blocks`` given: one list of block series per record.
+            * otherwise one series per block (samples ``hold_back + a .. hold_back + b - 1`` for the block's
+              rows ``a .. b - 1``, index from that position).
 
         Raises
         ------
@@ -281,8 +296,8 @@ class LinearTimeSeriesModel:
                 a = lo_s - self.max_lag
                 u = None if self.u_records is None else self.u_records[i].values[a:hi_s]
                 series.append(rec.wrap(res._residuals_array(rec.values[a:hi_s], u), lo_s))
-            out.append(series if blocks is not None else series[0])
-        return out[0] if (blocks is not None and len(self.records) == 1) else out
+            out.extend(series)
+        return HeldOutResiduals(out, lags=self.max_lag)
 
     def _record_name(self, i: int) -> str:
         return f"y[{i}]" if self.multi else "y"

@@ -1,0 +1,113 @@
+"""Thresholds calibrated on held-out residuals hold their size on new records of a fleet (issue 17).
+
+Monte Carlo with a fixed seed: every record of a simulated "fleet" is a VAR(2) whose coefficients are drawn around a
+common mean (paper 002: aircraft of one type with small differences). A baseline is fitted on 10 records; the tests
+are calibrated on its held-out residuals (each record through the fit on the other 9); 300 new records of the fleet
+then give 3,000 disjoint windows per channel. The realised false-alarm counts must lie in the two-sided 99.9 %
+binomial band of alpha, per channel and family-wise, and the chi-square / F thresholds must lie above it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import tsfdi
+
+A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
+A2 = -0.2 * np.eye(3)
+N, WINDOW, SPREAD = 2000, 200, 0.04
+
+
+def fleet_record(rng: np.random.Generator, n: int = N) -> np.ndarray:
+    """One record of the fleet: VAR(2) with coefficients A + SPREAD * N(0, 1), unit innovations."""
+    b1 = A1 + SPREAD * rng.standard_normal((3, 3))
+    b2 = A2 + SPREAD * rng.standard_normal((3, 3))
+    e = rng.standard_normal((n + 200, 3))
+    y = np.zeros_like(e)
+    for t in range(2, n + 200):
+        y[t] = b1 @ y[t - 1] + b2 @ y[t - 2] + e[t]
+    return y[200:]
+
+
+@pytest.fixture(scope="module")
+def fleet():
+    rng = np.random.default_rng(2026)
+    spec = tsfdi.VAR([fleet_record(rng) for _ in range(10)], 2)
+    baseline = spec.fit()
+    new = [np.asarray(baseline.residuals(fleet_record(rng))) for _ in range(300)]
+    return spec, baseline, spec.held_out_residuals(), new
+
+
+def band(n: int, alpha: float) -> tuple[float, float]:
+    """Two-sided 99.9 % binomial band of the number of false alarms in ``n`` independent windows."""
+    return tuple(stats.binom.ppf([0.0005, 0.9995], n, alpha))
+
+
+def alarms(test, new, reference=None) -> np.ndarray:
+    """Flags of every disjoint window of the new records' residuals, shape (windows, channels)."""
+    n = WINDOW - 2
+    flags = []
+    for e in new:
+        q = test.window_statistic(e, n, n, **(reference or {}))
+        thr, _ = test.threshold_pvalue(q, n, **(reference or {}))
+        flags.append(q > thr)
+    return np.concatenate(flags)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("alpha", [1e-2, 1e-3])
+def test_calibrated_size_on_new_records_of_a_fleet(fleet, alpha):
+    spec, baseline, held, new = fleet
+    lo, hi = band(3000, alpha)
+    # per channel: calibrated inside the band, chi-square above it
+    cal = alarms(tsfdi.LjungBox(lags=20, alpha=alpha).calibrate(held, window=WINDOW), new)
+    chi = alarms(tsfdi.LjungBox(lags=20, alpha=alpha), new)
+    assert cal.shape == (3000, 3)
+    for c in range(3):
+        assert lo <= cal[:, c].sum() <= hi, (c, cal.sum(axis=0), (lo, hi))
+        assert chi[:, c].sum() > hi, (c, chi.sum(axis=0), (lo, hi))
+    # family-wise: Sidak per-channel alpha, "any channel rejects" at alpha
+    fam = alarms(tsfdi.LjungBox(lags=20, alpha=alpha, correction="sidak").calibrate(held, window=WINDOW), new)
+    assert lo <= fam.any(axis=1).sum() <= hi, (fam.any(axis=1).sum(), (lo, hi))
+    # the joint (multivariate) portmanteau: its finite-window law has a lighter upper tail than the fitted scaled
+    # chi-square, so the calibrated joint test is conservative (measured 4 of 30 expected at alpha = 0.01 here):
+    # never above the band, where chi2(s^2 r) is
+    mv = tsfdi.LjungBox(lags=20, alpha=alpha, multivariate="hosking")
+    joint = alarms(tsfdi.LjungBox(lags=20, alpha=alpha, multivariate="hosking").calibrate(held, window=WINDOW), new)
+    assert joint.sum() <= hi, (joint.sum(), (lo, hi))
+    q = np.concatenate([mv.window_statistic(e, WINDOW - 2, WINDOW - 2) for e in new])[:, 0]
+    assert (q > stats.chi2.isf(alpha, 9 * 20)).sum() > hi                 # chi2(s^2 r) of the joint statistic
+    # the F test, calibrated against the pooled held-out variance: at most the band (measured 12, 12, 42 of 30
+    # expected at alpha = 0.01: conservative on two channels). In this fleet the residual variance hardly varies,
+    # and the F law of eq. 9 against the baseline's variance is inside the band too (31, 26, 48)
+    fcal = alarms(tsfdi.FTest(alpha=alpha).calibrate(held, window=WINDOW), new)
+    assert fcal.sum(axis=0).max() <= hi and fcal.sum() >= lo, (fcal.sum(axis=0), (lo, hi))
+
+
+def test_the_documented_pattern_runs(fleet):
+    """The pattern of issue 17: fit on several flights, calibrate on held-out residuals, detect on a new flight."""
+    spec, baseline, held, new = fleet
+    rng = np.random.default_rng(7)
+    new_flight = fleet_record(rng, 1000)
+    for test in (tsfdi.LjungBox(lags=20, alpha=0.01), tsfdi.FTest(alpha=0.01),
+                 tsfdi.LjungBox(lags=20, alpha=0.01, multivariate="hosking")):
+        test.calibrate(spec.held_out_residuals(), window=200)
+        d = tsfdi.detect(new_flight[:200], baseline, test)      # window counts signal samples, as in detection
+        assert isinstance(d.reject, bool) and d.nobs == 198
+        assert d.details["threshold_method"] == "calibrated" and test.threshold == "calibrated"
+        assert d.details["calibration_records"] == 10
+        np.testing.assert_array_equal(d.threshold, test.threshold_)
+        # p-value and threshold agree: the p-value is below alpha exactly where the statistic exceeds it
+        thr, pv = test.threshold_pvalue(np.vstack([test.threshold_ * 0.999, test.threshold_ * 1.001]), 198)
+        assert np.all(pv[0] > 0.01) and np.all(pv[1] < 0.01)
+    assert held.lags == 2 and len(held) == 10
+
+
+def test_calibration_needs_enough_independent_windows(fleet):
+    spec, baseline, held, new = fleet
+    with pytest.raises(ValueError, match="independent .* windows, at least 30 are needed"):
+        tsfdi.LjungBox(lags=20, alpha=0.01).calibrate(held[:2], window=200)      # 2 x 9 disjoint windows
+    with pytest.raises(ValueError, match="window"):
+        tsfdi.LjungBox(lags=20, alpha=0.01).calibrate(held, window=2)
