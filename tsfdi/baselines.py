@@ -612,8 +612,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                 raise ValueError(f"calibrate=True needs at least two fitting records per state; state {state!r} "
                                  f"has {len(segs)}")
             for m in names:
-                heldout[(m, state)] = _leave_one_out(out[m][state], segs,
-                                                     None if m == "var" else rec.channels.index(m))
+                # each fitting record through the model (same order, trend, hold-back) fitted on the others
+                heldout[(m, state)] = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
+                                       for e in out[m][state].model.held_out_residuals()]
     # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
     step = max(1, int(round(0.1 * rec.fs)))
     peaks = []
@@ -626,17 +627,3 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
                      steady_thresholds=thr, steady_window=V,
                      fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments, heldout=heldout)
-
-
-def _leave_one_out(res: Any, segs: list, channel: int | None) -> list:
-    """Residuals of each segment through the model (same order, trend, hold-back) refitted on the others."""
-    spec = res.model
-    recs = [g if channel is None else g[:, channel] for g in segs]
-    kw = {"trend": spec.trend, "hold_back": spec.hold_back}
-    out = []
-    for j in range(len(recs)):
-        others = [r for i, r in enumerate(recs) if i != j]
-        fit = type(spec)(others if len(others) > 1 else others[0], int(res.lags), **kw).fit()
-        e = np.asarray(fit.residuals(recs[j]), dtype=np.float64)
-        out.append(e.reshape(e.shape[0], -1))
-    return out
