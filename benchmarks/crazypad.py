@@ -1,0 +1,579 @@
+"""CrazyPAD benchmark (issue 17): detection and identification of propeller defects on real Crazyflie flights.
+
+Run: ``python benchmarks/crazypad.py`` (reads ``../shared/data/crazypad`` next to the repository; BLAS pinned to
+one thread; about 1 min on one core). Prints the choices, then three sections, with PASS/FAIL against the targets.
+
+Data. Controller logs of CrazyPAD (``tsfdi.datasets.load_crazypad``). Every log holds two airborne segments (two
+short flights, ~5-6 s each once trimmed), so a *flight* below is one log, and its two segments always go together:
+fitted together, held out together. The corrupt log ``weight_on_string_W2_near_M3/E8_log02`` (drone flipped,
+saturated commands) is excluded. Normal flights exist for drone E8 only (5 logs); some conditions were flown by
+E9 only or by both drones (printed), and the two airframes differ, so results are also given per drone.
+
+Choices, all made on normal flights only (in section 1 on the 4 fitting logs of each fold, in sections 2-3 on the
+5 normal logs), never on a faulty flight:
+
+- margin (take-off, landing): from the altitude ``stateEstimate.z`` (not a tested channel): the time from
+  thrust-on until z first enters +-10 % of the hover height (median z of the segment's central half), and from z
+  last leaving that band to thrust-off; the largest over the fitting segments plus a 0.25 s guard, rounded up to
+  0.5 s.
+- channels: the gyro rates ``controller.r_{roll,pitch,yaw}``; ``controller.accelz`` is added only if modelling it
+  lowers the held-out (leave one fitting log out) generalised variance of the gyro residuals by at least 5 %
+  (does it help predict the rates on a flight that was not fitted).
+- VAR order (trend "c"): BIC of ``select_order`` (max_lags 20) on the fitting flights of every model.
+- Ljung-Box lags: fixed a priori at 10 per second of window (10 for 1 s, 20 for 2 s windows), not tuned.
+- thresholds: ``test.calibrate(spec.held_out_residuals(), window=..., step=1)`` with the library's calibrated
+  threshold (``ScaledChi2Threshold``, see its docstring). Its default of 30 non-overlapping calibration windows
+  cannot be met with 2 s windows on these short flights (4 normal logs hold 16), so ``min_windows=5`` is passed;
+  the number of independent windows behind the calibrations is printed. ``held_out_residuals()`` holds out one
+  *segment* at a time, so the other segment of the same log stays in that fit (the library cannot hold out
+  groups of records).
+
+Tests: ``LB`` Ljung-Box per channel, ``LB-S`` the same with Sidak correction over the channels, ``LB-H``
+multivariate Ljung-Box (Hosking), ``F`` / ``F-S`` the variance F test without / with Sidak correction, ``LB+F``
+= ``LB-S`` and ``F-S`` together: a window is flagged (a model rejected) when either rejects (size <= 2 alpha).
+
+1. False alarms, leave one normal flight out (5 folds): VAR fitted on the other 4 logs (8 segments), tests
+   calibrated on its held-out residuals; windows of 1 s and 2 s, step = window (independent trials) and step
+   0.1 s (sliding rate, dependent windows), on the held-out flight; per channel and family-wise ("any"),
+   calibrated and theoretical (chi-square / F) thresholds, with the two-sided 99 % binomial band of the count.
+   Target: realised rate <= 2 alpha at alpha = 1e-2 with 2 s windows, calibrated, for the per-channel tests
+   (pooled over channels) and the family-wise ones (Sidak, Hosking).
+2. Detection per condition: VAR on all normal flights (faulty flights are never fitted), tests calibrated on its
+   held-out residuals; percent of the non-overlapping 1 s and 2 s windows flagged on every faulty flight, per
+   condition and drone. Target: cut_propeller_M3_4mm_4mm_39mm >= 95 % of its 2 s windows.
+3. Identification among the 9 conditions: one VAR per condition, leave one flight out within the condition (the
+   held-out flight's own condition model is fitted on that condition's other logs, every other model on all its
+   logs; normal included), every model with its own tests calibrated on its own held-out residuals; every 2 s
+   window (step 0.5 s) of the held-out flight is decided by the paper rule (the single accepted model, else
+   ambiguous / none) and the likelihood rule (the accepted model, or any model when none is accepted, with the
+   most likely residuals). Per condition: percent correct unique / wrong / ambiguous / none, per drone, confusion
+   tables; target: mean correct identification over conditions >= 85 % at 2 s (printed for both rules, test
+   ``LB+F``, fixed before running).
+"""
+
+import os
+
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import functools  # noqa: E402
+import math  # noqa: E402
+import time  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from scipy import stats  # noqa: E402
+
+import tsfdi  # noqa: E402
+from tsfdi.datasets import load_crazypad  # noqa: E402
+from tsfdi.windows import decide  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "crazypad"
+FS = None                  # sampling rate (Hz), set by setup()
+
+NORMAL = "normal_flight"
+CONDITIONS = (NORMAL, "cut_propeller_M3_1mm", "cut_propeller_M3_2.5mm_2.5mm_42mm", "cut_propeller_M3_4mm_4mm_39mm",
+              "tape_on_propeller_M1_M3", "tape_on_propeller_M3_M4", "add_weight_W1_near_M3",
+              "add_weight_W1_near_M3_M4", "weight_on_string_W2_near_M3")
+SHORT = dict(zip(CONDITIONS, ("normal", "cut1", "cut2.5", "cut4", "tapeM1M3", "tapeM3M4", "wM3", "wM3M4", "string")))
+CORRUPT = {("weight_on_string_W2_near_M3", "E8_log02"): "drone flipped, saturated commands"}
+
+GYRO = ("controller.r_roll", "controller.r_pitch", "controller.r_yaw")
+ACCELZ = "controller.accelz"
+ALTITUDE = "stateEstimate.z"
+
+ALPHAS = (1e-2, 1e-3)
+WINDOWS_S = (1.0, 2.0)
+SLIDE_S = 0.1
+LB_LAGS_PER_S = 10
+MAX_LAGS = 20
+MIN_WINDOWS = 5
+HOVER_BAND = 0.10          # +- fraction of the hover height
+GUARD_S = 0.25
+MARGIN_STEP_S = 0.5
+ACCELZ_GAIN = 0.05         # required relative decrease of the held-out gyro residual generalised variance
+IDENT_WINDOW_S, IDENT_STEP_S = 2.0, 0.5
+TARGET_FA, TARGET_DETECT, TARGET_IDENT = 2.0, 0.95, 0.85
+
+FAMILIES = ("LB", "LB-S", "LB-H", "F", "F-S")
+COMBINED = {"LB+F": ("LB-S", "F-S")}
+DETECTORS = ("LB-S", "F-S", "LB-H", "LB+F")      # family-wise detectors of sections 2 and 3
+PRIMARY = "LB+F"                                 # the identification test detailed in section 3
+
+
+# ------------------------------------------------------------------ data
+@dataclass(frozen=True)
+class Flight:
+    """One log: its airborne segments (DataFrames), of one condition and drone."""
+
+    condition: str
+    drone: str
+    log: str
+    segments: tuple
+
+    def arrays(self, channels) -> list:
+        return [s[list(channels)].to_numpy(dtype=np.float64) for s in self.segments]
+
+
+def setup(root=None) -> None:
+    """Point the benchmark at a CrazyPAD folder (default ``../shared/data/crazypad``), fail loudly if it is
+    missing, and read the sampling rate."""
+    global ROOT, FS
+    ROOT = Path(root) if root is not None else ROOT
+    if not (ROOT / "flights.csv").is_file():
+        raise FileNotFoundError(f"CrazyPAD data missing at {ROOT}: the benchmark needs ../shared/data/crazypad")
+    load_condition.cache_clear()
+    FS = float(np.median([s.attrs["fs"] for f in load_condition(NORMAL, (0.0, 0.0)) for s in f.segments]))
+
+
+@functools.lru_cache(maxsize=None)
+def load_condition(condition: str, margin: tuple) -> tuple:
+    """The flights (logs) of one condition with the (take-off, landing) margin in s; corrupt logs left out."""
+    segs = load_crazypad(ROOT, condition=condition, kind="controller", airborne=True,
+                         margin=tuple(pd.Timedelta(seconds=m) for m in margin))
+    flights: dict = {}
+    for s in segs:
+        if (condition, s.attrs["log"]) not in CORRUPT:
+            flights.setdefault((s.attrs["drone"], s.attrs["log"]), []).append(s)
+    return tuple(Flight(condition, d, log, tuple(v)) for (d, log), v in sorted(flights.items()))
+
+
+def records(flights, channels) -> list:
+    return [x for f in flights for x in f.arrays(channels)]
+
+
+def samples(seconds: float) -> int:
+    if FS is None:
+        raise RuntimeError("call setup() first")
+    return int(round(seconds * FS))
+
+
+# ------------------------------------------------------------------ models and tests
+@dataclass(frozen=True)
+class Model:
+    """A VAR fitted on some records, with the held-out residuals its tests are calibrated on."""
+
+    results: object
+    order: int
+    held: list
+
+
+def select_order(recs) -> int:
+    return int(tsfdi.select_order(recs, MAX_LAGS, "var", trend="c").selected)
+
+
+def fit_model(recs, order=None) -> Model:
+    """VAR(order) with an intercept (order by BIC when None) and its held-out residuals."""
+    order = select_order(recs) if order is None else order
+    spec = tsfdi.VAR(recs, order, trend="c")
+    return Model(spec.fit(), order, spec.held_out_residuals())
+
+
+def make_test(family: str, alpha: float, lags: int, calibrated: bool):
+    thr = tsfdi.ScaledChi2Threshold(alpha, min_windows=MIN_WINDOWS) if calibrated else "theoretical"
+    sidak = "sidak" if family.endswith("-S") else None
+    if family.startswith("LB"):
+        return tsfdi.LjungBox(lags=lags, alpha=alpha, correction=sidak, threshold=thr,
+                              multivariate="hosking" if family == "LB-H" else None)
+    return tsfdi.FTest(alpha=alpha, correction=sidak, threshold=thr)
+
+
+def calibration_window(held, window: int, order: int) -> int:
+    """``calibrate``'s ``window``: signal samples for held-out residuals that carry the model order (``.lags``),
+    residual samples (signal window minus the order) for a plain list."""
+    return window if getattr(held, "lags", None) is not None else window - order
+
+
+def tests_for(model: Model, families, alpha: float, window: int, calibrated: bool) -> dict:
+    """One test per family for windows of ``window`` signal samples: calibrated on the model's held-out residuals,
+    or with the theoretical threshold."""
+    lags = LB_LAGS_PER_S * round(window / FS)
+    out = {}
+    for fam in families:
+        test = make_test(fam, alpha, lags, calibrated)
+        if calibrated:
+            test.calibrate(model.held, window=calibration_window(model.held, window, model.order), step=1)
+        out[fam] = test
+    return out
+
+
+def independent_windows(tests: dict) -> int:
+    """Non-overlapping calibration windows behind calibrated tests (the smallest over them)."""
+    return min(int(t.calibration_windows_[1]) for t in tests.values())
+
+
+def flags(models: dict, tests: dict, x: np.ndarray, window: int, step: int, loglik: bool = False) -> dict:
+    """Every window of ``x`` through every model, for every family of ``tests`` (``tests[family][model]``):
+    family -> (channel rejections (n_windows, n_models, k) or None, model rejections (n_windows, n_models));
+    combined families reject when any part rejects; ``"loglik"`` -> likelihood score (n_windows, n_models)."""
+    rw = tsfdi.ResidualWindows({m: r.results for m, r in models.items()}).fit(x)
+    out = {"loglik": None}
+    for fam, test in tests.items():
+        ws = rw.statistics(test, window=window, step=step, loglik=loglik and out["loglik"] is None)
+        out["loglik"] = ws.loglik if out["loglik"] is None else out["loglik"]
+        out[fam] = (ws.channel_reject, ws.reject)
+    for fam, parts in COMBINED.items():
+        if all(p in out for p in parts):
+            out[fam] = (None, np.logical_or.reduce([out[p][1] for p in parts]))
+    return out
+
+
+# ------------------------------------------------------------------ choices (normal fitting flights only)
+@dataclass(frozen=True)
+class Choices:
+    """What was chosen on a set of normal flights."""
+
+    logs: tuple
+    climb_s: float
+    descent_s: float
+    margin: tuple
+    accelz_gain: float
+    channels: tuple
+    order: int
+
+    def line(self) -> str:
+        return (f"logs {','.join(log[-2:] for log in self.logs):<14} climb {self.climb_s:4.2f} s, descent "
+                f"{self.descent_s:4.2f} s -> margin ({self.margin[0]:g} s, {self.margin[1]:g} s); with accelz the "
+                f"held-out gyro gen. variance changes by {-100 * self.accelz_gain:+4.1f} % (added if <= "
+                f"{-100 * ACCELZ_GAIN:g} %) -> "
+                f"{'gyro + accelz' if ACCELZ in self.channels else 'gyro only'}; BIC order {self.order}")
+
+
+def _round_up(t: float) -> float:
+    return MARGIN_STEP_S * math.ceil((t + GUARD_S) / MARGIN_STEP_S - 1e-9)
+
+
+def transient_times(flights) -> tuple:
+    """Largest time from thrust-on to entering the hover band, and from leaving it to thrust-off (s)."""
+    climb, descent = [], []
+    for f in flights:
+        for s in f.segments:
+            t = (s.index - s.index[0]).total_seconds().to_numpy()
+            z = s[ALTITUDE].to_numpy()
+            hover = np.median(z[(t > 0.25 * t[-1]) & (t < 0.75 * t[-1])])
+            inside = np.abs(z - hover) <= HOVER_BAND * hover
+            climb.append(t[np.argmax(inside)])
+            descent.append(t[-1] - t[len(z) - 1 - np.argmax(inside[::-1])])
+    return max(climb), max(descent)
+
+
+def accelz_gain(flights) -> float:
+    """Mean relative decrease of the held-out gyro residual generalised variance when accelz is modelled too
+    (leave one log out among ``flights``, BIC order per channel set)."""
+    gains = []
+    for i, out in enumerate(flights):
+        fit = [f for j, f in enumerate(flights) if j != i]
+        logdet = []
+        for channels in (GYRO, GYRO + (ACCELZ,)):
+            recs = records(fit, channels)
+            res = tsfdi.VAR(recs, select_order(recs), trend="c").fit()
+            e = np.vstack([np.asarray(res.residuals(x))[:, :len(GYRO)] for x in out.arrays(channels)])
+            logdet.append(np.linalg.slogdet(np.cov(e.T))[1])
+        gains.append(-np.expm1(logdet[1] - logdet[0]))
+    return float(np.mean(gains))
+
+
+def choose(logs: tuple) -> Choices:
+    """Margin, channels and VAR order from the normal flights ``logs``."""
+    raw = [f for f in load_condition(NORMAL, (0.0, 0.0)) if f.log in logs]
+    climb, descent = transient_times(raw)
+    margin = (_round_up(climb), _round_up(descent))
+    flights = [f for f in load_condition(NORMAL, margin) if f.log in logs]
+    gain = accelz_gain(flights)
+    channels = GYRO + (ACCELZ,) if gain >= ACCELZ_GAIN else GYRO
+    return Choices(tuple(logs), climb, descent, margin, gain, channels, select_order(records(flights, channels)))
+
+
+def normal_logs() -> tuple:
+    return tuple(f.log for f in load_condition(NORMAL, (0.0, 0.0)))
+
+
+# ------------------------------------------------------------------ 1. false alarms (LOFO on normal flights)
+def false_alarms(folds=None, windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
+    """Flagged windows of every held-out normal flight: a DataFrame with one row per (fold, window, step, alpha,
+    mode, family, channel or "any"), the choices of every fold and the calibration windows per window length."""
+    logs = normal_logs()
+    rows, choices, ncal = [], [], {}
+    for k in range(len(logs)) if folds is None else folds:
+        fit_logs = tuple(log for i, log in enumerate(logs) if i != k)
+        ch = choose(fit_logs)
+        choices.append(ch)
+        flights = load_condition(NORMAL, ch.margin)
+        model = fit_model(records([f for f in flights if f.log in fit_logs], ch.channels), ch.order)
+        held_out = next(f for f in flights if f.log == logs[k])
+        for wsec in windows:
+            window = samples(wsec)
+            for alpha in alphas:
+                for mode in ("calibrated", "theoretical"):
+                    tests = tests_for(model, FAMILIES, alpha, window, mode == "calibrated")
+                    if mode == "calibrated":
+                        ncal.setdefault(wsec, []).append(independent_windows(tests))
+                    tests = {fam: {"m": t} for fam, t in tests.items()}
+                    for step_s in (wsec, SLIDE_S):
+                        for x in held_out.arrays(ch.channels):
+                            fl = flags({"m": model}, tests, x, window, samples(step_s))
+                            key = dict(fold=k, window_s=wsec, step_s=step_s, alpha=alpha, mode=mode)
+                            rows += _fa_rows(fl, ch.channels, key)
+    return pd.DataFrame(rows), choices, ncal
+
+
+def _fa_rows(fl: dict, channels, key: dict) -> list:
+    rows = []
+    for fam in FAMILIES:
+        rej_c, rej = fl[fam]
+        n = rej.shape[0]
+        rows.append({**key, "family": fam, "channel": "any", "flagged": int(rej[:, 0].sum()), "n": n})
+        if fam != "LB-H":
+            rows += [{**key, "family": fam, "channel": name.split(".")[-1], "flagged": int(rej_c[:, 0, c].sum()),
+                      "n": n} for c, name in enumerate(channels)]
+    return rows
+
+
+def expected_rate(family: str, alpha: float, k: int, any_channel: bool) -> float:
+    """Nominal false-alarm rate of one window: per channel alpha (Sidak: the per-channel share); any channel
+    1 - (1 - alpha)^k without correction (independent channels), alpha with Sidak or the joint test."""
+    if any_channel:
+        return -math.expm1(k * math.log1p(-alpha)) if family in ("LB", "F") else alpha
+    return -math.expm1(math.log1p(-alpha) / k) if family.endswith("-S") else alpha
+
+
+def binomial_band(n: int, p: float) -> tuple:
+    """Two-sided 99 % band of the rate of ``n`` Bernoulli(p) trials."""
+    return stats.binom.ppf(0.005, n, p) / n, stats.binom.ppf(0.995, n, p) / n
+
+
+def fa_table(fa: pd.DataFrame, k: int) -> pd.DataFrame:
+    """Counts and rates per (window, step, alpha, family, channel group, mode): each channel, the channels
+    pooled (one trial per window and channel) and "any"; with the expected rate and its 99 % band."""
+    out = []
+    for key, g in fa.groupby(["window_s", "step_s", "alpha", "family", "mode"], sort=False):
+        chans = [c for c in g.channel.unique() if c != "any"]
+        groups = [(c, g[g.channel == c]) for c in chans]
+        groups += [("pooled", g[g.channel != "any"])] if chans else []
+        groups += [("any", g[g.channel == "any"])]
+        for chan, rows in groups:
+            n, x = int(rows.n.sum()), int(rows.flagged.sum())
+            p = expected_rate(key[3], key[2], k, chan == "any")
+            lo, hi = binomial_band(n, p)
+            out.append(dict(zip(["window_s", "step_s", "alpha", "family", "mode"], key), channel=chan, flagged=x,
+                            n=n, rate=x / n, expected=p, lo=lo, hi=hi))
+    return pd.DataFrame(out)
+
+
+def report_false_alarms(tab: pd.DataFrame) -> None:
+    for (wsec, step_s), block in tab.groupby(["window_s", "step_s"]):
+        indep = step_s == wsec
+        kind = "non-overlapping: independent trials" if indep else "sliding: dependent windows, rate only"
+        print(f"\nwindow {wsec:g} s, step {step_s:g} s ({kind})")
+        cell = f"{'flagged/n':>10} {'rate':>6} {'99% band':>13} in"
+        print(f"{'alpha':>6} {'test':<5} {'channel':<8} {'expected':>8} | {'calibrated':^37} | {'theoretical':^37}")
+        print(f"{'':>6} {'':<5} {'':<8} {'':>8} | {cell} | {cell}")
+        for (alpha, fam, chan), g in block.groupby(["alpha", "family", "channel"], sort=False):
+            cells = []
+            for mode in ("calibrated", "theoretical"):
+                r = g[g["mode"] == mode].iloc[0]
+                band = f"[{r.lo:.3f},{r.hi:.3f}]" if indep else "n/a"
+                inside = ("yes" if r.lo <= r.rate <= r.hi else "NO ") if indep else "   "
+                cells.append(f"{r.flagged:>4}/{r.n:<5} {r.rate:6.3f} {band:>13} {inside}")
+            print(f"{alpha:>6g} {fam:<5} {chan:<8} {g.expected.iloc[0]:8.4f} | {cells[0]} | {cells[1]}")
+
+
+def fa_verdicts(tab: pd.DataFrame) -> list:
+    """PASS/FAIL: calibrated, alpha 1e-2, 2 s windows; per channel pooled (LB, F) and family-wise (LB-S, LB-H, F-S)."""
+    sel = tab[(tab["mode"] == "calibrated") & (tab.alpha == 1e-2) & (tab.window_s == 2.0)
+              & (((tab.channel == "pooled") & tab.family.isin(["LB", "F"]))
+                 | ((tab.channel == "any") & tab.family.isin(["LB-S", "LB-H", "F-S"])))]
+    lines = []
+    for r in sel.sort_values(["step_s", "family"], ascending=[False, True]).itertuples():
+        what = "per channel (pooled)" if r.channel == "pooled" else "family-wise (any)"
+        lines.append(f"  {'PASS' if r.rate <= TARGET_FA * r.alpha else 'FAIL'}  {r.family:<5} {what:<21} step "
+                     f"{r.step_s:g} s: {r.flagged}/{r.n} = {r.rate:.4f} vs <= {TARGET_FA * r.alpha:g}")
+    return lines
+
+
+# ------------------------------------------------------------------ 2. detection per condition
+def detection(choice: Choices, conditions=CONDITIONS[1:], windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
+    """Flagged non-overlapping windows of every faulty flight against the VAR of all normal flights; and the
+    calibration windows per window length."""
+    model = fit_model(records(load_condition(NORMAL, choice.margin), choice.channels), choice.order)
+    families = sorted({p for fam in DETECTORS for p in COMBINED.get(fam, (fam,))})
+    rows, ncal = [], {}
+    for wsec in windows:
+        window = samples(wsec)
+        for alpha in alphas:
+            tests = tests_for(model, families, alpha, window, True)
+            ncal[wsec] = independent_windows(tests)
+            tests = {fam: {"m": t} for fam, t in tests.items()}
+            for cond in conditions:
+                for f in load_condition(cond, choice.margin):
+                    for x in f.arrays(choice.channels):
+                        fl = flags({"m": model}, tests, x, window, window)
+                        rows += [{"condition": cond, "drone": f.drone, "log": f.log, "window_s": wsec,
+                                  "alpha": alpha, "family": fam, "flagged": int(fl[fam][1].sum()),
+                                  "n": int(fl[fam][1].shape[0])} for fam in DETECTORS]
+    return pd.DataFrame(rows), ncal
+
+
+def report_detection(det: pd.DataFrame) -> None:
+    for alpha, d in det.groupby("alpha", sort=False):
+        tab = d.groupby(["condition", "drone", "window_s", "family"], sort=False)[["flagged", "n"]].sum()
+        pct = (100 * tab.flagged / tab.n).unstack(["window_s", "family"])
+        n2 = tab.n.xs(max(d.window_s), level="window_s").groupby(level=[0, 1], sort=False).first()
+        pct.index = [f"{SHORT[c]} {dr} ({n2.loc[(c, dr)]})" for c, dr in pct.index]
+        pct.columns = [f"{fam} {w:g}s" for w, fam in pct.columns]
+        print(f"\nalpha = {alpha:g}: percent of windows flagged (rows: condition, drone, number of "
+              f"{max(d.window_s):g} s windows)")
+        print(pct.round(1).to_string())
+
+
+def detection_verdicts(det: pd.DataFrame) -> list:
+    d = det[(det.condition == "cut_propeller_M3_4mm_4mm_39mm") & (det.window_s == 2.0)]
+    lines = []
+    for (alpha, fam), g in d.groupby(["alpha", "family"], sort=False):
+        r = g.flagged.sum() / g.n.sum()
+        lines.append(f"  {'PASS' if r >= TARGET_DETECT else 'FAIL'}  alpha {alpha:g} {fam:<5} cut4 2 s: "
+                     f"{g.flagged.sum()}/{g.n.sum()} = {100 * r:.1f} % vs >= {100 * TARGET_DETECT:g} %")
+    return lines
+
+
+# ------------------------------------------------------------------ 3. identification
+def identification(choice: Choices, conditions=CONDITIONS, alphas=ALPHAS, held_out=None) -> tuple:
+    """Label of every 2 s window of every held-out flight, per test family, alpha and rule (one row per window);
+    and the fewest calibration windows behind a model's tests.
+
+    ``held_out``: optional (condition, log) pairs to hold out (default every flight of ``conditions``)."""
+    window, step = samples(IDENT_WINDOW_S), samples(IDENT_STEP_S)
+    parts = sorted({p for fam in DETECTORS for p in COMBINED.get(fam, (fam,))})
+    flights = {c: load_condition(c, choice.margin) for c in conditions}
+    full = {c: fit_model(records(fl, choice.channels)) for c, fl in flights.items()}
+    full_tests = {(c, a): tests_for(m, parts, a, window, True) for c, m in full.items() for a in alphas}
+    ncal = [independent_windows(t) for t in full_tests.values()]
+    rows = []
+    for cond in conditions:
+        for f in flights[cond]:
+            if held_out is not None and (cond, f.log) not in held_out:
+                continue
+            own = fit_model(records([g for g in flights[cond] if g.log != f.log], choice.channels))
+            models = {**full, cond: own}
+            for alpha in alphas:
+                per_model = {c: full_tests[(c, alpha)] for c in conditions}
+                per_model[cond] = tests_for(own, parts, alpha, window, True)
+                ncal.append(independent_windows(per_model[cond]))
+                tests = {fam: {c: per_model[c][fam] for c in conditions} for fam in parts}
+                for seg, x in enumerate(f.arrays(choice.channels)):
+                    fl = flags(models, tests, x, window, step, loglik=True)
+                    for fam in DETECTORS:
+                        for rule in ("paper", "likelihood"):
+                            labels = decide(~fl[fam][1], rule, loglik=fl["loglik"])
+                            rows += [{"condition": cond, "drone": f.drone, "log": f.log, "segment": seg,
+                                      "alpha": alpha, "family": fam, "rule": rule, "order": own.order,
+                                      "label": conditions[lb] if lb >= 0 else ("ambiguous" if lb == -2 else "none")}
+                                     for lb in labels]
+    return pd.DataFrame(rows), min(ncal)
+
+
+def with_outcome(ident: pd.DataFrame) -> pd.DataFrame:
+    out = np.where(ident.label == ident.condition, "correct",
+                   np.where(ident.label.isin(["ambiguous", "none"]), ident.label, "wrong"))
+    return ident.assign(outcome=out)
+
+
+def ident_summary(ident: pd.DataFrame) -> pd.DataFrame:
+    """Mean over conditions of the percent of correctly identified windows, per alpha, family and rule."""
+    ident = with_outcome(ident)
+    per_cond = ident.groupby(["alpha", "family", "rule", "condition"]).outcome.apply(lambda o: (o == "correct").mean())
+    return 100 * per_cond.groupby(level=[0, 1, 2]).mean().unstack("rule")
+
+
+def report_identification(ident: pd.DataFrame, conditions=CONDITIONS) -> None:
+    ident = with_outcome(ident)
+    order = [SHORT[c] for c in conditions if c in set(ident.condition)]
+    print(f"\nmean over conditions of the percent of correct windows, {IDENT_WINDOW_S:g} s windows, step "
+          f"{IDENT_STEP_S:g} s (paper: correct unique; likelihood: correct label)")
+    print(ident_summary(ident).round(1).to_string())
+    alpha = max(ident.alpha)
+    for rule, d in ident[(ident.family == PRIMARY) & (ident.alpha == alpha)].groupby("rule", sort=False):
+        print(f"\n{PRIMARY}, alpha {alpha:g}, {rule} rule: percent of the held-out condition's windows")
+        tab = pd.crosstab(d.condition, d.outcome, normalize="index")
+        tab = (100 * tab.reindex(columns=["correct", "wrong", "ambiguous", "none"]).fillna(0.0)).round(1)
+        drones = d.groupby("condition").drone.agg(lambda s: "+".join(sorted(s.unique())))
+        by_drone = d.groupby(["condition", "drone"]).outcome.apply(lambda o: 100 * (o == "correct").mean())
+        tab["drones"] = drones
+        tab["correct per drone"] = [" ".join(f"{dr}:{by_drone[(c, dr)]:.0f}" for dr in drones[c].split("+"))
+                                    for c in tab.index]
+        tab["windows"] = d.groupby("condition").size()
+        tab.index = tab.index.map(SHORT)
+        print(tab.reindex(order).to_string())
+        conf = pd.crosstab(d.condition.map(SHORT), d.label.map(lambda v: SHORT.get(v, v)), normalize="index")
+        cols = order + [c for c in ("ambiguous", "none") if c in conf.columns]
+        print(f"confusion ({rule} rule, percent of the true condition's windows; rows true, columns decided):")
+        print((100 * conf.reindex(index=order, columns=cols).fillna(0.0)).round(0).astype(int).to_string())
+
+
+def ident_verdicts(ident: pd.DataFrame) -> list:
+    summary = ident_summary(ident)
+    return [f"  {'PASS' if v >= 100 * TARGET_IDENT else 'FAIL'}  alpha {alpha:g} {PRIMARY} {rule:<10} rule: "
+            f"mean correct {v:.1f} % vs >= {100 * TARGET_IDENT:g} %"
+            for alpha in sorted(set(ident.alpha), reverse=True) for rule, v in summary.loc[(alpha, PRIMARY)].items()]
+
+
+# ------------------------------------------------------------------ main
+def print_data() -> None:
+    print(f"CrazyPAD benchmark (issue 17) on {ROOT}, controller logs, fs = {FS:.2f} Hz")
+    for (cond, log), why in CORRUPT.items():
+        print(f"excluded: {cond}/{log} ({why})")
+    print("flights per condition (a flight = one log = 2 airborne segments):")
+    for c in CONDITIONS:
+        drones = pd.Series([f.drone for f in load_condition(c, (0.0, 0.0))]).value_counts().sort_index()
+        print(f"  {SHORT[c]:<9} {c:<36} {drones.sum()} logs ({', '.join(f'{d}: {n}' for d, n in drones.items())})")
+
+
+def main() -> None:
+    t0 = time.perf_counter()
+    setup()
+    print_data()
+
+    fa, fold_choices, ncal1 = false_alarms()
+    choice = choose(normal_logs())
+    det, ncal2 = detection(choice)
+    ident, ncal3 = identification(choice)
+    print("\n== choices (made on normal flights only: per fold on its 4 fitting logs; sections 2-3 on all 5) ==")
+    for k, ch in enumerate(fold_choices):
+        print(f"  fold {k} (held out {normal_logs()[k]}): {ch.line()}")
+    print(f"  sections 2-3 (all normal): {choice.line()}")
+    print(f"  Ljung-Box lags fixed a priori: {LB_LAGS_PER_S} per s of window (1 s: {LB_LAGS_PER_S}, 2 s: "
+          f"{2 * LB_LAGS_PER_S}); thresholds: ScaledChi2Threshold(min_windows={MIN_WINDOWS}) calibrated on "
+          "held_out_residuals() (one segment held out at a time), step 1")
+    print("  independent calibration windows: section 1 "
+          + ", ".join(f"{w:g} s: {min(v)}-{max(v)}" for w, v in ncal1.items())
+          + "; section 2 " + ", ".join(f"{w:g} s: {v}" for w, v in ncal2.items())
+          + f"; section 3 (2 s, per condition model): >= {ncal3}")
+    orders = ident.groupby("condition").order.agg(lambda s: sorted(set(s)))
+    print("  section 3 BIC orders of the held-out flights' own-condition models: "
+          + ", ".join(f"{SHORT[c]} {orders[c]}" for c in CONDITIONS))
+    print(f"  section 3 detailed test {PRIMARY} (LB-S and F-S), fixed before running")
+
+    print("\n== 1. false alarms on held-out normal flights (leave one log out, 5 folds) ==")
+    tab = fa_table(fa, len(choice.channels))
+    report_false_alarms(tab)
+    print("\ntarget: realised FA <= 2 alpha at alpha = 1e-2, 2 s windows, calibrated:")
+    print("\n".join(fa_verdicts(tab)))
+
+    print("\n== 2. detection per condition (VAR on all normal flights, calibrated tests, non-overlapping windows) ==")
+    report_detection(det)
+    print("\ntarget: cut_propeller_M3_4mm_4mm_39mm >= 95 % of its 2 s windows:")
+    print("\n".join(detection_verdicts(det)))
+
+    print("\n== 3. identification among the 9 conditions (per-condition VARs, leave one flight out within the "
+          "condition) ==")
+    report_identification(ident)
+    print(f"\ntarget: mean correct identification over conditions >= 85 % at 2 s ({PRIMARY}):")
+    print("\n".join(ident_verdicts(ident)))
+    print(f"\nrun time {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
