@@ -232,3 +232,25 @@ def test_singular_removal_names_the_record():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             tsfdi.AR([np.arange(300.0), simulate_ar([-1.3, 0.6], 300, rng)], 2, "c").held_out_residuals()
+
+
+def test_groups_hold_out_records_together():
+    """groups: the records of one label are held out together (e.g. the two flights of one log)."""
+    records = var_records()
+    spec = tsfdi.VAR(records, 2, "c")
+    held = spec.held_out_residuals(groups=["a", "a", "b"])
+    assert len(held) == 3 and held.lags == spec.max_lag
+    without_a = tsfdi.VAR([records[2]], 2, "c").fit()
+    without_b = tsfdi.VAR(records[:2], 2, "c").fit()
+    for h, ref in zip(held, (without_a.residuals(records[0]), without_a.residuals(records[1]),
+                             without_b.residuals(records[2]))):
+        np.testing.assert_allclose(np.asarray(h), np.asarray(ref), rtol=1e-8, atol=1e-12)
+    # one label per record: the same as no groups
+    for h, ref in zip(spec.held_out_residuals(groups=[0, 1, 2]), spec.held_out_residuals()):
+        np.testing.assert_allclose(np.asarray(h), np.asarray(ref), rtol=1e-12)
+    with pytest.raises(ValueError, match="one label per record"):
+        spec.held_out_residuals(groups=["a", "b"])
+    with pytest.raises(ValueError, match="two distinct labels"):
+        spec.held_out_residuals(groups=["a", "a", "a"])
+    with pytest.raises(ValueError, match="blocks"):
+        spec.held_out_residuals(blocks=2, groups=["a", "a", "b"])

@@ -9,7 +9,7 @@ defined by its model (data + options) and its parameters.
 from __future__ import annotations
 
 import warnings
-from functools import cached_property
+from functools import cached_property, partial
 from typing import Any, ClassVar
 
 import numpy as np
@@ -181,7 +181,7 @@ class LinearTimeSeriesModel:
         return res
 
     # --- held-out residuals ------------------------------------------------------------------------
-    def held_out_residuals(self, blocks: int | None = None) -> list:
+    def held_out_residuals(self, blocks: int | None = None, *, groups: Any = None) -> list:
         """Residuals of each record (or block) through the model fitted on all the *other* records (blocks).
 
         The in-sample residuals :attr:`~LinearTimeSeriesResults.resid` are those of the data the model was
@@ -224,6 +224,10 @@ class LinearTimeSeriesModel:
             Number of contiguous blocks each record is cut into (``>= 2``). Default: ``None``, one held-out
             series per record when the spec has several records, 10 blocks for a single record. Every
             block must hold at least ``df_eq + 1`` regression rows.
+        groups : sequence, optional
+            One label per record (``blocks=None`` only): the records sharing a label are held out together,
+            e.g. the flights of one log or of one airframe, so that each is filtered by a model fitted on none
+            of them.
 
         Returns
         -------
@@ -240,7 +244,8 @@ class LinearTimeSeriesModel:
         Raises
         ------
         ValueError
-            ``blocks`` not an integer >= 2; a block with fewer than ``df_eq + 1`` rows; a record (block)
+            ``blocks`` not an integer >= 2; ``groups`` not one label per record, with ``blocks``, or a single
+            group; a block with fewer than ``df_eq + 1`` rows; a record (block)
             whose removal leaves a singular regression (fewer rows than coefficients, or collinear
             regressors), named in the message.
 
@@ -273,16 +278,26 @@ class LinearTimeSeriesModel:
                 parts.append(list(zip(edges[:-1].tolist(), edges[1:].tolist())))
         grams = [self._part_grams(i, p) for i, p in enumerate(parts)]
         total = sum(g.sum(axis=0) for g in grams)
+        label = self._held_out_groups(groups, blocks)
         out = []
         for i, record_parts in enumerate(parts):
             series = []
             for b, (lo, hi) in enumerate(record_parts):
-                what = (self._record_name(i) if blocks is None
-                        else f"block {b} (rows {lo}..{hi - 1}) of {self._record_name(i)}")
+                if label is None:
+                    what = (self._record_name(i) if blocks is None
+                            else f"block {b} (rows {lo}..{hi - 1}) of {self._record_name(i)}")
+                    removed, gone = grams[i][b], hi - lo
+                    design = partial(self._design_without, {i: (lo, hi)})
+                else:
+                    members = [r for r in range(len(parts)) if label[r] == label[i]]
+                    what = f"group {label[i]!r} ({', '.join(self._record_name(r) for r in members)})"
+                    removed = sum(grams[r][0] for r in members)
+                    gone = sum(nrows[r] for r in members)
+                    design = partial(self._design_without, {r: (0, nrows[r]) for r in members})
                 coef = None
-                if sum(nrows) - (hi - lo) >= k:
-                    coef = gram_solve(total - grams[i][b], k, lambda: self._design_without(i, lo, hi),
-                                      what=f"the regressor without {what}", stacklevel=4)
+                if sum(nrows) - gone >= k:
+                    coef = gram_solve(total - removed, k, design, what=f"the regressor without {what}",
+                                      stacklevel=4)
                 if coef is None:
                     raise ValueError(f"removing {what} leaves a singular regression: the other "
                                      f"{'records' if blocks is None else 'rows'} do not determine the {k} "
@@ -319,12 +334,29 @@ class LinearTimeSeriesModel:
         Z = np.hstack([X, Y])
         return np.stack([Z[lo:hi].T @ Z[lo:hi] for lo, hi in parts])
 
-    def _design_without(self, i: int, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
-        """Stacked regressor and target of all records without rows ``lo .. hi - 1`` of record ``i``."""
+    def _held_out_groups(self, groups: Any, blocks: int | None) -> list | None:
+        """The validated group label of every record (``None`` without groups)."""
+        if groups is None:
+            return None
+        if blocks is not None:
+            raise ValueError("groups holds out whole records: it cannot be combined with blocks")
+        if isinstance(groups, (str, bytes)) or not hasattr(groups, "__len__"):
+            raise ValueError(f"groups must be a sequence of one label per record, got {groups!r}")
+        label = list(groups)
+        if len(label) != len(self.records):
+            raise ValueError(f"groups must hold one label per record ({len(self.records)}), got {len(label)}")
+        if len(set(label)) < 2:
+            raise ValueError("groups must hold at least two distinct labels: holding out every record leaves "
+                             "nothing to fit")
+        return label
+
+    def _design_without(self, rows: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Stacked regressor and target of all records without the rows ``rows[i] = (lo, hi)`` of record ``i``."""
         xs, ys = [], []
         for r in range(len(self.records)):
             X, Y = self._record_design(r)
-            keep = np.r_[0:lo, hi:X.shape[0]] if r == i else slice(None)
+            lo, hi = rows.get(r, (0, 0))
+            keep = np.r_[0:lo, hi:X.shape[0]]
             xs.append(X[keep])
             ys.append(Y[keep])
         return np.vstack(xs), np.vstack(ys)
