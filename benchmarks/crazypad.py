@@ -24,9 +24,8 @@ Choices, all made on normal flights only (in section 1 on the 4 fitting logs of 
 - thresholds: ``test.calibrate(spec.held_out_residuals(), window=..., step=1)`` with the library's calibrated
   threshold (``ScaledChi2Threshold``, see its docstring). Its default of 30 non-overlapping calibration windows
   cannot be met with 2 s windows on these short flights (4 normal logs hold 16), so ``min_windows=5`` is passed;
-  the number of independent windows behind the calibrations is printed. ``held_out_residuals()`` holds out one
-  *segment* at a time, so the other segment of the same log stays in that fit (the library cannot hold out
-  groups of records).
+  the number of independent windows behind the calibrations is printed. ``held_out_residuals(groups=logs)``
+  holds out the two segments of one log together, as the folds do.
 
 Tests: ``LB`` Ljung-Box per channel, ``LB-S`` the same with Sidak correction over the channels, ``LB-H``
 multivariate Ljung-Box (Hosking), ``F`` / ``F-S`` the variance F test without / with Sidak correction, ``LB+F``
@@ -165,11 +164,15 @@ def select_order(recs) -> int:
     return int(tsfdi.select_order(recs, MAX_LAGS, "var", trend="c").selected)
 
 
-def fit_model(recs, order=None) -> Model:
-    """VAR(order) with an intercept (order by BIC when None) and its held-out residuals."""
+def fit_model(flights, channels, order=None) -> Model:
+    """VAR(order) with an intercept (order by BIC when None) on the flights' segments, and its held-out
+    residuals: the two segments of one log are held out together (a log is one flight of the folds)."""
+    recs = records(flights, channels)
     order = select_order(recs) if order is None else order
     spec = tsfdi.VAR(recs, order, trend="c")
-    return Model(spec.fit(), order, spec.held_out_residuals())
+    logs = [f.log for f in flights for _ in f.segments]
+    groups = logs if len(set(logs)) > 1 else None      # one log: its two segments held out in turn
+    return Model(spec.fit(), order, spec.held_out_residuals(groups=groups))
 
 
 def make_test(family: str, alpha: float, lags: int, calibrated: bool):
@@ -302,7 +305,7 @@ def false_alarms(folds=None, windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
         ch = choose(fit_logs)
         choices.append(ch)
         flights = load_condition(NORMAL, ch.margin)
-        model = fit_model(records([f for f in flights if f.log in fit_logs], ch.channels), ch.order)
+        model = fit_model([f for f in flights if f.log in fit_logs], ch.channels, ch.order)
         held_out = next(f for f in flights if f.log == logs[k])
         for wsec in windows:
             window = samples(wsec)
@@ -398,7 +401,7 @@ def fa_verdicts(tab: pd.DataFrame) -> list:
 def detection(choice: Choices, conditions=CONDITIONS[1:], windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
     """Flagged non-overlapping windows of every faulty flight against the VAR of all normal flights; and the
     calibration windows per window length."""
-    model = fit_model(records(load_condition(NORMAL, choice.margin), choice.channels), choice.order)
+    model = fit_model(load_condition(NORMAL, choice.margin), choice.channels, choice.order)
     families = sorted({p for fam in DETECTORS for p in COMBINED.get(fam, (fam,))})
     rows, ncal = [], {}
     for wsec in windows:
@@ -448,7 +451,7 @@ def identification(choice: Choices, conditions=CONDITIONS, alphas=ALPHAS, held_o
     window, step = samples(IDENT_WINDOW_S), samples(IDENT_STEP_S)
     parts = sorted({p for fam in DETECTORS for p in COMBINED.get(fam, (fam,))})
     flights = {c: load_condition(c, choice.margin) for c in conditions}
-    full = {c: fit_model(records(fl, choice.channels)) for c, fl in flights.items()}
+    full = {c: fit_model(fl, choice.channels) for c, fl in flights.items()}
     full_tests = {(c, a): tests_for(m, parts, a, window, True) for c, m in full.items() for a in alphas}
     ncal = [independent_windows(t) for t in full_tests.values()]
     rows = []
@@ -456,7 +459,7 @@ def identification(choice: Choices, conditions=CONDITIONS, alphas=ALPHAS, held_o
         for f in flights[cond]:
             if held_out is not None and (cond, f.log) not in held_out:
                 continue
-            own = fit_model(records([g for g in flights[cond] if g.log != f.log], choice.channels))
+            own = fit_model([g for g in flights[cond] if g.log != f.log], choice.channels)
             models = {**full, cond: own}
             for alpha in alphas:
                 per_model = {c: full_tests[(c, alpha)] for c in conditions}
@@ -546,7 +549,7 @@ def main() -> None:
     print(f"  sections 2-3 (all normal): {choice.line()}")
     print(f"  Ljung-Box lags fixed a priori: {LB_LAGS_PER_S} per s of window (1 s: {LB_LAGS_PER_S}, 2 s: "
           f"{2 * LB_LAGS_PER_S}); thresholds: ScaledChi2Threshold(min_windows={MIN_WINDOWS}) calibrated on "
-          "held_out_residuals() (one segment held out at a time), step 1")
+          "held_out_residuals(groups=logs) (both segments of a log held out together), step 1")
     print("  independent calibration windows: section 1 "
           + ", ".join(f"{w:g} s: {min(v)}-{max(v)}" for w, v in ncal1.items())
           + "; section 2 " + ", ".join(f"{w:g} s: {v}" for w, v in ncal2.items())
