@@ -101,7 +101,10 @@ def test_confusion_closed_form():
                     nchan={"var": 3}).detection_rates().loc[("var", "whiteness", 5.0)]
     p0 = 1 - 0.99 ** 3
     assert (d2["disjoint_windows"], d2["disjoint_alarms"]) == (4, 2)
-    assert d2["false_alarm_pvalue"] == pytest.approx(1 - (1 - p0) ** 4 - 4 * p0 * (1 - p0) ** 3)
+    # two-sided: twice the smaller tail, P(X >= 2) here
+    assert d2["false_alarm_pvalue"] == pytest.approx(2 * (1 - (1 - p0) ** 4 - 4 * p0 * (1 - p0) ** 3))
+    assert (d2["disjoint_band_low"], d2["disjoint_band_high"]) == tuple(stats.binom.ppf([0.005, 0.995], 4, p0))
+    assert d2["false_alarm_in_band"] == (d2["disjoint_band_low"] <= 2 <= d2["disjoint_band_high"])
     with pytest.raises(ValueError, match="window"):
         ev.table4(7.0)
 

@@ -149,14 +149,16 @@ class Evaluation:
 
     # -- detection
     def detection_rates(self) -> pd.DataFrame:
-        """Per model, method and window length: ``false_alarm`` (percent of healthy-record windows flagged),
+        r"""Per model, method and window length: ``false_alarm`` (percent of healthy-record windows flagged),
         ``expected_false_alarm`` (percent, ``1 - (1 - alpha)^k`` for ``k`` channels tested at ``alpha``),
         ``disjoint_windows`` and ``disjoint_alarms`` (the healthy windows that do not overlap: in each record those
         starting at a multiple of the window length from its first window, and how many of them are flagged),
-        ``false_alarm_pvalue`` (binomial probability of at least ``disjoint_alarms`` alarms in
-        ``disjoint_windows`` independent windows at the expected rate: sliding windows 1 s apart share most of
-        their samples, so one excursion flags a run of them and only the disjoint ones can be counted as
-        independent trials; small values mean more false alarms than the expectation allows),
+        ``false_alarm_pvalue`` (two-sided binomial p-value of ``disjoint_alarms`` alarms in ``disjoint_windows``
+        independent windows at the expected rate, :math:`\min(1, 2\min(P(X \le x), P(X \ge x)))`: sliding windows
+        1 s apart share most of their samples, so one excursion flags a run of them and only the disjoint ones can
+        be counted as independent trials; small values mean more -- or fewer -- false alarms than the expectation
+        allows), ``disjoint_band_low`` / ``disjoint_band_high`` (the two-sided 99 % binomial band of that count)
+        and ``false_alarm_in_band`` (the count lies inside it: the judgement of the false-alarm rate),
         ``missed_fault`` (percent of fault-record windows starting after the failure not flagged),
         ``missed_records`` (fault records with no alarm after the failure), ``delay_median`` and ``delay_max``
         (s, from the failure to the end of the first flagged window ending after it)."""
@@ -182,11 +184,15 @@ class Evaluation:
             k = self.nchan.get(key[0], 1)
             p0 = 1.0 - (1.0 - a) ** k
             n_dis, x_dis = len(disjoint), int(disjoint["alarm"].sum())
+            lo, hi = stats.binom.ppf([0.005, 0.995], n_dis, p0) if n_dis else (np.nan, np.nan)
+            p_two = min(1.0, 2.0 * min(stats.binom.cdf(x_dis, n_dis, p0), stats.binom.sf(x_dis - 1, n_dis, p0))) \
+                if n_dis else np.nan
             rows.append({"model": key[0], "method": key[1], "window": key[2],
                          "false_alarm": 100.0 * h["alarm"].mean() if len(h) else np.nan,
                          "expected_false_alarm": 100.0 * p0, "healthy_windows": len(h),
                          "disjoint_windows": n_dis, "disjoint_alarms": x_dis,
-                         "false_alarm_pvalue": float(stats.binom.sf(x_dis - 1, n_dis, p0)) if n_dis else np.nan,
+                         "false_alarm_pvalue": p_two, "disjoint_band_low": lo, "disjoint_band_high": hi,
+                         "false_alarm_in_band": bool(lo <= x_dis <= hi) if n_dis else False,
                          "missed_fault": 100.0 * (1.0 - f["alarm"].mean()) if len(f) else np.nan,
                          "missed_records": missed,
                          "delay_median": float(np.median(delays)) if delays else np.nan,
