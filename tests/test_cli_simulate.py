@@ -48,3 +48,30 @@ def test_no_command_prints_help_and_registry(capsys):
 def test_module_entry_point():
     r = subprocess.run([sys.executable, "-m", "tsfdi.cli", "simulate", "--help"], capture_output=True, text=True)
     assert r.returncode == 0 and "--records-per-case" in r.stdout
+
+
+def test_simulate_fleet_writes_the_drawn_aircraft(tmp_path):
+    from tsfdi.datasets.hexacopter import FLEET_COORDS, FleetSpread
+
+    out = tmp_path / "f.nc"
+    args = ["simulate", "--records-per-case", "1", "--duration", "1", "--failure-time", "0.5", "--states",
+            "healthy,rotor1", "--turbulence", "light", "--seed", "3"]
+    assert main(args + ["--out", str(out), "--fleet", "mass=0.1,cg_offset=0.02"]) == 0
+    ref = make_hexacopter_dataset(1, seed=3, duration=1.0, failure_time=0.5, states=("healthy", "rotor1"),
+                                  turbulence=("light",), fleet=FleetSpread(mass=0.1, cg_offset=0.02))
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        for name in FLEET_COORDS:
+            np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
+        np.testing.assert_array_equal(ds["roll"].values, ref["roll"].values)
+        assert "fleet" in ds.attrs
+    assert main(args + ["--out", str(tmp_path / "s.nc"), "--fleet", "default", "--shipped"]) == 0
+    with xr.open_dataset(tmp_path / "s.nc", engine="h5netcdf") as ds:
+        assert set(FLEET_COORDS) <= set(ds.coords)
+
+
+def test_simulate_fleet_bad_spec_exits_2(tmp_path, capsys):
+    base = ["simulate", "--out", str(tmp_path / "x.nc"), "--duration", "1"]
+    assert main(base + ["--fleet", "mass=2"]) == 2 and "mass" in capsys.readouterr().err
+    assert main(base + ["--fleet", "weight=0.1"]) == 2 and "fleet" in capsys.readouterr().err
+    r = subprocess.run([sys.executable, "-m", "tsfdi.cli", "simulate", "--help"], capture_output=True, text=True)
+    assert "--fleet" in r.stdout and "cg_offset" in r.stdout

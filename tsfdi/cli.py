@@ -38,6 +38,14 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
                    help="comma-separated Dryden levels: none, light, moderate, severe")
     p.add_argument("--dt", type=float, default=0.001, help="integration step in s")
     p.add_argument("--fs", type=float, default=100.0, help="output sampling frequency in Hz")
+    p.add_argument("--fleet", default=None, metavar="SPEC",
+                   help="a fleet of aircraft of one type (Hansen et al.): each record's mass, centre-of-gravity "
+                        "offset, motor constants and inertia drawn from its seed, uniformly around the nominal "
+                        "aircraft, and written as the record coordinates mass (kg), cg_x, cg_y (m), "
+                        "motor_constant, inertia (factors). SPEC is 'default' (mass=0.05, cg_offset=0.01, "
+                        "motor_constant=0.03, inertia=0.05) or comma-separated NAME=VALUE overriding some of "
+                        "them, e.g. 'mass=0.1,cg_offset=0.02' (relative spreads except cg_offset in m; see "
+                        "tsfdi.datasets.hexacopter.FleetSpread). Default: one aircraft, no fleet")
     p.add_argument("--shipped", action="store_true",
                    help="write only the shipped variables packed as int32 counts (see data/README.md); "
                         "default: every channel as float64")
@@ -46,14 +54,15 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
 @command("simulate", "simulate hexacopter records (Dryden turbulence, rotor failures) to a netCDF file",
          _simulate_args)
 def _simulate(args: argparse.Namespace) -> int:
-    from tsfdi.datasets.hexacopter import encode_for_file, make_hexacopter_dataset
+    from tsfdi.datasets.hexacopter import FleetSpread, encode_for_file, make_hexacopter_dataset
 
     t0 = time.perf_counter()
+    fleet = None if args.fleet is None else FleetSpread.from_spec(args.fleet)
     ds = make_hexacopter_dataset(args.records_per_case, seed=args.seed, duration=args.duration,
                                  failure_time=args.failure_time, speed=args.speed,
                                  states=tuple(s.strip() for s in args.states.split(",")),
                                  turbulence=tuple(s.strip() for s in args.turbulence.split(",")),
-                                 dt=args.dt, fs=args.fs)
+                                 dt=args.dt, fs=args.fs, fleet=fleet)
     if args.shipped:
         ds, enc = encode_for_file(ds)
     else:

@@ -1,11 +1,21 @@
-"""Hexacopter simulator: trim equilibria, rotor failures, the paper's qualitative facts, bit-for-bit data."""
+"""Hexacopter simulator: trim equilibria, rotor failures, the paper's qualitative facts, bit-for-bit data, fleets."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import xarray as xr
 
 from tsfdi.datasets import REGULAR_HEXACOPTER, load_hexacopter, make_hexacopter_dataset, simulate_hexacopter, trim
-from tsfdi.datasets.hexacopter import CHANNELS, PACK_SCALE, SHIPPED_VARIABLES, encode_for_file
+from tsfdi.datasets.hexacopter import (
+    CHANNELS,
+    FLEET_COORDS,
+    PACK_SCALE,
+    SHIPPED_VARIABLES,
+    FleetSpread,
+    HexacopterParameters,
+    encode_for_file,
+)
 
 
 @pytest.fixture(scope="module")
@@ -286,8 +296,6 @@ def test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop(rotor):
 def test_reversible_rotor_thrust_changes_sign():
     """A reversed rotor pushes down (T = k_T Omega |Omega|); a regular one at a negative command gives no thrust."""
     from tsfdi.datasets import _hexacopter_core as core
-    from tsfdi.datasets._hexacopter_params import HexacopterParameters
-
     x = np.zeros(18)
     x[12] = -300.0
     alive = np.ones(6, dtype=np.int64)
@@ -307,3 +315,126 @@ def test_ground_contact_is_a_loss():
     t = float(ds["lost_control_time"][0])
     assert 1.0 < t < 5.0 and np.isnan(ds["roll"].values[0, -1])
     assert np.max(np.abs(ds["roll"].values[0, : int(t * 100) - 1])) < 1.2  # not an attitude loss
+
+
+# ------------------------------------------------------------------------------------------------------ fleet
+
+
+def test_fleet_off_is_the_single_aircraft():
+    """fleet=None is the one-aircraft simulator (no fleet coordinates); the shipped records still regenerate
+    bit for bit (test_shipped_records_regenerate_bit_for_bit)."""
+    kw = dict(duration=2.0, failure_time=1.0, states=("healthy", "rotor2"), turbulence=("severe",))
+    a = make_hexacopter_dataset(1, seed=9, **kw)
+    b = make_hexacopter_dataset(1, seed=9, fleet=None, **kw)
+    for v in CHANNELS:
+        np.testing.assert_array_equal(a[v].values, b[v].values, err_msg=v)
+    assert not set(FLEET_COORDS) & set(a.coords) and "fleet" not in a.attrs
+
+
+def test_fleet_is_reproducible_per_record_and_within_the_spread():
+    f = FleetSpread()
+    kw = dict(duration=2.0, failure_time=1.0, states=("healthy", "rotor1"), turbulence=("light", "severe"))
+    a = make_hexacopter_dataset(2, seed=4, fleet=f, **kw)
+    b = make_hexacopter_dataset(2, seed=4, fleet=FleetSpread(), **kw)
+    for v in list(CHANNELS) + list(FLEET_COORDS):
+        np.testing.assert_array_equal(a[v].values, b[v].values, err_msg=v)
+    for name, (unit, _) in FLEET_COORDS.items():
+        assert a[name].dims == ("record",) and a[name].attrs["units"] == unit
+    nom = HexacopterParameters()
+    assert np.all(np.abs(a["mass"].values / nom.mass - 1) <= f.mass)
+    assert np.all(np.abs(a["cg_x"].values) <= f.cg_offset) and np.all(np.abs(a["cg_y"].values) <= f.cg_offset)
+    assert np.all(np.abs(a["motor_constant"].values - 1) <= f.motor_constant)
+    assert np.all(np.abs(a["inertia"].values - 1) <= f.inertia)
+    assert len(np.unique(a["mass"].values)) == a.sizes["record"]  # one aircraft per record
+    # a record alone, from its seed: the same aircraft and the same data
+    k = 5
+    one = simulate_hexacopter(duration=2.0, turbulence=str(a.turbulence.values[k]), failed_rotor=int(a.failed_rotor[k]),
+                              failure_time=1.0, seed=int(a.seed[k]), fleet=f)
+    for v in list(CHANNELS) + list(FLEET_COORDS):
+        np.testing.assert_array_equal(one[v].values[0], a[v].values[k], err_msg=v)
+    # the draw of one quantity does not depend on the other spreads
+    p0, v0 = FleetSpread(mass=0.0).draw(nom, 123)
+    p1, v1 = f.draw(nom, 123)
+    assert p0.mass == nom.mass and v0["cg_x"] == v1["cg_x"] and p0.k_torque == p1.k_torque
+    assert p1.k_thrust / nom.k_thrust == pytest.approx(v1["motor_constant"], rel=1e-14)
+    assert p1.izz / nom.izz == pytest.approx(v1["inertia"], rel=1e-14)
+
+
+def test_fleet_gusts_are_those_of_the_single_aircraft():
+    """The fleet draw has its own random stream: with zero spreads the records are those without a fleet."""
+    kw = dict(duration=2.0, failure_time=1.0, states=("rotor6",), turbulence=("moderate",))
+    a = make_hexacopter_dataset(1, seed=8, **kw)
+    b = make_hexacopter_dataset(1, seed=8, fleet=FleetSpread(0, 0, 0, 0), **kw)
+    np.testing.assert_array_equal(a["roll"].values, b["roll"].values)
+    assert b["mass"].values[0] == HexacopterParameters().mass
+
+
+def test_cg_offset_moves_the_thrust_line():
+    """Centre of gravity forward by cg_x: equal rotor thrusts pitch the nose down by cg_x * T (M_y < 0); to the
+    right by cg_y: they roll right (M_x = cg_y * T)."""
+    from tsfdi.datasets import _hexacopter_core as core
+    x = np.zeros(18)
+    x[12:] = 500.0
+    alive = np.ones(6, dtype=np.int64)
+    p = HexacopterParameters(cg_x=0.01, cg_y=-0.02)
+    d = core.derivative(x, x[12:], np.zeros(6), p.to_array(), alive)
+    thrust = 6 * p.k_thrust * 500.0 ** 2
+    assert d[10] * p.iyy == pytest.approx(-0.01 * thrust, rel=1e-9)
+    assert d[9] * p.ixx == pytest.approx(-0.02 * thrust, rel=1e-9)
+    with pytest.raises(ValueError, match="cg_x, cg_y"):
+        HexacopterParameters(cg_y=0.2)
+    with pytest.raises(ValueError, match="cg_x"):
+        HexacopterParameters(cg_x=np.nan)
+
+
+@pytest.mark.parametrize("params", [HexacopterParameters(cg_x=0.01, cg_y=-0.01, mass=2.5),
+                                    replace(REGULAR_HEXACOPTER, cg_y=0.01)])
+def test_trim_of_an_asymmetric_aircraft(params):
+    tr = trim(5.0, params=params)
+    assert tr["residual"] < 1e-9
+    assert abs(tr["controls"][1]) > 1.0  # a roll control holds the lateral offset
+
+
+def test_fleet_records_start_at_their_own_trim():
+    """Without turbulence every record of a fleet (heavier or lighter, offset centre of gravity) stays at its
+    trim: each record is trimmed for its own parameters."""
+    ds = simulate_hexacopter(duration=3.0, turbulence="none", seed=[1, 2, 3, 4],
+                             fleet=FleetSpread(0.1, 0.02, 0.06, 0.1))
+    assert np.ptp(ds["mass"].values) > 0.1 and np.all(ds["cg_y"].values != 0)
+    for name in ("roll", "pitch", "yaw", "p", "q", "r", "w", "z", "collective", "roll_control", "pitch_control"):
+        x = ds[name].values
+        assert np.max(np.abs(x - x[:, :1])) < 1e-7, name
+    # the collective follows the weight: Omega_0 ~ sqrt(m / k_T)
+    c = ds["collective"].values[:, 0]
+    assert np.corrcoef(c, np.sqrt(ds["mass"].values / ds["motor_constant"].values))[0, 1] > 0.99
+
+
+def test_fleet_records_stay_controlled():
+    """Default spreads, every state and turbulence level, 2 records per case, failure at 10 s: no record is lost;
+    attitude and altitude stay bounded and the heading is held after the transient (as without a fleet)."""
+    ds = make_hexacopter_dataset(2, seed=17, duration=30.0, fleet=FleetSpread())
+    assert not ds["lost_control"].values.any()
+    assert np.max(np.abs(ds["roll"].values)) < 0.6 and np.max(np.abs(ds["pitch"].values)) < 0.6
+    z = ds["z"].values
+    assert np.max(np.abs(z - z[:, :1])) < 4.0
+    assert np.max(np.abs(ds["r"].values[:, 2000:].mean(axis=1))) < 0.02
+
+
+@pytest.mark.parametrize("kwargs, name", [({"mass": -0.01}, "mass"), ({"mass": 0.6}, "mass"),
+                                          ({"cg_offset": np.nan}, "cg_offset"), ({"cg_offset": 0.2}, "cg_offset"),
+                                          ({"motor_constant": np.inf}, "motor_constant"),
+                                          ({"inertia": -1.0}, "inertia")])
+def test_fleet_bad_spreads(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        FleetSpread(**kwargs)
+
+
+def test_fleet_bad_types():
+    with pytest.raises(TypeError, match="mass"):
+        FleetSpread(mass="0.05")
+    with pytest.raises(TypeError, match="fleet"):
+        simulate_hexacopter(duration=1.0, fleet={"mass": 0.05})
+    with pytest.raises(ValueError, match="fleet"):
+        FleetSpread.from_spec("weight=0.1")
+    assert FleetSpread.from_spec("default") == FleetSpread()
+    assert FleetSpread.from_spec("mass=0.1, cg_offset=0") == FleetSpread(mass=0.1, cg_offset=0.0)

@@ -84,6 +84,9 @@ def _deriv(x, wcmd, g, P, alive, dx):
     rho = P[14]
     kn = P[15]
     rev = P[18] > 0.0
+    # centre-of-gravity offset from the hub centre (body x, y): the rotor arms are measured from the CG
+    cgx = P[19]
+    cgy = P[20]
     phi = x[3]
     th = x[4]
     u = x[6]
@@ -110,8 +113,8 @@ def _deriv(x, wcmd, g, P, alive, dx):
     Mz = 0.0
     for i in range(6):
         ang = i * (math.pi / 3.0)
-        xi = arm * math.cos(ang)
-        yi = arm * math.sin(ang)
+        xi = arm * math.cos(ang) - cgx
+        yi = arm * math.sin(ang) - cgy
         zi = -hr
         om = x[12 + i]
         if om < 0.0 and not rev:
@@ -355,8 +358,9 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
 
 @njit(cache=True, parallel=True)
 def simulate_batch(x0, integ0, ref, gusts, P, G, fail_rotor, fail_step, n_steps, dt, out, limits, lost):
+    """Records in parallel; ``P`` holds one parameter vector per record (rows), ``G`` is shared."""
     for i in prange(x0.shape[0]):
-        lost[i] = simulate_record(x0[i], integ0[i], ref[i], gusts[i], P, G, fail_rotor[i], fail_step[i],
+        lost[i] = simulate_record(x0[i], integ0[i], ref[i], gusts[i], P[i], G, fail_rotor[i], fail_step[i],
                                   n_steps, dt, out[i], limits)
 
 

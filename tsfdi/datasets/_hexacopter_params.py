@@ -21,11 +21,12 @@ References
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+import numbers
+from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["HexacopterParameters", "ControllerGains", "REGULAR_HEXACOPTER"]
+__all__ = ["HexacopterParameters", "ControllerGains", "REGULAR_HEXACOPTER", "FleetSpread", "FLEET_SEED_KEY"]
 
 
 @dataclass(frozen=True)
@@ -93,6 +94,13 @@ class HexacopterParameters:
         yaw steady-state threshold of 3e-4 rad^2). False (:data:`REGULAR_HEXACOPTER`): a rotor turns one way
         only, between ``omega_min`` and ``omega_max``, and its thrust is never negative; the opposite rotor
         then switches on and off its idle floor in gusts and the heading slips in severe turbulence.
+    cg_x, cg_y : float
+        0 m (shipped design): offset of the centre of gravity from the hub centre, forward (x) and to the right
+        (y) in body axes, e.g. an off-centre payload. The rotors then sit at ``(arm cos psi_i - cg_x,
+        arm sin psi_i - cg_y, -rotor_height)`` from the centre of gravity, about which the body rotates; the
+        inertia stays ``ixx, iyy, izz`` (the parallel-axis term ``mass * cg^2`` is 0.5 % of ``ixx`` at 1 cm
+        and neglected) and the body drag acts at the centre of gravity. ``hypot(cg_x, cg_y)`` must be below
+        ``arm / 2``. :class:`FleetSpread` draws them per record.
     """
 
     mass: float = 2.4
@@ -114,12 +122,19 @@ class HexacopterParameters:
     omega_min: float = 60.0
     omega_max: float = 1100.0
     reversible_rotors: bool = True
+    # appended after reversible_rotors: the kernels read the vector of to_array() by position
+    cg_x: float = 0.0
+    cg_y: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.reversible_rotors, (bool, np.bool_)):
             raise TypeError(f"reversible_rotors must be a bool, got {self.reversible_rotors!r}")
+        for name in ("cg_x", "cg_y"):
+            v = getattr(self, name)
+            if not np.isfinite(v):
+                raise ValueError(f"{name} must be a finite number, got {v!r}")
         for f in fields(self):
-            if f.name == "reversible_rotors":
+            if f.name in ("reversible_rotors", "cg_x", "cg_y"):
                 continue
             v = getattr(self, f.name)
             if not np.isfinite(v) or (v < 0) or (v == 0 and f.name not in
@@ -128,6 +143,9 @@ class HexacopterParameters:
                 raise ValueError(f"{f.name} must be a finite positive number, got {v!r}")
         if self.omega_min >= self.omega_max:
             raise ValueError(f"omega_min must be < omega_max, got {self.omega_min} >= {self.omega_max}")
+        if np.hypot(self.cg_x, self.cg_y) >= self.arm / 2:
+            raise ValueError(f"cg_x, cg_y: the centre-of-gravity offset must be below arm / 2 = {self.arm / 2:g} m, "
+                             f"got ({self.cg_x!r}, {self.cg_y!r})")
 
     def to_array(self) -> np.ndarray:
         return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
@@ -200,6 +218,108 @@ class ControllerGains:
 
     def to_array(self) -> np.ndarray:
         return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+#: Second entropy word of the generator of a record's fleet draw: ``numpy.random.default_rng([seed,
+#: FLEET_SEED_KEY])`` with the record's ``seed``. The turbulence uses ``default_rng(seed)``, so the aircraft
+#: drawn for a record is independent of its gusts, and the gusts are the same with and without a fleet.
+FLEET_SEED_KEY = 0xF1EE7
+
+#: Largest accepted spreads: relative ones (fractions of the nominal value) and the centre-of-gravity offset (m).
+_FLEET_MAX = {"mass": 0.5, "cg_offset": 0.1, "motor_constant": 0.5, "inertia": 0.5}
+
+
+@dataclass(frozen=True)
+class FleetSpread:
+    """Spreads of a fleet of aircraft of one type that differ slightly in weight and handling (payloads).
+
+    Hansen et al. (tsfdi's paper 002) analyse aircraft "of the same type but with small differences in weight and
+    handling due to payloads"; with ``fleet=FleetSpread()`` each record of :func:`~tsfdi.datasets.simulate_hexacopter`
+    / :func:`~tsfdi.datasets.make_hexacopter_dataset` flies its own aircraft drawn around the nominal
+    :class:`HexacopterParameters`. Every quantity is drawn **uniformly and independently** in the interval given
+    below (so a drawn value never leaves it), with one call ``rng.uniform(-1, 1, 5)`` of
+    ``rng = numpy.random.default_rng([seed, FLEET_SEED_KEY])`` (``seed``: the record's seed), in the order mass,
+    cg_x, cg_y, motor_constant, inertia: a record's aircraft depends only on its seed, and a spread set to 0
+    leaves that quantity nominal without changing the others.
+
+    Attributes
+    ----------
+    mass : float
+        0.05, relative: ``mass = nominal * (1 + mass * U)``, U uniform in [-1, 1] (2.28-2.52 kg for the nominal
+        2.4 kg, a payload of up to +-120 g).
+    cg_offset : float
+        0.01 m, absolute: ``cg_x`` and ``cg_y`` (see :class:`HexacopterParameters`) are each the nominal offset
+        plus ``cg_offset * U`` (a payload off the centre; 1 cm is 3 % of the arm).
+    motor_constant : float
+        0.03, relative: one factor ``1 + motor_constant * U`` multiplies ``k_thrust`` and ``k_torque`` of all six
+        rotors (another propeller batch: the torque-to-thrust ratio, a property of the propeller shape, is kept).
+    inertia : float
+        0.05, relative: one factor ``1 + inertia * U`` multiplies ``ixx``, ``iyy`` and ``izz`` (payload and
+        battery placement).
+
+    Each spread must be a finite number >= 0, at most 0.5 for the relative ones and 0.1 m for ``cg_offset``;
+    every record is trimmed for its own aircraft (:func:`~tsfdi.datasets.trim`) and flown with the one gain set
+    (:class:`ControllerGains`). With the default spreads no record was lost in light, moderate or severe
+    turbulence, healthy or with rotor 1, 2 or 6 failed (``tests/datasets/test_hexacopter.py``); much larger
+    spreads may lose records (flagged in ``lost_control``).
+    """
+
+    mass: float = 0.05
+    cg_offset: float = 0.01
+    motor_constant: float = 0.03
+    inertia: float = 0.05
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+                raise TypeError(f"{f.name} must be a real number, got {v!r} ({type(v).__name__})")
+            hi = _FLEET_MAX[f.name]
+            if not np.isfinite(v) or not 0.0 <= v <= hi:
+                raise ValueError(f"{f.name} must be a finite number in [0, {hi:g}], got {v!r}")
+            object.__setattr__(self, f.name, float(v))
+
+    def draw(self, params: HexacopterParameters, seed: int) -> tuple[HexacopterParameters, dict]:
+        """The aircraft of the record with seed ``seed``: ``(parameters, values)``.
+
+        ``values`` holds ``mass`` (kg), ``cg_x`` and ``cg_y`` (m), and the factors ``motor_constant`` and
+        ``inertia`` (1: nominal), the record coordinates of the simulated dataset.
+        """
+        u = np.random.default_rng([int(seed), FLEET_SEED_KEY]).uniform(-1.0, 1.0, 5)
+        kmot = 1.0 + self.motor_constant * u[3]
+        kin = 1.0 + self.inertia * u[4]
+        values = {"mass": params.mass * (1.0 + self.mass * u[0]),
+                  "cg_x": params.cg_x + self.cg_offset * u[1], "cg_y": params.cg_y + self.cg_offset * u[2],
+                  "motor_constant": kmot, "inertia": kin}
+        drawn = replace(params, mass=values["mass"], cg_x=values["cg_x"], cg_y=values["cg_y"],
+                        k_thrust=params.k_thrust * kmot, k_torque=params.k_torque * kmot,
+                        ixx=params.ixx * kin, iyy=params.iyy * kin, izz=params.izz * kin)
+        return drawn, values
+
+    @classmethod
+    def from_spec(cls, spec: str) -> FleetSpread:
+        """``"default"`` or comma-separated ``name=value`` spreads (the others default), e.g.
+        ``"mass=0.1,cg_offset=0.02"``: the ``--fleet`` option of ``tsfdi simulate``."""
+        if not isinstance(spec, str):
+            raise TypeError(f"fleet must be a string, got {type(spec).__name__}")
+        names = [f.name for f in fields(cls)]
+        kw = {}
+        for item in (t.strip() for t in spec.split(",")):
+            if item.lower() == "default":
+                continue
+            name, eq, value = item.partition("=")
+            name = name.strip().replace("-", "_")
+            if not eq or name not in names:
+                raise ValueError(f"fleet: expected 'default' or name=value with a name in {', '.join(names)}, "
+                                 f"got {item!r}")
+            try:
+                kw[name] = float(value)
+            except ValueError:
+                raise ValueError(f"{name} must be a number, got {value.strip()!r}") from None
+        return cls(**kw)
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -91,6 +91,15 @@ and the controls become stationary again after the transient in every case (test
 ``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading. No record of the shipped design loses
 the aircraft; a configuration that does is flagged in ``lost_control``.
 
+**Fleet.** By default every record flies the same aircraft. With ``fleet=FleetSpread(...)`` (Hansen et al.:
+aircraft "of the same type but with small differences in weight and handling due to payloads") each record
+flies its own: mass, centre-of-gravity offset (``cg_x``, ``cg_y``: the rotor arms are then measured from the
+offset centre of gravity), thrust and torque constants and inertia are drawn uniformly around the nominal
+parameters from the record's seed (:class:`FleetSpread`), independently of its gusts, and stored as record
+coordinates. Each record starts at its own trim (a lateral offset breaks the left-right symmetry: :func:`trim` then
+solves all six balances for roll, pitch and the four controls), with the controller's integrators holding
+it; the mixer and the gains are those of the nominal aircraft.
+
 **Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz; the controller and the gusts are held
 constant over a step (sampled-data controller at 1 kHz). Each record is integrated on its own
 (numba-compiled, records in parallel), so a record depends only on its own seed and configuration.
@@ -120,11 +129,17 @@ from scipy import optimize, signal
 
 from tsfdi._validation import check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
-from tsfdi.datasets._hexacopter_params import REGULAR_HEXACOPTER, ControllerGains, HexacopterParameters
+from tsfdi.datasets._hexacopter_params import (
+    FLEET_SEED_KEY,
+    REGULAR_HEXACOPTER,
+    ControllerGains,
+    FleetSpread,
+    HexacopterParameters,
+)
 from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, draw_gusts
 
-__all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "trim", "simulate_hexacopter",
-           "make_hexacopter_dataset",
+__all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "FleetSpread", "FLEET_SEED_KEY", "trim",
+           "simulate_hexacopter", "make_hexacopter_dataset", "FLEET_COORDS",
            "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file"]
 
 #: Output channels and their units.
@@ -148,6 +163,15 @@ _DESCRIPTIONS = {
 STATES = ("healthy", "rotor1", "rotor2", "rotor6")
 TURBULENCE_LEVELS = ("none",) + tuple(INTENSITIES)
 
+#: Record coordinates of a fleet (``fleet=FleetSpread(...)``): name -> (units, description).
+FLEET_COORDS = {
+    "mass": ("kg", "mass of the record's aircraft"),
+    "cg_x": ("m", "centre-of-gravity offset forward of the hub centre"),
+    "cg_y": ("m", "centre-of-gravity offset right of the hub centre"),
+    "motor_constant": ("1", "factor on k_thrust and k_torque (1: nominal)"),
+    "inertia": ("1", "factor on ixx, iyy, izz (1: nominal)"),
+}
+
 #: Bounds beyond which a record is flagged ``lost_control`` (roll, pitch in rad; altitude error in m); a
 #: record is also lost when the aircraft reaches the ground (altitude below 0).
 LOSS_LIMITS = (1.2, 1.2, 20.0)
@@ -158,7 +182,9 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
     """Steady level flight north at ``speed`` (m/s) without turbulence.
 
     Solves the longitudinal force and pitching-moment balance for pitch angle, collective and pitch
-    control (roll and yaw controls are zero by symmetry of the alternating rotor directions).
+    control (roll and yaw controls are zero by symmetry of the alternating rotor directions). An aircraft
+    with a lateral centre-of-gravity offset (``params.cg_y != 0``) is not symmetric: the six force and
+    moment balances are then solved for roll, pitch and the four controls.
 
     Returns
     -------
@@ -191,6 +217,8 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
         return [d[6], d[8], d[10] * params.iyy]
 
     om_h = np.sqrt(params.mass * params.gravity / (6 * params.k_thrust))
+    if params.cg_y != 0.0:
+        return _trim_asymmetric(speed, altitude, params, om_h)
     sol, info, ier, msg = optimize.fsolve(resid, [0.0, om_h, 0.0], full_output=True, xtol=1e-14)
     # (fsolve may stop at machine precision with ier != 1; the balance residual decides)
     if ier != 1 and np.max(np.abs(resid(sol))) > 1e-10:
@@ -199,6 +227,44 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
     d = _core.derivative(x, x[12:], g0, P, alive)
     integ = np.array([sol[0], 0.0, sol[1], 0.0, sol[2], 0.0])
     return {"state": x, "integrators": integ, "controls": np.array([sol[1], 0.0, sol[2], 0.0]),
+            "residual": float(np.max(np.abs(d[3:12])))}
+
+
+def _trim_asymmetric(speed: float, altitude: float, params: HexacopterParameters, om_h: float) -> dict:
+    """:func:`trim` of an aircraft without lateral symmetry: roll, pitch and the four controls of the mixer."""
+    P = params.to_array()
+    alive = np.ones(6, dtype=np.int64)
+    g0 = np.zeros(6)
+    az = np.arange(6) * np.pi / 3
+    yaw_sign = np.array([-1.0, 1.0, -1.0, 1.0, -1.0, 1.0])  # the controller's mixer (rotor 1 clockwise)
+    inertia = np.array([params.ixx, params.iyy, params.izz])
+
+    def build(z):
+        ph, th, om0, omr, omp, omy = z
+        x = np.zeros(_core.N_X)
+        x[2] = -altitude
+        x[3] = ph
+        x[4] = th
+        # body velocity of level flight north at ``speed`` (heading 0)
+        x[6:9] = speed * np.array([np.cos(th), np.sin(ph) * np.sin(th), np.cos(ph) * np.sin(th)])
+        c2 = om0 * om0 + 2.0 * om0 * (-np.sin(az) * omr + np.cos(az) * omp + yaw_sign * omy)
+        x[12:] = np.sign(c2) * np.sqrt(np.abs(c2))
+        return x
+
+    def resid(z):
+        x = build(z)
+        d = _core.derivative(x, x[12:], g0, P, alive)
+        return np.concatenate([d[6:9], d[9:12] * inertia])
+
+    sol, info, ier, msg = optimize.fsolve(resid, [0.0, 0.0, om_h, 0.0, 0.0, 0.0], full_output=True, xtol=1e-14)
+    if ier != 1 and np.max(np.abs(resid(sol))) > 1e-10:
+        raise RuntimeError(f"trim did not converge at speed={speed}: {msg}")
+    x = build(sol)
+    d = _core.derivative(x, x[12:], g0, P, alive)
+    ph, th, om0, omr, omp, omy = sol
+    # integrators [I_theta, I_phi, I_collective, I_roll, I_pitch, I_yaw] that reproduce the trim (heading 0)
+    integ = np.array([th, ph, om0, omr, omp, omy])
+    return {"state": x, "integrators": integ, "controls": np.array([om0, omr, omp, omy]),
             "residual": float(np.max(np.abs(d[3:12])))}
 
 
@@ -215,7 +281,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
                         turbulence="severe", failed_rotor=0, failure_time=10.0, seed=0,
                         dt: float = 0.001, fs: float = 100.0, altitude: float = 5.0, span: float = 0.6096,
                         params: HexacopterParameters | None = None, gains: ControllerGains | None = None,
-                        batch: int = 16):
+                        fleet: FleetSpread | None = None, batch: int = 16):
     """Simulate hexacopter records at 1/dt Hz and return them decimated to ``fs`` as an xarray Dataset.
 
     Parameters
@@ -244,6 +310,11 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         Flight altitude (m) and Dryden span (m).
     params, gains : optional
         :class:`HexacopterParameters` and :class:`ControllerGains`.
+    fleet : FleetSpread, optional
+        None (default): every record flies the aircraft ``params``. A :class:`FleetSpread`: each record flies
+        its own aircraft drawn around ``params`` from its seed (:meth:`FleetSpread.draw`; the gusts are the
+        same as without a fleet), trimmed for its own parameters; the drawn values are the record coordinates
+        ``mass``, ``cg_x``, ``cg_y``, ``motor_constant`` and ``inertia`` (:data:`FLEET_COORDS`).
     batch : int
         Records integrated per chunk (memory: ``batch * duration / dt * 19 * 8`` bytes).
 
@@ -253,7 +324,8 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         One variable per channel (see :data:`CHANNELS`), dims ``(record, time)``, units in ``attrs``;
         per-record coordinates ``state``, ``turbulence``, ``speed``, ``seed``, ``failure_time``,
         ``failed_rotor`` and the variable ``lost_control`` (True where roll or pitch exceeded 1.2 rad, the
-        altitude error 20 m or the aircraft reached the ground; the record is NaN from then on).
+        altitude error 20 m or the aircraft reached the ground; the record is NaN from then on); with a
+        ``fleet`` also the coordinates of :data:`FLEET_COORDS` and the attribute ``fleet``.
     """
     import xarray as xr
 
@@ -268,6 +340,8 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         raise TypeError("params must be a HexacopterParameters")
     if not isinstance(gains, ControllerGains):
         raise TypeError("gains must be a ControllerGains")
+    if fleet is not None and not isinstance(fleet, FleetSpread):
+        raise TypeError(f"fleet must be None or a FleetSpread, got {type(fleet).__name__}")
     q = (1.0 / dt) / fs
     if abs(q - round(q)) > 1e-9 or round(q) < 1:
         raise ValueError(f"fs must divide the integration rate 1/dt = {1 / dt:g} Hz, got fs={fs:g}")
@@ -308,8 +382,20 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     n -= n % q
     if n < q:
         raise ValueError(f"duration must be at least one output sample (1/fs), got {duration}")
-    tr = trim(speed, params=params, altitude=altitude)
-    P = params.to_array()
+    if fleet is None:
+        tr = trim(speed, params=params, altitude=altitude)
+        X0 = np.tile(tr["state"], (records, 1))
+        I0 = np.tile(tr["integrators"], (records, 1))
+        P = np.tile(params.to_array(), (records, 1))
+        zref = tr["state"][2]
+    else:
+        # each record's aircraft (from its seed) and its own trim: the integrators start at its trim controls
+        drawn = [fleet.draw(params, sd) for sd in seeds]
+        trims = [trim(speed, params=p, altitude=altitude) for p, _ in drawn]
+        X0 = np.array([t["state"] for t in trims])
+        I0 = np.array([t["integrators"] for t in trims])
+        P = np.array([p.to_array() for p, _ in drawn])
+        zref = -altitude
     G = gains.to_array()
     limits = np.array(LOSS_LIMITS)
     models = {lvl: DrydenTurbulence(altitude=altitude, airspeed=max(speed, 1.0), span=span, intensity=lvl)
@@ -325,14 +411,14 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         for j, i in enumerate(idx):
             if turb[i] != "none":
                 gusts[j] = draw_gusts(samplers[turb[i]], n, check_rng(seeds[i]))
-        x0 = np.tile(tr["state"], (nb, 1))
-        i0 = np.tile(tr["integrators"], (nb, 1))
-        ref = np.tile([speed, 0.0, tr["state"][2], 0.0], (nb, 1))
+        x0 = X0[start:start + nb]
+        i0 = I0[start:start + nb]
+        ref = np.tile([speed, 0.0, zref, 0.0], (nb, 1))
         fr = np.array([rotors[i] - 1 for i in idx], dtype=np.int64)
         fstep = np.array([int(round(ftimes[i] / dt)) if rotors[i] else -1 for i in idx], dtype=np.int64)
         out = np.empty((nb, n, _core.N_OUT))
         lost = np.empty(nb, dtype=np.int64)
-        _core.simulate_batch(x0, i0, ref, gusts, P, G, fr, fstep, n, dt, out, limits, lost)
+        _core.simulate_batch(x0, i0, ref, gusts, P[start:start + nb], G, fr, fstep, n, dt, out, limits, lost)
         del gusts
         if q > 1:
             good = np.nan_to_num(out)
@@ -352,6 +438,9 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
               "seed": ("record", np.array(seeds, dtype=np.int64)),
               "failure_time": ("record", np.array(ftimes), {"units": "s"}),
               "failed_rotor": ("record", np.array(rotors, dtype=np.int64))}
+    if fleet is not None:
+        for name, (unit, desc) in FLEET_COORDS.items():
+            coords[name] = ("record", np.array([v[name] for _, v in drawn]), {"units": unit, "long_name": desc})
     vars_ = {name: (("record", "time"), data[:, :, j], {"units": unit, "long_name": _DESCRIPTIONS[name]})
              for j, (name, unit) in enumerate(CHANNELS.items())}
     vars_["lost_control"] = ("record", lost_step >= 0)
@@ -364,17 +453,28 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         "parameters": repr(params.to_dict()), "gains": repr(gains.to_dict()),
         "yaw_sign": "positive = nose right (NED)",
     })
+    if fleet is not None:
+        ds.attrs["fleet"] = repr(fleet.to_dict())
+        ds.attrs["fleet_draw"] = (f"uniform per record from numpy.random.default_rng([seed, {FLEET_SEED_KEY:#x}]) "
+                                  "around the nominal 'parameters' (tsfdi.datasets.hexacopter.FleetSpread)")
     return ds
 
 
 def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, duration: float = 60.0,
                             failure_time: float = 10.0, speed: float = 5.0,
-                            states=STATES, turbulence=("light", "moderate", "severe"), **kwargs):
+                            states=STATES, turbulence=("light", "moderate", "severe"),
+                            fleet: FleetSpread | None = None, **kwargs):
     """The benchmark design of the paper's Table 1: states x turbulence levels x ``records_per_case``.
 
     Record ``k`` (in the order state, turbulence, repetition) gets the seed
     ``numpy.random.SeedSequence([seed, k]).generate_state(1)[0]``, stored in the ``seed`` coordinate, so
     any record can be regenerated alone with :func:`simulate_hexacopter`.
+
+    ``fleet=FleetSpread(...)`` makes a fleet of aircraft of one type (Hansen et al.): each record's mass,
+    centre-of-gravity offset, motor constants and inertia are drawn from its seed around the nominal
+    parameters (see :class:`FleetSpread`) and stored as record coordinates (:data:`FLEET_COORDS`); the
+    turbulence of every record is the same as without it. ``None`` (default): one aircraft, as before.
+    Other keyword arguments go to :func:`simulate_hexacopter`.
     """
     records_per_case = int_like(records_per_case, "records_per_case", minimum=1)
     seed = int_like(seed, "seed", minimum=0)
@@ -382,7 +482,7 @@ def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, dur
     rotors = [0 if s == "healthy" else _state_rotor(s) for s, _ in rows]
     seeds = [int(np.random.SeedSequence([seed, k]).generate_state(1)[0]) for k in range(len(rows))]
     ds = simulate_hexacopter(duration=duration, speed=speed, turbulence=[t for _, t in rows],
-                             failed_rotor=rotors, failure_time=failure_time, seed=seeds, **kwargs)
+                             failed_rotor=rotors, failure_time=failure_time, seed=seeds, fleet=fleet, **kwargs)
     ds.attrs["base_seed"] = seed
     ds.attrs["records_per_case"] = records_per_case
     return ds
