@@ -2,6 +2,7 @@
 ../shared/data/crazypad is missing) and on small synthetic logs."""
 
 import gzip
+import re
 import shutil
 from pathlib import Path
 
@@ -234,22 +235,14 @@ def test_bad_files(tmp_path):
     nan_t[5] = np.nan
     with pytest.raises(ValueError, match=r"E1_log04\.csv.*NaN"):
         read_crazypad_log(_write_log(d / "E1_log04.csv", nan_t, thrust))
-    text_t = d / "E1_log05.csv"
-    text_t.write_text("timestamp,controller.cmd_thrust\nsoon,1\nlater,1\n")
-    with pytest.raises(ValueError, match=r"E1_log05\.csv.*'timestamp' is not numeric"):
-        read_crazypad_log(text_t)
-    empty = d / "E1_log06.csv"
-    empty.write_text("")
-    with pytest.raises(ValueError, match=r"E1_log06\.csv is empty"):
-        read_crazypad_log(empty)
-    header = d / "E1_log07.csv"
-    header.write_text("timestamp,controller.cmd_thrust\n")
-    with pytest.raises(ValueError, match=r"E1_log07\.csv holds no samples"):
-        read_crazypad_log(header)
-    text_v = d / "E1_log08.csv"
-    text_v.write_text("timestamp,controller.cmd_thrust,x\n1,1,a\n2,1,b\n")
-    with pytest.raises(ValueError, match=r"E1_log08\.csv.*'x' is not numeric"):
-        read_crazypad_log(text_v)
+    for name, text, message in [
+            ("E1_log05.csv", "timestamp,controller.cmd_thrust\nsoon,1\nlater,1\n", r".*'timestamp' is not numeric"),
+            ("E1_log06.csv", "", r" is empty"),
+            ("E1_log07.csv", "timestamp,controller.cmd_thrust\n", r" holds no samples"),
+            ("E1_log08.csv", "timestamp,controller.cmd_thrust,x\n1,1,a\n2,1,b\n", r".*'x' is not numeric")]:
+        (d / name).write_text(text)
+        with pytest.raises(ValueError, match=re.escape(name) + message):
+            read_crazypad_log(d / name)
 
 
 def test_bad_options(root, table):
