@@ -111,6 +111,40 @@ C. *B plus a roll-effectiveness GLRT* (issue 4, "change in dynamics rather than 
    each stuck-surface flight, when the surface's own attitude tracking error first leaves the range it had
    before the onset on that flight (``departure_s``): for the ailerons this takes 4-28 s or never happens;
    on these flights a stuck aileron changes little until the next turn.
+C-PF. *C's channels with thresholds for a required false-alarm probability* (issue 17), printed beside C: the
+   four channels of C (thrust, sideslip, pitch, roll_gain), all on (C's folds switch all four on in every fold),
+   with no threshold grid and no accuracy criterion. In each leave-one-flight-out fold, each channel's threshold
+   is set on the fold's fitting flights' healthy data only -- the 44 flights other than the held-out one: the
+   whole record of those without failure and the part of the failure flights before the onset, after the 20 s
+   baseline phase (the statistics are causal, so their pre-onset values have not seen the failure). The held-out
+   flight never enters its own thresholds. For every such flight the largest value of the channel statistic over
+   its healthy part is taken -- the channel raises a false alarm on that flight exactly when this maximum exceeds
+   the threshold -- and ``tsfdi.EmpiricalThreshold`` gives the threshold that the maximum exceeds with probability
+   P_F / 4 per flight (generalised Pareto tail with xi = 0, i.e. exponential excesses as for Gumbel-type maxima,
+   over the largest 30 % of the 44 maxima; 44 P_F is far below the 20 exceedances its empirical quantile needs).
+   By the union bound the detector (first alarm over the four channels) then alarms on a healthy flight with
+   probability at most P_F = 0.1 if those estimates hold (the value fixed in advance; a sweep over 0.05-0.4 is
+   printed too). The held-out
+   flight is scored exactly as in C (first alarm, TP/FP/FN/TN, delays, ``score_records`` / ``detection_metrics``);
+   a flight's FP is exactly an alarm in its healthy part, so the fraction of held-out flights with FP is the check
+   of P_F that the script prints.
+
+   Why P_F per flight and not a rate per flight-hour: the outcome scored is per flight; one maximum per flight
+   gives (nearly) independent draws, whereas the samples within a flight are strongly dependent (moving averages,
+   RLS with forgetting), so a rate needs a model of how the false-alarm probability grows with exposure; and the
+   healthy parts total 0.84 flight-hours (10-132 s per flight after the baseline phase, mean 67 s), so 1 false
+   alarm per 10 flight-hours (P_F ~ 0.002 per flight of mean length) is far beyond what 44 maxima support --
+   EmpiricalThreshold refuses it and the script prints its message. The price: P_F refers to flights with healthy
+   parts as long as these; a longer flight has a larger false-alarm probability.
+
+   Measured (held-out): the per-channel exceedance is 2 of 45 on every channel (required 0.025: about 1 of 44
+   maxima, so the fold threshold lies near the largest of the other flights' maxima and the two largest exceed
+   it when held out) and 7 of 45 flights have a healthy-part alarm (0.156, required <= 0.1; binomial sd 0.045:
+   the tail estimate from 44 maxima is optimistic at this level), and the equal split of P_F over
+   the channels puts the thrust threshold at about 1.7 m/s^2 against C's 1.2: engine true positives fall from 19
+   to 7 of 23. C's fold criterion, which sees the failures, in effect spends its false alarms on the thrust
+   channel (3 healthy maxima above 1.2) and, in 43 of 45 folds, sets the other thresholds just above the largest
+   healthy maximum of all 45 flights (sideslip 1.15 < 1.2, pitch 0.449 < 0.45, roll_gain 3.17 < 3.25).
 
 Keipour's 22 flights. Paper 001's Table I is over 22 flights that it does not list. The flights of this copy
 recorded up to 2018-09-11, with the engine failures restricted to the 7 kept with commanded and measured
@@ -242,12 +276,20 @@ def first_alarm_s(df, det_result):
 
 def crossing_times(df, name, grid):
     """First time (s) the channel statistic exceeds each threshold of ``grid`` after the baseline phase."""
+    return first_crossings(*channel_statistic(df, name), grid)
+
+
+def channel_statistic(df, name):
+    """Time (s from the first row) and armed statistic of channel ``name`` (of ``CHANNELS`` or ``"roll_gain"``):
+    ``-inf`` before the end of the baseline phase and where undefined, so ``s > threshold`` is the alarm."""
+    if name == "roll_gain":
+        t, s = roll_gain_statistic(df)
+        return t, np.where(t >= ARM_AFTER_S, np.nan_to_num(s, nan=-np.inf), -np.inf)
     res = run_channel(df, name, 1e300)
     s = np.asarray(res.statistic, dtype=float)[:, 0]
     arm = int(round(ARM_AFTER_S * FS))
     t = (df.index - df.index[0]).total_seconds().to_numpy()
-    s = np.where(np.arange(s.size) >= arm, np.nan_to_num(s, nan=-np.inf), -np.inf)
-    return first_crossings(t, s, grid)
+    return t, np.where(np.arange(s.size) >= arm, np.nan_to_num(s, nan=-np.inf), -np.inf)
 
 
 def first_crossings(t, s, grid):
@@ -323,9 +365,149 @@ def roll_gain_statistic(df, y=None, u=None):
 
 def gain_crossing_times(df, grid):
     """First block time (s) the roll-gain statistic exceeds each threshold of ``grid`` after the baseline."""
-    t, s = roll_gain_statistic(df)
-    s = np.where(t >= ARM_AFTER_S, np.nan_to_num(s, nan=-np.inf), -np.inf)
-    return first_crossings(t, s, grid)
+    return first_crossings(*channel_statistic(df, "roll_gain"), grid)
+
+
+# --------------------------------------------------------------------------- C with thresholds for a required P_F
+#: configuration C-PF (issue 17): C's four channels, all on, thresholds for a required false-alarm probability
+PF_CHANNELS = (*BASE_CHANNELS, "roll_gain")
+#: required probability that a healthy flight raises at least one alarm of the detector (any channel), fixed in
+#: advance; split equally over the channels (union bound)
+PF_FLIGHT = 0.1
+#: further P_F values printed as a sweep
+PF_SWEEP = (0.05, 0.1, 0.2, 0.4)
+#: EmpiricalThreshold options for the ~44 per-flight maxima of a fold: a generalised Pareto tail with xi = 0
+#: (exponential excesses: the Gumbel domain of maxima of a long, weakly dependent statistic) fitted to the largest
+#: 30 % (about 13 maxima; min_tail lowered to the estimator's minimum of 10). With the default min_exceedances
+#: (20) the empirical quantile would need n P_F >= 20, which 44 flights never give, so the tail fit is used.
+PF_ESTIMATOR = dict(tail_fraction=0.3, min_tail=10, tail_shape=0.0)
+#: the rate asked for as an alternative to P_F per flight (false alarms per flight-hour), shown to be out of reach
+PF_RATE_PER_HOUR = 0.1
+
+
+def healthy_maxima(stats, onset):
+    """Largest armed statistic of every flight (rows) and channel (columns) over its healthy part: the whole
+    record of a flight without failure (``onset`` NaN), the samples before ``onset`` of a failure flight.
+
+    ``stats``: ``{channel: [(t, s) per flight]}`` as returned by :func:`channel_statistic`. A channel raises a
+    false alarm on the flight exactly when this maximum exceeds its threshold (``-inf``: no armed value)."""
+    out = {}
+    for c, per in stats.items():
+        out[c] = [np.max(s[t < (o if np.isfinite(o) else np.inf)], initial=-np.inf) for (t, s), o in zip(per, onset)]
+    return pd.DataFrame(out)
+
+
+def pf_thresholds(maxima, false_alarm):
+    """One threshold per channel (column of ``maxima``, one row per healthy flight) such that a flight's maximum
+    exceeds it with probability ``false_alarm / n_channels`` (``tsfdi.EmpiricalThreshold``, ``PF_ESTIMATOR``);
+    by the union bound the detector then alarms on a healthy flight with probability at most ``false_alarm``.
+    Flights without any armed value of a channel (maximum ``-inf``) are left out of its sample (conservative)."""
+    from tsfdi import EmpiricalThreshold
+
+    per_channel = false_alarm / maxima.shape[1]
+    out = {}
+    for c in maxima:
+        m = maxima[c].to_numpy(dtype=float)
+        out[c] = EmpiricalThreshold(per_channel, **PF_ESTIMATOR).calibrate(m[np.isfinite(m)]).threshold_
+    return pd.Series(out)
+
+
+def pf_folds(stats, onset, false_alarm):
+    """Leave-one-flight-out thresholds for a required false-alarm probability per flight, and held-out alarms.
+
+    For held-out flight ``i`` every channel's threshold is :func:`pf_thresholds` of the healthy-part maxima
+    (:func:`healthy_maxima`) of the *other* flights only -- flight ``i`` never enters its own thresholds, and no
+    sample at or after an onset enters any threshold. Flight ``i`` is then scored as configuration C is: its first
+    alarm is the earliest time any channel's armed statistic exceeds that channel's fold threshold (NaN: none).
+
+    Returns ``(alarm, thresholds, maxima)``: first-alarm times (s), the thresholds of every fold (rows: held-out
+    flight; columns: channels) and the healthy-part maxima of every flight.
+    """
+    onset = np.asarray(onset, dtype=float)
+    maxima = healthy_maxima(stats, onset)
+    n = len(onset)
+    thr = pd.DataFrame([pf_thresholds(maxima.drop(index=i), false_alarm) for i in range(n)])
+    alarm = np.full(n, np.nan)
+    for i in range(n):
+        firsts = [first_crossings(*stats[c][i], [thr.at[i, c]])[0] for c in stats]
+        alarm[i] = np.nanmin(firsts) if np.isfinite(firsts).any() else np.nan
+    return alarm, thr, maxima
+
+
+def pf_report(tab, healthy_s, stats, score, sc_c, c_fit):
+    """Run configuration C-PF (:func:`pf_folds`) for ``PF_FLIGHT`` and the ``PF_SWEEP``, print what was chosen
+    on which flights, the thresholds, the realised false alarms and the flights whose outcome differs from C's;
+    return the per-flight scores for ``PF_FLIGHT``."""
+    onset = tab.onset_s.to_numpy(dtype=float)
+    n, m = len(onset), len(stats)
+    alarm, thr, maxima = pf_folds(stats, onset, PF_FLIGHT)
+    sc = score(alarm)
+    nofail = int(np.isnan(onset).sum())
+    print(f"\nC-PF: configuration C's {m} channels ({', '.join(stats)}; all on, as in every fold of C), with\n"
+          f"thresholds for a required false-alarm probability P_F = {PF_FLIGHT:g} per healthy flight for the "
+          f"detector\n({PF_FLIGHT / m:g} per channel, union bound): tsfdi.EmpiricalThreshold (generalised Pareto "
+          f"tail, xi = {PF_ESTIMATOR['tail_shape']:g},\nlargest {PF_ESTIMATOR['tail_fraction']:.0%}) on the "
+          "per-flight maxima of each channel's statistic. Chosen in each of the "
+          f"{n} leave-one-flight-out\nfolds on the fold's fitting flights' healthy data only: the "
+          f"{nofail - 1}-{nofail} flights without failure and the part\nbefore the onset of the "
+          f"{n - nofail - 1}-{n - nofail} failure flights among the other {n - 1} "
+          f"(after the {ARM_AFTER_S:g} s baseline phase).\nThe held-out flight never enters its own thresholds; "
+          "no sample at or after an onset enters any threshold;\nno threshold grid and no accuracy criterion. "
+          "Held-out flights scored as C's.")
+    print(f"Healthy data: {n} flights, {healthy_s.sum() / 3600:.2f} flight-hours after the baseline phase "
+          f"({healthy_s.min():.0f}-{healthy_s.max():.0f} s per flight, mean {healthy_s.mean():.0f} s).")
+    exceed = maxima.to_numpy() > thr.to_numpy()          # held-out healthy part above the fold's threshold
+    rows = {c: {"min": thr[c].min(), "median": thr[c].median(), "max": thr[c].max(), "C all-flight": c_fit[c],
+                "held-out healthy alarms": f"{exceed[:, j].sum()} of {n} = {exceed[:, j].mean():.3f}"}
+            for j, c in enumerate(stats)}
+    print(f"Thresholds over the {n} folds (C all-flight: C's grid choice on all flights, for comparison) and "
+          "held-out flights\nwhose healthy part exceeds the fold's threshold (required: "
+          f"{PF_FLIGHT / m:g} per channel):")
+    print(pd.DataFrame(rows).T.to_string(float_format="{:.3f}".format))
+    fa = exceed.any(axis=1)
+    assert fa.sum() == (sc["outcome"] == "FP").sum()     # a healthy-part alarm is exactly an FP
+    print(f"detector (any channel): held-out flights with an alarm in their healthy part {fa.sum()} of {n} = "
+          f"{fa.mean():.3f}\n(required P_F <= {PF_FLIGHT:g}; binomial sd at P_F: "
+          f"{np.sqrt(PF_FLIGHT * (1 - PF_FLIGHT) / n):.3f})")
+
+    first = []
+    for i in range(n):
+        ts = {c: first_crossings(*stats[c][i], [thr.at[i, c]])[0] for c in stats}
+        first.append(min(((v, c) for c, v in ts.items() if np.isfinite(v)), default=(np.nan, "-"))[1])
+    diff = (sc_c["outcome"].to_numpy() != sc["outcome"].to_numpy()) | ~np.isclose(
+        sc_c["delay"].to_numpy(dtype=float), sc["delay"].to_numpy(dtype=float), equal_nan=True)
+    per = pd.DataFrame({"flight": tab.flight.str.replace("carbonZ_", ""), "fault": tab.fault, "onset_s": onset,
+                        "C_lofo": sc_c["outcome"].to_numpy(), "C_det_s": sc_c["delay"].to_numpy().round(2),
+                        "C_PF": sc["outcome"].to_numpy(), "CPF_det_s": sc["delay"].to_numpy().round(2),
+                        "CPF_alarm_s": alarm.round(2), "CPF_channel": first})[diff]
+    print(f"Flights whose held-out outcome or detection time differs between C and C-PF ({diff.sum()} of {n}):")
+    print(per.to_string(index=False))
+
+    rows = []
+    for pf in PF_SWEEP:
+        a, t, _ = pf_folds(stats, onset, pf)
+        s = score(a)
+        r = detection_metrics(s, max_delay=USEFUL_DELAY_S).loc["all"]
+        rows.append({"P_F": pf, "per channel": pf / m, **{f"{c} (median)": t[c].median() for c in stats},
+                     "realised": (s["outcome"] == "FP").mean(),
+                     **{v: int(r[k]) for k, v in TABLE_COLUMNS.items() if v in ("TP", "FP", "FN", "TN", "TP_5s")},
+                     "precision": r["precision"], "recall": r["recall"], "accuracy": r["accuracy"],
+                     "mean_det_s": r["mean_delay"]})
+    print("\nC-PF for other P_F (same folds; realised: fraction of held-out flights with an alarm in their healthy "
+          "part):")
+    print(pd.DataFrame(rows).to_string(index=False, float_format="{:.3f}".format))
+    # the rate alternative: 1 false alarm per 10 flight-hours, as a probability per flight of the mean length
+    p = -np.expm1(-PF_RATE_PER_HOUR * healthy_s.mean() / 3600)
+    try:
+        pf_thresholds(maxima.drop(index=0), p)
+        msg = "estimable"
+    except ValueError as e:
+        msg = f"not estimable, EmpiricalThreshold: {e}"
+    print(f"Per flight-hour instead: P_F = {PF_FLIGHT:g} per flight is about "
+          f"{-np.log1p(-PF_FLIGHT) / (healthy_s.mean() / 3600):.1f} false alarms per flight-hour on flights of the "
+          f"mean healthy\nlength; {PF_RATE_PER_HOUR:g} per flight-hour would be P_F = {p:.4f} per flight "
+          f"({p / m:.5f} per channel) from {n - 1} maxima per fold:\n{msg}")
+    return sc
 
 # --------------------------------------------------------------------------- Keipour's 22 flights
 #: paper 001, Table I: tests and mean detection time (s) per failure type, as published (the reference to beat)
@@ -511,7 +693,7 @@ def main():
     times_c["roll_gain"] = np.array([gain_crossing_times(df, GAIN["grid"]) for df in flights])
     grids_c = {c: grids[c] for c in BASE_CHANNELS}
     grids_c["roll_gain"] = GAIN["grid"]
-    alarm_c, chosen_c, alarm_cfit, label_cfit, _ = lofo(onset, times_c, grids_c)
+    alarm_c, chosen_c, alarm_cfit, label_cfit, idx_cfit = lofo(onset, times_c, grids_c)
     sc_c, sc_cf = score(alarm_c), score(alarm_cfit)
     times = {c: times_all[c] for c in BASE_CHANNELS}
     grids = {c: grids[c] for c in BASE_CHANNELS}
@@ -551,6 +733,12 @@ def main():
         fit[c] is not None and abs(fit[c] - ALFA_SETTINGS[c]) < 1e-9 for c in ALFA_SETTINGS)
     print(f"B-fit thresholds (all 45 flights, in-sample): {label_fit}; shipped ALFA_SETTINGS {ALFA_SETTINGS} "
           f"{'equal' if same else 'DIFFER from'} them")
+    # C-PF (issue 17): C's channels, thresholds for a required false-alarm probability per flight
+    stats_c = {c: [channel_statistic(df, c) for df in flights] for c in PF_CHANNELS}
+    t_end = np.array([(df.index[-1] - df.index[0]).total_seconds() for df in flights])
+    healthy_s = np.fmin(onset, t_end) - ARM_AFTER_S
+    c_fit = {c: (grids_c[c][k] if k < len(grids_c[c]) else np.nan) for c, k in idx_cfit.items()}
+    sc_pf = pf_report(tab, healthy_s, stats_c, score, sc_c, c_fit)
     for name, sc in {
             "A (fixed, paper 001 settings, roll and pitch pairs, 45 merged flights)": sc_a,
             "A-K (fixed, paper 001 settings, Keipour's commanded/measured pairing, 7 engine flights)": sc_k,
@@ -558,6 +746,8 @@ def main():
             "B5 (B plus roll/pitch effectiveness candidates, chosen by leave-one-flight-out, held-out)": sc_b5,
             "B-fit (same, thresholds fitted on all 45 flights: in-sample, optimistic)": sc_f,
             "C (B plus the roll-effectiveness GLRT candidate, chosen by leave-one-flight-out, held-out)": sc_c,
+            f"C, thresholds for P_F = {PF_FLIGHT:g} per flight (C-PF: set in each fold on the fitting flights' "
+            "healthy parts only, held-out)": sc_pf,
             "C-fit (C's all-flight choice: in-sample, optimistic)": sc_cf,
     }.items():
         print(f"\nTable I-like summary, configuration {name}")

@@ -315,6 +315,40 @@ def test_alfa_lofo_chooses_the_channel_set_inside_the_folds():
     assert m["mean_delay"] == 4.0 and m["mean_delay_within"] == 1.0 and m["TP_within"] == 1
 
 
+def test_alfa_pf_thresholds_come_from_the_other_flights_healthy_parts_only():
+    """C-PF: a fold's thresholds are EmpiricalThreshold(P_F / channels) of the other flights' healthy-part maxima;
+    the held-out flight and every sample after an onset stay out; the held-out alarm is the first crossing."""
+    B = _alfa_benchmark()
+    rng = np.random.default_rng(1)
+    n, pf = 40, 0.2
+    t = np.arange(0.0, 60.0, 0.5)
+    onset = np.where(np.arange(n) % 4 == 0, np.nan, 40.0)            # 10 flights without failure
+    stats = {"a": [], "b": []}
+    for i in range(n):
+        for c in stats:
+            s = np.where(t >= 20.0, rng.gumbel(size=t.size), -np.inf)  # armed after 20 s
+            if c == "a" and np.isfinite(onset[i]):
+                s = np.where(t >= onset[i], s + 100.0, s)              # the failure: far above any healthy value
+            stats[c].append((t, s))
+    alarm, thr, maxima = B.pf_folds(stats, onset, pf)
+    assert thr.shape == maxima.shape == (n, 2) and maxima.to_numpy().max() < 50.0  # no post-onset sample
+    for i in (0, 1):
+        for c in stats:
+            est = tsfdi.EmpiricalThreshold(pf / 2, **B.PF_ESTIMATOR).calibrate(maxima[c].drop(index=i))
+            assert est.method_ == "gpd" and thr.at[i, c] == est.threshold_
+    for i in range(n):                                                 # first crossing of any channel
+        firsts = [t[s > thr.at[i, c]][0] for c in stats for tt, s in [stats[c][i]] if (s > thr.at[i, c]).any()]
+        assert alarm[i] == min(firsts) if firsts else np.isnan(alarm[i])
+    sc = tsfdi.score_records(onset, alarm)
+    assert (sc["outcome"] == "FP").sum() == (maxima.to_numpy() > thr.to_numpy()).any(axis=1).sum()
+    assert set(sc["outcome"][np.isfinite(onset)]) <= {"TP", "FP"}     # every failure is caught (+100)
+    # a held-out flight with huge healthy values does not move its own thresholds, only the other folds'
+    stats["b"][1] = (t, np.where(t >= 20.0, 1e6, -np.inf))
+    alarm2, thr2, _ = B.pf_folds(stats, onset, pf)
+    pd.testing.assert_series_equal(thr2.loc[1], thr.loc[1])
+    assert (thr2["b"].drop(index=1) > thr["b"].drop(index=1)).all() and alarm2[1] == 20.0
+
+
 def test_real_alfa_roll_gain_channel_with_the_shipped_threshold():
     """Configuration C's roll-effectiveness GLRT: an aileron failure alarms within 10 s, a healthy flight never."""
     B = _alfa_benchmark()
@@ -362,3 +396,166 @@ def test_departure_is_the_first_exceedance_of_the_pre_onset_range():
     df = pd.DataFrame({"x": v}, index=pd.to_datetime(t, unit="s"))
     assert B.departure_s(df, "x", 30.0) == 4.0
     assert np.isnan(B.departure_s(df.assign(x=np.where(t < 30.0, v, 0.5)), "x", 30.0))
+
+
+# ------------------------------------------------------------------ thresholds for false alarms per flight hour
+FS = 20.0
+
+
+def healthy_runs(n_runs, seed, minutes=10.0):
+    """ARX runs y = 0.7 y[-1] + u + e (e: sd 0.1) sampled at FS Hz, one generator per run."""
+    n = int(minutes * 60 * FS)
+    ys, us = [], []
+    for r in range(n_runs):
+        rng = np.random.default_rng([seed, r])
+        u = rng.standard_normal(n)
+        ys.append(lfilter([1.0], [1.0, -0.7], u + 0.1 * rng.standard_normal(n)))
+        us.append(u)
+    return ys, us
+
+
+def episodes_and_hours(det, ys, us, fs=FS):
+    total, hours = 0, 0.0
+    for y, u in zip(ys, us):
+        det.reset()
+        rate = det.run(y, u).false_alarms_per_hour(fs)
+        total += int(rate.loc["all", "episodes"])
+        hours += rate.loc["all", "hours"]
+    return total, hours
+
+
+@pytest.mark.parametrize("opts", [{}, {"statistic": "mean", "window": 10}], ids=["zscore+glrt", "mean"])
+def test_calibrated_rate_holds_on_new_healthy_runs(opts):
+    from scipy import stats
+
+    ys, us = healthy_runs(20, seed=0)
+    det = OnlineDetector(1, na=1, nb=1, freeze_on_alarm=False, **opts)
+    assert det.calibration_ is None
+    assert det.calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS) is det
+    cal = det.calibration_
+    assert cal.runs == 20 and cal.healthy_hours == pytest.approx(20 / 6)
+    assert cal.expected_episodes == pytest.approx(2.0 * 20 / 6) and cal.false_alarms_per_hour == 2.0
+    assert cal.threshold == det.threshold and abs(cal.healthy_episodes - cal.expected_episodes) <= 2
+    if det.glrt is not None:
+        assert cal.glrt_threshold == det.glrt.threshold_ and det.models[0].threshold == det.threshold
+        assert set(cal.source_rates) == {"zscore", "glrt"}
+        assert all(1.0 <= r <= 2.0 for r in cal.source_rates.values())
+    else:
+        assert cal.glrt_threshold is None and cal.estimator == "empirical" and cal.source_rates == {"mean": 2.0}
+    # 20 new healthy runs: the alarm episodes lie in the two-sided 99 % Poisson band of the target
+    total, hours = episodes_and_hours(det, *healthy_runs(20, seed=1))
+    lo, hi = stats.poisson.ppf([0.005, 0.995], 2.0 * hours)
+    assert lo <= total <= hi, (total, lo, hi)
+
+
+def test_calibrated_default_detector_first_alarms_and_a_fault():
+    """With freeze_on_alarm the first alarm of a healthy run comes at the calibrated rate; a fault still alarms."""
+    from scipy import stats
+
+    ys, us = healthy_runs(20, seed=0)
+    det = OnlineDetector(["ax"], na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS)
+    assert det.freeze_on_alarm and det.threshold < 4.5     # 2 per hour at 20 Hz is looser than 4.5 sigma
+    new_y, new_u = healthy_runs(20, seed=1)
+    alarmed = 0
+    for y, u in zip(new_y, new_u):
+        det.reset()
+        alarmed += det.run(y, u).first_alarm is not None
+    p = 1.0 - np.exp(-2.0 * 600 / 3600)                   # P(a 10-minute run alarms) for Poisson episodes
+    lo, hi = stats.binom.ppf([0.005, 0.995], 20, p)
+    assert lo <= alarmed <= hi, (alarmed, lo, hi)
+    # a sensor bias of 5 error standard deviations in the output from sample 6000
+    y, u = new_y[0].copy(), new_u[0]
+    y[6000:] += 0.5
+    det.reset()
+    out = det.run(y, u)
+    assert out.alarm[6000:6040, 0].any()
+
+
+def test_calibration_extrapolates_short_healthy_data_with_an_exponential_tail():
+    ys, us = healthy_runs(20, seed=0)
+    two = OnlineDetector(1, na=1, nb=1, glrt=None).calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS)
+    half = OnlineDetector(1, na=1, nb=1, glrt=None).calibrate(ys, us, false_alarms_per_hour=0.5, fs=FS)
+    cal = half.calibration_
+    assert two.calibration_.estimator == "empirical" and cal.estimator == "exponential tail"
+    fit = cal.tail["zscore"]
+    assert 10 <= fit["n_u"] <= 20 and fit["beta"] > 0
+    # t = u + beta n_u (((n_u + 1) / K)^(1 / n_u) - 1), K = 0.5 * 20 / 6 expected episodes
+    k, n_u = 0.5 * 20 / 6, fit["n_u"]
+    assert half.threshold == pytest.approx(fit["u"] + fit["beta"] * n_u * (((n_u + 1) / k) ** (1 / n_u) - 1))
+    assert half.threshold > two.threshold
+    # with the GLRT, below 5 expected episodes each source gets half the rate (union bound)
+    both = OnlineDetector(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=1.0, fs=FS)
+    assert both.calibration_.source_rates == {"zscore": 0.5, "glrt": 0.5}
+    assert both.calibration_.estimator == "exponential tail" and set(both.calibration_.tail) == {"zscore", "glrt"}
+    assert both.glrt.threshold_ == both.calibration_.glrt_threshold
+
+
+def test_false_alarms_per_hour_report():
+    y, u = thrust_like(n=4000, change=4000)                # healthy
+    index = pd.date_range("2018-07-18 19:56:50", periods=len(y), freq="50ms")
+    det = mean_detector(threshold=0.15, direction="both", freeze_on_alarm=False)
+    out = det.run(pd.Series(y, index=index), pd.DataFrame(u, index=index))
+    a = out.alarm[:, 0]
+    starts = int(a[0]) + int(np.count_nonzero(a[1:] & ~a[:-1]))
+    assert starts >= 3 and out.alarm_start.sum() == starts and out.fs == pytest.approx(20.0)
+    rep = out.false_alarms_per_hour()                      # fs from the time index
+    assert list(rep.index) == ["thrust", "all"] and list(rep.columns) == ["episodes", "hours", "per_hour"]
+    hours = 4000 / 20.0 / 3600
+    assert rep.loc["thrust", "episodes"] == starts and rep.loc["all", "hours"] == pytest.approx(hours)
+    assert rep.loc["all", "per_hour"] == pytest.approx(starts / hours)
+    pd.testing.assert_frame_equal(out.false_alarms_per_hour(20.0), rep)
+    # numpy input has no time: fs is needed
+    det.reset()
+    out = det.run(y, u)
+    with pytest.raises(ValueError, match="fs"):
+        out.false_alarms_per_hour()
+    with pytest.raises(ValueError, match="fs"):
+        out.false_alarms_per_hour(0.0)
+    # an episode running across two blocks of a stream is counted once
+    cut = int(np.flatnonzero(a & np.r_[a[1:], False] & ~np.r_[False, a[:-1]])[0]) + 1   # inside an episode
+    det.reset()
+    parts = [det.run(y[:cut], u[:cut]), det.run(y[cut:], u[cut:])]
+    assert sum(int(p.false_alarms_per_hour(20.0).loc["all", "episodes"]) for p in parts) == starts
+    # several pairs: "all" is the sum over the pairs
+    yy, uu = two_pairs(gain=1.0)
+    rep = OnlineDetector(["a", "b"], na=1, nb=1, freeze_on_alarm=False).run(yy, uu).false_alarms_per_hour(50.0)
+    assert rep.loc["all", "episodes"] == rep.loc["a", "episodes"] + rep.loc["b", "episodes"] > 0
+
+
+def test_calibration_reads_fs_from_the_time_index_and_resets():
+    ys, us = healthy_runs(5, seed=2)
+    ref = OnlineDetector(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=20.0, fs=FS)
+    index = pd.date_range("2020-01-01", periods=len(ys[0]), freq="50ms")
+    det = OnlineDetector(1, na=1, nb=1)
+    det.run(ys[0][:100], us[0][:100])
+    det.calibrate([pd.Series(y, index=index) for y in ys], [pd.Series(u, index=index) for u in us],
+                  false_alarms_per_hour=20.0)
+    assert det.nobs == 0 and det.threshold == ref.threshold and det.glrt.threshold_ == ref.glrt.threshold_
+    assert det.calibration_.healthy_hours == pytest.approx(5 / 6)
+
+
+def test_calibration_bad_input():
+    ys, us = healthy_runs(3, seed=0, minutes=2.0)
+    det = OnlineDetector(1, na=1, nb=1)
+    with pytest.raises(ValueError, match="false_alarms_per_hour"):
+        det.calibrate(ys, us, false_alarms_per_hour=0.0, fs=FS)
+    with pytest.raises(TypeError, match="false_alarms_per_hour"):
+        det.calibrate(ys, us, false_alarms_per_hour="2/h", fs=FS)
+    with pytest.raises(ValueError, match="fs"):
+        det.calibrate(ys, us, false_alarms_per_hour=2.0, fs=-20.0)
+    with pytest.raises(ValueError, match="fs"):
+        det.calibrate(ys, us, false_alarms_per_hour=2.0)         # numpy runs carry no time
+    with pytest.raises(TypeError, match="y_runs"):
+        det.calibrate(ys[0], us, false_alarms_per_hour=2.0, fs=FS)
+    with pytest.raises(ValueError, match="u_runs"):
+        det.calibrate(ys, [], false_alarms_per_hour=2.0, fs=FS)
+    with pytest.raises(ValueError, match="same number of runs"):
+        det.calibrate(ys, us[:2], false_alarms_per_hour=2.0, fs=FS)
+    with pytest.raises(ValueError, match="healthy run 1: u and y must have the same length"):
+        det.calibrate(ys, [us[0], us[1][:-1], us[2]], false_alarms_per_hour=2.0, fs=FS)
+    # 0.1 h of healthy flight: 1 per hour needs 2 h for the tail fit of each source (half the rate each)
+    with pytest.raises(ValueError, match=r"at least 2 healthy hours are needed .* 5 for an empirical"):
+        det.calibrate(ys, us, false_alarms_per_hour=1.0, fs=FS)
+    with pytest.raises(ValueError, match="require fewer false alarms"):
+        det.calibrate(ys, us, false_alarms_per_hour=1e7, fs=FS)
+    assert det.calibration_ is None and det.threshold == 4.5   # nothing changed by the failed calls

@@ -19,7 +19,7 @@ from tsfdi.identification import Identification, WindowedIdentification, detect,
 from tsfdi.models import (AR, ARX, VAR, ARResults, ARXResults, HeldOutResiduals, RecursiveARX, RecursiveARXResults,
                           VARResults, load)
 from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
-from tsfdi.online import OnlineDetection, OnlineDetector
+from tsfdi.online import OnlineCalibration, OnlineDetection, OnlineDetector
 from tsfdi.selection import OrderSelection, select_order
 from tsfdi.windows import ResidualWindows, WindowStatistics
 
@@ -35,7 +35,7 @@ __all__ = [
     "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",
     "WindowedIdentification",
     # monitoring, online detection, baselines, evaluation
-    "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "Records", "fit_baselines",
+    "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "OnlineCalibration", "Records", "fit_baselines",
     "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
     # imported on first use
     "datasets", "plotting", "study", "plot_acf",

@@ -3,23 +3,32 @@
 :class:`OnlineDetector` runs several (output, input) signal pairs at once, each through a recursive ARX model
 with the stability gate, Welford running variance and Z-score alarms of paper 001 and a streaming GLRT on the
 same prediction errors (paper 002), and reports the first alarm of every pair and of the whole system with time
-stamps.
+stamps. :meth:`OnlineDetector.calibrate` sets the thresholds from healthy runs for a required number of false
+alarms per flight hour (paper 002's rule: the threshold from the statistic's distribution in normal operation).
 """
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal
+from tsfdi._data import as_signal, sampling_frequency
 from tsfdi._validation import float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
 from tsfdi.models.recursive import RecursiveARX
 
-__all__ = ["OnlineDetector", "OnlineDetection"]
+__all__ = ["OnlineDetector", "OnlineDetection", "OnlineCalibration"]
+
+_SECONDS_PER_HOUR = 3600.0
+_HUGE = 1e300            # a threshold no statistic reaches (calibration runs never alarm, so never freeze)
+_MIN_EMPIRICAL = 5.0     # expected episodes at the target rate needed for the empirical estimate
+_MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
+_TAIL_EPISODES = 20      # episodes above the base level of the tail fit
+_MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit accepts
 
 @dataclass(frozen=True, eq=False)
 class OnlineDetection:
@@ -48,6 +57,12 @@ class OnlineDetection:
         The detection statistic compared with ``threshold``: the Z-score (``statistic="zscore"``; the alarm is
         on its absolute value) or the direction-signed moving average of the prediction errors
         (``statistic="mean"``), NaN where undefined.
+    alarm_start : ndarray of bool, shape (nobs, n_pairs)
+        First sample of every alarm *episode* (a maximal stretch of consecutive alarmed samples of a pair, one
+        alarm to the operator); an episode continuing from the previous block of the stream is not restarted.
+    fs : float or None
+        Sampling frequency in Hz read from the time index of ``y`` (None for numpy input or an index without
+        time), used by :meth:`false_alarms_per_hour`.
     """
 
     pairs: tuple
@@ -60,6 +75,155 @@ class OnlineDetection:
     first_alarm_time: Any
     first_alarm_pair: str | None
     statistic: Any = None
+    alarm_start: np.ndarray | None = None
+    fs: float | None = None
+
+    def false_alarms_per_hour(self, fs: float | None = None) -> pd.DataFrame:
+        """Alarm episodes per hour of this block, per pair and in all: the false-alarm rate of a healthy run.
+
+        On a healthy run every alarm episode is a false alarm; consecutive alarmed samples are one episode
+        (counted at its first sample, :attr:`alarm_start`). The duration is that of the block,
+        ``nobs / fs`` -- the flight time, baseline and arming phases included, as in
+        :meth:`OnlineDetector.calibrate`.
+
+        Parameters
+        ----------
+        fs : float, optional
+            Sampling frequency in Hz; by default :attr:`fs` (from the time index of ``y``).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per pair and a row ``"all"`` (the sum over pairs, the rate
+            :meth:`OnlineDetector.calibrate` targets), columns ``episodes`` (int), ``hours`` (duration of the
+            block) and ``per_hour`` (``episodes / hours``).
+
+        Raises
+        ------
+        ValueError
+            If ``fs`` is not positive, or not given for data without a time index.
+        """
+        if fs is not None:
+            fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
+        elif self.fs is not None:
+            fs = self.fs
+        else:
+            raise ValueError("fs (sampling frequency in Hz) is needed: the data of this run carry no time index")
+        starts = self.alarm_start if self.alarm_start is not None else _episode_starts(self.alarm, None)
+        hours = self.alarm.shape[0] / fs / _SECONDS_PER_HOUR
+        episodes = np.append(starts.sum(axis=0), starts.sum()).astype(np.int64)
+        return pd.DataFrame({"episodes": episodes, "hours": hours, "per_hour": episodes / hours},
+                            index=pd.Index([*self.pairs, "all"], name="pair"))
+
+
+@dataclass(frozen=True, eq=False)
+class OnlineCalibration:
+    """Record of :meth:`OnlineDetector.calibrate`.
+
+    Attributes
+    ----------
+    false_alarms_per_hour : float
+        The required rate of alarm episodes per flight hour (all pairs together).
+    healthy_hours : float
+        Total duration of the healthy runs, :math:`H`.
+    runs : int
+        Number of healthy runs.
+    threshold : float
+        The calibrated threshold of the detection statistic.
+    glrt_threshold : float or None
+        The calibrated GLRT threshold (None without GLRT).
+    estimator : str
+        ``"empirical"`` (counted episodes; with a GLRT, those of the combined alarm) or ``"exponential tail"``
+        (extrapolated from the episode peaks, each source on its own).
+    source_rates : dict
+        Rate per hour at which each source ("zscore" / "mean", "glrt") is set on its own (one common rate).
+    expected_episodes : float
+        :math:`K = \\rho H`, the episodes the target rate means on the healthy runs.
+    healthy_episodes : int
+        Alarm episodes the calibrated detector would raise on the healthy runs (without freezing).
+    tail : dict
+        Per source fitted with the exponential tail: base level ``u``, episodes above it ``n_u`` and mean
+        excess ``beta``.
+    """
+
+    false_alarms_per_hour: float
+    healthy_hours: float
+    runs: int
+    threshold: float
+    glrt_threshold: float | None
+    estimator: str
+    source_rates: dict
+    expected_episodes: float
+    healthy_episodes: int
+    tail: dict
+
+
+def _episode_starts(alarm: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    """First samples of the runs of True in every column of ``alarm`` (``previous``: the row before)."""
+    before = np.zeros((1, alarm.shape[1]), dtype=bool) if previous is None else previous.reshape(1, -1)
+    return alarm & ~np.concatenate([before, alarm[:-1]], axis=0)
+
+
+class _TooShort(Exception):
+    """The healthy runs cannot support a rate (raised by :class:`_Upcrossings`, reworded by the caller)."""
+
+
+class _Upcrossings:
+    """Alarm episodes of a statistic against a threshold, over healthy series joined by NaN separators.
+
+    A sample ``k`` starts an episode at level ``t`` when ``x(k) > t`` and not ``x(k-1) > t`` (NaN: not live), so
+    the count is ``N(t) = #{k: lo(k) <= t < x(k)}`` with ``lo(k) = x(k-1)`` (``-inf`` after a NaN): evaluated at
+    every observed level by two sorted arrays.
+    """
+
+    def __init__(self, x: np.ndarray, hours: float) -> None:
+        self.x = x
+        self.hours = hours
+        prev = np.concatenate([[np.nan], x[:-1]])
+        live = np.isfinite(x)
+        hi = x[live]
+        lo = np.where(np.isfinite(prev), prev, -np.inf)[live]
+        a = np.sort(hi)
+        b = np.sort(np.minimum(lo, hi))
+        self.levels = np.unique(a)
+        self.counts = np.searchsorted(b, self.levels, "right") - np.searchsorted(a, self.levels, "right")
+        # monotone envelope from above: Ñ(t) = max over t' >= t of N(t')
+        self.envelope = np.maximum.accumulate(self.counts[::-1])[::-1] if self.levels.size else self.counts
+
+    def empirical(self, k: float) -> float:
+        """Level with ``k >= 1`` episodes: between the ceil(k)-th and floor(k)-th highest episode peaks."""
+        env, lev = self.envelope, self.levels
+        if lev.size == 0 or env[0] < np.ceil(k):
+            raise _TooShort("rate")
+        # drop(m): the level where the envelope falls below m, i.e. the m-th highest episode peak
+        m0, m1 = int(np.ceil(k)), int(np.floor(k))
+        d0, d1 = (float(lev[np.searchsorted(-env, -(m - 1), "left")]) for m in (m0, m1))
+        frac = (np.log(m0) - np.log(k)) / (np.log(m0) - np.log(m1)) if m0 > m1 else 0.0
+        return float(d0 + frac * (d1 - d0))
+
+    def level(self, rate: float) -> tuple[float, str, dict]:
+        """Threshold with ``rate`` episodes per hour: (threshold, estimator, tail fit)."""
+        k = rate * self.hours
+        env, lev = self.envelope, self.levels
+        if lev.size == 0 or env[0] < np.ceil(k):
+            raise _TooShort("rate")
+        if k >= _MIN_EMPIRICAL:
+            return self.empirical(k), "empirical", {}
+        if k < _MIN_EXTRAPOLATED:
+            raise _TooShort("hours")
+        j = int(np.argmax(env <= _TAIL_EPISODES)) if env[0] > _TAIL_EPISODES else 0
+        u = float(lev[j])
+        above = np.nan_to_num(self.x, nan=-np.inf) > u
+        start = np.flatnonzero(above & ~np.concatenate([[False], above[:-1]]))
+        stop = np.flatnonzero(above & ~np.concatenate([above[1:], [False]])) + 1
+        if start.size < _MIN_TAIL_EPISODES:
+            raise _TooShort("episodes")
+        peaks = np.array([self.x[i:e].max() for i, e in zip(start, stop)])
+        beta = float(np.mean(peaks - u))
+        n_u = int(start.size)
+        # mean-unbiased under the model: E[episodes above u + c beta_hat] = (n_u + 1) (1 + c / n_u)^-n_u = k
+        c = n_u * ((n_u + 1.0) / k) ** (1.0 / n_u) - n_u
+        return u + beta * c, "exponential tail", {"u": u, "n_u": n_u, "beta": beta}
 
 
 def _moving_average(x: np.ndarray, window: int) -> np.ndarray:
@@ -94,6 +258,9 @@ class OnlineDetector:
     (its ``scale`` is the Welford standard deviation at arming, its input the error minus the Welford mean at
     arming). No alarm of any source is raised among the first ``arm_after`` samples (baseline phase).
 
+    :meth:`calibrate` sets ``threshold`` (and the GLRT's) from healthy runs for a required number of false
+    alarms per flight hour; :meth:`OnlineDetection.false_alarms_per_hour` reports the rate of a run.
+
     Parameters
     ----------
     pairs : int or sequence of str
@@ -125,6 +292,11 @@ class OnlineDetector:
     **rls_options
         Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``eps``, ``stable_samples``,
         ``variance_tol``, ``min_variance_samples``.
+
+    Attributes
+    ----------
+    calibration_ : OnlineCalibration or None
+        Record of the last :meth:`calibrate` (None before).
 
     Notes
     -----
@@ -171,6 +343,12 @@ class OnlineDetector:
         if glrt is not None and not isinstance(glrt, GLRT):
             raise TypeError(f"glrt must be a tsfdi.detection.GLRT or None, got {type(glrt).__name__}")
         self.glrt = glrt
+        # the constructor's options, for the alarm-free copies run by calibrate()
+        self._options = dict(na=na, nb=nb, nk=nk, forgetting_factor=forgetting_factor, threshold=self.threshold,
+                             glrt=glrt, freeze_on_alarm=self.freeze_on_alarm, nonfinite=self.nonfinite,
+                             n_inputs=self.n_inputs, statistic=self.statistic, window=self.window,
+                             direction=self.direction, arm_after=self.arm_after, **rls_options)
+        self.calibration_: OnlineCalibration | None = None
         zs = self.statistic == "zscore"
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
         self._models = [RecursiveARX(na, nb, nk, forgetting_factor, n_inputs=self.n_inputs,
@@ -192,6 +370,7 @@ class OnlineDetector:
         self._time: list = [None] * k
         self._tail = np.full((k, max(self.window - 1, 0)), np.nan)
         self._stat_alarmed = np.zeros(k, dtype=bool)
+        self._last_alarm = np.zeros(k, dtype=bool)
         self._nobs = 0
 
     @property
@@ -337,13 +516,258 @@ class OnlineDetector:
                 self._source[c] = "+".join(s for s, a in ((self.statistic, zal[i]), ("glrt", gal[i])) if a)
                 self._time[c] = labels[i] if labels is not None else start + i
         self._nobs += n
-        return self._result(sy, Z, G, E, A, S)
+        starts = _episode_starts(A, self._last_alarm)
+        self._last_alarm = A[-1].copy()
+        return self._result(sy, Z, G, E, A, S, starts)
 
     def update(self, y: Any, u: Any) -> np.ndarray:
         """Process one sample of every pair; returns the per-pair alarm flags (bool array)."""
         yv = np.atleast_1d(np.asarray(y, dtype=np.float64)).reshape(1, -1)
         uv = np.atleast_1d(np.asarray(u, dtype=np.float64)).reshape(1, -1)
         return self.run(yv, uv).alarm[0]
+
+    # ------------------------------------------------------------------ thresholds from healthy runs
+    def _alarm_free_copy(self) -> OnlineDetector:
+        """A fresh detector with the same options whose thresholds are never reached (so it never freezes)."""
+        glrt = None
+        if self.glrt is not None:
+            glrt = copy.copy(self.glrt)
+            glrt.threshold = _HUGE
+        return OnlineDetector(self.pairs, **{**self._options, "threshold": _HUGE, "glrt": glrt})
+
+    @staticmethod
+    def _runs(runs: Any, name: str) -> list:
+        if not isinstance(runs, (list, tuple)):
+            raise TypeError(f"{name} must be a list of runs (one array, DataFrame or DataArray per healthy run), "
+                            f"got {type(runs).__name__}")
+        if not runs:
+            raise ValueError(f"{name} must hold at least one healthy run")
+        return list(runs)
+
+    def calibrate(self, y_runs: Any, u_runs: Any, *, false_alarms_per_hour: float,
+                  fs: float | None = None) -> OnlineDetector:
+        r"""Set the thresholds for a required number of false alarms per flight hour, from healthy runs.
+
+        Paper 002's rule (Hansen et al., section 3, Fig. 2): the threshold is read from the distribution of the
+        detection statistic in normal operation for a required false-alarm probability. Here the requirement is
+        a rate of alarm *episodes* per flight hour -- consecutive alarmed samples are one alarm to the operator
+        -- which is what a crew or an operator counts, whatever the sampling rate and the correlation of the
+        statistic.
+
+        Every healthy run goes through a fresh copy of the detector (same options) whose thresholds are never
+        reached, so its models never freeze; the copy's statistic is kept from the sample it can alarm at
+        (after arming and the baseline phase ``arm_after``): :math:`|Z|` for ``statistic="zscore"``, the
+        direction-signed moving average for ``"mean"``, and the GLRT's :math:`g(k)` when the GLRT is on. The
+        thresholds are then set, :meth:`reset` is called and ``calibration_`` records the estimate.
+
+        Parameters
+        ----------
+        y_runs, u_runs : list of array_like, DataFrame or DataArray
+            The healthy runs, one entry per run, each as :meth:`run` takes ``y`` and ``u``; runs are independent
+            (every one starts a fresh detector), so each should be a whole flight or a stretch long enough to
+            arm.
+        false_alarms_per_hour : float
+            Required alarm episodes per flight hour of healthy operation, all pairs together (the ``"all"`` row
+            of :meth:`OnlineDetection.false_alarms_per_hour`).
+        fs : float, optional
+            Sampling frequency in Hz; by default read from each run's time index.
+
+        Returns
+        -------
+        OnlineDetector
+            ``self``, with ``threshold`` (and ``glrt``'s threshold) set and ``calibration_``
+            (:class:`OnlineCalibration`).
+
+        Raises
+        ------
+        ValueError
+            For a non-positive rate or ``fs``, unequal numbers of runs, a run :meth:`run` refuses (the message
+            names the run), no ``fs`` for data without a time index, or healthy runs too short for the rate
+            (the message states how many healthy hours are needed).
+        TypeError
+            If ``y_runs`` / ``u_runs`` is not a list of runs.
+
+        Notes
+        -----
+        Let :math:`x_r(k)` be the statistic of run :math:`r` (undefined before it can alarm) and
+        :math:`H = \sum_r n_r / (3600 f_s)` the healthy flight hours (whole runs, arming phases included; with
+        several pairs, :math:`x` runs over every pair of every run and the rate is that of all pairs
+        together). A sample starts an episode at level :math:`t` when :math:`x_r(k) > t` and not
+        :math:`x_r(k-1) > t`; :math:`N(t)` counts them and :math:`\tilde N(t) = \max_{t' \ge t} N(t')` is its
+        non-increasing envelope. The target is :math:`K = \rho H` episodes, :math:`\rho` =
+        ``false_alarms_per_hour``.
+
+        - **Empirical** (:math:`K \ge 5`): with :math:`D_m = \min\{t: \tilde N(t) < m\}`, the :math:`m`-th
+          highest episode peak (for Poisson episodes, :math:`m` are expected at or above it),
+
+          .. math:: t = D_{\lceil K\rceil} + \frac{\ln\lceil K\rceil - \ln K}{\ln\lceil K\rceil - \ln\lfloor K\rfloor}
+                    \,\big(D_{\lfloor K\rfloor} - D_{\lceil K\rceil}\big)
+
+          (:math:`t = D_K` for an integer :math:`K`): the episode count interpolated log-linearly.
+        - **Exponential tail** (:math:`1 \le K < 5`: too few episodes to count): peaks over a threshold,
+          one peak per episode. :math:`u = D_{21}` is the lowest observed level with
+          :math:`\tilde N(u) \le 20`, :math:`n_u` (at least 10) the episodes above it and :math:`p_i` their
+          peaks (the largest :math:`x` of each). With exponential excesses of scale :math:`\beta` (a
+          generalised Pareto tail of shape 0) the episode rate above :math:`t > u` is
+          :math:`\rho(t) = \rho(u)\, e^{-(t - u)/\beta}`; the maximum-likelihood scale is the mean excess
+          :math:`\hat\beta = \frac{1}{n_u}\sum_i (p_i - u)` (:math:`n_u\hat\beta/\beta \sim \Gamma(n_u)`), and
+          :math:`u` being the :math:`(n_u+1)`-th peak, :math:`n_u + 1` episodes lie above it on average.
+          :math:`t = u + c\,\hat\beta` with the expected number of episodes above :math:`t`,
+          :math:`(n_u + 1)(1 + c/n_u)^{-n_u}`, equal to :math:`K`:
+
+          .. math:: t = u + \hat\beta\, n_u\Big[\Big(\frac{n_u + 1}{K}\Big)^{1/n_u} - 1\Big]
+                    \;\approx\; u + \hat\beta \ln\frac{n_u + 1}{K}.
+
+          The exponential tail suits the GLRT's :math:`g(k)` (a maximum of scaled :math:`\chi^2(1)`
+          variables). A lighter tail (log-survival concave, e.g. Gaussian errors) makes the threshold err
+          high (fewer false alarms than required), a heavier one (e.g. runs whose error scale differs) low.
+        - :math:`K < 1` (fewer than :math:`1/\rho` healthy hours): ``ValueError``.
+
+        With the GLRT on, an alarm of either source is an alarm of the pair. Both sources are set at the level
+        of one common rate of their own, :math:`\rho_s \in [\rho/2, \rho]` (at :math:`\rho/2` the union bound
+        caps the combined rate at :math:`\rho`). For :math:`K \ge 5` the episodes of the combined alarm are
+        counted: with each source at its empirical level for :math:`\rho_s` (the interpolation above, defined
+        down to one episode), :math:`R_m` is the largest :math:`\rho_s` whose combined alarm has fewer than
+        :math:`m` episodes on the healthy runs (bisection), and :math:`\rho_s` interpolates
+        :math:`R_{\lceil K\rceil}` and :math:`R_{\lfloor K\rfloor}` log-linearly as :math:`D_m` above. For
+        :math:`K < 5`, :math:`\rho_s = \rho/2` and each source is extrapolated by its own tail fit (which needs
+        :math:`K/2 \ge 1`).
+
+        The rate is that of the detector without freezing, the statistic's distribution in normal operation.
+        With ``freeze_on_alarm=True`` (the default) the first alarm of a healthy run comes at that rate
+        (nothing is frozen before it): a run of :math:`T` hours alarms with probability about
+        :math:`1 - e^{-\rho T}`. The later episodes of that pair are not: its model stays frozen where a false
+        alarm caught it, often with its parameters off, and may keep alarming (with ``"mean"`` often many
+        times), as after a fault. With one threshold for all pairs, pairs whose statistics differ in scale
+        (``"mean"`` in the units of each ``y``) share the rate unevenly.
+
+        References
+        ----------
+        Hansen, Blanke, Adrian, *A Framework for Rapid Diagnosis of Critical Faults in UAVs* (paper 002),
+        section 3 and Fig. 2; S. Coles, *An Introduction to Statistical Modeling of Extreme Values*, Springer
+        2001, chapters 4 (threshold excesses) and 5 (dependent sequences, declustering).
+        """
+        rate = float_like(false_alarms_per_hour, "false_alarms_per_hour", minimum=0.0, strict_min=True)
+        fs = float_like(fs, "fs", minimum=0.0, strict_min=True, optional=True)
+        ys, us = self._runs(y_runs, "y_runs"), self._runs(u_runs, "u_runs")
+        if len(ys) != len(us):
+            raise ValueError(f"y_runs and u_runs must hold the same number of runs, got {len(ys)} and {len(us)}")
+        sep = np.array([np.nan])
+        s_parts: list = []
+        g_parts: list = []
+        hours = 0.0
+        for i, (y, u) in enumerate(zip(ys, us)):
+            try:
+                out = self._alarm_free_copy().run(y, u)
+            except (ValueError, TypeError) as err:
+                raise type(err)(f"healthy run {i}: {err}") from err
+            f = fs if fs is not None else out.fs
+            if f is None:
+                raise ValueError(f"fs (sampling frequency in Hz) is needed: healthy run {i} carries no time index")
+            n = out.alarm.shape[0]
+            hours += n / f / _SECONDS_PER_HOUR
+            live = (np.arange(n) >= self.arm_after)[:, None]
+            stat = np.asarray(out.statistic, dtype=float).reshape(n, -1)
+            if self.statistic == "zscore":
+                stat = np.abs(stat)
+            stat = np.where(live, stat, np.nan)
+            g = np.where(live, np.asarray(out.glrt, dtype=float).reshape(n, -1), np.nan)
+            for c in range(len(self.pairs)):
+                s_parts += [stat[:, c], sep]
+                g_parts += [g[:, c], sep]
+        k_target = rate * hours
+        sources = {self.statistic: _Upcrossings(np.concatenate(s_parts), hours)}
+        if self.glrt is not None:
+            sources["glrt"] = _Upcrossings(np.concatenate(g_parts), hours)
+
+        def explain(source: str, reason: str, rho: float) -> ValueError:
+            where = f"{hours:.3g} healthy hours ({len(ys)} run(s))"
+            if reason == "rate":
+                return ValueError(f"false_alarms_per_hour={rate:g} is more than the {source} statistic raises on the "
+                                  f"{where} at any threshold: require fewer false alarms")
+            if reason == "hours":
+                return ValueError(f"false_alarms_per_hour={rate:g} cannot be supported by {where}: at least "
+                                  f"{_MIN_EXTRAPOLATED / rho:.3g} healthy hours are needed (exponential tail fit; "
+                                  f"{_MIN_EMPIRICAL / rate:.3g} for an empirical estimate)")
+            return ValueError(f"false_alarms_per_hour={rate:g}: the {source} statistic has fewer than "
+                              f"{_MIN_TAIL_EPISODES} alarm episodes above any level on the {where}, too few for a "
+                              f"tail fit; at least {_MIN_EMPIRICAL / rate:.3g} healthy hours are needed for an "
+                              f"empirical estimate")
+
+        def level(source: str, rho: float) -> tuple[float, str, dict]:
+            try:
+                return sources[source].level(rho)
+            except _TooShort as err:
+                raise explain(source, err.args[0], rho) from None
+
+        xs = {name: np.nan_to_num(up.x, nan=-np.inf) for name, up in sources.items()}
+
+        def episodes(thresholds: dict) -> int:
+            above = np.zeros(next(iter(xs.values())).shape, dtype=bool)
+            for name, t in thresholds.items():
+                above |= xs[name] > t
+            return int(np.count_nonzero(above[1:] & ~above[:-1]) + above[0])
+
+        def at(rho: float) -> dict:
+            return {name: level(name, rho) for name in sources}
+
+        if len(sources) == 1:
+            rho, fitted = rate, at(rate)
+        elif k_target < _MIN_EMPIRICAL:
+            rho = rate / 2.0                               # union bound, each source from its own tail fit
+            fitted = at(rho)
+        else:
+            # the combined alarm's episodes counted: both sources at their empirical level of a common rate
+            # r in [rate / 2, rate]; R_m = the largest r with fewer than m episodes, interpolated as D_m
+            def empirical(r: float) -> dict:
+                out = {}
+                for name, up in sources.items():
+                    try:
+                        out[name] = up.empirical(r * hours)
+                    except _TooShort as err:
+                        raise explain(name, err.args[0], r) from None
+                return out
+
+            def boundary(m: int) -> float:
+                lo, hi = rate / 2.0, rate
+                if episodes(empirical(hi)) < m:
+                    return hi
+                if episodes(empirical(lo)) >= m:
+                    return lo
+                for _ in range(30):
+                    mid = np.sqrt(lo * hi)
+                    lo, hi = (mid, hi) if episodes(empirical(mid)) < m else (lo, mid)
+                return lo
+
+            m0, m1 = int(np.ceil(k_target)), int(np.floor(k_target))
+            r0, r1 = boundary(m0), boundary(m1)
+            frac = (np.log(m0) - np.log(k_target)) / (np.log(m0) - np.log(m1)) if m0 > m1 else 0.0
+            rho = float(np.exp(np.log(r0) + frac * (np.log(r1) - np.log(r0))))
+            fitted = {name: (t, "empirical", {}) for name, t in empirical(rho).items()}
+        thresholds = {name: v[0] for name, v in fitted.items()}
+        for name, t in thresholds.items():
+            if not t > 0:
+                raise ValueError(f"false_alarms_per_hour={rate:g} needs a {name} threshold of {t:.4g}, not positive: "
+                                 f"require fewer false alarms")
+        t = thresholds[self.statistic]
+        self.threshold = t
+        self._options["threshold"] = t
+        if self.statistic == "zscore":
+            for m in self._models:
+                m.threshold = t
+        gamma = thresholds.get("glrt")
+        if gamma is not None:
+            glrt = copy.copy(self.glrt)
+            glrt.threshold = gamma
+            self.glrt = glrt
+            self._options["glrt"] = glrt
+        self.calibration_ = OnlineCalibration(
+            false_alarms_per_hour=rate, healthy_hours=hours, runs=len(ys), threshold=t, glrt_threshold=gamma,
+            estimator=next(iter(fitted.values()))[1], source_rates={name: rho for name in sources},
+            expected_episodes=k_target, healthy_episodes=episodes(thresholds),
+            tail={name: v[2] for name, v in fitted.items() if v[2]})
+        self.reset()
+        return self
 
     @property
     def first_alarms(self) -> pd.DataFrame:
@@ -352,7 +776,7 @@ class OnlineDetector:
                              "source": [s or None for s in self._source], "armed_at": self._armed_at.copy()},
                             ).set_axis(pd.Index(self.pairs, name="pair"))
 
-    def _result(self, sy: Any, Z, G, E, A, S) -> OnlineDetection:
+    def _result(self, sy: Any, Z, G, E, A, S, starts) -> OnlineDetection:
         fa = self.first_alarms
         hit = fa[fa["position"] >= 0]
         if len(hit):
@@ -367,4 +791,5 @@ class OnlineDetector:
                                resid=sy.wrap(E, 0, channels=names, vector=True),
                                alarm=A, first_alarms=fa, first_alarm=first, first_alarm_time=first_time,
                                first_alarm_pair=pair,
-                               statistic=sy.wrap(S, 0, channels=names, vector=True))
+                               statistic=sy.wrap(S, 0, channels=names, vector=True), alarm_start=starts,
+                               fs=sampling_frequency(sy))
