@@ -316,3 +316,23 @@ def test_detect_identify_arx_with_input():
     yf = sps.lfilter([0, 0.4, 0.3], [1, -0.5], u) + 0.1 * rng.standard_normal(3000)
     ident = tsfdi.identify(yf[2000:], {"healthy": res}, tsfdi.FTest(1e-3), u=u[2000:])
     assert ident.status == "none"
+
+
+def test_one_test_per_model(models):
+    """identify / identify_windows with a mapping name -> test: each candidate with its own (calibrated) test."""
+    rng = np.random.default_rng(107)
+    y = simulate("rotor2", 3000, rng)
+    tests = {name: tsfdi.LjungBox(30, 1e-3).calibrate(
+        [np.asarray(res.residuals(simulate(name, 2000, rng))) for _ in range(8)], window=400) for name, res in
+        models.items()}
+    ident = tsfdi.identify(y[:1000], models, tests)
+    for name, res in models.items():
+        alone = tsfdi.identify(y[:1000], {name: res}, tests[name]).decisions[name]
+        np.testing.assert_array_equal(ident.decisions[name].threshold, alone.threshold)
+        assert ident.decisions[name].details["threshold_method"] == "calibrated"
+    assert len({float(d.threshold[0]) for d in ident.decisions.values()}) == len(models)   # one null per model
+    wins = identify_windows(y, models, tests, window=1000, step=500)
+    assert wins[0].label == ident.label and wins.tests == tuple(tests.values())
+    np.testing.assert_allclose(wins[0].decisions["rotor2"].statistic, ident.decisions["rotor2"].statistic)
+    with pytest.raises(ValueError, match="no test for the model"):
+        tsfdi.identify(y[:1000], models, {"rotor2": tests["rotor2"]})

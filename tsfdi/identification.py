@@ -34,6 +34,17 @@ def _check_test(test: Any) -> ResidualTest:
     return test
 
 
+def _model_tests(test: Any, models: Mapping) -> dict:
+    """Name -> the test of each model: one test for all, or a mapping name -> test (one calibrated per model)."""
+    if isinstance(test, Mapping):
+        missing = [name for name in models if name not in test]
+        if missing:
+            raise ValueError(f"test is a mapping but has no test for the model(s) {missing}")
+        return {name: _check_test(test[name]) for name in models}
+    test = _check_test(test)
+    return dict.fromkeys(models, test)
+
+
 def _check_model(res: Any, name: str, nchan: int, arg: str) -> None:
     if not hasattr(res, "residuals"):
         raise TypeError(f"{arg} must hold fitted results (AR or VAR) with a residuals() method; "
@@ -162,7 +173,7 @@ def _check_models(models: Any) -> Mapping:
     return models
 
 
-def identify(signal: Any, models: Mapping, test: ResidualTest | None = None, *, u: Any = None) -> Identification:
+def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -> Identification:
     """Multi-class identification by one binary test per candidate model (Dutta et al., eq. 11 and the
     residual uncorrelatedness method).
 
@@ -173,8 +184,11 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None, *, 
     models : mapping
         Name -> fitted results (``tsfdi.AR(...).fit()`` / ``tsfdi.VAR(...).fit()``), e.g. the healthy
         model and one model per fault type. All must have the signal's number of channels.
-    test : ResidualTest, optional
-        The test applied to each model's residuals (default ``LjungBox()``).
+    test : ResidualTest or mapping, optional
+        The test applied to each model's residuals (default ``LjungBox()``), or a mapping name -> test: each
+        model with its own test, e.g. thresholds calibrated on that model's held-out residuals
+        (``LjungBox(...).calibrate(spec.held_out_residuals(), window=...)`` for each fault model's spec), so that
+        every candidate's accept / reject has a known size.
     u : array_like, optional
         Input signal when the candidates are input-output models (``tsfdi.ARX``).
 
@@ -182,16 +196,22 @@ def identify(signal: Any, models: Mapping, test: ResidualTest | None = None, *, 
     -------
     Identification
     """
-    test = _check_test(test)
     models = _check_models(models)
+    tests = _model_tests(test, models)
     sig = as_signal(signal, "signal", allow_constant=True)
     for name, res in models.items():
         _check_model(res, name, sig.nchan, "models")
     decisions = {}
     for name, res in models.items():
         resid = res.residuals(sig) if u is None else res.residuals(sig, u)
-        decisions[name] = test.test(resid, **test.reference(res))
-    return Identification(decisions=decisions, test=type(test).__name__)
+        decisions[name] = tests[name].test(resid, **tests[name].reference(res))
+    return Identification(decisions=decisions, test=_test_name(tests))
+
+
+def _test_name(tests: dict) -> str:
+    """The class name of the tests (one name when every model has a test of the same class)."""
+    names = list(dict.fromkeys(type(t).__name__ for t in tests.values()))
+    return names[0] if len(names) == 1 else "+".join(names)
 
 
 @dataclass(frozen=True, eq=False)
@@ -205,8 +225,8 @@ class WindowedIdentification:
     ----------
     windows : WindowStatistics
         Statistics, thresholds, p-values and rejections, shape (n_windows, n_models, n_channels).
-    test : ResidualTest
-        The test applied to every model.
+    tests : tuple of ResidualTest
+        The test of every model, in model order.
     references : tuple of dict
         What the test takes from each fitted model (:meth:`~tsfdi.ResidualTest.reference`), in model order.
     models, channels, starts, stops, statistic, threshold, pvalue, channel_reject :
@@ -222,7 +242,7 @@ class WindowedIdentification:
     """
 
     windows: WindowStatistics
-    test: ResidualTest
+    tests: tuple
     references: tuple = ()
 
     models = property(lambda self: self.windows.models)
@@ -261,9 +281,9 @@ class WindowedIdentification:
         if ws.decisions is not None:
             dec = dict(zip(self.models, ws.decisions[w]))
         else:
-            dec = {m: self.test.decision(ws.statistic[w, i], ws.nobs[i], self.channels, **self.references[i])
+            dec = {m: self.tests[i].decision(ws.statistic[w, i], ws.nobs[i], self.channels, **self.references[i])
                    for i, m in enumerate(self.models)}
-        return Identification(decisions=dec, test=type(self.test).__name__,
+        return Identification(decisions=dec, test=_test_name(dict(zip(self.models, self.tests))),
                               span=(int(self.starts[w]), int(self.stops[w])))
 
     def __iter__(self):
@@ -280,7 +300,7 @@ class WindowedIdentification:
         return f"WindowedIdentification(windows={len(self)}, models={self.models}, {counts})"
 
 
-def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = None, *, window: Any,
+def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: Any,
                      step: Any = 1, fs: float | None = None) -> WindowedIdentification:
     """:func:`identify` on every sliding window of one record.
 
@@ -303,8 +323,8 @@ def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = N
         Arrays over windows, models and channels; ``result[w]`` is the :class:`Identification` of window ``w``
         (with ``span = (start, stop)``), equal to ``identify(signal[start:stop], models, test)``.
     """
-    test = _check_test(test)
     models = _check_models(models)
+    tests = _model_tests(test, models)
     sig = as_signal(signal, "signal", allow_constant=True)
     rate = sampling_frequency(sig, fs)
     window = window_samples(window, "window", rate, minimum=2)
@@ -313,5 +333,6 @@ def identify_windows(signal: Any, models: Mapping, test: ResidualTest | None = N
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
     for name, res in models.items():
         _check_model(res, name, sig.nchan, "models")
-    ws = ResidualWindows(models).fit(sig.values, channels=sig.channels).statistics(test, window=window, step=step)
-    return WindowedIdentification(ws, test, tuple(test.reference(res) for res in models.values()))
+    ws = ResidualWindows(models).fit(sig.values, channels=sig.channels).statistics(tests, window=window, step=step)
+    return WindowedIdentification(ws, tuple(tests.values()),
+                                  tuple(tests[name].reference(res) for name, res in models.items()))
