@@ -166,7 +166,6 @@ import os
 
 os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
-import itertools  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402

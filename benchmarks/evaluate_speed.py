@@ -2,12 +2,12 @@
 
 All 240 records (minus the fitting records: the first 10 of each state and turbulence level, as in
 docs/scripts/study.py) x every 1 s sliding window x the 4 VAR(20) models (healthy for detection, rotor 1 / 2 / 6 for identification), whiteness (Ljung-Box) method, 5 / 10 / 20 s
-windows; then the same with every state a bank of its 10 per-record models (``bank=True``). Reference,
+windows; then with thresholds calibrated on held-out residuals. Reference,
 measured in the same run on a few records: the window-by-window path (each window filtered
 through each model and tested with ``LjungBox.test``, i.e. ``tsfdi.identify`` per window) and statsmodels
 ``acorr_ljungbox`` per window and channel. Prints medians and ratios.
 
-Last, ``evaluate`` (pooled and banks) and ``Monitor.run`` against the same calls on the commit before the windowed
+Last, ``evaluate`` and ``Monitor.run`` against the same calls on the commit before the windowed
 engine (``previous_commit.py``; ``--against REF`` picks another commit). Target: not slower.
 
 Run: ``python benchmarks/evaluate_speed.py [--against REF]``
@@ -76,19 +76,6 @@ def main() -> None:
           f"not excluded): {len(ev_all.detection)} + {len(ev_all.identification)} x 3 windows, median of 3 runs "
           f"{t_all:.2f} s -> {'PASS' if t_all < 30 else 'FAIL'} (< 30 s)")
 
-    # banks of per-record models: every state tested by its 10 per-record VARs (the first run also fits them)
-    times_bank = []
-    for _ in range(3):
-        t0 = time.perf_counter()
-        ev_b = tsfdi.evaluate(sig, bases, models=("var",), tests=WHITENESS, windows=WINDOWS, progress=False,
-                              bank=True)
-        times_bank.append(time.perf_counter() - t0)
-    members = sum(len(b.bank("var", s)) for b in bases.values() for s in (b.healthy,) + b.faults)
-    print(f"tsfdi.evaluate(bank=True): {members} per-record VAR(20) members (3 levels x 4 states x 10 records), "
-          f"{len(ev_b.detection)} + {len(ev_b.identification)} x 3 bank-windows: runs "
-          f"{', '.join(f'{t:.2f}' for t in times_bank)} s (first run fits the members), median "
-          f"{statistics.median(times_bank):.2f} s -> {'PASS' if times_bank[0] < 30 else 'FAIL'} (first run < 30 s)")
-
     # calibrated thresholds: leave-one-record-out refits (fit_baselines(calibrate=True)), then the evaluation with
     # every model's thresholds calibrated on its held-out residual windows (first run includes the calibration)
     t0 = time.perf_counter()
@@ -99,10 +86,10 @@ def main() -> None:
     for _ in range(3):
         t0 = time.perf_counter()
         tsfdi.evaluate(sig, cal_bases, models=("var",), windows=WINDOWS, progress=False,
-                       tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, threshold="empirical")})
+                       tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, threshold="calibrated")})
         times_cal.append(time.perf_counter() - t0)
     print(f"fit_baselines(calibrate=True) (adds 10 leave-one-out refits per state and level): {t_fit_cal:.2f} s; "
-          f"tsfdi.evaluate(LjungBox(threshold='empirical')): runs {', '.join(f'{t:.2f}' for t in times_cal)} s (first run "
+          f"tsfdi.evaluate(LjungBox(threshold='calibrated')): runs {', '.join(f'{t:.2f}' for t in times_cal)} s (first run "
           f"calibrates 3 levels x 4 models x 3 windows), median {statistics.median(times_cal):.2f} s -> "
           f"{'PASS' if times_cal[0] < 30 else 'FAIL'} (first run < 30 s)")
 
@@ -157,5 +144,4 @@ if __name__ == "__main__":
     args = parser.parse_args()
     main()
     compare({"evaluate": ("evaluate, VAR(20) whiteness, 5/10/20 s, 120 records", 3),
-             "evaluate_bank": ("evaluate(bank=True), 120 members, 5/10/20 s", 2),
              "monitor": ("Monitor.run, VAR, 5 s windows, 20 severe records", 3)}, args.against)

@@ -129,13 +129,6 @@ def evaluate_workload():
     return lambda: tsfdi.evaluate(sig, bases, models=("var",), progress=False, **kw)
 
 
-def evaluate_bank_workload():
-    import tsfdi
-
-    sig, bases, kw = _hexacopter()
-    return lambda: tsfdi.evaluate(sig, bases, models=("var",), progress=False, bank=True, **kw)
-
-
 def monitor_workload():
     sig, bases, _ = _hexacopter()
     b = bases["severe"]
@@ -149,7 +142,7 @@ def monitor_workload():
 
 
 WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
-             "evaluate": evaluate_workload, "evaluate_bank": evaluate_bank_workload, "monitor": monitor_workload}
+             "evaluate": evaluate_workload, "monitor": monitor_workload}
 
 
 def _worker(name: str, repeat: int) -> None:

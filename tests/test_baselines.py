@@ -1,4 +1,4 @@
-"""fit_baselines (Table 2 analogue), Baselines.monitor / calibrated_tests / select_alpha / bank (tsfdi.baselines)."""
+"""fit_baselines (Table 2 analogue), Baselines.monitor / calibrated_tests / select_alpha (tsfdi.baselines)."""
 
 from __future__ import annotations
 
@@ -257,68 +257,3 @@ def test_empirical_thresholds_leave_one_out(synthetic):
         b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01), "5s")
     with pytest.raises(TypeError, match="calibrate"):
         tsfdi.fit_baselines(recs, calibrate="yes", **kw)
-
-
-def test_bank_per_record_models(synthetic):
-    """Baselines.bank refits each state's model on each fitting record alone; evaluate / select_alpha / monitor
-    with bank=True test every state by its bank (a window is accepted when any member accepts)."""
-    recs, states, ft = synthetic
-    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2, max_lags=4,
-              var_max_lags=4, steady_window="5s", fit_records=3, models=["var", "y0"])
-    b = tsfdi.fit_baselines(recs, **kw)
-    bank = b.bank("var", "f1")
-    assert len(bank) == 3 and b.bank("var", "f1") is bank                         # cached
-    for seg, res in zip(b.segments["f1"], bank):
-        np.testing.assert_allclose(res.params, tsfdi.VAR(seg, 2, hold_back=4).fit().params, rtol=1e-10)
-    np.testing.assert_allclose(b.bank("y0", "f2")[1].params,
-                               tsfdi.AR(b.segments["f2"][1][:, 0], 2, hold_back=4).fit().params, rtol=1e-10)
-    assert b.state_models("var")["f1"] is b.models["var"]["f1"]
-    assert b.state_models("var", bank=True)["f1"] is bank
-    lb = tsfdi.LjungBox(lags=20, alpha=0.01)
-    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=("5s",),
-                        tests={"whiteness": lb}, settle=5.0, progress=False, bank=True)
-    assert ev.bank
-    # detection alarms of a healthy evaluation record: every healthy member rejects
-    ws = ResidualWindows({f"m{i}": m for i, m in enumerate(b.bank("var", "healthy"))}).fit(recs[4]).statistics(
-        lb, window=500, step=100)
-    alarms = ws.reject.all(axis=1)
-    det = ev.detection[ev.detection["record"] == 4]
-    np.testing.assert_array_equal(det["alarm"].to_numpy(), alarms)
-    # identification of a fault window: accepted by a state when one of its members accepts
-    row = ev.identification[ev.identification["record"] == 8].iloc[0]
-    s0 = int(round(row["start"] * FS))
-    for f in b.faults:
-        acc = any(not tsfdi.LjungBox(lags=20, alpha=0.01).test(np.asarray(m.residuals(recs[8][s0:s0 + 500]))).reject
-                  for m in b.bank("var", f))
-        assert row[f"acc_{f}"] == acc
-    mon = b.monitor("var", window="5s", test=lb, bank=True)
-    assert mon.baseline is b.bank("var", "healthy") and mon.models["f2"] is b.bank("var", "f2")
-    # select_alpha with banks: the held-out record's own state is its bank without that record's member
-    tab = b.select_alpha("var", LjungBox(lags=20), "5s", (1e-2, 1e-300), bank=True)
-    np.testing.assert_allclose(tab[["correct", "wrong", "ambiguous", "none"]].sum(axis=1), 100.0)
-    assert tab.loc[1e-300, "ambiguous"] == 100.0
-    one = b.select_alpha("var", LjungBox(lags=20), "5s", [1e-2], step="1000s", bank=True)  # one window per record
-    test = tsfdi.LjungBox(lags=20, alpha=1e-2)
-    count = dict.fromkeys(("correct", "wrong", "ambiguous", "none"), 0)
-    for f in b.faults:
-        for j, seg in enumerate(b.segments[f]):
-            hit = [g for g in b.faults
-                   if any(not test.test(np.asarray(m.residuals(seg))[:500 - 2]).reject
-                          for i, m in enumerate(b.bank("var", g)) if g != f or i != j)]
-            count["none" if not hit else "ambiguous" if len(hit) > 1 else
-                  "correct" if hit[0] == f else "wrong"] += 1
-    for k, v in count.items():
-        assert one.loc[1e-2, k] == pytest.approx(100.0 * v / 6)
-    emp = LjungBox(lags=20, alpha=0.01, threshold="empirical")
-    with pytest.raises(ValueError, match="theoretical"):
-        tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=("5s",), progress=False,
-                       tests=emp, bank=True)
-    with pytest.raises(ValueError, match="theoretical"):
-        b.monitor("var", window="5s", test=emp, bank=True)
-    with pytest.raises(TypeError, match="bank"):
-        b.monitor("var", window="5s", bank="yes")
-    with pytest.raises(ValueError, match="state"):
-        b.bank("var", "f9")
-    first = tsfdi.fit_baselines(recs, **{**kw, "fit_records": 1})
-    with pytest.raises(ValueError, match="two fitting records"):
-        first.select_alpha("var", LjungBox(lags=20), "5s", bank=True)

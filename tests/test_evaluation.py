@@ -22,7 +22,7 @@ def test_evaluate_synthetic(synthetic, fitted):
     ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var", "y0"),
                         tests={"whiteness": LjungBox(lags=20, alpha=1e-3), "variance": FTest(alpha=1e-3)},
                         windows=("5s", "20s"), settle=5.0, rules=("paper", "likelihood", "pvalue"), progress=False)
-    assert ev.thresholds == "theoretical" and not ev.bank
+    assert ev.thresholds == "theoretical"
     assert ev.alphas == {(m, meth): 1e-3 for m in ("var", "y0") for meth in ("whiteness", "variance")}
     assert ev.lags == {5.0: 20, 20.0: 20} and ev.nchan == {"var": 2, "y0": 1}
     # fitting records are excluded
@@ -167,9 +167,6 @@ def test_bad_input(synthetic, fitted):
                        progress=False)
     with pytest.raises(ValueError, match="windows"):
         tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=("1ms",), progress=False)
-    with pytest.raises(TypeError, match="bank"):
-        tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=("5s",), bank="yes",
-                       progress=False)
 
 
 def test_windows_as_time_spans_or_samples(synthetic, fitted):

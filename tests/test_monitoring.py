@@ -114,7 +114,7 @@ def test_window_statistics_equal_tests_on_slices(models, failure_record):
         k = x.shape[1]
         for arr in (ws.statistic, ws.threshold, ws.pvalue, ws.channel_reject):
             assert arr.shape == (len(ws), len(models), k)
-        for arr in (ws.reject, ws.member, ws.loglik):
+        for arr in (ws.reject, ws.loglik):
             assert arr.shape == (len(ws), len(models))
         for j, (name, res) in enumerate(models.items()):
             for w in (0, 7, len(ws.starts) - 1):
@@ -164,28 +164,18 @@ def test_fit_residuals_equals_fit(models, failure_record):
     x = failure_record
     for test in (LjungBox(lags=15, alpha=1e-3), FTest(alpha=1e-3)):
         ref = _stats(x, models, test, window=400, step=150)
-        given = {name: [np.asarray(res.residuals(x))] for name, res in models.items()}
+        given = {name: np.asarray(res.residuals(x)) for name, res in models.items()}
         got = ResidualWindows(models).fit_residuals(given, x.shape[0]).statistics(test, window=400, step=150)
-        for attr in ("starts", "statistic", "threshold", "pvalue", "channel_reject", "reject", "member", "loglik"):
+        for attr in ("starts", "statistic", "threshold", "pvalue", "channel_reject", "reject", "loglik"):
             np.testing.assert_array_equal(getattr(got, attr), getattr(ref, attr), err_msg=attr)
         assert (got.nobs, got.models, got.channels) == (ref.nobs, ref.models, ref.channels)
-    # a bank takes one residual array per member; a single array stands for a one-member bank
-    bank = {"bank": [models["healthy"], models["f1"]], "f2": models["f2"]}
-    lb = LjungBox(lags=15, alpha=1e-3)
-    ref = _stats(x, bank, lb, window=400, step=150)
-    given = {"bank": [np.asarray(m.residuals(x)) for m in bank["bank"]], "f2": np.asarray(models["f2"].residuals(x))}
-    got = ResidualWindows(bank).fit_residuals(given, x.shape[0]).statistics(lb, window=400, step=150)
-    for attr in ("statistic", "pvalue", "reject", "member", "loglik"):
-        np.testing.assert_array_equal(getattr(got, attr), getattr(ref, attr), err_msg=attr)
     with pytest.raises(ValueError, match="f2"):
-        ResidualWindows(models).fit_residuals({"healthy": given["f2"], "f1": given["f2"]}, x.shape[0])
-    with pytest.raises(ValueError, match="one array per bank member"):
-        ResidualWindows(bank).fit_residuals({"bank": given["f2"], "f2": given["f2"]}, x.shape[0])
+        ResidualWindows(models).fit_residuals({"healthy": given["healthy"], "f1": given["f1"]}, x.shape[0])
     with pytest.raises(ValueError, match="shape"):
-        ResidualWindows(models).fit_residuals({n: [np.asarray(r.residuals(x))[1:]] for n, r in models.items()},
+        ResidualWindows(models).fit_residuals({n: np.asarray(r.residuals(x))[1:] for n, r in models.items()},
                                               x.shape[0])
     with pytest.raises(ValueError, match="not fitted"):
-        ResidualWindows(models).statistics(lb, window=400)
+        ResidualWindows(models).statistics(LjungBox(lags=15), window=400)
 
 
 @pytest.mark.parametrize("method", ["hosking", "li-mcleod"])
@@ -212,76 +202,6 @@ def test_multivariate_ljungbox_through_the_engine(models, failure_record, method
             np.testing.assert_array_equal(ws.decisions[w][j].statistic, ref.statistic)
     # the failure record switches from healthy to f1: the joint test sees it
     assert not ws.reject[0, 0] and ws.reject[-1, 0]
-
-
-def test_window_statistics_bank(models, failure_record):
-    """A bank (list of models of one order) accepts a window when any member accepts; its decision is its best
-    member's there and its likelihood score the largest of its members'."""
-    x = failure_record
-    W, S = 400, 100
-    lb = LjungBox(lags=15, alpha=1e-3)
-    members = [models["healthy"], models["f2"], models["f1"]]
-    one = _stats(x, {f"m{i}": m for i, m in enumerate(members)}, lb, window=W, step=S)
-    ws = _stats(x, {"bank": members, "f1": models["f1"]}, lb, window=W, step=S)
-    rej = one.reject.T                                            # (members, n_windows)
-    np.testing.assert_array_equal(ws.reject[:, 0], rej.all(axis=0))
-    assert ws.reject[:, 0].any() and not ws.reject[:, 0].all()    # the record switches from healthy to f1
-    for w, m in enumerate(ws.member[:, 0]):
-        np.testing.assert_array_equal(ws.statistic[w, 0], one.statistic[w, m])
-        np.testing.assert_array_equal(ws.threshold[w, 0], one.threshold[w, m])
-        if not ws.reject[w, 0]:                                   # an accepting member is reported
-            assert not one.reject[w, m]
-            pm = [one.pvalue[w, i].min() for i in range(3) if not rej[i, w]]
-            assert one.pvalue[w, m].min() == max(pm)
-    np.testing.assert_allclose(ws.loglik[:, 0], one.loglik.max(axis=1))
-    np.testing.assert_allclose(ws.loglik[:, 1], one.loglik[:, 2])
-    # a one-member bank is the model itself
-    solo = _stats(x, {"h": [models["healthy"]]}, lb, window=W, step=S)
-    for key in ("statistic", "pvalue", "reject", "threshold"):
-        np.testing.assert_array_equal(getattr(solo, key)[:, 0], getattr(one, key)[:, 0])
-    assert (solo.member == 0).all()
-    # a Monitor with banks gives the events of the plain models when every bank has one member
-    plain = _monitor(models).run(x)
-    banked = _monitor({k: [m] for k, m in models.items()}).run(x)
-    assert banked.events == plain.events
-    with pytest.raises(ValueError, match="empty bank"):
-        _stats(x, {"b": []}, lb, window=W)
-    with pytest.raises(ValueError, match="share one order"):
-        _stats(x, {"b": [models["f1"], VAR(x, 3).fit()]}, lb, window=W)
-    with pytest.raises(TypeError, match=r"models\['b'\]"):
-        _stats(x, {"b": [models["f1"], "f2"]}, lb, window=W)
-
-
-@pytest.mark.slow
-def test_bank_holds_alpha_where_the_pooled_model_does_not():
-    """Records of one state that differ (AR(1) with coefficient 0.2, 0.5 or 0.8): the model pooled over them
-    averages the dynamics and its residuals on a new record are correlated; a bank of one model per record
-    rejects a new record's window at most at about alpha (binomial 99.9 % bound over independent records)."""
-    from scipy import stats
-
-    rng = np.random.default_rng(2026)
-    phis = (0.2, 0.5, 0.8)
-
-    def ar1(phi, n):
-        e = rng.standard_normal(n + 200)
-        y = np.zeros_like(e)
-        for t in range(1, e.size):
-            y[t] = phi * y[t - 1] + e[t]
-        return y[200:]
-
-    fitting = [ar1(phi, 5000) for phi in phis for _ in range(2)]
-    pooled = tsfdi.AR(fitting, 1).fit()
-    bank = [tsfdi.AR(y, 1).fit() for y in fitting]
-    alpha, trials = 0.05, 300
-    lb = LjungBox(lags=10, alpha=alpha)
-    rejects = {"pooled": 0, "bank": 0}
-    for _ in range(trials):
-        y = ar1(phis[rng.integers(3)], 500)
-        ws = _stats(y, {"pooled": pooled, "bank": bank}, lb, window=500)
-        for j, k in enumerate(ws.models):
-            rejects[k] += int(ws.reject[0, j])
-    assert rejects["bank"] <= stats.binom.ppf(0.999, trials, alpha), rejects
-    assert rejects["pooled"] >= 0.5 * trials, rejects
 
 
 def test_rolling_variance(kind):

@@ -166,7 +166,6 @@ class Baselines:
     segments: dict = field(default_factory=dict, repr=False)
     heldout: dict = field(default_factory=dict, repr=False)
     _calibrated: dict = field(default_factory=dict, repr=False)
-    _banks: dict = field(default_factory=dict, repr=False)
 
     def model_channels(self, model: str) -> list[int]:
         """Channel positions a model uses (all for ``"var"``)."""
@@ -200,17 +199,16 @@ class Baselines:
         return pd.DataFrame(rows)
 
     def monitor(self, model: str = "var", *, window: Any = "20s", step: Any = "1s", test: ResidualTest | None = None,
-                rule: str = "paper", bank: bool = False) -> Monitor:
+                rule: str = "paper") -> Monitor:
         """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models and steady-state thresholds.
 
         ``test`` (default ``LjungBox(lags=20, alpha=1e-3)``) detects with the healthy model and identifies with the
         fault models; with ``threshold="empirical"`` each model gets its own copy calibrated by
-        :meth:`calibrated_tests`. ``bank=True``: every state is the :meth:`bank` of its per-record models.
+        :meth:`calibrated_tests`.
         """
         test = _check_test(test)
-        _check_bank(bank, test)
         chans = self.model_channels(model)
-        states = self.state_models(model, bank)
+        states = self.state_models(model)
         if test.empirical:
             tests = self.calibrated_tests(model, test, window)
             ident: Any = {f: tests[f] for f in self.faults}
@@ -221,41 +219,9 @@ class Baselines:
                        window=window, step=step, fs=self.fs, test=ident, detection_test=det,
                        steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
 
-    def bank(self, model: str, state: str) -> tuple:
-        r"""The bank of ``state``: ``model`` refitted on each of the state's fitting records on its own.
-
-        The pooled model of :attr:`models` averages the dynamics of its fitting records. Records of one state
-        differ (in turbulence each flies its own trim and gusts, so its linearised dynamics differ a little), and
-        on a new record the pooled model's residuals are less white than the chi-square law says. A bank keeps one
-        model per fitting record (same order, trend and hold-back as the pooled model); a window is explained by
-        the state when *any* member accepts it (:class:`~tsfdi.windows.ResidualWindows`). If the new record
-        behaves like one of the fitting records, the member fitted on it rejects with probability about
-        ``alpha``, and the bank (which rejects only when every member does) at most that: the false-alarm rate
-        stays near its expectation where the pooled model's does not (docs/results.md, "Banks of per-record
-        models").
-
-        Returns
-        -------
-        tuple of fitted results
-            One per fitting record of ``state``, in the order of :attr:`fit_records`.
-        """
-        if model not in self.models:
-            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        if state not in self.models[model]:
-            raise ValueError(f"state must be one of {list(self.models[model])}, got {state!r}")
-        key = (model, state)
-        if key not in self._banks:
-            res = self.models[model][state]
-            spec = res.model
-            chans = self.model_channels(model)
-            segs = [g[:, chans] if model == "var" else g[:, chans[0]] for g in self.segments[state]]
-            self._banks[key] = tuple(type(spec)(g, int(res.lags), trend=spec.trend, hold_back=spec.hold_back).fit()
-                                     for g in segs)
-        return self._banks[key]
-
-    def state_models(self, model: str, bank: bool = False) -> dict:
-        """State -> the pooled fitted model of ``model`` (the paper), or with ``bank=True`` its :meth:`bank`."""
-        return {s: (self.bank(model, s) if bank else self.models[model][s]) for s in (self.healthy,) + self.faults}
+    def state_models(self, model: str) -> dict:
+        """State -> the fitted model ``model`` of that state (pooled over its fitting records)."""
+        return {s: self.models[model][s] for s in (self.healthy,) + self.faults}
 
     def calibrated_tests(self, model: str, test: ResidualTest, window: Any, *, step: Any = 1) -> dict:
         r"""Per state, a copy of ``test`` for windows of ``window`` with its threshold calibrated on that state's
@@ -318,8 +284,7 @@ class Baselines:
         return out
 
     def select_alpha(self, model: str = "var", test: ResidualTest | None = None, window: Any = "20s",
-                     alphas: Sequence[float] = (1e-3, 1e-4, 1e-5, 1e-6), *, step: Any = "1s",
-                     bank: bool = False) -> pd.DataFrame:
+                     alphas: Sequence[float] = (1e-3, 1e-4, 1e-5, 1e-6), *, step: Any = "1s") -> pd.DataFrame:
         """Choose the identification alpha on the fitting records, leaving each record out (paper's rule).
 
         Every fitting record of every fault state is cut into windows of ``window``, ``step`` apart, and driven
@@ -338,9 +303,6 @@ class Baselines:
             Window length and step (an int counts samples; ``"20s"`` a time span).
         alphas : sequence of float
             Candidate per-channel alphas, each in (0, 1).
-        bank : bool
-            Identify with the states' :meth:`bank` instead of their pooled models: the held-out record's own
-            state is its bank without the member fitted on that record (no ``calibrate=True`` needed).
 
         Returns
         -------
@@ -355,17 +317,16 @@ class Baselines:
         Dutta et al. (paper 003, Table 3) set each method's alpha (1e-3 to 1e-12) so as to minimise the
         confusion between failures. Out-of-sample residuals carry the baseline's estimation error, so at the
         nominal alpha the matching model is rejected more often than alpha (notes of :class:`~tsfdi.LjungBox`);
-        this choice measures that on held-out records instead of assuming it away. A model (a bank: any member)
-        accepts a window at ``alpha`` when its smallest channel p-value exceeds ``alpha``.
+        this choice measures that on held-out records instead of assuming it away. A model accepts a window at
+        ``alpha`` when its smallest channel p-value exceeds ``alpha``.
         """
         test = _check_test(test)
         if model not in self.models:
             raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        _check_bank(bank, test)
         if test.empirical:
             raise ValueError("select_alpha chooses the alpha of a test with the theoretical threshold; got a test "
                              "with threshold='empirical'")
-        if not bank and not self.heldout:
+        if not self.heldout:
             raise ValueError("baselines have no held-out residuals: fit them with fit_baselines(..., calibrate=True) "
                              "to select alpha")
         W = window_samples(window, "window", self.fs, minimum=2)
@@ -380,23 +341,12 @@ class Baselines:
                 x = seg if chan is None else seg[:, chan]
                 if seg.shape[0] < W:                    # record shorter than one window: skipped
                     continue
-                models, given = {}, {}
-                for f in self.faults:
-                    if bank:
-                        members = [r for i, r in enumerate(self.bank(model, f)) if f != state or i != j]
-                        if not members:
-                            raise ValueError(f"select_alpha with bank=True needs at least two fitting records per "
-                                             f"state; state {f!r} has one")
-                        models[f] = members
-                        given[f] = [r.residuals(x) for r in members]
-                    else:
-                        res = self.models[model][f]
-                        models[f] = res
-                        given[f] = self.heldout[(model, state)][j] if f == state else res.residuals(x)
+                models = {f: self.models[model][f] for f in self.faults}
+                given = {f: self.heldout[(model, state)][j] if f == state else res.residuals(x)
+                         for f, res in models.items()}
                 ws = ResidualWindows(models).fit_residuals(given, seg.shape[0]).statistics(
                     test, window=W, step=step, loglik=False)
-                # accepted at alpha when every channel's p-value exceeds it (a bank: its best member, the largest
-                # smallest-channel p-value): (windows, alphas, faults)
+                # accepted at alpha when every channel's p-value exceeds it: (windows, alphas, faults)
                 accepted.append(ws.min_pvalue[:, None, :] > alphas[None, :, None])
                 truth.append(np.full(len(ws), self.faults.index(state)))
         if not accepted:
@@ -426,14 +376,6 @@ def _check_test(test: Any) -> ResidualTest:
     if not isinstance(test, ResidualTest):
         raise TypeError(f"test must be a residual test (LjungBox, FTest, ...), got {type(test).__name__}")
     return test
-
-
-def _check_bank(bank: Any, test: ResidualTest) -> None:
-    if not isinstance(bank, (bool, np.bool_)):
-        raise TypeError(f"bank must be a bool, got {bank!r}")
-    if bank and getattr(test, "empirical", False):
-        raise ValueError("bank=True needs a test with the theoretical threshold: the calibrated thresholds belong to "
-                         "the pooled models (their leave-one-record-out residuals), not to the members of a bank")
 
 
 def _resid_list(res: Any) -> list:

@@ -38,7 +38,7 @@ from tsfdi._validation import float_like, option
 from tsfdi.baselines import Baselines, Records
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
-from tsfdi.windows import RULES, NONE, AMBIGUOUS, ResidualWindows, decide
+from tsfdi.windows import AMBIGUOUS, RULES, ResidualWindows, decide
 
 __all__ = ["OUTCOMES", "Evaluation", "detection_metrics", "evaluate", "first_alarm", "score_records"]
 
@@ -68,8 +68,6 @@ class Evaluation:
         The records evaluated (id, state, turbulence) and those skipped with the reason.
     thresholds : {"theoretical", "empirical"}
         How the test thresholds were set (``"empirical"`` when any test was calibrated).
-    bank : bool
-        Whether every state was the bank of its per-record models (:meth:`Baselines.bank`).
     calibration : pandas.DataFrame
         Per turbulence level (baselines), model, method, window length, state and channel: the null
         distribution's critical value (``distribution``) and, for a test with ``threshold="empirical"``, the calibrated
@@ -86,7 +84,6 @@ class Evaluation:
     records: pd.DataFrame
     nchan: dict = field(default_factory=dict)
     thresholds: str = "theoretical"
-    bank: bool = False
     calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     # -- identification
@@ -245,8 +242,7 @@ def _named_tests(tests: Any, models: list) -> dict:
 def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",), tests: Any = None,
              windows: Sequence[Any] = ("5s", "10s", "20s"), turbulence: Any = None, step: Any = "1s",
              settle: float = 10.0, rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True,
-             progress: bool = True, states: Any = None, failure_times: Any = None, fs: float | None = None,
-             bank: bool = False) -> Evaluation:
+             progress: bool = True, states: Any = None, failure_times: Any = None, fs: float | None = None) -> Evaluation:
     r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
 
     Parameters
@@ -287,19 +283,13 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         Show a tqdm progress bar over records.
     states, failure_times, fs :
         Per-record labels and sampling frequency for a sequence of signals.
-    bank : bool
-        ``False`` (the paper): every state is its model pooled over its fitting records. ``True``: every state
-        (healthy and each fault) is the bank of its models fitted on each fitting record alone
-        (:meth:`Baselines.bank`), accepted on a window when any member accepts; detection alarms when every
-        healthy member rejects. Needs tests with the theoretical threshold.
-
     Returns
     -------
     Evaluation
 
     Notes
     -----
-    Every record is filtered once through each model (and bank member) and all windows' statistics come from
+    Every record is filtered once through each model and all windows' statistics come from
     prefix sums (:class:`tsfdi.windows.ResidualWindows`).
     """
     if isinstance(baselines, Baselines):
@@ -329,12 +319,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         raise ValueError("models and windows must each hold at least one entry")
     tests = _named_tests(tests, models)
     methods = list(dict.fromkeys(meth for _, meth in tests))
-    if not isinstance(bank, (bool, np.bool_)):
-        raise TypeError(f"bank must be a bool, got {bank!r}")
     empirical = any(t.empirical for t in tests.values())
-    if bank and empirical:
-        raise ValueError("bank=True needs tests with the theoretical threshold: the calibrated thresholds belong to "
-                         "the pooled models (their leave-one-record-out residuals), not to the members of a bank")
     rules = tuple(dict.fromkeys(["paper"] + [option(r, "rules", RULES) for r in rules]))
     step_n = window_samples(step, "step", rec.fs)
     settle = float_like(settle, "settle", minimum=0.0)
@@ -380,7 +365,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         base = first if by_level is None else by_level[rec.turbulence[i]]
         for m in models:
             sig = as_signal(x_all[:, base.model_channels(m)], "signal", allow_constant=True)
-            per_state = base.state_models(m, bank)
+            per_state = base.state_models(m)
             # each record is filtered once through every (member) model; the windows of every length and
             # test are slices of these residuals
             rw_h = ResidualWindows({"h": per_state[healthy]})
@@ -442,8 +427,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                         cal_rows.append(row)
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
                       records=recs, nchan={m: len(first.model_channels(m)) for m in models},
-                      thresholds="empirical" if empirical else "theoretical", bank=bool(bank),
-                      calibration=pd.DataFrame(cal_rows))
+                      thresholds="empirical" if empirical else "theoretical", calibration=pd.DataFrame(cal_rows))
 
 
 # ------------------------------------------------------------------------------------ per-record scoring

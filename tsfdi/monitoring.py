@@ -111,12 +111,10 @@ class Monitor:
 
     Parameters
     ----------
-    baseline : fitted results or list of them
-        Healthy model :math:`M_0` (AR or VAR results), or a bank of healthy models (e.g. one per healthy
-        fitting record, :meth:`tsfdi.Baselines.bank`): the window is healthy when any member accepts it
-        (:class:`~tsfdi.windows.ResidualWindows`).
+    baseline : fitted results
+        Healthy model :math:`M_0` (AR, VAR or ARX results).
     models : mapping
-        Name -> fitted fault models :math:`M_1, M_2, \dots` (or banks), with the baseline's channels.
+        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels.
     window : int or time span
         Window length, as in pandas ``rolling``: an int counts samples, a time span (``"20s"``,
         ``pandas.Timedelta``) is converted with ``fs``.
@@ -157,10 +155,8 @@ class Monitor:
         self.fs = None if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
         if not isinstance(models, Mapping) or not models:
             raise TypeError("models must be a non-empty mapping name -> fitted fault models")
-        if not all(hasattr(r, "residuals") for r in (baseline if isinstance(baseline, (list, tuple)) else [baseline])):
-            raise TypeError(f"baseline must be fitted results (AR or VAR) or a list of them (a bank), got "
-                            f"{type(baseline).__name__}")
-        # validates every model and bank (the baseline as models['healthy'])
+        if not hasattr(baseline, "residuals"):
+            raise TypeError(f"baseline must be fitted results (AR, VAR or ARX), got {type(baseline).__name__}")
         self.nchan = ResidualWindows({"healthy": baseline}).nchan
         nf = ResidualWindows(models).nchan
         if nf != self.nchan:

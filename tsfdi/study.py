@@ -16,7 +16,6 @@ import pandas as pd
 from tsfdi._validation import int_like, option
 from tsfdi.baselines import Baselines, fit_baselines
 from tsfdi.datasets.hexacopter import hexacopter_signals
-from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.evaluation import Evaluation, evaluate
@@ -57,7 +56,7 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
                      tests: Any = None, windows: Sequence[Any] = ("5s", "10s", "20s"),
                      rules: Sequence[str] = ("paper", "likelihood", "pvalue"), settle: float = 10.0,
                      fit_records: int = 10, pool: str = "level", order: Any = 20, max_lags: int = 20,
-                     var_max_lags: int = 20, progress: bool = True, bank: bool = False) -> tuple[dict, Evaluation]:
+                     var_max_lags: int = 20, progress: bool = True) -> tuple[dict, Evaluation]:
     """The whole study of paper 003 on a hexacopter dataset: pooled baselines, then evaluation.
 
     The first ``fit_records`` valid records of each state and turbulence level fit the baselines (whole
@@ -85,8 +84,6 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
     order, max_lags, var_max_lags :
         Order choice and search bounds of :func:`fit_baselines`. Default order 20: on the shipped data BIC on
         the pooled records picks VAR(12-15) whose in-sample residuals are still correlated (docs/results.md).
-    bank : bool
-        Every state as the bank of its per-record models (:func:`evaluate`, :meth:`Baselines.bank`).
 
     Returns
     -------
@@ -130,7 +127,7 @@ def hexacopter_study(data: Any = None, *, records_per_case: int | None = None, m
             one = fit_baselines(sig, **kw)
             bases = dict.fromkeys(levels, one)
     ev = evaluate(sig, bases, models=names, tests=tests, windows=windows, rules=rules, settle=settle,
-                  progress=progress, bank=bank)
+                  progress=progress)
     return bases, ev
 
 

@@ -4,7 +4,7 @@ Everything in tsfdi that tests windows (``identify_windows``, ``Monitor``, ``eva
 ``Baselines.select_alpha``, the command line) runs through :class:`ResidualWindows` and :func:`decide`.
 
 The split follows a cost fitted once and queried per segment: :meth:`ResidualWindows.fit` drives a record once
-through each model (or each member of a bank) and keeps the residuals with their prefix sums;
+through each model and keeps the residuals (with their prefix sums for the likelihood score);
 :meth:`ResidualWindows.statistics` then gives, for any window length, step and test, the statistic, threshold,
 p-value and rejection of every window, and a Gaussian log-likelihood score, in one frozen
 :class:`WindowStatistics`. For a fixed model the residuals of a signal window are a slice of the record's
@@ -91,7 +91,7 @@ class WindowStatistics:
     Attributes
     ----------
     models : tuple of str
-        Model (or bank) names, axis 1 of the arrays.
+        Model names, axis 1 of the arrays.
     channels : tuple of str
     starts : ndarray of int, shape (n_windows,)
         Window ``w`` covers signal samples ``[starts[w], starts[w] + window)``.
@@ -102,12 +102,10 @@ class WindowStatistics:
     statistic, threshold, pvalue : ndarray, shape (n_windows, n_models, n_channels)
     channel_reject : ndarray of bool, shape (n_windows, n_models, n_channels)
     reject : ndarray of bool, shape (n_windows, n_models)
-        The model (a bank: every member) rejects the window.
-    member : ndarray of int, shape (n_windows, n_models)
-        The bank member whose decision is reported (0 for a single model).
+        The model rejects the window (some channel rejects).
     loglik : ndarray, shape (n_windows, n_models)
         Gaussian log-likelihood per sample of each model's residuals on the samples common to every model, with
-        the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)` (a bank: its best member).
+        the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
     decisions : tuple or None
         For tests applied window by window, the :class:`~tsfdi.Decision` of every window and model
         (``decisions[w][j]``); ``None`` when the statistics come from prefix sums.
@@ -124,7 +122,6 @@ class WindowStatistics:
     pvalue: np.ndarray
     channel_reject: np.ndarray
     reject: np.ndarray
-    member: np.ndarray
     loglik: np.ndarray
     decisions: tuple | None = None
 
@@ -154,21 +151,6 @@ class WindowStatistics:
         return f"WindowStatistics(windows={len(self)}, window={self.window}, step={self.step}, models={self.models})"
 
 
-def _members(what: str, res: Any) -> tuple:
-    """The fitted models standing for one state (``what`` names the argument in errors): one result, or the
-    members of a bank (a list or tuple of one order)."""
-    items = tuple(res) if isinstance(res, (list, tuple)) else (res,)
-    if not items:
-        raise ValueError(f"{what} is an empty bank: give at least one fitted model")
-    for r in items:
-        if not hasattr(r, "residuals"):
-            raise TypeError(f"{what} must be fitted results or a list of them (a bank), got {type(r).__name__}")
-    if len({int(r.lags) for r in items}) > 1:
-        raise ValueError(f"the members of the bank {what} must share one order, got lags "
-                         f"{sorted({int(r.lags) for r in items})}")
-    return items
-
-
 def _prefix(e: np.ndarray) -> tuple:
     """Cumulative sums of ``e`` and of its lag-0 products ``e_i e_j`` (leading zero row)."""
     k = e.shape[1]
@@ -183,11 +165,7 @@ class ResidualWindows:
     Parameters
     ----------
     models : mapping
-        Name -> fitted AR / VAR results, or a list of them of one order: a *bank* standing for one state by several
-        models (e.g. one per fitting record, :meth:`tsfdi.Baselines.bank`). A bank accepts a window when any
-        member accepts it; its decision on a window is that of its best member there (accepting before rejecting,
-        then the largest smallest-channel p-value, then the smallest largest statistic-to-threshold ratio), and its
-        likelihood score the largest of its members'.
+        Name -> fitted AR / VAR / ARX results, all with the same number of channels.
 
     Examples
     --------
@@ -198,10 +176,13 @@ class ResidualWindows:
 
     def __init__(self, models: Mapping) -> None:
         if not isinstance(models, Mapping) or not models:
-            raise TypeError("models must be a non-empty mapping name -> fitted results (or banks of them)")
-        self.banks = {name: _members(f"models[{name!r}]", res) for name, res in models.items()}
-        self.orders = {name: int(ms[0].lags) for name, ms in self.banks.items()}
-        nchan = {int(getattr(r, "neqs", 1)) for ms in self.banks.values() for r in ms}
+            raise TypeError("models must be a non-empty mapping name -> fitted results")
+        for name, res in models.items():
+            if not hasattr(res, "residuals"):
+                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR, ARX), got {type(res).__name__}")
+        self.models = dict(models)
+        self.orders = {name: int(res.lags) for name, res in self.models.items()}
+        nchan = {int(getattr(r, "neqs", 1)) for r in self.models.values()}
         if len(nchan) > 1:
             raise ValueError(f"every model must have the same number of channels, got {sorted(nchan)}")
         self.nchan = nchan.pop()
@@ -210,7 +191,7 @@ class ResidualWindows:
         self.channels_: tuple = ()
 
     def fit(self, signal: Any, *, channels: Any = None) -> ResidualWindows:
-        """Filter the record through every model (and bank member) once and keep the residuals' prefix sums.
+        """Filter the record through every model once and keep the residuals.
 
         Parameters
         ----------
@@ -227,19 +208,13 @@ class ResidualWindows:
         x = x.reshape(x.shape[0], -1)
         if x.shape[1] != self.nchan:
             raise ValueError(f"signal has {x.shape[1]} channel(s) but the models were fitted on {self.nchan}")
-        resid = {}
-        for name, members in self.banks.items():
-            out = []
-            for res in members:
-                e = res.residuals(x if self.nchan > 1 else x[:, 0])
-                out.append(np.asarray(e, dtype=np.float64).reshape(-1, self.nchan))
-            resid[name] = out
+        resid = {name: np.asarray(res.residuals(x if self.nchan > 1 else x[:, 0]), dtype=np.float64).reshape(
+            -1, self.nchan) for name, res in self.models.items()}
         return self._set(resid, x.shape[0], channels)
 
     def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
-        """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model refitted without
-        it) instead of filtering: ``residuals`` maps every name to one array per bank member, each
-        ``(nobs - order, k)``.
+        """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model fitted without
+        it) instead of filtering: ``residuals`` maps every name to an array ``(nobs - order, k)``.
 
         Returns
         -------
@@ -247,27 +222,20 @@ class ResidualWindows:
         """
         nobs = int_like(nobs, "nobs", minimum=1)
         resid = {}
-        for name, members in self.banks.items():
+        for name in self.models:
             if name not in residuals:
                 raise ValueError(f"residuals has no entry for the model {name!r}")
-            recs = residuals[name]
-            recs = list(recs) if isinstance(recs, (list, tuple)) else [recs]
-            if len(recs) != len(members):
-                raise ValueError(f"residuals[{name!r}] must hold one array per bank member ({len(members)}), got "
-                                 f"{len(recs)}")
-            out = []
-            for e in recs:
-                e = np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
-                if e.shape != (nobs - self.orders[name], self.nchan):
-                    raise ValueError(f"residuals[{name!r}] must have shape {(nobs - self.orders[name], self.nchan)}, "
-                                     f"got {e.shape}")
-                out.append(e)
-            resid[name] = out
+            e = np.asarray(residuals[name], dtype=np.float64)
+            e = e.reshape(e.shape[0], -1) if e.ndim else e
+            if e.shape != (nobs - self.orders[name], self.nchan):
+                raise ValueError(f"residuals[{name!r}] must have shape {(nobs - self.orders[name], self.nchan)}, "
+                                 f"got {e.shape}")
+            resid[name] = e
         return self._set(resid, nobs, channels)
 
     def _set(self, resid: dict, nobs: int, channels: Any) -> ResidualWindows:
         self._resid = resid
-        self._prefix: dict = {}          # (name, member) -> prefix sums of the likelihood score, made when first asked
+        self._prefix: dict = {}          # name -> prefix sums of the likelihood score, made when first asked
         self.nobs_ = nobs
         self.channels_ = tuple(str(c) for c in channels) if channels is not None else tuple(
             f"y{i}" for i in range(self.nchan))
@@ -283,7 +251,7 @@ class ResidualWindows:
         ----------
         test : ResidualTest or mapping
             The test applied to every model's residuals, or a mapping name -> test (each model with its own test,
-            e.g. thresholds calibrated on that model's healthy residuals); the members of a bank share its test.
+            e.g. thresholds calibrated on that model's held-out residuals).
         window, step : int
             Window length and step in signal samples.
         common : int, optional
@@ -307,54 +275,40 @@ class ResidualWindows:
         if window - pmax < 3:
             raise ValueError(f"window ({window}) must exceed the largest model order ({pmax}) by at least 3 samples")
         if isinstance(test, Mapping):
-            missing = [name for name in self.banks if name not in test]
+            missing = [name for name in self.models if name not in test]
             if missing:
                 raise ValueError(f"test is a mapping but has no test for the model(s) {missing}")
-            bad = [name for name in self.banks if not isinstance(test[name], ResidualTest)]
+            bad = [name for name in self.models if not isinstance(test[name], ResidualTest)]
         else:
             bad = [] if isinstance(test, ResidualTest) else ["test"]
         if bad:
             raise TypeError(f"test must be a residual test (LjungBox, FTest, GLRT, ...) or a mapping name -> test; "
                             f"not one for {bad}")
         starts = np.arange(0, nobs - window + 1, step)
-        nwin, k = starts.size, self.nchan
-        w = np.arange(nwin)
-        parts, nres, decisions = [], [], []
-        for name, members in self.banks.items():
+        nwin = starts.size
+        parts, nres = [], []
+        for name, res in self.models.items():
             p = self.orders[name]
             n = window - p
-            test_j = test[name] if isinstance(test, Mapping) else test
-            per = []
-            for i, (res, e) in enumerate(zip(members, self._resid[name])):
-                pre = None
-                if loglik:
-                    if (name, i) not in self._prefix:
-                        self._prefix[(name, i)] = _prefix(e)
-                    pre = self._prefix[(name, i)]
-                per.append(self._member(res, e, pre, test_j, starts, n, step, name, p, pmax, window))
-            if len(per) == 1:                                                # a single model: no member to choose
-                stat, pv, thr, rej_c, ll = per[0][:5]
-                parts.append((stat, pv, thr, rej_c, rej_c.any(axis=1), np.zeros(nwin, dtype=np.int64), ll))
-            else:
-                stat, pv, thr, rej_c, ll = (np.stack([m[i] for m in per]) for i in range(5))
-                acc = ~rej_c.any(axis=2)                                     # (members, n_windows)
-                ratio = np.max(stat / np.where(thr > 0, thr, np.inf), axis=2)
-                best = np.lexsort((-ratio, np.nan_to_num(pv.min(axis=2), nan=-1.0), acc), axis=0)[-1]
-                parts.append((stat[best, w], pv[best, w], thr[best, w], rej_c[best, w], ~acc.any(axis=0), best,
-                              ll.max(axis=0)))
+            pre = None
+            if loglik:
+                if name not in self._prefix:
+                    self._prefix[name] = _prefix(self._resid[name])
+                pre = self._prefix[name]
+            parts.append(self._model(res, self._resid[name], pre, test[name] if isinstance(test, Mapping) else test,
+                                     starts, n, step, name, p, pmax, window))
             nres.append(n)
-            decisions.append([m[5] for m in per][0] if len(per) == 1 else None)
-        stat, pv, thr, rej_c, rej, member, ll = (np.stack([pt[i] for pt in parts], axis=1) for i in range(7))
+        stat, pv, thr, rej_c, ll = (np.stack([pt[i] for pt in parts], axis=1) for i in range(5))
         dec = None
-        if all(d is not None for d in decisions):
-            dec = tuple(tuple(d[i] for d in decisions) for i in range(nwin))
-        return WindowStatistics(models=tuple(self.banks), channels=self.channels_, starts=starts, window=window,
+        if all(pt[5] is not None for pt in parts):
+            dec = tuple(tuple(pt[5][i] for pt in parts) for i in range(nwin))
+        return WindowStatistics(models=tuple(self.models), channels=self.channels_, starts=starts, window=window,
                                 step=step, nobs=tuple(nres), statistic=stat, threshold=thr, pvalue=pv,
-                                channel_reject=rej_c, reject=rej, member=member, loglik=ll, decisions=dec)
+                                channel_reject=rej_c, reject=rej_c.any(axis=2), loglik=ll, decisions=dec)
 
     @staticmethod
-    def _member(res: Any, e: np.ndarray, prefix: tuple | None, test: Any, starts: np.ndarray, n: int, step: int,
-                name: str, p: int, pmax: int, window: int) -> tuple:
+    def _model(res: Any, e: np.ndarray, prefix: tuple | None, test: Any, starts: np.ndarray, n: int, step: int,
+               name: str, p: int, pmax: int, window: int) -> tuple:
         """One fitted model with its record residuals ``e`` on every window: statistic, p-value, threshold, channel
         rejection (n_windows, k), the likelihood score (n_windows,; NaN without the residuals' ``prefix`` sums)
         and the window decisions (or None)."""

@@ -4,14 +4,14 @@ Every number in docs/results.md is computed here; nothing is typed by hand. Run 
 
     python docs/scripts/study.py
 
-Steps: baselines per turbulence level (first 10 valid records of each state and level pooled, post-transient part,
+Steps: paper 003's protocol like for like beside its Table 4; tsfdi's calibrated method with one set of models for
+all levels, on the shipped data and on a fleet generated on demand; then baselines per turbulence level (first 10 valid records of each state and level pooled, post-transient part,
 VAR(20) / AR(20): Table 2 analogue), then evaluation of every other record with 1 s sliding windows of 5 / 10 / 20 s for the
 scalar AR models (roll, pitch, yaw rate) and the VAR, residual variance (F test) and whiteness (Ljung-Box) methods,
 the paper's decision rule and two rules resolving ambiguous windows (Table 4 analogues, rates, detection), then the
 Monitor end to end on every evaluated fault record; then the VAR / AR whiteness study again with thresholds
 calibrated per model on leave-one-record-out residuals of its fitting records (paper 002 Fig. 2), side by side;
-then every state as a bank of per-record models (at the paper's alpha and at the alpha chosen on the fitting
-records); then the healthy-model detection at four per-channel alphas, and with the Ljung-Box test's exact finite-sample
+then the healthy-model detection at four per-channel alphas, and with the Ljung-Box test's exact finite-sample
 null (simulated white noise) at three; then the VAR + whiteness study once more on the
 design regenerated with each choice of the shipped aircraft undone (full speed, rotor drag, weathervane moment,
 one-way rotors: the regular aircraft).
@@ -196,27 +196,22 @@ def variants(data) -> pd.DataFrame:
 
 
 def alpha_table(bases, data) -> pd.DataFrame:
-    """Detection (VAR + whiteness, healthy model, pooled and as a bank of per-record models) on the healthy
-    evaluation records at several per-channel alphas: false-alarm rate of all windows and of the disjoint ones
-    against the expectation ``1 - (1 - alpha)^3``."""
+    """Detection (VAR + whiteness, healthy model) on the healthy evaluation records at several per-channel alphas:
+    false-alarm rate of all windows and of the disjoint ones against the expectation ``1 - (1 - alpha)^3``."""
     sig = hexacopter_signals(data)
     rows = []
     for a in (1e-4, 1e-3, 1e-2, 5e-2):
-        row = {}
-        for bank in (False, True):
-            ev = tsfdi.evaluate(sig, bases, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
-                                rules=["paper"], progress=False, bank=bank)
-            tag = ", bank" if bank else ""
-            for w, r in ev.detection_rates().loc[("var", "whiteness")].iterrows():
-                n, x = int(r["disjoint_windows"]), int(r["disjoint_alarms"])
-                row.setdefault(w, {"alpha per channel": a, "window (s)": w,
-                                   "expected false alarms (%)": round(r["expected_false_alarm"], 3),
-                                   "expected disjoint": round(n * r["expected_false_alarm"] / 100.0, 2)})
-                row[w].update({f"false alarms{tag}, all windows (%)": round(r["false_alarm"], 2),
-                               f"disjoint windows flagged{tag}": f"{x} of {n}",
-                               f"in the 99 % band{tag}": bool(r["false_alarm_in_band"]),
-                               f"two-sided binomial p{tag}": float(f"{r['false_alarm_pvalue']:.2g}")})
-        rows.extend(row.values())
+        ev = tsfdi.evaluate(sig, bases, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
+                            rules=["paper"], progress=False)
+        for w, r in ev.detection_rates().loc[("var", "whiteness")].iterrows():
+            n, x = int(r["disjoint_windows"]), int(r["disjoint_alarms"])
+            rows.append({"alpha per channel": a, "window (s)": w,
+                         "expected false alarms (%)": round(r["expected_false_alarm"], 3),
+                         "expected disjoint": round(n * r["expected_false_alarm"] / 100.0, 2),
+                         "false alarms, all windows (%)": round(r["false_alarm"], 2),
+                         "disjoint windows flagged": f"{x} of {n}",
+                         "in the 99 % band": bool(r["false_alarm_in_band"]),
+                         "two-sided binomial p": float(f"{r['false_alarm_pvalue']:.2g}")})
     return pd.DataFrame(rows).set_index(["alpha per channel", "window (s)"])
 
 
@@ -329,18 +324,17 @@ def what_if_tables(bases, ev) -> tuple[dict, pd.DataFrame, dict]:
 LOO_ALPHAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12)
 
 
-def loo_alpha(bases_e, data, bank: bool = False) -> tuple[pd.DataFrame, list[str]]:
+def loo_alpha(bases_e, data) -> tuple[pd.DataFrame, list[str]]:
     """Per turbulence level, the VAR + whiteness alpha chosen on the fitting records (leave one record out,
-    :meth:`tsfdi.Baselines.select_alpha`, 20 s windows) and the evaluation records identified and monitored at it;
-    ``bank=True``: every state as the bank of its per-record models, in the choice and in the evaluation.
+    :meth:`tsfdi.Baselines.select_alpha`, 20 s windows) and the evaluation records identified and monitored at it.
     Returns the table and the target lines."""
     sig = hexacopter_signals(data)
     rows, idents, dets = [], [], []
     for lvl, b in bases_e.items():
-        tab = b.select_alpha("var", tsfdi.LjungBox(lags=20), "20s", LOO_ALPHAS, bank=bank)
+        tab = b.select_alpha("var", tsfdi.LjungBox(lags=20), "20s", LOO_ALPHAS)
         a = tab.attrs["selected"]
         ev = tsfdi.evaluate(sig, bases_e, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
-                            turbulence=lvl, rules=["paper"], progress=False, bank=bank)
+                            turbulence=lvl, rules=["paper"], progress=False)
         idents.append(ev.identification)
         dets.append(ev.detection)
         r = ev.rates()["correct"].xs(("var", "whiteness", "paper"), level=("model", "method", "rule"))
@@ -363,9 +357,8 @@ def loo_alpha(bases_e, data, bank: bool = False) -> tuple[pd.DataFrame, list[str
     rates = {f: 100.0 * (df.loc[df["state"] == f, "label_paper"] == f).mean() for f in sorted(set(df["state"]))}
     low = min(100.0 * (g["label_paper"] == st).mean() for (_, st), g in df.groupby(["turbulence", "state"]))
     ok = all(v >= 99.6 for v in rates.values())
-    what = "banks of per-record models, " if bank else ""
-    lines = [f"- VAR + whiteness, {what}paper rule, 20 s, alpha chosen per level on the fitting records: correct "
-             f"unique identification " + ", ".join(f"{f} {v:.2f}%" for f, v in rates.items())
+    lines = ["- VAR + whiteness, paper rule, 20 s, alpha chosen per level on the fitting records: correct "
+             "unique identification " + ", ".join(f"{f} {v:.2f}%" for f, v in rates.items())
              + f" (lowest level and rotor {low:.2f}%) -> target >= 99.6% per rotor "
              + ("**met**." if ok else "**not met**.")]
     # detection over all levels: alarms on healthy windows against the sum of the per-level expectations
@@ -381,34 +374,12 @@ def loo_alpha(bases_e, data, bank: bool = False) -> tuple[pd.DataFrame, list[str
                  for lvl, h in dj.groupby("turbulence")) / len(dj)
         lo, hi = stats.binom.ppf([0.005, 0.995], len(dj), p0)
         x = int(dj["alarm"].sum())
-        lines.append(f"- Detection ({what}healthy model at the chosen alpha, {w:g} s): non-overlapping healthy "
+        lines.append(f"- Detection (healthy model at the chosen alpha, {w:g} s): non-overlapping healthy "
                      f"windows flagged {x} of {len(dj)}, two-sided 99 % band {lo:.0f}-{hi:.0f} at the expected "
                      f"{100 * p0:.3g}% (all {len(g)} sliding windows: {100.0 * g['alarm'].mean():.2f}%) -> "
                      + ("**met**." if lo <= x <= hi else "**not met**."))
     return tab.set_index(["turbulence", "alpha per channel", "held-out correct at 20 s, alpha 1e-3 (%)",
                           "held-out correct at 20 s (%)", "held-out windows", "window (s)"]), lines
-
-
-def bank_table(ev_b) -> pd.DataFrame:
-    """Banks of per-record models at the paper's alpha: identification (paper and likelihood rules) and
-    detection per window length."""
-    r = ev_b.rates()["correct"].xs(("var", "whiteness"), level=("model", "method"))
-    d = ev_b.detection_rates().loc[("var", "whiteness")]
-    rows = []
-    for w in sorted(d.index):
-        row = {"window (s)": w}
-        for rule in ("paper", "likelihood"):
-            row.update({f"{f} {rule} (%)": round(float(r.loc[(w, f, rule)]), 2) for f in ev_b.faults})
-        row.update({"false alarms (%)": round(float(d.loc[w, "false_alarm"]), 3),
-                    "expected (%)": round(float(d.loc[w, "expected_false_alarm"]), 3),
-                    "alarms": f"{int(round(d.loc[w, 'false_alarm'] * d.loc[w, 'healthy_windows'] / 100))} of "
-                              f"{int(d.loc[w, 'healthy_windows'])}",
-                    "disjoint flagged": f"{int(d.loc[w, 'disjoint_alarms'])} of {int(d.loc[w, 'disjoint_windows'])}",
-                    "two-sided binomial p": float(f"{d.loc[w, 'false_alarm_pvalue']:.2g}"),
-                    "missed faults (%)": round(float(d.loc[w, "missed_fault"]), 2),
-                    "median delay (s)": float(d.loc[w, "delay_median"])})
-        rows.append(row)
-    return pd.DataFrame(rows).set_index("window (s)")
 
 
 def targets(ev) -> list[str]:
@@ -529,18 +500,13 @@ def main() -> None:
     sig_small, n_small = int((null_tab.loc[~big, "two-sided binomial p"] < 0.05).sum()), int((~big).sum())
     alt, alt_steady, alt_lost = what_if_tables(bases, ev)
     loo_tab, loo_lines = loo_alpha(bases_e, data)
-    bank_tab, bank_lines = loo_alpha(bases_e, data, bank=True)
-    met = [line.endswith("**met**.") for line in bank_lines]
     improved = [line for line in targets(ev) if line.startswith("- Improved rules at 5 s")]
-    summary_line = (f"Summary: with every state a bank of per-record models and alpha chosen per level on the "
-                    f"fitting records (\"Banks of per-record models\" below), the 20 s identification target is "
-                    f"{'met' if met[0] else 'not met'} and the detection false-alarm target is met at "
-                    f"{sum(met[1:])} of {len(met) - 1} window lengths; the improved rule at 5 s (pooled models, "
-                    f"chi-square): {'met' if improved and improved[0].endswith('**met**.') else 'not met'}.")
-    fa_b = alpha_tab["in the 99 % band, bank"]
-    bank_cells = f"{int(fa_b.sum())} of {fa_b.size}"
-    ev_b = tsfdi.evaluate(hexacopter_signals(data), bases, models=["var"], tests=WHITENESS,
-                          rules=("paper", "likelihood"), progress=False, bank=True)
+    summary_line = ("Summary: the calibrated method with one set of models for all levels is the second section "
+                    "above; with the per-level models of this section and chi-square thresholds, the improved rule "
+                    f"at 5 s: {'met' if improved and improved[0].endswith('**met**.') else 'not met'}. (The banks of "
+                    "per-record models of earlier versions had no false-alarm size of their own and were removed.)")
+    pooled_in = alpha_tab["in the 99 % band"]
+    pooled_cells = f"{int(pooled_in.sum())} of {pooled_in.size}"
     sel_rows = []
     for lvl, b in bases.items():
         for st in (b.healthy,) + b.faults:
@@ -677,30 +643,6 @@ model on those windows while the other failures' models, whose residuals are far
 healthy model detecting at the chosen alpha: false alarms and missed faults in the table (the false-alarm rate
 against the expectation is the subject of the detection sections).
 
-### Banks of per-record models
-
-The pooled model of a state averages the dynamics of its 10 fitting records. In turbulence every record flies its
-own trim and gusts, so its linearised dynamics differ a little from the others', and on a new record the pooled
-model's residuals are less white than chi2(20) says: that is the false-alarm excess of the detection sections
-below. A *bank* keeps one model per fitting record instead (`Baselines.bank`: the same VAR(20) fitted on each
-record alone) and accepts a window when any member accepts it (`evaluate(..., bank=True)`,
-`tsfdi.ResidualWindows` with a list of models). When the new record behaves like one of the fitting
-records, the member fitted on that record rejects with probability about alpha, and the bank, which rejects only
-when every member does, at most that. Every state is a bank here, the healthy one (detection) and each failure
-(identification).
-
-At the paper's alpha (1e-3 per channel, chi-square thresholds), all levels:
-
-""" + markdown_table(bank_table(ev_b)) + """
-
-With the alpha chosen per level on the fitting records, the choice also made with banks
-(`select_alpha(..., bank=True)`: each held-out fault fitting record goes through its own state's bank without the
-member fitted on it, and through the other failures' banks):
-
-""" + "\n".join(bank_lines) + """
-
-""" + markdown_table(bank_tab) + """
-
 ### Calibrated thresholds (leave-one-record-out, paper 002 Fig. 2)
 
 Every model (healthy and each rotor, per level) gets its own per-channel Ljung-Box threshold: the 1 - alpha
@@ -773,8 +715,8 @@ p-value counts the disjoint windows as independent trials:
 """ + markdown_table(alpha_tab) + """
 
 Reading: over all windows the pooled model's false-alarm rate is above its expectation at nearly every alpha and
-window length; the bank's is at or below it in """ + bank_cells + """ cells. For the pooled model, counted on
-disjoint windows the excess at the paper's alpha (1e-3) and below is within binomial noise here, while at 1e-2 and
+window length; counted on the disjoint windows it is inside the two-sided 99 % band in """ + pooled_cells + """
+cells: the excess at the paper's alpha (1e-3) and below is within binomial noise here, while at 1e-2 and
 5e-2, where the tail is sampled best, it is significant in most cells: the statistic on new healthy
 records is spread wider than chi2(20) (the baseline's estimation error and slight misfit; notes of
 `tsfdi.LjungBox`), and thresholds calibrated on the fitting records do not fix that (calibrated section above).
