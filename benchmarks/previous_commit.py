@@ -4,8 +4,8 @@ Used by ``identify_speed.py`` and ``evaluate_speed.py`` (``--against REF``, defa
 commit before the windowed engine of issue 16). The earlier ``tsfdi`` package is exported with ``git archive`` into
 a temporary folder; each measurement is a fresh interpreter (``python previous_commit.py WORKLOAD``) with that folder
 or this repository first on ``PYTHONPATH``, the two trees alternating so that a slow spell of the machine hits
-both. A worker builds its inputs, runs the workload once to compile (numba) and warm caches, then times
-``repeat`` runs and prints their median; the comparison reports the median over rounds of each tree and the ratio
+both. A worker builds its inputs, runs the workload twice to compile (numba) and warm caches, then times
+``repeat`` units of as many calls as take about 0.1 s and prints the median time per call; the comparison reports the median over rounds of each tree and the ratio
 previous / current (above 1: the current tree is faster).
 
 The workloads use only calls whose meaning did not change, spelled for each tree where the spelling did
@@ -147,12 +147,17 @@ WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ft
 
 def _worker(name: str, repeat: int) -> None:
     fn = WORKLOADS[name]()
+    t0 = time.perf_counter()
     fn()                                                    # compile and warm up
+    fn()
+    once = time.perf_counter() - t0
+    number = max(1, int(0.1 / max(once / 2, 1e-9)))         # calls per timed unit: at least ~0.1 s of work
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
+        for _ in range(number):
+            fn()
+        times.append((time.perf_counter() - t0) / number)
     print(json.dumps({"median_s": statistics.median(times)}))
 
 

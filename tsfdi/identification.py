@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import html
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -224,11 +224,15 @@ class WindowedIdentification:
     Attributes
     ----------
     windows : WindowStatistics
-        Statistics, thresholds, p-values and rejections, shape (n_windows, n_models, n_channels).
+        Statistics, thresholds, p-values and rejections, shape (n_windows, n_models, n_channels); its ``loglik`` is
+        NaN (:meth:`decide` computes the scores when the ``"likelihood"`` rule is asked for).
     tests : tuple of ResidualTest
         The test of every model, in model order.
     references : tuple of dict
         What the test takes from each fitted model (:meth:`~tsfdi.ResidualTest.reference`), in model order.
+    engine : ResidualWindows
+        The fitted engine (:func:`identify_windows` computes the likelihood scores only when the
+        ``"likelihood"`` rule is asked for).
     models, channels, starts, stops, statistic, threshold, pvalue, channel_reject :
         Those of ``windows``; window ``w`` covers signal samples ``[starts[w], stops[w])``.
     accepted : ndarray of bool, shape (n_windows, n_models)
@@ -244,6 +248,7 @@ class WindowedIdentification:
     windows: WindowStatistics
     tests: tuple
     references: tuple = ()
+    engine: Any = field(default=None, repr=False, compare=False)
 
     models = property(lambda self: self.windows.models)
     channels = property(lambda self: self.windows.channels)
@@ -265,8 +270,10 @@ class WindowedIdentification:
 
     def decide(self, rule: str = "paper") -> list:
         """The label of every window by ``rule`` (:data:`tsfdi.windows.RULES`): a model name or ``None``."""
-        lab = self.windows.labels(rule)
-        return [self.models[i] if i >= 0 else None for i in lab]
+        ws = self.windows
+        if rule == "likelihood" and self.engine is not None and np.isnan(ws.loglik).all():
+            ws = self.engine.statistics(dict(zip(self.models, self.tests)), window=ws.window, step=ws.step)
+        return [self.models[i] if i >= 0 else None for i in ws.labels(rule)]
 
     def __len__(self) -> int:
         return len(self.windows)
@@ -333,6 +340,7 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
     for name, res in models.items():
         _check_model(res, name, sig.nchan, "models")
-    ws = ResidualWindows(models).fit(sig.values, channels=sig.channels).statistics(tests, window=window, step=step)
+    engine = ResidualWindows(models).fit(sig.values, channels=sig.channels)
+    ws = engine.statistics(tests, window=window, step=step, loglik=False)
     return WindowedIdentification(ws, tuple(tests.values()),
-                                  tuple(tests[name].reference(res) for name, res in models.items()))
+                                  tuple(tests[name].reference(res) for name, res in models.items()), engine)
