@@ -32,16 +32,7 @@ from statsmodels.tsa.ar_model import AutoReg  # noqa: E402
 import tsfdi  # noqa: E402
 from tsfdi.detection import glrt_direct  # noqa: E402
 from tsfdi import identify_windows  # noqa: E402
-
-
-def median_time(fn, repeat, number=1):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - t0) / number)
-    return float(np.median(times))
+from previous_commit import median_time  # noqa: E402
 
 
 def var_record(rng, n, freqs, s=3):

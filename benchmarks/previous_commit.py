@@ -31,6 +31,17 @@ ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = "899984e"
 
 
+def median_time(fn, repeat: int, number: int = 1) -> float:
+    """Median over ``repeat`` units of the time per call of ``fn``, each unit ``number`` calls."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        times.append((time.perf_counter() - t0) / number)
+    return float(statistics.median(times))
+
+
 def previous_tree(ref: str) -> Path:
     """``tsfdi`` of commit ``ref`` unpacked under a temporary folder (kept for the process's lifetime)."""
     out = Path(tempfile.mkdtemp(prefix=f"tsfdi-{ref}-"))
@@ -152,13 +163,7 @@ def _worker(name: str, repeat: int) -> None:
     fn()
     once = time.perf_counter() - t0
     number = max(1, int(0.1 / max(once / 2, 1e-9)))         # calls per timed unit: at least ~0.1 s of work
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            fn()
-        times.append((time.perf_counter() - t0) / number)
-    print(json.dumps({"median_s": statistics.median(times)}))
+    print(json.dumps({"median_s": median_time(fn, repeat, number)}))
 
 
 if __name__ == "__main__":
