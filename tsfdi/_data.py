@@ -12,11 +12,15 @@ their index starts at the original index's position ``lags``.
 
 from __future__ import annotations
 
+import datetime
+import numbers
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from tsfdi._validation import float_like, int_like
 
 __all__ = ["Signal", "as_signal", "is_xarray", "rolling_variance", "sampling_frequency", "window_samples"]
 
@@ -225,8 +229,6 @@ def sampling_frequency(signal: Signal, fs: Any = None) -> float | None:
     numpy array carries no time.
     """
     if fs is not None:
-        from tsfdi._validation import float_like
-
         return float_like(fs, "fs", minimum=0.0, strict_min=True)
     idx = signal.index
     if idx is None or len(idx) < 2 or isinstance(idx, pd.RangeIndex):
@@ -247,9 +249,6 @@ def window_samples(value: Any, name: str, fs: float | None, *, minimum: int = 1)
     ``numpy.timedelta64``) is converted with the sampling frequency ``fs`` (Hz) and rounded to the nearest
     sample. Floats are refused: say ``"2.5s"`` for a time span.
     """
-    import datetime
-    import numbers
-
     if isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{name} must be an int (samples) or a time span such as '2s', got {value!r}")
     # numpy counts timedelta64 as an integer type: time spans are recognised first
@@ -295,8 +294,6 @@ def rolling_variance(signal: Any, window: int, step: int = 1) -> np.ndarray:
         Variance (``ddof=0``) of window ``w`` = samples ``[w * step, w * step + window)``, from prefix sums of the
         globally centred signal.
     """
-    from tsfdi._validation import int_like
-
     sig = as_signal(signal, "signal", allow_constant=True)
     window = int_like(window, "window", minimum=2)
     step = int_like(step, "step", minimum=1)

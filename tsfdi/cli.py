@@ -102,7 +102,7 @@ def _csv_list(text: str | None) -> list[str] | None:
                  "identification (Table 4), detection rates and figures", _demo_args)
 def _demo(args: argparse.Namespace) -> int:
     from tsfdi.datasets import load_hexacopter
-    from tsfdi.datasets.hexacopter import hexacopter_signals
+    from tsfdi.datasets.hexacopter import SIGNAL_CHANNELS
     from tsfdi.study import demo_report, hexacopter_study, paper_tests, write_report
 
     t0 = time.perf_counter()
@@ -110,8 +110,7 @@ def _demo(args: argparse.Namespace) -> int:
     windows = [f"{float(w)}s" for w in _csv_list(args.windows)]
     order = int(args.order) if args.order.strip().isdigit() else args.order.strip()
     models = _csv_list(args.models)
-    tests = paper_tests(models or list(hexacopter_signals(data)["channel"].values) + ["var"],
-                        _csv_list(args.methods))
+    tests = paper_tests(models or [*SIGNAL_CHANNELS, "var"], _csv_list(args.methods))
     bases, ev = hexacopter_study(data, records_per_case=args.records_per_case, models=models, tests=tests,
                                  windows=windows, fit_records=args.fit_records, pool=args.pool, order=order,
                                  progress=not args.no_progress)

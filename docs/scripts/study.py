@@ -5,8 +5,8 @@ Every number in docs/results.md is computed here; nothing is typed by hand. Run 
     python docs/scripts/study.py
 
 Steps: paper 003's protocol like for like beside its Table 4; tsfdi's calibrated method with one set of models for
-all levels, on the shipped data and on a fleet generated on demand; then baselines per turbulence level (first 10 valid records of each state and level pooled, post-transient part,
-VAR(20) / AR(20): Table 2 analogue), then evaluation of every other record with 1 s sliding windows of 5 / 10 / 20 s for the
+all levels, on the shipped data and on a fleet generated on demand; then baselines per turbulence level (first 10
+valid records of each state and level pooled, post-transient part, VAR(20) / AR(20): Table 2 analogue), then evaluation of every other record with 1 s sliding windows of 5 / 10 / 20 s for the
 scalar AR models (roll, pitch, yaw rate) and the VAR, residual variance (F test) and whiteness (Ljung-Box) methods,
 the paper's decision rule and two rules resolving ambiguous windows (Table 4 analogues, rates, detection), then the
 Monitor end to end on every evaluated fault record; then the VAR / AR whiteness study again with thresholds
@@ -36,7 +36,7 @@ from tsfdi.baselines import insample_q  # noqa: E402
 from tsfdi.detection import EmpiricalThreshold  # noqa: E402
 from tsfdi.datasets import (REGULAR_HEXACOPTER, FleetSpread, HexacopterParameters, load_hexacopter,  # noqa: E402
                             make_hexacopter_dataset)
-from tsfdi.datasets.hexacopter import SHIPPED_VARIABLES, encode_for_file  # noqa: E402
+from tsfdi.datasets.hexacopter import SHIPPED_VARIABLES, SIGNAL_CHANNELS, encode_for_file  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
 from tsfdi.datasets.hexacopter import hexacopter_signals  # noqa: E402
 from tsfdi.study import (PAPER_ALPHA, demo_report, hexacopter_study, markdown_table, paper_tests,  # noqa: E402
@@ -105,7 +105,7 @@ def paper_like_for_like(data) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
     every other valid record of every level. Returns the Table 4 analogue beside the published Table 4, the
     detection rates of the healthy model, and the BIC orders."""
     sig = hexacopter_signals(data)
-    names = ["roll", "pitch", "yaw_rate", "var"]
+    names = [*SIGNAL_CHANNELS, "var"]
     b = tsfdi.fit_baselines(sig, fit_records="first", fit_turbulence="severe", duration=20.0, settle=10.0,
                             order="bic", models=names, max_lags=30, var_max_lags=30)
     tests = {"variance": {m: tsfdi.FTest(alpha=PAPER_ALPHA[("variance", "yaw" if m.startswith("yaw") else m)])
@@ -482,7 +482,7 @@ def main() -> None:
     fleet_tab, fleet_lines, fleet_orders = calibrated_one_set(fleet)
     fleet_lost = int(fleet["lost_control"].sum())
     bases, ev = hexacopter_study(data, progress="--progress" in sys.argv)
-    bases_e, ev_e = hexacopter_study(data, tests=paper_tests(["roll", "pitch", "yaw_rate", "var"], ["whiteness"],
+    bases_e, ev_e = hexacopter_study(data, tests=paper_tests([*SIGNAL_CHANNELS, "var"], ["whiteness"],
                                                              threshold="empirical"),
                                      progress="--progress" in sys.argv)
     counts = sorted({sum(e.shape[0] // (2000 - 20) for e in b.heldout[("var", st)])

@@ -140,7 +140,7 @@ from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, draw_gusts
 
 __all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "FleetSpread", "FLEET_SEED_KEY", "trim",
            "simulate_hexacopter", "make_hexacopter_dataset", "FLEET_COORDS",
-           "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file"]
+           "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file", "hexacopter_signals", "SIGNAL_CHANNELS"]
 
 #: Output channels and their units.
 CHANNELS = {
@@ -506,6 +506,9 @@ def _state_rotor(state: str) -> int:
 PACK_SCALE = {"roll": 1e-6, "pitch": 1e-6, "yaw": 1e-8, "p": 5e-5, "q": 5e-5, "r": 1e-6,
               "collective": 2e-3, "roll_control": 1e-2, "pitch_control": 1e-2, "yaw_control": 1e-4}
 #: Variables of the shipped file: the paper's attitude signals, the yaw rate and the four controls of eq. 2.
+#: Channels of :func:`hexacopter_signals` with ``yaw="rate"`` (the default): roll, pitch and the body yaw rate.
+SIGNAL_CHANNELS = ("roll", "pitch", "yaw_rate")
+
 SHIPPED_VARIABLES = ("roll", "pitch", "yaw", "r", "collective", "roll_control", "pitch_control", "yaw_control")
 _INT32_FILL = -2147483648
 
@@ -566,11 +569,11 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
     arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64)
             for v in ("roll", "pitch", "r" if use_r else "yaw")]
     if use_r:
-        names = ["roll", "pitch", "yaw_rate"]
+        names = list(SIGNAL_CHANNELS)
     elif yaw == "rate":
         arrs = [a[:, 1:] for a in arrs[:2]] + [np.diff(arrs[2], axis=1) * fs]
         t = t[1:]
-        names = ["roll", "pitch", "yaw_rate"]
+        names = list(SIGNAL_CHANNELS)
     else:
         names = ["roll", "pitch", "yaw"]
     vals = np.stack(arrs, axis=-1)

@@ -89,8 +89,8 @@ class FTest(CalibratedTest):
         """Variance ratio ``F`` of every sliding window (``window`` residual samples, ``step`` apart) against
         ``reference_variance``, shape (n_windows, k), from prefix sums."""
         sig = self._resid(resid, 3 if self.demean else 2)
-        if hasattr(self, "reference_variance_"):       # a calibrated test carries the variance it was calibrated with
-            reference_variance = self.reference_variance_
+        # a calibrated test carries the variance it was calibrated with
+        reference_variance = getattr(self, "reference_variance_", reference_variance)
         if reference_variance is None:
             raise TypeError("FTest.window_statistic needs reference_variance (the baseline's unbiased variance)")
         e = sig.values
@@ -261,8 +261,8 @@ class FTest(CalibratedTest):
         sig = self._resid(resid, 3 if self.demean else 2)
         e = sig.values
         k = sig.nchan
-        if hasattr(self, "reference_variance_"):       # a calibrated test carries the variance it was calibrated with
-            reference_variance = self.reference_variance_
+        # a calibrated test carries the variance it was calibrated with
+        reference_variance = getattr(self, "reference_variance_", reference_variance)
         if reference_variance is None or (reference_df is None and not self.empirical):
             raise TypeError("FTest.test needs reference_variance and reference_df (the baseline's unbiased "
                             "residual variance and N0 - d); tsfdi.detect/identify take them from the model")
