@@ -81,6 +81,8 @@ SHORT = dict(zip(CONDITIONS, ("normal", "cut1", "cut2.5", "cut4", "tapeM1M3", "t
 CORRUPT = {("weight_on_string_W2_near_M3", "E8_log02"): "drone flipped, saturated commands"}
 
 GYRO = ("controller.r_roll", "controller.r_pitch", "controller.r_yaw")
+COMMANDS = ("controller.cmd_roll", "controller.cmd_pitch", "controller.cmd_yaw")
+BASE = GYRO + COMMANDS
 ACCELZ = "controller.accelz"
 ALTITUDE = "stateEstimate.z"
 
@@ -97,10 +99,10 @@ ACCELZ_GAIN = 0.05         # required relative decrease of the held-out gyro res
 IDENT_WINDOW_S, IDENT_STEP_S = 2.0, 0.5
 TARGET_FA, TARGET_DETECT, TARGET_IDENT = 2.0, 0.95, 0.85
 
-FAMILIES = ("LB", "LB-S", "LB-H", "F", "F-S")
-COMBINED = {"LB+F": ("LB-S", "F-S")}
-DETECTORS = ("LB-S", "F-S", "LB-H", "LB+F")      # family-wise detectors of sections 2 and 3
-PRIMARY = "LB+F"                                 # the identification test detailed in section 3
+FAMILIES = ("LB", "LB-S", "LB-H", "F", "F-S", "M", "M-S")
+COMBINED = {"LB+F": ("LB-S", "F-S"), "LB+F+M": ("LB-S", "F-S", "M-S")}
+DETECTORS = ("LB-S", "F-S", "LB-H", "M-S", "LB+F", "LB+F+M")   # family-wise detectors of sections 2 and 3
+PRIMARY = "LB+F+M"                                             # the identification test detailed in section 3
 
 
 # ------------------------------------------------------------------ data
@@ -178,6 +180,8 @@ def fit_model(flights, channels, order=None) -> Model:
 def make_test(family: str, alpha: float, lags: int, calibrated: bool):
     thr = tsfdi.ScaledChi2Threshold(alpha, min_windows=MIN_WINDOWS) if calibrated else "theoretical"
     sidak = "sidak" if family.endswith("-S") else None
+    if family.startswith("M"):
+        return tsfdi.MeanTest(alpha=alpha, correction=sidak, threshold=thr)
     if family.startswith("LB"):
         return tsfdi.LjungBox(lags=lags, alpha=alpha, correction=sidak, threshold=thr,
                               multivariate="hosking" if family == "LB-H" else None)
@@ -192,14 +196,18 @@ def calibration_window(held, window: int, order: int) -> int:
 
 def tests_for(model: Model, families, alpha: float, window: int, calibrated: bool) -> dict:
     """One test per family for windows of ``window`` signal samples: calibrated on the model's held-out residuals,
-    or with the theoretical threshold."""
+    or with the theoretical threshold. A combined family (``COMBINED``) gets its parts under ``"family:part"``,
+    each at the Sidak share ``1 - (1 - alpha)^(1/parts)``, so that "any part rejects" has size alpha."""
     lags = LB_LAGS_PER_S * round(window / FS)
     out = {}
     for fam in families:
-        test = make_test(fam, alpha, lags, calibrated)
-        if calibrated:
-            test.calibrate(model.held, window=calibration_window(model.held, window, model.order), step=1)
-        out[fam] = test
+        parts = COMBINED.get(fam)
+        share = -math.expm1(math.log1p(-alpha) / len(parts)) if parts else alpha
+        for key, part in ([(f"{fam}:{p}", p) for p in parts] if parts else [(fam, fam)]):
+            test = make_test(part, share, lags, calibrated)
+            if calibrated:
+                test.calibrate(model.held, window=calibration_window(model.held, window, model.order), step=1)
+            out[key] = test
     return out
 
 
@@ -219,8 +227,9 @@ def flags(models: dict, tests: dict, x: np.ndarray, window: int, step: int, logl
         out["loglik"] = ws.loglik if out["loglik"] is None else out["loglik"]
         out[fam] = (ws.channel_reject, ws.reject)
     for fam, parts in COMBINED.items():
-        if all(p in out for p in parts):
-            out[fam] = (None, np.logical_or.reduce([out[p][1] for p in parts]))
+        keys = [f"{fam}:{p}" for p in parts]
+        if all(k in out for k in keys):
+            out[fam] = (None, np.logical_or.reduce([out[k][1] for k in keys]))
     return out
 
 
@@ -242,7 +251,7 @@ class Choices:
                 f"{self.descent_s:4.2f} s -> margin ({self.margin[0]:g} s, {self.margin[1]:g} s); with accelz the "
                 f"held-out gyro gen. variance changes by {-100 * self.accelz_gain:+4.1f} % (added if <= "
                 f"{-100 * ACCELZ_GAIN:g} %) -> "
-                f"{'gyro + accelz' if ACCELZ in self.channels else 'gyro only'}; BIC order {self.order}")
+                f"{'gyro, commands + accelz' if ACCELZ in self.channels else 'gyro + commands'}; BIC order {self.order}")
 
 
 def _round_up(t: float) -> float:
@@ -270,7 +279,7 @@ def accelz_gain(flights) -> float:
     for i, out in enumerate(flights):
         fit = [f for j, f in enumerate(flights) if j != i]
         logdet = []
-        for channels in (GYRO, GYRO + (ACCELZ,)):
+        for channels in (BASE, BASE + (ACCELZ,)):
             recs = records(fit, channels)
             res = tsfdi.VAR(recs, select_order(recs), trend="c").fit()
             e = np.vstack([np.asarray(res.residuals(x))[:, :len(GYRO)] for x in out.arrays(channels)])
@@ -286,7 +295,7 @@ def choose(logs: tuple) -> Choices:
     margin = (_round_up(climb), _round_up(descent))
     flights = [f for f in load_condition(NORMAL, margin) if f.log in logs]
     gain = accelz_gain(flights)
-    channels = GYRO + (ACCELZ,) if gain >= ACCELZ_GAIN else GYRO
+    channels = BASE + (ACCELZ,) if gain >= ACCELZ_GAIN else BASE
     return Choices(tuple(logs), climb, descent, margin, gain, channels, select_order(records(flights, channels)))
 
 
@@ -311,7 +320,7 @@ def false_alarms(folds=None, windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
             window = samples(wsec)
             for alpha in alphas:
                 for mode in ("calibrated", "theoretical"):
-                    tests = tests_for(model, FAMILIES, alpha, window, mode == "calibrated")
+                    tests = tests_for(model, FAMILIES + tuple(COMBINED), alpha, window, mode == "calibrated")
                     if mode == "calibrated":
                         ncal.setdefault(wsec, []).append(independent_windows(tests))
                     tests = {fam: {"m": t} for fam, t in tests.items()}
@@ -325,11 +334,11 @@ def false_alarms(folds=None, windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
 
 def _fa_rows(fl: dict, channels, key: dict) -> list:
     rows = []
-    for fam in FAMILIES:
+    for fam in FAMILIES + tuple(COMBINED):
         rej_c, rej = fl[fam]
         n = rej.shape[0]
         rows.append({**key, "family": fam, "channel": "any", "flagged": int(rej[:, 0].sum()), "n": n})
-        if fam != "LB-H":
+        if rej_c is not None and fam != "LB-H":
             rows += [{**key, "family": fam, "channel": name.split(".")[-1], "flagged": int(rej_c[:, 0, c].sum()),
                       "n": n} for c, name in enumerate(channels)]
     return rows
@@ -339,7 +348,7 @@ def expected_rate(family: str, alpha: float, k: int, any_channel: bool) -> float
     """Nominal false-alarm rate of one window: per channel alpha (Sidak: the per-channel share); any channel
     1 - (1 - alpha)^k without correction (independent channels), alpha with Sidak or the joint test."""
     if any_channel:
-        return -math.expm1(k * math.log1p(-alpha)) if family in ("LB", "F") else alpha
+        return -math.expm1(k * math.log1p(-alpha)) if family in ("LB", "F", "M") else alpha
     return -math.expm1(math.log1p(-alpha) / k) if family.endswith("-S") else alpha
 
 
@@ -385,10 +394,11 @@ def report_false_alarms(tab: pd.DataFrame) -> None:
 
 
 def fa_verdicts(tab: pd.DataFrame) -> list:
-    """PASS/FAIL: calibrated, alpha 1e-2, 2 s windows; per channel pooled (LB, F) and family-wise (LB-S, LB-H, F-S)."""
+    """PASS/FAIL: calibrated, alpha 1e-2, 2 s windows; per channel pooled (LB, F, M) and family-wise (LB-S, LB-H,
+    F-S, M-S and the combined detectors)."""
     sel = tab[(tab["mode"] == "calibrated") & (tab.alpha == 1e-2) & (tab.window_s == 2.0)
-              & (((tab.channel == "pooled") & tab.family.isin(["LB", "F"]))
-                 | ((tab.channel == "any") & tab.family.isin(["LB-S", "LB-H", "F-S"])))]
+              & (((tab.channel == "pooled") & tab.family.isin(["LB", "F", "M"]))
+                 | ((tab.channel == "any") & tab.family.isin(["LB-S", "LB-H", "F-S", "M-S", *COMBINED])))]
     lines = []
     for r in sel.sort_values(["step_s", "family"], ascending=[False, True]).itertuples():
         what = "per channel (pooled)" if r.channel == "pooled" else "family-wise (any)"
@@ -402,12 +412,11 @@ def detection(choice: Choices, conditions=CONDITIONS[1:], windows=WINDOWS_S, alp
     """Flagged non-overlapping windows of every faulty flight against the VAR of all normal flights; and the
     calibration windows per window length."""
     model = fit_model(load_condition(NORMAL, choice.margin), choice.channels, choice.order)
-    families = sorted({p for fam in DETECTORS for p in COMBINED.get(fam, (fam,))})
     rows, ncal = [], {}
     for wsec in windows:
         window = samples(wsec)
         for alpha in alphas:
-            tests = tests_for(model, families, alpha, window, True)
+            tests = tests_for(model, DETECTORS, alpha, window, True)
             ncal[wsec] = independent_windows(tests)
             tests = {fam: {"m": t} for fam, t in tests.items()}
             for cond in conditions:
@@ -449,10 +458,9 @@ def identification(choice: Choices, conditions=CONDITIONS, alphas=ALPHAS, held_o
 
     ``held_out``: optional (condition, log) pairs to hold out (default every flight of ``conditions``)."""
     window, step = samples(IDENT_WINDOW_S), samples(IDENT_STEP_S)
-    parts = sorted({p for fam in DETECTORS for p in COMBINED.get(fam, (fam,))})
     flights = {c: load_condition(c, choice.margin) for c in conditions}
     full = {c: fit_model(fl, choice.channels) for c, fl in flights.items()}
-    full_tests = {(c, a): tests_for(m, parts, a, window, True) for c, m in full.items() for a in alphas}
+    full_tests = {(c, a): tests_for(m, DETECTORS, a, window, True) for c, m in full.items() for a in alphas}
     ncal = [independent_windows(t) for t in full_tests.values()]
     rows = []
     for cond in conditions:
@@ -463,9 +471,9 @@ def identification(choice: Choices, conditions=CONDITIONS, alphas=ALPHAS, held_o
             models = {**full, cond: own}
             for alpha in alphas:
                 per_model = {c: full_tests[(c, alpha)] for c in conditions}
-                per_model[cond] = tests_for(own, parts, alpha, window, True)
+                per_model[cond] = tests_for(own, DETECTORS, alpha, window, True)
                 ncal.append(independent_windows(per_model[cond]))
-                tests = {fam: {c: per_model[c][fam] for c in conditions} for fam in parts}
+                tests = {key: {c: per_model[c][key] for c in conditions} for key in per_model[cond]}
                 for seg, x in enumerate(f.arrays(choice.channels)):
                     fl = flags(models, tests, x, window, step, loglik=True)
                     for fam in DETECTORS:
@@ -557,7 +565,7 @@ def main() -> None:
     orders = ident.groupby("condition").order.agg(lambda s: sorted(set(s)))
     print("  section 3 BIC orders of the held-out flights' own-condition models: "
           + ", ".join(f"{SHORT[c]} {orders[c]}" for c in CONDITIONS))
-    print(f"  section 3 detailed test {PRIMARY} (LB-S and F-S), fixed before running")
+    print(f"  section 3 detailed test {PRIMARY} ({' + '.join(COMBINED[PRIMARY])}, each at the Sidak share of alpha)")
 
     print("\n== 1. false alarms on held-out normal flights (leave one log out, 5 folds) ==")
     tab = fa_table(fa, len(choice.channels))

@@ -11,8 +11,8 @@ and :mod:`tsfdi.study` are imported on first use.
 import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
-from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, ResidualTest, ScaledChi2Threshold,
-                             ZScore)
+from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, ResidualTest,
+                             ScaledChi2Threshold, ZScore)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
@@ -30,7 +30,8 @@ __all__ = [
     "AR", "ARX", "VAR", "RecursiveARX", "ARResults", "ARXResults", "VARResults", "RecursiveARXResults",
     "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # residual tests and decisions
-    "ResidualTest", "Decision", "FTest", "LjungBox", "GLRT", "EmpiricalThreshold", "ScaledChi2Threshold", "ZScore",
+    "ResidualTest", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "EmpiricalThreshold", "ScaledChi2Threshold",
+    "ZScore",
     # windowed engine, detection, identification
     "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",
     "WindowedIdentification",
