@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import matplotlib
@@ -10,10 +11,19 @@ import pandas as pd
 import pytest
 import xarray as xr
 from _synthetic_fdi import FS, dataset
+from hypothesis import HealthCheck, settings
 
 import tsfdi
 
 matplotlib.use("Agg")
+
+# property-based tests (tests/property): a fixed, derandomised profile for CI and the default run, and a longer
+# random one for local runs: ``HYPOTHESIS_PROFILE=long pytest tests/property``
+settings.register_profile("ci", derandomize=True, max_examples=60, deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.register_profile("long", max_examples=2000, deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 #: ../shared next to the repository (CI has it there too); tests that need it fail loudly if it is missing
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"

@@ -14,10 +14,15 @@ grouped by lag, so one upper-triangular factor ``R`` of it gives every nested fi
 :func:`tsfdi.models.lstsq.nested_fits`). For AR and VAR models ``R`` is the Cholesky factor of the lag-product
 Gram matrix, computed in ``O(N max_lags)`` from lag products with end corrections; when that factor loses
 digits (ill-conditioned regressor) it is recomputed by a QR decomposition of the regressor.
+
+Everything runs in the units of the model spec (:attr:`tsfdi.AR.y_scale`: each channel divided by a power of
+two near its peak when it lies outside ``2**-20 .. 2**20``), so the selected order of ``c * y`` is that of
+``y`` for any ``c`` that keeps every channel's peak within ``1e-152 .. 1e152``.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -26,9 +31,10 @@ import numpy as np
 import pandas as pd
 
 from tsfdi._validation import float_like, int_like, option
+from tsfdi.exceptions import IllConditionedWarning
 from tsfdi.models import AR, ARX, VAR
-from tsfdi.models.criteria import information_criteria
-from tsfdi.models.lstsq import lag_gram, nested_fits, triangular_factor
+from tsfdi.models.criteria import EXACT_FIT_RTOL
+from tsfdi.models.lstsq import nested_fits, triangular_factor
 
 __all__ = ["select_order", "OrderSelection"]
 
@@ -64,6 +70,20 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     -------
     OrderSelection
 
+    Raises
+    ------
+    ValueError
+        ``max_lags`` too large for the data (the message names the model's ``lags`` / ``na``) or for the memory
+        limit, data outside ``[1e-152, 1e152]`` (each channel's largest magnitude), and the errors of the model
+        families (:class:`tsfdi.AR`, :class:`tsfdi.VAR`, :class:`tsfdi.ARX`).
+
+    Warns
+    -----
+    IllConditionedWarning
+        An ill-conditioned regressor, or orders that fit the data exactly (residual RMS below ``1e-12`` times
+        its peak: a deterministic signal); their criteria use the floor of
+        :func:`~tsfdi.models.criteria.information_criteria`, so the smallest exact order has the smallest BIC.
+
     Notes
     -----
     Paper 003 selects the order by the minimum of BIC (eq. 5) together with the stabilisation of RSS/SSS
@@ -82,25 +102,26 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
         spec = (AR(data, max_lags, trend=trend) if family == "ar"
                 else VAR(data, max_lags, trend=trend, criterion=criterion))
     s = spec.neqs
-    const = bool(spec.k_const)
 
     def design() -> np.ndarray:
-        return np.hstack(spec.design_all())
+        return np.hstack(spec.design_all(scaled=True))
 
     if family == "arx":
         Z = design()
         R = triangular_factor(Z.T @ Z, lambda: Z, s)
         group = 1 + spec.n_inputs
-    else:   # the Gram matrix of several records is the sum of theirs
-        gram = sum(lag_gram(r.values, max_lags, const=const) for r in spec.records)
-        R = triangular_factor(gram, design, s)
+    else:   # lag products; the Gram matrix of several records is the sum of theirs
+        R = triangular_factor(spec.gram(), design, s)
         group = s
     orders = np.arange(1, max_lags + 1)
     widths = spec.k_const + orders * group
     sse = nested_fits(R, s, widths)
-    nobs = sum(spec.nobs_records)
-    sss = float(np.sum(R[:, -s:] ** 2))   # = trace(Y'Y): columns of R have the norms of the columns of Z
-    values = information_criteria(sse, sss, nobs, widths * s, s, spec.criterion)
+    sss = np.sum(R[:, -s:] ** 2, axis=0)   # = diag(Y'Y): columns of R have the norms of the columns of Z
+    values = spec.criteria(sse, sss, widths * s)
+    if values["exact"].any():
+        warnings.warn(f"orders {orders[values['exact']].tolist()} fit the data exactly (a residual RMS below "
+                      f"{EXACT_FIT_RTOL:g} times its peak, or collinear channels): their likelihood is unbounded, so "
+                      "their criteria use that floor for the residual variance", IllConditionedWarning, stacklevel=2)
     return OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
 
 
@@ -142,9 +163,11 @@ class OrderSelection:
 
     @property
     def stabilized(self) -> int:
-        """Smallest order after which RSS/SSS improves by no more than ``tol`` (relative) at any step."""
-        r = self.values["rss_sss"]
-        gain = (r[:-1] - r[1:]) / r[:-1]          # gain[i]: improvement of order i+2 over order i+1
+        """Smallest order after which RSS/SSS improves by no more than ``tol`` (relative) at any step (an exact
+        fit counts as RSS/SSS = 0: nothing left to improve)."""
+        r = np.where(self.values["exact"], 0.0, self.values["rss_sss"])   # an exact fit leaves rounding only
+        # gain[i]: improvement of order i+2 over order i+1 (none once RSS/SSS is 0)
+        gain = np.divide(r[:-1] - r[1:], r[:-1], out=np.zeros(r.size - 1), where=r[:-1] > 0)
         big = np.flatnonzero(gain > self.tol)
         return int(self.orders[big[-1] + 1]) if big.size else int(self.orders[0])
 

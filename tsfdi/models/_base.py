@@ -18,12 +18,41 @@ from scipy import signal as sps
 
 from tsfdi._data import Signal, as_signal, is_xarray
 from tsfdi._validation import int_like, option
-from tsfdi.exceptions import UnstableModelWarning
+from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
-from tsfdi.models.criteria import information_criteria
-from tsfdi.models.lstsq import gram_solve, lag_gram, lagged_design, lstsq
+from tsfdi.models.criteria import EXACT_FIT_RTOL, information_criteria
+from tsfdi.models.lstsq import MAX_VALUES, check_size, gram_solve, lag_gram, lagged_design, lstsq
 
-__all__ = ["HeldOutResiduals", "LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults"]
+__all__ = ["HeldOutResiduals", "LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults",
+           "DATA_RANGE"]
+
+#: range of a channel's largest magnitude that the models accept: squares (variances) of data inside it stay
+#: in the normal floating-point range (1e-304 .. 1e304), with four decades to spare
+DATA_RANGE = (1e-152, 1e152)
+#: channels whose largest magnitude lies in this band (about 1e-6 .. 1e6) are fitted in their own units (bit for
+#: bit as always); the others in units of a power of two near it, which is exact and keeps them comparable with
+#: the intercept column of ones (see :attr:`LinearTimeSeriesModel.y_scale`)
+_OWN_UNITS = (2.0**-20, 2.0**20)
+
+
+def _channel_scale(values: list[np.ndarray], name: str, channels: list) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Largest magnitude of every channel over all records, checked against :data:`DATA_RANGE`, the unit (a
+    power of two, 1 inside the ``_OWN_UNITS`` band) in which the channel is fitted, and whether all are 1."""
+    peak = None
+    for v in values:
+        vt = np.ascontiguousarray(v.T)      # numpy reduces a contiguous axis far faster than axis 0 of (n, s)
+        p = np.maximum(vt.max(axis=1), -vt.min(axis=1))
+        peak = p if peak is None else np.maximum(peak, p)
+    lo, hi = (peak[0], peak[0]) if peak.size == 1 else (peak.min(), peak.max())
+    if lo < DATA_RANGE[0] or hi > DATA_RANGE[1]:
+        j = int(np.argmin(peak) if lo < DATA_RANGE[0] else np.argmax(peak))
+        raise ValueError(f"{name} peaks at {peak[j]:.3g} in channel {channels[j]!r}: the models need every "
+                         f"channel's largest magnitude within [{DATA_RANGE[0]:g}, {DATA_RANGE[1]:g}], where "
+                         f"variances (squares of the data) stay in the floating-point range; rescale {name}")
+    if lo >= _OWN_UNITS[0] and hi <= _OWN_UNITS[1]:
+        return peak, np.ones(peak.size), True
+    own = (peak >= _OWN_UNITS[0]) & (peak <= _OWN_UNITS[1])
+    return peak, np.where(own, 1.0, np.ldexp(1.0, np.frexp(peak)[1])), False
 
 
 class HeldOutResiduals(list):
@@ -50,7 +79,27 @@ def _is_record_list(y: Any) -> bool:
 
 
 class LinearTimeSeriesModel:
-    """Base of AR, VAR and ARX: ``y[t] + sum A_i y[t-i] = c + sum B_j u[t-nk-j+1] + e[t]``."""
+    """Base of AR, VAR and ARX: ``y[t] + sum A_i y[t-i] = c + sum B_j u[t-nk-j+1] + e[t]``.
+
+    **Input contract** (all three families): ``y`` (and ``u``) finite, real, non-constant in every channel, with
+    every channel's largest magnitude within :data:`DATA_RANGE` ``= [1e-152, 1e152]`` (outside it variances
+    leave the floating-point range); the order(s) leave at least ``df_eq + 1`` regression rows, and the
+    regressor at most :data:`~tsfdi.models.lstsq.MAX_VALUES` values (2 GiB). Anything else raises a
+    ``ValueError`` / ``TypeError`` naming the argument, before anything large is allocated.
+
+    Attributes
+    ----------
+    y_scale : ndarray, shape (s,)
+        Unit of each output channel in the fit: 1 for a channel whose largest magnitude lies in
+        ``[2**-20, 2**20]`` (about 1e-6 .. 1e6), otherwise the power of two just above it. The fit, its Gram
+        matrices and its criteria are computed on the data divided by these units (exact: a power of two) and
+        the results are returned in the data's units, so nothing overflows or underflows over
+        :data:`DATA_RANGE`, and the results at ``y`` and ``c * y`` correspond: coefficients of the lags
+        unchanged, ``sigma2`` times ``c**2``, ``llf`` minus ``nobs * log|c|`` per channel (exactly for a
+        power of two ``c``).
+    u_scale : ndarray, shape (n_inputs,) or None
+        The same for the inputs.
+    """
 
     _vector: ClassVar[bool | None] = None   # False: scalar output required, True: 2-D output required
     #: the results class :meth:`fit` returns (and :func:`tsfdi.models.load` rebuilds)
@@ -94,6 +143,11 @@ class LinearTimeSeriesModel:
         if hold_back < self.max_lag:
             raise ValueError(f"hold_back must be >= the largest lag ({self.max_lag}), got {hold_back}")
         self.hold_back = hold_back
+        rows = sum([r.nobs for r in self.records]) - hold_back * len(self.records)
+        cols = self.df_eq + self.neqs
+        if rows * cols > MAX_VALUES:
+            orders = f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")
+            check_size(rows * cols, f"{orders} on {rows:,} regression rows: the regressor ({rows:,} x {cols:,})")
         minimum = hold_back + self.df_eq + 1
         if not self.multi and self.data.nobs < minimum:
             raise ValueError(f"y is too short for {lag_name}={self.na}: {self.data.nobs} samples, at least "
@@ -103,10 +157,21 @@ class LinearTimeSeriesModel:
                 if r.nobs <= hold_back:
                     raise ValueError(f"y[{i}] is too short: {r.nobs} samples, at least {hold_back + 1} are needed "
                                      f"(hold back {hold_back} + 1)")
-            rows = sum(r.nobs - hold_back for r in self.records)
             if rows < self.df_eq + 1:
                 raise ValueError(f"y is too short for {lag_name}={self.na}: {rows} usable samples in all records, "
                                  f"at least {self.df_eq + 1} are needed ({self.df_eq} parameters + 1)")
+        self._y_peak, self.y_scale, own = _channel_scale([r.values for r in self.records], "y", self.data.channels)
+        self.u_scale = None
+        if self.u_records is not None:
+            _, self.u_scale, own_u = _channel_scale([r.values for r in self.u_records], "u", self.u_data.channels)
+            own = own and own_u
+        self._rescaled = not own
+        self._col_scale = None      # the fit's regressor column j is the data's times _col_scale[j]
+        if self._rescaled:
+            col = [np.ones(self.k_const)]
+            for g in range(1, max(self.na, self.nb) + 1):
+                col += ([1.0 / self.y_scale] if g <= self.na else []) + ([1.0 / self.u_scale] if g <= self.nb else [])
+            self._col_scale = np.concatenate(col)
 
     @property
     def data(self) -> Signal:
@@ -123,8 +188,14 @@ class LinearTimeSeriesModel:
         """Number of estimation rows contributed by each record."""
         return [r.nobs - self.hold_back for r in self.records]
 
-    def design_all(self) -> tuple[np.ndarray, np.ndarray]:
+    def design_all(self, scaled: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Regressor and target of all records, stacked (each record holds back its own first samples).
+
+        Parameters
+        ----------
+        scaled : bool
+            In the units of the fit (each output channel divided by :attr:`y_scale`, each input by
+            :attr:`u_scale`, the intercept column kept at 1) instead of the data's units.
 
         Returns
         -------
@@ -133,9 +204,7 @@ class LinearTimeSeriesModel:
         Y : ndarray, shape (sum of nobs_records, neqs)
             Target ``y[t]``.
         """
-        parts = [self._design(r.values, None if self.u_records is None else self.u_records[i].values,
-                              self.hold_back)
-                 for i, r in enumerate(self.records)]
+        parts = [self._record_design(i, scaled) for i in range(len(self.records))]
         if len(parts) == 1:
             return parts[0]
         return np.vstack([p[0] for p in parts]), np.vstack([p[1] for p in parts])
@@ -173,10 +242,71 @@ class LinearTimeSeriesModel:
     def _design(self, y: np.ndarray, u: np.ndarray | None, start: int) -> tuple[np.ndarray, np.ndarray]:
         return lagged_design(y, self.na, start, const=bool(self.k_const), u=u, nb=self.nb, nk=self.nk)
 
+    # --- units of the fit (y_scale, u_scale) ----------------------------------------------------------
+    def _scaled_values(self, i: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """Output and input of record ``i`` in the units of the fit (no copy when they are the data's)."""
+        y = self.records[i].values
+        u = None if self.u_records is None else self.u_records[i].values
+        if self._rescaled:
+            y = y / self.y_scale
+            u = None if u is None else u / self.u_scale
+        return y, u
+
+    def _from_fit_units(self, coef: np.ndarray) -> np.ndarray:
+        """Coefficients of the scaled regression in the data's units (exact: powers of two)."""
+        if not self._rescaled:
+            return coef
+        with np.errstate(over="ignore"):
+            params = coef * self._col_scale[:, None] * self.y_scale[None, :]
+        if not np.isfinite(params).all():
+            raise ValueError("y: the coefficients leave the floating-point range in the data's units: the channels "
+                             f"of y{' and u' if self.nb else ''} differ too much in scale (largest magnitudes "
+                             f"{np.r_[self._y_peak].tolist()}); rescale them to comparable units")
+        return params
+
+    def _to_fit_units(self, params: np.ndarray) -> np.ndarray:
+        if not self._rescaled:
+            return params
+        return params / self._col_scale[:, None] / self.y_scale[None, :]
+
+    def gram(self) -> np.ndarray:
+        """Gram matrix of ``[X | Y]`` (:meth:`design_all` in the units of the fit), summed over the records.
+
+        An AR / VAR reads it from the lag products of the samples (:func:`~tsfdi.models.lstsq.lag_gram`, no
+        regressor built), an ARX from its explicit regressor.
+        """
+        if self.nb == 0:
+            const = bool(self.k_const)
+            return sum(lag_gram(self._scaled_values(i)[0], self.na, const=const) for i in range(len(self.records)))
+        return sum(Z.T @ Z for Z in (np.hstack(self._record_design(i)) for i in range(len(self.records))))
+
+    def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
+        """Fit criteria of fits on this spec's estimation sample, in the data's units
+        (:func:`~tsfdi.models.criteria.information_criteria` with this spec's units and peaks).
+
+        Parameters
+        ----------
+        sse : ndarray, shape (q, s, s)
+            Residual cross products in the units of the fit.
+        sss : ndarray, shape (s,)
+            Sum of squares of each channel of the target ``Y`` (same units).
+        df_model : array_like, shape (q,)
+            Regression coefficients of each fit (all equations).
+        """
+        return information_criteria(sse, sss, sum(self.nobs_records), df_model, self.neqs, self.criterion,
+                                    scale=self.y_scale if self._rescaled else None, peak=self._y_peak)
+
     def fit(self) -> LinearTimeSeriesResults:
-        """Estimate the parameters by least squares (QR / SVD, never the normal equations)."""
-        X, Y = self.design_all()
-        res = self.results_class(self, lstsq(X, Y))
+        """Estimate the parameters by least squares (QR / SVD, never the normal equations).
+
+        The fit runs in the units :attr:`y_scale` / :attr:`u_scale` and its coefficients are returned in the
+        data's. An exact fit (residuals zero to rounding: a deterministic signal) is a valid result: its
+        ``sigma2`` is the actual (possibly zero) residual variance, and ``llf``, ``aic`` and ``bic`` use the
+        floor of :func:`~tsfdi.models.criteria.information_criteria` with an
+        :class:`~tsfdi.exceptions.IllConditionedWarning` when first computed.
+        """
+        X, Y = self.design_all(scaled=True)
+        res = self.results_class(self, self._from_fit_units(lstsq(X, Y)))
         res._warn_unstable()
         return res
 
@@ -302,7 +432,7 @@ class LinearTimeSeriesModel:
                     raise ValueError(f"removing {what} leaves a singular regression: the other "
                                      f"{'records' if blocks is None else 'rows'} do not determine the {k} "
                                      "coefficients per equation (too few rows or collinear regressors)")
-                res = self.results_class(self, coef)
+                res = self.results_class(self, self._from_fit_units(coef))
                 rec = self.records[i]
                 if blocks is None:
                     lo_s, hi_s = self.max_lag, rec.nobs
@@ -317,18 +447,22 @@ class LinearTimeSeriesModel:
     def _record_name(self, i: int) -> str:
         return f"y[{i}]" if self.multi else "y"
 
-    def _record_design(self, i: int) -> tuple[np.ndarray, np.ndarray]:
-        u = None if self.u_records is None else self.u_records[i].values
-        return self._design(self.records[i].values, u, self.hold_back)
+    def _record_design(self, i: int, scaled: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        if scaled:
+            y, u = self._scaled_values(i)
+        else:
+            y, u = self.records[i].values, None if self.u_records is None else self.u_records[i].values
+        return self._design(y, u, self.hold_back)
 
     def _part_grams(self, i: int, parts: list[tuple[int, int]]) -> np.ndarray:
-        """Gram matrices of ``[X | Y]`` over the regression rows ``lo .. hi - 1`` of record ``i``, one per part.
+        """Gram matrices of ``[X | Y]`` (units of the fit) over the regression rows ``lo .. hi - 1`` of record
+        ``i``, one per part.
 
         An AR / VAR reads them from the lag products of the samples (:func:`lag_gram`, no regressor built);
         an ARX from its explicit regressor.
         """
         if self.nb == 0:
-            y, p, h = self.records[i].values, self.na, self.hold_back
+            y, p, h = self._scaled_values(i)[0], self.na, self.hold_back
             return np.stack([lag_gram(y[h + lo - p:h + hi], p, const=bool(self.k_const)) for lo, hi in parts])
         X, Y = self._record_design(i)
         Z = np.hstack([X, Y])
@@ -351,7 +485,8 @@ class LinearTimeSeriesModel:
         return label
 
     def _design_without(self, rows: dict) -> tuple[np.ndarray, np.ndarray]:
-        """Stacked regressor and target of all records without the rows ``rows[i] = (lo, hi)`` of record ``i``."""
+        """Stacked regressor and target (units of the fit) of all records without the rows ``rows[i] = (lo, hi)``
+        of record ``i``."""
         xs, ys = [], []
         for r in range(len(self.records)):
             X, Y = self._record_design(r)
@@ -394,13 +529,15 @@ class LinearTimeSeriesResults:
 
     # --- in-sample quantities ----------------------------------------------------------------------
     @cached_property
-    def _resid_and_sss(self) -> tuple[np.ndarray, float]:
-        """In-sample residuals and the signal sum of squares of the estimation sample (the regressor is
-        rebuilt here and not kept, so a results object does not hold an ``nobs x df_eq`` matrix)."""
-        X, Y = self.model.design_all()
-        e = Y - X @ self._params2d
+    def _resid_and_sss(self) -> tuple[np.ndarray, np.ndarray]:
+        """In-sample residuals and the sum of squares of each channel of the estimation sample, in the units of
+        the fit (the regressor is rebuilt here and not kept, so a results object does not hold an
+        ``nobs x df_eq`` matrix)."""
+        m = self.model
+        X, Y = m.design_all(scaled=True)
+        e = Y - X @ m._to_fit_units(self._params2d)
         e.setflags(write=False)
-        return e, float(np.sum(Y * Y))
+        return e, np.ascontiguousarray((Y * Y).T).sum(axis=1)   # (a contiguous reduction: fast for any s)
 
     @property
     def _resid_array(self) -> np.ndarray:
@@ -452,12 +589,17 @@ class LinearTimeSeriesResults:
 
     @cached_property
     def _criteria(self) -> dict[str, float]:
-        return information_criteria(self._sse[None], self._resid_and_sss[1], self.nobs, np.array([self.df_model]),
-                                    self.neqs, self.model.criterion)
+        values = self.model.criteria(self._sse[None], self._resid_and_sss[1], [self.df_model])
+        if values["exact"][0]:
+            warnings.warn(f"the {type(self.model).__name__} fits y exactly (a residual RMS below {EXACT_FIT_RTOL:g} "
+                          "times the peak of y, or collinear channels): the likelihood is unbounded, so llf, aic and "
+                          "bic use that floor for the residual variance", IllConditionedWarning, stacklevel=4)
+        return values
 
     @property
     def llf(self) -> float:
-        """Gaussian log-likelihood at the maximum-likelihood covariance."""
+        """Gaussian log-likelihood at the maximum-likelihood covariance (finite: an exact fit uses the floor of
+        :func:`~tsfdi.models.criteria.information_criteria`, with a warning)."""
         return float(self._criteria["llf"][0])
 
     @property
@@ -494,10 +636,11 @@ class LinearTimeSeriesResults:
         A model fitted on a list of records gives a list with the residuals of each record.
         """
         m = self.model
+        e = self._resid_array * m.y_scale
         if not m.multi:
-            return m.data.wrap(self._resid_array.copy(), m.hold_back)
+            return m.data.wrap(e, m.hold_back)
         bounds = np.cumsum([0] + m.nobs_records)
-        return [r.wrap(self._resid_array[a:b].copy(), m.hold_back)
+        return [r.wrap(e[a:b].copy(), m.hold_back)
                 for r, a, b in zip(m.records, bounds[:-1], bounds[1:])]
 
     # --- stability ------------------------------------------------------------------------------
@@ -538,7 +681,7 @@ class LinearTimeSeriesResults:
         comp[:s] = -np.concatenate(list(A), axis=1)
         comp[s:, :-s] = np.eye((na - 1) * s)
         eig = np.linalg.eigvals(comp)
-        with np.errstate(divide="ignore"):
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):   # a zero eigenvalue: a root at inf
             r = 1.0 / eig
         return r[np.argsort(np.abs(r))]
 
@@ -560,26 +703,35 @@ class LinearTimeSeriesResults:
         return sig
 
     def _residuals_array(self, y: np.ndarray, u: np.ndarray | None) -> np.ndarray:
-        """One-step prediction errors of ``y`` (and ``u``) through the fixed model, from ``max_lag`` on."""
-        m = self.model
-        if m.nb == 0 and self.neqs == 1:   # scalar AR: one IIR pass
-            a = np.r_[1.0, self._ar_blocks[:, 0, 0]]
-            e = sps.lfilter(a, [1.0], y[:, 0])[m.max_lag:]
-            return (e - (self._params2d[0, 0] if m.k_const else 0.0))[:, None]
-        if m.nb == 0:   # VAR: accumulate the lag terms, no design matrix
-            p, n = m.na, y.shape[0]
-            e = y[p:] - self._params2d[0] if m.k_const else y[p:].copy()
-            At = self._ar_blocks_t
-            for i in range(1, p + 1):
-                e += y[p - i:n - i] @ At[i - 1]
-            return e
-        X, Y = m._design(y, u, m.max_lag)
-        return Y - X @ self._params2d
+        """One-step prediction errors of ``y`` (and ``u``) through the fixed model, from ``max_lag`` on.
 
-    def save(self, path: Any) -> None:
-        """Save the model (data and options) and its parameters to ``path`` (``.npz``) for
-        :func:`tsfdi.models.load`; see :mod:`tsfdi.models.archive`."""
-        save_archive(self, path)
+        Raises ``ValueError`` when they leave the floating-point range (a signal far larger than the model's).
+        """
+        m = self.model
+        with np.errstate(over="ignore", invalid="ignore"):
+            if m.nb == 0 and self.neqs == 1:   # scalar AR: one IIR pass
+                a = np.r_[1.0, self._ar_blocks[:, 0, 0]]
+                e = sps.lfilter(a, [1.0], y[:, 0])[m.max_lag:]
+                e = (e - (self._params2d[0, 0] if m.k_const else 0.0))[:, None]
+            elif m.nb == 0:   # VAR: accumulate the lag terms, no design matrix
+                p, n = m.na, y.shape[0]
+                e = y[p:] - self._params2d[0] if m.k_const else y[p:].copy()
+                At = self._ar_blocks_t
+                for i in range(1, p + 1):
+                    e += y[p - i:n - i] @ At[i - 1]
+            else:
+                X, Y = m._design(y, u, m.max_lag)
+                e = Y - X @ self._params2d
+        if not np.isfinite(e).all():
+            raise ValueError(f"y: the residuals through the {type(m).__name__} leave the floating-point range "
+                             f"(y peaks at {np.abs(y).max():.3g}); rescale y to the units of the model's data")
+        return e
+
+    def save(self, path: Any) -> Any:
+        """Save the model (data and options) and its parameters to ``path`` for :func:`tsfdi.models.load`;
+        ``.npz`` is appended to a name that does not end with it. Returns the ``pathlib.Path`` written. A time
+        index that cannot be stored exactly is refused with a ``ValueError``; see :mod:`tsfdi.models.archive`."""
+        return save_archive(self, path)
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({type(self.model).__name__}, {self.model._lag_name}={self.model.na}, "
@@ -628,5 +780,7 @@ class ScalarOutputResults(LinearTimeSeriesResults):
 
     @property
     def sigma2(self) -> float:
-        """Maximum-likelihood residual variance ``RSS / nobs`` (as statsmodels ``AutoReg``)."""
-        return float(self._sse[0, 0] / self.nobs)
+        """Maximum-likelihood residual variance ``RSS / nobs`` (as statsmodels ``AutoReg``); rounding-level (or 0)
+        for an exact fit, whose ``llf`` uses a floor instead (see :meth:`LinearTimeSeriesModel.fit`)."""
+        scale = self.model.y_scale[0]
+        return float(self._sse[0, 0] / self.nobs * scale * scale)

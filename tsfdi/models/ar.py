@@ -7,9 +7,10 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from tsfdi._validation import check_rng, int_like
+from tsfdi._validation import check_rng, float_like, int_like
 from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
 from tsfdi.models.archive import register
+from tsfdi.models.lstsq import check_size
 
 __all__ = ["AR", "ARResults"]
 
@@ -36,6 +37,22 @@ class AR(LinearTimeSeriesModel):
     hold_back : int, optional
         Number of initial samples excluded from the estimation sample (default ``lags``); used to fit
         several orders on a common sample (see :func:`tsfdi.select_order`).
+
+    Raises
+    ------
+    ValueError
+        A channel whose largest magnitude is outside ``[1e-152, 1e152]`` (where variances leave the
+        floating-point range), NaN / inf or constant data, too few samples for the order, or a regressor of
+        more than 2 GiB (:data:`~tsfdi.models.lstsq.MAX_VALUES`), each named in the message.
+    TypeError
+        Non-numeric data or a non-integer order.
+
+    Notes
+    -----
+    The fit runs in units near each channel's peak (:attr:`y_scale`: powers of two, exact), so the
+    results at ``c * y`` are those at ``y`` rescaled: lag coefficients unchanged, ``sigma2`` times ``c**2``,
+    ``llf`` minus ``nobs * log|c|`` per channel. An exact fit (zero residuals to rounding) warns and gets a
+    finite ``llf`` (see :func:`~tsfdi.models.criteria.information_criteria`).
     """
 
     _vector = False
@@ -91,14 +108,27 @@ class ARResults(ScalarOutputResults):
         burn : int, optional
             Samples discarded at the start (default ``10 * lags + 100``).
         sigma2 : float, optional
-            Innovation variance (default :attr:`sigma2`).
+            Innovation variance ``>= 0`` (default :attr:`sigma2`).
+
+        Raises
+        ------
+        ValueError
+            ``nobs + burn`` samples larger than the memory limit (:data:`~tsfdi.models.lstsq.MAX_VALUES`); a
+            simulation that leaves the floating-point range (an unstable model).
         """
         nobs = int_like(nobs, "nobs", minimum=1)
         burn = 10 * self.lags + 100 if burn is None else int_like(burn, "burn", minimum=0)
+        var = self.sigma2 if sigma2 is None else float_like(sigma2, "sigma2", minimum=0.0)
+        check_size(nobs + burn, f"nobs={nobs} (+ burn={burn}): the simulated signal")
         rng = check_rng(rng)
-        scale = np.sqrt(self.sigma2 if sigma2 is None else sigma2)
-        e = rng.standard_normal(nobs + burn) * scale + self.intercept
-        return sps.lfilter([1.0], np.r_[1.0, self.ar_coefs], e)[burn:]
+        e = rng.standard_normal(nobs + burn) * np.sqrt(var) + self.intercept
+        with np.errstate(over="ignore", invalid="ignore"):
+            y = sps.lfilter([1.0], np.r_[1.0, self.ar_coefs], e)[burn:]
+        if not np.isfinite(y).all():
+            raise ValueError(f"nobs={nobs}: the simulation leaves the floating-point range (the fitted AR is "
+                             f"{'unstable' if not self.is_stable else 'driven by a huge sigma2'}); simulate fewer "
+                             "samples")
+        return y
 
 
 AR.results_class = ARResults

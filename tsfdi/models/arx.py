@@ -38,6 +38,23 @@ class ARX(LinearTimeSeriesModel):
     trend : {"n", "c"}
     hold_back : int, optional
         Initial samples excluded (default: the largest lag ``max(na, nk + nb - 1)``).
+
+    Raises
+    ------
+    ValueError
+        ``u`` of another length than ``y``, a channel whose largest magnitude is outside ``[1e-152, 1e152]``
+        (where variances leave the floating-point range), NaN / inf or constant data, too few samples for the
+        order, or a regressor of more than 2 GiB (:data:`~tsfdi.models.lstsq.MAX_VALUES`), each named in the
+        message.
+    TypeError
+        Non-numeric data or a non-integer order.
+
+    Notes
+    -----
+    The fit runs in units near each channel's peak (:attr:`y_scale` / :attr:`u_scale`: powers of two, exact),
+    so the results at ``c * y`` (and ``c * u``) are those at ``y`` rescaled: lag coefficients unchanged,
+    ``sigma2`` times ``c**2``, ``llf`` minus ``nobs * log|c|`` per channel. An exact fit (zero residuals to
+    rounding) warns and gets a finite ``llf`` (see :func:`~tsfdi.models.criteria.information_criteria`).
     """
 
     _vector = False
@@ -101,14 +118,25 @@ class ARXResults(ScalarOutputResults):
         Returns
         -------
         The simulated output, ``len(u)`` samples in the kind of ``u``.
+
+        Raises
+        ------
+        ValueError
+            ``sigma2`` negative, ``u`` with another number of inputs, or a simulated output that leaves the
+            floating-point range (an unstable model), named in the message.
         """
         usig = self._new_input(u)
         var = self.sigma2 if sigma2 is None else float_like(sigma2, "sigma2", minimum=0.0)
         e = check_rng(rng).standard_normal(usig.nobs) * np.sqrt(var) + self.intercept
         a = np.r_[1.0, self.a]
-        y = sps.lfilter([1.0], a, e)
-        for m, b in enumerate(self.b):
-            y += sps.lfilter(np.r_[np.zeros(self.model.nk), b], a, usig.values[:, m])
+        with np.errstate(over="ignore", invalid="ignore"):
+            y = sps.lfilter([1.0], a, e)
+            for m, b in enumerate(self.b):
+                y += sps.lfilter(np.r_[np.zeros(self.model.nk), b], a, usig.values[:, m])
+        if not np.isfinite(y).all():
+            raise ValueError("u: the simulated output leaves the floating-point range (the fitted ARX is "
+                             f"{'unstable' if not self.is_stable else 'driven far beyond its data'}); use a shorter "
+                             "or smaller u")
         return usig.wrap(y, 0, vector=False, name="y")
 
     def _new_input(self, u: Any, nobs: int | None = None):

@@ -9,19 +9,27 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["information_criteria"]
+__all__ = ["information_criteria", "EXACT_FIT_RTOL", "COLLINEAR_RTOL"]
+
+#: residual RMS, relative to a channel's largest magnitude, below which a fit counts as exact (to rounding)
+EXACT_FIT_RTOL = 1e-12
+#: eigenvalue of a residual covariance, relative to its largest, below which the decomposition does not resolve
+#: it (channels whose residuals are collinear to rounding)
+COLLINEAR_RTOL = 1e-12
 
 
-def information_criteria(sse: np.ndarray, sss: float, nobs: int, df_model: np.ndarray, neqs: int,
-                         criterion: str = "logdet") -> dict[str, np.ndarray]:
+def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: np.ndarray, neqs: int,
+                         criterion: str = "logdet", *, scale: np.ndarray | None = None,
+                         peak: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Fit criteria of one or several fits of an ``s``-channel linear time-series model.
 
     Parameters
     ----------
     sse : ndarray, shape (q, s, s)
-        Residual cross-product matrices ``E'E`` of ``q`` fits.
-    sss : float
-        Signal sum of squares ``sum_t y[t]' y[t]`` over the estimation sample.
+        Residual cross-product matrices ``E'E`` of ``q`` fits, in the units of the fit: channel ``j`` divided
+        by ``scale[j]``.
+    sss : float or ndarray, shape (s,)
+        Signal sum of squares ``sum_t y_j[t]^2`` of each channel over the estimation sample (same units).
     nobs : int
         Number of residuals ``N``.
     df_model : ndarray, shape (q,)
@@ -32,11 +40,18 @@ def information_criteria(sse: np.ndarray, sss: float, nobs: int, df_model: np.nd
         How a vector model's residual covariance enters the BIC: its log-determinant (the likelihood,
         statsmodels' ``VAR``) or the log of its trace (paper 003, "Vector AR Identification Method").
         Identical for ``s = 1``.
+    scale : ndarray, shape (s,), optional
+        The unit of each channel in ``sse`` and ``sss`` (a power of two; default: the data's own units): the
+        criteria are those of the data in its own units, computed without forming ``scale**2 * sse`` (which
+        may leave the floating-point range).
+    peak : ndarray, shape (s,), optional
+        Largest magnitude of each channel in the data's units (default ``scale``); sets the exact-fit floor.
 
     Returns
     -------
     dict of ndarray
-        ``llf``, ``aic``, ``bic``, ``rss_sss`` (percent), ``spp``, ``sigma2``.
+        ``llf``, ``aic``, ``bic``, ``rss_sss`` (percent), ``spp``, ``sigma2`` (data units) and ``exact``
+        (bool: the fit's residual covariance reached the floor below).
 
     Notes
     -----
@@ -49,23 +64,66 @@ def information_criteria(sse: np.ndarray, sss: float, nobs: int, df_model: np.nd
 
     ``BIC / N = ln sigma_e^2 + k ln N / N + const`` is paper 003's eq. 5 (the constant ``ln 2 pi + 1`` does
     not depend on the order, so both select the same order). The trace variant uses
-    ``N (ln(2 pi tr Sigma) + 1) + k ln N``. ``RSS/SSS = 100 sum e'e / sum y'y`` is eq. 6 in percent;
-    ``SPP = N s / d`` (paper 003 Table 2 uses the signal length for ``N``). ``sigma2`` is ``tr Sigma / s``.
+    ``N (ln(2 pi tr Sigma) + 1) + k ln N``. ``RSS/SSS = 100 sum e'e / sum y'y`` is eq. 6 in percent (0 when
+    the estimation sample is all zeros); ``SPP = N s / d`` (paper 003 Table 2 uses the signal length for
+    ``N``). ``sigma2`` is ``tr Sigma / s``.
+
+    **Exact fits.** When the residuals vanish to rounding (a deterministic signal: a ramp, a sinusoid, an
+    exact recursion) or the channels are collinear, ``Sigma`` is singular and the likelihood is unbounded
+    (``llf = +inf``). A residual RMS below ``EXACT_FIT_RTOL = 1e-12`` times a channel's peak carries no
+    information beyond rounding, so ``Sigma``'s eigenvalues (each channel measured in units of
+    ``1e-12 * peak``) are floored at 1, and at ``COLLINEAR_RTOL = 1e-12`` times the largest one (below it an
+    eigenvalue is rounding), and ``tr Sigma``'s terms at the first floor: ``llf``, ``aic`` and ``bic`` stay
+    finite and reproducible, every exact order gets the same fit term, and the BIC penalty picks the smallest
+    exact order. ``exact`` flags those fits; the callers warn.
     """
     sse = np.asarray(sse, dtype=float)
     df_model = np.asarray(df_model, dtype=float)
-    sigma = sse / nobs
     s = neqs
-    _, logdet = np.linalg.slogdet(sigma)
-    trace = np.trace(sigma, axis1=-2, axis2=-1)
+    own = scale is None                                     # the data's own units: no weights
+    peak = (np.ones(s) if own else scale) if peak is None else peak
+    floor = (EXACT_FIT_RTOL * peak) ** 2 if own else (EXACT_FIT_RTOL * (peak / scale)) ** 2   # units of the fit
+    sss = np.asarray(sss, dtype=float)
+    sigma = sse / nobs
+    var = sigma.diagonal(axis1=-2, axis2=-1)               # (q, s)
+    if s == 1:
+        exact = var[:, 0] < floor[0]
+        logdet = np.log(np.maximum(var[:, 0], floor[0]))
+    else:   # the smallest eigenvalue is >= det / tr^(s-1), and >= det / tr^s times the largest: only the fits
+        # that fail these bounds (against the largest floor) are decomposed, in units of the floor
+        with np.errstate(divide="ignore", invalid="ignore"):   # a singular Sigma: -inf, replaced below
+            sign, logdet = np.linalg.slogdet(sigma)
+            log_tr = np.log(var.sum(axis=-1))
+            exact = ~((sign > 0) & (logdet - (s - 1) * log_tr > np.log(floor.max()))
+                      & (logdet - s * log_tr > np.log(COLLINEAR_RTOL)))
+        if exact.any():
+            root = np.sqrt(floor)
+            lam = np.linalg.eigvalsh(sigma[exact] / root[:, None] / root[None, :])
+            low = np.maximum(1.0, COLLINEAR_RTOL * lam.max(axis=-1, keepdims=True))
+            logdet[exact] = np.log(np.maximum(lam, low)).sum(axis=-1) + np.log(floor).sum()
+            exact[exact] = (lam < low).any(axis=-1)
+    any_exact = exact.any()
+    if own:
+        top = 1.0
+        resid_ss = var[:, 0] if s == 1 else var.sum(axis=-1)    # tr Sigma
+        sss_w = float(sss.sum())
+        trace = np.maximum(var, floor).sum(axis=-1) if any_exact else resid_ss
+    else:   # tr Sigma and tr Y'Y in data units, as top^2 * (sum of (scale / top)^2-weighted terms)
+        logdet = logdet + 2 * np.log(scale).sum()
+        top = scale.max()
+        w = (scale / top) ** 2
+        resid_ss = np.sum(var * w, axis=-1)
+        sss_w = float(np.sum(sss * w))
+        trace = np.sum(np.maximum(var, floor) * w, axis=-1) if any_exact else resid_ss
     llf = -0.5 * nobs * (s * np.log(2 * np.pi) + logdet + s)
     k = df_model + s * (s + 1) / 2
-    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 1)
+    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * np.log(top) + 1)
     return {
         "llf": llf,
         "aic": -2 * llf + 2 * k,
         "bic": fit_term + k * np.log(nobs),
-        "rss_sss": 100.0 * nobs * trace / sss,
+        "rss_sss": 100.0 * nobs * resid_ss / sss_w if sss_w > 0 else np.zeros(len(sse)),
         "spp": nobs * s / df_model,
-        "sigma2": trace / s,
+        "sigma2": resid_ss * top * top / s,
+        "exact": exact,
     }

@@ -25,13 +25,29 @@ from scipy import linalg
 
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits", "gram_solve"]
+__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits", "gram_solve",
+           "check_size", "MAX_VALUES"]
 
 #: condition number of the regressor above which a fit warns (digits left < ~6)
 COND_WARN = 1e10
 #: smallest fraction of a Gram column's energy left unexplained by the columns before it for which the
 #: Cholesky route is trusted; below it the factor is recomputed by QR of the regressor itself.
 GRAM_RELATIVE_FLOOR = 1e-9
+#: largest number of float64 values (2 GiB) that one array of a model may hold: the regressor of a fit, the
+#: covariance of a recursive estimator, a simulated signal. Orders and lengths are checked against it before
+#: anything is allocated.
+MAX_VALUES = 2**28
+
+
+def check_size(n_values: int, what: str) -> None:
+    """Raise ``ValueError`` when an array of ``n_values`` float64 values would exceed :data:`MAX_VALUES`.
+
+    ``what`` names the arguments that set the size and the array, e.g. ``"lags=5000 on 10,000,000 samples:
+    the regressor (9,995,000 x 5,000)"``; the message adds the size and the limit.
+    """
+    if n_values > MAX_VALUES:
+        raise ValueError(f"{what} would hold {n_values:,} values ({n_values * 8 / 2**30:,.3g} GiB), more than the "
+                         f"limit of {MAX_VALUES:,} values (2 GiB)")
 
 
 def lagged_design(y: np.ndarray, lags: int, start: int, *, const: bool, u: np.ndarray | None = None,
@@ -77,11 +93,17 @@ def lstsq(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     """Least squares by LAPACK ``gelsd`` (SVD based, never the normal equations).
 
     Warns with :class:`~tsfdi.exceptions.IllConditionedWarning` when ``X`` is rank deficient or its
-    condition number exceeds ``1e10``; the minimum-norm solution is returned in that case.
+    condition number exceeds ``1e10``; the minimum-norm solution is returned in that case. ``X`` and ``Y`` must
+    be finite; a singular value decomposition that does not converge raises ``ValueError`` (naming ``y``).
     """
-    coef, _, rank, sv = linalg.lstsq(X, Y, lapack_driver="gelsd", check_finite=False)
+    try:
+        coef, _, rank, sv = linalg.lstsq(X, Y, lapack_driver="gelsd", check_finite=False)
+    except (linalg.LinAlgError, ValueError):
+        raise ValueError(f"y: the least-squares solver did not converge on the {X.shape[0]} x {X.shape[1]} "
+                         "regressor (a numerically degenerate signal)") from None
     if X.shape[1]:
-        cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
+        with np.errstate(over="ignore"):
+            cond = sv[0] / sv[-1] if sv[-1] > 0 else np.inf
         if rank < X.shape[1] or cond > COND_WARN:
             warnings.warn(f"the regressor is ill-conditioned (rank {rank} of {X.shape[1]}, condition number "
                           f"{cond:.3g}); the estimates are not reliable", IllConditionedWarning, stacklevel=3)
@@ -118,7 +140,9 @@ def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
     n, s = y.shape
     C = lag_products(y, lags)
     out = np.empty((int(const) + (lags + 1) * s,) * 2)
-    _assemble_gram(C, y[:lags], y[n - lags:], y[lags:].sum(axis=0), int(n), bool(const), out)
+    # the column sums through a contiguous copy: numpy reduces axis 0 of an (n, s) array slowly for small s
+    S0 = y[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(y[lags:].T).sum(axis=1)
+    _assemble_gram(C, y[:lags], y[n - lags:], S0, int(n), bool(const), out)
     return out
 
 
@@ -233,7 +257,9 @@ def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int 
         except linalg.LinAlgError:
             pass
     Z = design()
-    R = linalg.qr(Z, mode="r", check_finite=False)[0][: Z.shape[1]]
+    R = np.zeros((Z.shape[1], Z.shape[1]))         # square even when Z has fewer rows than columns
+    Rq = linalg.qr(Z, mode="r", check_finite=False)[0][: Z.shape[1]]
+    R[: Rq.shape[0]] = Rq
     m = R.shape[0] - n_targets
     if m:
         cond = np.linalg.cond(R[:m, :m])
@@ -275,7 +301,7 @@ def gram_solve(gram: np.ndarray, k: int, design: callable, *, what: str = "the r
     -------
     ndarray, shape (k, s), or None
         ``None`` when ``X`` is rank deficient (fewer rows than columns, or singular values below
-        ``eps * max(X.shape)`` times the largest, numpy's rank rule).
+        ``eps * max(X.shape)`` times the largest, numpy's rank rule) or its SVD does not converge.
     """
     gxx = gram[:k, :k]
     try:
@@ -289,11 +315,15 @@ def gram_solve(gram: np.ndarray, k: int, design: callable, *, what: str = "the r
     X, Y = design()
     if X.shape[0] < k:
         return None
-    coef, _, rank, sv = linalg.lstsq(X, Y, cond=np.finfo(float).eps * max(X.shape), lapack_driver="gelsd",
-                                     check_finite=False)
+    try:
+        coef, _, rank, sv = linalg.lstsq(X, Y, cond=np.finfo(float).eps * max(X.shape), lapack_driver="gelsd",
+                                         check_finite=False)
+    except (linalg.LinAlgError, ValueError):   # an SVD that does not converge: no usable solution
+        return None
     if rank < k:
         return None
-    cond = sv[0] / sv[-1]
+    with np.errstate(over="ignore"):
+        cond = sv[0] / sv[-1]
     if cond > COND_WARN:
         warnings.warn(f"{what} is ill-conditioned (condition number {cond:.3g}); the estimates are not reliable",
                       IllConditionedWarning, stacklevel=stacklevel)

@@ -43,6 +43,7 @@ import numpy as np
 
 from tsfdi._data import as_signal
 from tsfdi._validation import float_like, int_like, option
+from tsfdi.models.lstsq import check_size
 
 __all__ = ["RecursiveARX", "RecursiveARXResults", "RecursiveARXState"]
 
@@ -57,17 +58,90 @@ _UPDATED = 16
 _I_VALID, _I_STABLE_CNT, _I_MODEL_STABLE, _I_NW, _I_VAR_CNT, _I_VAR_STABLE, _I_ALARMED, _I_SKIPPED, \
     _I_SEEN, _I_FIRST_ALARM, _I_FROZEN = range(11)
 # float state slots
-_F_MEAN, _F_M2 = range(2)
+_F_MEAN, _F_M2, _F_UNIT = range(3)
+#: largest weight ``phi' P phi / lambda`` of one sample relative to the covariance P it updates (see the kernel)
+_MAX_WEIGHT = 1e12
+#: ridge (relative to the largest variance) that restores a covariance which rounding made indefinite
+_RIDGE = 2.0**-40
+#: largest magnitude of a sample (outputs and inputs) and of ``P0``'s diagonal: products of the two, summed over
+#: up to 16,384 parameters, stay in the floating-point range
+MAX_SAMPLE = 1e152
+MAX_P0 = 1e100
+
+
+@numba.njit(cache=True, nogil=True, inline="always", fastmath={"reassoc", "contract", "arcp", "nsz"})
+def _m_phi(P, phi, px, capped, any_cap, inv_lam, half):  # pragma: no cover - compiled
+    """``px = M phi`` and ``phi' px``: ``M = P`` when no coordinate is capped (the kernel folds ``1 / lambda``
+    into ``s``), else ``M = F o P`` with ``F[i, k] = 1 / lambda``, ``1 / sqrt(lambda)`` or 1 as neither, one or
+    both of ``i, k`` are capped."""
+    d = phi.shape[0]
+    for i in range(d):
+        px[i] = 0.0
+    if not any_cap:
+        for k in range(d):
+            pk = phi[k]
+            for i in range(d):
+                px[i] += P[k, i] * pk
+    else:
+        for k in range(d):
+            pk = phi[k]
+            for i in range(d):
+                f = 1.0 if capped[i] and capped[k] else (half if capped[i] or capped[k] else inv_lam)
+                px[i] += P[k, i] * f * pk
+    s = 0.0
+    for i in range(d):
+        s += phi[i] * px[i]
+    return s
+
+
+@numba.njit(cache=True, nogil=True, inline="always", fastmath={"reassoc", "contract", "arcp", "nsz"})
+def _diagonal(P, pcap, lam, capped):  # pragma: no cover - compiled
+    """Check the variances after ``P`` changed and flag the coordinates capped at the next sample.
+
+    Rounding may leave a variance negative (``P`` indefinite) when ``P`` is nearly singular: a ridge lifts the
+    diagonal back (``2**-40`` times the largest variance plus twice the deficit); a covariance that is no
+    longer finite restarts from its bound ``diag(pcap)`` (covariance resetting). A coordinate is capped (not
+    forgotten) when ``P[i, i] / lambda`` would exceed ``pcap[i]``. Returns whether any is.
+    """
+    d = P.shape[0]
+    dmin = np.inf
+    dmax = 0.0
+    any_cap = False
+    for i in range(d):
+        p = P[i, i]
+        dmin = min(dmin, p)
+        dmax = max(dmax, p)
+        capped[i] = lam < 1.0 and p > lam * pcap[i]
+        any_cap = any_cap or capped[i]
+    if dmin > 0.0 and dmax < np.inf:
+        return any_cap
+    if dmin > -np.inf and dmax < np.inf:
+        mu = _RIDGE * dmax - min(dmin, 0.0) * 2.0
+        for i in range(d):
+            P[i, i] += mu
+    else:
+        for i in range(d):
+            for k in range(d):
+                P[i, k] = pcap[i] if i == k else 0.0
+    any_cap = False
+    for i in range(d):
+        capped[i] = lam < 1.0 and P[i, i] > lam * pcap[i]
+        any_cap = any_cap or capped[i]
+    return any_cap
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, var_tol, var_min, zthr, arm_after,
-                theta, P, ybuf, ubuf, ist, fst,
+                pcap, theta, P, ybuf, ubuf, ist, fst,
                 out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
     """Process samples ``y[t], u[t, :]`` in order, updating the state arrays in place.
 
     ``ybuf[k] = y[t-1-k]`` (length ``max(na, 1)``), ``ubuf[j, k] = u_j[t-k]`` (``nk + nb`` columns).
     Non-finite samples are skipped (the caller has already rejected them when the policy is "raise").
+    ``pcap`` starts as the diagonal of ``P0``: forgetting never lifts ``P[i, i]`` above it; when a dominant sample
+    scales ``P`` down, ``pcap`` follows (see ``RecursiveARX``).
+    The error statistics ``fst = [mean, M2, unit]`` are kept in units of ``fst[2]``, a power of two set by the
+    first nonzero error, so that their squares stay in the floating-point range at any data scale.
     """
     n = y.shape[0]
     d = theta.shape[0]
@@ -76,8 +150,11 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
     t0 = max(na, nk + nb - 1) if nb > 0 else na
     off_b = na + trend
     inv_lam = 1.0 / lam
+    half = np.sqrt(inv_lam)
     phi = np.empty(d)
     px = np.empty(d)
+    capped = np.zeros(d, dtype=np.bool_)
+    any_cap = _diagonal(P, pcap, lam, capped)
     for t in range(n):
         yt = y[t]
         finite = np.isfinite(yt)
@@ -112,17 +189,50 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
             for i in range(d):
                 yhat += phi[i] * theta[i]
             e = yt - yhat
-            # px = P phi  (row axpy over the symmetric P)
-            for i in range(d):
-                px[i] = 0.0
-            for k in range(d):
-                pk = phi[k]
+            # anti-windup: a coordinate whose variance would pass its P0 value is not forgotten at this sample
+            # (M = F o P with F[i, k] = 1 / lambda, 1 / sqrt(lambda) or 1 as neither, one or both are capped;
+            # the flags come from _diagonal, run whenever P changes)
+            # px = M phi (row axpy over the symmetric P); M = P / lambda, folded into s, when nothing is capped
+            lam_s = lam if not any_cap else 1.0
+            s = _m_phi(P, phi, px, capped, any_cap, inv_lam, half)
+            if s < 0.0:
+                # P lost its positive definiteness to rounding (its condition number beyond ~1e16: a direction
+                # excited by data far larger than 1 / sqrt(P) while another is not): a ridge on the diagonal,
+                # twice what makes phi' M phi positive plus _RIDGE times the largest variance, restores it
+                w = 0.0
+                top = 0.0
                 for i in range(d):
-                    px[i] += P[k, i] * pk
-            s = 0.0
-            for i in range(d):
-                s += phi[i] * px[i]
-            s += lam
+                    f = 1.0 if not any_cap or capped[i] else inv_lam
+                    w += f * phi[i] * phi[i]
+                    top = max(top, P[i, i])
+                mu = 2.0 * (-s) / w + _RIDGE * top
+                for i in range(d):
+                    P[i, i] += mu
+                s = _m_phi(P, phi, px, capped, any_cap, inv_lam, half)
+                touched = True
+            else:
+                touched = False
+            updating = not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1)
+            if updating and not s <= _MAX_WEIGHT * lam_s:
+                # the sample would outweigh P's information by more than 1 / _MAX_WEIGHT: the symmetric update
+                # would lose P's last digits (and its positive definiteness). Shrink P so that phi' M phi is
+                # exactly _MAX_WEIGHT lambda: the prior dropped is then < 1e-12 of the sample's weight.
+                top = 0.0
+                for i in range(d):
+                    top = max(top, abs(phi[i]))
+                sq = 0.0
+                for i in range(d):
+                    sq += (phi[i] / top) * px[i]
+                g = _MAX_WEIGHT * lam_s / sq
+                for i in range(d):
+                    px[i] = px[i] * g / top
+                    pcap[i] = pcap[i] * g / top
+                    for k in range(d):
+                        P[i, k] = P[i, k] * g / top
+                s = 0.0
+                for i in range(d):
+                    s += phi[i] * px[i]
+            s += lam_s
             # parameter step L(k) e(k), L = P phi / (lambda + phi' P phi)
             ge = e / s
             step_max = 0.0
@@ -143,9 +253,13 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
                 nw = ist[_I_NW]
                 mean = fst[_F_MEAN]
                 m2 = fst[_F_M2]
+                unit = fst[_F_UNIT]
+                if unit == 0.0 and e != 0.0:
+                    unit = 2.0 ** np.floor(np.log2(abs(e)))
+                en = e / unit if unit != 0.0 else e     # e in the statistics' unit (exact: a power of two)
                 if ist[_I_VAR_STABLE] == 1:
                     sd = np.sqrt(m2 / (nw - 1))
-                    z = (e - mean) / sd if sd > 0 else (np.inf if e != mean else 0.0)
+                    z = (en - mean) / sd if sd > 0 else (np.inf if en != mean else 0.0)
                     if abs(z) > zthr and ist[_I_SEEN] > arm_after:
                         flags |= _ALARM
                         if ist[_I_ALARMED] == 0:
@@ -154,9 +268,9 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
                 if not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
                     # Welford (paper 001, eq. 8)
                     nw += 1
-                    delta = e - mean
+                    delta = en - mean
                     mean += delta / nw
-                    m2 += delta * (e - mean)
+                    m2 += delta * (en - mean)
                     if ist[_I_VAR_STABLE] == 0 and nw >= 3:
                         v_old = fst[_F_M2] / (nw - 2)
                         v_new = m2 / (nw - 1)
@@ -169,6 +283,7 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
                     ist[_I_NW] = nw
                     fst[_F_MEAN] = mean
                     fst[_F_M2] = m2
+                    fst[_F_UNIT] = unit
                 if ist[_I_VAR_STABLE] == 1:
                     flags |= _VAR_STABLE
             # parameter and covariance update (eqs. 6-7 / 15-16), skipped once frozen: the alarmed sample
@@ -176,14 +291,24 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
             if not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
                 for i in range(d):
                     theta[i] += px[i] * ge
-                c = 1.0 / np.sqrt(lam * s)
+                c = 1.0 / np.sqrt(lam_s * s)
                 for i in range(d):
                     px[i] *= c
-                for i in range(d):
-                    vi = px[i]
-                    for k in range(d):
-                        P[i, k] = P[i, k] * inv_lam - vi * px[k]
+                if not any_cap:
+                    for i in range(d):
+                        vi = px[i]
+                        for k in range(d):
+                            P[i, k] = P[i, k] * inv_lam - vi * px[k]
+                else:
+                    for i in range(d):
+                        vi = px[i]
+                        for k in range(d):
+                            f = 1.0 if capped[i] and capped[k] else (half if capped[i] or capped[k] else inv_lam)
+                            P[i, k] = P[i, k] * f - vi * px[k]
+                touched = True
                 flags |= _UPDATED
+            if touched:   # P changed: check it, flag the capped coordinates of the next sample
+                any_cap = _diagonal(P, pcap, lam, capped)
         # shift the output history
         for i in range(ybuf.shape[0] - 1, 0, -1):
             ybuf[i] = ybuf[i - 1]
@@ -191,8 +316,9 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
         for i in range(d):
             out_params[t, i] = theta[i]
         out_err[t] = e
-        out_var[t] = fst[_F_M2] / (ist[_I_NW] - 1) if ist[_I_NW] >= 2 else np.nan
-        out_mean[t] = fst[_F_MEAN] if ist[_I_NW] >= 1 else np.nan
+        unit = fst[_F_UNIT] if fst[_F_UNIT] != 0.0 else 1.0
+        out_var[t] = fst[_F_M2] / (ist[_I_NW] - 1) * unit * unit if ist[_I_NW] >= 2 else np.nan
+        out_mean[t] = fst[_F_MEAN] * unit if ist[_I_NW] >= 1 else np.nan
         out_z[t] = z
         out_flags[t] = flags
 
@@ -214,7 +340,9 @@ class RecursiveARXResults:
     mean : same kind, shape (nobs,)
         Welford running mean of the prediction errors after each sample (NaN before the model is stable).
     zscore : same kind, shape (nobs,)
-        ``(e(t) - mean) / s`` with the statistics before sample ``t``; NaN until model and variance are stable.
+        ``(e(t) - mean) / s`` with the statistics before sample ``t``; NaN until model and variance are stable;
+        ``+-inf`` when every error so far was equal (``s = 0``: a frozen sensor, an exactly predicted signal) and
+        ``e(t)`` differs from them (an alarm), 0 when it does not.
     model_stable, variance_stable, alarm, skipped : ndarray of bool, shape (nobs,)
         Per-sample flags (plain numpy arrays).
     first_alarm : int or None
@@ -268,8 +396,12 @@ class RecursiveARXState:
     counters : ndarray of int64, shape (11,)
         Sample counters and flags: samples seen and skipped, run of valid samples, the stability gates and
         their counters, the number of errors in the running statistics, alarm state, first alarm, frozen.
-    error_stats : ndarray, shape (2,)
-        Welford running mean and sum of squared deviations of the prediction errors.
+    error_stats : ndarray, shape (3,)
+        Welford running mean and sum of squared deviations of the prediction errors, in units of the third
+        entry (a power of two set by the first nonzero error; 0 before).
+    P_bound : ndarray, shape (d,)
+        Anti-windup bound of each variance ``P[i, i]``: the diagonal of ``P0``, scaled down with ``P`` by a
+        dominant sample (see :class:`RecursiveARX`, Notes).
     """
 
     theta: np.ndarray
@@ -278,6 +410,7 @@ class RecursiveARXState:
     u_history: np.ndarray
     counters: np.ndarray
     error_stats: np.ndarray
+    P_bound: np.ndarray
 
 
 class RecursiveARX:
@@ -292,11 +425,13 @@ class RecursiveARX:
     nk : int, default 0
         Input delay in samples (``>= 0``); ``nk = 0`` lets ``u[t]`` explain ``y[t]``.
     forgetting_factor : float, default 1.0
-        ``lambda`` in (0, 1]; 1 gives ordinary recursive least squares (paper 001, eqs. 4-7), below 1 the
-        exponentially weighted version of paper 002, eqs. 14-16 (memory about ``1 / (1 - lambda)`` samples).
+        ``lambda`` in [0.5, 1]; 1 gives ordinary recursive least squares (paper 001, eqs. 4-7), below 1 the
+        exponentially weighted version of paper 002, eqs. 14-16 (memory about ``1 / (1 - lambda)`` samples, at
+        least two).
     P0 : float or ndarray, default 1e4
         Initial covariance ``P(0)``: a positive scalar (times the identity) or a symmetric positive-definite
-        ``(d, d)`` matrix. Large values make the estimate forget the initial ``theta0`` quickly.
+        ``(d, d)`` matrix, with diagonal at most ``1e100``. Large values make the estimate forget the initial
+        ``theta0`` quickly.
     n_inputs : int, default 1
         Number of input signals.
     trend : {"n", "c"}, default "n"
@@ -325,6 +460,15 @@ class RecursiveARX:
         when the gates are open (the model and the error statistics keep learning). On a real vehicle this
         is the settling time after take-off or after the switch to autonomous flight.
 
+    Raises
+    ------
+    ValueError
+        An option outside its range (named), or orders whose arrays would exceed 2 GiB
+        (:data:`~tsfdi.models.lstsq.MAX_VALUES`): ``P`` holds ``d**2`` values (``d <= 16384``), the input
+        history ``n_inputs * (nk + nb)``; checked before anything is allocated.
+    TypeError
+        A non-integer order or a non-numeric option.
+
     Notes
     -----
     Per sample (paper 001, eqs. 4-7; paper 002, eqs. 14-16)::
@@ -335,7 +479,32 @@ class RecursiveARX:
         P(k)     = P(k-1) / lambda - v v',   v = P(k-1) phi(k) / sqrt(lambda (lambda + phi(k)' P(k-1) phi(k)))
 
     which equals ``P(k) = (lambda P(k-1)^-1 + phi phi')^-1``. With ``P(0) = p0 I`` the estimate after ``N``
-    samples minimises ``sum_t lambda^(N-t) e_t^2 + lambda^N |theta - theta0|^2 / p0``.
+    samples minimises ``sum_t lambda^(N-t) e_t^2 + lambda^N |theta - theta0|^2 / p0`` (for ``lambda < 1`` the
+    prior term is weighted by the anti-windup rule below instead of ``lambda^N``).
+
+    **Numerical safeguards** (none acts on well-excited data of moderate scale):
+
+    * *Covariance windup*: a coordinate whose variance ``P[i, i] / lambda`` would exceed its initial value
+      ``P0[i, i]`` is not forgotten at that sample (``P <- F o P - v v'`` with ``F[i, k] = 1 / lambda`` for two
+      free coordinates, ``1 / sqrt(lambda)`` for one, 1 for none), so the estimator is never less certain
+      about a parameter than at the start. Without it, a parameter that the data do not excite (an input at
+      rest, a frozen sensor) has its variance grow as ``lambda^-t`` until it overflows (after
+      ``~700 / (1 - lambda)`` samples) and the estimate turns NaN. It also keeps the prior from being forgotten
+      before the data have excited a coordinate, so with ``lambda < 1`` the start-up transient differs slightly
+      from the plain recursion (by far less than the estimation noise).
+    * *Dominant samples*: when a sample would carry more than ``1e12`` times the information of ``P``
+      (``phi' P phi > 1e12 lambda``: data far larger than ``1 / sqrt(P0)``, e.g. raw sensor counts with
+      ``P0 = 1e4``), ``P`` and its anti-windup bound are first scaled down to make that ratio exactly ``1e12``.
+      The symmetric update would otherwise lose all of ``P``'s digits in the direction of ``phi`` and turn it
+      indefinite (NaN parameters from then on); the prior it drops weighs less than ``1e-12`` of the sample.
+    * *Rounding*: a covariance that rounding has made indefinite (``phi' P phi < 0`` or a negative variance;
+      its condition number beyond ``~1e16``, e.g. with collinear regressors and strong forgetting) gets a
+      ridge on the diagonal (``2**-40`` times its largest variance plus twice the deficit); one that is no
+      longer finite is reset to ``diag(P_bound)``, keeping ``theta``.
+    * *Scale*: samples are accepted up to ``1e152`` in magnitude (``ValueError`` beyond, naming ``y`` or ``u``
+      and the sample); the error statistics are kept in units of a power of two set by the first nonzero
+      error, so the Z-scores do not depend on the data's scale (``variance`` may underflow to 0 for errors below
+      ``~1e-154``).
 
     The loop is compiled with numba (``cache=True``); :meth:`update` and :meth:`run` share it, so feeding a
     stream sample by sample, in chunks or at once gives identical results.
@@ -358,8 +527,7 @@ class RecursiveARX:
         self.nk = int_like(nk, "nk", minimum=0)
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
         self.trend = option(trend, "trend", ("n", "c"))
-        self.forgetting_factor = float_like(forgetting_factor, "forgetting_factor", minimum=0.0, maximum=1.0,
-                                            strict_min=True)
+        self.forgetting_factor = float_like(forgetting_factor, "forgetting_factor", minimum=0.5, maximum=1.0)
         self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
         self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
         self.stable_samples = int_like(stable_samples, "stable_samples", minimum=1)
@@ -373,15 +541,23 @@ class RecursiveARX:
         d = self.n_params
         if d == 0:
             raise ValueError("na, nb and trend give a model without parameters: set na > 0, nb > 0 or trend='c'")
+        check_size(d * d, f"na={self.na}, nb={self.nb}, n_inputs={self.n_inputs}: the covariance P ({d:,} x {d:,})")
+        check_size(self.n_inputs * (self.nk + self.nb), f"nk={self.nk}, nb={self.nb}, n_inputs={self.n_inputs}: "
+                   f"the input history ({self.n_inputs:,} x {self.nk + self.nb:,})")
         if np.ndim(P0) == 0:
-            p0 = float_like(P0, "P0", minimum=0.0, strict_min=True)
+            p0 = float_like(P0, "P0", minimum=0.0, strict_min=True, maximum=MAX_P0)
             self._P0 = np.eye(d) * p0
         else:
-            P0 = np.asarray(P0, dtype=np.float64)
+            try:
+                P0 = np.asarray(P0, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise TypeError(f"P0 must be a positive scalar or a real ({d}, {d}) matrix, got {P0!r}") from None
             if P0.shape != (d, d):
                 raise ValueError(f"P0 must be a positive scalar or a ({d}, {d}) matrix, got shape {P0.shape}")
             if not np.isfinite(P0).all() or not np.allclose(P0, P0.T, rtol=1e-12, atol=0.0):
                 raise ValueError("P0 must be a finite symmetric matrix")
+            if np.diag(P0).max() > MAX_P0:
+                raise ValueError(f"P0 must have a diagonal of at most {MAX_P0:g}, got {np.diag(P0).max():g}")
             try:
                 np.linalg.cholesky(P0)
             except np.linalg.LinAlgError:
@@ -420,11 +596,13 @@ class RecursiveARX:
         self._ubuf = np.zeros((self.n_inputs, max(self.nk + self.nb, 1)))
         self._ist = np.zeros(11, dtype=np.int64)
         self._ist[_I_FIRST_ALARM] = -1
-        self._fst = np.zeros(2)
+        self._fst = np.zeros(3)
+        self._pcap = np.diag(self._P0).copy()   # anti-windup bound of each variance (see Notes)
 
     def get_state(self) -> RecursiveARXState:
-        """Snapshot of the estimator state (deep copies): parameters, ``P``, the regressor buffers, the sample
-        counters, the stability / alarm / frozen flags and the Welford error statistics.
+        """Snapshot of the estimator state (deep copies): parameters, ``P`` and its anti-windup bound, the
+        regressor buffers, the sample counters, the stability / alarm / frozen flags and the Welford error
+        statistics.
 
         ``s = m.get_state(); m.run(b); m.set_state(s); m.run(b)`` gives identical outputs from both runs.
         """
@@ -435,7 +613,8 @@ class RecursiveARX:
 
         return RecursiveARXState(theta=frozen_copy(self.theta_), P=frozen_copy(self.P_),
                                  y_history=frozen_copy(self._ybuf), u_history=frozen_copy(self._ubuf),
-                                 counters=frozen_copy(self._ist), error_stats=frozen_copy(self._fst))
+                                 counters=frozen_copy(self._ist), error_stats=frozen_copy(self._fst),
+                                 P_bound=frozen_copy(self._pcap))
 
     def set_state(self, state: RecursiveARXState) -> None:
         """Restore a snapshot taken by :meth:`get_state` (of this estimator or one with the same options).
@@ -447,7 +626,8 @@ class RecursiveARX:
             raise TypeError(f"state must be a RecursiveARXState from get_state(), got {type(state).__name__}")
         pairs = ((self.theta_, state.theta, "theta"), (self.P_, state.P, "P"),
                  (self._ybuf, state.y_history, "y_history"), (self._ubuf, state.u_history, "u_history"),
-                 (self._ist, state.counters, "counters"), (self._fst, state.error_stats, "error_stats"))
+                 (self._ist, state.counters, "counters"), (self._fst, state.error_stats, "error_stats"),
+                 (self._pcap, state.P_bound, "P_bound"))
         for mine, theirs, name in pairs:
             if np.shape(theirs) != mine.shape:
                 raise ValueError(f"state.{name} has shape {np.shape(theirs)}, this estimator needs {mine.shape}: "
@@ -502,13 +682,14 @@ class RecursiveARX:
     @property
     def error_mean(self) -> float:
         """Running mean of the prediction errors (Welford)."""
-        return float(self._fst[_F_MEAN])
+        return float(self._fst[_F_MEAN] * (self._fst[_F_UNIT] or 1.0))
 
     @property
     def error_variance(self) -> float:
         """Running sample variance ``s_n^2`` of the prediction errors (NaN with fewer than two)."""
         nw = int(self._ist[_I_NW])
-        return float(self._fst[_F_M2] / (nw - 1)) if nw >= 2 else float("nan")
+        unit = self._fst[_F_UNIT] or 1.0
+        return float(self._fst[_F_M2] / (nw - 1) * unit * unit) if nw >= 2 else float("nan")
 
     # ------------------------------------------------------------------ processing
     def _no_input(self, n: int) -> np.ndarray:
@@ -531,9 +712,8 @@ class RecursiveARX:
             raise ValueError(f"u and y must have the same length, got len(u)={uv.shape[0]} and len(y)={n}")
         return np.ascontiguousarray(uv)
 
-    def _call(self, yv: np.ndarray, uv: np.ndarray):
-        n = yv.shape[0]
-        d = self.n_params
+    def _check_samples(self, yv: np.ndarray, uv: np.ndarray) -> None:
+        """Non-finite samples under ``nonfinite="raise"`` and samples beyond ``MAX_SAMPLE``: ``ValueError``."""
         if self.nonfinite == "raise":
             bad_y = ~np.isfinite(yv)
             bad_u = ~np.isfinite(uv).all(axis=1)
@@ -542,6 +722,17 @@ class RecursiveARX:
                 first = int(np.flatnonzero(bad_y | bad_u)[0])
                 raise ValueError(f"{which} contains NaN/inf (first at sample {first} of this call); pass "
                                  "nonfinite='skip' to skip and count such samples")
+        for name, v in (("y", yv), ("u", uv)):
+            big = np.abs(v) > MAX_SAMPLE
+            big &= ~np.isinf(v)     # NaN compares False; inf is a non-finite sample, not a large one
+            if big.any():
+                first = int(np.argwhere(big)[0, 0])
+                raise ValueError(f"{name} has a sample of magnitude {np.abs(v[first]).max():.3g} (first at sample "
+                                 f"{first} of this call): samples must lie within +-{MAX_SAMPLE:g}; rescale {name}")
+
+    def _call(self, yv: np.ndarray, uv: np.ndarray):
+        n = yv.shape[0]
+        d = self.n_params
         out_params = np.empty((n, d))
         out_err = np.empty(n)
         out_var = np.empty(n)
@@ -550,8 +741,9 @@ class RecursiveARX:
         out_flags = np.empty(n, dtype=np.int64)
         _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
                     self.freeze_on_alarm, self.eps, self.stable_samples, self.variance_tol,
-                    self.min_variance_samples, self.threshold, self.arm_after, self.theta_, self.P_, self._ybuf, self._ubuf,
-                    self._ist, self._fst, out_params, out_err, out_var, out_mean, out_z, out_flags)
+                    self.min_variance_samples, self.threshold, self.arm_after, self._pcap, self.theta_, self.P_,
+                    self._ybuf, self._ubuf, self._ist, self._fst, out_params, out_err, out_var, out_mean, out_z,
+                    out_flags)
         return out_params, out_err, out_var, out_mean, out_z, out_flags
 
     def update(self, y: float, u: Any = None) -> float:
@@ -560,28 +752,41 @@ class RecursiveARX:
         Parameters
         ----------
         y : float
-            Output sample.
+            Output sample (a real number: not a bool, not a string).
         u : float or array_like of length ``n_inputs``
-            Input sample(s).
+            Input sample(s) (real numbers).
 
         Returns
         -------
         float
             The prediction error, NaN during start-up (incomplete regressor) or for a skipped sample.
+
+        Raises
+        ------
+        TypeError
+            ``y`` or ``u`` not real numbers (bools and strings are refused, as :meth:`run` refuses them).
+        ValueError
+            ``u`` with another number of inputs, NaN / inf under ``nonfinite="raise"``, or a sample beyond
+            ``+-1e152``; the estimator is left unchanged.
         """
-        try:
-            yv = np.array([float(y)])
-        except (TypeError, ValueError):
-            raise TypeError(f"y must be a real number, got {y!r}") from None
+        if isinstance(y, (bool, np.bool_, str, bytes)) or np.asarray(y).dtype.kind not in "iuf" or np.ndim(y):
+            raise TypeError(f"y must be a real number, got {y!r} ({type(y).__name__})")
+        yf = float(y)
+        yv = np.array([yf])
         if u is None:
             uv = self._no_input(1)
         else:
             try:
-                uv = np.asarray(u, dtype=np.float64).reshape(1, -1)
+                uv = np.asarray(u)
+                if uv.dtype.kind not in "iuf":
+                    raise TypeError
+                uv = uv.astype(np.float64).reshape(1, -1)
             except (TypeError, ValueError):
                 raise TypeError(f"u must be real number(s), got {u!r}") from None
             if uv.shape[1] != self.n_inputs:
                 raise ValueError(f"u must hold n_inputs={self.n_inputs} value(s), got {uv.shape[1]}")
+        if not (abs(yf) <= MAX_SAMPLE) or not (np.abs(uv) <= MAX_SAMPLE).all():   # rare: the full check
+            self._check_samples(yv, uv)
         _, err, _, _, _, _ = self._call(yv, np.ascontiguousarray(uv))
         return float(err[0])
 
@@ -599,10 +804,22 @@ class RecursiveARX:
         -------
         RecursiveARXResults
             Histories wrapped in ``y``'s data kind (index kept).
+
+        Raises
+        ------
+        ValueError
+            ``y`` / ``u`` of different lengths or with NaN / inf under ``nonfinite="raise"``, a sample beyond
+            ``+-1e152``, or a parameter history of more than 2 GiB (run a long signal in chunks: the results are
+            identical); nothing is processed.
+        TypeError
+            Non-numeric (or bool) ``y`` / ``u``.
         """
         sy = as_signal(y, "y", vector=False, min_nobs=1, allow_constant=True, finite=False)
         yv = np.ascontiguousarray(sy.values[:, 0])
         uv = self._prepare_u(u, yv.shape[0])
+        n, d = yv.shape[0], self.n_params
+        check_size(n * d, f"y with {n:,} samples: the parameter history ({n:,} x {d:,}); run it in chunks")
+        self._check_samples(yv, uv)
         start = self.nobs
         alarm_before = self.first_alarm
         params, err, var, mean, z, flags = self._call(yv, uv)

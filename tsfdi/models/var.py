@@ -9,6 +9,7 @@ import numpy as np
 from tsfdi._validation import check_rng, int_like
 from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
 from tsfdi.models.archive import register
+from tsfdi.models.lstsq import check_size
 
 __all__ = ["VAR", "VARResults"]
 
@@ -35,6 +36,22 @@ class VAR(LinearTimeSeriesModel):
     criterion : {"logdet", "trace"}
         BIC variant: the likelihood's log-determinant of ``Sigma`` (standard) or the log of its trace
         (paper 003, "Vector AR Identification Method"). See :func:`tsfdi.models.criteria.information_criteria`.
+
+    Raises
+    ------
+    ValueError
+        A channel whose largest magnitude is outside ``[1e-152, 1e152]`` (where variances leave the
+        floating-point range), NaN / inf or constant data, too few samples for the order, or a regressor of
+        more than 2 GiB (:data:`~tsfdi.models.lstsq.MAX_VALUES`), each named in the message.
+    TypeError
+        Non-numeric data or a non-integer order.
+
+    Notes
+    -----
+    The fit runs in units near each channel's peak (:attr:`y_scale`: powers of two, exact), so the
+    results at ``c * y`` are those at ``y`` rescaled: lag coefficients unchanged, ``sigma2`` times ``c**2``,
+    ``llf`` minus ``nobs * log|c|`` per channel. An exact fit (zero residuals to rounding) warns and gets a
+    finite ``llf`` (see :func:`~tsfdi.models.criteria.information_criteria`).
     """
 
     _vector = True
@@ -73,7 +90,8 @@ class VARResults(LinearTimeSeriesResults):
 
     @property
     def sigma(self) -> np.ndarray:
-        return self._sse / self.nobs
+        scale = self.model.y_scale
+        return self._sse / self.nobs * scale[:, None] * scale[None, :]
 
     def residuals(self, y: Any) -> Any:
         """One-step prediction errors of a new vector signal through the fixed model.
@@ -98,15 +116,49 @@ class VARResults(LinearTimeSeriesResults):
         burn : int, optional
             Samples discarded at the start (default ``10 * lags + 100``).
         sigma : ndarray (s, s), optional
-            Innovation covariance (default :attr:`sigma`).
+            Innovation covariance (default :attr:`sigma`): symmetric positive semi-definite (a singular one, e.g.
+            zeros for the noise-free response, is drawn through its eigendecomposition).
+
+        Raises
+        ------
+        ValueError
+            ``nobs + burn`` samples larger than the memory limit
+            (:data:`~tsfdi.models.lstsq.MAX_VALUES`); ``sigma`` not a finite symmetric positive semi-definite
+            ``(s, s)`` matrix; a simulation that leaves the floating-point range (an unstable model).
         """
         nobs = int_like(nobs, "nobs", minimum=1)
         burn = 10 * self.lags + 100 if burn is None else int_like(burn, "burn", minimum=0)
+        s = self.neqs
+        check_size((nobs + burn) * s, f"nobs={nobs} (+ burn={burn}): the simulated signal")
         rng = check_rng(rng)
-        s, p = self.neqs, self.lags
-        cov = self.sigma if sigma is None else np.asarray(sigma, dtype=float)
-        e = rng.multivariate_normal(np.zeros(s), cov, size=nobs + burn, method="cholesky") + self.intercept
-        return _simulate_var(self.coefs, e)[burn:]
+        cov = self.sigma if sigma is None else _covariance(sigma, s)
+        try:
+            e = rng.multivariate_normal(np.zeros(s), cov, size=nobs + burn, method="cholesky")
+        except np.linalg.LinAlgError:   # positive semi-definite but singular
+            e = rng.multivariate_normal(np.zeros(s), cov, size=nobs + burn, method="eigh")
+        with np.errstate(over="ignore", invalid="ignore"):
+            y = _simulate_var(self.coefs, e + self.intercept)[burn:]
+        if not np.isfinite(y).all():
+            raise ValueError(f"nobs={nobs}: the simulation leaves the floating-point range (the fitted VAR is "
+                             f"{'unstable' if not self.is_stable else 'driven by a huge sigma'}); simulate fewer "
+                             "samples")
+        return y
+
+
+def _covariance(sigma: object, s: int) -> np.ndarray:
+    """``sigma`` as a finite symmetric positive semi-definite ``(s, s)`` matrix, or an error naming it."""
+    try:
+        cov = np.asarray(sigma, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"sigma must be a real ({s}, {s}) covariance matrix, got {sigma!r}") from None
+    if cov.shape != (s, s):
+        raise ValueError(f"sigma must be a ({s}, {s}) covariance matrix, got shape {cov.shape}")
+    if not np.isfinite(cov).all() or not np.allclose(cov, cov.T, rtol=1e-12, atol=0.0):
+        raise ValueError("sigma must be a finite symmetric matrix")
+    top = np.abs(cov).max()
+    if top > 0 and np.linalg.eigvalsh(cov / top).min() < -1e-12:
+        raise ValueError("sigma must be positive semi-definite (it has a negative eigenvalue)")
+    return cov
 
 
 def _simulate_var(coefs: np.ndarray, e: np.ndarray) -> np.ndarray:
