@@ -13,7 +13,11 @@ their index starts at the original index's position ``lags``.
 from __future__ import annotations
 
 import datetime
+import lzma
 import numbers
+import tarfile
+import zipfile
+import zlib
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,7 +26,8 @@ import pandas as pd
 
 from tsfdi._validation import float_like, int_like
 
-__all__ = ["Signal", "as_signal", "is_xarray", "rolling_variance", "sampling_frequency", "window_samples"]
+__all__ = ["Signal", "as_signal", "is_xarray", "read_csv", "refuse_masked", "rolling_variance", "sampling_frequency",
+           "window_samples"]
 
 
 def is_xarray(obj: Any) -> bool:
@@ -115,15 +120,31 @@ class Signal:
 
 
 def _numeric(arr: np.ndarray, name: str) -> np.ndarray:
-    if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
-        if arr.dtype == object:
-            try:
-                arr = arr.astype(np.float64)
-            except (TypeError, ValueError):
-                raise TypeError(f"{name} must contain real numbers, got non-numeric values") from None
-        else:
-            raise TypeError(f"{name} must contain real numbers, got dtype {arr.dtype}")
+    """``arr`` as float64: integers and floats as they are, an object array of numbers converted; booleans,
+    complex numbers, strings, datetimes and timedeltas refused."""
+    if arr.dtype.kind == "O":
+        try:
+            arr = arr.astype(np.float64)
+        except OverflowError:
+            raise ValueError(f"{name} holds a number too large for float64") from None
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must contain real numbers, got non-numeric values") from None
+    elif arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must contain real numbers, got dtype {arr.dtype}")
     return np.ascontiguousarray(arr, dtype=np.float64)
+
+
+def refuse_masked(value: Any, name: str) -> None:
+    """Raise a ``ValueError`` naming ``name`` if ``value`` is a numpy masked array with masked entries.
+
+    tsfdi has no notion of a masked sample: a masked value is never used as data. A masked array whose mask is
+    empty is plain data.
+    """
+    if isinstance(value, np.ma.MaskedArray) and np.ma.is_masked(value):
+        mask = np.ma.getmaskarray(value)
+        first = int(np.argwhere(mask)[0, 0]) if mask.ndim else 0
+        raise ValueError(f"{name} is a masked array with {int(mask.sum())} masked value(s) (first at sample "
+                         f"{first}): fill or drop the masked values first")
 
 
 def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nobs: int = 1,
@@ -185,7 +206,14 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         index = pd.Index(data[time_dim].values) if time_dim in data.coords else pd.RangeIndex(data.sizes[time_dim])
         arr = data.values
     elif isinstance(data, (np.ndarray, list, tuple)) or np.isscalar(data):
-        arr = np.asarray(data)
+        refuse_masked(data, name)
+        if isinstance(data, (list, tuple)):
+            for i, item in enumerate(data):
+                refuse_masked(item, f"{name}[{i}]")
+        try:
+            arr = np.asarray(data)
+        except (TypeError, ValueError) as exc:     # ragged nested sequences
+            raise ValueError(f"{name} must be a rectangular (nobs,) or (nobs, nchan) array of numbers: {exc}") from None
     else:
         raise TypeError(f"{name} must be a numpy array, pandas Series/DataFrame or xarray DataArray, "
                         f"got {type(data).__name__}")
@@ -213,7 +241,8 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         raise ValueError(f"{name} contains {bad} NaN/inf value(s) (first at sample {first}); "
                          "remove or interpolate them first")
     if not allow_constant and arr.shape[0] > 1:
-        const = np.ptp(arr, axis=0) == 0
+        cols = np.ascontiguousarray(arr.T)        # reductions along contiguous rows: ~30x faster than axis 0
+        const = cols.max(axis=1) == cols.min(axis=1)
         if const.any():
             which = [channels[i] for i in np.flatnonzero(const)]
             raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
@@ -265,7 +294,10 @@ def window_samples(value: Any, name: str, fs: float | None, *, minimum: int = 1)
         if fs is None:
             raise ValueError(f"{name} = {value!r} is a time span but the sampling frequency is unknown: give fs "
                              "or a signal with a time index, or count samples with an int")
-        n = int(round(span.total_seconds() * fs))
+        samples = span.total_seconds() * fs
+        if not np.isfinite(samples):
+            raise ValueError(f"{name} = {value!r} at fs = {fs:g} Hz is too many samples")
+        n = int(round(samples))
         if n < minimum:
             raise ValueError(f"{name} = {value!r} is {n} sample(s) at fs = {fs:g} Hz; at least {minimum} are "
                              "needed")
@@ -308,6 +340,24 @@ def _rolling_variance(x: np.ndarray, window: int, step: int) -> np.ndarray:
     zero = np.zeros((1, x.shape[1]))
     s1 = np.concatenate([zero, np.cumsum(x, axis=0)])
     s2 = np.concatenate([zero, np.cumsum(x * x, axis=0)])
-    starts = np.arange(0, n_all - window + 1, step)
+    starts = np.arange(0, n_all - window + 1, min(step, n_all))
     m = (s1[starts + window] - s1[starts]) / window
     return np.maximum((s2[starts + window] - s2[starts]) / window - m * m, 0.0)
+
+
+def read_csv(path: Any, name: str = "path", **kwargs: Any) -> pd.DataFrame:
+    """``pandas.read_csv(path, **kwargs)`` whose failures name the file.
+
+    A missing file raises ``FileNotFoundError``; an empty file, text that does not parse, a file that is not
+    what its compression suffix says (``.gz``, ``.zip``, ...), a truncated or undecodable file, or columns
+    asked for in ``usecols`` that are not there raise a ``ValueError`` starting with ``name`` and the path.
+    """
+    try:
+        return pd.read_csv(path, **kwargs)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{name}: {path} does not exist") from None
+    except pd.errors.EmptyDataError:
+        raise ValueError(f"{name}: {path} is empty (no header line)") from None
+    except (ValueError, OSError, EOFError, ImportError, zlib.error, zipfile.BadZipFile, lzma.LZMAError,
+            tarfile.TarError) as exc:
+        raise ValueError(f"{name}: {path} cannot be read as a CSV file ({type(exc).__name__}: {exc})") from None

@@ -12,7 +12,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["int_like", "float_like", "option", "probability", "check_rng"]
+__all__ = ["boolean", "int_like", "float_like", "option", "probability", "check_rng"]
+
+
+def boolean(value: Any, name: str) -> bool:
+    """Return ``value`` as a ``bool`` if it is one (Python or numpy) or raise naming ``name``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {value!r} ({type(value).__name__})")
+    return bool(value)
 
 
 def int_like(value: Any, name: str, *, minimum: int | None = None, maximum: int | None = None,
@@ -23,7 +30,8 @@ def int_like(value: Any, name: str, *, minimum: int | None = None, maximum: int 
     """
     if value is None and optional:
         return None
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, np.integer)):
+    # numpy counts timedelta64 as an integer type: a time span is not a count
+    if isinstance(value, (bool, np.bool_, np.timedelta64)) or not isinstance(value, (numbers.Integral, np.integer)):
         if isinstance(value, (float, np.floating)) and float(value).is_integer():
             value = int(value)
         else:
@@ -44,7 +52,8 @@ def float_like(value: Any, name: str, *, minimum: float | None = None, maximum: 
     """
     if value is None and optional:
         return None
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.floating, np.integer)):
+    if isinstance(value, (bool, np.bool_, np.timedelta64)) or not isinstance(value, (numbers.Real, np.floating,
+                                                                                      np.integer)):
         raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
     value = float(value)
     if not np.isfinite(value):
@@ -73,6 +82,7 @@ def check_rng(rng: Any, name: str = "rng") -> np.random.Generator:
     """Turn ``None | int | numpy.random.Generator`` into a ``Generator``."""
     if isinstance(rng, np.random.Generator):
         return rng
-    if rng is None or (isinstance(rng, (numbers.Integral, np.integer)) and not isinstance(rng, bool)):
+    if rng is None or (isinstance(rng, (numbers.Integral, np.integer))
+                       and not isinstance(rng, (bool, np.bool_, np.timedelta64))):
         return np.random.default_rng(rng)
     raise TypeError(f"{name} must be None, an int seed or a numpy.random.Generator, got {type(rng).__name__}")

@@ -8,15 +8,15 @@ of the same channels (an xarray object or a sequence of signals).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, is_xarray, rolling_variance, window_samples
-from tsfdi._validation import float_like, int_like, option, probability
+from tsfdi._data import as_signal, is_xarray, refuse_masked, rolling_variance, window_samples
+from tsfdi._validation import boolean, float_like, int_like, option, probability
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
 from tsfdi.monitoring import Monitor
@@ -68,9 +68,8 @@ class Records:
             data = hexacopter_signals(data)
         if isinstance(data, xr.DataArray) and data.ndim == 3 and "record" in data.dims:
             da = data.transpose("record", "time", ...)
-            t = np.asarray(da["time"].values, dtype=float)
-            fs_ = 1.0 / float(np.median(np.diff(t))) if fs is None else float_like(fs, "fs", minimum=0.0,
-                                                                                    strict_min=True)
+            fs_ = _time_rate(da["time"].values, name) if fs is None else float_like(fs, "fs", minimum=0.0,
+                                                                                     strict_min=True)
             n = da.sizes["record"]
 
             def coord(key, given, default):
@@ -87,7 +86,7 @@ class Records:
             valid = ~lost & np.array([np.all(np.isfinite(v)) for v in vals])
             chans = tuple(str(c) for c in da[da.dims[2]].values)
             return cls(vals, st.astype(str), coord("turbulence", turbulence, "").astype(str),
-                       coord("failure_time", failure_times, np.nan).astype(float),
+                       _failure_times(coord("failure_time", failure_times, np.nan), n),
                        np.asarray(da["record"].values) if "record" in da.coords else np.arange(n), valid, chans, fs_)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
             raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
@@ -99,26 +98,70 @@ class Records:
         if len(k) != 1:
             raise ValueError(f"every record of {name} must have the same number of channels, got {sorted(k)}")
         n = len(sigs)
+        refuse_masked(states, "states")
         st = np.asarray(states).astype(str)
         if st.shape != (n,):
             raise ValueError(f"states must have one entry per record ({n}), got shape {st.shape}")
-        ft = np.full(n, np.nan) if failure_times is None else np.asarray(failure_times, dtype=float)
+        ft = np.full(n, np.nan) if failure_times is None else _failure_times(failure_times, n)
+        refuse_masked(turbulence, "turbulence")
         tb = np.full(n, "") if turbulence is None else np.asarray(turbulence).astype(str)
-        if ft.shape != (n,) or tb.shape != (n,):
-            raise ValueError(f"failure_times and turbulence must have one entry per record ({n})")
+        if tb.shape != (n,):
+            raise ValueError(f"turbulence must have one entry per record ({n}), got shape {tb.shape}")
         fs_ = 1.0 if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
         return cls([s.values for s in sigs], st, tb, ft, np.arange(n), np.ones(n, bool), tuple(sigs[0].channels),
                    fs_)
 
 
+def _time_rate(time: np.ndarray, name: str) -> float:
+    """Sampling frequency in Hz from a time coordinate in seconds (numbers), datetimes or timedeltas."""
+    idx = pd.Index(time)
+    if isinstance(idx, (pd.DatetimeIndex, pd.TimedeltaIndex)):
+        dt = np.asarray((idx[1:] - idx[:-1]).total_seconds())
+    elif pd.api.types.is_numeric_dtype(idx.dtype) and not pd.api.types.is_bool_dtype(idx.dtype):
+        dt = np.diff(np.asarray(idx, dtype=float))
+    else:
+        raise TypeError(f"{name}'s time coordinate must hold seconds, datetimes or timedeltas (or pass fs=), got "
+                        f"dtype {idx.dtype}")
+    step = float(np.median(dt)) if dt.size else float("nan")
+    if not (np.isfinite(step) and step > 0 and np.isfinite(1.0 / step)):
+        raise ValueError(f"{name}'s time coordinate gives no sampling frequency (median step {step} s): it must "
+                         "increase, or pass fs=")
+    return 1.0 / step
+
+
+def _failure_times(value: Any, n: int) -> np.ndarray:
+    """Failure time per record (s, >= 0; NaN for a record without failure) as a float array."""
+    refuse_masked(value, "failure_times")
+    try:
+        ft = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"failure_times must hold numbers (s; NaN for a record without failure), got {value!r}") \
+            from None
+    if ft.shape != (n,):
+        raise ValueError(f"failure_times must have one entry per record ({n}), got shape {ft.shape}")
+    bad = np.flatnonzero(np.isinf(ft) | (ft < 0))
+    if bad.size:
+        raise ValueError(f"failure_times must be >= 0 s or NaN (no failure), got {ft[bad[0]]} for record {bad[0]}")
+    return ft
+
+
 def _segment(rec: Records, i: int, settle: float, duration: float | None) -> np.ndarray:
+    """Samples of record ``i`` from ``settle`` s after its failure (after 0 without failure), ``duration`` s long
+    (``None``: to the end of the record, empty when it ends before)."""
     ft = rec.failure_time[i]
     t0 = (ft if np.isfinite(ft) else 0.0) + settle
-    a = int(round(t0 * rec.fs))
-    b = None if duration is None else a + int(round(duration * rec.fs))
+    n = rec.values[i].shape[0]
+    start = t0 * rec.fs
+    a = int(round(start)) if start < n else n                   # (bounds first: no int() of a huge float)
+    if duration is None:
+        return rec.values[i][a:]
+    length = duration * rec.fs
+    b = a + (int(round(length)) if length <= n else n + 1)
     seg = rec.values[i][a:b]
-    if b is not None and seg.shape[0] < b - a:
+    if seg.shape[0] < b - a:
         raise ValueError(f"record {rec.ids[i]} is too short for a {duration} s segment starting at {t0} s")
+    if seg.shape[0] == 0:
+        raise ValueError(f"duration: {duration} s is less than one sample at fs = {rec.fs:g} Hz")
     return seg
 
 
@@ -221,6 +264,8 @@ class Baselines:
 
     def state_models(self, model: str) -> dict:
         """State -> the fitted model ``model`` of that state (pooled over its fitting records)."""
+        if not isinstance(model, str) or model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
         return {s: self.models[model][s] for s in (self.healthy,) + self.faults}
 
     def calibrated_tests(self, model: str, test: ResidualTest, window: Any, *, step: Any = 1) -> dict:
@@ -370,6 +415,15 @@ class Baselines:
                 f"fit_records={len(self.fit_records)})")
 
 
+def _names(value: Any, name: str) -> list:
+    """A name or a sequence of names as a list (a str is one name)."""
+    if isinstance(value, str):
+        return [value]
+    if not isinstance(value, Iterable):
+        raise TypeError(f"{name} must be a name or a sequence of names, got {value!r}")
+    return list(value)
+
+
 def _check_test(test: Any) -> ResidualTest:
     if test is None:
         return LjungBox(lags=20, alpha=1e-3)
@@ -476,8 +530,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         order = option(order, "order", ("bic", "rss_sss"))
     else:
         order = int_like(order, "order", minimum=1, maximum=max(max_lags, var_max_lags))
-    if not isinstance(calibrate, (bool, np.bool_)):
-        raise TypeError(f"calibrate must be a bool, got {calibrate!r}")
+    calibrate = boolean(calibrate, "calibrate")
     if isinstance(data, Mapping) and not is_xarray(data):
         if not data:
             raise ValueError("data is an empty mapping: give one signal per state")
@@ -496,15 +549,17 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     # which records fit
     ok = rec.valid.copy()
     if fit_turbulence is not None:
-        levels = [fit_turbulence] if isinstance(fit_turbulence, str) else list(fit_turbulence)
-        ok &= np.isin(rec.turbulence, levels)
+        ok &= np.isin(rec.turbulence, _names(fit_turbulence, "fit_turbulence"))
     per_cell = None
     if isinstance(fit_records, str):
         fit_records = option(fit_records, "fit_records", ("first", "all"))
         per_cell = 1 if fit_records == "first" else None
         if fit_records == "all":
             chosen = np.flatnonzero(ok)
-    elif isinstance(fit_records, (int, np.integer)) and not isinstance(fit_records, bool):
+    elif isinstance(fit_records, (bool, np.bool_)) or not isinstance(fit_records, (Iterable, int, float, np.number)):
+        raise TypeError(f"fit_records must be 'first', 'all', a positive int or a sequence of record identifiers, "
+                        f"got {fit_records!r}")
+    elif not isinstance(fit_records, Iterable):
         per_cell = int_like(fit_records, "fit_records", minimum=1)
     if per_cell is not None:
         seen: dict = {}
@@ -524,7 +579,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         chosen = np.array([pos[w] for w in wanted], dtype=int)
         if not np.all(rec.valid[chosen]):
             raise ValueError("fit_records contains records that lost control or hold NaN")
-    names = list(rec.channels) + ["var"] if models is None else list(models)
+    names = list(rec.channels) + ["var"] if models is None else _names(models, "models")
+    if not names:
+        raise ValueError("models must name at least one model (a channel or 'var')")
     for m in names:
         if m != "var" and m not in rec.channels:
             raise ValueError(f"models must hold channel names {rec.channels} or 'var', got {m!r}")
@@ -536,6 +593,10 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         if not idx:
             raise ValueError(f"no valid fitting record for state {state!r}")
         segs = [_segment(rec, i, settle, duration) for i in idx]
+        empty = rec.ids[[i for i, g in zip(idx, segs) if g.shape[0] == 0]].tolist()
+        if empty:
+            raise ValueError(f"record(s) {empty} of state {state!r} end before the fitting segment starts ({settle} s "
+                             "after the failure): give a smaller settle")
         segments[state] = segs
         for m in names:
             if m == "var":
@@ -566,6 +627,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
             if post.shape[0] >= V:
                 peaks.append(rolling_variance(post, V, step).max(axis=0))
     thr = steady_factor * np.max(peaks, axis=0) if peaks else np.full(len(rec.channels), np.inf)
+    if peaks and not np.all(np.isfinite(thr)):
+        raise ValueError(f"steady_factor={steady_factor:g} makes the steady-state thresholds overflow: give a smaller "
+                         "factor")
     return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
                      steady_thresholds=thr, steady_window=V,
                      fit_records=tuple(rec.ids[chosen].tolist()), fs=rec.fs, segments=segments, heldout=heldout)

@@ -25,7 +25,7 @@ the examples), NaN meaning "no fault" (onset) or "no alarm" (first alarm).
 from __future__ import annotations
 
 import numbers
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,8 +33,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from tsfdi._data import as_signal, window_samples
-from tsfdi._validation import float_like, option
+from tsfdi._data import as_signal, refuse_masked, window_samples
+from tsfdi._validation import boolean, float_like, option
 from tsfdi.baselines import Baselines, Records
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
@@ -158,7 +158,8 @@ class Evaluation:
         and ``false_alarm_in_band`` (the count lies inside it: the judgement of the false-alarm rate),
         ``missed_fault`` (percent of fault-record windows starting after the failure not flagged),
         ``missed_records`` (fault records with no alarm after the failure), ``delay_median`` and ``delay_max``
-        (s, from the failure to the end of the first flagged window ending after it)."""
+        (s, from the failure to the end of the first flagged window ending after it). A rate or delay over no
+        window (no healthy record, no window after a failure, no detection) is NaN."""
         det = self.detection
         keys = ["model", "method", "window"]
         rows = []
@@ -308,15 +309,21 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             raise ValueError(f"data is sampled at {rec.fs} Hz but the baselines at {b.fs} Hz")
         if (b.healthy, b.faults) != (first.healthy, first.faults):
             raise ValueError("every Baselines of the mapping must have the same healthy and fault states")
+    if not isinstance(models, (str, Iterable)):
+        raise TypeError(f"models must be a model name or a sequence of names, got {models!r}")
     models = [models] if isinstance(models, str) else list(models)
     for m in models:
-        if m not in first.models:
+        if not isinstance(m, str) or m not in first.models:
             raise ValueError(f"models must be among the fitted models {list(first.models)}, got {m!r}")
     if not isinstance(windows, (list, tuple)):
         windows = [windows]
     wins = {window_samples(w, "windows", rec.fs, minimum=2): None for w in windows}
     if not models or not wins:
         raise ValueError("models and windows must each hold at least one entry")
+    detection = boolean(detection, "detection")
+    progress = boolean(progress, "progress")
+    if turbulence is not None and not isinstance(turbulence, (str, Iterable)):
+        raise TypeError(f"turbulence must be a level name or a sequence of names, got {turbulence!r}")
     tests = _named_tests(tests, models)
     methods = list(dict.fromkeys(meth for _, meth in tests))
     empirical = any(t.empirical for t in tests.values())
@@ -338,6 +345,11 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     recs.attrs["healthy"] = healthy
     if not use.any():
         raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
+    longest = max(wins)
+    short = rec.ids[[i for i in np.flatnonzero(use) if rec.values[i].shape[0] < longest]].tolist()
+    if short:
+        raise ValueError(f"windows: a {longest}-sample window is longer than the record(s) {short[:5]}"
+                         f"{' ...' if len(short) > 5 else ''}; give shorter windows")
 
     alphas = {key: t.alpha for key, t in tests.items()}
     lag_of = {round(W / rec.fs, 9): t.lags for W in wins for t in tests.values() if isinstance(t, LjungBox)}
@@ -368,12 +380,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             per_state = base.state_models(m)
             # each record is filtered once through every (member) model; the windows of every length and
             # test are slices of these residuals
-            rw_h = ResidualWindows({"h": per_state[healthy]})
+            rw_h = ResidualWindows({healthy: per_state[healthy]})
             rw_f = ResidualWindows({f: per_state[f] for f in faults})
             if detection:
-                rw_h.fit(sig.values, channels=sig.channels)
+                rw_h.fit(sig)
             if is_fault:
-                rw_f.fit(sig.values, channels=sig.channels)
+                rw_f.fit(sig)
             for meth in methods:
                 for W in wins:
                     w = round(W / rec.fs, 9)
@@ -445,6 +457,7 @@ def _is_missing(v: Any) -> bool:
 
 def _scoring_times(value: Any, name: str) -> np.ndarray:
     """One number per record as a float64 array (NaN allowed, inf not) or raise naming ``name``."""
+    refuse_masked(value, name)
     if isinstance(value, pd.DataFrame):
         raise TypeError(f"{name} must be 1-D (one value per record), got a DataFrame")
     if isinstance(value, (pd.Series, pd.Index)):
@@ -604,6 +617,7 @@ def first_alarm(alarm: Any, time: Any = None, *, origin: Any = None) -> float:
     elif isinstance(alarm, (str, bytes)):
         raise TypeError(f"alarm must be boolean, got a {type(alarm).__name__}")
     else:
+        refuse_masked(alarm, "alarm")
         try:
             values = np.asarray(alarm)
         except (ValueError, TypeError) as exc:
@@ -619,6 +633,7 @@ def first_alarm(alarm: Any, time: Any = None, *, origin: Any = None) -> float:
     if time is not None:
         if isinstance(time, (str, bytes)) or np.ndim(time) != 1:
             raise ValueError(f"time must be 1-D (one entry per row of alarm), got {time!r}")
+        refuse_masked(time, "time")
         axis, tname = pd.Index(time), "time"
         if len(axis) != n:
             raise ValueError(f"time has {len(axis)} entries but alarm has {n} rows")

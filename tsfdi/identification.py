@@ -20,6 +20,7 @@ from tsfdi._data import as_signal, sampling_frequency, window_samples
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.models import ARXResults
 from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
 
 __all__ = ["detect", "identify", "identify_windows", "Identification", "WindowedIdentification"]
@@ -47,11 +48,23 @@ def _model_tests(test: Any, models: Mapping) -> dict:
 
 def _check_model(res: Any, name: str, nchan: int, arg: str) -> None:
     if not hasattr(res, "residuals"):
-        raise TypeError(f"{arg} must hold fitted results (AR or VAR) with a residuals() method; "
+        raise TypeError(f"{arg} must hold fitted results (AR, VAR or ARX) with a residuals() method; "
                         f"{name!r} is a {type(res).__name__}")
     neqs = int(getattr(res, "neqs", 1))
     if neqs != nchan:
         raise ValueError(f"signal has {nchan} channel(s) but {arg} {name!r} was fitted on {neqs} channel(s)")
+
+
+def _residuals(res: Any, signal: Any, u: Any, what: str) -> Any:
+    """Residuals of ``signal`` through ``res``, with the input ``u`` for an input-output (ARX) model only."""
+    if isinstance(res, ARXResults):
+        if u is None:
+            raise TypeError(f"u is required: {what} is an ARX (input-output) model; pass its input signal as u=")
+        return res.residuals(signal, u)
+    if u is not None:
+        raise TypeError(f"u is only for input-output (ARX) models: {what} ({type(res).__name__}) has no exogenous "
+                        "input; leave u out")
+    return res.residuals(signal)
 
 
 def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: Any = None) -> Decision:
@@ -68,17 +81,27 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
         What the test needs from the baseline (reference variance and degrees of freedom for the F test,
         sigma for the GLRT) is taken from the fitted results.
     u : array_like, optional
-        Input signal for an input-output baseline (``tsfdi.ARX(...).fit()``), passed to its ``residuals``.
+        Input signal for an input-output baseline (``tsfdi.ARX(...).fit()``), passed to its ``residuals``;
+        required for such a baseline, refused for AR / VAR baselines.
 
     Returns
     -------
     Decision
         ``reject`` True means fault (H1).
+
+    Raises
+    ------
+    TypeError
+        ``baseline`` is not fitted results, ``test`` is not a residual test, ``u`` is missing for an ARX baseline
+        or given for an AR / VAR one, or ``signal`` is not numeric.
+    ValueError
+        ``signal`` is not 1-D / 2-D, holds NaN / inf or a masked value, is too short for the model and test, or
+        has a channel count other than the baseline's.
     """
     test = _check_test(test)
     sig = as_signal(signal, "signal", allow_constant=True)
     _check_model(baseline, "baseline", sig.nchan, "baseline")
-    resid = baseline.residuals(signal) if u is None else baseline.residuals(signal, u)
+    resid = _residuals(baseline, sig, u, "baseline")
     return test.test(resid, **test.reference(baseline))
 
 
@@ -190,11 +213,17 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
         (``LjungBox(...).calibrate(spec.held_out_residuals(), window=...)`` for each fault model's spec), so that
         every candidate's accept / reject has a known size.
     u : array_like, optional
-        Input signal when the candidates are input-output models (``tsfdi.ARX``).
+        Input signal when the candidates are input-output models (``tsfdi.ARX``): required for those, refused for
+        AR / VAR models.
 
     Returns
     -------
     Identification
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`detect`, for every model; also for ``models`` that is not a non-empty mapping.
     """
     models = _check_models(models)
     tests = _model_tests(test, models)
@@ -203,7 +232,7 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
         _check_model(res, name, sig.nchan, "models")
     decisions = {}
     for name, res in models.items():
-        resid = res.residuals(sig) if u is None else res.residuals(sig, u)
+        resid = _residuals(res, sig, u, f"models[{name!r}]")
         decisions[name] = tests[name].test(resid, **tests[name].reference(res))
     return Identification(decisions=decisions, test=_test_name(tests))
 
@@ -317,7 +346,8 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     Parameters
     ----------
     signal, models, test :
-        As in :func:`identify`.
+        As in :func:`identify`; the models are AR / VAR results (the windowed engine filters the signal alone, so
+        input-output ARX models are refused: use :func:`identify` with ``u`` on each window).
     window, step : int or time span
         As in pandas ``rolling``: an int counts samples, a time span (``"2s"``, ``pandas.Timedelta``) is converted
         with the signal's time index or ``fs``.
@@ -329,6 +359,13 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     WindowedIdentification
         Arrays over windows, models and channels; ``result[w]`` is the :class:`Identification` of window ``w``
         (with ``span = (start, stop)``), equal to ``identify(signal[start:stop], models, test)``.
+
+    Raises
+    ------
+    TypeError, ValueError
+        As :func:`identify`; also for a ``window`` / ``step`` that is not a positive int or time span, a time span
+        without a known sampling frequency, a ``window`` longer than the signal or too short for a model's order
+        and the test's lags.
     """
     models = _check_models(models)
     tests = _model_tests(test, models)
@@ -340,7 +377,7 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
     for name, res in models.items():
         _check_model(res, name, sig.nchan, "models")
-    engine = ResidualWindows(models).fit(sig.values, channels=sig.channels)
+    engine = ResidualWindows(models).fit(sig)
     ws = engine.statistics(tests, window=window, step=step, loglik=False)
     return WindowedIdentification(ws, tuple(tests.values()),
                                   tuple(tests[name].reference(res) for name, res in models.items()), engine)

@@ -15,10 +15,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, rolling_variance, window_samples
+from tsfdi._data import as_signal, refuse_masked, rolling_variance, window_samples
 from tsfdi._validation import float_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.models import ARXResults
 from tsfdi.windows import RULES, ResidualWindows
 
 __all__ = ["Monitor", "MonitorResult", "MonitorEvent", "rolling_variance"]
@@ -112,7 +113,7 @@ class Monitor:
     Parameters
     ----------
     baseline : fitted results
-        Healthy model :math:`M_0` (AR, VAR or ARX results).
+        Healthy model :math:`M_0` (AR or VAR results; input-output ARX models are refused).
     models : mapping
         Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels.
     window : int or time span
@@ -156,7 +157,10 @@ class Monitor:
         if not isinstance(models, Mapping) or not models:
             raise TypeError("models must be a non-empty mapping name -> fitted fault models")
         if not hasattr(baseline, "residuals"):
-            raise TypeError(f"baseline must be fitted results (AR, VAR or ARX), got {type(baseline).__name__}")
+            raise TypeError(f"baseline must be fitted results (AR or VAR), got {type(baseline).__name__}")
+        if isinstance(baseline, ARXResults):
+            raise TypeError("baseline is an ARX (input-output) model: Monitor filters the output stream alone and "
+                            "takes AR / VAR models")
         self.nchan = ResidualWindows({"healthy": baseline}).nchan
         nf = ResidualWindows(models).nchan
         if nf != self.nchan:
@@ -189,7 +193,12 @@ class Monitor:
         if steady_thresholds is None:
             self.steady_thresholds = None
         else:
-            thr = np.asarray(steady_thresholds, dtype=np.float64).ravel()
+            refuse_masked(steady_thresholds, "steady_thresholds")
+            try:
+                thr = np.asarray(steady_thresholds, dtype=np.float64).ravel()
+            except (TypeError, ValueError):
+                raise TypeError(f"steady_thresholds must be {self.nchan} number(s), got {steady_thresholds!r}") \
+                    from None
             if thr.shape != (self.nchan,) or not np.all(np.isfinite(thr)) or np.any(thr <= 0):
                 raise ValueError(f"steady_thresholds must hold {self.nchan} finite positive variance(s), got "
                                  f"{steady_thresholds!r}")

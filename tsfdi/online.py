@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, sampling_frequency
-from tsfdi._validation import float_like, int_like, option
+from tsfdi._data import as_signal, refuse_masked, sampling_frequency
+from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
 from tsfdi.models.recursive import RecursiveARX
 
@@ -255,8 +255,8 @@ class OnlineDetector:
       longitudinal specific force), "up" above ``+threshold``, "both" on the absolute value.
 
     Optionally a streaming :class:`tsfdi.detection.GLRT` runs on the same errors once the variance is stable
-    (its ``scale`` is the Welford standard deviation at arming, its input the error minus the Welford mean at
-    arming). No alarm of any source is raised among the first ``arm_after`` samples (baseline phase).
+    and positive (its ``scale`` is the Welford standard deviation at arming, its input the error minus the
+    Welford mean at arming). No alarm of any source is raised among the first ``arm_after`` samples (baseline phase).
 
     :meth:`calibrate` sets ``threshold`` (and the GLRT's) from healthy runs for a required number of false
     alarms per flight hour; :meth:`OnlineDetection.false_alarms_per_hour` reports the rate of a run.
@@ -335,9 +335,7 @@ class OnlineDetector:
         self.direction = option(direction, "direction", ("both", "down", "up"))
         self.arm_after = int_like(arm_after, "arm_after", minimum=0)
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
-        if not isinstance(freeze_on_alarm, (bool, np.bool_)):
-            raise TypeError(f"freeze_on_alarm must be a bool, got {freeze_on_alarm!r}")
-        self.freeze_on_alarm = bool(freeze_on_alarm)
+        self.freeze_on_alarm = boolean(freeze_on_alarm, "freeze_on_alarm")
         if isinstance(glrt, str) and glrt == "default":
             glrt = GLRT(window=20, alpha=1e-6) if self.statistic == "zscore" else None
         if glrt is not None and not isinstance(glrt, GLRT):
@@ -482,9 +480,10 @@ class OnlineDetector:
             S[:, c] = stat
             gal = np.zeros(n, dtype=bool)
             if self.glrt is not None:
-                # the GLRT is armed from the sample after the variance became stable
+                # the GLRT is armed from the sample after the variance became stable (and positive: a stream of
+                # exactly predicted samples has no scale to measure a change against)
                 if self._streams[c] is None:
-                    vs = np.flatnonzero(vstable)
+                    vs = np.flatnonzero(vstable & np.isfinite(var) & (var > 0))
                     if vs.size:
                         arm = int(vs[0]) + 1
                         self._streams[c] = (self.glrt.stream(1, scale=np.sqrt(var[vs[0]])), float(mean[vs[0]]))
@@ -521,10 +520,37 @@ class OnlineDetector:
         return self._result(sy, Z, G, E, A, S, starts)
 
     def update(self, y: Any, u: Any) -> np.ndarray:
-        """Process one sample of every pair; returns the per-pair alarm flags (bool array)."""
-        yv = np.atleast_1d(np.asarray(y, dtype=np.float64)).reshape(1, -1)
-        uv = np.atleast_1d(np.asarray(u, dtype=np.float64)).reshape(1, -1)
-        return self.run(yv, uv).alarm[0]
+        """Process one sample of every pair; returns the per-pair alarm flags (bool array).
+
+        Parameters
+        ----------
+        y : float or array_like, shape (n_pairs,)
+            The output of every pair at this sample (a number for a single pair); NaN / inf follow
+            ``nonfinite``.
+        u : float or array_like, shape (n_pairs * n_inputs,)
+            The inputs of every pair, pair by pair.
+
+        Raises
+        ------
+        TypeError
+            ``y`` or ``u`` is None, a string, a boolean or otherwise not numbers.
+        ValueError
+            ``y`` or ``u`` has more than one dimension, the wrong number of values, or masked values.
+        """
+        return self.run(self._sample(y, "y"), self._sample(u, "u")).alarm[0]
+
+    @staticmethod
+    def _sample(value: Any, name: str) -> np.ndarray:
+        """One sample of every pair, a number or a 1-D sequence, as a (1, k) float array."""
+        if value is None or isinstance(value, (str, bytes)):
+            raise TypeError(f"{name} must be a number or a 1-D sequence of numbers (this sample of every pair), "
+                            f"got {value!r}")
+        refuse_masked(value, name)
+        if np.ndim(value) > 1:
+            raise ValueError(f"{name} must be a number or a 1-D sequence (this sample of every pair), got shape "
+                             f"{np.shape(value)}")
+        values = as_signal(np.atleast_1d(value), name, min_nobs=1, allow_constant=True, finite=False).values
+        return values.reshape(1, -1)
 
     # ------------------------------------------------------------------ thresholds from healthy runs
     def _alarm_free_copy(self) -> OnlineDetector:

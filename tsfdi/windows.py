@@ -25,10 +25,12 @@ from typing import Any
 
 import numpy as np
 
-from tsfdi._validation import int_like, option
+from tsfdi._data import as_signal
+from tsfdi._validation import boolean, int_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.models import ARXResults
 
 __all__ = ["RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
 
@@ -165,7 +167,8 @@ class ResidualWindows:
     Parameters
     ----------
     models : mapping
-        Name -> fitted AR / VAR / ARX results, all with the same number of channels.
+        Name -> fitted AR / VAR results, all with the same number of channels. Input-output (ARX) models are
+        refused: the engine filters the output alone (use :func:`tsfdi.identify` with ``u`` on each window).
 
     Examples
     --------
@@ -179,7 +182,10 @@ class ResidualWindows:
             raise TypeError("models must be a non-empty mapping name -> fitted results")
         for name, res in models.items():
             if not hasattr(res, "residuals"):
-                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR, ARX), got {type(res).__name__}")
+                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR), got {type(res).__name__}")
+            if isinstance(res, ARXResults):
+                raise TypeError(f"models[{name!r}] is an ARX (input-output) model: the windowed engine filters the "
+                                "output alone and takes AR / VAR models; test ARX models with tsfdi.identify(..., u=)")
         self.models = dict(models)
         self.orders = {name: int(res.lags) for name, res in self.models.items()}
         nchan = {int(getattr(r, "neqs", 1)) for r in self.models.values()}
@@ -195,22 +201,28 @@ class ResidualWindows:
 
         Parameters
         ----------
-        signal : ndarray, shape (nobs, k)
-            The record, validated by the caller (float64, finite, ``k`` = the models' channels).
+        signal : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, k)
+            The record (``k`` = the models' channels), finite.
         channels : sequence of str, optional
-            Channel names (default ``y0, y1, ...``).
+            Channel names (default: those of ``signal``).
 
         Returns
         -------
         self
+
+        Raises
+        ------
+        TypeError, ValueError
+            A ``signal`` that is not numeric, not 1-D / 2-D, holds NaN / inf or masked values, is shorter than a
+            model's order + 1 or has another number of channels than the models.
         """
-        x = np.asarray(signal, dtype=np.float64)
-        x = x.reshape(x.shape[0], -1)
-        if x.shape[1] != self.nchan:
-            raise ValueError(f"signal has {x.shape[1]} channel(s) but the models were fitted on {self.nchan}")
+        sig = as_signal(signal, "signal", allow_constant=True)
+        if sig.nchan != self.nchan:
+            raise ValueError(f"signal has {sig.nchan} channel(s) but the models were fitted on {self.nchan}")
+        x = sig.values
         resid = {name: np.asarray(res.residuals(x if self.nchan > 1 else x[:, 0]), dtype=np.float64).reshape(
             -1, self.nchan) for name, res in self.models.items()}
-        return self._set(resid, x.shape[0], channels)
+        return self._set(resid, sig.nobs, sig.channels if channels is None else channels)
 
     def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
         """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model fitted without
@@ -221,15 +233,18 @@ class ResidualWindows:
         self
         """
         nobs = int_like(nobs, "nobs", minimum=1)
+        if not isinstance(residuals, Mapping):
+            raise TypeError(f"residuals must be a mapping model name -> residual array, got {type(residuals).__name__}")
         resid = {}
         for name in self.models:
             if name not in residuals:
                 raise ValueError(f"residuals has no entry for the model {name!r}")
-            e = np.asarray(residuals[name], dtype=np.float64)
-            e = e.reshape(e.shape[0], -1) if e.ndim else e
-            if e.shape != (nobs - self.orders[name], self.nchan):
-                raise ValueError(f"residuals[{name!r}] must have shape {(nobs - self.orders[name], self.nchan)}, "
-                                 f"got {e.shape}")
+            shape = (nobs - self.orders[name], self.nchan)
+            if shape[0] < 1:
+                raise ValueError(f"nobs ({nobs}) must exceed the order ({self.orders[name]}) of the model {name!r}")
+            e = as_signal(residuals[name], f"residuals[{name!r}]", allow_constant=True).values
+            if e.shape != shape:
+                raise ValueError(f"residuals[{name!r}] must have shape {shape}, got {e.shape}")
             resid[name] = e
         return self._set(resid, nobs, channels)
 
@@ -268,6 +283,7 @@ class ResidualWindows:
             raise ValueError("ResidualWindows is not fitted: call fit(signal) first")
         window = int_like(window, "window", minimum=2)
         step = int_like(step, "step", minimum=1)
+        loglik = boolean(loglik, "loglik")
         nobs = self.nobs_
         if window > nobs:
             raise ValueError(f"window must be <= the signal length {nobs}, got {window}")
@@ -284,6 +300,7 @@ class ResidualWindows:
         if bad:
             raise TypeError(f"test must be a residual test (LjungBox, FTest, GLRT, ...) or a mapping name -> test; "
                             f"not one for {bad}")
+        step = min(step, nobs)                  # a step beyond the record: one window
         starts = np.arange(0, nobs - window + 1, step)
         nwin = starts.size
         parts, nres = [], []

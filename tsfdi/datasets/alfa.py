@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tsfdi._data import read_csv
 from tsfdi._validation import option
 
 __all__ = ["load_alfa", "list_alfa", "ALFA_DOI", "ALFA_URL"]
@@ -71,9 +72,62 @@ def _strip_ext(name: str) -> str:
     return name
 
 
+def _datetimes(values: pd.Series, path: Path, column: str) -> pd.DatetimeIndex:
+    """The time stamps of ``column`` (date-time strings, or integers in ns), strictly increasing."""
+    if pd.api.types.is_numeric_dtype(values.dtype):
+        index = pd.DatetimeIndex(pd.to_datetime(_nanoseconds(values, path, column), unit="ns"))
+    else:
+        try:
+            index = pd.DatetimeIndex(pd.to_datetime(values))
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise ValueError(f"path: {path}: column {column!r} must hold time stamps ({exc})") from None
+    _check_increasing(index.asi8, index.hasnans, path, column)
+    return index
+
+
+def _nanoseconds(values: pd.Series, path: Path, column: str) -> np.ndarray:
+    """The integer time stamps (ns) of ``column``."""
+    if pd.api.types.is_bool_dtype(values.dtype) or not pd.api.types.is_integer_dtype(values.dtype):
+        raise ValueError(f"path: {path}: column {column!r} must hold integer time stamps in ns, got dtype "
+                         f"{values.dtype}")
+    return values.to_numpy(dtype=np.int64)
+
+
+def _check_increasing(ns: np.ndarray, missing: bool, path: Path, column: str) -> None:
+    if missing:
+        raise ValueError(f"path: {path}: column {column!r} has missing or unreadable time stamps")
+    back = np.flatnonzero(np.diff(ns) <= 0)
+    if back.size:
+        raise ValueError(f"path: {path}: column {column!r} is not strictly increasing (row {int(back[0]) + 1})")
+
+
+def _read_table(path: Path, columns: tuple[str, ...], **kwargs: Any) -> pd.DataFrame:
+    """One CSV file with at least one row and the given columns; errors name the file."""
+    df = read_csv(path, "path", **kwargs)
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise ValueError(f"path: {path} has no column(s) {missing}; columns: {list(df.columns)}")
+    if len(df) == 0:
+        raise ValueError(f"path: {path} has a header but no rows")
+    return df
+
+
+def _number(value: Any, path: Path, column: str) -> float:
+    """A finite number read from ``column``."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = float("nan")
+    if not np.isfinite(x):
+        raise ValueError(f"path: {path}: column {column!r} must hold finite numbers, got {value!r}")
+    return x
+
+
 def _finish(df: pd.DataFrame, flight: str, onset: pd.Timestamp | None, code: int, layout: str, source: Path,
             leaking: list[str], kind: str) -> Any:
     fault, detail = _fault_from_name(flight)
+    if len(df) < 2:
+        raise ValueError(f"path: {source} holds {len(df)} time stamp(s); a flight needs at least 2")
     df.index.name = "time"
     gt = np.zeros(len(df), dtype=bool) if onset is None else np.asarray(df.index >= onset)
     df["ground_truth"] = gt
@@ -86,7 +140,7 @@ def _finish(df: pd.DataFrame, flight: str, onset: pd.Timestamp | None, code: int
         "failure_code": int(code),
         "onset_time": onset,
         "onset_s": None if onset is None else float((onset - t0).total_seconds()),
-        "fs": float(1.0 / np.median(dt)) if dt.size else float("nan"),
+        "fs": float(1.0 / np.median(dt)),
         "layout": layout,
         "source": str(source),
         "leaking_columns": ["ground_truth", *leaking],
@@ -105,19 +159,22 @@ def _finish(df: pd.DataFrame, flight: str, onset: pd.Timestamp | None, code: int
 
 
 def _read_merged(path: Path, kind: str) -> Any:
-    df = pd.read_csv(path)
+    df = _read_table(path, ())
     flight = _strip_ext(path.name)
     if "%time" in df.columns:  # merged_20hz
-        df.index = pd.to_datetime(df.pop("%time"))
+        df.index = _datetimes(df.pop("%time"), path, "%time")
         onset, code = None, 0
         if "field.data" in df.columns:
-            data = df.pop("field.data").to_numpy(dtype=float)
+            try:
+                data = df.pop("field.data").to_numpy(dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"path: {path}: column 'field.data' (failure code) must hold numbers") from None
             hit = np.flatnonzero(np.nan_to_num(data) != 0)
             if hit.size:
-                onset, code = df.index[hit[0]], int(data[hit[0]])
+                onset, code = df.index[hit[0]], int(_number(data[hit[0]], path, "field.data"))
         return _finish(df, flight, onset, code, "merged_20hz", path, [], kind)
     if "time" in df.columns and "label" in df.columns:  # engine_commanded_measured
-        df.index = pd.to_datetime(df.pop("time"))
+        df.index = _datetimes(df.pop("time"), path, "time")
         label = df.pop("label").astype(str).str.lower().eq("true").to_numpy()
         hit = np.flatnonzero(label)
         onset = df.index[hit[0]] if hit.size else None
@@ -142,30 +199,39 @@ def _read_official(folder: Path, flight: str | None, kind: str) -> Any:
         raise ValueError(f"flight: {flight!r} not found in {folder}; available: {flights}")
     prefix = flight + "-"
     topics = {_strip_ext(p.name)[len(prefix):]: p for p in files if p.name.startswith(prefix)}
-    grid = pd.read_csv(topics[_TOPIC_GRID], usecols=["%time"])["%time"].to_numpy(dtype=np.int64)
-    grid = np.sort(grid)
+    grid_file = topics[_TOPIC_GRID]
+    grid = np.sort(_nanoseconds(_read_table(grid_file, ("%time",))["%time"], grid_file, "%time"))
+    _check_increasing(grid, False, grid_file, "%time")
     out = pd.DataFrame(index=pd.to_datetime(grid, unit="ns"))
     onset_ns, code = None, 0
     leaking: list[str] = []
     for topic, p in sorted(topics.items()):
         if topic.startswith("failure_status"):
-            fs = pd.read_csv(p)
+            fs = read_csv(p, "path")
             if len(fs):
-                first = int(fs["%time"].min())
+                if "%time" not in fs.columns:
+                    raise ValueError(f"path: {p} has no column '%time'; columns: {list(fs.columns)}")
+                times = _nanoseconds(fs["%time"], p, "%time")
+                first = int(times.min())
                 if onset_ns is None or first < onset_ns:
                     onset_ns = first
-                    code = int(fs.loc[fs["%time"].idxmin(), "field.data"]) if "field.data" in fs else 1
+                    code = int(_number(fs["field.data"].iloc[int(np.argmin(times))], p, "field.data")) \
+                        if "field.data" in fs else 1
             continue
-        tab = pd.read_csv(p)
+        tab = read_csv(p, "path")
         keep = [c for c in tab.columns if c.startswith("field.") and not _SKIP_FIELDS.search(c)
-                and pd.api.types.is_numeric_dtype(tab[c])]
-        if not keep:
+                and pd.api.types.is_numeric_dtype(tab[c]) and not pd.api.types.is_bool_dtype(tab[c])]
+        if not keep or not len(tab):
             continue
-        tab = tab[["%time", *keep]].sort_values("%time")
+        if "%time" not in tab.columns:
+            raise ValueError(f"path: {p} has no column '%time'; columns: {list(tab.columns)}")
+        times = _nanoseconds(tab["%time"], p, "%time")
+        order = np.argsort(times, kind="stable")
+        tab = tab[keep].iloc[order]
         short = topic[len("mavros-"):] if topic.startswith("mavros-") else topic
         names = {c: f"{short}.{c[len('field.'):]}" for c in keep}
         tab = tab.rename(columns=names)
-        pos = np.searchsorted(tab["%time"].to_numpy(dtype=np.int64), grid, side="right") - 1
+        pos = np.searchsorted(times[order], grid, side="right") - 1
         vals = tab[list(names.values())].to_numpy(dtype=np.float64)
         block = np.full((grid.size, vals.shape[1]), np.nan)
         ok = pos >= 0
@@ -237,11 +303,16 @@ def list_alfa(root: str | Path) -> pd.DataFrame:
         One row per flight: ``flight``, ``fault``, ``failure_code``, ``onset_s``, ``merged_path`` and
         ``engine_path`` (the commanded / measured file or None).
     """
+    if not isinstance(root, (str, Path)):
+        raise TypeError(f"root must be a str or pathlib.Path, got {type(root).__name__}")
     root = Path(root)
     table = root / "flights.csv"
     if not table.is_file():
         raise FileNotFoundError(f"root: {table} not found; download ALFA from {ALFA_URL} (doi:{ALFA_DOI})")
-    df = pd.read_csv(table)
+    df = read_csv(table, "root")
+    missing = [c for c in ("folder", "flight") if c not in df.columns]
+    if missing:
+        raise ValueError(f"root: {table} has no column(s) {missing}; not an ALFA flight table")
     df["merged_path"] = [str(root / "merged_20hz" / f / f"{n}.csv.gz") for f, n in zip(df["folder"], df["flight"])]
     eng = root / "engine_commanded_measured"
     df["engine_path"] = [str(eng / f"{n}.csv.gz") if (eng / f"{n}.csv.gz").is_file() else None

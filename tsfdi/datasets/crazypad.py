@@ -37,7 +37,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._validation import option
+from tsfdi._data import read_csv
+from tsfdi._validation import boolean, option
 
 __all__ = ["list_crazypad", "load_crazypad", "read_crazypad_log", "CRAZYPAD_URL", "CRAZYPAD_DOI"]
 
@@ -51,6 +52,7 @@ _GAP_FACTOR = 2.5
 _CITATION = ("Masalimov, Muslimov, Kozlov, Munasypov, CrazyPAD: A Dataset for Assessing the Impact of Structural "
              "Defects on Nano-Quadcopter Performance, Data 2024, 9, 79, doi:" + CRAZYPAD_DOI)
 _HINT = f"download CrazyPAD from {CRAZYPAD_URL} (MIT licence) and pass its folder"
+_MAX_SPAN_MS = 9.2e12   # a TimedeltaIndex holds int64 nanoseconds: about 292 years (in ms)
 
 
 def _strip_ext(name: str) -> str:
@@ -142,12 +144,7 @@ def _log_files(root: Path) -> list[tuple[str, str, str, str, Path]]:
 
 
 def _read_csv(file: Path, usecols: Any = None) -> pd.DataFrame:
-    try:
-        return pd.read_csv(file, usecols=usecols)
-    except pd.errors.EmptyDataError:
-        raise ValueError(f"file: {file} is empty, not a CrazyPAD log") from None
-    except (pd.errors.ParserError, UnicodeDecodeError, OSError, EOFError) as exc:
-        raise ValueError(f"file: {file} cannot be read as a CSV log ({exc})") from None
+    return read_csv(file, "file", usecols=usecols)
 
 
 def _timestamps_ms(df: pd.DataFrame, file: Path) -> np.ndarray:
@@ -275,7 +272,7 @@ def read_crazypad_log(file: str | Path, *, airborne: bool = True, margin: Any = 
         raise FileNotFoundError(f"file: {f} does not exist; {_HINT}")
     if f.is_dir():
         raise ValueError(f"file: {f} is a folder; read a folder with load_crazypad")
-    airborne = bool(airborne)
+    airborne = boolean(airborne, "airborne")
     span = _margin(margin)
     wanted = _columns(columns)
     if kind is not None:
@@ -295,6 +292,9 @@ def read_crazypad_log(file: str | Path, *, airborne: bool = True, margin: Any = 
         names = wanted
     if ts.size == 0:
         raise ValueError(f"file: {f} holds no samples")
+    if ts[-1] - ts[0] > _MAX_SPAN_MS:
+        raise ValueError(f"file: {f}: column 'timestamp' spans {ts[-1] - ts[0]:.3g} ms, more than a time index "
+                         "can hold; not a CrazyPAD log (time stamps in ms)")
     bad = np.flatnonzero(np.diff(ts) <= 0)
     if bad.size:
         i = int(bad[0])
@@ -377,6 +377,7 @@ def load_crazypad(path: str | Path | None = None, *, condition: str | Sequence[s
     """
     root = _as_path(path)
     kind = option(kind, "kind", _KINDS)
+    airborne = boolean(airborne, "airborne")
     span = _margin(margin)
     wanted = _columns(columns)
     logs = [r for r in _log_files(root) if r[0] == kind]
