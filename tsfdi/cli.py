@@ -343,11 +343,11 @@ def _fit(args: argparse.Namespace) -> int:
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     try:
-        res.save(args.out)
+        written = res.save(args.out)
     except OSError as exc:
         raise _write_error("--out", args.out, exc) from None
     print(f"{model.upper()}({res.lags}) on {list(df.columns)} ({res.nobs} samples): BIC {res.bic:.6g}, "
-          f"RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}; saved to {args.out}")
+          f"RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}; saved to {written}")
     return 0
 
 
@@ -381,8 +381,6 @@ def _identify(args: argparse.Namespace) -> int:
     for spec in args.models:
         name, _, path = spec.rpartition("=")
         name = name or Path(path).stem
-        if not Path(path).exists():
-            raise ValueError(f"model file {path} does not exist")
         try:
             models[name] = load(path)
         except (OSError, ValueError, TypeError) as exc:
