@@ -438,3 +438,17 @@ def test_fleet_bad_types():
         FleetSpread.from_spec("weight=0.1")
     assert FleetSpread.from_spec("default") == FleetSpread()
     assert FleetSpread.from_spec("mass=0.1, cg_offset=0") == FleetSpread(mass=0.1, cg_offset=0.0)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(records_per_case=10**12), "records_per_case"),
+    (dict(duration=1e300), "2 GiB"),
+    (dict(dt=1e-300), "2 GiB"),
+    (dict(speed=1e300), "speed"),
+    (dict(states=()), "states"),
+    (dict(turbulence=[]), "turbulence"),
+])
+def test_make_dataset_bounds_are_checked_before_allocating(kwargs, match):
+    """Issue 18: unbounded sizes and impossible speeds are refused by name, before anything is integrated."""
+    with pytest.raises(ValueError, match=match):
+        make_hexacopter_dataset(**kwargs)

@@ -222,7 +222,8 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
     sol, info, ier, msg = optimize.fsolve(resid, [0.0, om_h, 0.0], full_output=True, xtol=1e-14)
     # (fsolve may stop at machine precision with ier != 1; the balance residual decides)
     if ier != 1 and np.max(np.abs(resid(sol))) > 1e-10:
-        raise RuntimeError(f"trim did not converge at speed={speed}: {msg}")
+        raise ValueError(f"speed={speed} m/s: the aircraft has no trim (steady level flight) at this speed "
+                         f"({msg.strip()})")
     x = build(sol)
     d = _core.derivative(x, x[12:], g0, P, alive)
     integ = np.array([sol[0], 0.0, sol[1], 0.0, sol[2], 0.0])
@@ -258,7 +259,8 @@ def _trim_asymmetric(speed: float, altitude: float, params: HexacopterParameters
 
     sol, info, ier, msg = optimize.fsolve(resid, [0.0, 0.0, om_h, 0.0, 0.0, 0.0], full_output=True, xtol=1e-14)
     if ier != 1 and np.max(np.abs(resid(sol))) > 1e-10:
-        raise RuntimeError(f"trim did not converge at speed={speed}: {msg}")
+        raise ValueError(f"speed={speed} m/s: the aircraft has no trim (steady level flight) at this speed "
+                         f"({msg.strip()})")
     x = build(sol)
     d = _core.derivative(x, x[12:], g0, P, alive)
     ph, th, om0, omr, omp, omy = sol
@@ -275,6 +277,12 @@ def _rotor_index(failed_rotor) -> int:
     if not 0 <= r <= 6:
         raise ValueError(f"failed_rotor must be 1..6 (0 or None: healthy), got {failed_rotor!r}")
     return r
+
+
+#: largest commanded speed (m/s): the shipped aircraft has no trim much beyond 30 m/s
+MAX_SPEED = 40.0
+#: most values an array of a simulation may hold (2 GiB of float64), checked before integrating
+MAX_VALUES = 2**28
 
 
 def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 5.0,
@@ -330,7 +338,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     import xarray as xr
 
     duration = float_like(duration, "duration", minimum=0.0, strict_min=True)
-    speed = float_like(speed, "speed", minimum=0.0)
+    speed = float_like(speed, "speed", minimum=0.0, maximum=MAX_SPEED)
     dt = float_like(dt, "dt", minimum=0.0, strict_min=True)
     fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
     batch = int_like(batch, "batch", minimum=1)
@@ -378,6 +386,10 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         ftimes.append(t if r else np.nan)
     seeds = [int_like(s, "seed", minimum=0) for s in per("seed", seed)]
 
+    if duration / dt * batch * 19 > MAX_VALUES or duration * fs * records * len(CHANNELS) > MAX_VALUES:
+        raise ValueError(f"records={records}, duration={duration:g} s, dt={dt:g} s, fs={fs:g} Hz, batch={batch}: the "
+                         f"integration state or the output would hold more than {MAX_VALUES:,} values (2 GiB); "
+                         "simulate fewer or shorter records per call")
     n = int(round(duration / dt))
     n -= n % q
     if n < q:
@@ -478,6 +490,11 @@ def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, dur
     """
     records_per_case = int_like(records_per_case, "records_per_case", minimum=1)
     seed = int_like(seed, "seed", minimum=0)
+    for name, value in (("states", states), ("turbulence", turbulence)):
+        if isinstance(value, str) or not len(value):
+            raise ValueError(f"{name} must be a non-empty sequence, got {value!r}")
+    if records_per_case * len(states) * len(turbulence) > MAX_VALUES:
+        raise ValueError(f"records_per_case={records_per_case}: the data set would hold more than {MAX_VALUES:,} values")
     rows = [(s, t) for s in states for t in turbulence for _ in range(records_per_case)]
     rotors = [0 if s == "healthy" else _state_rotor(s) for s, _ in rows]
     seeds = [int(np.random.SeedSequence([seed, k]).generate_state(1)[0]) for k in range(len(rows))]
