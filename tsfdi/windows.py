@@ -8,9 +8,9 @@ through each model and keeps the residuals (with their prefix sums for the likel
 :meth:`ResidualWindows.statistics` then gives, for any window length, step and test, the statistic, threshold,
 p-value and rejection of every window, and a Gaussian log-likelihood score, in one frozen
 :class:`WindowStatistics`. For a fixed model the residuals of a signal window are a slice of the record's
-residuals (samples ``[s + p, s + W)`` of window ``[s, s + W)`` for an order-``p`` model), so the Ljung-Box and
-F statistics of all windows come from prefix sums
-(:func:`~tsfdi.detection.ljungbox_windows`, :meth:`~tsfdi.FTest.window_statistic`); other tests are applied
+residuals (samples ``[s + p, s + W)`` of window ``[s, s + W)`` for an order-``p`` model), so the Ljung-Box, F
+and mean-shift statistics of all windows come from prefix sums (:func:`~tsfdi.detection.ljungbox_windows`,
+:meth:`~tsfdi.FTest.window_statistic`, :meth:`~tsfdi.MeanTest.window_statistic`); other tests are applied
 window by window through their ``test`` method.
 
 The decision rule of Dutta et al. (paper 003): a model is *accepted* when its residual test does not reject
@@ -28,6 +28,7 @@ import numpy as np
 from tsfdi._data import as_signal
 from tsfdi._validation import boolean, int_like, option
 from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import ARXResults
@@ -335,7 +336,7 @@ class ResidualWindows:
             raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model {name!r}, "
                              f"got {window}")
         ds = None
-        if (isinstance(test, LjungBox) and test.multivariate is None) or (
+        if (isinstance(test, LjungBox) and test.multivariate is None) or isinstance(test, MeanTest) or (
                 isinstance(test, FTest) and test.alternative == "greater"):
             stat = test.window_statistic(e, n, step, **ref)
             thr, pv = test.threshold_pvalue(stat, n, **ref)

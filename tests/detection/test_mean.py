@@ -76,3 +76,16 @@ def test_bad_reference_variance_is_named():
         t.test(np.ones((10, 2)), reference_variance=[1.0, -1.0])
     with pytest.raises(ValueError, match="alpha"):
         tsfdi.MeanTest(alpha=1.5)
+
+
+def test_windowed_engine_agrees_with_detect_window_by_window():
+    rng = np.random.default_rng(8)
+    y = rng.standard_normal((1200, 2))
+    res = tsfdi.VAR(y, 2, trend="c").fit()
+    x = rng.standard_normal((400, 2)) + [0.0, 0.4]
+    t = tsfdi.MeanTest(alpha=0.01)
+    ws = tsfdi.ResidualWindows({"m": res}).fit(x).statistics(t, window=100, step=50)
+    for i, s in enumerate(ws.starts):
+        d = tsfdi.detect(x[s:s + 100], res, t)
+        np.testing.assert_allclose(ws.statistic[i, 0], d.statistic, rtol=1e-10)
+        assert ws.reject[i, 0] == d.reject
