@@ -178,8 +178,9 @@ def test_bad_input():
         tsfdi.LjungBox(10).test(bad)
     with pytest.raises(ValueError, match="resid is too short"):
         tsfdi.LjungBox(50).test(x)
-    with pytest.raises(ValueError, match="constant"):
-        tsfdi.LjungBox(5).test(np.ones(50))
+    # a constant residual (a frozen sensor) is a documented outcome, not an error: Q = inf, p-value 0, reject
+    d = tsfdi.LjungBox(5).test(np.ones(50))
+    assert d.reject and d.statistic[0] == np.inf and d.pvalue[0] == 0 and d.details["constant"] == ("y0",)
     with pytest.raises(ValueError, match="lags"):
         tsfdi.LjungBox(0)
     with pytest.raises(TypeError, match="lags"):

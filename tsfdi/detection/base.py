@@ -5,14 +5,67 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+import numba
 import numpy as np
 
 from tsfdi._data import Signal, as_signal
-from tsfdi._validation import option, probability
+from tsfdi._validation import int_like, option, probability
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
 
 __all__ = ["CalibratedTest", "ResidualTest"]
+
+
+def rescale_exponent(x: np.ndarray, axis: int = 0, *, within: int = 256) -> np.ndarray:
+    """Exponent ``e`` per column (``axis=0``; per row with ``axis=1``) of a finite 2-D array such that the values
+    ``x * 2**-e`` can be squared and multiplied without overflow or underflow: 0 (nothing to do) when ``max |x|`` is
+    within [2**-within, 2**within], else the exponent of ``max |x|`` (the rescaled maximum is in [0.5, 1);
+    ``within=0``: always that exponent).
+
+    ``np.ldexp(x, -e)`` rescales by a power of two, which is exact: a statistic that does not depend on the scale
+    (a correlation, a variance ratio, a Z-score) is bit for bit the one of the original values, while values near
+    1e300 or 1e-300 no longer give squares of ``inf`` or 0.
+    """
+    e = np.frexp(max_abs(x, axis))[1]
+    return np.where(np.abs(e) > within, e, 0)
+
+
+def max_abs(x: np.ndarray, axis: int = 0) -> np.ndarray:
+    """``max |x|`` per column (``axis=0``) or row (``axis=1``) of a finite 2-D array, in one pass over memory."""
+    if x.size < 4096:                                   # small: numpy, without the compiled call's overhead
+        return np.abs(x).max(axis=axis)
+    return _max_abs_columns(x if axis == 0 else x.T)
+
+
+@numba.njit(cache=True, nogil=True)
+def _max_abs_columns(x):  # pragma: no cover - compiled
+    out = np.zeros(x.shape[1])
+    for i in range(x.shape[0]):
+        for j in range(x.shape[1]):
+            v = abs(x[i, j])
+            if v > out[j]:
+                out[j] = v
+    return out
+
+
+def scaled_ratio(value: np.ndarray, ref: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """``value * 4**scale / ref`` (a variance ratio of residuals rescaled by ``2**-scale``, :func:`rescale_exponent`)
+    without overflow or underflow on the way, exact; a ratio beyond the float range is refused (the reference
+    variance cannot be the residual's)."""
+    with np.errstate(over="ignore", divide="ignore"):
+        if not scale.any():
+            f = value / ref                             # a division is exact to rounding, subnormal or not
+        else:
+            rescaled = np.ldexp(ref, -2 * scale)
+            if np.all((rescaled >= np.finfo(np.float64).tiny) & (rescaled <= np.finfo(np.float64).max)):
+                f = value / rescaled
+            else:
+                mant, exp = np.frexp(ref)               # the quotient by the mantissa, then the exponents
+                f = np.ldexp(value / mant, 2 * scale - exp)
+    if f.size and not np.isfinite(f.max()):
+        raise ValueError(f"resid has a variance beyond 1e308 times reference_variance ({ref}): the variance ratio is "
+                         "beyond the float range; reference_variance must be the baseline's residual variance")
+    return f
 
 
 class ResidualTest:
@@ -71,8 +124,8 @@ class ResidualTest:
     @staticmethod
     def family_alpha(channel_alpha: float, k: int) -> tuple[float, float]:
         r"""Size of the signal-level decision "some channel rejects" of ``k`` channels tested at
-        ``channel_alpha`` each: :math:`1 - (1 - lpha_c)^k` when the channels are independent, and the bound
-        :math:`\min(1, k lpha_c)` that holds whatever their dependence (Bonferroni)."""
+        ``channel_alpha`` each: :math:`1 - (1 - \alpha_c)^k` when the channels are independent, and the bound
+        :math:`\min(1, k \alpha_c)` that holds whatever their dependence (Bonferroni)."""
         return float(-np.expm1(k * np.log1p(-channel_alpha))), float(min(1.0, k * channel_alpha))
 
 
@@ -155,23 +208,30 @@ class CalibratedTest(ResidualTest):
         Raises
         ------
         ValueError
-            With the empirical threshold, if the test is not calibrated or was calibrated on another number
-            of channels.
+            If ``statistic`` holds NaN; with the empirical threshold, if the test is not calibrated or was calibrated
+            on another number of channels.
 
         Notes
         -----
         ``threshold="theoretical"``: :meth:`null_threshold` and the upper-tail probability of the null
-        distribution -- for the Ljung-Box test :math:`\chi^2_{1-lpha}(r - 	ext{model\_df})` and
-        :math:`P(\chi^2(r - 	ext{model\_df}) > Q)` (Dutta et al., paper 003, eqs. 13-14); for the F test
-        :math:`f_{1-lpha}(N_u, N_0 - d)` and :math:`P(\mathcal F(N_u, N_0 - d) > F)` (eqs. 9-10, one-sided;
+        distribution -- for the Ljung-Box test :math:`\chi^2_{1-\alpha}(r - \text{model\_df})` and
+        :math:`P(\chi^2(r - \text{model\_df}) > Q)` (Dutta et al., paper 003, eqs. 13-14); for the F test
+        :math:`f_{1-\alpha}(N_u, N_0 - d)` and :math:`P(\mathcal F(N_u, N_0 - d) > F)` (eqs. 9-10, one-sided;
         the two-sided rule is in :meth:`decision`). ``alpha`` is the type I risk per tested window and channel
         (``alpha / k`` with ``correction="bonferroni"``).
 
         ``threshold="empirical"``: the calibrated ``threshold_`` and the empirical p-value
         :math:`p = (1 + \#\{s_i \ge s\}) / (n + 1)` of the calibration sample (:meth:`calibrate`; Hansen et
         al., paper 002, Fig. 2).
+
+        A statistic of ``inf`` (the Ljung-Box :math:`Q` of a constant window, a frozen sensor) exceeds every
+        threshold and has p-value 0 with either threshold.
         """
-        s = np.asarray(statistic, dtype=np.float64)
+        s = statistic_array(statistic)
+        if s.ndim == 0 or s.shape[-1] == 0:
+            raise ValueError(f"statistic must have one column per channel, got shape {s.shape}")
+        if np.isnan(s).any():
+            raise ValueError(f"statistic contains {int(np.isnan(s).sum())} NaN value(s)")
         k = s.shape[-1]
         if self.empirical:
             self._check_calibrated(k)
@@ -200,15 +260,16 @@ class CalibratedTest(ResidualTest):
         -------
         Decision
             Channel ``c`` rejects when ``statistic[c] > threshold[c]`` (:meth:`threshold_pvalue`); the signal
-            rejects when any channel rejects. ``details["threshold_method"]`` is ``"theoretical"`` or
-            ``"empirical"`` (then with the calibration's details).
+            rejects when any channel rejects (a statistic of ``inf``, a constant window, rejects with p-value 0).
+            ``details["threshold_method"]`` is ``"theoretical"`` or ``"empirical"`` (then with the calibration's
+            details).
 
         Notes
         -----
-        Ljung-Box: accept H0 when :math:`Q \le \chi^2_{1-lpha}(r - 	ext{model\_df})` (Dutta et al., paper
-        003, eq. 14). F test: accept H0 when :math:`F \le f_{1-lpha}(N_u, N_0 - d)` (eq. 10).
+        Ljung-Box: accept H0 when :math:`Q \le \chi^2_{1-\alpha}(r - \text{model\_df})` (Dutta et al., paper
+        003, eq. 14). F test: accept H0 when :math:`F \le f_{1-\alpha}(N_u, N_0 - d)` (eq. 10).
         """
-        stat = np.array(statistic, dtype=np.float64, ndmin=1)
+        stat = np.atleast_1d(statistic_array(statistic))
         if stat.ndim != 1:
             raise ValueError(f"statistic must hold one value per channel, got shape {stat.shape}")
         k = stat.shape[0]
@@ -287,7 +348,7 @@ class CalibratedTest(ResidualTest):
         -----
         Hansen et al. (paper 002, Fig. 2) take the threshold from the distribution of the detection statistic in
         normal operation for a required false-alarm probability. Two estimators of the per-channel
-        :math:`1 - lpha` quantile (:meth:`_channel_alpha` with ``correction``):
+        :math:`1 - \alpha` quantile (:meth:`_channel_alpha` with ``correction``):
 
         - ``threshold="calibrated"`` (or ``"theoretical"`` before calibration): scaled chi-square laws
           :math:`c_j\,\chi^2(\nu_j)` fitted to each record's windows by their first two moments, mixed over the
@@ -314,9 +375,11 @@ class CalibratedTest(ResidualTest):
             recs = list(resid) if isinstance(resid, (list, tuple)) else [resid]
             if not recs:
                 raise ValueError("resid is an empty sequence")
-            n = int(window) - lags
+            window = int_like(window, "window", minimum=1)
+            n = window - lags
             if n < 2:
-                raise ValueError(f"window ({window}) must exceed the model order of the held-out residuals ({lags})")
+                raise ValueError(f"window ({window}) must exceed the model order of the held-out residuals ({lags}) "
+                                 "by at least 2")
             reference = self._calibration_reference(recs, reference)
             stats_, groups, n_ind = [], [], 0
             for i, r in enumerate(recs):
@@ -330,11 +393,16 @@ class CalibratedTest(ResidualTest):
                 raise ValueError(f"resid: no record holds a window of {n} residual samples")
             stat = np.concatenate(stats_)
             groups = np.concatenate(groups) if len(stats_) > 1 else None
+            frozen = ~np.isfinite(stat)
+            if frozen.any():
+                raise ValueError(f"resid holds {int(frozen.any(axis=1).sum())} constant window(s) (a frozen sensor, "
+                                 f"statistic inf) in channel(s) {np.flatnonzero(frozen.any(axis=0)).tolist()}: "
+                                 "healthy calibration records must not contain constant stretches")
         else:
             if resid is not None:
                 raise TypeError("give resid or statistic, not both")
             stat = as_signal(statistic, "statistic", allow_constant=True).values
-            n_ind = None if independent is None else int(independent)
+            n_ind = int_like(independent, "independent", minimum=0, optional=True)
             groups = None
         stat = np.asarray(stat, dtype=np.float64)
         stat = stat.reshape(stat.shape[0], -1)
@@ -386,7 +454,7 @@ class CalibratedTest(ResidualTest):
         out = np.empty_like(s2)
         for c, est in enumerate(self.thresholds_):
             out[:, c] = est.pvalue(s2[:, c])
-        return out.reshape(s.shape)
+        return np.where(s2 == np.inf, 0.0, out).reshape(s.shape)   # a constant window: beyond any calibration
 
     def _calibration_details(self) -> dict:
         method = self.thresholds_[0].method_ if isinstance(self.thresholds_[0], ScaledChi2Threshold) else None
@@ -401,6 +469,16 @@ class CalibratedTest(ResidualTest):
         else:
             out["pvalue_method"] = "empirical: (1 + #{calibration >= statistic}) / (n + 1)"
         return out
+
+
+def statistic_array(statistic: Any) -> np.ndarray:
+    """Values of a test statistic as a float array (``TypeError`` naming ``statistic`` for anything else)."""
+    if isinstance(statistic, (str, bytes)):
+        raise TypeError(f"statistic must be numbers, got {statistic!r}")
+    try:
+        return np.asarray(statistic, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"statistic must be numbers, got {type(statistic).__name__}") from None
 
 
 def baseline_variance(results: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -2,12 +2,16 @@
 
 The data-driven threshold (:class:`~tsfdi.detection.threshold.EmpiricalThreshold`) lives in
 :mod:`tsfdi.detection.threshold`. ``scale`` is the standard deviation of the healthy residual throughout (the
-compiled kernels receive the coefficient ``coef = 1 / (2 scale^2)`` of eq. 3).
+compiled kernels receive the coefficient ``coef = 1 / (2 scale^2)`` of eq. 3). The kernels see the residual and
+the scale both divided by the power of two nearest the scale (:func:`_unit`, exact), so that :math:`g` does not
+depend on their common scale, and a window never longer than the record (the statistic is the same, the memory
+bounded by the data).
 """
 
 from __future__ import annotations
 
 import copy
+import math
 from typing import Any
 
 import numba
@@ -16,7 +20,7 @@ from scipy import special
 
 from tsfdi._data import as_signal
 from tsfdi._validation import float_like, int_like, option
-from tsfdi.detection.base import ResidualTest, baseline_variance
+from tsfdi.detection.base import ResidualTest, baseline_variance, max_abs, rescale_exponent
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold
 
@@ -107,11 +111,12 @@ def _direct(x, window, coef):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _ring_update(buf, head, count, value, window, coef):  # pragma: no cover - compiled
-    """Push one sample into a ring buffer and return (g, best n, jump, new head, new count)."""
-    head = (head + 1) % window
+def _ring_update(buf, head, count, value, coef):  # pragma: no cover - compiled
+    """Push one sample into a ring buffer (the last ``len(buf)`` samples) and return (g, best n, jump, new head,
+    new count)."""
+    head = (head + 1) % buf.shape[0]
     buf[head] = value
-    if count < window:
+    if count < buf.shape[0]:
         count += 1
     s = 0.0
     gmax = -1.0
@@ -127,8 +132,50 @@ def _ring_update(buf, head, count, value, window, coef):  # pragma: no cover - c
             sbest = s
         idx -= 1
         if idx < 0:
-            idx = window - 1
+            idx = buf.shape[0] - 1
     return gmax * coef, nbest, sbest / nbest, head, count
+
+
+#: Largest |residual| / scale the kernels accept (2**400, about 2.6e120): g of a window stays far below 1e308.
+_MAX_RATIO_EXP = 400
+
+
+def _unit(x: np.ndarray, scale: np.ndarray, name: str = "resid", *,
+          always: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``x`` and ``scale`` (per column) divided by the power of two nearest ``scale``, and its exponents (unchanged,
+    exponents 0, when both are within 2**-256 .. 2**256, unless ``always``).
+
+    The division is exact, so g (a function of ``x / scale``) is bit for bit unchanged, while ``x ** 2`` and
+    ``scale ** 2`` no longer overflow or underflow. A residual more than 2**400 scales from zero is refused (its g
+    would be beyond the float range: the scale is wrong).
+    """
+    e = np.frexp(scale)[1]
+    top = max_abs(x.reshape(x.shape[0], -1)) if x.size else np.zeros(1)
+    with np.errstate(over="ignore"):
+        limit = np.ldexp(1.0, e + _MAX_RATIO_EXP)
+    if np.any(top > limit):
+        ratio = float(np.max(np.log10(top) - np.log10(scale)))
+        raise ValueError(f"{name} is up to 1e{ratio:.0f} times scale ({scale}): the GLRT statistic would be beyond "
+                         "the float range; scale must be the residual's standard deviation")
+    if not always and not np.any(np.abs(e) > 256) and not np.any(top > 2.0 ** 256):
+        return x, scale, np.zeros_like(e)               # squares of sums and 1 / scale**2 are floats: nothing to do
+    return np.ldexp(x, -e), np.ldexp(scale, -e), e
+
+
+def _std(x: np.ndarray) -> np.ndarray:
+    """Sample standard deviation per column, computed on ``x`` rescaled by a power of two (exact, no overflow)."""
+    e = rescale_exponent(x)
+    if not e.any():
+        return x.std(axis=0, ddof=1)
+    return np.ldexp(np.ldexp(x, -e).std(axis=0, ddof=1), e)
+
+
+def _chi2_1_isf(log_p: float) -> float:
+    """Upper quantile of the chi-square(1) law at probability ``exp(log_p)``, also below the float range (log
+    domain): ``chdtri`` down to 1e-300, then :math:`t = \\Phi^{-1}(p / 2)^2` by ``ndtri_exp`` of the log."""
+    if log_p >= math.log(1e-300):
+        return float(special.chdtri(1.0, np.exp(log_p)))
+    return float(special.ndtri_exp(log_p - np.log(2.0)) ** 2)
 
 
 def glrt_direct(resid: Any, window: int, scale: float) -> np.ndarray:
@@ -139,7 +186,8 @@ def glrt_direct(resid: Any, window: int, scale: float) -> np.ndarray:
     x = as_signal(resid, "resid", vector=False, allow_constant=True).values[:, 0]
     window = int_like(window, "window", minimum=1)
     scale = float_like(scale, "scale", minimum=0.0, strict_min=True)
-    return _direct(x, window, 0.5 / scale ** 2)
+    xu, su, _ = _unit(x, np.float64(scale))
+    return _direct(xu, min(window, x.shape[0]), 0.5 / su ** 2)
 
 
 # ---------------------------------------------------------------------------------------------- results
@@ -212,7 +260,18 @@ class GLRT(ResidualTest):
     :math:`P(g(k) > \gamma) \le M \, P(\chi^2(1) > 2\gamma)`, so :math:`\gamma = \chi^2_{1-\alpha/M}(1)/2`
     has a per-sample false-alarm rate of at most :math:`\alpha` -- **valid only for iid residuals**. For
     correlated residuals (the usual case in flight, Hansen et al.) the rate is far higher; use
-    :class:`~tsfdi.EmpiricalThreshold`.
+    :class:`~tsfdi.EmpiricalThreshold`. The quantile is computed from the logarithm of :math:`\alpha / M`, so it
+    is finite for any ``alpha`` and ``window`` (about 710 at :math:`\alpha / M = 10^{-310}`).
+
+    Numerics and resources: :math:`g` depends on the residual only through ``resid / scale``; both are divided by
+    the power of two nearest ``scale`` before anything is squared (exact), so residuals and scales near 1e300 or
+    1e-300 give the :math:`g` of values near 1, and a residual more than about 1e120 scales from zero is refused
+    (``ValueError``: the scale is wrong). A window longer than the record is the record (:math:`j` cannot precede
+    the first sample): memory and time grow with the data, never with ``window``, and a :meth:`stream` keeps at
+    most ``window`` past samples, allocated as they arrive. A constant residual is tested like any other: with a
+    known ``scale`` a constant level :math:`A` gives :math:`g = n A^2 / (2\sigma^2)` (a frozen sensor away from
+    the healthy mean alarms; a residual frozen at exactly 0 does not); without ``scale`` it cannot give its own
+    scale (``ValueError``).
 
     References
     ----------
@@ -243,7 +302,12 @@ class GLRT(ResidualTest):
     def _check_scale(scale: Any) -> np.ndarray | None:
         if scale is None:
             return None
-        s = np.atleast_1d(np.asarray(scale, dtype=np.float64))
+        if isinstance(scale, (str, bytes, bool, np.bool_)):
+            raise TypeError(f"scale must be a positive finite number or one per channel, got {scale!r}")
+        try:
+            s = np.atleast_1d(np.asarray(scale, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise TypeError(f"scale must be a positive finite number or one per channel, got {scale!r}") from None
         if s.ndim != 1 or not np.all(np.isfinite(s)) or np.any(s <= 0):
             raise ValueError(f"scale must be a positive finite number or one per channel, got {scale!r}")
         return s
@@ -256,7 +320,7 @@ class GLRT(ResidualTest):
             self.threshold.check_fitted()
             return self.threshold.threshold_
         if self.threshold == "theoretical":
-            return float(special.chdtri(1.0, self.alpha / self.window) / 2.0)
+            return _chi2_1_isf(math.log(self.alpha) - math.log(self.window)) / 2.0
         return float(self.threshold)
 
     @property
@@ -275,7 +339,7 @@ class GLRT(ResidualTest):
         """
         sig = as_signal(healthy, "healthy", min_nobs=2)
         if self.scale is None:
-            self.scale_ = sig.values.std(axis=0, ddof=1)
+            self.scale_ = _std(sig.values)
         g = self._g_values(sig.values, self._scale_for(sig.nchan, sig.values))
         if isinstance(self.threshold, EmpiricalThreshold):
             self.threshold = copy.copy(self.threshold).calibrate(g.ravel())
@@ -294,7 +358,10 @@ class GLRT(ResidualTest):
         s = self._check_scale(scale) if scale is not None else (
             self.scale if self.scale is not None else getattr(self, "scale_", None))
         if s is None:
-            s = values.std(axis=0, ddof=1)
+            if values.shape[0] < 2:
+                raise ValueError("resid is too short to estimate scale from it: 1 sample, at least 2 are needed; "
+                                 "pass scale")
+            s = _std(values)
             if np.any(s <= 0):
                 raise ValueError("resid is constant: scale cannot be estimated from it; pass scale")
         if s.shape[0] == 1 and k > 1:
@@ -305,20 +372,24 @@ class GLRT(ResidualTest):
 
     # ------------------------------------------------------------------ batch
     def _g_values(self, x: np.ndarray, scale: np.ndarray) -> np.ndarray:
+        xu, su, _ = _unit(x, scale)
+        window = min(self.window, x.shape[0])
         g = np.empty(x.shape)
         for c in range(x.shape[1]):
-            g[:, c] = _scan_g(np.ascontiguousarray(x[:, c]), 0, self.window, 0.5 / scale[c] ** 2)
+            g[:, c] = _scan_g(np.ascontiguousarray(xu[:, c]), 0, window, 0.5 / su[c] ** 2)
         return g
 
     def _scan_values(self, x: np.ndarray, scale: np.ndarray) -> GLRTScan:
         n, k = x.shape
+        xu, su, e = _unit(x, scale)
+        window = min(self.window, n)
         g = np.empty((n, k))
         ci = np.empty((n, k), dtype=np.int64)
         jump = np.empty((n, k))
         pos = np.arange(n)
         for c in range(k):
-            gc, best, jc = _scan(np.ascontiguousarray(x[:, c]), 0, self.window, 0.5 / scale[c] ** 2)
-            g[:, c], ci[:, c], jump[:, c] = gc, pos - best + 1, jc
+            gc, best, jc = _scan(np.ascontiguousarray(xu[:, c]), 0, window, 0.5 / su[c] ** 2)
+            g[:, c], ci[:, c], jump[:, c] = gc, pos - best + 1, np.ldexp(jc, e[c])
         return GLRTScan(g, ci, jump)
 
     def scan(self, resid: Any, scale: Any = None) -> GLRTScan:
@@ -362,17 +433,18 @@ class GLRT(ResidualTest):
         change = np.full(k, -1, dtype=np.int64)
         jump = np.full(k, np.nan)
         alarms = []
+        xu, su, e = _unit(sig.values, s)
+        window = min(self.window, sig.nobs)
         for c in range(k):
             idx = np.flatnonzero(alarm[:, c])
             alarms.append(idx)
             if idx.size:
                 i0 = int(idx[0])
-                lo = max(0, i0 - self.window + 1)
-                _, best, jc = _scan(np.ascontiguousarray(sig.values[lo:i0 + 1, c]), i0 - lo, self.window,
-                                    0.5 / s[c] ** 2)
+                lo = max(0, i0 - window + 1)
+                _, best, jc = _scan(np.ascontiguousarray(xu[lo:i0 + 1, c]), i0 - lo, window, 0.5 / su[c] ** 2)
                 first[c] = i0
                 change[c] = i0 - best[0] + 1
-                jump[c] = jc[0]
+                jump[c] = np.ldexp(jc[0], e[c])
         labels = sig.index if sig.index is not None else None
 
         def _label(i: int) -> Any:
@@ -441,12 +513,15 @@ class GLRTStream:
         ML change instant (sample number) and jump of the last sample, per channel.
     """
 
-    def __init__(self, window: int, scale: np.ndarray, threshold: float) -> None:
-        self.window = int(window)
-        self.scale = np.atleast_1d(np.asarray(scale, dtype=np.float64))
+    def __init__(self, window: int, scale: Any, threshold: float) -> None:
+        self.window = int_like(window, "window", minimum=1)
+        self.scale = GLRT._check_scale(scale)
+        if self.scale is None:
+            raise TypeError("scale is needed for a stream: the standard deviation of the healthy residual per channel")
         self.nchan = self.scale.shape[0]
-        self.threshold = float(threshold)
-        self._coef = 0.5 / self.scale ** 2
+        self.threshold = float_like(threshold, "threshold")
+        self._exp = np.frexp(self.scale)[1]               # samples are kept divided by 2**_exp (exact), see _unit
+        self._coef = 0.5 / np.ldexp(self.scale, -self._exp) ** 2
         self.reset()
 
     def __repr__(self) -> str:
@@ -455,8 +530,9 @@ class GLRTStream:
 
     def reset(self) -> None:
         """Forget all samples."""
-        self._buf = np.zeros((self.nchan, self.window))
-        self._head = np.full(self.nchan, self.window - 1, dtype=np.int64)
+        # the ring buffer grows with the samples seen up to ``window``: memory is bounded by the data, not the option
+        self._buf = np.zeros((self.nchan, min(self.window, 64)))
+        self._head = np.full(self.nchan, self._buf.shape[1] - 1, dtype=np.int64)
         self._count = np.zeros(self.nchan, dtype=np.int64)
         self.k = 0
         self.g = np.zeros(self.nchan)
@@ -464,6 +540,28 @@ class GLRTStream:
         self.first_alarm: int | None = None
         self.change_index = np.full(self.nchan, -1, dtype=np.int64)
         self.jump = np.full(self.nchan, np.nan)
+
+    def _history(self, c: int) -> np.ndarray:
+        """The samples of channel ``c`` in the buffer, oldest first (rescaled)."""
+        cnt = int(self._count[c])
+        return np.roll(self._buf[c], -(int(self._head[c]) + 1))[self._buf.shape[1] - cnt:] if cnt else np.zeros(0)
+
+    def _keep(self, rows: list, spare: int = 0) -> None:
+        """Refill the buffer with the last ``window`` samples of every channel's ``rows`` (oldest first), growing it
+        (doubling, up to ``window``) when they and ``spare`` more samples do not fit."""
+        cnt = min(self.window, len(rows[0]))
+        cap = self._buf.shape[1]
+        if cnt + spare > cap:
+            cap = min(self.window, max(cnt + spare, 2 * cap))
+        buf = np.zeros((self.nchan, cap))
+        for c, r in enumerate(rows):
+            buf[c, :cnt] = r[len(r) - cnt:]
+        self._buf = buf
+        self._head[:] = (cnt - 1) % cap
+        self._count[:] = cnt
+
+    def _unit_sample(self, v: np.ndarray, name: str) -> np.ndarray:
+        return _unit(v.reshape(-1, self.nchan), self.scale, name, always=True)[0]
 
     def update(self, x: Any) -> np.ndarray:
         """Add one sample (a float, or one value per channel).
@@ -473,19 +571,26 @@ class GLRTStream:
         ndarray, shape (nchan,)
             g of the sample per channel (shape ``(1,)`` for one channel).
         """
-        v = np.atleast_1d(np.asarray(x, dtype=np.float64))
+        if isinstance(x, (str, bytes, bool, np.bool_)) or x is None:
+            raise TypeError(f"x must be a number or one number per channel, got {x!r}")
+        try:
+            v = np.atleast_1d(np.asarray(x, dtype=np.float64))
+        except (TypeError, ValueError):
+            raise TypeError(f"x must be a number or one number per channel, got {x!r}") from None
         if v.shape != (self.nchan,):
             raise ValueError(f"x must hold {self.nchan} value(s), got shape {np.shape(x)}")
         if not np.all(np.isfinite(v)):
             raise ValueError(f"x contains NaN/inf at sample {self.k}")
+        vu = self._unit_sample(v, "x")[0]
+        if self._count[0] == self._buf.shape[1] < self.window:     # full but shorter than the window: grow
+            self._keep([self._history(c) for c in range(self.nchan)], spare=1)
         g = np.empty(self.nchan)
         for c in range(self.nchan):
-            gc, nb, jc, h, cnt = _ring_update(self._buf[c], self._head[c], self._count[c], v[c], self.window,
-                                              self._coef[c])
+            gc, nb, jc, h, cnt = _ring_update(self._buf[c], self._head[c], self._count[c], vu[c], self._coef[c])
             self._head[c], self._count[c] = h, cnt
             g[c] = gc
             self.change_index[c] = self.k - nb + 1
-            self.jump[c] = jc
+            self.jump[c] = np.ldexp(jc, self._exp[c])
         self._finish(g)
         return g.copy()
 
@@ -504,7 +609,10 @@ class GLRTStream:
         ndarray, shape (n, nchan)
             g of every sample of the block per channel (also for ``(n,)`` input).
         """
-        arr = np.asarray(xs, dtype=np.float64)
+        try:
+            arr = np.asarray(xs, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"xs must be an array of numbers, got {type(xs).__name__}") from None
         arr2 = arr[:, None] if arr.ndim == 1 else arr
         if arr2.ndim != 2 or arr2.shape[1] != self.nchan:
             raise ValueError(f"xs must have shape (n,) or (n, {self.nchan}), got {arr.shape}")
@@ -513,22 +621,18 @@ class GLRTStream:
         n = arr2.shape[0]
         if n == 0:
             return np.empty((0, self.nchan))
+        xu = self._unit_sample(arr2, "xs")
         out = np.empty((n, self.nchan))
+        rows = []
         for c in range(self.nchan):
             cnt = int(self._count[c])
-            hist = np.roll(self._buf[c], -(int(self._head[c]) + 1))[self.window - cnt:] if cnt else np.zeros(0)
-            full = np.concatenate([hist, arr2[:, c]])
-            g, best, jc = _scan(full, cnt, self.window, self._coef[c])
+            full = np.concatenate([self._history(c), xu[:, c]])
+            g, best, jc = _scan(full, cnt, min(self.window, full.size), self._coef[c])
             out[:, c] = g
-            tail = full[-self.window:]
-            newcnt = min(self.window, full.size)
-            buf = np.zeros(self.window)
-            buf[:newcnt] = tail[-newcnt:]
-            self._buf[c] = buf
-            self._head[c] = newcnt - 1
-            self._count[c] = newcnt
+            rows.append(full[-min(self.window, full.size):])
             self.change_index[c] = self.k + n - 1 - best[-1] + 1
-            self.jump[c] = jc[-1]
+            self.jump[c] = np.ldexp(jc[-1], self._exp[c])
+        self._keep(rows)
         alarm_rows = np.flatnonzero(np.any(out > self.threshold, axis=1))
         if alarm_rows.size and self.first_alarm is None:
             self.first_alarm = self.k + int(alarm_rows[0])

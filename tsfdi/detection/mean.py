@@ -8,7 +8,7 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import int_like
-from tsfdi.detection.base import CalibratedTest, baseline_variance
+from tsfdi.detection.base import CalibratedTest, baseline_variance, rescale_exponent, scaled_ratio
 from tsfdi.detection.decision import Decision
 
 __all__ = ["MeanTest"]
@@ -46,6 +46,12 @@ class MeanTest(CalibratedTest):
     is :class:`~tsfdi.GLRT` (per sample); this test fixes the window, as the F and Ljung-Box tests do, so that
     all three share the windowed engine, the calibration and the identification rules.
 
+    :math:`T` does not depend on the common scale of the residuals and ``reference_variance``: the residuals are
+    rescaled by a power of two before the sum is squared (exact), and a :math:`T` beyond the float range is refused
+    (``ValueError``: the reference variance cannot be the residual's). A constant window (a frozen sensor) is tested
+    like any other: frozen away from zero its mean has moved (and it rejects when :math:`T` is large enough), frozen
+    at zero :math:`T = 0`.
+
     References
     ----------
     Hansen, Blanke, Adrian (paper 002), eqs. 1-2. Kay, S. M., *Fundamentals of Statistical Signal
@@ -78,9 +84,12 @@ class MeanTest(CalibratedTest):
         if ref is None:
             raise TypeError("MeanTest needs reference_variance (the baseline's unbiased residual variance); "
                             "tsfdi.detect/identify take it from the model")
-        if isinstance(ref, str):
+        if isinstance(ref, (str, bytes, bool, np.bool_)):
             raise TypeError(f"reference_variance must be a number or one per channel, got {ref!r}")
-        arr = np.asarray(ref, dtype=np.float64)
+        try:
+            arr = np.asarray(ref, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"reference_variance must be a number or one per channel, got {ref!r}") from None
         arr = np.full(k, float(arr)) if arr.ndim == 0 else arr
         if arr.shape != (k,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
             raise ValueError(f"reference_variance must be finite, > 0 and one value per channel ({k}), got {ref!r}")
@@ -106,9 +115,11 @@ class MeanTest(CalibratedTest):
         window = int_like(window, "window", minimum=1, maximum=sig.nobs)
         step = int_like(step, "step", minimum=1)
         starts = np.arange(0, sig.nobs - window + 1, step)
-        c1 = np.concatenate([np.zeros((1, sig.nchan)), np.cumsum(sig.values, axis=0)])
+        scale = rescale_exponent(sig.values)
+        e = np.ldexp(sig.values, -scale) if scale.any() else sig.values      # exact rescaling, see Notes
+        c1 = np.concatenate([np.zeros((1, sig.nchan)), np.cumsum(e, axis=0)])
         s1 = c1[starts + window] - c1[starts]
-        return s1 * s1 / (window * ref)
+        return scaled_ratio(s1 * s1 / window, ref, scale)
 
     def null_threshold(self, k: int, nobs: int | None = None, **reference: Any) -> np.ndarray:
         r""":math:`\chi^2_{1-\alpha}(1)` per channel (``alpha`` per channel after ``correction``)."""
@@ -145,7 +156,9 @@ class MeanTest(CalibratedTest):
         """
         sig = self._resid(resid, 1)
         ref = self._variance(reference_variance, sig.nchan)
-        total = sig.values.sum(axis=0)
-        stat = total * total / (sig.nobs * ref)
-        return self.decision(stat, sig.nobs, tuple(sig.channels), details={"mean": total / sig.nobs},
+        scale = rescale_exponent(sig.values)
+        e = np.ldexp(sig.values, -scale) if scale.any() else sig.values      # exact rescaling, see Notes
+        total = e.sum(axis=0)
+        stat = scaled_ratio(total * total / sig.nobs, ref, scale)
+        return self.decision(stat, sig.nobs, tuple(sig.channels), details={"mean": np.ldexp(total / sig.nobs, scale)},
                              reference_variance=ref)

@@ -208,7 +208,7 @@ class ScaledChi2Threshold:
         records (default 0.9), so that a new record's false-alarm rate exceeds ``false_alarm`` only with
         probability about ``1 - confidence`` over the choice of calibration records.
     n_boot : int
-        Bootstrap replicates (fixed seed: the result is reproducible).
+        Bootstrap replicates, 10 to 100,000 (fixed seed: the result is reproducible).
 
     Attributes
     ----------
@@ -263,7 +263,7 @@ class ScaledChi2Threshold:
         self.false_alarm = probability(false_alarm, "false_alarm")
         self.min_windows = int_like(min_windows, "min_windows", minimum=5)
         self.confidence = float_like(confidence, "confidence", minimum=0.5, maximum=1.0, strict_max=True)
-        self.n_boot = int_like(n_boot, "n_boot", minimum=10)
+        self.n_boot = int_like(n_boot, "n_boot", minimum=10, maximum=100_000)   # a bounded (n_boot, records) array
 
     def __repr__(self) -> str:
         fitted = f", threshold_={self.threshold_:.5g}, records_={self.records_}" if hasattr(self, "threshold_") else ""
@@ -345,5 +345,6 @@ class ScaledChi2Threshold:
 
         self.check_fitted()
         v = np.asarray(value, dtype=np.float64)
-        tail = special.chdtrc(self.df_, v[..., None] / self.scale_).mean(axis=-1)
+        with np.errstate(over="ignore"):                # beyond the float range: a tail of 0
+            tail = special.chdtrc(self.df_, v[..., None] / self.scale_).mean(axis=-1)
         return np.minimum(1.0, tail * self._pvalue_factor)

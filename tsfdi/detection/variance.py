@@ -8,7 +8,8 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import int_like, option
-from tsfdi.detection.base import CalibratedTest, baseline_variance
+from tsfdi.detection.base import (CalibratedTest, baseline_variance, rescale_exponent, scaled_ratio,
+                                  statistic_array)
 from tsfdi.detection.decision import Decision
 
 __all__ = ["FTest"]
@@ -58,6 +59,21 @@ class FTest(CalibratedTest):
     fault model's own baseline variance. For a VAR each channel is tested against the corresponding
     diagonal element of the residual covariance with ``d`` the number of parameters per equation.
 
+    Numerics: the residuals are rescaled by a power of two before they are squared and the reference variance by
+    its square (exact), so that :math:`F` does not depend on the common scale of ``resid`` and
+    ``reference_variance`` (values near 1e300 or 1e-300 give the :math:`F` of values near 1); a ratio beyond the
+    float range (above about 1.8e308: the reference variance cannot be the residual's) is refused
+    (``ValueError``). Thresholds are inverses of the upper tail of the F law (:func:`f_isf`; the lower limit of
+    ``"two-sided"`` that of :math:`\mathcal F(N_0 - d, N_u)` at :math:`1 / F`), so that they hold down to
+    ``alpha = 1e-300`` (inverting the lower tail at ``1 - alpha`` loses every digit of ``alpha`` below about
+    1e-16), and p-values below 1e-250 are computed in log space (:func:`f_sf`).
+
+    **A constant window** (a frozen sensor) has :math:`\hat\sigma_{0u}^2 = 0` with ``demean=True`` (exactly, in
+    :meth:`test` and in :meth:`window_statistic` alike), so :math:`F = 0`: ``"greater"`` does not reject it (the
+    variance did not increase) and ``"two-sided"`` rejects it with p-value 0. Without ``demean`` a constant
+    window is tested by its mean square like any other. The Ljung-Box test rejects constant windows
+    (:class:`~tsfdi.LjungBox`).
+
     References
     ----------
     Dutta, McKay, Kopsaftopoulos, Gandhi, *Statistical Time Series Methods for Multicopter Fault Detection
@@ -93,22 +109,37 @@ class FTest(CalibratedTest):
         reference_variance = getattr(self, "reference_variance_", reference_variance)
         if reference_variance is None:
             raise TypeError("FTest.window_statistic needs reference_variance (the baseline's unbiased variance)")
-        e = sig.values
         k = sig.nchan
         ref = _per_channel(reference_variance, "reference_variance", k)
         window = int_like(window, "window", minimum=3 if self.demean else 2, maximum=sig.nobs)
         step = int_like(step, "step", minimum=1)
-        starts = np.arange(0, sig.nobs - window + 1, step)
+        e = sig.values
+        scale = np.zeros(k, dtype=np.int32)
         zero = np.zeros((1, k))
-        c2 = np.concatenate([zero, np.cumsum(e * e, axis=0)])
-        ss = c2[starts + window] - c2[starts]
+        with np.errstate(over="ignore", under="ignore"):
+            c2 = np.concatenate([zero, np.cumsum(e * e, axis=0)])
+        total = c2[-1]
+        if not ((total > 2.0 ** -512) & (total < np.inf)).all() and not all(
+                2.0 ** -512 < t < np.inf or not e[:, c].any() for c, t in enumerate(total)):
+            # squares beyond the float range, or so small that they lose digits: rescale (exact), see Notes
+            scale = rescale_exponent(e)
+            e = np.ldexp(e, -scale)
+            c2 = np.concatenate([zero, np.cumsum(e * e, axis=0)])
+        starts = np.arange(0, sig.nobs - window + 1, step)
+        ends = starts + window
+        ss = c2[ends] - c2[starts]
         if self.demean:
             c1 = np.concatenate([zero, np.cumsum(e, axis=0)])
-            s1 = c1[starts + window] - c1[starts]
-            var_u = (ss - s1 * s1 / window) / (window - 1)
-        else:
-            var_u = ss / window
-        return var_u / ref
+            s1 = c1[ends] - c1[starts]
+            ss = ss - s1 * s1 / window
+        # a difference of prefix sums keeps only the digits the sums before the window leave: windows whose sum of
+        # squares is below 1e-6 of the prefix sum at their end (a quiet or constant stretch) are summed directly
+        if not ss.min() > 1e-6 * c2[-1].max():         # else no window can be (c2 only grows)
+            direct = ss <= 1e-6 * c2[ends]
+            for c in np.flatnonzero(direct.any(axis=0)):
+                rows = np.flatnonzero(direct[:, c])
+                ss[rows, c] = _sum_squares(e[:, c], starts[rows], window, self.demean)
+        return scaled_ratio(ss / (window - 1 if self.demean else window), ref, scale)
 
     def null_threshold(self, k: int, nobs: int | None = None, reference_df: Any = None,
                        **reference: Any) -> np.ndarray:
@@ -140,7 +171,14 @@ class FTest(CalibratedTest):
             raise TypeError("FTest needs nobs (the number of current residual samples per window) for its "
                             "theoretical threshold")
         df0 = _per_channel(reference_df, "reference_df", k)
-        return special.fdtri(self._nu(nobs), df0, 1.0 - self._channel_alpha(self.alpha, k, self.correction))
+        nu, a = self._nu(nobs), self._channel_alpha(self.alpha, k, self.correction)
+        key = (nu, tuple(df0), a)
+        cache = self.__dict__.setdefault("_thr_cache", {})    # the same windows again: cache the critical values
+        if key not in cache:
+            if len(cache) >= 64:
+                cache.clear()
+            cache[key] = f_isf(nu, df0, a)
+        return cache[key].copy()
 
     def _nu(self, nobs: int) -> float:
         """:math:`N_u`: the current residual's degrees of freedom (``nobs - 1`` with ``demean``)."""
@@ -150,7 +188,7 @@ class FTest(CalibratedTest):
                      **reference: Any) -> np.ndarray:
         r""":math:`P(\mathcal F(N_u, N_0 - d) > F)` (eq. 9), same shape as ``statistic``."""
         df0 = _per_channel(reference_df, "reference_df", statistic.shape[-1])
-        return special.fdtrc(self._nu(nobs), df0, statistic)
+        return f_sf(self._nu(nobs), df0, statistic)
 
     def _df(self, k: int, nobs: int, reference_df: Any = None, **reference: Any) -> np.ndarray:
         df0 = np.full(k, np.nan) if reference_df is None else _per_channel(reference_df, "reference_df", k)
@@ -198,9 +236,9 @@ class FTest(CalibratedTest):
         """
         if self.empirical or self.alternative == "greater":
             return super().decision(statistic, nobs, channels, details=details, **reference)
-        f = np.array(statistic, dtype=np.float64, ndmin=1)
-        if f.ndim != 1:
-            raise ValueError(f"statistic must hold one value per channel, got shape {f.shape}")
+        f = np.atleast_1d(statistic_array(statistic))
+        if f.ndim != 1 or np.isnan(f).any():
+            raise ValueError(f"statistic must hold one number (not NaN) per channel, got {f}")
         k = f.shape[0]
         reference_df = reference.get("reference_df")
         if reference_df is None:
@@ -212,9 +250,11 @@ class FTest(CalibratedTest):
         info = dict(details) if details else {}
         info.update(self._decision_details(k, **reference))
         info["threshold_method"] = self._theoretical
-        thr = special.fdtri(dfn, df0, 1.0 - a / 2)
-        lower = special.fdtri(dfn, df0, a / 2)
-        pv = np.minimum(1.0, 2 * np.minimum(special.fdtr(dfn, df0, f), special.fdtrc(dfn, df0, f)))
+        # the lower tail of F(N_u, N_0 - d) is the upper tail of F(N_0 - d, N_u) at 1 / F
+        thr = f_isf(dfn, df0, a / 2)
+        with np.errstate(divide="ignore", over="ignore"):     # 1 / 0 = inf, 1 / subnormal = inf: tails of 0
+            lower = 1.0 / f_isf(df0, dfn, a / 2)
+            pv = np.minimum(1.0, 2 * np.minimum(f_sf(df0, dfn, 1.0 / f), f_sf(dfn, df0, f)))
         rej = (f > thr) | (f < lower)
         info["lower_threshold"] = lower
         return Decision(statistic=f, threshold=thr, pvalue=pv, alpha=self.alpha, reject=bool(rej.any()),
@@ -256,7 +296,8 @@ class FTest(CalibratedTest):
         -------
         Decision
             :meth:`decision` of the variance ratio :math:`F` of ``resid`` (eq. 9); ``details["variance"]`` holds
-            :math:`\\hat\\sigma_{Vu}^2` per channel.
+            :math:`\\hat\\sigma_{Vu}^2` per channel (``inf`` if it is beyond the float range, ``|resid|`` above
+            about 1e154, while :math:`F` is not).
         """
         sig = self._resid(resid, 3 if self.demean else 2)
         e = sig.values
@@ -269,13 +310,20 @@ class FTest(CalibratedTest):
         ref = _per_channel(reference_variance, "reference_variance", k)
         extra = {} if reference_df is None else {"reference_df": _per_channel(reference_df, "reference_df", k)}
         n = e.shape[0]
+        scale = rescale_exponent(e)
+        if scale.any():
+            e = np.ldexp(e, -scale)                     # exact rescaling: squares neither overflow nor underflow
         if self.demean:
             nu = n - 1
             var_u = np.sum((e - e.mean(axis=0)) ** 2, axis=0) / nu
+            var_u[e.max(axis=0) == e.min(axis=0)] = 0.0   # a constant window, whatever the rounding of its mean
         else:
             nu = n
             var_u = np.einsum("ij,ij->j", e, e) / nu
-        f = var_u / ref
+        f = scaled_ratio(var_u, ref, scale)
+        if scale.any():
+            with np.errstate(over="ignore"):
+                var_u = np.ldexp(var_u, 2 * scale)        # inf when the variance itself is beyond the float range
         return self.decision(f, n, tuple(sig.channels), details={"variance": var_u}, reference_variance=ref,
                              **extra)
 
@@ -286,15 +334,128 @@ class FTest(CalibratedTest):
         ref = reference.get("reference_variance")
         sigs = [self._resid(r, 2) for r in recs]
         if ref is None:
-            ss = sum(np.einsum("ij,ij->j", s.values, s.values) for s in sigs)
-            ref = ss / sum(s.nobs for s in sigs)
+            if len({s.nchan for s in sigs}) > 1:
+                raise ValueError(f"resid: every record must have the same channels, got {[s.nchan for s in sigs]}")
+            scale = np.max([rescale_exponent(s.values) for s in sigs], axis=0)      # exact rescaling, see Notes
+            ss = 0.0
+            for s in sigs:
+                v = np.ldexp(s.values, -scale)
+                ss = ss + np.einsum("ij,ij->j", v, v)
+            with np.errstate(over="ignore"):
+                ref = np.ldexp(ss / sum(s.nobs for s in sigs), 2 * scale)
+            if not np.all((ref > 0) & np.isfinite(ref)):
+                raise ValueError(f"resid: the mean square of the calibration residuals ({ref}) is 0 or beyond the "
+                                 "float range in some channel; give reference_variance or rescale the residuals")
         self.reference_variance_ = _per_channel(ref, "reference_variance", sigs[0].nchan)
         return {**reference, "reference_variance": self.reference_variance_}
 
 
+#: Below this probability scipy's incomplete beta function (``fdtrc``, ``betaincinv``) loses its digits (it may be
+#: off by a factor of 2 near 1e-300, or return NaN); the tail is then computed in log space (:func:`_log_beta_tail`).
+_LOG_SPACE_BELOW = 1e-250
+
+
+def _log_beta_tail(a: np.ndarray, b: np.ndarray, log_y: np.ndarray) -> np.ndarray:
+    r""":math:`\ln I_y(a, b)` (the lower tail of :math:`B(a, b)` at :math:`y = e^{\text{log\_y}}`) for
+    :math:`y < (a + 1) / (a + b + 2)`: the prefactor :math:`y^a (1-y)^b / (a B(a, b))` in log space times the
+    continued fraction of the incomplete beta function (modified Lentz), which converges there."""
+    y = np.exp(log_y)
+    qab, qap, qam = a + b, a + 1.0, a - 1.0
+    tiny = 1e-300
+
+    def clip(v):
+        return np.where(np.abs(v) < tiny, tiny, v)
+
+    c = np.ones_like(y)
+    d = 1.0 / clip(1.0 - qab * y / qap)
+    h = d
+    for m in range(1, 5000):
+        for an in (m * (b - m) * y / ((qam + 2 * m) * (a + 2 * m)),
+                   -(a + m) * (qab + m) * y / ((a + 2 * m) * (qap + 2 * m))):
+            d = 1.0 / clip(1.0 + an * d)
+            c = clip(1.0 + an / c)
+            h = h * d * c
+        if np.all(np.abs(d * c - 1.0) < 1e-15):
+            break
+    return a * log_y + b * np.log1p(-y) - special.betaln(a, b) - np.log(a) + np.log(h)
+
+
+def f_isf(dfn: Any, dfd: Any, alpha: Any) -> np.ndarray:
+    r"""Upper ``alpha`` quantile of the F law :math:`\mathcal F(\text{dfn}, \text{dfd})`, accurate down to
+    ``alpha = 1e-300``.
+
+    ``1 - X`` of :math:`X = \text{dfn} F / (\text{dfn} F + \text{dfd}) \sim B(\text{dfn}/2, \text{dfd}/2)` is
+    :math:`Y \sim B(a, b)`, :math:`a = \text{dfd}/2`, :math:`b = \text{dfn}/2`, whose lower ``alpha`` quantile
+    :math:`y` gives :math:`F = \text{dfd} (1 - y) / (\text{dfn}\, y)` (``inf`` beyond the float range):
+    ``scipy.special.betaincinv`` where its result checks out, else (below ``alpha = 1e-250``, or where the
+    inverse is NaN or wrong) Newton's method on :math:`\ln I_y(a, b) = \ln \alpha` in :math:`\ln y`
+    (:func:`_log_beta_tail`). (``scipy.special.fdtri(dfn, dfd, 1 - alpha)`` loses the digits of ``alpha`` in
+    ``1 - alpha``: it is ``inf`` below ``alpha`` of about 1e-16.)
+    """
+    dfn, dfd, alpha = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (dfn, dfd, alpha)))
+    shape = dfn.shape
+    dfn, dfd, alpha = (v.ravel() for v in (dfn, dfd, alpha))
+    a, b = dfd / 2, dfn / 2
+    y = special.betaincinv(a, b, alpha)
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore", under="ignore"):
+        f = dfd * (1.0 - y) / (dfn * y)
+        # scipy's inverse may be NaN, or a wrong power of two where y is tiny: checked by the forward function
+        far = (alpha < _LOG_SPACE_BELOW) | ~(np.abs(special.betainc(a, b, y) / alpha - 1.0) < 1e-8)
+        if np.any(far):
+            a, b, log_alpha = a[far], b[far], np.log(alpha[far])
+            log_y = (log_alpha + np.log(a) + special.betaln(a, b)) / a       # leading term of the tail as start
+            top = np.log((a + 1) / (a + b + 2))
+            for _ in range(100):
+                log_y = np.minimum(log_y, top)
+                log_i = _log_beta_tail(a, b, log_y)
+                slope = np.exp(a * log_y + (b - 1) * np.log1p(-np.exp(log_y)) - special.betaln(a, b) - log_i)
+                move = np.clip((log_i - log_alpha) / slope, -5.0, 5.0)
+                log_y = log_y - move
+                if np.all(np.abs(move) < 1e-13):
+                    break
+            f[far] = np.exp(np.log(dfd[far] / dfn[far]) + np.log1p(-np.exp(log_y)) - log_y)
+    return f.reshape(shape)
+
+
+def f_sf(dfn: Any, dfd: Any, f: Any) -> np.ndarray:
+    r""":math:`P(\mathcal F(\text{dfn}, \text{dfd}) > f)`: ``scipy.special.fdtrc``, and in log space below
+    1e-250 (:func:`_log_beta_tail`), where scipy's value may be off by a factor of 2 or be 0 for 1e-300."""
+    p = special.fdtrc(dfn, dfd, f)
+    if not np.any(p < _LOG_SPACE_BELOW):
+        return p
+    dfn, dfd, f, p = (np.array(v, dtype=np.float64) for v in np.broadcast_arrays(dfn, dfd, f, p))
+    far = (p < _LOG_SPACE_BELOW) & np.isfinite(f)
+    a, b = dfd[far] / 2, dfn[far] / 2
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore", under="ignore"):
+        log_y = np.log(a) - np.log(a + b * f[far])
+        p[far] = np.exp(_log_beta_tail(a, b, log_y))
+    return p
+
+
+def _sum_squares(x: np.ndarray, starts: np.ndarray, window: int, demean: bool) -> np.ndarray:
+    """Sum of squares of the windows ``x[s:s + window]`` (about their own mean with ``demean``; exactly 0 for a
+    constant window), summed directly, a few million samples at a time."""
+    view = np.lib.stride_tricks.sliding_window_view(x, window)
+    out = np.empty(starts.size)
+    chunk = max(1, 2 ** 21 // window)
+    for i in range(0, starts.size, chunk):
+        seg = view[starts[i:i + chunk]]
+        if demean:
+            dev = seg - seg.mean(axis=1)[:, None]
+            out[i:i + chunk] = np.where(seg.max(axis=1) == seg.min(axis=1), 0.0, np.einsum("ij,ij->i", dev, dev))
+        else:
+            out[i:i + chunk] = np.einsum("ij,ij->i", seg, seg)
+    return out
+
+
 def _per_channel(value: Any, name: str, k: int) -> np.ndarray:
     """A positive finite scalar or one value per channel, as a ``(k,)`` float array."""
-    arr = np.asarray(value, dtype=np.float64)
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}") from None
     if arr.ndim == 0:
         arr = np.full(k, float(arr))
     if arr.shape != (k,):

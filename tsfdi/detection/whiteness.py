@@ -11,7 +11,7 @@ import numba
 
 from tsfdi._data import as_signal
 from tsfdi._validation import int_like, option
-from tsfdi.detection.base import CalibratedTest
+from tsfdi.detection.base import CalibratedTest, rescale_exponent, statistic_array
 from tsfdi.detection.decision import Decision
 
 __all__ = ["LjungBox", "autocovariance", "ljungbox_windows"]
@@ -72,11 +72,10 @@ def _ljungbox_q(acov_t: np.ndarray, n: int) -> np.ndarray:
     return n * (n + 2) * ((rho * rho) @ w)
 
 
-def _check_variance(c0: np.ndarray, channels: list) -> None:
-    bad = np.flatnonzero(~(c0 > 0))
-    if bad.size:
-        raise ValueError(f"resid is constant in channel(s) {[channels[i] for i in bad]}: "
-                         "autocorrelations are undefined")
+def _degenerate(xt: np.ndarray, demean: bool) -> np.ndarray:
+    """Channels of C-contiguous ``(k, n)`` residuals whose autocorrelations are undefined (zero variance): constant
+    ones (``demean``) or all-zero ones."""
+    return xt.max(axis=1) == xt.min(axis=1) if demean else ~np.any(xt, axis=1)
 
 
 class LjungBox(CalibratedTest):
@@ -138,6 +137,14 @@ class LjungBox(CalibratedTest):
     misspecification: its false-alarm rate is ``alpha`` whatever the statistic's distribution, provided the
     calibration residuals come from the same process as the tested ones.
 
+    **A constant window** (a frozen sensor; with ``demean=False`` an all-zero one) has no autocorrelation: its
+    :math:`Q` is ``inf``, with p-value 0, and the channel rejects; ``Decision.details["constant"]`` names such
+    channels (empty otherwise). The windowed path (:func:`ljungbox_windows`, :meth:`window_statistic`, and so
+    ``tsfdi.identify_windows`` and ``Monitor``) gives the same ``inf`` for the same windows. With ``multivariate``
+    a constant channel makes the joint statistic ``inf``. :math:`Q` does not depend on the scale of the residuals:
+    they are rescaled by a power of two before any square (exact), so that values near 1e300 or 1e-300 give the
+    :math:`Q` of values near 1.
+
     The chi-square law is asymptotic, and for short windows with many lags its upper tail is too light even for
     iid Gaussian residuals: with 480 samples and 20 lags the test rejects white noise more often than ``alpha``,
     increasingly so for small ``alpha``; at 1980 samples the excess is small (within Monte Carlo error at
@@ -190,7 +197,12 @@ class LjungBox(CalibratedTest):
         x = sig.values
         out = []
         for a in range(0, sig.nobs - window + 1, step):
-            xt = x[a:a + window].T
+            w = x[a:a + window]
+            if _degenerate(np.ascontiguousarray(w.T), self.demean).any():
+                out.append(np.inf)
+                continue
+            e = rescale_exponent(w)
+            xt = (np.ldexp(w, -e) if e.any() else w).T
             if self.demean:
                 xt = xt - xt.mean(axis=1)[:, None]
             out.append(self._joint_q(np.ascontiguousarray(xt.T), window, sig.nchan))
@@ -213,17 +225,35 @@ class LjungBox(CalibratedTest):
         -------
         Decision
             One component per channel, or one named ``"joint"`` with ``multivariate`` set.
+            ``details["constant"]``: the channels that are constant (a frozen sensor), whose statistic is ``inf``
+            (p-value 0, reject).
         """
         sig = self._prepare(resid)
         xt = np.ascontiguousarray(sig.values.T)
+        const = _degenerate(xt, self.demean)
+        e = rescale_exponent(xt, axis=1)
+        if e.any():
+            xt = np.ldexp(xt, -e[:, None])                # exact rescaling, see Notes
         n = xt.shape[1]
         if self.demean:
             xt = xt - xt.mean(axis=1)[:, None]
         if self.multivariate is None:
             acov = _acov_t(xt, self.lags)
-            _check_variance(acov[:, 0], sig.channels)
-            return self.decision(_ljungbox_q(acov, n), n, tuple(sig.channels))
-        return self._multivariate(np.ascontiguousarray(xt.T), n, sig.nchan)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                q = _ljungbox_q(acov, n)
+            q[const] = np.inf
+            return self.decision(q, n, tuple(sig.channels))
+        q = np.inf if const.any() else self._joint_q(np.ascontiguousarray(xt.T), n, sig.nchan)
+        return self._multivariate(q, n, sig.nchan, {"constant": tuple(np.asarray(sig.channels)[const].tolist())})
+
+    def decision(self, statistic: Any, nobs: int, channels: Any = None, *, details: dict | None = None,
+                 **reference: Any) -> Decision:
+        """As :meth:`CalibratedTest.decision <tsfdi.detection.base.CalibratedTest.decision>`, with
+        ``details["constant"]``: the channels whose statistic is ``inf`` (a constant window, see Notes)."""
+        stat = np.atleast_1d(statistic_array(statistic))
+        names = tuple(channels) if channels is not None else tuple(f"y{i}" for i in range(stat.shape[-1]))
+        const = {"constant": tuple(c for c, q in zip(names, stat) if q == np.inf)} if stat.ndim == 1 else {}
+        return super().decision(stat, nobs, channels, details={**const, **(details or {})}, **reference)
 
     def null_threshold(self, k: int, nobs: int | None = None, **reference: Any) -> np.ndarray:
         r"""Critical value of the per-channel Ljung-Box test under H0 (Dutta et al., paper 003, eq. 14).
@@ -287,18 +317,17 @@ class LjungBox(CalibratedTest):
             q = n * np.sum(terms) + s * s * h * (h + 1) / (2.0 * n)
         return float(q)
 
-    def _multivariate(self, x: np.ndarray, n: int, s: int) -> Decision:
+    def _multivariate(self, q: float, n: int, s: int, details: dict) -> Decision:
         h = self.lags
-        q = self._joint_q(x, n, s)
         df = float(s * s * h - self.model_df)
         if df < 1:
             raise ValueError(f"model_df must be < s**2 * lags = {s * s * h} for the multivariate test, "
                              f"got {self.model_df}")
-        details = {"lags": h, "model_df": self.model_df, "method": self.multivariate, "nchan": s}
+        details = {**details, "lags": h, "model_df": self.model_df, "method": self.multivariate, "nchan": s}
         if self.empirical:
             self._check_calibrated(1)
             thr = float(self.threshold_[0])
-            pv = float(self.calibrated_pvalue(np.array([q]))[0])
+            pv = float(self.calibrated_pvalue(np.array([[q]]))[0, 0])
             details.update(self._calibration_details())
         else:
             thr = special.chdtri(df, self.alpha)
@@ -334,14 +363,19 @@ def ljungbox_windows(resid: Any, lags: int, window: int, step: int = 1, *, demea
     -------
     ndarray, shape (n_windows, k)
         ``Q`` of window ``w`` (samples ``[w * step, w * step + window)``) per channel, equal to
-        statsmodels ``acorr_ljungbox`` on that window.
+        statsmodels ``acorr_ljungbox`` on that window and to :meth:`LjungBox.test`; ``inf`` for a constant
+        window (a frozen sensor; with ``demean=False`` an all-zero one), as :meth:`LjungBox.test` says.
 
     Notes
     -----
     With prefix sums :math:`S`, :math:`S^{(2)}` of :math:`x` and :math:`x^2` and :math:`P_l` of the lag products
     :math:`x_t x_{t-l}`, the centred lag-:math:`l` sum of a window of length :math:`n` and mean :math:`m` is
     :math:`P_l - m (\sum_{t \ge l} x_t + \sum_{t < n - l} x_t) + (n - l) m^2`, so every window costs O(lags)
-    after one O(N * lags) pass.
+    after one O(N * lags) pass. The prefix sums are of the record rescaled by a power of two (exact: :math:`Q` does
+    not change, squares do not overflow) and, with ``demean``, centred on its mean. A difference of prefix sums
+    loses the digits that the sums before the window carry: a window whose centred energy is below ``1e-6`` of
+    :math:`S^{(2)}` at its end (a quiet stretch after a loud one) is computed directly from its own samples in
+    O(window * lags); constant windows are found exactly (no sample differs from the one before it).
     """
     sig = as_signal(resid, "resid", allow_constant=True)
     lags = int_like(lags, "lags", minimum=1)
@@ -353,40 +387,92 @@ def ljungbox_windows(resid: Any, lags: int, window: int, step: int = 1, *, demea
         raise ValueError(f"window must be <= the record length {n_all}, got {window}")
     if window <= lags:
         raise ValueError(f"window must be > lags ({lags}), got {window}")
-    x = x - x.mean(axis=0)  # global centring limits cancellation in the prefix sums
+    e = rescale_exponent(x)
+    if np.any(np.abs(e) > 1000):                       # 2**-e would not be a float: rescale here
+        x, e = np.ldexp(x, -e), np.zeros_like(e)
+    factor = np.ldexp(1.0, -e)                          # exact rescaling: squares neither overflow nor underflow
+    # global centring (of the rescaled record) limits cancellation in the prefix sums
+    centre = ((np.ldexp(x, -e) if e.any() else x).mean(axis=0) if demean else np.zeros(k))
     starts = np.arange(0, n_all - window + 1, step, dtype=np.int64)
     q = np.empty((starts.size, k))
     for c in range(k):
-        q[:, c] = _windows_q(np.ascontiguousarray(x[:, c]), lags, window, starts, bool(demean))
-    if not np.all(np.isfinite(q)):
-        raise ValueError("resid is constant within a window: autocorrelations are undefined")
+        q[:, c] = _windows_q(np.ascontiguousarray(x[:, c]), factor[c], centre[c], lags, window, starts, bool(demean))
     return q
 
 
-@numba.njit(cache=True, nogil=True)
-def _windows_q(x, lags, window, starts, demean):  # pragma: no cover - compiled
+#: A window whose centred energy is below this fraction of the prefix sum of squares at its end is computed directly.
+_DIRECT_BELOW = 1e-6
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _direct_q(x, a, window, lags, demean):  # pragma: no cover - compiled
+    """Q of the window ``x[a:a + window]`` from its own samples (centred on its own mean with ``demean``), divided by
+    their largest deviation first so that a window far quieter than the record does not underflow."""
+    n = float(window)
+    m = 0.0
+    if demean:
+        for t in range(a, a + window):
+            m += x[t]
+        m /= n
+    top = 0.0
+    for t in range(a, a + window):
+        top = max(top, abs(x[t] - m))
+    c0 = 0.0
+    for t in range(a, a + window):
+        c0 += ((x[t] - m) / top) ** 2
+    q = 0.0
+    for lag in range(1, lags + 1):
+        c = 0.0
+        for t in range(a + lag, a + window):
+            c += ((x[t] - m) / top) * ((x[t - lag] - m) / top)
+        r = c / c0
+        q += r * r / (n - lag)
+    return q * n * (n + 2)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _windows_q(x, factor, centre, lags, window, starts, demean):  # pragma: no cover - compiled
+    """Q of every window from prefix sums of ``x * factor - centre`` (``x`` rescaled by a power of two, and centred
+    on the record's mean with ``demean``); ``x`` itself (a rescaled record could underflow in a window far quieter
+    than the rest) serves the exact test for constant windows and the direct evaluation of windows the prefix sums
+    cannot resolve."""
     n_all = x.shape[0]
     nw = starts.shape[0]
     s1 = np.zeros(n_all + 1)
     s2 = np.zeros(n_all + 1)
     for t in range(n_all):
-        s1[t + 1] = s1[t] + x[t]
-        s2[t + 1] = s2[t] + x[t] * x[t]
+        v = x[t] * factor - centre
+        s1[t + 1] = s1[t] + v
+        s2[t + 1] = s2[t] + v * v
     n = float(window)
     mean = np.zeros(nw)
     gamma0 = np.empty(nw)
-    for w in range(nw):
+    special = np.zeros(nw, dtype=np.int8)   # 1: a constant window, 2: one the prefix sums cannot resolve
+    nspecial = 0
+    last = 0                                # the last sample before b that differs from the one before it
+    t = 1
+    for w in range(nw):                     # starts increase: one sweep finds the last change before each end
         a = starts[w]
         b = a + window
+        while t < b:
+            if x[t] != x[t - 1]:
+                last = t
+            t += 1
         if demean:
             mean[w] = (s1[b] - s1[a]) / n
         gamma0[w] = s2[b] - s2[a] - n * mean[w] * mean[w]
+        if last <= a and (demean or x[a] == 0.0):
+            special[w] = 1
+            nspecial += 1
+        elif not gamma0[w] > _DIRECT_BELOW * s2[b]:
+            special[w] = 2
+            nspecial += 1
     q = np.zeros(nw)
     p = np.zeros(n_all + 1)
     for lag in range(1, lags + 1):
-        # p[i] = sum_{t' < i} x[t' + lag] x[t']
+        # p[i] = sum_{t' < i} xc[t' + lag] xc[t'], xc = x * factor - centre
         for i in range(n_all - lag):
-            p[i + 1] = p[i] + x[i + lag] * x[i]
+            p[i + 1] = p[i] + (x[i + lag] * factor - centre) * (x[i] * factor - centre)
         inv = 1.0 / (n - lag)
         for w in range(nw):
             a = starts[w]
@@ -398,8 +484,11 @@ def _windows_q(x, lags, window, starts, demean):  # pragma: no cover - compiled
             c = lagsum - m * (head + tail) + (n - lag) * m * m
             r = c / gamma0[w]
             q[w] += r * r * inv
-    for w in range(nw):
-        q[w] *= n * (n + 2)
-        if not gamma0[w] > 0:
-            q[w] = np.nan
+    q *= n * (n + 2)
+    if nspecial:
+        for w in range(nw):
+            if special[w] == 1:
+                q[w] = np.inf               # a constant window (a frozen sensor), see LjungBox
+            elif special[w] == 2:
+                q[w] = _direct_q(x, starts[w], window, lags, demean)
     return q

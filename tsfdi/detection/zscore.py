@@ -9,7 +9,7 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import float_like, int_like
-from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.base import ResidualTest, rescale_exponent
 from tsfdi.detection.decision import Decision
 
 __all__ = ["ZScore"]
@@ -68,6 +68,12 @@ class ZScore(ResidualTest):
     samples before it. ``alpha`` of the decision is the nominal per-sample two-sided Gaussian rate: alpha is the
     false-alarm probability per sample, not per window. Over ``N`` samples the false-alarm probability of the
     record is about ``N * alpha`` for iid Gaussian residuals.
+
+    The Z-score does not depend on the scale of the residual: each channel is divided by a power of two before the
+    recursion (exact), so values near 1e300 or 1e-300 give the scores of values near 1 (the running variance of
+    ``details["variance"]`` is ``inf`` where it is itself beyond the float range, ``|resid|`` above about 1e154).
+    A constant history (e.g. a frozen sensor during the burn-in) has a running standard deviation of 0: a sample
+    equal to its mean scores 0, any other sample scores ``inf`` and alarms.
     The recursive model :class:`tsfdi.RecursiveARX` runs the same test online, armed by its stability gates.
 
     References
@@ -101,10 +107,21 @@ class ZScore(ResidualTest):
     def zscores(self, resid: Any) -> Any:
         """Z-score series in the caller's data kind (NaN during the burn-in)."""
         sig = self._resid(resid, self.burn_in + 1, " (burn_in + 1)")
-        z = np.column_stack([_welford_z(np.ascontiguousarray(sig.values[:, c]), self.burn_in,
-                                        self.threshold if self.freeze_on_alarm else 0.0)[0]
-                             for c in range(sig.nchan)])
-        return sig.wrap(z, 0)
+        return sig.wrap(self._scores(sig.values)[0], 0)
+
+    def _scores(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Z-scores and running variances of every channel of ``x`` (rescaled by a power of two, see Notes)."""
+        e = rescale_exponent(x)
+        xu = np.ldexp(x, -e) if e.any() else x
+        zs = np.empty(x.shape)
+        vs = np.empty(x.shape)
+        for c in range(x.shape[1]):
+            zs[:, c], vs[:, c] = _welford_z(np.ascontiguousarray(xu[:, c]), self.burn_in,
+                                            self.threshold if self.freeze_on_alarm else 0.0)
+        if e.any():
+            with np.errstate(over="ignore"):
+                vs = np.ldexp(vs, 2 * e)                # inf where the variance is beyond the float range
+        return zs, vs
 
     def test(self, resid: Any) -> Decision:
         """Score every sample of ``resid`` (per channel) and decide.
@@ -120,11 +137,7 @@ class ZScore(ResidualTest):
         """
         sig = self._resid(resid, self.burn_in + 1, " (burn_in + 1)")
         k = sig.nchan
-        zs = np.empty((sig.nobs, k))
-        vs = np.empty((sig.nobs, k))
-        for c in range(k):
-            zs[:, c], vs[:, c] = _welford_z(np.ascontiguousarray(sig.values[:, c]), self.burn_in,
-                                            self.threshold if self.freeze_on_alarm else 0.0)
+        zs, vs = self._scores(sig.values)
         absz = np.abs(zs)
         alarm = np.nan_to_num(absz, nan=0.0) > self.threshold
         first = np.array([int(np.flatnonzero(alarm[:, c])[0]) if alarm[:, c].any() else -1 for c in range(k)])
