@@ -82,6 +82,12 @@ def test_calibrated_size_on_new_records_of_a_fleet(fleet, alpha):
     # channels; in this fleet the residual variance hardly varies, so the F law of eq. 9 is no worse)
     fcal = alarms(tsfdi.FTest(alpha=alpha).calibrate(held, window=WINDOW), new)
     assert fcal.sum(axis=0).max() <= hi and fcal.sum() >= lo, (fcal.sum(axis=0), (lo, hi))
+    # the mean-shift test, its law's degrees of freedom fixed at 1: at most the band per channel (conservative
+    # on some), the Sidak family-wise decision inside it
+    mcal = alarms(tsfdi.MeanTest(alpha=alpha).calibrate(held, window=WINDOW), new)
+    assert mcal.sum(axis=0).max() <= hi, (mcal.sum(axis=0), (lo, hi))
+    mfam = alarms(tsfdi.MeanTest(alpha=alpha, correction="sidak").calibrate(held, window=WINDOW), new)
+    assert lo <= mfam.any(axis=1).sum() <= hi, (mfam.any(axis=1).sum(), (lo, hi))
 
 
 def test_the_documented_pattern_runs(fleet):

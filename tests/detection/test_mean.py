@@ -62,6 +62,9 @@ def test_calibrated_on_held_out_residuals():
     spec = tsfdi.VAR(recs, 1, trend="c")
     t = tsfdi.MeanTest(alpha=0.01).calibrate(spec.held_out_residuals(), window=100)
     assert t.threshold == "calibrated" and t.threshold_.shape == (2,)
+    law = t.thresholds_[0]                       # chi-square(1) per record, only its scale fitted: c_j = mean T
+    np.testing.assert_array_equal(law.df_, np.ones(6))
+    assert law.df == 1.0 and np.all(law.scale_ > 0)
     d = tsfdi.detect(recs[0][:100] + [0.0, 2.0], spec.fit(), t)
     assert d.details["threshold_method"] == "calibrated" and d.channel_reject[1]
 

@@ -144,6 +144,8 @@ class CalibratedTest(ResidualTest):
     """
 
     threshold: Any = None
+    #: known degrees of freedom of the statistic's null law, fixed in the calibrated law (None: fitted)
+    null_df: float | None = None
     alpha: float
     #: Name of the distributional threshold option, the same for every test.
     _theoretical = "theoretical"
@@ -418,6 +420,8 @@ class CalibratedTest(ResidualTest):
         for c in range(k):
             est = copy.copy(tpl)
             est.false_alarm = a
+            if isinstance(est, ScaledChi2Threshold) and est.df is None:
+                est.df = self.null_df                  # the statistic's known degrees of freedom, if any
             for attr in [v for v in vars(est) if v.endswith("_")]:
                 est.__dict__.pop(attr, None)
             try:

@@ -59,6 +59,7 @@ class MeanTest(CalibratedTest):
     """
 
     name = "mean-shift test"
+    null_df = 1.0
     null_hypothesis = "residual mean is zero over the window (healthy / model fits)"
     alternative_hypothesis = "residual mean is not zero over the window (fault / model does not fit)"
 

@@ -241,8 +241,12 @@ class ScaledChi2Threshold:
     Here that distribution is estimated from held-out windows (records driven through a model not fitted on them)
     without needing :math:`\gg 1 / P_F` of them. Each record :math:`j` gets its own law
     :math:`c_j\,\chi^2(\nu_j)` by the method of moments (Satterthwaite): with the mean :math:`m_j` and variance
-    :math:`v_j` of its windows, :math:`c_j = v_j / (2 m_j)` and :math:`\nu_j = 2 m_j^2 / v_j`. A new record is
-    a draw from the fleet, so the null law is the mixture and the threshold :math:`t` solves
+    :math:`v_j` of its windows, :math:`c_j = v_j / (2 m_j)` and :math:`\nu_j = 2 m_j^2 / v_j`. When the degrees of
+    freedom are known (``df``; one for the mean-shift test's :math:`T`) only the scale is fitted,
+    :math:`c_j = m_j / \nu`: a record holds few independent windows, and the sample variance of a one-degree
+    statistic from ten of them is far too noisy and biased low (it would give :math:`\nu_j \gg 1`, a light tail). A
+    record whose mean is offset makes :math:`T` noncentral; the central law with the same mean has the heavier tail,
+    so the fit errs on the safe side. A new record is a draw from the fleet, so the null law is the mixture and the threshold :math:`t` solves
 
     .. math:: \frac{1}{M} \sum_{j=1}^{M} P\big(\chi^2(\nu_j) > t / c_j\big) = P_F .
 
@@ -259,11 +263,12 @@ class ScaledChi2Threshold:
     method_ = "scaled-chi2"
 
     def __init__(self, false_alarm: float = 1e-3, *, min_windows: int = 30, confidence: float = 0.9,
-                 n_boot: int = 200) -> None:
+                 n_boot: int = 200, df: float | None = None) -> None:
         self.false_alarm = probability(false_alarm, "false_alarm")
         self.min_windows = int_like(min_windows, "min_windows", minimum=5)
         self.confidence = float_like(confidence, "confidence", minimum=0.5, maximum=1.0, strict_max=True)
         self.n_boot = int_like(n_boot, "n_boot", minimum=10, maximum=100_000)   # a bounded (n_boot, records) array
+        self.df = None if df is None else float_like(df, "df", minimum=0.0, strict_min=True, maximum=1e12)
 
     def __repr__(self) -> str:
         fitted = f", threshold_={self.threshold_:.5g}, records_={self.records_}" if hasattr(self, "threshold_") else ""
@@ -313,8 +318,12 @@ class ScaledChi2Threshold:
         v = np.array([p.var(ddof=1) for p in parts])
         if not (np.all(m > 0) and np.all(v > 0)):
             raise ValueError("statistic does not vary on some healthy record: no null law can be fitted")
-        self.scale_ = v / (2.0 * m)
-        self.df_ = 2.0 * m * m / v
+        if self.df is None:
+            self.scale_ = v / (2.0 * m)
+            self.df_ = 2.0 * m * m / v
+        else:
+            self.scale_ = m / self.df
+            self.df_ = np.full(m.shape, self.df)
         pf = self.false_alarm
         self.point_threshold_ = float(_mixture_quantile(self.scale_[None, :], self.df_[None, :], pf)[0])
         if len(parts) > 1:
