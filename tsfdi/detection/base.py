@@ -506,3 +506,20 @@ def baseline_variance(results: Any) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"baseline has no residual degrees of freedom (df_resid = {df_resid})")
     unbiased = ml * nobs / df_resid
     return unbiased, np.full(ml.shape, df_resid)
+
+
+def per_channel(value: Any, name: str, k: int) -> np.ndarray:
+    """A positive finite scalar or one value per channel, as a ``(k,)`` float array."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}") from None
+    if arr.ndim == 0:
+        arr = np.full(k, float(arr))
+    if arr.shape != (k,):
+        raise ValueError(f"{name} must be a scalar or have one value per channel ({k}), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError(f"{name} must be finite and > 0, got {arr}")
+    return arr

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import int_like
-from tsfdi.detection.base import CalibratedTest, baseline_variance, rescale_exponent, scaled_ratio
+from tsfdi.detection.base import CalibratedTest, baseline_variance, per_channel, rescale_exponent, scaled_ratio
 from tsfdi.detection.decision import Decision
 
 __all__ = ["MeanTest"]
@@ -85,16 +85,7 @@ class MeanTest(CalibratedTest):
         if ref is None:
             raise TypeError("MeanTest needs reference_variance (the baseline's unbiased residual variance); "
                             "tsfdi.detect/identify take it from the model")
-        if isinstance(ref, (str, bytes, bool, np.bool_)):
-            raise TypeError(f"reference_variance must be a number or one per channel, got {ref!r}")
-        try:
-            arr = np.asarray(ref, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"reference_variance must be a number or one per channel, got {ref!r}") from None
-        arr = np.full(k, float(arr)) if arr.ndim == 0 else arr
-        if arr.shape != (k,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-            raise ValueError(f"reference_variance must be finite, > 0 and one value per channel ({k}), got {ref!r}")
-        return arr
+        return per_channel(ref, "reference_variance", k)
 
     def _calibration_reference(self, recs: list, reference: dict) -> dict:
         """The variance the calibrated test divides by, kept as ``reference_variance_``: the given one, else

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import int_like, option
-from tsfdi.detection.base import (CalibratedTest, baseline_variance, rescale_exponent, scaled_ratio,
+from tsfdi.detection.base import (CalibratedTest, baseline_variance, per_channel, rescale_exponent, scaled_ratio,
                                   statistic_array)
 from tsfdi.detection.decision import Decision
 
@@ -110,7 +110,7 @@ class FTest(CalibratedTest):
         if reference_variance is None:
             raise TypeError("FTest.window_statistic needs reference_variance (the baseline's unbiased variance)")
         k = sig.nchan
-        ref = _per_channel(reference_variance, "reference_variance", k)
+        ref = per_channel(reference_variance, "reference_variance", k)
         window = int_like(window, "window", minimum=3 if self.demean else 2, maximum=sig.nobs)
         step = int_like(step, "step", minimum=1)
         e = sig.values
@@ -170,7 +170,7 @@ class FTest(CalibratedTest):
         if nobs is None:
             raise TypeError("FTest needs nobs (the number of current residual samples per window) for its "
                             "theoretical threshold")
-        df0 = _per_channel(reference_df, "reference_df", k)
+        df0 = per_channel(reference_df, "reference_df", k)
         nu, a = self._nu(nobs), self._channel_alpha(self.alpha, k, self.correction)
         key = (nu, tuple(df0), a)
         cache = self.__dict__.setdefault("_thr_cache", {})    # the same windows again: cache the critical values
@@ -187,16 +187,16 @@ class FTest(CalibratedTest):
     def _null_pvalue(self, statistic: np.ndarray, nobs: int | None = None, reference_df: Any = None,
                      **reference: Any) -> np.ndarray:
         r""":math:`P(\mathcal F(N_u, N_0 - d) > F)` (eq. 9), same shape as ``statistic``."""
-        df0 = _per_channel(reference_df, "reference_df", statistic.shape[-1])
+        df0 = per_channel(reference_df, "reference_df", statistic.shape[-1])
         return f_sf(self._nu(nobs), df0, statistic)
 
     def _df(self, k: int, nobs: int, reference_df: Any = None, **reference: Any) -> np.ndarray:
-        df0 = np.full(k, np.nan) if reference_df is None else _per_channel(reference_df, "reference_df", k)
+        df0 = np.full(k, np.nan) if reference_df is None else per_channel(reference_df, "reference_df", k)
         return np.column_stack([np.full(k, self._nu(nobs)), df0])
 
     def _decision_details(self, k: int, reference_variance: Any = None, **reference: Any) -> dict:
         details: dict = {} if reference_variance is None else {
-            "reference_variance": _per_channel(reference_variance, "reference_variance", k)}
+            "reference_variance": per_channel(reference_variance, "reference_variance", k)}
         details.update({"alternative": self.alternative, "demean": self.demean,
                         "channel_alpha": self._channel_alpha(self.alpha, k, self.correction),
                         "correction": self.correction})
@@ -244,7 +244,7 @@ class FTest(CalibratedTest):
         if reference_df is None:
             raise TypeError("FTest needs reference_df (the baseline's N0 - d); tsfdi.detect/identify take it from "
                             "the model")
-        df0 = _per_channel(reference_df, "reference_df", k)
+        df0 = per_channel(reference_df, "reference_df", k)
         a = self._channel_alpha(self.alpha, k, self.correction)
         dfn = np.full(k, self._nu(nobs))
         info = dict(details) if details else {}
@@ -307,8 +307,8 @@ class FTest(CalibratedTest):
         if reference_variance is None or (reference_df is None and not self.empirical):
             raise TypeError("FTest.test needs reference_variance and reference_df (the baseline's unbiased "
                             "residual variance and N0 - d); tsfdi.detect/identify take them from the model")
-        ref = _per_channel(reference_variance, "reference_variance", k)
-        extra = {} if reference_df is None else {"reference_df": _per_channel(reference_df, "reference_df", k)}
+        ref = per_channel(reference_variance, "reference_variance", k)
+        extra = {} if reference_df is None else {"reference_df": per_channel(reference_df, "reference_df", k)}
         n = e.shape[0]
         scale = rescale_exponent(e)
         if scale.any():
@@ -346,7 +346,7 @@ class FTest(CalibratedTest):
             if not np.all((ref > 0) & np.isfinite(ref)):
                 raise ValueError(f"resid: the mean square of the calibration residuals ({ref}) is 0 or beyond the "
                                  "float range in some channel; give reference_variance or rescale the residuals")
-        self.reference_variance_ = _per_channel(ref, "reference_variance", sigs[0].nchan)
+        self.reference_variance_ = per_channel(ref, "reference_variance", sigs[0].nchan)
         return {**reference, "reference_variance": self.reference_variance_}
 
 
@@ -446,20 +446,3 @@ def _sum_squares(x: np.ndarray, starts: np.ndarray, window: int, demean: bool) -
         else:
             out[i:i + chunk] = np.einsum("ij,ij->i", seg, seg)
     return out
-
-
-def _per_channel(value: Any, name: str, k: int) -> np.ndarray:
-    """A positive finite scalar or one value per channel, as a ``(k,)`` float array."""
-    if isinstance(value, (str, bytes, bool, np.bool_)):
-        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}") from None
-    if arr.ndim == 0:
-        arr = np.full(k, float(arr))
-    if arr.shape != (k,):
-        raise ValueError(f"{name} must be a scalar or have one value per channel ({k}), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ValueError(f"{name} must be finite and > 0, got {arr}")
-    return arr
