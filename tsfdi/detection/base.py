@@ -34,6 +34,9 @@ def max_abs(x: np.ndarray, axis: int = 0) -> np.ndarray:
     """``max |x|`` per column (``axis=0``) or row (``axis=1``) of a finite 2-D array, in one pass over memory."""
     if x.size < 4096:                                   # small: numpy, without the compiled call's overhead
         return np.abs(x).max(axis=axis)
+    if x.shape[1 - axis] == 1:                          # one column (row): a flat reduction is ~3x faster
+        v = x.ravel()
+        return np.array([max(v.max(), -v.min())])
     return _max_abs_columns(x if axis == 0 else x.T)
 
 
@@ -510,16 +513,19 @@ def baseline_variance(results: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def per_channel(value: Any, name: str, k: int) -> np.ndarray:
     """A positive finite scalar or one value per channel, as a ``(k,)`` float array."""
-    if isinstance(value, (str, bytes, bool, np.bool_)):
-        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}") from None
-    if arr.ndim == 0:
-        arr = np.full(k, float(arr))
-    if arr.shape != (k,):
-        raise ValueError(f"{name} must be a scalar or have one value per channel ({k}), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (k,):
+        arr = value                                     # the common case, from a baseline: no conversion
+    else:
+        if isinstance(value, (str, bytes, bool, np.bool_)):
+            raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}")
+        try:
+            arr = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be a positive number or one per channel, got {value!r}") from None
+        if arr.ndim == 0:
+            arr = np.full(k, float(arr))
+        if arr.shape != (k,):
+            raise ValueError(f"{name} must be a scalar or have one value per channel ({k}), got shape {arr.shape}")
+    if not ((arr > 0) & (arr < np.inf)).all():          # NaN fails both comparisons
         raise ValueError(f"{name} must be finite and > 0, got {arr}")
     return arr
