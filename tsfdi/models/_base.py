@@ -14,7 +14,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
-from scipy import signal as sps
 
 from tsfdi._data import Signal, as_signal, is_xarray
 from tsfdi._validation import int_like, option
@@ -709,9 +708,9 @@ class LinearTimeSeriesResults:
         """
         m = self.model
         with np.errstate(over="ignore", invalid="ignore"):
-            if m.nb == 0 and self.neqs == 1:   # scalar AR: one IIR pass
+            if m.nb == 0 and self.neqs == 1:   # scalar AR: one FIR pass (e[t] = sum_i a_i y[t-i], t >= max_lag)
                 a = np.r_[1.0, self._ar_blocks[:, 0, 0]]
-                e = sps.lfilter(a, [1.0], y[:, 0])[m.max_lag:]
+                e = np.convolve(y[:, 0], a, "valid")
                 e = (e - (self._params2d[0, 0] if m.k_const else 0.0))[:, None]
             elif m.nb == 0:   # VAR: accumulate the lag terms, no design matrix
                 p, n = m.na, y.shape[0]

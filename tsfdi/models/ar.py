@@ -82,7 +82,7 @@ class ARResults(ScalarOutputResults):
     def residuals(self, y: Any) -> Any:
         """One-step prediction errors of a new signal through the fixed model.
 
-        ``e[t] = y[t] + sum_i a_i y[t-i] - c`` for ``t = lags .. len(y) - 1`` (computed by one IIR filter pass).
+        ``e[t] = y[t] + sum_i a_i y[t-i] - c`` for ``t = lags .. len(y) - 1`` (one convolution pass).
 
         Parameters
         ----------
