@@ -13,7 +13,7 @@ from tsfdi._validation import int_like, option, probability
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
 
-__all__ = ["CalibratedTest", "ResidualTest"]
+__all__ = ["CalibratedTest", "ReferenceVarianceTest", "ResidualTest"]
 
 
 def rescale_exponent(x: np.ndarray, axis: int = 0, *, within: int = 256) -> np.ndarray:
@@ -486,6 +486,34 @@ def statistic_array(statistic: Any) -> np.ndarray:
         return np.asarray(statistic, dtype=np.float64)
     except (TypeError, ValueError):
         raise TypeError(f"statistic must be numbers, got {type(statistic).__name__}") from None
+
+
+class ReferenceVarianceTest(CalibratedTest):
+    """A calibrated test whose statistic divides by a reference (baseline) residual variance per channel: the F
+    test and the mean-shift test. Calibrated on held-out residuals without a baseline variance, it divides by the
+    pooled mean square of those residuals (the calibrated law absorbs the scale)."""
+
+    def _calibration_reference(self, recs: list, reference: dict) -> dict:
+        """The variance the calibrated test divides by, kept as ``reference_variance_``: the given
+        ``reference_variance`` (a baseline's), else the pooled mean square of the calibration residuals per
+        channel (held-out residuals need no baseline variance: the calibrated law absorbs the scale)."""
+        ref = reference.get("reference_variance")
+        sigs = [self._resid(r, 2) for r in recs]
+        if ref is None:
+            if len({s.nchan for s in sigs}) > 1:
+                raise ValueError(f"resid: every record must have the same channels, got {[s.nchan for s in sigs]}")
+            scale = np.max([rescale_exponent(s.values) for s in sigs], axis=0)      # exact rescaling, see Notes
+            ss = 0.0
+            for s in sigs:
+                v = np.ldexp(s.values, -scale)
+                ss = ss + np.einsum("ij,ij->j", v, v)
+            with np.errstate(over="ignore"):
+                ref = np.ldexp(ss / sum(s.nobs for s in sigs), 2 * scale)
+            if not np.all((ref > 0) & np.isfinite(ref)):
+                raise ValueError(f"resid: the mean square of the calibration residuals ({ref}) is 0 or beyond the "
+                                 "float range in some channel; give reference_variance or rescale the residuals")
+        self.reference_variance_ = per_channel(ref, "reference_variance", sigs[0].nchan)
+        return {**reference, "reference_variance": self.reference_variance_}
 
 
 def baseline_variance(results: Any) -> tuple[np.ndarray, np.ndarray]:

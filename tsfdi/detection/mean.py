@@ -8,13 +8,14 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import int_like
-from tsfdi.detection.base import CalibratedTest, baseline_variance, per_channel, rescale_exponent, scaled_ratio
+from tsfdi.detection.base import (ReferenceVarianceTest, baseline_variance, per_channel, rescale_exponent,
+                                  scaled_ratio)
 from tsfdi.detection.decision import Decision
 
 __all__ = ["MeanTest"]
 
 
-class MeanTest(CalibratedTest):
+class MeanTest(ReferenceVarianceTest):
     r"""Test of a shift of the residual mean over a window (the GLRT of a mean change with a known onset).
 
     Parameters
@@ -86,16 +87,6 @@ class MeanTest(CalibratedTest):
             raise TypeError("MeanTest needs reference_variance (the baseline's unbiased residual variance); "
                             "tsfdi.detect/identify take it from the model")
         return per_channel(ref, "reference_variance", k)
-
-    def _calibration_reference(self, recs: list, reference: dict) -> dict:
-        """The variance the calibrated test divides by, kept as ``reference_variance_``: the given one, else
-        the pooled mean square of the calibration residuals per channel."""
-        sigs = [self._resid(r, 2) for r in recs]
-        ref = reference.get("reference_variance")
-        if ref is None:
-            ref = sum(np.einsum("ij,ij->j", s.values, s.values) for s in sigs) / sum(s.nobs for s in sigs)
-        self.reference_variance_ = self._variance(ref, sigs[0].nchan)
-        return {**reference, "reference_variance": self.reference_variance_}
 
     # ------------------------------------------------------------------ statistic and rules
     def window_statistic(self, resid: Any, window: int, step: int = 1, reference_variance: Any = None,

@@ -8,14 +8,14 @@ import numpy as np
 from scipy import special
 
 from tsfdi._validation import int_like, option
-from tsfdi.detection.base import (CalibratedTest, baseline_variance, per_channel, rescale_exponent, scaled_ratio,
+from tsfdi.detection.base import (ReferenceVarianceTest, baseline_variance, per_channel, rescale_exponent, scaled_ratio,
                                   statistic_array)
 from tsfdi.detection.decision import Decision
 
 __all__ = ["FTest"]
 
 
-class FTest(CalibratedTest):
+class FTest(ReferenceVarianceTest):
     r"""Residual variance F test (Dutta et al., eqs. 8-11).
 
     Parameters
@@ -327,27 +327,6 @@ class FTest(CalibratedTest):
         return self.decision(f, n, tuple(sig.channels), details={"variance": var_u}, reference_variance=ref,
                              **extra)
 
-    def _calibration_reference(self, recs: list, reference: dict) -> dict:
-        """The variance the calibrated test divides by, kept as ``reference_variance_``: the given
-        ``reference_variance`` (a baseline's), else the pooled mean square of the calibration residuals per
-        channel (held-out residuals need no baseline variance: the calibrated law absorbs the scale)."""
-        ref = reference.get("reference_variance")
-        sigs = [self._resid(r, 2) for r in recs]
-        if ref is None:
-            if len({s.nchan for s in sigs}) > 1:
-                raise ValueError(f"resid: every record must have the same channels, got {[s.nchan for s in sigs]}")
-            scale = np.max([rescale_exponent(s.values) for s in sigs], axis=0)      # exact rescaling, see Notes
-            ss = 0.0
-            for s in sigs:
-                v = np.ldexp(s.values, -scale)
-                ss = ss + np.einsum("ij,ij->j", v, v)
-            with np.errstate(over="ignore"):
-                ref = np.ldexp(ss / sum(s.nobs for s in sigs), 2 * scale)
-            if not np.all((ref > 0) & np.isfinite(ref)):
-                raise ValueError(f"resid: the mean square of the calibration residuals ({ref}) is 0 or beyond the "
-                                 "float range in some channel; give reference_variance or rescale the residuals")
-        self.reference_variance_ = per_channel(ref, "reference_variance", sigs[0].nchan)
-        return {**reference, "reference_variance": self.reference_variance_}
 
 
 #: Below this probability scipy's incomplete beta function (``fdtrc``, ``betaincinv``) loses its digits (it may be
