@@ -12,7 +12,12 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["boolean", "int_like", "float_like", "option", "probability", "check_rng"]
+__all__ = ["MAX_VALUES", "boolean", "int_like", "float_like", "option", "probability", "check_rng"]
+
+#: largest number of float64 values (2 GiB) that one array may hold: the regressor of a fit, the covariance of a
+#: recursive estimator, a simulated signal or data set. Orders and lengths are checked against it before anything is
+#: allocated.
+MAX_VALUES = 2**28
 
 
 def boolean(value: Any, name: str) -> bool:

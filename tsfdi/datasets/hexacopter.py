@@ -127,7 +127,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import optimize, signal
 
-from tsfdi._validation import check_rng, float_like, int_like, option
+from tsfdi._validation import MAX_VALUES, check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
 from tsfdi.datasets._hexacopter_params import (
     FLEET_SEED_KEY,
@@ -281,8 +281,6 @@ def _rotor_index(failed_rotor) -> int:
 
 #: largest commanded speed (m/s): the shipped aircraft has no trim much beyond 30 m/s
 MAX_SPEED = 40.0
-#: most values an array of a simulation may hold (2 GiB of float64), checked before integrating
-MAX_VALUES = 2**28
 
 
 def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 5.0,

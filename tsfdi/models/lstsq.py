@@ -23,6 +23,7 @@ import numba
 import numpy as np
 from scipy import linalg
 
+from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
 __all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits", "gram_solve",
@@ -33,10 +34,6 @@ COND_WARN = 1e10
 #: smallest fraction of a Gram column's energy left unexplained by the columns before it for which the
 #: Cholesky route is trusted; below it the factor is recomputed by QR of the regressor itself.
 GRAM_RELATIVE_FLOOR = 1e-9
-#: largest number of float64 values (2 GiB) that one array of a model may hold: the regressor of a fit, the
-#: covariance of a recursive estimator, a simulated signal. Orders and lengths are checked against it before
-#: anything is allocated.
-MAX_VALUES = 2**28
 
 
 def check_size(n_values: int, what: str) -> None:
