@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import xarray as xr
+from _contract import named
 from hypothesis import event, given
 from hypothesis import strategies as st
 from scipy.signal import lfilter
@@ -157,13 +158,6 @@ WINDOWS = mostly(st.one_of(st.integers(15, 60), st.sampled_from(["0.3s", "400ms"
 STEPS = mostly(st.one_of(st.integers(1, 30), st.sampled_from(["0.1s", pd.Timedelta("50ms")])), BAD_SPANS)
 RATES = mostly(st.sampled_from([None, 100.0, 100]),
                st.sampled_from([1.0, 0.0, -1.0, np.nan, np.inf, 1e-300, 1e300, "100"]))
-
-
-def named(exc: Exception, names) -> None:
-    """The error message names one of ``names`` (as a word)."""
-    msg = str(exc)
-    event(f"refused: {msg.split()[0] if msg else type(exc).__name__}")
-    assert any(re.search(rf"(?<![\w-]){re.escape(n)}(?![\w])", msg) for n in names), f"{type(exc).__name__}: {msg}"
 
 
 def check_decision(d: tsfdi.Decision, nchan: int) -> None:
