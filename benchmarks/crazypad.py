@@ -42,7 +42,7 @@ which the conditions withheld from the shared copy check.
    0.1 s (sliding rate, dependent windows), on the held-out flight; per channel and family-wise ("any"),
    calibrated and theoretical (chi-square / F) thresholds, with the two-sided 99 % binomial band of the count.
    Target: realised rate <= 2 alpha at alpha = 1e-2 with 2 s windows, calibrated, for the per-channel tests
-   (pooled over channels) and the family-wise ones (Sidak, Hosking).
+   (LB, F, M pooled over channels) and the family-wise ones (LB-S, LB-H, F-S, M-S and the combined detectors).
 2. Detection per condition: VAR on all normal flights (faulty flights are never fitted), tests calibrated on its
    held-out residuals; percent of the non-overlapping 1 s and 2 s windows flagged on every faulty flight, per
    condition and drone. Target: cut_propeller_M3_4mm_4mm_39mm >= 95 % of its 2 s windows.
