@@ -74,6 +74,41 @@ class Signal:
     def nchan(self) -> int:
         return self.values.shape[1]
 
+    @property
+    def named(self) -> bool:
+        """Whether the channels carry the caller's names (a DataFrame's columns, a DataArray's channel
+        coordinate) rather than positions (numpy, a Series)."""
+        return self.kind != "numpy" and self.vector
+
+    def match_channels(self, channels: Any, name: str, *, named: bool = True) -> "Signal":
+        """This signal with its channels in the order of ``channels``.
+
+        A named signal matched against named ``channels`` (``named=True``: the model was fitted on named data)
+        is reordered by name; a missing or an extra channel raises a ``ValueError`` naming it. Otherwise the
+        channels are matched by position and only their number is checked.
+        """
+        channels = [str(c) for c in channels]
+        if not (named and self.named):
+            if self.nchan != len(channels):
+                raise ValueError(f"{name} has {self.nchan} channel(s) but the model was fitted on {len(channels)} "
+                                 f"({channels})")
+            return self
+        have = [str(c) for c in self.channels]
+        if len(set(have)) != len(have):
+            raise ValueError(f"{name} has duplicate channel names: {have}")
+        missing = [c for c in channels if c not in have]
+        extra = [c for c in have if c not in channels]
+        if missing or extra:
+            what = "; ".join(p for p in (f"missing channel(s) {missing}" if missing else "",
+                                         f"extra channel(s) {extra}" if extra else "") if p)
+            raise ValueError(f"{name}: {what}; the model was fitted on channels {channels}")
+        if have == channels:
+            return self
+        order = [have.index(c) for c in channels]
+        return Signal(values=np.ascontiguousarray(self.values[:, order]), kind=self.kind, vector=self.vector,
+                      index=self.index, channels=channels, name=self.name, time_dim=self.time_dim,
+                      channel_dim=self.channel_dim)
+
     def wrap(self, values: np.ndarray, start: int = 0, *, channels: list | None = None,
              name: Any = None, vector: bool | None = None) -> Any:
         """Wrap an array whose rows are the samples ``start, start + 1, ...`` of this signal.
