@@ -220,10 +220,13 @@ class ResidualWindows:
         sig = as_signal(signal, "signal", allow_constant=True)
         if sig.nchan != self.nchan:
             raise ValueError(f"signal has {sig.nchan} channel(s) but the models were fitted on {self.nchan}")
-        x = sig.values
-        resid = {name: np.asarray(res.residuals(x if self.nchan > 1 else x[:, 0]), dtype=np.float64).reshape(
-            -1, self.nchan) for name, res in self.models.items()}
-        return self._set(resid, sig.nobs, sig.channels if channels is None else channels)
+        resid, names = {}, None
+        for name, res in self.models.items():   # the Signal itself, so that named channels are matched by name
+            r = res.residuals(sig)
+            if names is None and getattr(r, "ndim", 1) == 2 and sig.named:
+                names = [str(c) for c in (r.columns if hasattr(r, "columns") else r[sig.channel_dim].values)]
+            resid[name] = np.asarray(r, dtype=np.float64).reshape(-1, self.nchan)
+        return self._set(resid, sig.nobs, (names or sig.channels) if channels is None else channels)
 
     def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
         """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model fitted without
