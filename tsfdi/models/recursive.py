@@ -155,6 +155,7 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
     px = np.empty(d)
     capped = np.zeros(d, dtype=np.bool_)
     any_cap = _diagonal(P, pcap, lam, capped)
+    inv_unit = 1.0 / fst[_F_UNIT] if fst[_F_UNIT] != 0.0 else 1.0
     for t in range(n):
         yt = y[t]
         finite = np.isfinite(yt)
@@ -256,7 +257,8 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
                 unit = fst[_F_UNIT]
                 if unit == 0.0 and e != 0.0:
                     unit = 2.0 ** np.floor(np.log2(abs(e)))
-                en = e / unit if unit != 0.0 else e     # e in the statistics' unit (exact: a power of two)
+                    inv_unit = 1.0 / unit
+                en = e * inv_unit     # e in the statistics' unit (exact: a power of two)
                 if ist[_I_VAR_STABLE] == 1:
                     sd = np.sqrt(m2 / (nw - 1))
                     z = (en - mean) / sd if sd > 0 else (np.inf if en != mean else 0.0)
@@ -295,17 +297,22 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
                 for i in range(d):
                     px[i] *= c
                 if not any_cap:
+                    # the plain update, with the check of _diagonal folded in: a variance that is not positive
+                    # and finite, or one that reaches its cap, sends P through _diagonal below
                     for i in range(d):
                         vi = px[i]
                         for k in range(d):
                             P[i, k] = P[i, k] * inv_lam - vi * px[k]
+                        p = P[i, i]
+                        if not (0.0 < p < lam * pcap[i]):
+                            touched = True
                 else:
                     for i in range(d):
                         vi = px[i]
                         for k in range(d):
                             f = 1.0 if capped[i] and capped[k] else (half if capped[i] or capped[k] else inv_lam)
                             P[i, k] = P[i, k] * f - vi * px[k]
-                touched = True
+                    touched = True
                 flags |= _UPDATED
             if touched:   # P changed: check it, flag the capped coordinates of the next sample
                 any_cap = _diagonal(P, pcap, lam, capped)
@@ -714,6 +721,8 @@ class RecursiveARX:
 
     def _check_samples(self, yv: np.ndarray, uv: np.ndarray) -> None:
         """Non-finite samples under ``nonfinite="raise"`` and samples beyond ``MAX_SAMPLE``: ``ValueError``."""
+        if all(v.size == 0 or (-MAX_SAMPLE <= v.min() and v.max() <= MAX_SAMPLE) for v in (yv, uv)):
+            return      # every sample finite and in range (a NaN fails both comparisons): two reductions, no copy
         if self.nonfinite == "raise":
             bad_y = ~np.isfinite(yv)
             bad_u = ~np.isfinite(uv).all(axis=1)
