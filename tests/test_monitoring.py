@@ -126,13 +126,15 @@ def test_window_statistics_equal_tests_on_slices(models, failure_record):
                 np.testing.assert_array_equal(ws.channel_reject[w, j], ref.channel_reject)
         np.testing.assert_array_equal(ws.accepted, ~ws.reject)
         np.testing.assert_array_equal(ws.min_pvalue, ws.pvalue.min(axis=2))
-    # likelihood score on the common samples [s + pmax, s + W): -(log det S + k log 2 pi + k) / 2
+    # likelihood score on the common samples [s + pmax, s + W): mean Gaussian log-density under N(0, sigma)
+    from scipy.stats import multivariate_normal
+
     ws = _stats(x, models, lb, window=W, step=S)
-    s = ws.starts[3]
-    e = np.asarray(models["f1"].residuals(x[s:s + W]))
-    cov = np.cov(e.T, bias=True)
-    expected = -0.5 * (np.linalg.slogdet(cov)[1] + 2 * np.log(2 * np.pi) + 2)
-    assert ws.loglik[3, 1] == pytest.approx(expected, rel=1e-9)
+    s, pmax = ws.starts[3], max(res.lags for res in models.values())
+    for j, res in enumerate(models.values()):
+        e = np.asarray(res.residuals(x[s:s + W]))[-(W - pmax):]
+        expected = multivariate_normal(np.zeros(2), res.sigma).logpdf(e).mean()
+        assert ws.loglik[3, j] == pytest.approx(expected, rel=1e-9)
     assert np.isnan(_stats(x, models, lb, window=W, step=S, loglik=False).loglik).all()
 
 
@@ -374,3 +376,19 @@ def test_plots(models, failure_record):
     with pytest.raises(TypeError, match="DataFrame"):
         plot_confusion([[1, 2]])
     plt.close("all")
+
+
+def test_likelihood_score_sees_a_mean_shift():
+    """Two AR(1) models that differ only in their intercept: the likelihood rule picks the one whose mean the
+    window has (the former score, the window's own demeaned covariance, could not tell them apart)."""
+    rng = np.random.default_rng(3)
+    e = rng.standard_normal(4000)
+    y0 = np.empty(4000)
+    y0[0] = 0.0
+    for t in range(1, 4000):
+        y0[t] = 0.5 * y0[t - 1] + e[t]
+    low, high = tsfdi.AR(y0, 1, trend="c").fit(), tsfdi.AR(y0 + 3.0, 1, trend="c").fit()
+    models = {"low": low, "high": high}
+    ws = tsfdi.ResidualWindows(models).fit(y0[:1000] + 3.0).statistics(LjungBox(lags=5), window=200, step=200)
+    assert (ws.loglik[:, 1] > ws.loglik[:, 0]).all()
+    assert (decide(np.ones_like(ws.accepted), "likelihood", loglik=ws.loglik) == 1).all()

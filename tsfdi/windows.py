@@ -37,8 +37,8 @@ __all__ = ["RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "
 
 #: Decision rules. ``"paper"``: one accepted model is an identification, several are ambiguous, none is no decision
 #: (Dutta et al.). ``"likelihood"``: among the accepted models (all models when none is accepted) the one whose
-#: residuals have the largest Gaussian log-likelihood on the window (smallest log-determinant of the window's residual
-#: covariance, on samples common to every model). ``"pvalue"``: the same with the largest signal-level p-value (the
+#: residuals are the most likely on the window under the model's own Gaussian innovation law (see
+#: :attr:`WindowStatistics.loglik`), on samples common to every model. ``"pvalue"``: the same with the largest signal-level p-value (the
 #: smallest channel p-value of each model).
 RULES = ("paper", "likelihood", "pvalue")
 
@@ -107,8 +107,13 @@ class WindowStatistics:
     reject : ndarray of bool, shape (n_windows, n_models)
         The model rejects the window (some channel rejects).
     loglik : ndarray, shape (n_windows, n_models)
-        Gaussian log-likelihood per sample of each model's residuals on the samples common to every model, with
-        the window's own ML covariance, :math:`-\tfrac12(\ln\det\hat S + k\ln 2\pi + k)`.
+        Gaussian log-likelihood per sample of each model's residuals on the ``m`` samples common to every model,
+        under the model's innovation law :math:`N(0, \Sigma)` (:math:`\Sigma` the fit's ML residual covariance,
+        ``sigma`` / ``sigma2``): :math:`-\tfrac12(\ln\det\Sigma + \operatorname{tr}(\Sigma^{-1}S) + k\ln 2\pi)`
+        with :math:`S = \tfrac1m\sum_t e_t e_t'` (not demeaned), the per-sample form of the Gaussian
+        log-likelihood of the innovations (Lütkepohl 2005, Sec. 3.4). A mean shift of the residuals (a new trim)
+        and a change of their covariance both lower it; ``-inf`` for a model without a proper law (singular
+        :math:`\Sigma`).
     decisions : tuple or None
         For tests applied window by window, the :class:`~tsfdi.Decision` of every window and model
         (``decisions[w][j]``); ``None`` when the statistics come from prefix sums.
@@ -154,12 +159,10 @@ class WindowStatistics:
         return f"WindowStatistics(windows={len(self)}, window={self.window}, step={self.step}, models={self.models})"
 
 
-def _prefix(e: np.ndarray) -> tuple:
-    """Cumulative sums of ``e`` and of its lag-0 products ``e_i e_j`` (leading zero row)."""
+def _prefix(e: np.ndarray) -> np.ndarray:
+    """Cumulative sums of the lag-0 products ``e_i e_j`` of the residuals (leading zero row)."""
     k = e.shape[1]
-    c1 = np.concatenate([np.zeros((1, k)), np.cumsum(e, axis=0)])
-    c2 = np.concatenate([np.zeros((1, k * k)), np.cumsum((e[:, :, None] * e[:, None, :]).reshape(-1, k * k), axis=0)])
-    return c1, c2
+    return np.concatenate([np.zeros((1, k * k)), np.cumsum((e[:, :, None] * e[:, None, :]).reshape(-1, k * k), axis=0)])
 
 
 class ResidualWindows:
@@ -328,7 +331,7 @@ class ResidualWindows:
                                 channel_reject=rej_c, reject=rej_c.any(axis=2), loglik=ll, decisions=dec)
 
     @staticmethod
-    def _model(res: Any, e: np.ndarray, prefix: tuple | None, test: Any, starts: np.ndarray, n: int, step: int,
+    def _model(res: Any, e: np.ndarray, prefix: np.ndarray | None, test: Any, starts: np.ndarray, n: int, step: int,
                name: str, p: int, pmax: int, window: int) -> tuple:
         """One fitted model with its record residuals ``e`` on every window: statistic, p-value, threshold, channel
         rejection (n_windows, k), the likelihood score (n_windows,; NaN without the residuals' ``prefix`` sums)
@@ -353,13 +356,16 @@ class ResidualWindows:
         thr = np.broadcast_to(np.asarray(thr, dtype=float), rej_c.shape)
         if prefix is None:
             return stat, pv, thr, rej_c, np.full(nwin, np.nan), ds
-        c1, c2 = prefix
+        c2 = prefix
         # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
         off = pmax - p
         m = window - pmax
         lo, hi = starts + off, starts + off + m
-        mu = (c1[hi] - c1[lo]) / m
-        cov = ((c2[hi] - c2[lo]) / m).reshape(nwin, k, k) - mu[:, :, None] * mu[:, None, :]
-        sign, logdet = np.linalg.slogdet(cov)
-        logdet = np.where(sign > 0, logdet, np.inf)
-        return stat, pv, thr, rej_c, -0.5 * (logdet + k * np.log(2 * np.pi) + k), ds
+        # Gaussian log-likelihood per sample of the window's residuals under the model's innovation law N(0, Sigma)
+        sigma = np.asarray(res.sigma if hasattr(res, "sigma") else res.sigma2, dtype=np.float64).reshape(k, k)
+        sign, logdet = np.linalg.slogdet(sigma)
+        if sign <= 0 or not np.isfinite(logdet):      # no proper Gaussian law (an exact fit): never the most likely
+            return stat, pv, thr, rej_c, np.full(nwin, -np.inf), ds
+        second = ((c2[hi] - c2[lo]) / m).reshape(nwin, k, k)   # (1/m) sum e e', not demeaned: a mean shift counts
+        quad = np.einsum("ij,wji->w", np.linalg.inv(sigma), second)
+        return stat, pv, thr, rej_c, -0.5 * (logdet + quad + k * np.log(2 * np.pi)), ds
