@@ -39,7 +39,7 @@ __all__ = [
     "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "OnlineCalibration", "Records", "fit_baselines",
     "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
     # imported on first use
-    "datasets", "plotting", "study", "plot_acf",
+    "datasets", "plotting", "study", "plot_acf", "align",
     "TsfdiWarning", "__version__",
 ]
 
@@ -47,11 +47,14 @@ _LAZY_MODULES = ("datasets", "plotting", "study")
 
 
 def __getattr__(name: str):
-    """``tsfdi.datasets``, ``tsfdi.plotting`` and ``tsfdi.study`` (and ``tsfdi.plot_acf``) on first use."""
+    """``tsfdi.datasets``, ``tsfdi.plotting`` and ``tsfdi.study`` (and ``tsfdi.plot_acf``, ``tsfdi.align``) on first
+    use."""
     if name in _LAZY_MODULES:
         return importlib.import_module(f"tsfdi.{name}")
     if name == "plot_acf":
         return importlib.import_module("tsfdi.plotting").plot_acf
+    if name == "align":
+        return importlib.import_module("tsfdi.datasets").align
     raise AttributeError(f"module 'tsfdi' has no attribute {name!r}")
 
 

@@ -8,6 +8,15 @@ Results are wrapped back in the caller's kind: a numpy array for numpy input, a 
 ``DataFrame`` with the sliced original index for pandas input, and a ``DataArray`` with the sliced time
 coordinate for xarray input. Residuals of a model with ``lags`` lags lose the first ``lags`` samples, so
 their index starts at the original index's position ``lags``.
+
+Time index (decided here for every entry point). A ``DatetimeIndex`` / ``TimedeltaIndex`` (pandas) or a datetime /
+timedelta time coordinate (xarray) is checked by :func:`as_signal`: it must be strictly increasing and uniformly
+sampled, every step within :data:`JITTER` (10 %) of the median step. A non-increasing stamp, a duplicated stamp or a
+gap (one missing sample is already a step of twice the median) raises a ``ValueError`` naming the argument, the
+position and time, pointing to :func:`tsfdi.align` (``gaps="split"``), which puts irregular or multi-rate data on a
+uniform grid. A ``RangeIndex``, an integer or other numeric index and a numpy array carry positions, not
+checked stamps, and are accepted as they are. :func:`sampling_frequency` reads ``fs`` from the time index (also a
+numeric index named ``"time"`` or a numeric xarray time coordinate, in seconds) with the same uniformity check.
 """
 
 from __future__ import annotations
@@ -26,8 +35,11 @@ import pandas as pd
 
 from tsfdi._validation import float_like, int_like
 
-__all__ = ["Signal", "as_signal", "is_xarray", "read_csv", "refuse_masked", "rolling_variance", "sampling_frequency",
-           "window_samples"]
+__all__ = ["JITTER", "Signal", "as_signal", "is_xarray", "read_csv", "refuse_masked", "rolling_variance",
+           "sampling_frequency", "time_step", "window_samples"]
+
+#: a time index is uniformly sampled when every step lies within this fraction of its median step
+JITTER = 0.1
 
 
 def is_xarray(obj: Any) -> bool:
@@ -77,8 +89,10 @@ class Signal:
     @property
     def named(self) -> bool:
         """Whether the channels carry the caller's names (a DataFrame's columns, a DataArray's channel
-        coordinate) rather than positions (numpy, a Series)."""
-        return self.kind != "numpy" and self.vector
+        coordinate) rather than positions (numpy, a Series, a DataArray without channel coordinate: the
+        placeholder names ``y0, y1, ...`` count as positions)."""
+        return (self.kind != "numpy" and self.vector
+                and list(self.channels) != [f"y{i}" for i in range(self.nchan)])
 
     def match_channels(self, channels: Any, name: str, *, named: bool = True) -> "Signal":
         """This signal with its channels in the order of ``channels``.
@@ -281,29 +295,77 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         if const.any():
             which = [channels[i] for i in np.flatnonzero(const)]
             raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
+    if isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex)):
+        time_step(index, name)
     return Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
                   channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)
 
 
-def sampling_frequency(signal: Signal, fs: Any = None) -> float | None:
+def _format_time(value: Any) -> str:
+    """A time stamp for a message: ISO format for a date-time, seconds otherwise."""
+    if isinstance(value, (pd.Timestamp, np.datetime64)):
+        return pd.Timestamp(value).isoformat()
+    if isinstance(value, (pd.Timedelta, np.timedelta64)):
+        return f"{pd.Timedelta(value).total_seconds():g} s"
+    return f"{float(value):g} s"
+
+
+def time_step(index: pd.Index | None, name: str, *, numeric: bool = False) -> float | None:
+    """Median step in seconds of a uniformly sampled time index; ``None`` when the index carries no time.
+
+    A ``DatetimeIndex`` / ``TimedeltaIndex`` is a time index; a numeric index is one (in seconds) when ``numeric``
+    is true. The index must be strictly increasing and every step ``d_i`` must satisfy
+    ``|d_i - median(d)| <= JITTER * median(d)`` (:data:`JITTER` = 10 %).
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the position and the time of the first missing (NaT / NaN), non-increasing or
+        non-uniform step, and pointing to :func:`tsfdi.align`.
+    """
+    if index is None or len(index) < 2 or isinstance(index, pd.RangeIndex):
+        return None
+    stamps = isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex))
+    if not (stamps or (numeric and pd.api.types.is_numeric_dtype(index.dtype)
+                       and not pd.api.types.is_bool_dtype(index.dtype))):
+        return None
+    if index.hasnans:
+        raise ValueError(f"{name} has a missing time stamp (NaT / NaN) at sample {int(np.argmax(index.isna()))} "
+                         "of its time index")
+    if stamps:      # integers in the index's own unit (UTC for a time zone)
+        steps = np.diff(index.asi8) / {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}[index.unit]
+    else:
+        steps = np.diff(np.asarray(index, dtype=np.float64))
+    hint = "put it on a uniform grid with tsfdi.align(..., gaps='split')"
+    bad = np.flatnonzero(~(steps > 0))
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"{name} has a time index that is not strictly increasing: sample {i + 1} at "
+                         f"{_format_time(index[i + 1])} follows {_format_time(index[i])}; sort it or {hint}")
+    dt = float(np.median(steps))
+    bad = np.flatnonzero(np.abs(steps - dt) > JITTER * dt)
+    if bad.size:
+        i = int(bad[0])
+        what = "gap" if steps[i] > dt else "short step"
+        raise ValueError(f"{name} is not uniformly sampled: a {what} of {steps[i]:g} s after sample {i} at "
+                         f"{_format_time(index[i])} (median step {dt:g} s; every step must be within "
+                         f"{JITTER:.0%} of it); {hint}, or split the signal at the gap")
+    return dt
+
+
+def sampling_frequency(signal: Signal, fs: Any = None, name: str = "signal") -> float | None:
     """Sampling frequency in Hz: ``fs`` when given, else read from the signal's time index, else ``None``.
 
-    A ``DatetimeIndex`` / ``TimedeltaIndex`` gives ``1 / median(spacing)`` in seconds; a numeric index named
-    ``"time"`` (pandas) or a numeric xarray time coordinate is taken to be in seconds. A ``RangeIndex`` or a
-    numpy array carries no time.
+    A ``DatetimeIndex`` / ``TimedeltaIndex`` gives ``1 / median(step)`` in seconds; a numeric index named
+    ``"time"`` (pandas) or a numeric xarray time coordinate is taken to be in seconds. The index must be uniformly
+    sampled (:func:`time_step`): a gap or a jitter beyond :data:`JITTER` raises a ``ValueError`` naming ``name``.
+    A ``RangeIndex`` or a numpy array carries no time.
     """
     if fs is not None:
         return float_like(fs, "fs", minimum=0.0, strict_min=True)
     idx = signal.index
-    if idx is None or len(idx) < 2 or isinstance(idx, pd.RangeIndex):
-        return None
-    if isinstance(idx, (pd.DatetimeIndex, pd.TimedeltaIndex)):
-        dt = float(np.median(np.asarray((idx[1:] - idx[:-1]).total_seconds())))
-    elif pd.api.types.is_numeric_dtype(idx.dtype) and (signal.kind == "xarray" or idx.name == "time"):
-        dt = float(np.median(np.diff(np.asarray(idx, dtype=np.float64))))
-    else:
-        return None
-    return 1.0 / dt if dt > 0 else None
+    dt = time_step(idx, name, numeric=idx is not None and (signal.kind == "xarray" or idx.name == "time"))
+    return None if dt is None else 1.0 / dt
 
 
 def window_samples(value: Any, name: str, fs: float | None, *, minimum: int = 1) -> int:

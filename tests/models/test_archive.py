@@ -342,8 +342,6 @@ INDEXES = {
     "datetime_tz_freq": lambda n: pd.date_range("2020-03-28", periods=n, freq="h", tz="Europe/Paris", name="time"),
     "datetime_fixed_offset": lambda n: pd.date_range(
         "2020", periods=n, freq="s", tz=datetime.timezone(datetime.timedelta(hours=-3, minutes=-30))),
-    "datetime_ns_nat": lambda n: pd.DatetimeIndex(list(pd.date_range("2020", periods=n - 1, freq="10ms",
-                                                                      unit="ns")) + [pd.NaT]),
     "datetime_no_freq": lambda n: pd.DatetimeIndex(pd.date_range("2020", periods=n, freq="D").values),
     "timedelta_freq": lambda n: pd.timedelta_range(0, periods=n, freq="250ms", name="dt"),
     "period": lambda n: pd.period_range("2000-01", periods=n, freq="M", name="p"),
@@ -371,6 +369,13 @@ def test_every_index_kind_round_trips_exactly(tmp_path, kind):
         assert_same(back, res)
         pd.testing.assert_series_equal(back.resid, res.resid)
         assert back.model.u_data is None or back.model.u_data.index.equals(idx)
+
+
+def test_a_time_index_with_nat_is_refused_at_fit():
+    """A missing time stamp cannot be fitted (issue 19: time indexes are checked), so it is never saved."""
+    idx = pd.DatetimeIndex(list(pd.date_range("2020", periods=Y1.size - 1, freq="10ms", unit="ns")) + [pd.NaT])
+    with pytest.raises(ValueError, match="missing time stamp"):
+        tsfdi.AR(pd.Series(Y1, index=idx), 2, "c").fit()
 
 
 def test_frame_records_with_different_indexes(tmp_path):
