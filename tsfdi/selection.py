@@ -35,6 +35,7 @@ from tsfdi.exceptions import IllConditionedWarning
 from tsfdi.models import AR, ARX, VAR
 from tsfdi.models.criteria import EXACT_FIT_RTOL
 from tsfdi.models.lstsq import nested_fits, triangular_factor
+from tsfdi.summary import Summary
 
 __all__ = ["select_order", "OrderSelection"]
 
@@ -148,8 +149,8 @@ class OrderSelection:
 
     @cached_property
     def table(self) -> pd.DataFrame:
-        """Criteria indexed by order: ``bic``, ``aic``, ``rss_sss`` (%), ``spp``, ``sigma2``, ``llf``."""
-        cols = ["bic", "aic", "rss_sss", "spp", "sigma2", "llf"]
+        """Criteria indexed by order: ``bic``, ``aic``, ``hqic``, ``rss_sss`` (%), ``spp``, ``sigma2``, ``llf``."""
+        cols = ["bic", "aic", "hqic", "rss_sss", "spp", "sigma2", "llf"]
         return pd.DataFrame({c: self.values[c] for c in cols}, index=pd.Index(self.orders, name="order"))
 
     @property
@@ -184,6 +185,26 @@ class OrderSelection:
         else:
             model = AR(y, order, trend=spec.trend, hold_back=spec.hold_back)
         return model.fit()
+
+    def summary(self) -> Summary:
+        """The criteria per order with the selected orders marked: a :class:`tsfdi.summary.Summary` (text when
+        printed, HTML in a notebook) whose table is :attr:`table` plus a column ``selected`` (``min BIC`` at
+        :attr:`selected`, ``RSS/SSS stable`` at :attr:`stabilized`)."""
+        spec = self.spec
+        mark = pd.Series("", index=self.table.index)
+        mark[self.selected] = "min BIC"
+        mark[self.stabilized] = ", ".join(filter(None, [mark[self.stabilized], "RSS/SSS stable"]))
+        header = [("Model", type(spec).__name__), ("Trend", spec.trend), ("Orders", f"1..{self.max_lags}"),
+                  ("Observations (common sample)", sum(spec.nobs_records)), ("Selected (min BIC)", self.selected),
+                  ("RSS/SSS stable from", self.stabilized), ("RSS/SSS tolerance", self.tol)]
+        if spec.multi:
+            header.insert(2, ("Records", len(spec.records)))
+        if spec.neqs > 1:
+            header.insert(2, ("BIC variant", spec.criterion))
+        notes = ["Every order is fitted on the same sample (the first max_lags samples of each record held back)."]
+        if isinstance(spec, ARX):
+            notes.append("ARX order p: na = nb = p.")
+        return Summary("Order selection", header, [("Criteria per order", self.table.assign(selected=mark))], notes)
 
     def plot(self, ax=None):
         """BIC and RSS/SSS against the order, as paper 003 Fig. 8. Returns the Figure."""

@@ -119,7 +119,7 @@ def test_results_are_immutable():
 
 def test_summary_and_repr():
     res = tsfdi.AR(signals()["ar2"], 2).fit()
-    text = res.summary()
+    text = str(res.summary())
     assert "BIC" in text and "RSS/SSS" in text and "a2" in text and f"{res.bic:.6g}" in text
     assert "ARResults" in repr(res)
 

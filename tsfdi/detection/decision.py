@@ -15,11 +15,13 @@ signal-level false-alarm rate is at most ``alpha``; the default (``None``) is th
 
 from __future__ import annotations
 
-import html
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
+
+from tsfdi.summary import Summary
 
 __all__ = ["Decision"]
 
@@ -137,23 +139,28 @@ class Decision:
             return float(np.max(self.statistic / self.threshold))
 
     # ------------------------------------------------------------------ display
-    def summary(self) -> str:
-        """A plain-text table of the decision per channel and for the signal."""
-        lines = [f"{self.test or 'Residual test'} (alpha = {self.alpha:g}, nobs = {self.nobs})",
-                 f"  H0: {self.null_hypothesis}",
-                 f"  H1: {self.alternative_hypothesis}"]
+    def summary(self) -> Summary:
+        """The decision per channel and for the signal: a :class:`tsfdi.summary.Summary` (text when printed,
+        HTML tables in a notebook) with the hypotheses, ``alpha``, the signal's decision and p-value in its header
+        and one row per channel (statistic, threshold, p-value, degrees of freedom, reject)."""
+        header = [("Test", self.test or "Residual test"), ("H0", self.null_hypothesis),
+                  ("H1", self.alternative_hypothesis), ("alpha", self.alpha), ("Observations", self.nobs)]
         corr = self.details.get("correction")
         if corr:
-            lines.append(f"  per-channel correction: {corr}")
-        w = max([7] + [len(c) for c in self.channels])
-        lines.append(f"  {'channel':<{w}}  {'statistic':>12}  {'threshold':>12}  {'p-value':>10}  {'df':>14}  decision")
-        for i, c in enumerate(self.channels):
-            dec = "reject" if self.channel_reject[i] else "accept"
-            lines.append(f"  {c:<{w}}  {self.statistic[i]:>12.5g}  {self.threshold[i]:>12.5g}  "
-                         f"{_fmt(self.pvalue[i]):>10}  {_fmt(self.df[i]):>14}  {dec}")
-        verdict = "reject H0 (fault / model does not fit)" if self.reject else "accept H0"
-        lines.append(f"  signal: {verdict}; rule: the signal is accepted only if every channel accepts")
-        return "\n".join(lines)
+            header.append(("Per-channel correction", corr))
+        header += [("Signal p-value", self.signal_pvalue),
+                   ("Signal decision", "reject H0 (fault / model does not fit)" if self.reject else "accept H0")]
+        df = self.df
+        if df.ndim == 1:
+            dfs = {"df": df}
+        elif df.shape[1:] == (2,):      # the F test: numerator and denominator
+            dfs = {"df num": df[:, 0], "df den": df[:, 1]}
+        else:
+            dfs = {"df": [_fmt(d) for d in df]}
+        table = pd.DataFrame({"statistic": self.statistic, "threshold": self.threshold, "p-value": self.pvalue,
+                              **dfs, "reject": self.channel_reject}, index=pd.Index(self.channels, name="channel"))
+        return Summary(f"{self.test or 'Residual test'} decision", header, [("Per channel", table)],
+                       ["Rule: the signal is accepted only if every channel accepts."])
 
     def __repr__(self) -> str:
         stats = ", ".join(f"{c}={s:.4g}{'>' if r else '<='}{t:.4g}" for c, s, t, r in
@@ -162,17 +169,7 @@ class Decision:
                 f"{stats})")
 
     def _repr_html_(self) -> str:
-        rows = "".join(
-            f"<tr><td>{html.escape(str(c))}</td><td>{self.statistic[i]:.5g}</td><td>{self.threshold[i]:.5g}</td>"
-            f"<td>{_fmt(self.pvalue[i])}</td><td>{html.escape(_fmt(self.df[i]))}</td>"
-            f"<td>{'reject' if self.channel_reject[i] else 'accept'}</td></tr>"
-            for i, c in enumerate(self.channels))
-        verdict = "reject H0" if self.reject else "accept H0"
-        return (f"<div><b>{html.escape(self.test or 'Residual test')}</b> &mdash; {verdict} "
-                f"(alpha = {self.alpha:g}, nobs = {self.nobs})<br>"
-                f"H0: {html.escape(self.null_hypothesis)}<br>H1: {html.escape(self.alternative_hypothesis)}"
-                "<table><thead><tr><th>channel</th><th>statistic</th><th>threshold</th><th>p-value</th>"
-                f"<th>df</th><th>decision</th></tr></thead><tbody>{rows}</tbody></table></div>")
+        return self.summary().as_html()
 
     def plot(self, ax: Any = None, **kwargs: Any) -> Any:
         """Bars of the statistic per channel against the critical limit (Dutta et al., Figs. 10-13).

@@ -8,19 +8,22 @@ defined by its model (data + options) and its parameters.
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from functools import cached_property, partial
 from typing import Any, ClassVar
 
 import numpy as np
 import pandas as pd
+from scipy import linalg, stats
 
 from tsfdi._data import Signal, as_signal, is_xarray
-from tsfdi._validation import int_like, option
+from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import EXACT_FIT_RTOL, information_criteria
 from tsfdi.models.lstsq import MAX_VALUES, check_size, gram_solve, lag_gram, lagged_design, lstsq
+from tsfdi.summary import Summary
 
 __all__ = ["HeldOutResiduals", "LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults",
            "DATA_RANGE"]
@@ -52,6 +55,41 @@ def _channel_scale(values: list[np.ndarray], name: str, channels: list) -> tuple
         return peak, np.ones(peak.size), True
     own = (peak >= _OWN_UNITS[0]) & (peak <= _OWN_UNITS[1])
     return peak, np.where(own, 1.0, np.ldexp(1.0, np.frexp(peak)[1])), False
+
+
+def _same_channels(records: list[Signal], name: str) -> tuple[Signal, ...]:
+    """The records with the channels of the first: named records (DataFrames, DataArrays with a channel
+    coordinate) reordered by name, with a ``ValueError`` naming a missing or extra channel; others by position,
+    with their number checked."""
+    first = records[0]
+    out = [first]
+    for i, r in enumerate(records[1:], start=1):
+        if not (r.named and first.named) and r.nchan != first.nchan:
+            raise ValueError(f"{name}[{i}] has {r.nchan} channel(s) but {name}[0] has {first.nchan}")
+        out.append(r.match_channels(first.channels, f"{name}[{i}]", named=first.named))
+    return tuple(out)
+
+
+def _future_index(index: pd.Index, steps: int) -> pd.Index:
+    """The ``steps`` time stamps after ``index``, continued at its frequency: a ``RangeIndex``, a datetime,
+    timedelta or period index with a frequency that pandas knows or infers, a numeric index with a constant
+    spacing. Any other index is continued by the sample positions ``len(index), len(index) + 1, ...``."""
+    n, name = len(index), index.name
+    if isinstance(index, pd.RangeIndex):
+        return pd.RangeIndex(index.stop, index.stop + steps * index.step, index.step, name=name)
+    if isinstance(index, pd.PeriodIndex):
+        return pd.period_range(index[-1], periods=steps + 1, freq=index.freq, name=name)[1:]
+    if isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex)):
+        freq = index.freq or (pd.infer_freq(index) if n >= 3 else None)
+        if freq is not None:
+            make = pd.date_range if isinstance(index, pd.DatetimeIndex) else pd.timedelta_range
+            return make(index[-1], periods=steps + 1, freq=freq, name=name, unit=index.unit)[1:]
+    elif n >= 2 and pd.api.types.is_numeric_dtype(index.dtype) and not pd.api.types.is_bool_dtype(index.dtype):
+        t = index.to_numpy(dtype=np.float64)
+        step = (t[-1] - t[0]) / (n - 1)
+        if step > 0 and np.allclose(np.diff(t), step, rtol=1e-9, atol=0.0):
+            return pd.Index(t[-1] + step * np.arange(1, steps + 1), name=name)
+    return pd.RangeIndex(n, n + steps, name=name)
 
 
 class HeldOutResiduals(list):
@@ -114,25 +152,21 @@ class LinearTimeSeriesModel:
         self.nk = int_like(nk, "nk", minimum=0)
         self.multi = _is_record_list(y)
         records = list(y) if self.multi else [y]
-        self.records = tuple(as_signal(r, "y" if not self.multi else f"y[{i}]", vector=self._vector)
-                             for i, r in enumerate(records))
-        for i, r in enumerate(self.records[1:], start=1):
-            if r.nchan != self.records[0].nchan:
-                raise ValueError(f"y[{i}] has {r.nchan} channel(s) but y[0] has {self.records[0].nchan}")
+        self.records = _same_channels([as_signal(r, "y" if not self.multi else f"y[{i}]", vector=self._vector)
+                                       for i, r in enumerate(records)], "y")
         self.u_records = None
         if u is not None:
             if self.multi != _is_record_list(u) or (self.multi and len(u) != len(records)):
                 raise ValueError("u must be a list of as many records as y when y is a list of records "
                                  "(and a single signal otherwise)")
             u_list = list(u) if self.multi else [u]
-            self.u_records = tuple(as_signal(r, "u" if not self.multi else f"u[{i}]") for i, r in enumerate(u_list))
+            self.u_records = _same_channels([as_signal(r, "u" if not self.multi else f"u[{i}]")
+                                             for i, r in enumerate(u_list)], "u")
             for i, (ur, yr) in enumerate(zip(self.u_records, self.records)):
                 name = "u" if not self.multi else f"u[{i}]"
                 if ur.nobs != yr.nobs:
                     raise ValueError(f"{name} has {ur.nobs} samples but {name.replace('u', 'y', 1)} has {yr.nobs}: "
                                      "they must match")
-                if ur.nchan != self.u_records[0].nchan:
-                    raise ValueError(f"{name} has {ur.nchan} input(s) but u[0] has {self.u_records[0].nchan}")
         if self.u_records is None and self.nb:
             raise ValueError("nb > 0 needs an input signal u")
         if self.na + self.nb < 1:
@@ -507,12 +541,29 @@ class LinearTimeSeriesResults:
     Attributes are computed on first access and cached. Information criteria follow the likelihood form
     used by statsmodels ``AutoReg`` (Lütkepohl):
 
-    ``llf = -nobs/2 (s ln 2 pi + ln det Sigma + s)``, ``aic = -2 llf + 2 k``, ``bic = -2 llf + k ln nobs``
+    ``llf = -nobs/2 (s ln 2 pi + ln det Sigma + s)``, ``aic = -2 llf + 2 k``, ``bic = -2 llf + k ln nobs``,
+    ``hqic = -2 llf + 2 k ln ln nobs``
 
     with ``Sigma`` the maximum-likelihood residual covariance and ``k = df_model + s (s + 1) / 2`` the
     number of free parameters including the noise covariance. Divided by ``nobs`` the BIC is the papers'
     eq. 5, ``ln sigma_e^2 + d ln N / N``, up to a constant that does not depend on the order.
+
+    **Inference** (``bse``, ``tvalues``, ``pvalues``, ``conf_int``) follows statsmodels for the same model: the
+    covariance of the coefficients of equation ``j`` is ``s_j^2 (X'X)^{-1}`` with ``X`` the stacked regressor of
+    all records, and ``s_j^2 = RSS_j / nobs`` for a scalar output (statsmodels ``AutoReg``) or
+    ``RSS_j / (nobs - df_eq)`` for a VAR (statsmodels ``VAR``'s ``sigma_u``); ``tvalues = params / bse`` are
+    referred to the standard normal distribution in both (their ``pvalues``; ``conf_int`` is
+    ``params +- z_{1 - alpha/2} bse``). With several records ``nobs`` counts the regression rows of all of them.
+
+    **Labels.** ``params``, ``bse``, ``tvalues``, ``pvalues`` and ``conf_int()`` are bare arrays for a model of
+    numpy data and pandas objects labelled with the parameter names (index) and the channel names (columns, or the
+    Series name) for pandas or xarray data.
     """
+
+    #: statsmodels' residual variance behind ``bse``: ``RSS / (nobs - df_eq)`` (VAR) or ``RSS / nobs`` (AutoReg)
+    _df_adjusted_bse: ClassVar[bool] = True
+    _bse_note: ClassVar[str] = ("std err from Sigma = E'E / (nobs - df_eq) per equation (statsmodels VAR); z and "
+                                "P>|z| from the normal distribution")
 
     def __init__(self, model: LinearTimeSeriesModel, params: np.ndarray) -> None:
         params = np.array(params, dtype=float)
@@ -629,18 +680,164 @@ class LinearTimeSeriesResults:
         return float(self._criteria["spp"][0])
 
     @property
+    def hqic(self) -> float:
+        """Hannan-Quinn information criterion ``-2 llf + 2 k ln ln nobs`` (statsmodels ``AutoReg.hqic``; see
+        :func:`~tsfdi.models.criteria.information_criteria` for statsmodels ``VAR``'s per-sample form)."""
+        return float(self._criteria["hqic"][0])
+
+    @property
     def resid(self) -> Any:
         """In-sample residuals (one-step prediction errors) in the caller's data kind.
 
         A model fitted on a list of records gives a list with the residuals of each record.
         """
+        return self._per_record(self._resid_array * self.model.y_scale)
+
+    @property
+    def fittedvalues(self) -> Any:
+        """In-sample one-step predictions ``y[t] - e[t]`` of the estimation sample, in the caller's data kind
+        (statsmodels' ``fittedvalues``); a list with those of each record for a model fitted on several."""
         m = self.model
-        e = self._resid_array * m.y_scale
+        y = np.vstack([r.values[m.hold_back:] for r in m.records])
+        return self._per_record(y - self._resid_array * m.y_scale)
+
+    def _per_record(self, values: np.ndarray) -> Any:
+        """Rows of the stacked estimation sample wrapped in the data's kind: one series, or one per record."""
+        m = self.model
         if not m.multi:
-            return m.data.wrap(e, m.hold_back)
+            return m.data.wrap(values, m.hold_back)
         bounds = np.cumsum([0] + m.nobs_records)
-        return [r.wrap(e[a:b].copy(), m.hold_back)
-                for r, a, b in zip(m.records, bounds[:-1], bounds[1:])]
+        return [r.wrap(values[a:b].copy(), m.hold_back) for r, a, b in zip(m.records, bounds[:-1], bounds[1:])]
+
+    # --- inference (statsmodels' conventions) ------------------------------------------------------
+    @cached_property
+    def _bse2d(self) -> np.ndarray:
+        """Standard errors ``sqrt(s_j^2 diag((X'X)^-1))``, shape ``(df_eq, neqs)``, in the data's units.
+
+        ``(X'X)^-1 = V S^-2 V'`` from the singular values of the triangular factor of the regressor (units of the
+        fit), so nothing is squared before the decomposition; a direction the regressor does not determine gets
+        an infinite standard error.
+        """
+        m = self.model
+        X, _ = m.design_all(scaled=True)
+        R = linalg.qr(X, mode="r", check_finite=False)[0][: X.shape[1]]
+        _, sv, vt = np.linalg.svd(R)
+        var = np.diag(self._sse) / (self.df_resid if self._df_adjusted_bse else self.nobs)
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+            xtx_inv = ((vt / sv[:, None]) ** 2).sum(axis=0)
+            bse = np.sqrt(xtx_inv[:, None] * var[None, :])
+            if m._rescaled:
+                bse = bse * m._col_scale[:, None] * m.y_scale[None, :]
+        bse.setflags(write=False)
+        return bse
+
+    @cached_property
+    def _tvalues2d(self) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = self._params2d / self._bse2d
+        t.setflags(write=False)
+        return t
+
+    @cached_property
+    def _pvalues2d(self) -> np.ndarray:
+        p = 2.0 * stats.norm.sf(np.abs(self._tvalues2d))
+        p.setflags(write=False)
+        return p
+
+    def _labelled(self, values: np.ndarray) -> Any:
+        """Per-parameter values ``(df_eq, neqs)`` as :attr:`params` gives them: a bare (read-only) array for numpy
+        data, 1-D for one output channel; a Series (index: parameter names) or a DataFrame (columns: channels)
+        for pandas or xarray data."""
+        m = self.model
+        out = values if m._vector else values[:, 0]
+        if m.data.kind == "numpy":
+            return out
+        if not m._vector:
+            return pd.Series(out.copy(), index=self._param_names(), name=m.data.name)
+        return pd.DataFrame(out.copy(), index=self._param_names(), columns=list(m.data.channels))
+
+    @property
+    def params(self) -> Any:
+        """Regression coefficients in the papers' sign, rows ``[const, lag-1 group, lag-2 group, ...]`` (one
+        column per equation for a VAR); labelled for pandas / xarray data (see the class docstring)."""
+        return self._labelled(self._params2d)
+
+    @property
+    def bse(self) -> Any:
+        """Standard errors of :attr:`params` (statsmodels' convention of the model family; class docstring)."""
+        return self._labelled(self._bse2d)
+
+    @property
+    def tvalues(self) -> Any:
+        """``params / bse``."""
+        return self._labelled(self._tvalues2d)
+
+    @property
+    def pvalues(self) -> Any:
+        """Two-sided p-values of ``tvalues`` under the standard normal distribution, ``2 P(Z > |t|)``."""
+        return self._labelled(self._pvalues2d)
+
+    def conf_int(self, alpha: float = 0.05) -> Any:
+        """Confidence intervals ``params -+ z_{1 - alpha/2} bse`` of level ``1 - alpha`` (normal, as statsmodels'
+        ``AutoReg``; statsmodels' ``VAR`` has none but its p-values use the same distribution).
+
+        Parameters
+        ----------
+        alpha : float
+            In (0, 1).
+
+        Returns
+        -------
+        ndarray or DataFrame
+            numpy data: shape ``(df_eq, 2)`` for a scalar output, ``(df_eq, s, 2)`` for a VAR, ``[..., 0]`` the
+            lower and ``[..., 1]`` the upper bound. pandas / xarray data: a DataFrame indexed by parameter names
+            with columns ``["lower", "upper"]``, or ``(channel, "lower" / "upper")`` for a VAR.
+        """
+        q = stats.norm.isf(probability(alpha) / 2)
+        lo, hi = self._params2d - q * self._bse2d, self._params2d + q * self._bse2d
+        m = self.model
+        ci = np.stack([lo, hi], axis=-1)
+        ci = ci if m._vector else ci[:, 0]
+        if m.data.kind == "numpy":
+            return ci
+        if not m._vector:
+            return pd.DataFrame(ci, index=self._param_names(), columns=["lower", "upper"])
+        columns = pd.MultiIndex.from_product([list(m.data.channels), ["lower", "upper"]])
+        return pd.DataFrame(ci.reshape(ci.shape[0], -1), index=self._param_names(), columns=columns)
+
+    # --- forecasts ----------------------------------------------------------------------------------
+    def _forecast_array(self, steps: int, u: np.ndarray | None = None) -> np.ndarray:
+        """``steps`` forecasts after the last sample of the (last) fitted record, shape ``(steps, neqs)``.
+
+        ``y[t] = x[t] params`` with the model's regressor ``x[t]``: the lagged outputs (the forecasts once past
+        the data) and, for an ARX, the inputs ``u`` of the forecast samples after those of the data.
+        """
+        m = self.model
+        p = m.max_lag
+        check_size((p + steps) * (self.neqs + m.n_inputs), f"steps={steps}: the forecast")
+        y_past = m.records[-1].values
+        y = np.concatenate([y_past[len(y_past) - p:], np.zeros((steps, self.neqs))])
+        if u is not None:
+            u_past = m.u_records[-1].values
+            u = np.concatenate([u_past[len(u_past) - p:], u])
+        with np.errstate(over="ignore", invalid="ignore"):
+            for h in range(steps):
+                X, _ = m._design(y[h:h + p + 1], None if u is None else u[h:h + p + 1], p)
+                y[p + h] = X[0] @ self._params2d
+        if not np.isfinite(y).all():
+            why = "unstable" if not self.is_stable else "driven far beyond its data"
+            raise ValueError(f"steps={steps}: the forecasts leave the floating-point range (the fitted "
+                             f"{type(m).__name__} is {why}); forecast fewer steps")
+        return y[p:]
+
+    def _forecast(self, steps: Any) -> Any:
+        """:meth:`_forecast_array` in the kind of the last record, its time index continued (``_future_index``)."""
+        steps = int_like(steps, "steps", minimum=1)
+        f = self._forecast_array(steps)
+        rec = self.model.records[-1]
+        if rec.kind == "numpy":
+            return f if rec.vector else f[:, 0]
+        return dataclasses.replace(rec, index=_future_index(rec.index, steps)).wrap(f)
 
     # --- stability ------------------------------------------------------------------------------
     def _ar_matrices(self) -> np.ndarray:
@@ -696,10 +893,12 @@ class LinearTimeSeriesResults:
 
     # --- new data --------------------------------------------------------------------------------
     def _new_signal(self, y: Any, name: str = "y") -> Signal:
+        """``y`` validated, with the model's channels in the model's order: a named signal (DataFrame, DataArray
+        with a channel coordinate) of a model fitted on named data is matched by name, and a missing or extra
+        channel raises a ``ValueError`` naming it; otherwise the channels are taken by position."""
         sig = as_signal(y, name, vector=self.model._vector, min_nobs=self.model.max_lag + 1, allow_constant=True)
-        if sig.nchan != self.neqs:
-            raise ValueError(f"{name} has {sig.nchan} channel(s) but the model was fitted on {self.neqs}")
-        return sig
+        data = self.model.data
+        return sig.match_channels(data.channels, name, named=data.named)
 
     def _residuals_array(self, y: np.ndarray, u: np.ndarray | None) -> np.ndarray:
         """One-step prediction errors of ``y`` (and ``u``) through the fixed model, from ``max_lag`` on.
@@ -736,42 +935,72 @@ class LinearTimeSeriesResults:
         return (f"{type(self).__name__}({type(self.model).__name__}, {self.model._lag_name}={self.model.na}, "
                 f"nobs={self.nobs}, bic={self.bic:.6g})")
 
-    def _summary_rows(self) -> list[tuple[str, str]]:
-        return [("Model", type(self.model).__name__), ("Order", str(self.model.na)), ("Trend", self.trend),
-                ("Observations", str(self.nobs)), ("Parameters", str(self.df_model)),
-                ("Log-likelihood", f"{self.llf:.6g}"), ("AIC", f"{self.aic:.6g}"), ("BIC", f"{self.bic:.6g}"),
-                ("RSS/SSS (%)", f"{self.rss_sss:.6g}"), ("Samples per parameter", f"{self.spp:.2f}"),
-                ("Stable", str(self.is_stable))]
+    def summary(self, alpha: float = 0.05) -> Summary:
+        """Fit statistics and one coefficient table per equation (coef, std err, z, P>|z|, confidence interval).
 
-    def summary(self) -> str:
-        """A plain-text summary: fit statistics and the parameter table."""
-        rows = self._summary_rows()
-        width = max(len(k) for k, _ in rows)
-        head = "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
-        return f"{head}\n\n{self._param_frame().to_string(float_format=lambda v: f'{v: .6g}')}"
+        Parameters
+        ----------
+        alpha : float
+            The confidence intervals have level ``1 - alpha``.
 
-    def _param_frame(self):
-        import pandas as pd
+        Returns
+        -------
+        tsfdi.summary.Summary
+            ``print()`` shows it as text, a notebook as HTML; ``.tables`` holds the numbers.
+        """
+        alpha = probability(alpha)
+        m = self.model
+        order = f"{m._lag_name}={m.na}" + (f", nb={m.nb}, nk={m.nk}" if m.nb else "")
+        header = [("Model", type(m).__name__), ("Channels", ", ".join(map(str, m.data.channels))),
+                  ("Order", order), ("Trend", self.trend)]
+        if m.u_data is not None:
+            header.append(("Inputs", ", ".join(self._input_names())))
+        if m.multi:
+            header.append(("Records", len(m.records)))
+        header += [("Observations", self.nobs), ("Parameters", self.df_model), ("Log-likelihood", self.llf),
+                   ("AIC", self.aic), ("BIC", self.bic), ("HQIC", self.hqic), ("RSS/SSS (%)", self.rss_sss),
+                   ("Samples per parameter", self.spp), ("Stable", self.is_stable)]
+        q = stats.norm.isf(alpha / 2)
+        tables = []
+        for j, channel in enumerate(m.data.channels):
+            coef, bse = self._params2d[:, j], self._bse2d[:, j]
+            table = pd.DataFrame({"coef": coef, "std err": bse, "z": self._tvalues2d[:, j],
+                                  "P>|z|": self._pvalues2d[:, j],
+                                  f"[{alpha / 2:g}": coef - q * bse, f"{1 - alpha / 2:g}]": coef + q * bse},
+                                 index=self._param_names())
+            tables.append((f"Equation {channel}" if m._vector else f"Coefficients of {channel}", table))
+        a = "A_i" if m._vector else "a_i"
+        notes = [f"Coefficients in the papers' sign: y[t] + sum_i {a} y[t-i] = c"
+                 + (" + sum_j b_j u[t-nk-j+1]" if m.nb else "") + f" + e[t] (statsmodels' phi_i = -{a}).",
+                 self._bse_note + "."]
+        return Summary(f"{type(m).__name__} results", header, tables, notes)
 
-        return pd.DataFrame(self._params2d, index=self._param_names(), columns=self.model.data.channels)
+    def _input_names(self) -> list[str]:
+        """Names of the inputs: the caller's (DataFrame columns, channel coordinate, Series / DataArray name),
+        else ``u0, u1, ...``."""
+        u = self.model.u_data
+        if u.named or (not u.vector and u.name is not None):
+            return [str(c) for c in u.channels]
+        return [f"u{i}" for i in range(u.nchan)]
 
     def _param_names(self) -> list[str]:
         m = self.model
         names = ["const"] if m.k_const else []
+        inputs = self._input_names() if m.nb else []
         for g in range(1, max(m.na, m.nb) + 1):
             if g <= m.na:
                 names += [f"a{g}" if self.neqs == 1 else f"A{g}.{c}" for c in m.data.channels]
             if g <= m.nb:
-                names += [f"b{g}.{c}" for c in m.u_data.channels]
+                names += [f"b{g}.{c}" for c in inputs]
         return names
 
 
 class ScalarOutputResults(LinearTimeSeriesResults):
     """Results of a model with one output channel (AR, ARX): 1-D ``params``, scalar ``sigma2``."""
 
-    @property
-    def params(self) -> np.ndarray:
-        return self._params2d[:, 0]
+    _df_adjusted_bse = False
+    _bse_note = ("std err from sigma2 = RSS / nobs (statsmodels AutoReg); z and P>|z| from the normal "
+                 "distribution")
 
     @property
     def intercept(self) -> float:

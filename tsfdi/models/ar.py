@@ -69,10 +69,16 @@ class ARResults(ScalarOutputResults):
     ----------
     ar_coefs : ndarray, shape (lags,)
         ``a_1..a_na`` in the papers' sign (``y[t] + sum a_i y[t-i] = c + e[t]``).
-    params : ndarray
-        ``[c, a_1, ..., a_na]`` (``c`` only with ``trend="c"``).
+    params : ndarray or Series
+        ``[c, a_1, ..., a_na]`` (``c`` only with ``trend="c"``); a Series indexed ``const, a1, a2, ...`` for
+        pandas / xarray data.
+    bse, tvalues, pvalues : ndarray or Series
+        Standard errors ``sqrt(sigma2 diag((X'X)^-1))``, ``params / bse`` and their two-sided normal p-values, as
+        statsmodels ``AutoReg(y, lags, trend).fit()`` (whose lag coefficients have the opposite sign).
     sigma2 : float
         Maximum-likelihood residual variance ``RSS / nobs`` (as statsmodels ``AutoReg``).
+    fittedvalues : same kind as ``y``
+        ``y[t] - e[t]`` over the estimation sample.
     """
 
     @property
@@ -95,6 +101,23 @@ class ARResults(ScalarOutputResults):
         """
         sig = self._new_signal(y)
         return sig.wrap(self._residuals_array(sig.values, None), self.lags)
+
+    def forecast(self, steps: int = 1) -> Any:
+        """Forecasts of the ``steps`` samples after the end of the fitted data (the last record of a model fitted
+        on several), ``y[t] = c - sum_i a_i y[t-i]`` with the forecasts in place of the samples not yet seen
+        (statsmodels' ``AutoRegResults.forecast(steps)``).
+
+        Returns
+        -------
+        Same kind as ``y``, ``steps`` samples: a Series / DataArray's time index continued at its frequency (or
+        constant spacing; the sample positions ``len(y), ...`` when it has none).
+
+        Raises
+        ------
+        ValueError
+            ``steps`` < 1, or forecasts that leave the floating-point range (an unstable model).
+        """
+        return self._forecast(steps)
 
     def simulate(self, nobs: int, rng: Any = None, *, burn: int | None = None, sigma2: float | None = None) -> np.ndarray:
         """Simulate ``nobs`` samples of the fitted process with Gaussian innovations.

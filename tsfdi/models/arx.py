@@ -8,7 +8,7 @@ import numpy as np
 from scipy import signal as sps
 
 from tsfdi._data import as_signal
-from tsfdi._validation import check_rng, float_like
+from tsfdi._validation import check_rng, float_like, int_like
 from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
 from tsfdi.models.archive import register
 
@@ -79,10 +79,17 @@ class ARXResults(ScalarOutputResults):
         Output coefficients in the papers' sign.
     b : ndarray, shape (n_inputs, nb)
         Input coefficients; ``b[m, j]`` multiplies ``u_m[t - nk - j]``.
-    params : ndarray
-        ``[c, (a_1, b_{., 1}), (a_2, b_{., 2}), ...]`` grouped by lag (the regressor order).
+    params : ndarray or Series
+        ``[c, (a_1, b_{., 1}), (a_2, b_{., 2}), ...]`` grouped by lag (the regressor order), named ``const, a1,
+        b1.<input>, a2, ...`` in a Series for pandas / xarray data.
+    bse, tvalues, pvalues : ndarray or Series
+        Standard errors ``sqrt(sigma2 diag((X'X)^-1))``, ``params / bse`` and their two-sided normal p-values:
+        statsmodels ``AutoReg``'s convention, i.e. ``OLS`` on the same regressor with its covariance scaled by
+        ``(nobs - df_eq) / nobs``.
     sigma2 : float
         ``RSS / nobs``.
+    fittedvalues : same kind as ``y``
+        ``y[t] - e[t]`` over the estimation sample.
     """
 
     @property
@@ -101,6 +108,35 @@ class ARXResults(ScalarOutputResults):
         sig = self._new_signal(y)
         usig = self._new_input(u, sig.nobs)
         return sig.wrap(self._residuals_array(sig.values, usig.values), self.model.max_lag)
+
+    def forecast(self, steps: int, u: Any) -> Any:
+        """Forecasts of the ``steps`` samples after the end of the fitted data (the last record of a model fitted
+        on several), driven by the future inputs ``u``:
+        ``y[t] = c - sum_i a_i y[t-i] + sum_m sum_j b_{m,j} u_m[t-nk-j+1]``, with the forecasts in place of the
+        outputs not yet seen and the fitted data's inputs before ``u`` (statsmodels'
+        ``AutoRegResults.forecast(steps, exog=...)``).
+
+        Parameters
+        ----------
+        steps : int
+            Number of samples forecast.
+        u : array_like (steps,) or (steps, n_inputs), Series, DataFrame or DataArray
+            The inputs of the forecast samples (matched by name when the model and ``u`` are named).
+
+        Returns
+        -------
+        ``steps`` samples in the kind of ``u``, with its index.
+
+        Raises
+        ------
+        ValueError
+            ``steps`` < 1, ``u`` without ``steps`` samples or with other inputs, or forecasts that leave the
+            floating-point range.
+        """
+        steps = int_like(steps, "steps", minimum=1)
+        usig = self._new_input(u, steps, "steps is")
+        name = self.model.data.name if self.model.data.name is not None else "y"
+        return usig.wrap(self._forecast_array(steps, usig.values), 0, vector=False, name=name)
 
     def simulate(self, u: Any, rng: Any = None, *, sigma2: float | None = None) -> Any:
         """Simulate the output of the fitted model driven by the input ``u`` and Gaussian innovations.
@@ -139,12 +175,16 @@ class ARXResults(ScalarOutputResults):
                              "or smaller u")
         return usig.wrap(y, 0, vector=False, name="y")
 
-    def _new_input(self, u: Any, nobs: int | None = None):
+    def _new_input(self, u: Any, nobs: int | None = None, against: str = "y has"):
+        """``u`` validated, its inputs in the model's order: matched by name when both ``u`` and the model's input
+        are named (a missing or extra input raises naming it), else by position."""
         usig = as_signal(u, "u", allow_constant=True)
-        if usig.nchan != self.model.n_inputs:
-            raise ValueError(f"u has {usig.nchan} input(s) but the model was fitted with {self.model.n_inputs}")
+        fitted = self.model.u_data
+        if not (usig.named and fitted.named) and usig.nchan != fitted.nchan:
+            raise ValueError(f"u has {usig.nchan} input(s) but the model was fitted with {fitted.nchan}")
+        usig = usig.match_channels(fitted.channels, "u", named=fitted.named)
         if nobs is not None and usig.nobs != nobs:
-            raise ValueError(f"u has {usig.nobs} samples but y has {nobs}: they must match")
+            raise ValueError(f"u has {usig.nobs} samples but {against} {nobs}: they must match")
         return usig
 
 

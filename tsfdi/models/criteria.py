@@ -50,7 +50,7 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     Returns
     -------
     dict of ndarray
-        ``llf``, ``aic``, ``bic``, ``rss_sss`` (percent), ``spp``, ``sigma2`` (data units) and ``exact``
+        ``llf``, ``aic``, ``bic``, ``hqic``, ``rss_sss`` (percent), ``spp``, ``sigma2`` (data units) and ``exact``
         (bool: the fit's residual covariance reached the floor below).
 
     Notes
@@ -60,7 +60,12 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     .. math::
 
         \\ell = -\\tfrac{N}{2}\\,(s \\ln 2\\pi + \\ln\\det\\Sigma + s), \\quad
-        \\mathrm{AIC} = -2\\ell + 2k, \\quad \\mathrm{BIC} = -2\\ell + k \\ln N .
+        \\mathrm{AIC} = -2\\ell + 2k, \\quad \\mathrm{BIC} = -2\\ell + k \\ln N, \\quad
+        \\mathrm{HQIC} = -2\\ell + 2k \\ln \\ln N
+
+    (HQIC: Hannan and Quinn, 1979, in the likelihood form of statsmodels ``AutoReg``, whose ``k`` also counts the
+    noise variance; statsmodels ``VAR`` reports ``ln det Sigma + 2 d ln ln N / N``, the same criterion divided by
+    ``N`` without the terms that do not depend on the order).
 
     ``BIC / N = ln sigma_e^2 + k ln N / N + const`` is paper 003's eq. 5 (the constant ``ln 2 pi + 1`` does
     not depend on the order, so both select the same order). The trace variant uses
@@ -122,6 +127,7 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
         "llf": llf,
         "aic": -2 * llf + 2 * k,
         "bic": fit_term + k * np.log(nobs),
+        "hqic": -2 * llf + 2 * k * np.log(np.log(nobs)),
         "rss_sss": 100.0 * nobs * resid_ss / sss_w if sss_w > 0 else np.zeros(len(sse)),
         "spp": nobs * s / df_model,
         "sigma2": resid_ss * top * top / s,

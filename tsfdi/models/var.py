@@ -70,15 +70,18 @@ class VARResults(LinearTimeSeriesResults):
     coefs : ndarray, shape (lags, s, s)
         ``A_1..A_na`` in the papers' sign; ``coefs[i][r, c]`` multiplies channel ``c`` at lag ``i + 1`` in
         the equation of channel ``r``.
-    params : ndarray, shape (df_eq, s)
-        Regression coefficients, one column per equation, rows ``[const, lag-1 block, lag-2 block, ...]``.
+    params : ndarray or DataFrame, shape (df_eq, s)
+        Regression coefficients, one column per equation, rows ``[const, lag-1 block, lag-2 block, ...]``
+        (``A{i}.{channel}``); a DataFrame (parameters x channels) for pandas / xarray data.
+    bse, tvalues, pvalues : ndarray or DataFrame, shape (df_eq, s)
+        Standard errors ``sqrt(diag((X'X)^-1) sigma_u[j, j])`` with statsmodels' degrees-of-freedom adjusted
+        ``sigma_u = E'E / (nobs - df_eq)``, ``params / bse`` and their two-sided normal p-values, exactly as
+        statsmodels ``VAR(y).fit(lags, trend)`` (``stderr``, ``tvalues``, ``pvalues``).
     sigma : ndarray, shape (s, s)
         Maximum-likelihood residual covariance ``E'E / nobs`` (statsmodels' ``sigma_u_mle``).
+    fittedvalues : same kind as ``y``
+        ``y[t] - e[t]`` over the estimation sample.
     """
-
-    @property
-    def params(self) -> np.ndarray:
-        return self._params2d
 
     @property
     def coefs(self) -> np.ndarray:
@@ -104,6 +107,23 @@ class VARResults(LinearTimeSeriesResults):
         """
         sig = self._new_signal(y)
         return sig.wrap(self._residuals_array(sig.values, None), self.lags)
+
+    def forecast(self, steps: int = 1) -> Any:
+        """Forecasts of the ``steps`` samples after the end of the fitted data (the last record of a model fitted
+        on several), ``y[t] = c - sum_i A_i y[t-i]`` with the forecasts in place of the samples not yet seen
+        (statsmodels' ``VARResults.forecast(y[-lags:], steps)``, Lütkepohl 2005, sec. 2.2.2).
+
+        Returns
+        -------
+        Same kind as ``y``, shape ``(steps, s)``: a DataFrame / DataArray's time index continued at its frequency
+        (or constant spacing; the sample positions ``len(y), ...`` when it has none).
+
+        Raises
+        ------
+        ValueError
+            ``steps`` < 1, or forecasts that leave the floating-point range (an unstable model).
+        """
+        return self._forecast(steps)
 
     def simulate(self, nobs: int, rng: Any = None, *, burn: int | None = None,
                  sigma: np.ndarray | None = None) -> np.ndarray:
