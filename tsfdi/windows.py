@@ -196,6 +196,14 @@ class ResidualWindows:
         if len(nchan) > 1:
             raise ValueError(f"every model must have the same number of channels, got {sorted(nchan)}")
         self.nchan = nchan.pop()
+        # models fitted on named channels: one order for all, so that every statistic and reference lines up
+        named = {name: [str(c) for c in r.model.data.channels] for name, r in self.models.items()
+                 if r.model.data.named}
+        orders = {tuple(c) for c in named.values()}
+        if len(orders) > 1:
+            raise ValueError("models fitted on named channels must share one channel order, got "
+                             + "; ".join(f"{name!r}: {c}" for name, c in named.items()))
+        self._channels = list(orders.pop()) if orders else None
         self._resid: dict | None = None
         self.nobs_: int | None = None
         self.channels_: tuple = ()
@@ -223,13 +231,11 @@ class ResidualWindows:
         sig = as_signal(signal, "signal", allow_constant=True)
         if sig.nchan != self.nchan:
             raise ValueError(f"signal has {sig.nchan} channel(s) but the models were fitted on {self.nchan}")
-        resid, names = {}, None
-        for name, res in self.models.items():   # the Signal itself, so that named channels are matched by name
-            r = res.residuals(sig)
-            if names is None and getattr(r, "ndim", 1) == 2 and sig.named:
-                names = [str(c) for c in (r.columns if hasattr(r, "columns") else r[sig.channel_dim].values)]
-            resid[name] = np.asarray(r, dtype=np.float64).reshape(-1, self.nchan)
-        return self._set(resid, sig.nobs, (names or sig.channels) if channels is None else channels)
+        if self._channels is not None:          # a named signal is reordered to the models' channels, by name
+            sig = sig.match_channels(self._channels, "signal")
+        resid = {name: np.asarray(res.residuals(sig), dtype=np.float64).reshape(-1, self.nchan)
+                 for name, res in self.models.items()}
+        return self._set(resid, sig.nobs, sig.channels if channels is None else channels)
 
     def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
         """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model fitted without
