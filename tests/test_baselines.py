@@ -69,9 +69,12 @@ def test_fit_baselines_data_kinds(kind):
     b = tsfdi.fit_baselines(segs, max_lags=4, var_max_lags=4, models=["var"])
     assert b.faults == ("f1", "f2")
     assert all(b.models["var"][s].lags == 2 for s in segs)
-    # a sequence of signals without fs is sampled at 1 Hz: "10s" is 10 samples
+    # without fs the rate comes from the records' time index (100 Hz: "10s" is 1000 samples); arrays carry no time
+    # and are taken at 1 Hz ("10s" is 10 samples)
     mon = b.monitor("var", window="10s", test=LjungBox(lags=10, alpha=1e-3))
-    assert mon.nchan == 2 and (mon.window, mon.step, mon.steady_window) == (10, 1, 10)
+    assert b.fs == (1.0 if kind == "numpy" else pytest.approx(100.0, rel=1e-12))
+    assert mon.nchan == 2 and (mon.window, mon.step, mon.steady_window) == ((10, 1, 10) if kind == "numpy" else
+                                                                            (1000, 100, 1000))
 
 
 def test_monitor_from_baselines(synthetic, fitted):

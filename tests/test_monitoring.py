@@ -297,22 +297,30 @@ def test_window_vocabulary_errors(models):
         tsfdi.Monitor(h, f, window=500, step=100, steady_window=5.0, fs=FS)
     with pytest.raises(TypeError, match="window"):
         tsfdi.Monitor(h, f, window=True, fs=FS)
-    # a time span needs the sampling frequency
-    with pytest.raises(ValueError, match="window"):
-        tsfdi.Monitor(h, f, window="5s", step=100, steady_window=500)
-    with pytest.raises(ValueError, match="step"):
-        tsfdi.Monitor(h, f, window=500, step="1s", steady_window=500)
-    with pytest.raises(ValueError, match="steady_window"):
-        tsfdi.Monitor(h, f, window=500, step=100, steady_window="10s")
-    # the defaults are time spans too (1 s step, 10 s variance window)
-    with pytest.raises(ValueError, match="step"):
-        tsfdi.Monitor(h, f, window=500)
-    with pytest.raises(ValueError, match="steady_window"):
-        tsfdi.Monitor(h, f, window=500, step=100)
-    with pytest.raises(ValueError, match="window"):
-        tsfdi.Monitor(h, f, window="five seconds", fs=FS)
+    # a time span needs the sampling frequency: fs, or the time index of the data (read at the first samples)
+    x = np.zeros((2000, 2))
+    for kw, named in ((dict(window="5s", step=100, steady_window=500), r"window = '5s' is a time span"),
+                      (dict(window=500, step="1s", steady_window=500), r"step = '1s' is a time span"),
+                      (dict(window=500, step=100, steady_window="10s"), r"steady_window = '10s' is a time span"),
+                      # the defaults are time spans too (1 s step, 10 s variance window)
+                      (dict(window=500), r"step = '1s' \(the default\), steady_window = '10s' are time spans"),
+                      (dict(window=500, step=100), r"steady_window = '10s' is a time span")):
+        mon = tsfdi.Monitor(h, f, **kw)
+        assert mon.fs is None
+        with pytest.raises(ValueError, match=named + r", .*signal carries no time index"):
+            mon.run(x)
+        with pytest.raises(ValueError, match="at least two samples in the first block"):
+            mon.run(as_kind(x, "pandas")[:1])
+    # a typo or a non-positive span is refused at once, with or without fs
+    for span in ("five seconds", "-2s", "0s"):
+        for fs in (FS, None):
+            with pytest.raises(ValueError, match="window"):
+                tsfdi.Monitor(h, f, window=span, fs=fs)
     with pytest.raises(ValueError, match="window"):
         tsfdi.Monitor(h, f, window=2, step=1, steady_window=500)
+    # a span too short at the rate read from the data names the rate and where it came from
+    with pytest.raises(ValueError, match=r"window = '20ms' is 2 sample\(s\) at fs = 100 Hz.*read from the time index"):
+        tsfdi.Monitor(h, f, window="20ms").run(as_kind(x, "pandas"))
 
 
 def test_bad_baseline_is_named(models):
@@ -392,3 +400,73 @@ def test_likelihood_score_sees_a_mean_shift():
     ws = tsfdi.ResidualWindows(models).fit(y0[:1000] + 3.0).statistics(LjungBox(lags=5), window=200, step=200)
     assert (ws.loglik[:, 1] > ws.loglik[:, 0]).all()
     assert (decide(np.ones_like(ws.accepted), "likelihood", loglik=ws.loglik) == 1).all()
+
+
+# ------------------------------------------------------------------------------- detection only, fs from the data
+def test_detection_only(models, failure_record):
+    full = _monitor(models).run(failure_record)
+    for none in (None, {}):
+        mon = tsfdi.Monitor(models["healthy"], none, window="5s", step="1s", fs=FS,
+                            test=LjungBox(lags=20, alpha=1e-4), steady_window="5s")
+        assert repr(mon) == "Monitor(models=None (detection only), window=500, step=100, fs=100.0, rule='paper')"
+        res = mon.run(failure_record)
+        # the same healthy-model test of every window as with fault models, and nothing identified
+        pd.testing.assert_frame_equal(res.windows.drop(columns=["phase", "status", "label", "accepted"]),
+                                      full.windows.drop(columns=["phase", "status", "label", "accepted"]))
+        assert [(e.kind, e.time) for e in res.events] == [("detection", full.detection_time)]
+        assert res.label is None and res.steady_time is None and res.models == ()
+        assert (res.windows["status"] == "").all() and res.windows["label"].isna().all()
+        assert list(res.windows["phase"].unique()) == ["healthy", "transient"]
+        assert repr(res).startswith("MonitorResult(detection only, windows=26, fault windows=")
+    # with thresholds, the steady state is still reported
+    thr = 3.0 * failure_record[1500:].var(axis=0)
+    res = tsfdi.Monitor(models["healthy"], window="5s", fs=FS, test=LjungBox(lags=20, alpha=1e-4),
+                        steady_window="5s", steady_thresholds=thr).run(failure_record)
+    assert [e.kind for e in res.events] == ["detection", "steady"]
+    assert res.plot() is not None
+    # healthy data: no event
+    assert tsfdi.Monitor(models["healthy"], window="5s", fs=FS, test=LjungBox(lags=20, alpha=1e-4)).run(
+        record("healthy", 3000, np.random.default_rng(13))).events == []
+
+
+@pytest.mark.parametrize("index", ["datetime", "timedelta", "seconds", "xarray"])
+def test_fs_is_read_from_the_time_index(models, failure_record, index):
+    """window / step / steady_window as time spans without fs: the rate of the data's time index (100 Hz)."""
+    n = failure_record.shape[0]
+    if index == "xarray":
+        x = as_kind(failure_record, "xarray")
+    else:
+        idx = {"datetime": pd.date_range("2024-05-01", periods=n, freq="10ms"),
+               "timedelta": pd.timedelta_range(0, periods=n, freq="10ms"),
+               "seconds": pd.Index(np.arange(n) / FS, name="time")}[index]
+        x = pd.DataFrame(failure_record, index=idx, columns=["y0", "y1"])
+    thr = 3.0 * failure_record[1500:].var(axis=0)
+    ref = _monitor(models, steady_thresholds=thr).run(failure_record)            # numpy with fs=100
+    mon = _monitor(models, steady_thresholds=thr, fs=None)
+    assert (mon.fs, mon.window, mon.step, mon.steady_window) == (None, None, None, None)
+    assert "window='5s', step='1s', fs=None" in repr(mon)
+    got = mon.run(x)
+    assert mon.fs == pytest.approx(FS) and (mon.window, mon.step, mon.steady_window) == (500, 100, 500)
+    assert [(e.kind, e.label, e.status) for e in got.events] == [(e.kind, e.label, e.status) for e in ref.events]
+    np.testing.assert_allclose([e.time for e in got.events], [e.time for e in ref.events])
+    assert got.detection_time == pytest.approx(ref.detection_time)
+    # the defaults (1 s step, 10 s variance window) too
+    mon2 = tsfdi.Monitor(models["healthy"], {"f1": models["f1"]}, window="2s")
+    mon2.run(x)
+    assert (mon2.window, mon2.step, mon2.steady_window) == (200, 100, 1000)
+    # streamed in blocks: the rate of the first block
+    mon.reset()
+    assert mon.fs is None and mon.window is None
+    streamed = []
+    for k in range(0, n, 250):
+        streamed += mon.update(x[k:k + 250])
+    assert streamed == got.events
+
+
+def test_sample_counts_with_a_time_index_give_times_in_seconds(models, failure_record):
+    x = as_kind(failure_record, "pandas")
+    counts = _monitor(models, window=500, step=100, steady_window=500, fs=None)
+    assert counts.window == 500 and counts.fs is None
+    res = counts.run(x)
+    assert counts.fs == pytest.approx(FS) and 10.0 < res.detection_time <= 12.0
+    assert counts.run(failure_record).detection_time == pytest.approx(res.detection_time * FS)   # numpy: samples

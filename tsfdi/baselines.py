@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, is_xarray, refuse_masked, rolling_variance, window_samples
+from tsfdi._data import as_signal, is_xarray, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, int_like, option, probability
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
@@ -57,7 +57,12 @@ class Records:
                   fs: float | None = None, name: str = "data") -> Records:
         """Build from a hexacopter ``Dataset``, a ``(record, time, channel)`` DataArray or a sequence of
         signals (numpy / pandas / xarray, each ``(nobs, k)``) with ``states`` (and optional ``failure_times``,
-        ``turbulence``) given per record."""
+        ``turbulence``) given per record.
+
+        Named records (``DataFrame``, ``DataArray`` with a channel coordinate) are put in the channel order of the
+        first by name; a missing or an extra channel raises a ``ValueError`` naming the record and the channel.
+        Without ``fs`` the sampling frequency comes from the time coordinate, or from the time index of the first
+        record, else 1 Hz."""
         if isinstance(data, Records):
             return data
         import xarray as xr
@@ -97,6 +102,9 @@ class Records:
         k = {s.nchan for s in sigs}
         if len(k) != 1:
             raise ValueError(f"every record of {name} must have the same number of channels, got {sorted(k)}")
+        # named records (DataFrames, DataArrays with a channel coordinate) in the channel order of the first
+        sigs = [sigs[0]] + [s.match_channels(sigs[0].channels, f"{name}[{i}]", named=sigs[0].named)
+                            for i, s in enumerate(sigs[1:], start=1)]
         n = len(sigs)
         refuse_masked(states, "states")
         st = np.asarray(states).astype(str)
@@ -107,7 +115,7 @@ class Records:
         tb = np.full(n, "") if turbulence is None else np.asarray(turbulence).astype(str)
         if tb.shape != (n,):
             raise ValueError(f"turbulence must have one entry per record ({n}), got shape {tb.shape}")
-        fs_ = 1.0 if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
+        fs_ = sampling_frequency(sigs[0], fs, f"{name}[0]") or 1.0
         return cls([s.values for s in sigs], st, tb, ft, np.arange(n), np.ones(n, bool), tuple(sigs[0].channels),
                    fs_)
 
@@ -468,7 +476,8 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     states, failure_times, turbulence : array_like, optional
         Per-record labels for a sequence of signals.
     fs : float, optional
-        Sampling frequency in Hz (from the time coordinate for xarray input, else 1).
+        Sampling frequency in Hz (default: from the time coordinate for xarray input, from the time index of the
+        first record for a sequence of signals, else 1).
     healthy : str
         Name of the healthy state; every other state is a fault state.
     fit_records : "first", "all", int or sequence

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from tsfdi._data import as_signal, sampling_frequency, window_samples
+from tsfdi._data import Signal, as_signal, sampling_frequency, window_samples
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
@@ -46,13 +46,19 @@ def _model_tests(test: Any, models: Mapping) -> dict:
     return dict.fromkeys(models, test)
 
 
-def _check_model(res: Any, name: str, nchan: int, arg: str) -> None:
+def _check_model(res: Any, name: str, sig: Signal, arg: str) -> None:
+    """``res`` is fitted results whose channels ``sig`` has: by name when both are named (a missing or an extra
+    channel raises naming it; the model's ``residuals`` reorders the signal), else by their number."""
     if not hasattr(res, "residuals"):
         raise TypeError(f"{arg} must hold fitted results (AR, VAR or ARX) with a residuals() method; "
                         f"{name!r} is a {type(res).__name__}")
+    data = getattr(getattr(res, "model", None), "data", None)
+    if isinstance(data, Signal) and data.named and sig.named:
+        sig.match_channels(data.channels, "signal")
+        return
     neqs = int(getattr(res, "neqs", 1))
-    if neqs != nchan:
-        raise ValueError(f"signal has {nchan} channel(s) but {arg} {name!r} was fitted on {neqs} channel(s)")
+    if neqs != sig.nchan:
+        raise ValueError(f"signal has {sig.nchan} channel(s) but {arg} {name!r} was fitted on {neqs} channel(s)")
 
 
 def _residuals(res: Any, signal: Any, u: Any, what: str) -> Any:
@@ -73,7 +79,9 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     Parameters
     ----------
     signal : array_like, Series, DataFrame or DataArray
-        Current signal :math:`Z_u` (scalar or vector, time on axis 0).
+        Current signal :math:`Z_u` (scalar or vector, time on axis 0). A named signal (``DataFrame``,
+        ``DataArray`` with a channel coordinate) is matched to a model fitted on named data by channel name, in
+        any order; an array by position.
     baseline : fitted results
         The healthy model :math:`M_0` (``tsfdi.AR(...).fit()`` or ``tsfdi.VAR(...).fit()``).
     test : ResidualTest, optional
@@ -95,12 +103,13 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
         ``baseline`` is not fitted results, ``test`` is not a residual test, ``u`` is missing for an ARX baseline
         or given for an AR / VAR one, or ``signal`` is not numeric.
     ValueError
-        ``signal`` is not 1-D / 2-D, holds NaN / inf or a masked value, is too short for the model and test, or
-        has a channel count other than the baseline's.
+        ``signal`` is not 1-D / 2-D, holds NaN / inf or a masked value, is too short for the model and test, lacks
+        a channel of the baseline or has one it does not know (named), or has a channel count other than the
+        baseline's.
     """
     test = _check_test(test)
     sig = as_signal(signal, "signal", allow_constant=True)
-    _check_model(baseline, "baseline", sig.nchan, "baseline")
+    _check_model(baseline, "baseline", sig, "baseline")
     resid = _residuals(baseline, sig, u, "baseline")
     return test.test(resid, **test.reference(baseline))
 
@@ -203,7 +212,8 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
     Parameters
     ----------
     signal : array_like, Series, DataFrame or DataArray
-        Current signal (scalar for AR models, ``(nobs, s)`` for VAR models).
+        Current signal (scalar for AR models, ``(nobs, s)`` for VAR models); a named signal is matched to each
+        model's channels by name (see :func:`detect`).
     models : mapping
         Name -> fitted results (``tsfdi.AR(...).fit()`` / ``tsfdi.VAR(...).fit()``), e.g. the healthy
         model and one model per fault type. All must have the signal's number of channels.
@@ -229,7 +239,7 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
     tests = _model_tests(test, models)
     sig = as_signal(signal, "signal", allow_constant=True)
     for name, res in models.items():
-        _check_model(res, name, sig.nchan, "models")
+        _check_model(res, name, sig, "models")
     decisions = {}
     for name, res in models.items():
         resid = _residuals(res, sig, u, f"models[{name!r}]")
@@ -376,7 +386,7 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     if window > sig.nobs:
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
     for name, res in models.items():
-        _check_model(res, name, sig.nchan, "models")
+        _check_model(res, name, sig, "models")
     engine = ResidualWindows(models).fit(sig)
     ws = engine.statistics(tests, window=window, step=step, loglik=False)
     return WindowedIdentification(ws, tuple(tests.values()),

@@ -1,13 +1,14 @@
 """Sliding-window fault detection and identification of one stream (Dutta et al., paper 003, Fig. 3).
 
 :class:`Monitor` tests every window with the healthy model, waits for the post-failure steady state (rolling
-variances, Fig. 7 discussion) and then identifies every window with the fault models; the windows are tested by
-the windowed engine (:class:`tsfdi.windows.ResidualWindows`) and labelled by its decision rule
-(:func:`tsfdi.windows.decide`).
+variances, Fig. 7 discussion) and then identifies every window with the fault models (without fault models it
+detects only); the windows are tested by the windowed engine (:class:`tsfdi.windows.ResidualWindows`) and labelled
+by its decision rule (:func:`tsfdi.windows.decide`).
 """
 
 from __future__ import annotations
 
+import datetime
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -15,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, refuse_masked, rolling_variance, window_samples
+from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import float_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
@@ -62,13 +63,16 @@ class MonitorResult:
     ----------
     events : list of MonitorEvent
     windows : pandas.DataFrame
-        One row per window: ``start``, ``end`` (seconds with ``fs``, else samples), ``detect_statistic`` (largest channel statistic/threshold
-        ratio of the healthy model), ``detect_pvalue``, ``fault`` (healthy model rejects), ``phase`` ("healthy",
-        "transient", "steady"), ``status``, ``label``, ``accepted``, and the rolling variance of every channel.
+        One row per window: ``start``, ``end`` (seconds with ``fs``, else samples), ``detect_statistic`` (largest
+        channel statistic/threshold ratio of the healthy model), ``detect_pvalue``, ``fault`` (healthy model
+        rejects), ``phase`` ("healthy", "transient", "steady"), ``status``, ``label``, ``accepted`` (empty without
+        fault models), and ``variance_<channel>``, the rolling variance of every channel.
     detection_time, steady_time : float or None
         Time of the first detection / steady-state event.
     label : str or None
-        Most frequent label over the identified windows (``None`` if none).
+        Most frequent label over the identified windows (``None`` if none, always ``None`` without fault models).
+    models : tuple of str
+        The fault models' names; empty for a detection-only monitor.
     """
 
     events: list
@@ -76,6 +80,7 @@ class MonitorResult:
     detection_time: float | None
     steady_time: float | None
     label: str | None
+    models: tuple = ()
 
     def to_frame(self) -> pd.DataFrame:
         """The events as a ``DataFrame`` (one row per event)."""
@@ -91,8 +96,26 @@ class MonitorResult:
         return plot_monitor(self, ax=ax)
 
     def __repr__(self) -> str:
-        return (f"MonitorResult(windows={len(self.windows)}, events={len(self.events)}, detection_time="
-                f"{self.detection_time}, steady_time={self.steady_time}, label={self.label!r})")
+        faults = int(self.windows["fault"].sum()) if len(self.windows) else 0
+        what = "detection only" if not self.models else f"models={list(self.models)}"
+        return (f"MonitorResult({what}, windows={len(self.windows)}, fault windows={faults}, events="
+                f"{len(self.events)}, detection_time={self.detection_time}, steady_time={self.steady_time}, "
+                f"label={self.label!r})")
+
+
+def _is_span(value: Any) -> bool:
+    """Whether ``value`` is a time span (``"2s"``, ``Timedelta``, ``timedelta``, ``timedelta64``), not a count."""
+    return isinstance(value, (str, datetime.timedelta, np.timedelta64))
+
+
+def _check_span(value: Any, name: str) -> None:
+    """A time span given before ``fs`` is known: parsed now (a typo is an error at once), converted later."""
+    try:
+        span = pd.Timedelta(value)
+    except (TypeError, ValueError, OverflowError):
+        span = pd.NaT
+    if span is pd.NaT or not span > pd.Timedelta(0):
+        raise ValueError(f"{name} must be an int (samples) or a positive time span such as '2s', got {value!r}")
 
 
 class Monitor:
@@ -110,20 +133,27 @@ class Monitor:
        residuals through each fault model in ``models`` are tested with ``test``, and ``rule`` turns the
        decisions into a label (``"identification"`` event per window).
 
+    Without fault models (``models=None``) the monitor detects only: every window is tested with the healthy
+    model (``fault`` in :attr:`MonitorResult.windows`), the first rejection is the ``"detection"`` event, a
+    ``"steady"`` event follows only with ``steady_thresholds``, and no window is identified.
+
     Parameters
     ----------
     baseline : fitted results
         Healthy model :math:`M_0` (AR or VAR results; input-output ARX models are refused).
-    models : mapping
-        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels.
+    models : mapping or None
+        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels; ``None`` (or an empty
+        mapping) for detection only.
     window : int or time span
         Window length, as in pandas ``rolling``: an int counts samples, a time span (``"20s"``,
         ``pandas.Timedelta``) is converted with ``fs``.
     step : int or time span, optional
-        Distance between window starts (default ``"1s"`` as in the paper, which needs ``fs``).
+        Distance between window starts (default ``"1s"`` as in the paper, at least one sample).
     fs : float, optional
-        Sampling frequency in Hz; needed for time spans. Event and window times are in seconds with ``fs``, in
-        samples without it.
+        Sampling frequency in Hz. By default it is read from the time index of the first block of samples
+        (:meth:`run`, :meth:`update`): a ``DatetimeIndex`` / ``TimedeltaIndex``, a numeric pandas index named
+        ``"time"`` or an xarray time coordinate (seconds), at least two samples. Time spans need it; event and
+        window times are in seconds with it, in samples without it.
     test : ResidualTest or mapping, optional
         Identification test, :class:`~tsfdi.LjungBox` (default ``LjungBox(lags=25, alpha=1e-3)``) or
         :class:`~tsfdi.FTest`; or a mapping model name -> test (each fault model with its own calibrated
@@ -134,9 +164,14 @@ class Monitor:
         Rolling-variance thresholds per channel; ``None`` skips the steady-state check (identification starts
         with the first window after the detection).
     steady_window : int or time span, optional
-        Length of the rolling-variance window (default ``"10s"``, the paper's, which needs ``fs``).
+        Length of the rolling-variance window (default ``"10s"``, the paper's).
     rule : {"paper", "likelihood", "pvalue"}
         Decision rule (see :data:`tsfdi.windows.RULES`).
+
+    Attributes
+    ----------
+    window, step, steady_window : int or None
+        The lengths in samples; ``None`` for a time span while ``fs`` is not known yet (before the first samples).
 
     Notes
     -----
@@ -144,37 +179,51 @@ class Monitor:
     sums (:class:`~tsfdi.windows.ResidualWindows`); :meth:`update` feeds a stream chunk by chunk and gives the same
     events as :meth:`run` on the concatenated stream.
 
+    A named signal (a ``DataFrame``, a ``DataArray`` with a channel coordinate) is matched to the baseline's
+    channels by name: its columns may come in any order, and a missing or an extra channel raises a
+    ``ValueError`` naming it. Later blocks of a stream are matched to the first one the same way. Arrays and
+    models fitted on arrays are matched by position.
+
     References
     ----------
     Dutta, McKay, Kopsaftopoulos, Gandhi, *Statistical Time Series Methods for Multicopter Fault Detection and
     Identification* (paper 003), Fig. 3, Fig. 7 and eqs. 8-14.
     """
 
-    def __init__(self, baseline: Any, models: Mapping, *, window: Any, step: Any = None, fs: float | None = None,
-                 test: Any = None, detection_test: Any = None, steady_thresholds: Any = None,
+    def __init__(self, baseline: Any, models: Mapping | None = None, *, window: Any, step: Any = None,
+                 fs: float | None = None, test: Any = None, detection_test: Any = None, steady_thresholds: Any = None,
                  steady_window: Any = None, rule: str = "paper") -> None:
-        self.fs = None if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
-        if not isinstance(models, Mapping) or not models:
-            raise TypeError("models must be a non-empty mapping name -> fitted fault models")
+        self._fs = None if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
+        models = {} if models is None else models
+        if not isinstance(models, Mapping):
+            raise TypeError(f"models must be a mapping name -> fitted fault models, or None to detect only, got "
+                            f"{type(models).__name__}")
         if not hasattr(baseline, "residuals"):
             raise TypeError(f"baseline must be fitted results (AR or VAR), got {type(baseline).__name__}")
         if isinstance(baseline, ARXResults):
             raise TypeError("baseline is an ARX (input-output) model: Monitor filters the output stream alone and "
                             "takes AR / VAR models")
         self.nchan = ResidualWindows({"healthy": baseline}).nchan
-        nf = ResidualWindows(models).nchan
-        if nf != self.nchan:
-            raise ValueError(f"models have {nf} channel(s) but baseline has {self.nchan}")
+        if models:
+            nf = ResidualWindows(models).nchan
+            if nf != self.nchan:
+                raise ValueError(f"models have {nf} channel(s) but baseline has {self.nchan}")
         self.baseline = baseline
         self.models = dict(models)
-        self.window = window_samples(window, "window", self.fs, minimum=3)
-        if step is None and self.fs is None:
-            raise ValueError("step: the default step is 1 s, which needs fs; give fs or step in samples")
-        self.step = max(1, int(round(self.fs))) if step is None else window_samples(step, "step", self.fs)
-        if steady_window is None and self.fs is None:
-            raise ValueError("steady_window: the default is 10 s, which needs fs; give fs or steady_window in samples")
-        self.steady_window = window_samples("10s" if steady_window is None else steady_window, "steady_window",
-                                              self.fs, minimum=2)
+        data = getattr(getattr(baseline, "model", None), "data", None)     # the channels it was fitted on
+        self._model_named = isinstance(data, Signal) and data.named
+        self._model_channels = list(data.channels) if isinstance(data, Signal) else [
+            f"y{i}" for i in range(self.nchan)]
+        # lengths in samples now, or time spans kept until fs is read from the data
+        self._lengths = {"window": (window, 3), "step": (step, 1),
+                         "steady_window": ("10s" if steady_window is None else steady_window, 2)}
+        for name, (value, minimum) in self._lengths.items():
+            if value is None and name == "step":
+                continue
+            if self._fs is None and _is_span(value):
+                _check_span(value, name)
+            else:
+                window_samples(value, name, self._fs, minimum=minimum)
         test = LjungBox(lags=25, alpha=1e-3) if test is None else test
         if isinstance(test, Mapping):
             test = dict(test)
@@ -206,11 +255,35 @@ class Monitor:
         self.reset()
 
     def __repr__(self) -> str:
-        return (f"Monitor(models={list(self.models)}, window={self.window}, step={self.step}, fs={self.fs}, "
+        what = f"models={list(self.models)}" if self.models else "models=None (detection only)"
+
+        def length(name):       # samples, or the time span while fs is unknown
+            value = getattr(self, name)
+            return value if value is not None else repr(self._lengths[name][0] or "1s")
+
+        return (f"Monitor({what}, window={length('window')}, step={length('step')}, fs={self.fs}, "
                 f"rule={self.rule!r})")
 
+    def _set_fs(self, fs: float | None, source: str = "") -> None:
+        """Set ``fs`` and the lengths in samples (those given as time spans need it)."""
+        self.fs = fs
+        for name, (value, minimum) in self._lengths.items():
+            if value is None:                       # the default step (checked above): 1 s, at least one sample
+                size = None if fs is None else max(1, int(round(fs)))
+            elif fs is None and _is_span(value):
+                size = None
+            else:
+                try:
+                    size = window_samples(value, name, fs, minimum=minimum)
+                except ValueError as err:
+                    raise ValueError(f"{err}{source}") from None
+            setattr(self, name, size)
+
     def reset(self) -> None:
-        """Forget the stream: back to the healthy phase at time 0."""
+        """Forget the stream: back to the healthy phase at time 0 (with ``fs`` as given to the constructor)."""
+        self._set_fs(self._fs)
+        self._channels: list | None = None     # channel names of the stream (its first block), in model order
+        self._named = False
         self._buffer = np.empty((0, self.nchan))
         self._offset = 0           # stream position of _buffer[0]
         self._next = 0             # stream position of the next window start
@@ -221,11 +294,34 @@ class Monitor:
         self._events: list = []
 
     # ------------------------------------------------------------------------------------------------------------
-    def _values(self, signal: Any) -> np.ndarray:
-        sig = as_signal(signal, "signal", allow_constant=True)
-        if sig.nchan != self.nchan:
-            raise ValueError(f"signal has {sig.nchan} channel(s) but the models have {self.nchan}")
+    def _values(self, samples: Any) -> np.ndarray:
+        """The samples in the stream's channel order; the first block sets the channels (matched to the baseline's
+        by name when both are named) and, without ``fs``, the sampling frequency from its time index."""
+        sig = as_signal(samples, "signal", allow_constant=True)
+        if self._channels is not None:
+            return sig.match_channels(self._channels, "signal", named=self._named).values
+        sig = sig.match_channels(self._model_channels, "signal", named=self._model_named)
+        if self.fs is None:
+            fs = sampling_frequency(sig, None, "signal")
+            spans = [f"{name} = {value!r}" if value is not None else f"{name} = '1s' (the default)"
+                     for name, (value, _) in self._lengths.items() if value is None or _is_span(value)]
+            if fs is None and spans:
+                raise ValueError(f"{', '.join(spans)} {'is a time span' if len(spans) == 1 else 'are time spans'}, "
+                                 "but fs is not given and signal carries no time index to read it from (a "
+                                 "DatetimeIndex / TimedeltaIndex, a numeric index named 'time' or an xarray time "
+                                 "coordinate, with at least two samples in the first block): give fs=, such a "
+                                 "signal, or count samples with ints")
+            self._set_fs(fs, f" (fs = {fs:g} Hz read from the time index of signal)" if fs else "")
+        # the names of a named signal, else those of the model (an array is taken in the model's order)
+        self._channels, self._named = list(sig.channels if sig.named else self._model_channels), sig.named
         return sig.values
+
+    def _record(self, x: np.ndarray) -> Any:
+        """Samples of the stream as a signal the models match by name (when the stream is named)."""
+        if not self._named:
+            return x
+        return Signal(values=np.ascontiguousarray(x), kind="pandas", vector=True, index=pd.RangeIndex(x.shape[0]),
+                      channels=self._channels)
 
     def _t(self, pos: int) -> float:
         return round(pos / (1.0 if self.fs is None else self.fs), 9)
@@ -238,12 +334,12 @@ class Monitor:
         body = x[hist:]
         if body.shape[0] < W:
             return []
-        det = ResidualWindows({"healthy": self.baseline}).fit(body).statistics(self.detection_test, window=W, step=S)
-        ident = ResidualWindows(self.models).fit(body).statistics(self.test, window=W, step=S)
-        names = ident.models
-        rej = ident.reject.T                                          # (n_models, n_windows)
-        labels = ident.labels(self.rule)
-        state = ident.status
+        record = self._record(body)
+        det = ResidualWindows({"healthy": self.baseline}).fit(record).statistics(self.detection_test, window=W,
+                                                                                  step=S)
+        if self.models:
+            ident = ResidualWindows(self.models).fit(record).statistics(self.test, window=W, step=S)
+            names, rej, labels, state = ident.models, ident.reject.T, ident.labels(self.rule), ident.status
         d_stat, d_thr = det.statistic[:, 0], det.threshold[:, 0]
         d_pv, d_rej = det.pvalue[:, 0], det.reject[:, 0]
         new_events = []
@@ -257,33 +353,31 @@ class Monitor:
             row = {"start": self._t(start), "end": self._t(end),
                    "detect_statistic": float(np.max(d_stat[w] / d_thr[w])),
                    "detect_pvalue": float(np.min(d_pv[w])), "fault": fault}
-            for c in range(self.nchan):
-                row[f"variance_{c}"] = float(var[c])
+            for c, name in enumerate(self._channels):
+                row[f"variance_{name}"] = float(var[c])
             if self._phase == "healthy" and fault:
                 self._phase = "transient"
                 self._detect_pos = end
                 new_events.append(MonitorEvent(self._t(end), "detection", None, "fault",
                                                window=(self._t(start), self._t(end))))
-                if self.steady_thresholds is None:
+                if self.steady_thresholds is None and self.models:     # identification starts at once
                     self._phase, self._steady_pos = "steady", start
                     new_events.append(MonitorEvent(self._t(end), "steady", None, "steady",
                                                    window=(self._t(start), self._t(end))))
-            if self._phase == "transient":
+            if self._phase == "transient" and self.steady_thresholds is not None:
                 var_start = pos0 + lo
                 if lo >= 0 and var_start >= self._detect_pos and np.all(var <= self.steady_thresholds):
                     self._phase, self._steady_pos = "steady", var_start
                     new_events.append(MonitorEvent(self._t(end), "steady", None, "steady",
                                                    window=(self._t(var_start), self._t(end))))
             row["phase"] = self._phase
-            label, acc = None, ()
-            if self._phase == "steady" and start >= self._steady_pos:
+            label, acc, st = None, (), ""
+            if self.models and self._phase == "steady" and start >= self._steady_pos:
                 acc = tuple(n for j, n in enumerate(names) if not rej[j, w])
                 st = str(state[w])
                 label = names[labels[w]] if labels[w] >= 0 else None
                 new_events.append(MonitorEvent(self._t(end), "identification", label, st, acc,
                                                (self._t(start), self._t(end))))
-            else:
-                st = ""
             row.update({"status": st, "label": label, "accepted": ",".join(acc)})
             self._rows.append(row)
         self._events.extend(new_events)
@@ -300,6 +394,13 @@ class Monitor:
         Returns
         -------
         list of MonitorEvent
+
+        Raises
+        ------
+        ValueError
+            Samples that are not a finite signal, a missing / extra channel (named) or another number of channels;
+            a time span (``window``, ``step``, ``steady_window``; the defaults are time spans) without ``fs`` when
+            the first block carries no time index.
         """
         x = self._values(samples)
         self._buffer = np.concatenate([self._buffer, x])
@@ -334,12 +435,13 @@ class Monitor:
 
     def result(self) -> MonitorResult:
         """Events and per-window table of everything fed so far."""
+        channels = self._channels if self._channels is not None else self._model_channels
         cols = ["start", "end", "detect_statistic", "detect_pvalue", "fault"] + \
-            [f"variance_{c}" for c in range(self.nchan)] + ["phase", "status", "label", "accepted"]
+            [f"variance_{c}" for c in channels] + ["phase", "status", "label", "accepted"]
         frame = pd.DataFrame(self._rows, columns=cols)
         ident = frame["label"][frame["status"] != ""].dropna()
         label = ident.value_counts().idxmax() if len(ident) else None
         det = next((e.time for e in self._events if e.kind == "detection"), None)
         st = next((e.time for e in self._events if e.kind == "steady"), None)
         return MonitorResult(events=list(self._events), windows=frame, detection_time=det, steady_time=st,
-                             label=label)
+                             label=label, models=tuple(self.models))

@@ -10,6 +10,7 @@ alarms per flight hour (paper 002's rule: the threshold from the statistic's dis
 from __future__ import annotations
 
 import copy
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,6 +20,7 @@ import pandas as pd
 from tsfdi._data import as_signal, refuse_masked, sampling_frequency
 from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
+from tsfdi.exceptions import ConvergenceWarning
 from tsfdi.models.recursive import RecursiveARX
 
 __all__ = ["OnlineDetector", "OnlineDetection", "OnlineCalibration"]
@@ -242,7 +244,7 @@ def _moving_average(x: np.ndarray, window: int) -> np.ndarray:
 
 
 class OnlineDetector:
-    """Online anomaly detection on several commanded / measured (input / output) signal pairs at once.
+    r"""Online anomaly detection on several commanded / measured (input / output) signal pairs at once.
 
     Every pair gets its own :class:`tsfdi.RecursiveARX` (same orders and options for all pairs). Its a-priori
     prediction errors feed one of two detection statistics:
@@ -257,6 +259,11 @@ class OnlineDetector:
     Optionally a streaming :class:`tsfdi.detection.GLRT` runs on the same errors once the variance is stable
     and positive (its ``scale`` is the Welford standard deviation at arming, its input the error minus the
     Welford mean at arming). No alarm of any source is raised among the first ``arm_after`` samples (baseline phase).
+
+    A pair is *armed* (its Z-score and GLRT can alarm) once its model is stable by the scale-free gate of the Notes
+    and then its error variance is stable (:class:`tsfdi.RecursiveARX`). :meth:`run` warns
+    (:class:`~tsfdi.exceptions.ConvergenceWarning`, once per pair and stream) when it returns with a pair that has
+    not armed, naming the pair and the time of the last sample: no alarm could be raised for it.
 
     :meth:`calibrate` sets ``threshold`` (and the GLRT's) from healthy runs for a required number of false
     alarms per flight hour; :meth:`OnlineDetection.false_alarms_per_hour` reports the rate of a run.
@@ -289,9 +296,13 @@ class OnlineDetector:
         Side of the moving-average test.
     arm_after : int, default 0
         Length of the baseline phase in samples (counted from the first sample given to the detector).
+    eps : float, default 1e-2
+        Model-stability bound of the arming gate: the largest parameter step relative to the largest parameter,
+        both weighted by the scale of their regressor (see Notes); a fraction, so the same for any units of ``y``
+        and ``u``.
     **rls_options
-        Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``eps``, ``stable_samples``,
-        ``variance_tol``, ``min_variance_samples``.
+        Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``stable_samples`` (consecutive samples
+        the model and the variance gates must hold), ``variance_tol``, ``min_variance_samples``.
 
     Attributes
     ----------
@@ -301,6 +312,26 @@ class OnlineDetector:
     Notes
     -----
     Feeding a stream in blocks (:meth:`run`) or sample by sample (:meth:`update`) gives the same alarms.
+
+    **Arming gate.** Paper 001 (section IV-B) considers the model stable for fault detection when the parameter
+    step :math:`\|L(k)\hat e(k)\|_\infty < \epsilon` "for some time", with :math:`\epsilon` "a small positive number"
+    and no unit. An absolute bound depends on the units of ``y`` and ``u`` (a gain from a command in rad/s to a
+    rate in deg/s is 57 times that to a rate in rad/s) and arms at once while the estimate is still at its
+    start ``theta = 0`` on quiet data. Here the step is measured relative to the model it changes. With
+    :math:`\Delta\theta(k) = \theta(k) - \theta(k-1)` and :math:`D(k)` the diagonal of regressor scales -- 1 for
+    the constant, :math:`\max_{t \le k}|y(t)|` for every :math:`a_i`, :math:`\max_{t \le k}|u_j(t)|` for every
+    :math:`b_{ji}` -- sample :math:`k` passes when
+
+    .. math:: \|D(k)\,\Delta\theta(k)\|_\infty < \epsilon\, \|D(k)\,\theta(k-1)\|_\infty ,
+
+    i.e. no term of the prediction :math:`\phi(k)'\theta` moves by more than the fraction :math:`\epsilon` of the
+    largest term. Both sides are in the units of ``y``: the gate is unchanged when ``y`` and each input are
+    rescaled, together or separately (the estimator itself is equivariant when ``P0`` is rescaled with them,
+    :math:`P_0 \propto 1/c^2` per regressor). The model is stable once ``stable_samples`` consecutive regression
+    samples pass (paper 001's "for some time"; samples without a prediction error neither count nor break the
+    run); from then on the error variance is tracked as in :class:`tsfdi.RecursiveARX`. A model that never
+    moves from ``theta = 0`` (an output that does not depend on its regressors) never passes: paper 001 notes that
+    uncorrelated pairs are "very unlikely to allow for the model estimation to stabilize".
 
     The moving average of the a-priori errors over ``w`` samples, ``m(k) = (1/w) sum_{i=k-w+1}^{k} e(i)``, is
     the finite-moving-average detector of a change in mean; for independent Gaussian errors it is the GLRT of
@@ -317,7 +348,7 @@ class OnlineDetector:
     def __init__(self, pairs: Any, *, na: int = 2, nb: int = 2, nk: int = 0, forgetting_factor: float = 0.995,
                  threshold: float = 4.5, glrt: Any = "default", freeze_on_alarm: bool = True,
                  nonfinite: str = "skip", n_inputs: int = 1, statistic: str = "zscore", window: int = 20,
-                 direction: str = "both", arm_after: int = 0, **rls_options: Any) -> None:
+                 direction: str = "both", arm_after: int = 0, eps: float = 1e-2, **rls_options: Any) -> None:
         if isinstance(pairs, (int, np.integer)) and not isinstance(pairs, bool):
             n = int_like(pairs, "pairs", minimum=1)
             names = tuple(f"pair{i}" for i in range(n))
@@ -335,6 +366,7 @@ class OnlineDetector:
         self.direction = option(direction, "direction", ("both", "down", "up"))
         self.arm_after = int_like(arm_after, "arm_after", minimum=0)
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
+        self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
         self.freeze_on_alarm = boolean(freeze_on_alarm, "freeze_on_alarm")
         if isinstance(glrt, str) and glrt == "default":
             glrt = GLRT(window=20, alpha=1e-6) if self.statistic == "zscore" else None
@@ -345,7 +377,7 @@ class OnlineDetector:
         self._options = dict(na=na, nb=nb, nk=nk, forgetting_factor=forgetting_factor, threshold=self.threshold,
                              glrt=glrt, freeze_on_alarm=self.freeze_on_alarm, nonfinite=self.nonfinite,
                              n_inputs=self.n_inputs, statistic=self.statistic, window=self.window,
-                             direction=self.direction, arm_after=self.arm_after, **rls_options)
+                             direction=self.direction, arm_after=self.arm_after, eps=self.eps, **rls_options)
         self.calibration_: OnlineCalibration | None = None
         zs = self.statistic == "zscore"
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
@@ -354,6 +386,8 @@ class OnlineDetector:
                                      freeze_on_alarm=self.freeze_on_alarm and zs, nonfinite=self.nonfinite,
                                      arm_after=self.arm_after if zs else 0, **rls_options)
                         for _ in names]
+        for m in self._models:
+            m.eps = 0.0      # the estimators' own (absolute) gate stays shut: _estimate opens it (see Notes)
         self.reset()
 
     def reset(self) -> None:
@@ -370,10 +404,16 @@ class OnlineDetector:
         self._stat_alarmed = np.zeros(k, dtype=bool)
         self._last_alarm = np.zeros(k, dtype=bool)
         self._nobs = 0
+        # arming gate per pair: passing regression samples in a row so far, largest |y| and |u_j| so far
+        self._passes = np.zeros(k, dtype=np.int64)
+        self._scales = np.zeros((k, 1 + self.n_inputs))
+        self._warned = np.zeros(k, dtype=bool)
+        self._last_time: Any = None      # index label of the last sample (None for numpy input)
 
     @property
     def models(self) -> tuple:
-        """The per-pair :class:`tsfdi.RecursiveARX` estimators (read their state, do not feed them)."""
+        """The per-pair :class:`tsfdi.RecursiveARX` estimators (read their state, do not feed them; the detector
+        opens their own absolute stability gate ``eps`` where its scale-free gate passes, see Notes)."""
         return tuple(self._models)
 
     @property
@@ -404,37 +444,89 @@ class OnlineDetector:
             return np.abs(m)
         return m
 
+    def _estimate(self, c: int, y: np.ndarray, u: np.ndarray) -> list:
+        """Run pair ``c``'s estimator over a block under the scale-free arming gate (Notes); the result parts.
+
+        Until the model is stable the block is first run with the estimator's own gate shut (its parameters do not
+        depend on the gate before it opens), the gate of the Notes is evaluated on that parameter history, and the
+        block is run again from the same state with the estimator's gate shut up to the run of passing samples
+        that reaches ``stable_samples`` (or the run still going at the end of the block) and open from there, so
+        that the estimator counts exactly those samples and turns stable where the gate does.
+        """
+        m = self._models[c]
+        n = y.shape[0]
+        # regressor scales: the largest |y| and |u_j| so far (finite samples)
+        sy = np.maximum.accumulate(np.r_[self._scales[c, 0], np.where(np.isfinite(y), np.abs(y), 0.0)])[1:]
+        su = np.maximum.accumulate(np.vstack([self._scales[c, 1:], np.where(np.isfinite(u), np.abs(u), 0.0)]),
+                                   axis=0)[1:]
+        if n:
+            self._scales[c] = np.r_[sy[-1], su[-1]]
+        if m.model_stable or n == 0:
+            return [m.run(y, u)]
+        state = m.get_state()
+        probe = m.run(y, u)
+        reg = np.flatnonzero(np.isfinite(np.asarray(probe.resid, dtype=float)))     # samples with a regression
+        if reg.size == 0:                                        # nothing to count: the probe is the run
+            return [probe]
+        m.set_state(state)
+        theta = np.vstack([state.theta, np.asarray(probe.params, dtype=float)])
+        scale = np.column_stack([np.ones((n, int(m.trend == "c"))), np.repeat(sy[:, None], m.na, axis=1),
+                                 np.repeat(su, m.nb, axis=1)])
+        passes = (np.abs(np.diff(theta, axis=0)) * scale).max(axis=1) < self.eps * (np.abs(theta[:-1]) * scale).max(
+            axis=1)
+        ok = passes[reg]
+        last_fail = np.maximum.accumulate(np.where(ok, -1, np.arange(ok.size)))
+        count = np.arange(ok.size) - last_fail + np.where(last_fail < 0, self._passes[c], 0)
+        self._passes[c] = count[-1]
+        hit = np.flatnonzero(count >= m.stable_samples)
+        # the run of passing samples that arms, else the one still going at the end of the block; its first
+        # sample (0: a run carried over from the previous block, already counted by the estimator)
+        first = int(last_fail[hit[0] if hit.size else -1]) + 1
+        opened = n if first == ok.size else 0 if first == 0 else int(reg[first])
+        parts = []
+        if opened > 0:
+            parts.append(m.run(y[:opened], u[:opened]))
+        if opened < n:
+            m.eps = np.inf
+            parts.append(m.run(y[opened:], u[opened:]))
+            m.eps = 0.0
+        return parts
+
+    @staticmethod
+    def _join(parts: list) -> tuple:
+        """Errors, Z-scores, Z-score alarms, variance-stable flags, variances and means of result parts."""
+        def cat(name):
+            return np.concatenate([np.asarray(getattr(p, name), dtype=float) for p in parts])
+
+        flags = [np.concatenate([getattr(p, name) for p in parts]) for name in ("alarm", "variance_stable")]
+        return cat("resid"), cat("zscore"), flags[0], flags[1], cat("variance"), cat("mean")
+
     def _run_mean(self, c: int, m: RecursiveARX, yc: np.ndarray, uc: np.ndarray, start: int):
         """Run pair ``c`` in "mean" mode, freezing its model at the first alarm (exactly as sample by sample)."""
-        n = yc.shape[0]
         snap = None
         if self.freeze_on_alarm and not self._stat_alarmed[c]:
-            snap = m.get_state()
-        res = m.run(yc, uc)
-        e = np.asarray(res.resid, dtype=float)
+            snap = m.get_state(), self._passes[c], self._scales[c].copy()
+        parts = self._estimate(c, yc, uc)
+        e = self._join(parts)[0]
         stat = self._mean_statistic(c, e)
-        pos = start + np.arange(n)
+        pos = start + np.arange(yc.shape[0])
         hit = np.flatnonzero((np.nan_to_num(stat, nan=-np.inf) > self.threshold) & (pos >= self.arm_after))
-        results = [res]
         if snap is not None and hit.size:
             i = int(hit[0])
-            m.set_state(snap)
-            parts = [m.run(yc[:i], uc[:i])] if i > 0 else []
+            m.set_state(snap[0])
+            self._passes[c], self._scales[c] = snap[1], snap[2]
+            parts = self._estimate(c, yc[:i], uc[:i]) if i > 0 else []
             m.freeze()
-            parts.append(m.run(yc[i:], uc[i:]))
-            e = np.concatenate([np.asarray(p.resid, dtype=float) for p in parts])
+            parts += self._estimate(c, yc[i:], uc[i:])
+            e = self._join(parts)[0]
             stat = self._mean_statistic(c, e)
-            results = parts
         if hit.size:
             self._stat_alarmed[c] = True
         w1 = self.window - 1
         if w1:
             self._tail[c] = np.concatenate([self._tail[c], e])[-w1:]
         alarm = (np.nan_to_num(stat, nan=-np.inf) > self.threshold) & (pos >= self.arm_after)
-        z = np.concatenate([np.asarray(p.zscore, dtype=float) for p in results])
-        vstable = np.concatenate([p.variance_stable for p in results])
-        var = np.concatenate([np.asarray(p.variance, dtype=float) for p in results])
-        mean = np.concatenate([np.asarray(p.mean, dtype=float) for p in results])
+        _, z, _, vstable, var, mean = self._join(parts)
         return e, z, stat, alarm, vstable, var, mean
 
     def run(self, y: Any, u: Any) -> OnlineDetection:
@@ -450,7 +542,37 @@ class OnlineDetector:
         Returns
         -------
         OnlineDetection
+
+        Warns
+        -----
+        ConvergenceWarning
+            Once per pair and stream (until :meth:`reset`), when the block ends with a pair not armed while its
+            Z-score or GLRT would need it, naming the pair, the time of the last sample (index label, and seconds
+            since the first sample when the index gives ``fs``) and the gate that is still shut.
         """
+        out = self._process(y, u)
+        idle = self.statistic == "mean" and self.glrt is None       # nothing waits for arming
+        for c in np.flatnonzero((self._armed_at < 0) & ~self._warned & ~idle):
+            self._warned[c] = True
+            m = self._models[c]
+            last = self._nobs - 1
+            when = f"sample {last}"
+            if self._last_time is not None:
+                seconds = "" if out.fs is None else f", {last / out.fs:.6g} s after the first sample"
+                when = f"time {self._last_time} ({when}{seconds})"
+            run = f"for stable_samples={m.stable_samples} samples in a row"
+            gate = (f"its model is stable but its error variance has not settled (relative change per sample below "
+                    f"variance_tol={m.variance_tol:g} {run}, after at least min_variance_samples="
+                    f"{m.min_variance_samples} errors): give more data or raise variance_tol" if m.model_stable else
+                    f"its parameter step never stayed below eps={self.eps:g} of the parameters {run}: check that y "
+                    "follows u, give more data or raise eps")
+            warnings.warn(f"OnlineDetector pair {self.pairs[c]!r} has not armed by the end of the data at {when}, so "
+                          f"it could raise no {'Z-score' if self.statistic == 'zscore' else 'GLRT'} alarm: {gate}",
+                          ConvergenceWarning, stacklevel=2)
+        return out
+
+    def _process(self, y: Any, u: Any) -> OnlineDetection:
+        """:meth:`run` without the warning (:meth:`update` feeds one sample at a time)."""
         sy, su = self._signals(y, u)
         n, k = sy.nobs, len(self.pairs)
         start = self._nobs
@@ -466,13 +588,8 @@ class OnlineDetector:
             yc = np.ascontiguousarray(sy.values[:, c])
             uc = np.ascontiguousarray(su.values[:, c * ni:(c + 1) * ni])
             if self.statistic == "zscore":
-                res = m.run(yc, uc[:, 0] if ni == 1 else uc)
-                e = np.asarray(res.resid, dtype=float)
-                z = np.asarray(res.zscore, dtype=float)
-                stat, zal = z, res.alarm.copy()
-                vstable = res.variance_stable
-                var = np.asarray(res.variance, dtype=float)
-                mean = np.asarray(res.mean, dtype=float)
+                e, z, zal, vstable, var, mean = self._join(self._estimate(c, yc, uc))
+                stat = z
             else:
                 e, z, stat, zal, vstable, var, mean = self._run_mean(c, m, yc, uc, start)
             Z[:, c] = z
@@ -515,6 +632,8 @@ class OnlineDetector:
                 self._source[c] = "+".join(s for s, a in ((self.statistic, zal[i]), ("glrt", gal[i])) if a)
                 self._time[c] = labels[i] if labels is not None else start + i
         self._nobs += n
+        if n:
+            self._last_time = labels[-1] if labels is not None else None
         starts = _episode_starts(A, self._last_alarm)
         self._last_alarm = A[-1].copy()
         return self._result(sy, Z, G, E, A, S, starts)
@@ -537,7 +656,7 @@ class OnlineDetector:
         ValueError
             ``y`` or ``u`` has more than one dimension, the wrong number of values, or masked values.
         """
-        return self.run(self._sample(y, "y"), self._sample(u, "u")).alarm[0]
+        return self._process(self._sample(y, "y"), self._sample(u, "u")).alarm[0]
 
     @staticmethod
     def _sample(value: Any, name: str) -> np.ndarray:
@@ -684,9 +803,13 @@ class OnlineDetector:
         hours = 0.0
         for i, (y, u) in enumerate(zip(ys, us)):
             try:
-                out = self._alarm_free_copy().run(y, u)
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always", ConvergenceWarning)
+                    out = self._alarm_free_copy().run(y, u)
             except (ValueError, TypeError) as err:
                 raise type(err)(f"healthy run {i}: {err}") from err
+            for w in caught:
+                warnings.warn(f"healthy run {i}: {w.message}", w.category, stacklevel=2)
             f = fs if fs is not None else out.fs
             if f is None:
                 raise ValueError(f"fs (sampling frequency in Hz) is needed: healthy run {i} carries no time index")
