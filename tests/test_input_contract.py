@@ -365,55 +365,139 @@ def test_crazypad_error_paths(tmp_path):
 # -------------------------------------------------------------------------------------------- command line
 @pytest.fixture(scope="module")
 def cli_files(tmp_path_factory):
+    """Data and model files of every kind the command line refuses, beside valid ones."""
+    from _synthetic_fdi import FS, record
+
     d = tmp_path_factory.mktemp("cli")
-    r = np.random.default_rng(1)
-    pd.DataFrame({"time": np.arange(500) / 100, "a": r.standard_normal(500)}).to_csv(d / "ok.csv", index=False)
-    assert main(["fit", str(d / "ok.csv"), "--out", str(d / "m.npz"), "--max-lags", "3"]) == 0
+    x = record("healthy", 500, np.random.default_rng(1))
+    ok = pd.DataFrame({"time": np.arange(500) / FS, "a": x[:, 0], "b": x[:, 1]})
+    ok.to_csv(d / "ok.csv", index=False)
+    assert main(["fit", str(d / "ok.csv"), "--columns", "a", "--out", str(d / "m.npz"), "--max-lags", "3"]) == 0
+    assert main(["fit", str(d / "ok.csv"), "--out", str(d / "m2.npz"), "--max-lags", "3"]) == 0
+    (d / "sub").mkdir()
+    (d / "sub" / "m.npz").write_bytes((d / "m.npz").read_bytes())
+    (d / "truncated.npz").write_bytes((d / "m.npz").read_bytes()[:300])
+    np.savez(d / "foreign.npz", weights=np.arange(3.0))
+    np.savez(d / "pickled.npz", weights=np.array([{"w": 1}], dtype=object))
+    ok.assign(label="x").to_csv(d / "text_column.csv", index=False)
+    ok.assign(b=ok["b"].where(ok.index != 37)).to_csv(d / "nan.csv", index=False)
+    ok.iloc[:10].to_csv(d / "short.csv", index=False)
+    ok.assign(time=np.r_[ok["time"][:250], ok["time"][250:] + 1.0]).to_csv(d / "gap.csv", index=False)
+    ok.drop(columns="time").to_csv(d / "no_time.csv", index=False)
+    values = np.stack([x, x[::-1], x + 1.0])
+    values[1, 40, 1] = np.nan
+    xr.Dataset({"a": (("record", "time"), values[..., 0]), "b": (("record", "time"), values[..., 1])},
+               coords={"time": np.arange(500) / FS, "state": ("record", ["healthy", "healthy", "f1"])}).to_netcdf(
+        d / "records.nc", engine="h5netcdf")
     files = {"empty.csv": "", "header.csv": "time,a\n", "text.csv": "time,a\n0,x\n0.01,y\n",
              "same_time.csv": "time,a\n0,1\n0,2\n0,3\n", "fake.nc": "not netcdf", "fake.csv.gz": "not gzip",
-             "time_text.csv": "time,a\nt0,1\nt1,2\n", "bad.npz": "junk"}
+             "time_text.csv": "time,a\nt0,1\nt1,2\n", "bad.npz": "junk", "notes.txt": "a text file"}
     for name, text in files.items():
         (d / name).write_text(text)
     return d
 
 
+FIT = ["fit", "--out", "{d}/x.npz", "--max-lags", "3"]
+DETECT = ["detect", "{d}/ok.csv", "--baseline", "{d}/m2.npz"]
+
+
 @pytest.mark.parametrize("argv, named", [
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--max-lags", "0"], "--max-lags"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--max-lags", "abc"], "--max-lags"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--lags", "0"], "--lags"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--lags", "30"], "--lags"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--fs", "0"], "--fs"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--fs", "nan"], "--fs"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--start", "inf"], "--start"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/x.npz", "--start", "3", "--stop", "1"], "--stop"),
-    (["fit", "{d}/ok.csv", "--out", "{d}/no/such/dir/x.npz", "--max-lags", "3"], "--out"),
-    (["fit", "{d}/empty.csv", "--out", "{d}/x.npz"], "empty.csv"),
-    (["fit", "{d}/header.csv", "--out", "{d}/x.npz"], "header.csv"),
-    (["fit", "{d}/text.csv", "--out", "{d}/x.npz"], "text.csv"),
-    (["fit", "{d}/same_time.csv", "--out", "{d}/x.npz"], "same_time.csv"),
-    (["fit", "{d}/time_text.csv", "--out", "{d}/x.npz"], "time_text.csv"),
-    (["fit", "{d}/fake.nc", "--out", "{d}/x.npz"], "fake.nc"),
-    (["fit", "{d}/fake.csv.gz", "--out", "{d}/x.npz"], "fake.csv.gz"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "0"], "--window"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "inf"], "--window"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "1e300"], "--window"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "0.001"], "--window"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "2", "--step", "-1"], "--step"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "2", "--alpha", "1"], "--alpha"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "2", "--fs", "1e300"], "--window"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/bad.npz"], "bad.npz"),
-    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "--window", "2", "--out", "{d}/no/dir/t.csv"], "--out"),
-    (["simulate", "--out", "{d}/s.nc", "--records-per-case", "0"], "--records-per-case"),
-    (["simulate", "--out", "{d}/s.nc", "--duration", "nan"], "--duration"),
-    (["simulate", "--out", "{d}/s.nc", "--seed", "-1"], "--seed"),
-    (["simulate", "--out", "{d}/no/dir/s.nc", "--records-per-case", "1", "--duration", "0.5", "--states", "healthy",
-      "--turbulence", "none"], "--out"),
-    (["demo", "--windows", "abc"], "--windows"),
-    (["demo", "--order", "xyz"], "--order"),
-    (["demo", "--data", "{d}/fake.nc", "--no-figures", "--no-progress"], "fake.nc"),
+    # missing files
+    (["fit", "{d}/missing.csv", "--out", "{d}/x.npz"], ["missing.csv", "does not exist"]),
+    (["detect", "{d}/ok.csv", "--baseline", "{d}/nope.npz"], ["--baseline", "nope.npz", "does not exist"]),
+    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "{d}/gone.npz"], ["--models", "gone.npz"]),
+    (["demo", "--data", "{d}/gone.nc", "--no-figures", "--no-progress"], ["--data", "gone.nc", "does not exist"]),
+    (["fit", "{d}", "--out", "{d}/x.npz"], ["is a folder"]),
+    # missing / wrong columns
+    ([*FIT, "{d}/ok.csv", "--columns", "accel_z"], ["--columns", "ok.csv", "'accel_z'", "['a', 'b']"]),
+    ([*FIT, "{d}/ok.csv", "--columns", "a,a"], ["--columns a,a", "twice"]),
+    ([*FIT, "{d}/records.nc", "--record", "0", "--columns", "c"], ["--columns", "records.nc", "'c'", "['a', 'b']"]),
+    ([*DETECT, "--columns", "a"], ["--columns", "ok.csv", "['a']", "--baseline", "m2.npz", "2 channel(s)"]),
+    ([*FIT, "{d}/ok.csv", "--time-column", "clock"], ["--time-column", "ok.csv", "'clock'"]),
+    ([*FIT, "{d}/ok.csv", "--model", "ar"], ["--model ar", "one column", "--columns"]),
+    # no time, a time column with a gap, disagreeing --fs
+    ([*FIT, "{d}/no_time.csv"], ["no_time.csv", "--time-column", "--fs"]),
+    ([*FIT, "{d}/gap.csv"], ["gap.csv", "column 'time'", "line 252", "--start / --stop"]),
+    ([*FIT, "{d}/ok.csv", "--fs", "50"], ["--fs 50", "ok.csv", "100 Hz"]),
+    ([*FIT, "{d}/same_time.csv"], ["same_time.csv", "column 'time'", "does not increase"]),
+    ([*FIT, "{d}/time_text.csv"], ["time_text.csv", "column 'time'", "line 2", "'t0'"]),
+    # NaN: the file, the column, where, and what to do
+    ([*FIT, "{d}/nan.csv"], ["nan.csv", "column 'b'", "line 39", "time 0.37 s", "--nan-policy omit", "--columns"]),
+    ([*FIT, "{d}/records.nc", "--record", "1"], ["record 1 of", "records.nc", "variable 'b'", "time 0.4 s"]),
+    # too short
+    ([*FIT, "{d}/short.csv", "--max-lags", "20"], ["short.csv", "too short", "10 samples", "--max-lags 20"]),
+    ([*FIT, "{d}/ok.csv", "--start", "495"], ["ok.csv", "too short", "--max-lags 3"]),
+    ([*FIT, "{d}/ok.csv", "--start", "3s", "--stop", "1s"], ["--stop", "--start"]),
+    ([*FIT, "{d}/ok.csv", "--start", "10s"], ["--start / --stop", "ok.csv", "no row"]),
+    ([*DETECT, "--window", "4"], ["--window 4", "4 samples = 0.04 s", "order"]),
+    # non-numeric
+    ([*FIT, "{d}/text.csv"], ["text.csv", "column 'a'", "not numeric", "line 2", "'x'"]),
+    ([*FIT, "{d}/text_column.csv", "--columns", "a,label"], ["text_column.csv", "column 'label'", "not numeric"]),
+    # bad --window / --step
+    ([*DETECT, "--window", "0"], ["--window"]), ([*DETECT, "--window", "abc"], ["--window", "'abc'"]),
+    ([*DETECT, "--window", "2.5"], ["--window", "'2.5s'", "samples"]), ([*DETECT, "--window", "inf"], ["--window"]),
+    ([*DETECT, "--window", "1e300"], ["--window"]), ([*DETECT, "--window=-2s"], ["--window", "> 0"]),
+    ([*DETECT, "--window", "100s"], ["--window 100s", "10000 samples = 100 s", "longer than", "ok.csv"]),
+    ([*DETECT, "--window", "2s", "--step", "-1"], ["--step"]),
+    ([*DETECT, "--window", "2s", "--step", "0.1ms"], ["--step", "0.1ms", "0 sample"]),
+    (["monitor", "{d}/ok.csv", "--baseline", "{d}/m2.npz"], ["--window"]),
+    (["monitor", "{d}/ok.csv", "--baseline", "{d}/m2.npz", "--window", "1s", "--steady-window", "1ms"],
+     ["--steady-window"]),
+    # output folder that does not exist: refused before any work
+    ([*FIT, "{d}/ok.csv", "--out", "{d}/no/such/dir/x.npz"], ["--out", "no/such/dir"]),
+    ([*DETECT, "--out", "{d}/no/dir/t.csv"], ["--out", "no/dir"]),
+    (["identify", "{d}/ok.csv", "--models", "{d}/m2.npz", "--out", "{d}/no/dir/t.csv"], ["--out", "no/dir"]),
+    (["select-order", "{d}/ok.csv", "--out", "{d}/no/dir/t.csv"], ["--out", "no/dir"]),
+    (["monitor", "{d}/ok.csv", "--baseline", "{d}/m2.npz", "--window", "1s", "--out", "{d}/no/dir/e.csv"],
+     ["--out", "no/dir"]),
+    (["simulate", "--out", "{d}/no/dir/s.nc", "--records-per-case", "1", "--duration", "0.5s"], ["--out", "no/dir"]),
+    # foreign or corrupt model files
+    ([*DETECT[:2], "--baseline", "{d}/foreign.npz"], ["--baseline", "foreign.npz", "not a tsfdi"]),
+    ([*DETECT[:2], "--baseline", "{d}/pickled.npz"], ["--baseline", "pickled.npz", "not a tsfdi"]),
+    ([*DETECT[:2], "--baseline", "{d}/notes.txt"], ["--baseline", "notes.txt", "not a tsfdi"]),
+    ([*DETECT[:2], "--baseline", "{d}/truncated.npz"], ["--baseline", "truncated.npz"]),
+    ([*DETECT[:2], "--baseline", "{d}/ok.csv"], ["--baseline", "ok.csv", "not a tsfdi"]),
+    (["identify", "{d}/ok.csv", "--models", "{d}/bad.npz"], ["--models", "bad.npz"]),
+    (["monitor", "{d}/ok.csv", "--baseline", "{d}/m2.npz", "--models", "f={d}/notes.txt", "--window", "1s"],
+     ["--models f=", "notes.txt"]),
+    # duplicate model names
+    (["identify", "{d}/ok.csv", "--models", "h={d}/m.npz", "h={d}/sub/m.npz"], ["--models", "'h'", "twice"]),
+    (["identify", "{d}/ok.csv", "--models", "{d}/m.npz", "{d}/sub/m.npz"], ["--models", "'m'", "twice", "NAME=PATH"]),
+    (["monitor", "{d}/ok.csv", "--baseline", "{d}/m2.npz", "--models", "f={d}/m2.npz", "f={d}/m2.npz", "--window",
+      "1s"], ["--models", "'f'", "twice"]),
+    # netCDF records
+    ([*FIT, "{d}/records.nc"], ["records.nc", "3 records", "--record", "--where", "state: f1, healthy"]),
+    ([*DETECT, "--record", "0"], ["--record", "ok.csv"]),
+    (["detect", "{d}/records.nc", "--baseline", "{d}/m2.npz", "--record", "7"], ["--record 7", "records.nc", "0..2"]),
+    (["detect", "{d}/records.nc", "--baseline", "{d}/m2.npz", "--record", "x"], ["--record", "'x'"]),
+    (["detect", "{d}/records.nc", "--baseline", "{d}/m2.npz", "--where", "state=f9"],
+     ["--where state=f9", "records.nc", "['f1', 'healthy']"]),
+    (["detect", "{d}/records.nc", "--baseline", "{d}/m2.npz", "--where", "colour=red"], ["--where colour", "'state'"]),
+    (["detect", "{d}/records.nc", "--baseline", "{d}/m2.npz", "--where", "state"], ["--where", "KEY=VALUE"]),
+    # flag values
+    ([*FIT, "{d}/ok.csv", "--max-lags", "0"], ["--max-lags"]),
+    ([*FIT, "{d}/ok.csv", "--max-lags", "abc"], ["--max-lags"]),
+    ([*FIT, "{d}/ok.csv", "--lags", "0"], ["--lags"]), ([*FIT, "{d}/ok.csv", "--lags", "30"], ["--lags 30"]),
+    ([*FIT, "{d}/ok.csv", "--fs", "0"], ["--fs"]), ([*FIT, "{d}/ok.csv", "--fs", "nan"], ["--fs"]),
+    ([*FIT, "{d}/ok.csv", "--start", "inf"], ["--start"]),
+    ([*FIT, "{d}/ok.csv", "--start", "1.5"], ["--start", "'1.5s'"]),
+    ([*DETECT, "--alpha", "1"], ["--alpha"]),
+    # unreadable data files
+    ([*FIT, "{d}/empty.csv"], ["empty.csv"]), ([*FIT, "{d}/header.csv"], ["header.csv"]),
+    ([*FIT, "{d}/fake.nc"], ["fake.nc", "netCDF"]), ([*FIT, "{d}/fake.csv.gz"], ["fake.csv.gz"]),
+    # simulate and demo
+    (["simulate", "--out", "{d}/s.nc", "--records-per-case", "0"], ["--records-per-case"]),
+    (["simulate", "--out", "{d}/s.nc", "--duration", "nan"], ["--duration"]),
+    (["simulate", "--out", "{d}/s.nc", "--duration", "60"], ["--duration", "'60s'"]),
+    (["simulate", "--out", "{d}/s.nc", "--seed", "-1"], ["--seed"]),
+    (["demo", "--windows", "abc"], ["--windows"]), (["demo", "--order", "xyz"], ["--order"]),
+    (["demo", "--data", "{d}/fake.nc", "--no-figures", "--no-progress"], ["--data", "fake.nc"]),
 ])
-def test_cli_errors_exit_2_naming_the_flag_or_file(cli_files, capsys, argv, named):
+def test_cli_errors_exit_2_naming_what_the_user_typed(cli_files, capsys, argv, named):
     rc = main([a.format(d=cli_files) for a in argv])
     err = capsys.readouterr().err
     assert rc == 2
-    assert named in err and "Traceback" not in err
+    assert err.startswith("usage: tsfdi ") and f"tsfdi {argv[0]}: error: " in err, err
+    for word in named:
+        assert word.format(d=cli_files) in err, (word, err)
+    assert "Traceback" not in err

@@ -1,0 +1,300 @@
+"""`tsfdi` on its own netCDF output and on CSV files with a time column: record selection, pooled fits,
+select-order / detect / identify / monitor equal to the library calls, time spans, --help defaults, --version."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+from _synthetic_fdi import record
+
+import tsfdi
+from tsfdi.cli import COMMANDS, main
+from tsfdi.windows import ResidualWindows
+
+COLUMNS = ["roll", "pitch"]
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    """A tiny `tsfdi simulate` file (records 0, 1 healthy; 2, 3 rotor 1 failing at 1 s; 4 s at 100 Hz), a healthy
+    VAR fitted on records 0 and 1 and a rotor-1 VAR on the post-failure part of records 2 and 3."""
+    d = tmp_path_factory.mktemp("sim")
+    nc = d / "sim.nc"
+    assert main(["simulate", "--out", str(nc), "--records-per-case", "2", "--duration", "4s", "--failure-time", "1s",
+                 "--states", "healthy,rotor1", "--turbulence", "light", "--seed", "5"]) == 0
+    assert main(["fit", str(nc), "--where", "state=healthy", "--columns", "roll,pitch", "--max-lags", "8", "--out",
+                 str(d / "healthy.npz")]) == 0
+    assert main(["fit", str(nc), "--where", "state=rotor1", "--start", "1500ms", "--columns", "roll,pitch",
+                 "--max-lags", "8", "--out", str(d / "rotor1.npz")]) == 0
+    with xr.open_dataset(nc, engine="h5netcdf") as ds:
+        ds = ds.load()
+    return d, nc, ds
+
+
+def frame(ds, i: int, columns=COLUMNS) -> pd.DataFrame:
+    """Record ``i`` of the simulated Dataset as the command line reads it."""
+    return pd.DataFrame({c: ds[c].values[i] for c in columns}, index=pd.Index(ds["time"].values, name="time"))
+
+
+def test_fit_pools_the_selected_records(sim, capsys):
+    d, nc, ds = sim
+    capsys.readouterr()
+    assert main(["fit", str(nc), "--where", "state=healthy", "--columns", "roll,pitch", "--max-lags", "8", "--out",
+                 str(d / "h2.npz")]) == 0
+    out = capsys.readouterr().out
+    assert "on ['roll', 'pitch'] from 2 record(s) at 100 Hz" in out and "VAR results" in out
+    res = tsfdi.load(d / "h2.npz")
+    ref = tsfdi.select_order([frame(ds, 0), frame(ds, 1)], 8, "var").fit()
+    assert res.model.multi and res.lags == ref.lags and res.nobs == ref.nobs == 2 * (400 - 8)
+    np.testing.assert_array_equal(np.asarray(res.params), np.asarray(ref.params))
+    # the same records chosen by number, by a numeric coordinate, and by two conditions
+    for sel in (["--record", "0,1"], ["--record", "0", "--record", "1"], ["--where", "failed_rotor=0"],
+                ["--where", "state=healthy,rotor9", "--where", "turbulence=light"]):
+        assert main(["fit", str(nc), *sel, "--columns", "roll,pitch", "--max-lags", "8", "--out",
+                     str(d / "h3.npz")]) == 0
+        np.testing.assert_array_equal(np.asarray(tsfdi.load(d / "h3.npz").params), np.asarray(ref.params))
+
+
+def test_select_order_prints_the_table(sim, capsys):
+    d, nc, ds = sim
+    out = d / "order.csv"
+    assert main(["select-order", str(nc), "--record", "0", "--columns", "roll", "--max-lags", "6", "--out",
+                 str(out)]) == 0
+    printed = capsys.readouterr().out
+    sel = tsfdi.select_order(frame(ds, 0, ["roll"])["roll"], 6)
+    assert str(sel.summary()) in printed and "AR on ['roll'] from 1 record(s) at 100 Hz" in printed
+    table = pd.read_csv(out)
+    assert list(table["order"]) == list(range(1, 7))
+    np.testing.assert_allclose(table[["bic", "aic", "rss_sss", "spp"]], sel.table[["bic", "aic", "rss_sss", "spp"]],
+                               rtol=1e-12)
+    assert main(["select-order", str(nc), "--record", "0", "--columns", "roll,pitch", "--max-lags", "4",
+                 "--criterion", "trace"]) == 0
+    trace = tsfdi.select_order(frame(ds, 0), 4, "var", criterion="trace")
+    assert str(trace.summary()) in capsys.readouterr().out
+
+
+def test_detect_whole_records_and_windows(sim, capsys):
+    d, nc, ds = sim
+    healthy = tsfdi.load(d / "healthy.npz")
+    out = d / "detect.csv"
+    capsys.readouterr()
+    assert main(["detect", str(nc), "--baseline", str(d / "healthy.npz"), "--record", "1,2", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "sim.nc record 1 (400 samples = 4 s at 100 Hz" in printed and "LjungBox decision" in printed
+    t = pd.read_csv(out)
+    assert list(t["record"]) == [1, 2] and list(t["start"]) == [0.0, 0.0] and list(t["end"]) == [4.0, 4.0]
+    for row, i in zip(t.itertuples(), (1, 2)):
+        dec = tsfdi.detect(frame(ds, i), healthy, tsfdi.LjungBox(lags=20, alpha=1e-3))
+        assert (row.statistic_roll, row.statistic_pitch) == pytest.approx(tuple(dec.statistic), rel=1e-12)
+        assert row.fault == bool(np.any(dec.reject))
+    assert list(t["fault"]) == [False, True]            # the healthy record passes, the rotor failure is found
+    # per window: a bare integer counts samples, '1s' is the same window at 100 Hz
+    for window, step in (("100", "50"), ("1s", "500ms")):
+        assert main(["detect", str(nc), "--baseline", str(d / "healthy.npz"), "--record", "2", "--window", window,
+                     "--step", step, "--method", "variance", "--out", str(out)]) == 0
+        assert "window 100 samples = 1 s, step 50 samples = 0.5 s, at 100 Hz" in capsys.readouterr().out
+        t = pd.read_csv(out)
+        ws = ResidualWindows({"h": healthy}).fit(frame(ds, 2)).statistics(tsfdi.FTest(alpha=1e-3), window=100,
+                                                                           step=50)
+        assert len(t) == len(ws) == 7
+        np.testing.assert_allclose(t["start"], ws.starts / 100)
+        np.testing.assert_allclose(t["end"] - t["start"], 1.0)
+        np.testing.assert_allclose(t[["statistic_roll", "statistic_pitch"]], ws.statistic[:, 0], rtol=1e-12)
+        np.testing.assert_array_equal(t["fault"], ws.reject[:, 0])
+
+
+def test_identify_records(sim, capsys):
+    d, nc, ds = sim
+    out = d / "identify.csv"
+    assert main(["identify", str(nc), "--models", f"healthy={d / 'healthy.npz'}", str(d / "rotor1.npz"),
+                 "--where", "state=rotor1", "--window", "1s", "--step", "1s", "--method", "variance", "--out",
+                 str(out)]) == 0
+    t = pd.read_csv(out, keep_default_na=False)
+    assert list(t["record"]) == [2] * 4 + [3] * 4
+    models = {"healthy": tsfdi.load(d / "healthy.npz"), "rotor1": tsfdi.load(d / "rotor1.npz")}
+    for i in (2, 3):
+        part = t[t["record"] == i]
+        wins = tsfdi.identify_windows(frame(ds, i), models, tsfdi.FTest(alpha=1e-3), window="1s", step="1s")
+        np.testing.assert_array_equal(part["pvalue_rotor1"], wins.windows.min_pvalue[:, 1])
+        assert part["label"].tolist() == [lab or "" for lab in wins.decide("paper")]
+    assert (t["label"][t["start"] >= 2.0] == "rotor1").all()      # a second after the failure: rotor 1
+    assert not t["accept_healthy"][t["start"] >= 1.0].any()
+
+
+def test_monitor_writes_events(sim, capsys):
+    d, nc, ds = sim
+    out = d / "events.csv"
+    assert main(["monitor", str(nc), "--record", "3", "--baseline", str(d / "healthy.npz"), "--models",
+                 f"rotor1={d / 'rotor1.npz'}", "--window", "1s", "--step", "20", "--steady-window", "50",
+                 "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    mon = tsfdi.Monitor(tsfdi.load(d / "healthy.npz"), {"rotor1": tsfdi.load(d / "rotor1.npz")}, window=100, step=20,
+                        fs=100.0, test=tsfdi.LjungBox(lags=25, alpha=1e-3), steady_window=50)
+    ref = mon.run(frame(ds, 3))
+    assert f"sim.nc record 3: detection at {ref.detection_time:g} s, label rotor1" in printed
+    t = pd.read_csv(out)
+    expected = ref.to_frame()
+    assert len(t) == len(expected) > 0 and (t["record"] == 3).all()
+    np.testing.assert_allclose(t["time"], expected["time"])
+    assert t["kind"].tolist() == expected["kind"].tolist()
+    assert t["kind"].iloc[0] == "detection" and 1.0 < ref.detection_time < 2.5
+    # detection only: no fault models, the same detection; the healthy records raise nothing
+    assert main(["monitor", str(nc), "--baseline", str(d / "healthy.npz"), "--window", "1s", "--step", "20",
+                 "--steady-window", "50", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert f"sim.nc record 3: detection at {ref.detection_time:g} s, label -" in printed
+    assert "sim.nc record 0: detection at -" in printed and "sim.nc record 1: detection at -" in printed
+    t = pd.read_csv(out)
+    assert set(t["record"]) == {2, 3} and "identification" not in set(t["kind"])
+    assert t["time"][(t["record"] == 3) & (t["kind"] == "detection")].tolist() == [ref.detection_time]
+
+
+@pytest.fixture(scope="module")
+def csv_files(tmp_path_factory):
+    """The same two-channel record at 50 Hz with a 'timestamp' column from 100 s, a 'clock' column, no time."""
+    d = tmp_path_factory.mktemp("csv")
+    x = record("healthy", 1000, np.random.default_rng(7))
+    df = pd.DataFrame({"timestamp": 100.0 + np.arange(1000) / 50, "a": x[:, 0], "b": x[:, 1]})
+    df.to_csv(d / "stamped.csv", index=False)
+    df.rename(columns={"timestamp": "clock"}).to_csv(d / "clock.csv", index=False)
+    df.drop(columns="timestamp").to_csv(d / "plain.csv", index=False)
+    return d, df
+
+
+def test_csv_time_column_is_the_index(csv_files, capsys):
+    d, df = csv_files
+    assert main(["fit", str(d / "stamped.csv"), "--max-lags", "4", "--out", str(d / "s.npz")]) == 0
+    assert "VAR(2) on ['a', 'b'] from 1 record(s) at 50 Hz" in capsys.readouterr().out   # not a 'timestamp' channel
+    ref = tsfdi.load(d / "s.npz")
+    np.testing.assert_allclose(np.asarray(ref.model.data.index), df["timestamp"])
+    for argv in (["clock.csv", "--time-column", "clock"], ["plain.csv", "--fs", "50"],
+                 ["stamped.csv", "--fs", "50.2"]):                     # --fs within 1 % of the time column
+        assert main(["fit", str(d / argv[0]), *argv[1:], "--max-lags", "4", "--out", str(d / "o.npz")]) == 0
+        assert "at 50" in capsys.readouterr().out
+        np.testing.assert_array_equal(np.asarray(tsfdi.load(d / "o.npz").params), np.asarray(ref.params))
+    # windows of 2 s are 100 samples at 50 Hz, and their times are on the file's clock
+    assert main(["detect", str(d / "stamped.csv"), "--baseline", str(d / "s.npz"), "--window", "2s", "--step", "5s",
+                 "--out", str(d / "t.csv")]) == 0
+    assert "window 100 samples = 2 s, step 250 samples = 5 s, at 50 Hz" in capsys.readouterr().out
+    t = pd.read_csv(d / "t.csv")
+    assert "record" not in t and t["start"].tolist() == [100.0, 105.0, 110.0, 115.0]
+    # --start / --stop as times on that clock, or as row numbers
+    assert main(["fit", str(d / "stamped.csv"), "--start", "110s", "--stop", "2min", "--lags", "2", "--max-lags", "4",
+                 "--out", str(d / "o.npz")]) == 0
+    assert "(496 samples)" in capsys.readouterr().out                   # 500 rows less the hold-back of 4
+    assert main(["fit", str(d / "stamped.csv"), "--start", "500", "--stop", "1000", "--lags", "2", "--max-lags", "4",
+                 "--out", str(d / "o.npz")]) == 0
+    assert "(496 samples)" in capsys.readouterr().out
+
+
+def test_nan_policy_omit_splits_into_records(csv_files, capsys):
+    d, df = csv_files
+    gappy = df.copy()
+    gappy.loc[[300, 301, 700], "b"] = np.nan
+    gappy.loc[702:703, "a"] = np.nan                    # leaves a 1-row piece (row 701), dropped as too short
+    gappy.to_csv(d / "gappy.csv", index=False)
+    assert main(["fit", str(d / "gappy.csv"), "--max-lags", "4", "--nan-policy", "omit", "--out",
+                 str(d / "g.npz")]) == 0
+    captured = capsys.readouterr()
+    assert "from 3 record(s)" in captured.out
+    assert "dropped 1 piece(s) of split records shorter than 6 samples" in captured.err
+    pieces = [df.iloc[a:b].set_index("timestamp").rename_axis("time") for a, b in ((0, 300), (302, 700), (704, 1000))]
+    ref = tsfdi.select_order(pieces, 4, "var").fit()
+    np.testing.assert_array_equal(np.asarray(tsfdi.load(d / "g.npz").params), np.asarray(ref.params))
+
+
+def test_help_shows_the_defaults(capsys):
+    expect = {"fit": ["--max-lags MAX_LAGS   largest order searched (default: 20)", "(default: raise)"],
+              "select-order": ["(default: logdet)"],
+              "detect": ["(default: 1s)", "a bare integer counts samples", "(default: 0.001)", "(default: 20)"],
+              "identify": ["(default: paper)", "(default: whiteness)"],
+              "monitor": ["(default: 10s)", "(default: 25)"],
+              "simulate": ["(default: 60s)", "(default: 10s)", "(default: 1ms)", "(default: 100.0)"],
+              "demo": ["(default: 5s,10s,20s)", "(default: tsfdi-demo)"]}
+    assert set(expect) == set(COMMANDS)
+    for name, words in expect.items():
+        with pytest.raises(SystemExit) as exc:
+            main([name, "--help"])
+        assert exc.value.code == 0
+        text = " ".join(capsys.readouterr().out.split())        # argparse wraps lines
+        for w in words:
+            assert " ".join(w.split()) in text, (name, w)
+        assert "(default: None)" not in text and "(default: False)" not in text
+
+
+def test_version_and_python_m_tsfdi(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out == f"tsfdi {tsfdi.__version__}\n"
+    # python -m tsfdi: the real exit status and stderr of an error
+    r = subprocess.run([sys.executable, "-m", "tsfdi", "fit", str(tmp_path / "flight.csv"), "--out",
+                        str(tmp_path / "m.npz")], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stdout == "" and r.stderr.startswith("usage: tsfdi fit")
+    assert r.stderr.splitlines()[-1] == f"tsfdi fit: error: data: {tmp_path / 'flight.csv'} does not exist"
+    assert "Traceback" not in r.stderr
+
+
+def test_warnings_are_one_line(tmp_path, capsys):
+    x = np.random.default_rng(3).standard_normal(300)
+    pd.DataFrame({"time": np.arange(300) / 10, "a": x, "b": 2 * x}).to_csv(tmp_path / "twins.csv", index=False)
+    assert main(["fit", str(tmp_path / "twins.csv"), "--max-lags", "2", "--out", str(tmp_path / "m.npz")]) == 0
+    err = capsys.readouterr().err
+    assert err and all(line.startswith("tsfdi fit: warning: ") for line in err.strip().splitlines())
+    assert "cli.py" not in err
+
+
+def test_columns_are_matched_by_name(sim, capsys):
+    """--columns pitch,roll against a model of roll, pitch: the same decisions (channels matched by name)."""
+    d, nc, ds = sim
+    tables = []
+    for cols in ("roll,pitch", "pitch,roll"):
+        out = d / f"by_name_{cols}.csv"
+        assert main(["identify", str(nc), "--models", f"healthy={d / 'healthy.npz'}", str(d / "rotor1.npz"),
+                     "--record", "2", "--columns", cols, "--window", "1s", "--out", str(out)]) == 0
+        tables.append(pd.read_csv(out, keep_default_na=False))
+        assert main(["detect", str(nc), "--baseline", str(d / "healthy.npz"), "--record", "2", "--columns", cols,
+                     "--window", "1s", "--out", str(out)]) == 0
+        tables.append(pd.read_csv(out)[["statistic_roll", "statistic_pitch", "fault"]])
+    pd.testing.assert_frame_equal(tables[0], tables[2])
+    pd.testing.assert_frame_equal(tables[1], tables[3])
+
+
+def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypatch):
+    """Every command of docs/guide/cli.md runs (in its order, in a fresh folder), and its claims hold."""
+    import re
+    import shlex
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "cli.md").read_text()
+    commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
+                if line.startswith("tsfdi ")]
+    assert len(commands) == 9
+    ulog = shared_data / "px4" / "sample.ulg"
+    if not ulog.is_file():
+        raise FileNotFoundError(f"shared PX4 log missing at {ulog}: the CLI page's example needs it")
+    (tmp_path / "sample.ulg").symlink_to(ulog)
+    monkeypatch.chdir(tmp_path)
+    printed = {}
+    for line in commands:
+        assert main(shlex.split(line)[1:]) == 0, (line, capsys.readouterr().err)
+        printed[line.split()[1]] = capsys.readouterr().out
+    # select-order: the orders the page quotes
+    assert re.search(r"Selected \(min BIC\) +6\n", printed["select-order"])
+    assert re.search(r"RSS/SSS stable from +8\n", printed["select-order"])
+    # detect: the windows ending by the failure at 3 s pass, every later one rejects
+    t = pd.read_csv("detect.csv")
+    assert set(t["record"]) == {2, 3} and (t["fault"] == (t["end"] > 3.0)).all()
+    # monitor: detected by the end of the first window after the failure; rotor1 once the transient has passed
+    ev = pd.read_csv("events.csv")
+    assert ev["time"][ev["kind"] == "detection"].tolist() == [3.0]
+    late = ev[(ev["kind"] == "identification") & (ev["window_start"] >= 5.0)]
+    assert len(late) and (late["label"] == "rotor1").all()
+    # the PX4 log: the 5 s windows of the first 10 s (the vehicle moved by hand) are faults, later ones are not
+    table = [row.split() for row in printed["detect"].splitlines() if re.match(r"\s+\d+\s+\d", row)]
+    faults = [(float(r[1]), r[-1] == "True") for r in table]
+    assert faults and all(f == (start < 10.0) for start, f in faults)
