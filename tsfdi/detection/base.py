@@ -386,18 +386,19 @@ class CalibratedTest(ResidualTest):
                 raise ValueError(f"window ({window}) must exceed the model order of the held-out residuals ({lags}) "
                                  "by at least 2")
             reference = self._calibration_reference(recs, reference)
-            stats_, groups, n_ind = [], [], 0
+            stats_, groups, per_record = [], [], []
             for i, r in enumerate(recs):
                 nr = as_signal(r, f"resid[{i}]", allow_constant=True).nobs
                 if nr < n:
                     continue                                   # a record shorter than one window gives none
                 stats_.append(np.asarray(self.window_statistic(r, n, step, **reference)))
                 groups.append(np.full(stats_[-1].shape[0], i))
-                n_ind += nr // n
+                per_record.append(nr // n)
             if not stats_:
                 raise ValueError(f"resid: no record holds a window of {n} residual samples")
             stat = np.concatenate(stats_)
             groups = np.concatenate(groups) if len(stats_) > 1 else None
+            n_ind = per_record if len(stats_) > 1 else per_record[0]
             frozen = ~np.isfinite(stat)
             if frozen.any():
                 raise ValueError(f"resid holds {int(frozen.any(axis=1).sum())} constant window(s) (a frozen sensor, "
@@ -438,7 +439,7 @@ class CalibratedTest(ResidualTest):
         self.thresholds_ = ths
         self.threshold_ = np.array([t.threshold_ for t in ths])
         self.calibration_ = [t.sample_ for t in ths]
-        self.calibration_windows_ = (int(stat.shape[0]), n_ind)
+        self.calibration_windows_ = (int(stat.shape[0]), int(np.sum(n_ind)) if n_ind is not None else None)
         return self
 
     def _calibration_reference(self, recs: list, reference: dict) -> dict:
