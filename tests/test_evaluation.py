@@ -73,12 +73,15 @@ def test_confusion_closed_form():
     recs.attrs["healthy"] = "h"
     ev = Evaluation(identification=ident, detection=det, faults=("a", "b"), rules=("paper", "likelihood"),
                     alphas={("var", "whiteness"): 0.01}, lags={5.0: 20}, records=recs, nchan={"var": 3})
+    # decisions per true state: the faults decided, then ambiguous and none; every row adds to 100
     conf = ev.confusion("paper").xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
-    np.testing.assert_allclose(conf.loc["a"], [75.0, 25.0])
-    np.testing.assert_allclose(conf.loc["b"], [25.0, 75.0])
+    assert list(conf.columns) == ["a", "b", "ambiguous", "none"]
+    np.testing.assert_allclose(conf.loc["a"], [50.0, 0.0, 25.0, 25.0])
+    np.testing.assert_allclose(conf.loc["b"], [0.0, 50.0, 25.0, 25.0])
     conf = ev.confusion("likelihood").xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
-    np.testing.assert_allclose(conf.loc["a"], [75.0, 25.0])
-    np.testing.assert_allclose(conf.loc["b"], [25.0, 75.0])
+    np.testing.assert_allclose(conf.loc["a"], [75.0, 25.0, 0.0, 0.0])
+    np.testing.assert_allclose(conf.loc["b"], [25.0, 75.0, 0.0, 0.0])
+    np.testing.assert_allclose(conf.sum(axis=1), 100.0)
     r = ev.rates().xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
     np.testing.assert_allclose(r.loc[("a", "paper"), ["correct", "wrong", "ambiguous", "none"]], [50, 0, 25, 25])
     np.testing.assert_allclose(r.loc[("b", "paper"), ["correct", "wrong", "ambiguous", "none"]], [50, 0, 25, 25])

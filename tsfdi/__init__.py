@@ -11,13 +11,13 @@ and :mod:`tsfdi.study` are imported on first use.
 import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
-from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, ResidualTest,
-                             ScaledChi2Threshold, ZScore)
+from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
+                             ResidualTest, ScaledChi2Threshold, ZScore)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
-from tsfdi.models import (AR, ARX, VAR, ARResults, ARXResults, HeldOutResiduals, RecursiveARX, RecursiveARXResults,
-                          VARResults, load)
+from tsfdi.models import (AR, ARX, EMRAN, VAR, ARResults, ARXResults, EMRANResults, HeldOutResiduals, RecursiveARX,
+                          RecursiveARXResults, VARResults, load)
 from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
 from tsfdi.online import OnlineCalibration, OnlineDetection, OnlineDetector
 from tsfdi.selection import OrderSelection, select_order
@@ -27,10 +27,12 @@ __version__ = "0.1.0"
 
 __all__ = [
     # models and order selection
-    "AR", "ARX", "VAR", "RecursiveARX", "ARResults", "ARXResults", "VARResults", "RecursiveARXResults",
+    "AR", "ARX", "VAR", "RecursiveARX", "EMRAN", "ARResults", "ARXResults", "VARResults", "RecursiveARXResults",
+    "EMRANResults",
     "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # residual tests and decisions
-    "ResidualTest", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "EmpiricalThreshold", "ScaledChi2Threshold",
+    "ResidualTest", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "MovingSquaredError", "EmpiricalThreshold",
+    "ScaledChi2Threshold",
     "ZScore",
     # windowed engine, detection, identification
     "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",

@@ -88,24 +88,38 @@ class Evaluation:
 
     # -- identification
     def confusion(self, rule: str = "paper") -> pd.DataFrame:
-        """Percent of the windows of each true failure accepted (``"paper"``, several may be accepted) or
-        labelled (other rules) as each fault, per model, method and window length (paper's Table 4 numbers).
+        """Percent of the windows of each true failure labelled as each fault, ``"ambiguous"`` or ``"none"`` by
+        ``rule``, per model, method and window length: every row adds up to 100.
+
+        With the ``"paper"`` rule a window is labelled by the fault model that alone accepts it, ``"ambiguous"``
+        when several accept it and ``"none"`` when none does; the other rules label every window (their
+        ``"ambiguous"`` and ``"none"`` columns are 0). The paper's Table 4 counts acceptances instead, which
+        need not add up to 100 (:meth:`table4`).
 
         Returns
         -------
-        DataFrame indexed by ``(model, method, window, true)`` with one column per fault.
+        DataFrame indexed by ``(model, method, window, true)`` with one column per fault, then ``ambiguous``
+        and ``none`` (percent of the row's windows).
         """
         rule = option(rule, "rule", self.rules)
         df = self.identification
-        keys = ["model", "method", "window", "state"]
-        if rule == "paper":
-            cols = [f"acc_{f}" for f in self.faults]
-            tab = df.groupby(keys, sort=False)[cols].mean() * 100.0
-            tab.columns = list(self.faults)
-        else:
-            lab = df[f"label_{rule}"]
-            tab = pd.concat({f: (lab == f) for f in self.faults}, axis=1).groupby(
-                [df[k] for k in keys], sort=False).mean() * 100.0
+        lab = df[f"label_{rule}"].where(df[f"label_{rule}"] != "", "none")
+        cols = [*self.faults, "ambiguous", "none"]
+        tab = pd.concat({c: lab == c for c in cols}, axis=1).groupby(
+            [df[k] for k in ("model", "method", "window", "state")], sort=False).mean() * 100.0
+        tab.index = tab.index.set_names(["model", "method", "window", "true"])
+        return tab
+
+    def _accepted(self, rule: str) -> pd.DataFrame:
+        """Percent of the windows of each true failure accepted as each fault (``"paper"``: several may be
+        accepted) or labelled as it (other rules), indexed like :meth:`confusion`: the numbers of Table 4."""
+        rule = option(rule, "rule", self.rules)
+        if rule != "paper":
+            return self.confusion(rule)[list(self.faults)]
+        df = self.identification
+        tab = df.groupby(["model", "method", "window", "state"], sort=False)[[f"acc_{f}" for f in self.faults]]\
+            .mean() * 100.0
+        tab.columns = list(self.faults)
         tab.index = tab.index.set_names(["model", "method", "window", "true"])
         return tab
 
@@ -131,7 +145,7 @@ class Evaluation:
     def table4(self, window: float | None = None, rule: str = "paper") -> pd.DataFrame:
         """The paper's Table 4 layout: rows ``(model, method)``, one column per true failure holding
         ``"a/b/c"``, the percent of its windows accepted (or labelled) as each fault, for one window length."""
-        conf = self.confusion(rule)
+        conf = self._accepted(rule)
         wins = sorted(conf.index.get_level_values("window").unique())
         window = wins[-1] if window is None else float(window)
         if window not in wins:
@@ -912,3 +926,159 @@ def detection_metrics(scores: pd.DataFrame, *, by: Any = None, max_delay: float 
     out = out.astype({c: np.int64 for c in ints})
     out.attrs["max_delay"] = max_delay
     return out
+
+
+# ------------------------------------------------------------------------------- paper 004: MT / UD / FA
+__all__ += ["detection_time", "false_alarm_percentage", "sensor_validation_metrics"]
+
+
+def _alarm_and_labels(alarm: Any, labels: Any, time: Any) -> tuple[np.ndarray, np.ndarray, Any]:
+    """Flags of one record's alarm and ground truth (1-D, same length) and its time axis (``time``, else the
+    alarm's pandas index, else None)."""
+    out = []
+    for value, name in ((alarm, "alarm"), (labels, "labels")):
+        if isinstance(value, (str, bytes)):
+            raise TypeError(f"{name} must be boolean, got a {type(value).__name__}")
+        refuse_masked(value, name)
+        arr = value.to_numpy() if isinstance(value, (pd.Series, pd.DataFrame)) else np.asarray(
+            value.values if hasattr(value, "dims") else value)
+        if arr.ndim != 1:
+            raise ValueError(f"{name} must be 1-D (one flag per sample), got shape {arr.shape}")
+        try:
+            out.append(_alarm_flags(arr))
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(str(exc).replace("alarm", name, 1)) from None
+    flags, truth = out
+    if flags.shape != truth.shape:
+        raise ValueError(f"alarm and labels must have the same length, got {flags.size} and {truth.size}")
+    if time is None and isinstance(alarm, pd.Series):
+        time = alarm.index
+    return flags, truth, time
+
+
+def detection_time(alarm: Any, labels: Any, time: Any = None) -> float:
+    """Time from a fault's onset to its first alarm (paper 004's detection time), NaN if it is not detected.
+
+    Parameters
+    ----------
+    alarm : array_like of bool, shape (nobs,), or pandas.Series
+        Per-sample alarm flags of one record (e.g. ``Decision.details["alarm"]`` of
+        :class:`~tsfdi.detection.moving.MovingSquaredError`); 0 / 1 numbers are accepted, NaN is an error.
+    labels : array_like of bool, shape (nobs,)
+        Ground truth: True on the faulty samples (e.g. from :func:`tsfdi.datasets.inject_fault`).
+    time : array_like, optional
+        Time of every sample (numbers, datetimes or timedeltas). Default: the index of a pandas ``alarm``, else the
+        sample position (the result is then in samples).
+
+    Returns
+    -------
+    float
+        ``time[first alarm on a faulty sample] - time[first faulty sample]``, in seconds for datetimes / timedeltas;
+        NaN when no faulty sample alarms (an undetected fault) or the record has no faulty sample. Alarms before the
+        onset are false alarms (:func:`false_alarm_percentage`), alarms after the fault has ended do not detect it.
+
+    Examples
+    --------
+    >>> detection_time([0, 1, 0, 0, 1, 1], [0, 0, 0, 1, 1, 1], time=[0.0, 0.02, 0.04, 0.06, 0.08, 0.1])
+    0.02
+    >>> detection_time([0, 0, 0, 0], [0, 0, 1, 1])
+    nan
+    """
+    flags, truth, time = _alarm_and_labels(alarm, labels, time)
+    if not (flags & truth).any():
+        return float("nan")
+    # rounded to 12 significant digits: the difference of two time stamps without its rounding noise
+    return float(f"{first_alarm(flags & truth, time) - first_alarm(truth, time):.12g}")
+
+
+def false_alarm_percentage(alarm: Any, labels: Any) -> float:
+    """Paper 004's false-alarm figure FA: percentage of the time before the fault onset spent in alarm.
+
+    Parameters
+    ----------
+    alarm, labels : array_like of bool, shape (nobs,)
+        Per-sample alarm flags and ground truth of one record, as for :func:`detection_time`.
+
+    Returns
+    -------
+    float
+        ``100 * (alarming samples before the first faulty sample) / (samples before it)``; the whole record when no
+        sample is faulty; NaN when the record starts faulty. Every sample counts for the same time (a uniformly
+        sampled record).
+
+    Examples
+    --------
+    >>> false_alarm_percentage([0, 1, 0, 0, 1, 1], [0, 0, 0, 0, 1, 1])
+    25.0
+    """
+    flags, truth, _ = _alarm_and_labels(alarm, labels, None)
+    onset = int(np.argmax(truth)) if truth.any() else truth.size
+    return float(100.0 * flags[:onset].mean()) if onset else float("nan")
+
+
+def sensor_validation_metrics(alarms: Sequence, labels: Sequence, *, times: Sequence | None = None) -> pd.Series:
+    """Paper 004's figures of a sensor-validation scheme over several records: MT, UD and FA (Tables 2-3).
+
+    Parameters
+    ----------
+    alarms : sequence of array_like of bool
+        Per-sample alarm flags, one array (or pandas Series) per record -- typically one record per injected fault.
+    labels : sequence of array_like of bool
+        Ground truth of each record (True on the faulty samples); a record without faulty samples counts for FA
+        only.
+    times : sequence of array_like, optional
+        Time axis of each record (default: each alarm's pandas index, else sample positions).
+
+    Returns
+    -------
+    pandas.Series
+        ``MT``: mean detection time of the detected faults (:func:`detection_time`; NaN if none is detected);
+        ``UD``: number of undetected faults; ``FA``: percentage of the fault-free time before the onsets spent in
+        alarm, pooled over the records (total alarming samples over total samples before the onsets); ``faults``:
+        number of records with a fault; ``longest``: the largest detection time.
+
+    Raises
+    ------
+    TypeError, ValueError
+        A record that is not a 1-D boolean array, alarm and labels of different lengths, sequences of different
+        lengths.
+
+    References
+    ----------
+    I. Samy, I. Postlethwaite, D. Gu, "Neural network based sensor validation scheme demonstrated on an unmanned
+    air vehicle (UAV) model" (paper 004), section VII and Tables 2-3.
+
+    Examples
+    --------
+    >>> m = sensor_validation_metrics([[0, 0, 1, 1], [1, 0, 0, 0]], [[0, 0, 1, 1], [0, 0, 1, 1]])
+    >>> m.to_dict()
+    {'MT': 0.0, 'UD': 1, 'FA': 25.0, 'faults': 2, 'longest': 0.0}
+    """
+    for value, name in ((alarms, "alarms"), (labels, "labels")):
+        if isinstance(value, (str, bytes)) or not isinstance(value, (Sequence, np.ndarray)) or (
+                isinstance(value, np.ndarray) and value.ndim != 2):
+            raise TypeError(f"{name} must be a sequence of per-record arrays (a list), got {type(value).__name__}")
+    if len(alarms) != len(labels):
+        raise ValueError(f"alarms and labels must hold the same number of records, got {len(alarms)} and "
+                         f"{len(labels)}")
+    if times is not None and len(times) != len(alarms):
+        raise ValueError(f"times must hold one time axis per record, got {len(times)} for {len(alarms)} records")
+    delays, undetected, faults, in_alarm, before = [], 0, 0, 0, 0
+    for i, (a, lab) in enumerate(zip(alarms, labels)):
+        try:
+            flags, truth, _ = _alarm_and_labels(a, lab, None)
+            d = detection_time(a, lab, None if times is None else times[i])
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"record {i}: {exc}") from None
+        onset = int(np.argmax(truth)) if truth.any() else truth.size
+        in_alarm += int(flags[:onset].sum())
+        before += onset
+        if truth.any():
+            faults += 1
+            if np.isnan(d):
+                undetected += 1
+            else:
+                delays.append(d)
+    return pd.Series({"MT": float(np.mean(delays)) if delays else float("nan"), "UD": undetected,
+                      "FA": 100.0 * in_alarm / before if before else float("nan"), "faults": faults,
+                      "longest": float(np.max(delays)) if delays else float("nan")}, dtype=object)

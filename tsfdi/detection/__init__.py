@@ -4,10 +4,12 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.glrt import GLRT, GLRTScan, GLRTStream, glrt_direct
 from tsfdi.detection.mean import MeanTest
+from tsfdi.detection.moving import MovingSquaredError, MovingSquaredErrorStream
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, autocovariance, ljungbox_windows
 from tsfdi.detection.zscore import ZScore
 
-__all__ = ["Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest", "ResidualTest",
-           "ScaledChi2Threshold", "ZScore", "autocovariance", "glrt_direct", "ljungbox_windows"]
+__all__ = ["Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest",
+           "MovingSquaredError", "MovingSquaredErrorStream", "ResidualTest", "ScaledChi2Threshold", "ZScore",
+           "autocovariance", "glrt_direct", "ljungbox_windows"]

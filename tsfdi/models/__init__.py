@@ -8,8 +8,9 @@ from tsfdi.models._base import HeldOutResiduals
 from tsfdi.models.ar import AR, ARResults
 from tsfdi.models.archive import load
 from tsfdi.models.arx import ARX, ARXResults
+from tsfdi.models.emran import EMRAN, EMRANResults
 from tsfdi.models.recursive import RecursiveARX, RecursiveARXResults, RecursiveARXState
 from tsfdi.models.var import VAR, VARResults
 
-__all__ = ["AR", "ARResults", "ARX", "ARXResults", "VAR", "VARResults", "RecursiveARX", "RecursiveARXResults",
-           "RecursiveARXState", "HeldOutResiduals", "load"]
+__all__ = ["AR", "ARResults", "ARX", "ARXResults", "EMRAN", "EMRANResults", "VAR", "VARResults", "RecursiveARX",
+           "RecursiveARXResults", "RecursiveARXState", "HeldOutResiduals", "load"]
