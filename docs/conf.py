@@ -5,9 +5,13 @@ Build (warnings are errors) from the repository root::
     docs/build.sh            # = sphinx-build -W --keep-going -b html docs docs/_build/html
 
 The notebooks in ``../notebooks`` are copied into ``docs/_notebooks`` (git-ignored) at every build and rendered
-by myst-nb. They are committed without outputs and are **not executed** by default (CI executes them in
-``tests/test_notebooks.py``); set ``TSFDI_DOCS_EXECUTE=1`` to execute them during the build and render the
-outputs.
+by myst-nb. They are committed without outputs (``tests/test_notebooks.py`` checks it), so the build **executes**
+them, and the gallery page, to render their figures (about 15 s; notebook 3 reads ``../shared/data/alfa``).
+``TSFDI_DOCS_EXECUTE=0`` skips the execution for a quick look at the text (the figure check of
+``docs/build.sh`` then fails on the gallery).
+
+Math is rendered by the MathJax copy of ``sphinx-mathjax-offline`` under ``_static/mathjax``: the site loads
+nothing from the network.
 """
 
 from __future__ import annotations
@@ -20,7 +24,9 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
-os.environ.setdefault("MPLBACKEND", "Agg")
+# the kernels that execute the notebooks and the gallery inherit this environment: with matplotlib's inline backend
+# their figures become cell outputs (with Agg, which CI sets for the tests, they would be drawn nowhere)
+os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
 
 import tsfdi  # noqa: E402
 
@@ -33,6 +39,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",
     "sphinx.ext.intersphinx",
     "sphinx.ext.viewcode",
     "numpydoc",
@@ -66,7 +73,7 @@ _copy_notebooks()
 # --- myst / myst-nb ---------------------------------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
-nb_execution_mode = "force" if os.environ.get("TSFDI_DOCS_EXECUTE") == "1" else "off"
+nb_execution_mode = "off" if os.environ.get("TSFDI_DOCS_EXECUTE") == "0" else "force"
 nb_execution_timeout = 600
 nb_execution_raise_on_error = True
 # the notebooks locate the repository root by walking up from their working folder, so running them from
@@ -77,7 +84,9 @@ nb_execution_allow_errors = False
 # --- autodoc / autosummary / numpydoc -------------------------------------------------------------------
 autosummary_generate = True
 autosummary_imported_members = True
-autodoc_default_options = {"members": True, "inherited-members": False, "show-inheritance": False}
+# inherited members (summary, save, bic, params of the results classes) come from the class template
+# (_templates/autosummary/class.rst)
+autodoc_default_options = {"members": True, "show-inheritance": False}
 autodoc_typehints = "none"
 autodoc_member_order = "bysource"
 numpydoc_show_class_members = False

@@ -21,8 +21,8 @@ from tsfdi.detection.whiteness import LjungBox
 from tsfdi.evaluation import Evaluation, evaluate
 from tsfdi.exceptions import UnstableModelWarning
 
-__all__ = ["PAPER_ALPHA", "baselines_table", "demo_report", "hexacopter_study", "markdown_table", "paper_tests",
-           "write_figures", "write_report"]
+__all__ = ["PAPER_ALPHA", "UNITS", "baselines_table", "demo_report", "hexacopter_study", "markdown_figures",
+           "markdown_table", "paper_tests", "write_figures", "write_report"]
 
 
 #: Type I risk of each method and model family in the paper's Table 3 (scalar AR on roll / pitch / yaw, VAR).
@@ -170,47 +170,105 @@ def markdown_table(df) -> str:
     return "\n".join([head, rule] + rows)
 
 
+#: Units of the report's columns, written into their headers (counts of windows / records / parameters and the
+#: dimensionless statistics keep their names)
+UNITS = {"nobs": "nobs (samples)", "spp": "spp (samples per parameter)", "rss_sss": "rss_sss (%)",
+         "window": "window (s)", "false_alarm": "false_alarm (%)", "expected_false_alarm": "expected_false_alarm (%)",
+         "missed_fault": "missed_fault (%)", "delay_median": "delay_median (s)", "delay_max": "delay_max (s)"}
+
+
+def _units(df: pd.DataFrame) -> pd.DataFrame:
+    """``df`` with the columns and index levels of :data:`UNITS` renamed to carry their unit."""
+    df = df.rename(columns=UNITS)
+    return df.rename_axis(index=[UNITS.get(n, n) for n in df.index.names])
+
+
 def demo_report(bases: dict, ev: Evaluation, *, markdown: bool = False) -> str:
-    """Text of the demo: Table 2 analogue, Table 4 analogues (paper and improved rules), rates, detection."""
+    """Text of the demo: Table 2 analogue, Table 4 analogues (paper and improved rules), rates, detection.
+
+    Every table gives its units: in the column headers (``(%)``, ``(s)``, ``(samples)``) or, for the
+    percentages of Table 4, in the caption and the headers."""
     def show(df: pd.DataFrame) -> str:
+        df = _units(df)
         return markdown_table(df) if markdown else df.to_string()
 
     out = []
     t2 = baselines_table(bases)[["turbulence", "state", "model", "signals", "order", "parameters", "records", "nobs",
                                  "spp", "rss_sss", "q_insample", "stable"]]
-    out.append("## Table 2 analogue: baseline models (pooled fitting records; q_insample: median in-sample "
-               "Ljung-Box Q, 20 lags, 20 s blocks)\n")
+    out.append("## Table 2 analogue: baseline models\n\nPooled fitting records; order in lags (samples); parameters "
+               "and records are counts; nobs in samples; spp: samples per parameter; rss_sss in percent; "
+               "q_insample: median in-sample Ljung-Box Q (20 lags, 20 s blocks), dimensionless.\n")
     out.append(show(t2.set_index(["turbulence", "state", "model", "signals"]).round(
         {"spp": 2, "rss_sss": 5, "q_insample": 2})))
     for w in sorted(ev.identification["window"].unique()):
         for rule in ev.rules:
             what = "accepted" if rule == "paper" else "labelled"
             out.append(f"\n## Table 4 analogue, {w:g} s windows, rule '{rule}'\n\nPercent of the windows of each true "
-                       f"failure (columns) {what} as {' / '.join(ev.faults)}.\n")
-            out.append(show(ev.table4(w, rule)))
+                       f"failure (columns) {what} as {' / '.join(ev.faults)} (%).\n")
+            out.append(show(ev.table4(w, rule).rename(columns=lambda c: f"{c} (%)")))
+    out.append("\n## Decisions of the paper's rule (percent of windows)\n\nPercent of the windows of each true failure "
+               "identified as each fault, ambiguous (several models accept) or none (no model accepts); every row "
+               "adds up to 100 %.\n")
+    out.append(show(ev.confusion("paper").rename(columns=lambda c: f"{c} (%)").round(2)))
     r = ev.rates()["correct"].unstack("true").unstack("rule")
-    r.columns = [f"{t} ({rule})" for t, rule in r.columns]
+    r.columns = [f"{t} ({rule}, %)" for t, rule in r.columns]
     out.append("\n## Correct unique identification (percent of windows)\n")
     out.append(show(r.round(2)))
-    out.append("\n## Detection with the healthy model\n")
+    out.append("\n## Detection with the healthy model\n\nRates in percent of windows, delays in s from the failure to "
+               "the end of the first flagged window; counts of windows and records.\n")
     out.append(show(ev.detection_rates().round(3)))
     return "\n".join(out) + "\n"
 
 
+def markdown_figures(paths: Sequence[Any], start: Any) -> str:
+    """Markdown that embeds figures written by :func:`write_figures`, one ``![caption](path)`` per figure with
+    its path relative to the folder ``start`` (where the markdown file is), under a ``## Figures`` heading."""
+    import os
+    from pathlib import Path
+
+    lines = ["## Figures", ""]
+    for p in map(Path, paths):
+        rel = Path(os.path.relpath(p, start)).as_posix()
+        lines += [f"![{_caption(p.stem)}]({rel})", ""]
+    return "\n".join(lines)
+
+
+def _caption(stem: str) -> str:
+    """Caption of a figure of :func:`write_figures` from its file name."""
+    parts = stem.split("_")
+    if stem.startswith("order_selection_var"):
+        return "Order selection of the healthy VAR: BIC and RSS/SSS against the order"
+    if stem.startswith("order_selection_ar_"):
+        return f"Order selection of the healthy AR model of {'_'.join(parts[3:-1])}: BIC and RSS/SSS against the order"
+    if stem == "acf_var_healthy":
+        return "Auto- and cross-correlations of the healthy VAR's residuals on a healthy test record"
+    if stem == "variance_evolution":
+        return "Rolling variance (10 s) of one test record per failure against the steady-state thresholds"
+    if stem.startswith("identification_bars_"):
+        return f"Ljung-Box statistic of each fault VAR on a {parts[-1]} test record against the critical limit"
+    if stem.startswith("confusion_"):
+        model, method, w, rule = parts[1], parts[2], parts[3], "_".join(parts[4:])
+        return (f"Decisions in percent of the windows of each true failure ({model}, {method}, {w.rstrip('s')} s "
+                f"windows, rule {rule})")
+    return stem.replace("_", " ")
+
+
 def write_report(bases: dict, ev: Evaluation, data: Any, out: Any, *, figures: bool = True) -> list:
-    """Write ``report.md`` (:func:`demo_report` as markdown), ``identification_windows.csv.gz`` (the per-window
-    identification table) and, with ``figures``, :func:`write_figures` under ``out/figures``. Returns the paths
-    written, the report first."""
+    """Write ``report.md`` (:func:`demo_report` as markdown; with ``figures`` it embeds them, paths relative to
+    ``out``), ``identification_windows.csv.gz`` (the per-window identification table) and, with ``figures``,
+    :func:`write_figures` under ``out/figures``. Returns the paths written, the report first."""
     from pathlib import Path
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "report.md", out / "identification_windows.csv.gz"]
-    paths[0].write_text(demo_report(bases, ev, markdown=True))
+    figs = write_figures(bases, ev, data, out / "figures") if figures else []
+    text = demo_report(bases, ev, markdown=True)
+    if figs:
+        text += "\n" + markdown_figures(figs, out)
+    paths[0].write_text(text)
     ev.identification.to_csv(paths[1], index=False)
-    if figures:
-        paths += write_figures(bases, ev, data, out / "figures")
-    return paths
+    return paths + figs
 
 
 def write_figures(bases: dict, ev: Evaluation, data: Any, out: Any) -> list:
@@ -246,10 +304,14 @@ def write_figures(bases: dict, ev: Evaluation, data: Any, out: Any) -> list:
     fit = set(b.fit_records)
     test_rec = {s: next((i for i in range(sig.sizes["record"]) if st[i] == s and tb[i] == level and valid[i]
                          and sig["record"].values[i] not in fit), None) for s in (b.healthy,) + b.faults}
+    def record(i, start=0, stop=None):
+        """Record ``i`` as a DataFrame (time index in s, one column per named channel), samples start:stop."""
+        return sig.isel(record=i, time=slice(start, stop)).to_pandas()
+
     if "var" in b.models and test_rec[b.healthy] is not None:
-        x = sig.isel(record=test_rec[b.healthy]).values[2000:4000]
-        save(plot_acf(np.asarray(b.models["var"][b.healthy].residuals(x)), lags=40), "acf_var_healthy.png")
-    recs = [sig.isel(record=i).values for s, i in test_rec.items() if i is not None and s != b.healthy]
+        x = record(test_rec[b.healthy], 2000, 4000)
+        save(plot_acf(b.models["var"][b.healthy].residuals(x), lags=40), "acf_var_healthy.png")
+    recs = [record(i) for s, i in test_rec.items() if i is not None and s != b.healthy]
     if recs:
         save(plot_variance_evolution(recs, fs=b.fs, thresholds=b.steady_thresholds, failure_time=10.0,
                                      labels=[s for s, i in test_rec.items() if i is not None and s != b.healthy],
@@ -260,7 +322,7 @@ def write_figures(bases: dict, ev: Evaluation, data: Any, out: Any) -> list:
             i = test_rec.get(f)
             if i is None:
                 continue
-            x = sig.isel(record=i).values[3000:5000]
+            x = record(i, 3000, 5000)
             ident = identify(x, {g: b.models["var"][g] for g in b.faults}, mon.test)
             save(ident.plot(), f"identification_bars_var_{f}.png")
     confs = {rule: ev.confusion(rule).sort_index() for rule in ev.rules[:2]}

@@ -39,8 +39,8 @@ from tsfdi.datasets import (REGULAR_HEXACOPTER, FleetSpread, HexacopterParameter
 from tsfdi.datasets.hexacopter import SHIPPED_VARIABLES, SIGNAL_CHANNELS, encode_for_file  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
 from tsfdi.datasets.hexacopter import hexacopter_signals  # noqa: E402
-from tsfdi.study import (PAPER_ALPHA, demo_report, hexacopter_study, markdown_table, paper_tests,  # noqa: E402
-                         write_figures)
+from tsfdi.study import (PAPER_ALPHA, demo_report, hexacopter_study, markdown_figures, markdown_table,  # noqa: E402
+                         paper_tests, write_figures)
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -794,9 +794,7 @@ On the regular aircraft shipped before (see above):
 - Earlier (one fitting record per state): a VAR fitted on one record and tested on another gave Ljung-Box Q
   of about 40-60 for 25 lags (expected 25); pooling removed most of that excess outside severe turbulence.
 
-## Figures
-
-""" + "\n".join(f"- `{p.relative_to(ROOT / 'docs').as_posix()}`" for p in figs) + "\n"
+""" + markdown_figures(figs, ROOT / "docs")
     (ROOT / "docs" / "results.md").write_text(head + report + tail)
     print(f"wrote docs/results.md and {len(figs)} figures in {elapsed:.0f} s")
 

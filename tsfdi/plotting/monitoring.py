@@ -40,9 +40,10 @@ def plot_variance_evolution(signals: Any, *, fs: float = 1.0, window: float = 10
     failure_time : float, optional
         Failure instant (s), drawn as a vertical dashed line.
     labels : sequence of str, optional
-        Legend labels of the records.
+        Legend labels of the records (default: no label; the legend then shows the threshold and failure lines
+        only).
     channels : sequence of str, optional
-        Panel titles (default the signal's channel names).
+        Channel names of the y-axis labels (default the signal's channel names).
     ax : sequence of k Axes, optional
 
     Returns
@@ -69,12 +70,14 @@ def plot_variance_evolution(signals: Any, *, fs: float = 1.0, window: float = 10
         axes[c].set_ylabel(f"var({names[c]})")
         axes[c].set_yscale("log")
         if thresholds is not None:
-            axes[c].axhline(float(np.asarray(thresholds)[c]), color="k", ls="--", lw=1)
+            axes[c].axhline(float(np.asarray(thresholds)[c]), color="k", ls="--", lw=1,
+                            label="steady-state threshold")
         if failure_time is not None:
-            axes[c].axvline(failure_time, color="k", ls=":", lw=1)
+            axes[c].axvline(failure_time, color="k", ls=":", lw=1, label=f"failure at {failure_time:g} s")
     axes[-1].set_xlabel(f"time of the window end (s), window {window:g} s")
-    if labels is not None:
-        axes[0].legend(fontsize="small", ncol=min(4, len(sigs)))
+    if axes[0].get_legend_handles_labels()[0]:
+        axes[0].legend(fontsize="small", ncol=min(5, len(sigs) + 2), loc="lower center", bbox_to_anchor=(0.5, 1.0),
+                       frameon=False)
     fig.tight_layout()
     return fig
 
@@ -82,6 +85,13 @@ def plot_variance_evolution(signals: Any, *, fs: float = 1.0, window: float = 10
 def plot_monitor(result: Any, ax: Any = None) -> Any:
     """Timeline of a :class:`~tsfdi.monitoring.MonitorResult`: rolling variances, healthy-model detection
     statistic (ratio to its threshold) and the identified label of each window.
+
+    Parameters
+    ----------
+    result : MonitorResult
+        Its ``windows`` table; each ``variance_<channel>`` column is one curve of the top panel, labelled by
+        ``<channel>``.
+    ax : sequence of three matplotlib Axes, optional
 
     Returns
     -------
@@ -93,12 +103,12 @@ def plot_monitor(result: Any, ax: Any = None) -> Any:
     var_cols = [c for c in w.columns if c.startswith("variance_")]
     fig, axes = _axes(ax, 3, figsize=(7, 6))
     for c in var_cols:
-        axes[0].plot(w["end"], w[c], lw=1, label=c.replace("variance_", "channel "))
+        axes[0].plot(w["end"], w[c], lw=1, label=c.removeprefix("variance_"))
     axes[0].set_yscale("log")
     axes[0].set_ylabel("rolling variance")
-    axes[0].legend(fontsize="small")
-    axes[1].plot(w["end"], w["detect_statistic"], lw=1, color="C3")
-    axes[1].axhline(1.0, color="k", ls="--", lw=1)
+    axes[0].legend(title="channel", fontsize="small")
+    axes[1].plot(w["end"], w["detect_statistic"], lw=1, color="C3", label="healthy model")
+    axes[1].axhline(1.0, color="k", ls="--", lw=1, label="threshold")
     axes[1].set_yscale("log")
     axes[1].set_ylabel("healthy model\nstatistic / threshold")
     labs = sorted({str(x) for x in w["label"].dropna()} | {"(none)"})
@@ -111,19 +121,26 @@ def plot_monitor(result: Any, ax: Any = None) -> Any:
     for e in result.events:
         if e.kind in ("detection", "steady"):
             for a in axes:
-                a.axvline(e.time, color="k" if e.kind == "detection" else "g", ls=":", lw=1)
+                a.axvline(e.time, color="k" if e.kind == "detection" else "g", ls=":", lw=1,
+                          label=f"{e.kind} at {e.time:g}" if a is axes[1] else None)
+    axes[1].legend(fontsize="small")
     fig.tight_layout()
     return fig
 
 
 def plot_confusion(table: Any, ax: Any = None, *, title: str | None = None, cmap: str = "Blues") -> Any:
-    """Heatmap of a confusion table: rows true failures, columns identified (or accepted) faults, percent.
+    """Heatmap of a confusion table: rows true failures, columns the decision, percent of the row's windows.
 
     Parameters
     ----------
     table : pandas.DataFrame
-        Rows true classes, columns candidate classes, values in percent (e.g. one ``(model, method, window)``
-        slice of :meth:`tsfdi.Evaluation.confusion`).
+        Rows true classes, columns the decisions in percent, e.g. one ``(model, method, window)`` slice of
+        :meth:`tsfdi.Evaluation.confusion`: one column per fault, then ``ambiguous`` (several models accept) and
+        ``none`` (no model accepts), so that every row adds up to 100. Those two columns are set apart by a line.
+    ax : matplotlib Axes, optional
+    title : str, optional
+    cmap : str
+        Matplotlib colour map of the cells (0 to 100 %).
 
     Returns
     -------
@@ -133,7 +150,7 @@ def plot_confusion(table: Any, ax: Any = None, *, title: str | None = None, cmap
     import pandas as pd
 
     if not isinstance(table, pd.DataFrame) or table.empty:
-        raise TypeError("table must be a non-empty pandas DataFrame (rows true class, columns candidates)")
+        raise TypeError("table must be a non-empty pandas DataFrame (rows true class, columns decisions in %)")
     if ax is None:
         fig, ax = plt.subplots(figsize=(1.3 * table.shape[1] + 2, 1.0 * table.shape[0] + 1.5))
     else:
@@ -142,13 +159,16 @@ def plot_confusion(table: Any, ax: Any = None, *, title: str | None = None, cmap
     im = ax.imshow(vals, cmap=cmap, vmin=0, vmax=100)
     ax.set_xticks(range(table.shape[1]), [str(c) for c in table.columns])
     ax.set_yticks(range(table.shape[0]), [str(i) for i in table.index])
-    ax.set_xlabel("identified as")
+    ax.set_xlabel("decided as")
     ax.set_ylabel("true failure")
+    undecided = [j for j, c in enumerate(table.columns) if str(c) in ("ambiguous", "none")]
+    if undecided and undecided[0] > 0:
+        ax.axvline(undecided[0] - 0.5, color="k", lw=1.5)
     for i in range(vals.shape[0]):
         for j in range(vals.shape[1]):
             ax.text(j, i, f"{vals[i, j]:.1f}", ha="center", va="center",
                     color="white" if vals[i, j] > 60 else "black", fontsize="small")
-    fig.colorbar(im, ax=ax, label="% of windows")
+    fig.colorbar(im, ax=ax, label="% of the true failure's windows")
     if title:
         ax.set_title(title, fontsize="medium")
     fig.tight_layout()
