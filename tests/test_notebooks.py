@@ -1,7 +1,8 @@
 """The notebooks in ``notebooks/`` run from top to bottom without error, and are committed without outputs.
 
 Each notebook is executed by nbclient in a fresh kernel with ``notebooks/`` as working folder (notebook 3 reads
-the ALFA copy in ``../shared/data/alfa`` and fails loudly if it is missing). Total run time is kept to about a
+the ALFA copy in ``../shared/data/alfa``, notebook 4 the PX4 log in ``../shared/data/px4``; both fail loudly if it is
+missing). Total run time is kept to about a
 minute on two cores by working on subsets of the data inside the notebooks.
 """
 
@@ -18,7 +19,8 @@ nbclient = pytest.importorskip("nbclient")
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
-EXPECTED = {"01_baseline_modelling.ipynb", "02_detection_identification.ipynb", "03_online_alfa.ipynb"}
+EXPECTED = {"01_baseline_modelling.ipynb", "02_detection_identification.ipynb", "03_online_alfa.ipynb",
+            "04_px4_log.ipynb"}
 
 
 def test_every_notebook_is_there():
