@@ -12,10 +12,11 @@ import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
 from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
-                             ResidualTest, ScaledChi2Threshold, ZScore)
+                             ParameterGLRT, ResidualTest, ScaledChi2Threshold, ZScore)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
+from tsfdi.isolation import Isolation, IsolationSeries, ResidualSet
 from tsfdi.models import (AR, ARX, EMRAN, VAR, ARResults, ARXResults, EMRANResults, HeldOutResiduals, RecursiveARX,
                           RecursiveARXResults, VARResults, load)
 from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
@@ -31,12 +32,13 @@ __all__ = [
     "EMRANResults",
     "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # residual tests and decisions
-    "ResidualTest", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "MovingSquaredError", "EmpiricalThreshold",
+    "ResidualTest", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "ParameterGLRT", "MovingSquaredError",
+    "EmpiricalThreshold",
     "ScaledChi2Threshold",
     "ZScore",
     # windowed engine, detection, identification
     "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",
-    "WindowedIdentification",
+    "WindowedIdentification", "ResidualSet", "Isolation", "IsolationSeries",
     # monitoring, online detection, baselines, evaluation
     "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "OnlineCalibration", "Records", "fit_baselines",
     "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",

@@ -2,7 +2,7 @@
 
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
-from tsfdi.detection.glrt import GLRT, GLRTScan, GLRTStream, glrt_direct
+from tsfdi.detection.glrt import GLRT, GLRTScan, GLRTStream, ParameterGLRT, glrt_direct
 from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.moving import MovingSquaredError, MovingSquaredErrorStream
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
@@ -11,5 +11,5 @@ from tsfdi.detection.whiteness import LjungBox, autocovariance, ljungbox_windows
 from tsfdi.detection.zscore import ZScore
 
 __all__ = ["Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest",
-           "MovingSquaredError", "MovingSquaredErrorStream", "ResidualTest", "ScaledChi2Threshold", "ZScore",
+           "MovingSquaredError", "MovingSquaredErrorStream", "ParameterGLRT", "ResidualTest", "ScaledChi2Threshold", "ZScore",
            "autocovariance", "glrt_direct", "ljungbox_windows"]

@@ -16,15 +16,16 @@ from typing import Any
 
 import numba
 import numpy as np
+import pandas as pd
 from scipy import special
 
-from tsfdi._data import as_signal
+from tsfdi._data import as_signal, is_xarray
 from tsfdi._validation import float_like, int_like, option
 from tsfdi.detection.base import ResidualTest, baseline_variance, max_abs, rescale_exponent
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold
 
-__all__ = ["GLRT", "GLRTStream", "GLRTScan", "glrt_direct"]
+__all__ = ["GLRT", "GLRTStream", "GLRTScan", "ParameterGLRT", "glrt_direct"]
 
 
 # ---------------------------------------------------------------------------------------------- kernels
@@ -176,6 +177,33 @@ def _chi2_1_isf(log_p: float) -> float:
     if log_p >= math.log(1e-300):
         return float(special.chdtri(1.0, np.exp(log_p)))
     return float(special.ndtri_exp(log_p - np.log(2.0)) ** 2)
+
+
+def _chi2_isf(log_p: float, df: float) -> float:
+    r"""Upper quantile of the chi-square(``df``) law at probability ``exp(log_p)``, also below the float range:
+    ``chdtri`` down to 1e-300, then Newton's method on the asymptotic series of the log upper tail,
+    :math:`\ln Q(a, z) \approx (a - 1)\ln z - z - \ln\Gamma(a) + \ln(1 + (a-1)/z + (a-1)(a-2)/z^2)`,
+    :math:`a = df / 2`, :math:`z = x / 2` (:math:`z > 690` there: the series' next term is below 1e-4)."""
+    if df == 1.0:
+        return _chi2_1_isf(log_p)
+    if log_p >= math.log(1e-300):
+        return float(special.chdtri(df, math.exp(log_p)))
+    a = df / 2.0
+    z = -log_p
+    for _ in range(100):
+        f = ((a - 1) * math.log(z) - z - math.lgamma(a) + math.log1p((a - 1) / z + (a - 1) * (a - 2) / z ** 2)
+             - log_p)
+        step = f / ((a - 1) / z - 1.0)
+        z -= step
+        if abs(step) <= 1e-14 * z:
+            break
+    return 2.0 * z
+
+
+def _is_record_list(value: Any) -> bool:
+    """A non-empty list / tuple of arrays, pandas or xarray objects (several records), not of numbers."""
+    return (isinstance(value, (list, tuple)) and len(value) > 0
+            and all(isinstance(v, (np.ndarray, pd.Series, pd.DataFrame)) or is_xarray(v) for v in value))
 
 
 def glrt_direct(resid: Any, window: int, scale: float) -> np.ndarray:
@@ -333,14 +361,23 @@ class GLRT(ResidualTest):
     def calibrate(self, healthy: Any) -> GLRT:
         """Calibrate on healthy residuals: ``scale_`` (if ``scale`` is None) and an empirical threshold.
 
-        The statistic of every channel of ``healthy`` is pooled into one sample for the
+        ``healthy`` is one residual record or a list / tuple of records (numpy arrays, pandas or xarray objects;
+        same channels; a list of numbers is one record): the scale is the
+        standard deviation of all their samples, and the statistic is computed record by record (no window
+        straddles two records). The statistic of every channel of every record is pooled into one sample for the
         :class:`~tsfdi.EmpiricalThreshold` (a copy is stored, so one threshold object can serve several
         tests). Returns ``self``.
         """
-        sig = as_signal(healthy, "healthy", min_nobs=2)
+        recs = list(healthy) if _is_record_list(healthy) else [healthy]
+        sigs = [as_signal(r, "healthy" if len(recs) == 1 else f"healthy[{i}]", min_nobs=2)
+                for i, r in enumerate(recs)]
+        if len({s.nchan for s in sigs}) > 1:
+            raise ValueError(f"healthy: every record must have the same channels, got {[s.nchan for s in sigs]}")
+        pooled = np.concatenate([s.values for s in sigs])
         if self.scale is None:
-            self.scale_ = _std(sig.values)
-        g = self._g_values(sig.values, self._scale_for(sig.nchan, sig.values))
+            self.scale_ = _std(pooled)
+        s = self._scale_for(sigs[0].nchan, pooled)
+        g = np.concatenate([self._g_values(sg.values, s) for sg in sigs])     # no window straddles two records
         if isinstance(self.threshold, EmpiricalThreshold):
             self.threshold = copy.copy(self.threshold).calibrate(g.ravel())
         self.healthy_statistic_ = g
@@ -639,3 +676,358 @@ class GLRTStream:
         self.k += n - 1
         self._finish(out[-1])
         return out
+
+
+# ---------------------------------------------------------------------------------------------- parameter changes
+#: relative pivot below which a regressor direction counts as not excited in a window (see ParameterGLRT, Notes)
+_PIVOT_TOL = 1e-9
+
+
+@numba.njit(cache=True, nogil=True)
+def _quadratic(A, b, L, z, tol):  # pragma: no cover - compiled
+    """``b' A^+ b`` over the excited directions of the symmetric ``A`` (lower triangle used): a Cholesky
+    factorisation that skips every column whose pivot is below ``tol`` times its diagonal (collinear with the
+    earlier columns, or zero)."""
+    d = A.shape[0]
+    q = 0.0
+    for p in range(d):
+        s = A[p, p]
+        for r in range(p):
+            s -= L[p, r] * L[p, r]
+        if A[p, p] <= 0.0 or s <= tol * A[p, p]:
+            for r in range(p, d):
+                L[r, p] = 0.0
+            z[p] = 0.0
+            continue
+        piv = np.sqrt(s)
+        L[p, p] = piv
+        for r in range(p + 1, d):
+            t = A[r, p]
+            for c in range(p):
+                t -= L[r, c] * L[p, c]
+            L[r, p] = t / piv
+        t = b[p]
+        for c in range(p):
+            t -= L[p, c] * z[c]
+        z[p] = t / piv
+        q += z[p] * z[p]
+    return q
+
+
+@numba.njit(cache=True, nogil=True)
+def _param_scan(y, phi, ref, window, coef, tol):  # pragma: no cover - compiled
+    """g(k) and the best post-change length n for every k: the max over n = 1..window of
+    ``coef * b' A^+ b`` with ``A = sum phi_i phi_i'``, ``b = sum phi_i (y_i - phi_i' ref[j])`` over i = j..k,
+    j = k - n + 1, both accumulated backwards from k (O(window d^3) per sample)."""
+    n_all, d = phi.shape
+    g = np.empty(n_all)
+    best = np.empty(n_all, dtype=np.int64)
+    A = np.zeros((d, d))
+    c = np.zeros(d)
+    b = np.zeros(d)
+    L = np.zeros((d, d))
+    z = np.zeros(d)
+    for k in range(n_all):
+        A[:, :] = 0.0
+        c[:] = 0.0
+        m = window if window < k + 1 else k + 1
+        gmax = -1.0
+        nbest = 1
+        for n in range(1, m + 1):
+            i = k - n + 1
+            for p in range(d):
+                c[p] += phi[i, p] * y[i]
+                for r in range(p + 1):
+                    A[p, r] += phi[i, p] * phi[i, r]
+            for p in range(d):
+                t = c[p]
+                for r in range(d):
+                    t -= (A[p, r] if r <= p else A[r, p]) * ref[i, r]
+                b[p] = t
+            v = _quadratic(A, b, L, z, tol)
+            if v > gmax:
+                gmax = v
+                nbest = n
+        g[k] = gmax * coef
+        best[k] = nbest
+    return g, best
+
+
+class ParameterGLRT(ResidualTest):
+    r"""GLRT for a change in the parameters of a linear regression / ARX model (Hansen et al., section 3).
+
+    Paper 002 monitors the parameters of its RLS-adapted residual generators (eqs. 14-16) with a GLRT beside the
+    residual, and combines the two through their joint distribution. This is that test: under H0 the output
+    follows the reference parameters, :math:`y_i = \varphi_i^\top\theta_{ref} + w_i`; under H1 the parameters
+    jumped by an unknown :math:`\nu` at an unknown instant :math:`j` in the last ``window`` samples.
+
+    Parameters
+    ----------
+    window : int
+        :math:`M`: the change instant ranges over the last ``window`` samples.
+    scale : float, optional
+        Standard deviation :math:`\sigma` of the healthy residual :math:`w`. ``None``: estimated by
+        :meth:`calibrate`, else from the tested record's residual.
+    threshold : "theoretical", float or EmpiricalThreshold
+        ``"theoretical"``: :math:`\gamma = \chi^2_{1-\alpha/M}(d)/2` (below); a float: a fixed :math:`\gamma`;
+        an :class:`~tsfdi.EmpiricalThreshold`: calibrated on healthy records by :meth:`calibrate` (Hansen et
+        al., Fig. 2; needed with an adapting reference, see Notes).
+    alpha : float
+        Per-sample false-alarm probability of the theoretical threshold.
+    joint : bool, default False
+        Test the joint residual-parameter alternative: a change of the residual mean *and* of the parameters
+        (a constant regressor, reference 0, is put before the given ones). Its statistic is the residual's
+        mean-change GLRT (:class:`GLRT`, eq. 3) plus the parameter-change statistic of the part of the
+        regressors orthogonal to the constant (see Notes).
+
+    Attributes
+    ----------
+    scale_ : float
+        :math:`\sigma` estimated by :meth:`calibrate` (when ``scale`` is None).
+    healthy_statistic_ : ndarray
+        :math:`g` of the calibration records, pooled (after :meth:`calibrate`).
+
+    Notes
+    -----
+    With the residual :math:`r_i = y_i - \varphi_i^\top\theta_{ref}` the log-likelihood ratio of a change
+    :math:`\nu` at :math:`j`, maximised over :math:`\nu` (its ML value :math:`\hat\nu = A^{-1} b`, the least
+    squares fit of the residuals on the regressors after :math:`j`), is (the form of eq. 2)
+
+    .. math:: S_j^k = \frac{b^\top A^{-1} b}{2\sigma^2}, \quad A = \sum_{i=j}^{k}\varphi_i\varphi_i^\top, \quad
+              b = \sum_{i=j}^{k}\varphi_i r_i, \qquad g(k) = \max_{k - M < j \le k} S_j^k \quad \text{(eq. 3)}.
+
+    With one constant regressor it is the mean-change GLRT of :class:`GLRT`. Given the regressors and a known
+    reference, :math:`2 S_j^k \sim \chi^2(d)` under H0 for a fixed :math:`j` (:math:`d` regressors, or the rank
+    of :math:`A`), and the union bound over the :math:`M` change instants makes
+    :math:`\gamma = \chi^2_{1-\alpha/M}(d)/2` a per-sample false-alarm rate of at most :math:`\alpha` (iid
+    Gaussian :math:`w`). With ``joint=True``, :math:`d + 1` degrees of freedom; the statistic splits into the
+    mean-change statistic of the residual (:math:`\chi^2(1)/2`) and the parameter-change statistic of the
+    regressors made orthogonal to the constant on the window (:math:`\chi^2(d)/2`), independent under H0 for a
+    fixed :math:`j`: the joint distribution of the two detectors of paper 002.
+
+    *The RLS parameter change*: ``params`` may be the parameter history of :class:`tsfdi.RecursiveARX`
+    (``results.params``, row :math:`t` the estimate after sample :math:`t`); the reference of a change at
+    :math:`j` is then :math:`\hat\theta_{j-1}`, the estimate just before it. For RLS without forgetting,
+    :math:`\hat\theta_k - \hat\theta_{j-1} = P_k b` exactly, so :math:`S_j^k` is the change of the recursive
+    estimate over the window weighed by the information of the window's data. The reference's own estimation
+    error inflates the statistic by about :math:`n / (j-1)` (relative) without forgetting and by about
+    :math:`n (1 - \lambda)` with forgetting factor :math:`\lambda`, so with an adapting reference calibrate the
+    threshold (``threshold=EmpiricalThreshold(...)``) on healthy records, as paper 002 does; a reference fixed
+    from a long healthy fit keeps the chi-square law. Hold the adaptation on an alarm
+    (:meth:`tsfdi.RecursiveARX.freeze`), else the estimate learns the fault and masks it (paper 002).
+
+    A regressor direction that a window does not excite (a constant input, collinear regressors, the first
+    samples of a window shorter than :math:`d`) is left out of that window's statistic (a Cholesky
+    factorisation skipping pivots below ``1e-9`` of their diagonal): its law is then :math:`\chi^2` with fewer
+    degrees of freedom and the theoretical threshold stays conservative. :math:`g` does not depend on the
+    scale of ``y``, ``scale`` or any regressor column (all are rescaled by powers of two, exactly). Cost
+    O(N M d^3), compiled.
+
+    References
+    ----------
+    Hansen, Blanke, Adrian, *A Framework for Rapid Diagnosis of Critical Faults in UAVs*, section 3, eqs. 1-3,
+    14-16, Fig. 9. Blanke and Hansen (2013), *Towards self-tuning residual generators for UAV control surface
+    fault diagnosis*. Willsky and Jones (1976), *A generalized likelihood ratio approach to the detection and
+    estimation of jumps in linear systems*, IEEE TAC 21(1).
+    """
+
+    name = "GLRT (parameter change)"
+    null_hypothesis = "the model parameters equal the reference over the window (healthy)"
+    alternative_hypothesis = "the model parameters jumped at some instant in the window (fault)"
+
+    def __init__(self, window: int = 100, scale: float | None = None, threshold: Any = "theoretical", *,
+                 alpha: float = 1e-3, joint: bool = False) -> None:
+        self.window = int_like(window, "window", minimum=1)
+        self.scale = float_like(scale, "scale", minimum=0.0, strict_min=True, optional=True)
+        self.alpha = self._check_alpha(alpha)
+        if isinstance(threshold, str):
+            self.threshold = option(threshold, "threshold", ("theoretical",))
+        elif isinstance(threshold, EmpiricalThreshold):
+            self.threshold = threshold
+        else:
+            self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
+        if not isinstance(joint, (bool, np.bool_)):
+            raise TypeError(f"joint must be True or False, got {joint!r}")
+        self.joint = bool(joint)
+
+    def __repr__(self) -> str:
+        return (f"ParameterGLRT(window={self.window}, scale={self.scale}, threshold={self.threshold!r}, "
+                f"alpha={self.alpha:g}, joint={self.joint})")
+
+    def critical_value(self, df: int) -> float:
+        """The threshold :math:`\\gamma` for ``df`` tested parameters (the regressors, plus one with ``joint``)."""
+        df = int_like(df, "df", minimum=1)
+        if isinstance(self.threshold, EmpiricalThreshold):
+            self.threshold.check_fitted()
+            return self.threshold.threshold_
+        if self.threshold == "theoretical":
+            return _chi2_isf(math.log(self.alpha) - math.log(self.window), float(df)) / 2.0
+        return float(self.threshold)
+
+    # ------------------------------------------------------------------ inputs
+    def _inputs(self, y: Any, regressors: Any, params: Any, name: str = "y") -> tuple:
+        """Validated ``y`` (Signal), regressors (n, d), the reference of every change instant (n, d) and the
+        regressor names (with the constant of ``joint`` first)."""
+        sy = as_signal(y, name, vector=False, allow_constant=True)
+        n = sy.nobs
+        sx = as_signal(regressors, "regressors", allow_constant=True)
+        if sx.nobs != n:
+            raise ValueError(f"regressors must have one row per sample of {name} ({n}), got {sx.nobs}")
+        phi, names = sx.values, list(sx.channels)
+        d = phi.shape[1]
+        if params is None:
+            ref = np.zeros((n, d))
+        else:
+            sp = as_signal(params, "params", allow_constant=True)
+            shape = sp.values.shape if sp.vector else (sp.nobs,)
+            if shape == (n, d) and sp.vector:
+                ref = np.concatenate([sp.values[:1], sp.values[:-1]])   # a change at j: from the estimate before j
+            elif shape == (d,):
+                ref = np.broadcast_to(sp.values[:, 0], (n, d))
+            else:
+                raise ValueError(f"params must be a reference vector ({d},) or a parameter history ({n}, {d}) "
+                                 f"(one row per sample), got shape {shape}")
+        if self.joint:
+            phi = np.concatenate([np.ones((n, 1)), phi], axis=1)
+            ref = np.concatenate([np.zeros((n, 1)), ref], axis=1)
+            names = ["mean", *names]
+        return sy, np.ascontiguousarray(phi), np.ascontiguousarray(ref), names
+
+    @staticmethod
+    def _residual(y: np.ndarray, phi: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        """:math:`r_i = y_i - \\varphi_i^\\top \\theta_{ref}` (the reference of a change at ``i``)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            r = y - np.einsum("ij,ij->i", phi, ref)
+        if not np.all(np.isfinite(r)):
+            first = int(np.flatnonzero(~np.isfinite(r))[0])
+            raise ValueError(f"y - regressors @ params is beyond the float range (first at sample {first}): "
+                             "rescale the regressors or params")
+        return r
+
+    def _scale_value(self, r: np.ndarray, scale: Any) -> float:
+        if scale is not None:
+            return float_like(scale, "scale", minimum=0.0, strict_min=True)
+        if self.scale is not None:
+            return self.scale
+        if hasattr(self, "scale_"):
+            return self.scale_
+        s = float(_std(r[:, None])[0]) if r.shape[0] >= 2 else 0.0
+        if not s > 0:
+            raise ValueError("y: the residual is constant or has one sample, its scale cannot be estimated; pass "
+                             "scale")
+        return s
+
+    def _g(self, y: np.ndarray, phi: np.ndarray, ref: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+        """g and the best post-change length, on data rescaled by powers of two (exact, see Notes)."""
+        r = self._residual(y, phi, ref)
+        _unit(r[:, None], np.array([sigma]), "y")          # refuses a residual beyond 2**400 scales
+        es = int(np.frexp(sigma)[1])
+        ec = np.frexp(max_abs(phi))[1] if phi.size else np.zeros(0, dtype=np.int64)
+        phi_u = np.ldexp(phi, -ec)
+        ref_u = np.ldexp(ref, ec - es)
+        y_u = np.ldexp(y, -es)
+        coef = 0.5 / np.ldexp(sigma, -es) ** 2
+        window = min(self.window, y.shape[0])
+        return _param_scan(y_u, phi_u, ref_u, window, coef, _PIVOT_TOL)
+
+    # ------------------------------------------------------------------ public
+    def statistic(self, y: Any, regressors: Any, params: Any = None, scale: Any = None) -> Any:
+        """The statistic series :math:`g(k)` in the kind of ``y`` (same index).
+
+        Parameters
+        ----------
+        y : array_like, Series or DataArray, shape (nobs,)
+            The model's output; with ``params=None`` the residual of the reference model itself.
+        regressors : array_like, DataFrame or DataArray, shape (nobs, d)
+            The regressor :math:`\\varphi_i` of every sample (for an ARX model: the lagged outputs and inputs in
+            the order of the parameters; start-up rows without a complete regressor left out).
+        params : array_like, shape (d,) or (nobs, d), optional
+            The reference: a fixed parameter vector, or a parameter history (``RecursiveARX(...).run(...).params``;
+            a change at sample ``j`` is measured from row ``j - 1``). ``None``: zero (``y`` is a residual).
+        scale : float, optional
+            :math:`\\sigma` (overrides the test's ``scale`` / ``scale_``).
+        """
+        sy, phi, ref, _ = self._inputs(y, regressors, params)
+        y0 = sy.values[:, 0]
+        g, _ = self._g(y0, phi, ref, self._scale_value(self._residual(y0, phi, ref), scale))
+        return sy.wrap(g[:, None], 0)
+
+    def calibrate(self, y: Any, regressors: Any, params: Any = None) -> ParameterGLRT:
+        """``scale_`` (if ``scale`` is None: the standard deviation of the healthy residual) and the empirical
+        threshold from healthy records; returns ``self``.
+
+        ``y``, ``regressors`` and ``params`` are one record each, or lists of records of equal length (``params``
+        may be one vector for all). The statistic is computed record by record and pooled.
+        """
+        many = _is_record_list(y)
+        ys = list(y) if many else [y]
+        xs = list(regressors) if many else [regressors]
+        if len(xs) != len(ys):
+            raise ValueError(f"regressors must hold one record per record of y ({len(ys)}), got {len(xs)}")
+        ps = list(params) if many and _is_record_list(params) else [params] * len(ys)
+        if len(ps) != len(ys):
+            raise ValueError(f"params must hold one record per record of y ({len(ys)}), got {len(ps)}")
+        parts = [self._inputs(yi, xi, pi, f"y[{i}]" if many else "y") for i, (yi, xi, pi) in enumerate(zip(ys, xs, ps))]
+        resid = [self._residual(sy.values[:, 0], phi, ref) for sy, phi, ref, _ in parts]
+        if self.scale is None:
+            pooled = np.concatenate(resid)
+            if pooled.shape[0] < 2 or not _std(pooled[:, None])[0] > 0:
+                raise ValueError("y: the healthy residual is constant or has one sample, its scale cannot be "
+                                 "estimated")
+            self.scale_ = float(_std(pooled[:, None])[0])
+        sigma = self.scale if self.scale is not None else self.scale_
+        g = np.concatenate([self._g(sy.values[:, 0], phi, ref, sigma)[0] for sy, phi, ref, _ in parts])
+        if isinstance(self.threshold, EmpiricalThreshold):
+            self.threshold = copy.copy(self.threshold).calibrate(g)
+        self.healthy_statistic_ = g
+        return self
+
+    def test(self, y: Any, regressors: Any, params: Any = None, scale: Any = None) -> Decision:
+        """Run the test over a record (arguments as in :meth:`statistic`).
+
+        Returns
+        -------
+        Decision
+            ``statistic``: the largest :math:`g(k)`; ``threshold``: :math:`\\gamma`; ``df``: the number of tested
+            parameters (:math:`d`, or :math:`d + 1` with ``joint``); ``pvalue`` nan (a maximum over the record);
+            ``reject`` when any sample alarms; ``alpha`` the per-sample false-alarm probability. ``details``:
+            ``"g"`` (the series, kind of ``y``), ``"alarms"`` (positions), ``"first_alarm"`` (position, -1 if
+            none), ``"first_alarm_label"``, ``"change_index"`` (ML change instant at the first alarm, -1 if none),
+            ``"change"`` (ML parameter change :math:`\\hat\\nu` at the first alarm, a ``pandas.Series`` named by
+            the regressors, with ``"mean"`` first for ``joint``; NaN without alarm), ``"scale"``, ``"window"``,
+            ``"threshold_method"``, ``"alarm_rate"``.
+        """
+        sy, phi, ref, names = self._inputs(y, regressors, params)
+        y0 = sy.values[:, 0]
+        r = self._residual(y0, phi, ref)
+        sigma = self._scale_value(r, scale)
+        g, best = self._g(y0, phi, ref, sigma)
+        d = phi.shape[1]
+        gamma = self.critical_value(d)
+        alarms = np.flatnonzero(g > gamma)
+        change = pd.Series(np.nan, index=pd.Index(names, name="parameter"), name="change")
+        first = change_at = -1
+        if alarms.size:
+            first = int(alarms[0])
+            change_at = first - int(best[first]) + 1
+            seg = slice(change_at, first + 1)
+            rs = y0[seg] - phi[seg] @ ref[change_at]
+            change[:] = np.linalg.lstsq(phi[seg], rs, rcond=None)[0]
+        method = ("theoretical" if isinstance(self.threshold, str) else
+                  self.threshold.method_ if isinstance(self.threshold, EmpiricalThreshold) else "fixed")
+        label = None if first < 0 else (sy.index[first] if sy.index is not None else first)
+        details = {"g": sy.wrap(g[:, None], 0), "alarms": alarms, "first_alarm": first, "first_alarm_label": label,
+                   "change_index": change_at, "change": change, "scale": sigma, "window": self.window,
+                   "threshold_method": method, "alarm_rate": float(alarms.size / max(g.size, 1))}
+        return Decision(statistic=np.array([g.max()]), threshold=np.array([gamma]), pvalue=np.array([np.nan]),
+                        alpha=self.false_alarm, reject=bool(alarms.size), df=np.array([float(d)]), nobs=sy.nobs,
+                        null_hypothesis=self.null_hypothesis, alternative_hypothesis=self.alternative_hypothesis,
+                        details=details, channel_reject=np.array([bool(alarms.size)]),
+                        channels=tuple(sy.channels), test="ParameterGLRT")
+
+    @property
+    def false_alarm(self) -> float:
+        """Per-sample false-alarm probability targeted by the threshold."""
+        if isinstance(self.threshold, EmpiricalThreshold):
+            return self.threshold.false_alarm
+        return self.alpha
