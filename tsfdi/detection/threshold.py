@@ -267,9 +267,11 @@ class ScaledChi2Threshold:
     only. For the same reason a record's own spread :math:`v_j` needs several non-overlapping windows: the windows of
     a record about one window long all but coincide, their variance is near zero and its law would have a
     far too light tail (on a real PX4 gyro record cut in seven one-window blocks, 29 % false alarms at a
-    family-wise 1 %). When a record holds fewer than :data:`MIN_RECORD_WINDOWS` independent windows, the records
-    are therefore pooled into one law fitted to all windows (``pooled_``; the spread between the records' means
-    then widens it, as it should), and the bootstrap resamples the records and refits that law. Monte Carlo checks of the realised size on new records of a simulated fleet are in
+    family-wise 1 %). When a record holds fewer than :data:`MIN_RECORD_WINDOWS` independent windows and the degrees
+    of freedom are fitted, the records are therefore pooled into one law fitted to all windows (``pooled_``; the
+    spread between the records' means then widens it, as it should), and the bootstrap resamples the records and
+    refits that law. With known degrees of freedom only each record's mean is used, which overlapping windows
+    estimate without that bias: the laws stay per record. Monte Carlo checks of the realised size on new records of a simulated fleet are in
     ``tests/detection/test_calibration_mc.py``.
     """
 
@@ -338,7 +340,8 @@ class ScaledChi2Threshold:
                              f"{self.min_windows} are needed to fit the null law: give more or longer healthy "
                              "records")
         # a record shorter than MIN_RECORD_WINDOWS windows cannot show its own spread (its windows overlap): pool
-        self.pooled_ = bool(len(parts) > 1 and per.min() < MIN_RECORD_WINDOWS)
+        # (with known degrees of freedom only the mean is fitted per record, which overlapping windows estimate well)
+        self.pooled_ = bool(self.df is None and len(parts) > 1 and per.min() < MIN_RECORD_WINDOWS)
         s1 = np.array([p.sum() for p in parts])
         s2 = np.array([np.square(p).sum() for p in parts])
         cnt = np.array([p.size for p in parts], dtype=np.float64)
