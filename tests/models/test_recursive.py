@@ -320,6 +320,16 @@ def test_arm_after_and_freeze():
     # the frozen model still predicts: its errors equal y - phi' theta with the frozen theta
     phi = np.column_stack([-y[1999:-1], -y[1998:-2], u[1999:-1], u[1998:-2]])
     np.testing.assert_allclose(np.asarray(res.resid), y[2000:] - phi @ theta, rtol=1e-10, atol=1e-12)
+    # unfreeze(): adaptation resumes from the held parameters: the first error uses them, then they move
+    m = RecursiveARX(2, 2, 1, forgetting_factor=0.995)
+    m.run(y[:2000], u[:2000])
+    m.freeze()
+    m.run(y[2000:2500], u[2000:2500])
+    m.unfreeze()
+    assert not m.frozen
+    resumed = m.run(y[2500:2600], u[2500:2600])
+    assert np.asarray(resumed.resid)[0] == pytest.approx(y[2500] - phi[500] @ theta, rel=1e-10)
+    np.testing.assert_array_equal(np.asarray(resumed.params)[0] != theta, True)
     m.reset()
     assert not m.frozen
     with pytest.raises(ValueError, match="arm_after"):

@@ -677,8 +677,14 @@ class RecursiveARX:
         """Stop adapting from the next sample on: parameters, ``P`` and the error statistics stay as they are,
         prediction errors and Z-scores are still computed (used by detectors that alarm on a statistic other
         than the model's own Z-score: paper 002's adaptation halted on their alarm; ``freeze_on_alarm`` does the
-        same on the model's own first alarm). :meth:`reset` undoes it."""
+        same on the model's own first alarm). :meth:`unfreeze` (or :meth:`reset`) undoes it."""
         self._ist[_I_FROZEN] = 1
+
+    def unfreeze(self) -> None:
+        """Adapt again from the next sample on, from the parameters, ``P`` and error statistics held while frozen
+        (paper 002 halts adaptation only while an alarm lasts). A model frozen by ``freeze_on_alarm`` stays frozen:
+        its alarm is part of its state."""
+        self._ist[_I_FROZEN] = 0
 
     @property
     def first_alarm(self) -> int | None:
