@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_VALUES", "boolean", "int_like", "float_like", "option", "probability", "check_rng"]
+__all__ = ["MAX_VALUES", "boolean", "int_like", "float_like", "option", "probability", "check_rng", "sample_vector"]
 
 #: largest number of float64 values (2 GiB) that one array may hold: the regressor of a fit, the covariance of a
 #: recursive estimator, a simulated signal or data set. Orders and lengths are checked against it before anything is
@@ -91,3 +91,17 @@ def check_rng(rng: Any, name: str = "rng") -> np.random.Generator:
                        and not isinstance(rng, (bool, np.bool_, np.timedelta64))):
         return np.random.default_rng(rng)
     raise TypeError(f"{name} must be None, an int seed or a numpy.random.Generator, got {type(rng).__name__}")
+
+
+def sample_vector(value: Any, nchan: int, name: str = "x") -> np.ndarray:
+    """One sample of a stream as a float64 vector of ``nchan`` values (a number for one channel), or raise naming
+    ``name``; whether NaN / inf are allowed is the caller's check."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or value is None:
+        raise TypeError(f"{name} must be a number or one number per channel, got {value!r}")
+    try:
+        v = np.atleast_1d(np.asarray(value, dtype=np.float64))
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number or one number per channel, got {value!r}") from None
+    if v.shape != (nchan,):
+        raise ValueError(f"{name} must hold {nchan} value(s), got shape {np.shape(value)}")
+    return v

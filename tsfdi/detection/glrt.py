@@ -20,7 +20,7 @@ import pandas as pd
 from scipy import special
 
 from tsfdi._data import as_signal, is_xarray
-from tsfdi._validation import float_like, int_like, option
+from tsfdi._validation import float_like, int_like, option, sample_vector
 from tsfdi.detection.base import ResidualTest, baseline_variance, max_abs, rescale_exponent
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold
@@ -219,6 +219,15 @@ def glrt_direct(resid: Any, window: int, scale: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------------- results
+
+def _threshold_option(threshold: Any) -> Any:
+    """A GLRT's ``threshold``: ``"theoretical"``, an :class:`EmpiricalThreshold` or a positive number."""
+    if isinstance(threshold, str):
+        return option(threshold, "threshold", ("theoretical",))
+    if isinstance(threshold, EmpiricalThreshold):
+        return threshold
+    return float_like(threshold, "threshold", minimum=0.0, strict_min=True)
+
 class GLRTScan:
     """The GLRT statistic series and the ML estimates behind it (from :meth:`GLRT.scan`).
 
@@ -316,12 +325,7 @@ class GLRT(ResidualTest):
         self.window = int_like(window, "window", minimum=1)
         self.scale = self._check_scale(scale)
         self.alpha = self._check_alpha(alpha)
-        if isinstance(threshold, str):
-            self.threshold = option(threshold, "threshold", ("theoretical",))
-        elif isinstance(threshold, EmpiricalThreshold):
-            self.threshold = threshold
-        else:
-            self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
+        self.threshold = _threshold_option(threshold)
 
     def __repr__(self) -> str:
         return f"GLRT(window={self.window}, scale={self.scale}, threshold={self.threshold!r}, alpha={self.alpha:g})"
@@ -608,14 +612,7 @@ class GLRTStream:
         ndarray, shape (nchan,)
             g of the sample per channel (shape ``(1,)`` for one channel).
         """
-        if isinstance(x, (str, bytes, bool, np.bool_)) or x is None:
-            raise TypeError(f"x must be a number or one number per channel, got {x!r}")
-        try:
-            v = np.atleast_1d(np.asarray(x, dtype=np.float64))
-        except (TypeError, ValueError):
-            raise TypeError(f"x must be a number or one number per channel, got {x!r}") from None
-        if v.shape != (self.nchan,):
-            raise ValueError(f"x must hold {self.nchan} value(s), got shape {np.shape(x)}")
+        v = sample_vector(x, self.nchan)
         if not np.all(np.isfinite(v)):
             raise ValueError(f"x contains NaN/inf at sample {self.k}")
         vu = self._unit_sample(v, "x")[0]
@@ -840,12 +837,7 @@ class ParameterGLRT(ResidualTest):
         self.window = int_like(window, "window", minimum=1)
         self.scale = float_like(scale, "scale", minimum=0.0, strict_min=True, optional=True)
         self.alpha = self._check_alpha(alpha)
-        if isinstance(threshold, str):
-            self.threshold = option(threshold, "threshold", ("theoretical",))
-        elif isinstance(threshold, EmpiricalThreshold):
-            self.threshold = threshold
-        else:
-            self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
+        self.threshold = _threshold_option(threshold)
         if not isinstance(joint, (bool, np.bool_)):
             raise TypeError(f"joint must be True or False, got {joint!r}")
         self.joint = bool(joint)

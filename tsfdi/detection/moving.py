@@ -15,7 +15,7 @@ import numba
 import numpy as np
 
 from tsfdi._data import Signal, as_signal, sampling_frequency, window_samples
-from tsfdi._validation import float_like, int_like
+from tsfdi._validation import float_like, int_like, sample_vector
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold
@@ -275,14 +275,7 @@ class MovingSquaredErrorStream:
         ndarray, shape (nchan,)
             :math:`r` of the sample per channel.
         """
-        if isinstance(x, (str, bytes, bool, np.bool_)) or x is None:
-            raise TypeError(f"x must be a number or one number per channel, got {x!r}")
-        try:
-            v = np.atleast_1d(np.asarray(x, dtype=np.float64))
-        except (TypeError, ValueError):
-            raise TypeError(f"x must be a number or one number per channel, got {x!r}") from None
-        if v.shape != (self.nchan,):
-            raise ValueError(f"x must hold {self.nchan} value(s), got shape {np.shape(x)}")
+        v = sample_vector(x, self.nchan)
         if np.isinf(v).any():
             raise ValueError(f"x contains inf at sample {self.k}")
         self._buf[self.k % self.window] = v * v
