@@ -41,6 +41,13 @@ class Records:
         False for records that cannot be used (lost control: NaN after the loss).
     channels : tuple of str
     fs : float
+    source : xarray.Dataset or xarray.DataArray or None
+        Records backed by dask, chunked along ``record`` (:func:`tsfdi.fleet.is_chunked`): the data itself, read
+        where it is used (:meth:`read`, chunk by chunk by :func:`tsfdi.fleet.map_records`). ``values`` is then empty
+        and ``valid`` reflects ``lost_control`` only: non-finite values are found when a record is read. ``None``
+        for records in memory.
+    length : int or None
+        Samples of every record of ``source``.
     """
 
     values: list
@@ -51,6 +58,8 @@ class Records:
     valid: np.ndarray
     channels: tuple
     fs: float
+    source: Any = None
+    length: int | None = None
 
     @classmethod
     def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
@@ -62,11 +71,27 @@ class Records:
         Named records (``DataFrame``, ``DataArray`` with a channel coordinate) are put in the channel order of the
         first by name; a missing or an extra channel raises a ``ValueError`` naming the record and the channel.
         Without ``fs`` the sampling frequency comes from the time coordinate, or from the time index of the first
-        record, else 1 Hz."""
+        record, else 1 Hz.
+
+        A ``Dataset`` or ``DataArray`` backed by dask and chunked along ``record`` (:func:`tsfdi.fleet.is_chunked`)
+        is not read: the labels come from its coordinates, the channels and ``fs`` from its first record, and the
+        data stays in :attr:`source`."""
         if isinstance(data, Records):
             return data
         import xarray as xr
 
+        from tsfdi.fleet import is_chunked
+
+        if is_chunked(data):
+            if isinstance(data, xr.Dataset):        # (lazily: the chunks will hold the signal variables only)
+                from tsfdi.datasets.hexacopter import hexacopter_signals
+
+                data = hexacopter_signals(data)
+            st, tb, ft, ids, lost = _labels(data, states, failure_times, turbulence, name)
+            head = cls.from_data(data.isel(record=slice(0, 1)).compute(), states=st[:1], failure_times=ft[:1],
+                                 turbulence=tb[:1], fs=fs, name=name)
+            return cls([], st, tb, ft, ids, ~lost, head.channels, head.fs, source=data,
+                       length=int(head.values[0].shape[0]))
         if isinstance(data, xr.Dataset):
             from tsfdi.datasets.hexacopter import hexacopter_signals
 
@@ -75,24 +100,11 @@ class Records:
             da = data.transpose("record", "time", ...)
             fs_ = _time_rate(da["time"].values, name) if fs is None else float_like(fs, "fs", minimum=0.0,
                                                                                      strict_min=True)
-            n = da.sizes["record"]
-
-            def coord(key, given, default):
-                if given is not None:
-                    return np.asarray(given)
-                return np.asarray(da[key].values) if key in da.coords else np.full(n, default)
-
-            st = coord("state", states, None)
-            if st[0] is None:
-                raise ValueError(f"{name} needs a 'state' coordinate (or pass states=)")
-            lost = np.asarray(da["lost_control"].values, dtype=bool) if "lost_control" in da.coords else \
-                np.zeros(n, bool)
+            st, tb, ft, ids, lost = _labels(da, states, failure_times, turbulence, name)
             vals = [np.asarray(v, dtype=np.float64) for v in da.values]
             valid = ~lost & np.array([np.all(np.isfinite(v)) for v in vals])
             chans = tuple(str(c) for c in da[da.dims[2]].values)
-            return cls(vals, st.astype(str), coord("turbulence", turbulence, "").astype(str),
-                       _failure_times(coord("failure_time", failure_times, np.nan), n),
-                       np.asarray(da["record"].values) if "record" in da.coords else np.arange(n), valid, chans, fs_)
+            return cls(vals, st, tb, ft, ids, valid, chans, fs_)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
             raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
                             f"non-empty sequence of signals, got {type(data).__name__}")
@@ -118,6 +130,59 @@ class Records:
         fs_ = sampling_frequency(sigs[0], fs, f"{name}[0]") or 1.0
         return cls([s.values for s in sigs], st, tb, ft, np.arange(n), np.ones(n, bool), tuple(sigs[0].channels),
                    fs_)
+
+    def read(self, where: Any, chunk: Any = None) -> Records:
+        """The records at positions ``where`` (a slice or an array of positions), in memory.
+
+        Parameters
+        ----------
+        where : slice or array_like of int
+        chunk : xarray.Dataset or xarray.DataArray, optional
+            Those records of :attr:`source` already read (the chunk :func:`tsfdi.fleet.map_records` hands a
+            worker); default: read them from :attr:`source` on the current dask scheduler.
+
+        Returns
+        -------
+        Records
+            With the labels and identifiers of those records (``source`` None).
+        """
+        import dataclasses
+
+        if self.source is None and chunk is None:
+            pos = np.arange(len(self.values))[where]
+            return dataclasses.replace(self, values=[self.values[i] for i in pos], state=self.state[pos],
+                                       turbulence=self.turbulence[pos], failure_time=self.failure_time[pos],
+                                       ids=self.ids[pos], valid=self.valid[pos])
+        if chunk is None:
+            chunk = self.source.isel(record=where).compute()
+        out = Records.from_data(chunk, states=self.state[where], failure_times=self.failure_time[where],
+                                turbulence=self.turbulence[where], fs=self.fs)
+        return dataclasses.replace(out, ids=self.ids[where])
+
+
+def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: str) -> tuple:
+    """State, turbulence, failure time, identifier and lost-control flag of every record of an xarray object with a
+    ``record`` dimension, from its coordinates (and a ``lost_control`` variable) or the given labels."""
+    import xarray as xr
+
+    n = data.sizes["record"]
+    keys = [k for k in ("state", "turbulence", "failure_time", "record") if k in data.coords]
+    if "lost_control" in data.coords or (isinstance(data, xr.Dataset) and "lost_control" in data):
+        keys.append("lost_control")
+    found = {k: data[k].values for k in keys}
+
+    def coord(key, given, default):
+        if given is not None:
+            return np.asarray(given)
+        return np.asarray(found[key]) if key in found else np.full(n, default)
+
+    st = coord("state", states, None)
+    if st[0] is None:
+        raise ValueError(f"{name} needs a 'state' coordinate (or pass states=)")
+    ids = np.asarray(found["record"]) if "record" in found else np.arange(n)
+    return (st.astype(str), coord("turbulence", turbulence, "").astype(str),
+            _failure_times(coord("failure_time", failure_times, np.nan), n), ids,
+            coord("lost_control", None, False).astype(bool))
 
 
 def _time_rate(time: np.ndarray, name: str) -> float:
@@ -151,6 +216,26 @@ def _failure_times(value: Any, n: int) -> np.ndarray:
     if bad.size:
         raise ValueError(f"failure_times must be >= 0 s or NaN (no failure), got {ft[bad[0]]} for record {bad[0]}")
     return ft
+
+
+def _finite(rec: Records) -> Any:
+    """``finite(i)``: whether record ``i`` holds only finite values. Records in memory are checked already
+    (:attr:`Records.valid`); records backed by dask are read a chunk at a time when first asked about."""
+    if rec.source is None:
+        return lambda i: True
+    from tsfdi.fleet import record_chunks
+
+    chunks = record_chunks(rec.source)
+    starts = np.array([c.start for c in chunks])
+    flags: dict = {}
+
+    def finite(i: int) -> bool:
+        c = int(np.searchsorted(starts, i, side="right")) - 1
+        if c not in flags:
+            flags[c] = rec.read(chunks[c]).valid
+        return bool(flags[c][i - chunks[c].start])
+
+    return finite
 
 
 def _segment(rec: Records, i: int, settle: float, duration: float | None) -> np.ndarray:
@@ -472,7 +557,10 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         A hexacopter dataset (:func:`tsfdi.datasets.load_hexacopter`; converted by :func:`hexacopter_signals`),
         a ``(record, time, channel)`` DataArray with ``state`` (and ``failure_time``, ``turbulence``)
         coordinates, a sequence of ``(nobs, k)`` signals with ``states=`` (numpy, pandas or xarray each), or a
-        mapping state -> signal (one steady-state segment per state, used whole).
+        mapping state -> signal (one steady-state segment per state, used whole). Either xarray kind may be backed
+        by dask, chunked along ``record`` (a fleet opened with ``xarray.open_zarr``; :mod:`tsfdi.fleet`): then only
+        the fitting records are read (on the current dask scheduler), and the baselines are those of the same data
+        in memory.
     states, failure_times, turbulence : array_like, optional
         Per-record labels for a sequence of signals.
     fs : float, optional
@@ -555,7 +643,8 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     faults = tuple(s for s in uniq if s != healthy)
     if not faults:
         raise ValueError("data has no fault state: at least one state other than the healthy one is needed")
-    # which records fit
+    # which records fit (records backed by dask: checked for non-finite values as they are considered)
+    finite = _finite(rec)
     ok = rec.valid.copy()
     if fit_turbulence is not None:
         ok &= np.isin(rec.turbulence, _names(fit_turbulence, "fit_turbulence"))
@@ -564,7 +653,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         fit_records = option(fit_records, "fit_records", ("first", "all"))
         per_cell = 1 if fit_records == "first" else None
         if fit_records == "all":
-            chosen = np.flatnonzero(ok)
+            chosen = np.array([i for i in np.flatnonzero(ok) if finite(i)], dtype=int)
     elif isinstance(fit_records, (bool, np.bool_)) or not isinstance(fit_records, (Iterable, int, float, np.number)):
         raise TypeError(f"fit_records must be 'first', 'all', a positive int or a sequence of record identifiers, "
                         f"got {fit_records!r}")
@@ -575,7 +664,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         chosen = []
         for i in np.flatnonzero(ok):
             key = (rec.state[i], rec.turbulence[i])
-            if seen.get(key, 0) < per_cell:
+            if seen.get(key, 0) < per_cell and finite(i):
                 seen[key] = seen.get(key, 0) + 1
                 chosen.append(i)
         chosen = np.array(chosen, dtype=int)
@@ -586,8 +675,10 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         if bad:
             raise ValueError(f"fit_records {bad} are not record identifiers of data")
         chosen = np.array([pos[w] for w in wanted], dtype=int)
-        if not np.all(rec.valid[chosen]):
+        if not (np.all(rec.valid[chosen]) and all(finite(i) for i in chosen)):
             raise ValueError("fit_records contains records that lost control or hold NaN")
+    if rec.source is not None:          # only the fitting records are read
+        rec, chosen = rec.read(chosen), np.arange(len(chosen))
     names = list(rec.channels) + ["var"] if models is None else _names(models, "models")
     if not names:
         raise ValueError("models must name at least one model (a channel or 'var')")

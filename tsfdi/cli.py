@@ -762,7 +762,8 @@ def _write(flag: str, table: pd.DataFrame, path: str | None) -> None:
 
 # ---------------------------------------------------------------------------------------------------- simulate
 def _simulate_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--out", required=True, help="output netCDF file")
+    p.add_argument("--out", required=True, help="output file: netCDF, or a zarr store (format 2) for a name ending in "
+                                                ".zarr; either is chunked by record")
     p.add_argument("--records-per-case", type=_count, default=20, help="records per state and turbulence level")
     p.add_argument("--seed", type=_seed, default=2024, help="base seed (record k uses SeedSequence([seed, k]))")
     p.add_argument("--duration", type=_duration, default="60s", help="record length, a time span such as '60s'")
@@ -786,30 +787,88 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--shipped", action="store_true",
                    help="write only the shipped variables packed as int32 counts (see data/README.md); "
                         "default: every channel as float64")
+    p.add_argument("--chunk", type=_count, default=20,
+                   help="records per chunk: the chunks are simulated in parallel on the dask scheduler and written "
+                        "as they come, so memory holds a few chunks (each chunk x duration x fs x 19 x 8 bytes, and "
+                        "the 1 kHz integration of 16 records at a time), whatever the number of records")
+    p.add_argument("--scheduler", default="threads",
+                   help="dask scheduler of the chunks: threads, processes, synchronous, or the address of a running "
+                        "dask.distributed scheduler (e.g. tcp://10.0.0.1:8786) to simulate on its cluster")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-@command("simulate", "simulate hexacopter records (Dryden turbulence, rotor failures) to a netCDF file",
-         _simulate_args)
+def _dask_scheduler(value: str) -> Any:
+    """A context in which ``dask.compute`` runs on the scheduler ``--scheduler`` names."""
+    import dask
+
+    if "://" in value:
+        from distributed import Client
+
+        try:
+            return Client(value, timeout="10s")
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"--scheduler {value}: cannot connect to the dask scheduler ({exc})") from None
+    if value in ("threads", "processes", "synchronous"):
+        return dask.config.set(scheduler=value)
+    raise ValueError(f"--scheduler must be threads, processes, synchronous or the address of a dask.distributed "
+                     f"scheduler such as tcp://10.0.0.1:8786, got {value!r}")
+
+
+def _write_chunks(ds: Any, enc: dict, args: argparse.Namespace, zarr: bool) -> int:
+    """Write a fleet backed by dask chunk by chunk on the ``--scheduler``; the number of records that lost control."""
+    import xarray as xr
+
+    from tsfdi.fleet import compute
+
+    if zarr:        # zarr's own compressor; the record coordinates chunked like the data
+        enc = {v: {k: e[k] for k in ("dtype", "scale_factor", "_FillValue") if k in e} for v, e in enc.items()}
+        enc.update({c: {"chunks": (args.chunk,)} for c, v in ds.coords.items() if v.dims == ("record",)
+                    and c != "record"})
+    elif args.scheduler == "processes":
+        raise ValueError("--scheduler processes cannot write a netCDF file (the processes of dask's local scheduler "
+                         "share no lock on it): write a .zarr store, or use threads or a dask.distributed scheduler")
+    with _dask_scheduler(args.scheduler):
+        store = ds.to_zarr(args.out, mode="w", encoding=enc, compute=False, zarr_format=2) if zarr else \
+            ds.to_netcdf(args.out, engine="h5netcdf", encoding=enc, compute=False)
+        compute(store, progress=not args.no_progress)
+    with xr.open_zarr(args.out) if zarr else xr.open_dataset(args.out, engine="h5netcdf") as written:
+        return int(written["lost_control"].values.sum())
+
+
+@command("simulate", "simulate hexacopter records (Dryden turbulence, rotor failures) to a netCDF file or zarr store "
+         "chunked by record, the chunks in parallel on dask", _simulate_args)
 def _simulate(args: argparse.Namespace) -> int:
+    import importlib.util
+
     from tsfdi.datasets.hexacopter import FleetSpread, encode_for_file, make_hexacopter_dataset
 
     _check_out("--out", args.out)
+    zarr = Path(args.out).suffix.lower() == ".zarr"
+    if importlib.util.find_spec("dask") is None:      # without the fleet extra: netCDF, simulated in memory
+        if zarr or args.scheduler != "threads":
+            raise ValueError(f"{'--out ' + args.out if zarr else '--scheduler'}: needs dask and zarr (pip install "
+                             "'tsfdi[fleet]')")
+        args.chunk = None
     t0 = time.perf_counter()
     fleet = None if args.fleet is None else FleetSpread.from_spec(args.fleet)
+    # backed by dask: nothing is simulated until the chunks are written
     ds = make_hexacopter_dataset(args.records_per_case, seed=args.seed, duration=args.duration,
                                  failure_time=args.failure_time, speed=args.speed,
                                  states=tuple(s.strip() for s in args.states.split(",")),
                                  turbulence=tuple(s.strip() for s in args.turbulence.split(",")),
-                                 dt=args.dt, fs=args.fs, fleet=fleet)
+                                 dt=args.dt, fs=args.fs, fleet=fleet, chunks=args.chunk)
     if args.shipped:
         ds, enc = encode_for_file(ds)
     else:
         enc = {v: {"zlib": True, "shuffle": True} for v in ds.data_vars}
     try:
-        ds.to_netcdf(args.out, engine="h5netcdf", encoding=enc)
+        if args.chunk is None:
+            ds.to_netcdf(args.out, engine="h5netcdf", encoding=enc)
+            nlost = int(ds["lost_control"].sum())
+        else:
+            nlost = _write_chunks(ds, enc, args, zarr)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
-    nlost = int(ds["lost_control"].sum())
     print(f"wrote {ds.sizes['record']} records to {args.out} in {time.perf_counter() - t0:.1f} s; "
           f"lost control in {nlost} record(s)")
     return 0

@@ -24,6 +24,7 @@ the examples), NaN meaning "no fault" (onset) or "no alarm" (first alarm).
 
 from __future__ import annotations
 
+import dataclasses
 import numbers
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -264,7 +265,10 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     ----------
     data : xarray.Dataset, xarray.DataArray or sequence of signals
         Records as accepted by :func:`~tsfdi.fit_baselines`; the records in ``baselines.fit_records`` and records
-        that lost control (NaN) are skipped.
+        that lost control (NaN) are skipped. Either xarray kind may be backed by dask, chunked along ``record``
+        (a fleet opened with ``xarray.open_zarr``, :mod:`tsfdi.fleet`): its chunks are then evaluated on the
+        current dask scheduler (threads, processes or a ``dask.distributed`` Client) and only their per-window
+        tables come back, in record order, so the result is the one of the same records in memory.
     baselines : Baselines or mapping
         From :func:`~tsfdi.fit_baselines`, or a mapping turbulence level -> :class:`~tsfdi.Baselines`
         (condition-scheduled baselines: each record is tested with the models of its own turbulence level; levels
@@ -298,6 +302,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         Show a tqdm progress bar over records.
     states, failure_times, fs :
         Per-record labels and sampling frequency for a sequence of signals.
+
     Returns
     -------
     Evaluation
@@ -306,6 +311,11 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     -----
     Every record is filtered once through each model and all windows' statistics come from
     prefix sums (:class:`tsfdi.windows.ResidualWindows`).
+
+    With data backed by dask, the driver reads the record coordinates and the first record only; each worker reads
+    its chunk, checks it for non-finite values (skipped records, as in memory) and returns the rows of its windows
+    (:func:`tsfdi.fleet.map_records`). The driver's memory then grows with the result tables (one row per window,
+    about 100 bytes), not with the records (``8 * channels`` bytes per sample).
     """
     if isinstance(baselines, Baselines):
         by_level = None
@@ -351,83 +361,61 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         use &= np.isin(rec.turbulence, list(by_level))
     if turbulence is not None:
         use &= np.isin(rec.turbulence, [turbulence] if isinstance(turbulence, str) else list(turbulence))
-    reasons = np.where(np.isin(rec.ids, list(fit)), "fitting record",
-                       np.where(~rec.valid, "lost control / non-finite",
-                                np.where(use, "", "not selected")))
-    recs = pd.DataFrame({"record": rec.ids, "state": rec.state, "turbulence": rec.turbulence,
-                         "evaluated": use, "skipped": reasons})
-    recs.attrs["healthy"] = healthy
     if not use.any():
         raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
     longest = max(wins)
-    short = rec.ids[[i for i in np.flatnonzero(use) if rec.values[i].shape[0] < longest]].tolist()
+    short = rec.ids[[i for i in np.flatnonzero(use)
+                     if (rec.values[i].shape[0] if rec.source is None else rec.length) < longest]].tolist()
     if short:
         raise ValueError(f"windows: a {longest}-sample window is longer than the record(s) {short[:5]}"
                          f"{' ...' if len(short) > 5 else ''}; give shorter windows")
 
     alphas = {key: t.alpha for key, t in tests.items()}
     lag_of = {round(W / rec.fs, 9): t.lags for W in wins for t in tests.values() if isinstance(t, LjungBox)}
-
-    def state_tests(base: Baselines, m: str, meth: str, W: int) -> tuple:
-        """The detection test and the fault models' tests (calibrated per state for an empirical test)."""
-        t = tests[(m, meth)]
-        if not t.empirical:
-            return t, t
-        cal = base.calibrated_tests(m, t, W)
-        return cal[healthy], {f: cal[f] for f in faults}
-
+    # what every record needs, calibrated once here (an empirical test, per state) and sent once to the workers
+    levels = {None: first} if by_level is None else by_level
+    plan = {"models": {lvl: {m: (b.state_models(m), b.model_channels(m)) for m in models}
+                       for lvl, b in levels.items()},
+            "tests": {(lvl, m, meth, W): _state_tests(b, tests[(m, meth)], m, W)
+                      for lvl, b in levels.items() for (m, meth) in tests for W in wins},
+            "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
+            "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
+            "detection": detection}
     ident_parts, det_parts = [], []
-    idx = np.flatnonzero(use)
-    iterator = idx
-    if progress:
-        from tqdm.auto import tqdm
+    if rec.source is None:
+        idx = np.flatnonzero(use)
+        iterator = idx
+        if progress:
+            from tqdm.auto import tqdm
 
-        iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
-    label_names = np.array(list(faults) + ["ambiguous", "none"], dtype=object)
-    for i in iterator:
-        x_all = rec.values[i]
-        state, ft = rec.state[i], rec.failure_time[i]
-        is_fault = state != healthy
-        base = first if by_level is None else by_level[rec.turbulence[i]]
-        for m in models:
-            sig = as_signal(x_all[:, base.model_channels(m)], "signal", allow_constant=True)
-            per_state = base.state_models(m)
-            # each record is filtered once through every (member) model; the windows of every length and
-            # test are slices of these residuals
-            rw_h = ResidualWindows({healthy: per_state[healthy]})
-            rw_f = ResidualWindows({f: per_state[f] for f in faults})
-            if detection:
-                rw_h.fit(sig)
-            if is_fault:
-                rw_f.fit(sig)
-            for meth in methods:
-                for W in wins:
-                    w = round(W / rec.fs, 9)
-                    test_h, test_f = state_tests(base, m, meth, W)
-                    if detection:
-                        wh = rw_h.statistics(test_h, window=W, step=step_n, loglik=False)
-                        st, en = wh.starts / rec.fs, (wh.starts + W) / rec.fs
-                        det_parts.append(pd.DataFrame({
-                            "record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
-                            "method": meth, "window": w, "start": st, "end": en,
-                            "failure_time": ft, "fault_true": is_fault & (st >= ft),
-                            "pre": ~is_fault | (en <= ft), "alarm": wh.reject[:, 0]}))
-                    if not is_fault:
-                        continue
-                    ws = rw_f.statistics(test_f, window=W, step=step_n)
-                    keep = ws.starts / rec.fs >= ft + settle
-                    if not keep.any():
-                        continue
-                    acc = ws.accepted[keep]
-                    cols = {"record": rec.ids[i], "state": state, "turbulence": rec.turbulence[i], "model": m,
-                            "method": meth, "window": w, "start": ws.starts[keep] / rec.fs}
-                    for j, f in enumerate(faults):
-                        cols[f"acc_{f}"] = acc[:, j]
-                    for rule in rules:
-                        lab = decide(acc, rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
-                        cols[f"label_{rule}"] = label_names[np.where(lab >= 0, lab, np.where(
-                            lab == AMBIGUOUS, len(faults), len(faults) + 1))]
-                    ident_parts.append(pd.DataFrame(cols))
+            iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
+        for i in iterator:
+            ident, det = _evaluate_record(rec.values[i], rec.ids[i], rec.state[i], rec.turbulence[i],
+                                          rec.failure_time[i], plan)
+            ident_parts += ident
+            det_parts += det
+    else:
+        # records backed by dask: every chunk runs on the current dask scheduler, the per-window tables come back
+        # chunk by chunk in record order, so the tables are those of the loop above
+        from tsfdi.fleet import map_records, record_chunks
+
+        valid = rec.valid.copy()
+        chunks = map_records(_evaluate_chunk, rec.source, dataclasses.replace(rec, source=None), use, plan,
+                             progress=progress, desc="tsfdi evaluate")
+        for where, (ok, ident, det) in zip(record_chunks(rec.source), chunks):
+            valid[where] = ok
+            ident_parts += [ident] if ident is not None else []
+            det_parts += [det] if det is not None else []
+        rec = dataclasses.replace(rec, valid=valid)
+        use &= valid
+        if not use.any():
+            raise ValueError("no record left to evaluate (all are fitting records, invalid or not selected)")
+    reasons = np.where(np.isin(rec.ids, list(fit)), "fitting record",
+                       np.where(~rec.valid, "lost control / non-finite",
+                                np.where(use, "", "not selected")))
+    recs = pd.DataFrame({"record": rec.ids, "state": rec.state, "turbulence": rec.turbulence,
+                         "evaluated": use, "skipped": reasons})
+    recs.attrs["healthy"] = healthy
     ident = pd.concat(ident_parts, ignore_index=True) if ident_parts else pd.DataFrame(
         columns=["record", "state", "turbulence", "model", "method", "window", "start"]
         + [f"acc_{f}" for f in faults] + [f"label_{r}" for r in rules])
@@ -454,6 +442,79 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
                       records=recs, nchan={m: len(first.model_channels(m)) for m in models},
                       thresholds="empirical" if empirical else "theoretical", calibration=pd.DataFrame(cal_rows))
+
+
+def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
+    """The detection test and the fault models' tests of model ``m`` on ``W``-sample windows (calibrated per state
+    on the baselines' held-out residuals for an empirical test)."""
+    if not test.empirical:
+        return test, test
+    cal = base.calibrated_tests(m, test, W)
+    return cal[base.healthy], {f: cal[f] for f in base.faults}
+
+
+def _evaluate_record(x_all: np.ndarray, rid: Any, state: str, turb: str, ft: float, plan: dict) -> tuple[list, list]:
+    """The identification and detection rows of one record (``evaluate``): every window of every length, model and
+    test."""
+    healthy, faults, fs, step_n = plan["healthy"], plan["faults"], plan["fs"], plan["step"]
+    detection, rules = plan["detection"], plan["rules"]
+    level = turb if plan["by_level"] else None
+    is_fault = state != healthy
+    label_names = np.array(list(faults) + ["ambiguous", "none"], dtype=object)
+    ident_parts, det_parts = [], []
+    for m, (per_state, chans) in plan["models"][level].items():
+        sig = as_signal(x_all[:, chans], "signal", allow_constant=True)
+        # each record is filtered once through every (member) model; the windows of every length and
+        # test are slices of these residuals
+        rw_h = ResidualWindows({healthy: per_state[healthy]})
+        rw_f = ResidualWindows({f: per_state[f] for f in faults})
+        if detection:
+            rw_h.fit(sig)
+        if is_fault:
+            rw_f.fit(sig)
+        for meth in plan["methods"]:
+            for W in plan["windows"]:
+                w = round(W / fs, 9)
+                test_h, test_f = plan["tests"][(level, m, meth, W)]
+                if detection:
+                    wh = rw_h.statistics(test_h, window=W, step=step_n, loglik=False)
+                    st, en = wh.starts / fs, (wh.starts + W) / fs
+                    det_parts.append(pd.DataFrame({
+                        "record": rid, "state": state, "turbulence": turb, "model": m,
+                        "method": meth, "window": w, "start": st, "end": en,
+                        "failure_time": ft, "fault_true": is_fault & (st >= ft),
+                        "pre": ~is_fault | (en <= ft), "alarm": wh.reject[:, 0]}))
+                if not is_fault:
+                    continue
+                ws = rw_f.statistics(test_f, window=W, step=step_n)
+                keep = ws.starts / fs >= ft + plan["settle"]
+                if not keep.any():
+                    continue
+                acc = ws.accepted[keep]
+                cols = {"record": rid, "state": state, "turbulence": turb, "model": m,
+                        "method": meth, "window": w, "start": ws.starts[keep] / fs}
+                for j, f in enumerate(faults):
+                    cols[f"acc_{f}"] = acc[:, j]
+                for rule in rules:
+                    lab = decide(acc, rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
+                    cols[f"label_{rule}"] = label_names[np.where(lab >= 0, lab, np.where(
+                        lab == AMBIGUOUS, len(faults), len(faults) + 1))]
+                ident_parts.append(pd.DataFrame(cols))
+    return ident_parts, det_parts
+
+
+def _evaluate_chunk(chunk: Any, where: slice, labels: Records, use: np.ndarray, plan: dict) -> tuple:
+    """One chunk of records backed by dask, on a worker (``evaluate``): which of its records are valid, and the
+    identification and detection rows of those evaluated (``None`` for none)."""
+    rec = labels.read(where, chunk)
+    ident_parts, det_parts = [], []
+    for j in np.flatnonzero(use[where] & rec.valid):
+        ident, det = _evaluate_record(rec.values[j], rec.ids[j], rec.state[j], rec.turbulence[j],
+                                      rec.failure_time[j], plan)
+        ident_parts += ident
+        det_parts += det
+    return (rec.valid, pd.concat(ident_parts, ignore_index=True) if ident_parts else None,
+            pd.concat(det_parts, ignore_index=True) if det_parts else None)
 
 
 # ------------------------------------------------------------------------------------ per-record scoring

@@ -8,8 +8,9 @@ by its decision rule (:func:`tsfdi.windows.decide`).
 
 from __future__ import annotations
 
+import copy
 import datetime
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
-from tsfdi._validation import float_like, option
+from tsfdi._validation import boolean, float_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import ARXResults
@@ -433,6 +434,56 @@ class Monitor:
         self.update(signal)
         return self.result()
 
+    def screen(self, records: Any, *, progress: bool = False) -> pd.DataFrame:
+        """Run the monitor over every record of many (offline, each from time 0 as :meth:`run`): one row per record.
+
+        Parameters
+        ----------
+        records : sequence of signals, xarray.DataArray or xarray.Dataset
+            A sequence of records, each what :meth:`run` takes (numpy, pandas or xarray); a ``(record, time,
+            channel)`` DataArray; or a hexacopter Dataset (converted by
+            :func:`~tsfdi.datasets.hexacopter.hexacopter_signals`). Either xarray kind may be backed by dask, chunked
+            along ``record`` (a fleet opened with ``xarray.open_zarr``): the chunks then run on the current dask
+            scheduler (threads, processes or a ``dask.distributed`` Client, :func:`tsfdi.fleet.map_records`) and only
+            their rows come back, so the driver never holds the records; the table is the one of the same records in
+            memory.
+        progress : bool
+            Show a tqdm progress bar over the records.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Indexed by ``record`` (the ``record`` coordinate, else the position), with the other record coordinates of
+            xarray input (``state``, ``turbulence``, ``failure_time``, ...), then ``windows`` (windows tested),
+            ``fault_windows`` (windows the healthy model rejects), ``detection_time`` and ``steady_time`` (NaN without
+            the event) and ``label`` (:attr:`MonitorResult.label`, None without). ``detection_time`` is the time of the
+            first alarm (the end of the first rejected window), ready for :func:`tsfdi.score_records`.
+
+        Raises
+        ------
+        TypeError
+            ``records`` of another kind.
+        ValueError
+            A record that :meth:`run` refuses (NaN after a loss of control, too short, other channels), named.
+
+        Notes
+        -----
+        The monitor's own state is left alone: every record runs on a copy (reset, as :meth:`run` does).
+        """
+        from tsfdi.fleet import is_chunked, map_records
+
+        progress = boolean(progress, "progress")
+        if is_chunked(records):
+            import xarray as xr
+
+            if isinstance(records, xr.Dataset):     # (lazily: the chunks will hold the signal variables only)
+                from tsfdi.datasets.hexacopter import hexacopter_signals
+
+                records = hexacopter_signals(records)
+            parts = map_records(_screen_rows, records, self, progress=progress, desc="tsfdi screen")
+            return pd.concat(list(parts))
+        return _screen_rows(records, slice(0, None), self, progress=progress)
+
     def result(self) -> MonitorResult:
         """Events and per-window table of everything fed so far."""
         channels = self._channels if self._channels is not None else self._model_channels
@@ -445,3 +496,48 @@ class Monitor:
         st = next((e.time for e in self._events if e.kind == "steady"), None)
         return MonitorResult(events=list(self._events), windows=frame, detection_time=det, steady_time=st,
                              label=label, models=tuple(self.models))
+
+
+def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = False) -> pd.DataFrame:
+    """:meth:`Monitor.screen` of records in memory; ``where.start`` is the position of the first (the index when the
+    records have no ``record`` coordinate)."""
+    import xarray as xr
+
+    if isinstance(records, xr.Dataset):
+        from tsfdi.datasets.hexacopter import hexacopter_signals
+
+        records = hexacopter_signals(records)
+    coords: dict = {}
+    if isinstance(records, xr.DataArray):
+        if "record" not in records.dims or records.ndim not in (2, 3):
+            raise TypeError(f"records as a DataArray must have dims (record, time[, channel]), got {records.dims}")
+        records = records.transpose("record", ...)
+        n = records.sizes["record"]
+        index = records["record"].values if "record" in records.coords else np.arange(n) + where.start
+        coords = {k: np.asarray(c.values) for k, c in records.coords.items() if c.dims == ("record",) and k != "record"}
+        items: Sequence = [records.isel(record=i) for i in range(n)]
+    elif isinstance(records, Sequence) and not isinstance(records, (str, bytes)) and len(records):
+        items, index = records, np.arange(len(records)) + where.start
+    else:
+        raise TypeError(f"records must be a non-empty sequence of signals, a (record, time, channel) DataArray or a "
+                        f"hexacopter Dataset, got {type(records).__name__}")
+    if progress:
+        from tqdm.auto import tqdm
+
+        items = tqdm(items, desc="tsfdi screen", unit="record")
+    m = copy.copy(monitor)
+    rows = []
+    for i, x in enumerate(items):
+        try:
+            res = m.run(x)
+        except (TypeError, ValueError) as err:
+            raise type(err)(f"records: record {index[i]}: {err}") from None
+        rows.append((len(res.windows), int(res.windows["fault"].sum()),
+                     np.nan if res.detection_time is None else res.detection_time,
+                     np.nan if res.steady_time is None else res.steady_time, res.label))
+    windows, faults, detection, steady, label = zip(*rows)
+    index = pd.Index(index, name="record")
+    table = {**coords, "windows": np.array(windows, dtype=np.int64), "fault_windows": np.array(faults, dtype=np.int64),
+             "detection_time": np.array(detection, dtype=float), "steady_time": np.array(steady, dtype=float),
+             "label": pd.Series(label, index=index, dtype=object)}
+    return pd.DataFrame(table, index=index)

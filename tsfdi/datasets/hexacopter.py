@@ -124,6 +124,9 @@ References
 
 from __future__ import annotations
 
+import inspect
+from typing import Any
+
 import numpy as np
 from scipy import optimize, signal
 
@@ -333,8 +336,18 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         altitude error 20 m or the aircraft reached the ground; the record is NaN from then on); with a
         ``fleet`` also the coordinates of :data:`FLEET_COORDS` and the attribute ``fleet``.
     """
-    import xarray as xr
+    plan = _plan(records, duration=duration, speed=speed, turbulence=turbulence, failed_rotor=failed_rotor,
+                 failure_time=failure_time, seed=seed, dt=dt, fs=fs, altitude=altitude, span=span, params=params,
+                 gains=gains, fleet=fleet, batch=batch)
+    data, lost_step = _integrate(plan, 0, plan["records"])
+    return _dataset(plan, {name: data[:, :, j] for j, name in enumerate(CHANNELS)}, lost_step)
 
+
+def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, seed, dt, fs, altitude, span, params,
+          gains, fleet, batch, chunk=None) -> dict:
+    """The arguments of :func:`simulate_hexacopter` checked, and one entry per record (turbulence, failed rotor,
+    failure time, seed and, with a fleet, the drawn aircraft); ``chunk``: the records simulated at once (default
+    all)."""
     duration = float_like(duration, "duration", minimum=0.0, strict_min=True)
     speed = float_like(speed, "speed", minimum=0.0, maximum=MAX_SPEED)
     dt = float_like(dt, "dt", minimum=0.0, strict_min=True)
@@ -384,7 +397,8 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         ftimes.append(t if r else np.nan)
     seeds = [int_like(s, "seed", minimum=0) for s in per("seed", seed)]
 
-    if duration / dt * batch * 19 > MAX_VALUES or duration * fs * records * len(CHANNELS) > MAX_VALUES:
+    at_once = records if chunk is None else min(chunk, records)
+    if duration / dt * batch * 19 > MAX_VALUES or duration * fs * at_once * len(CHANNELS) > MAX_VALUES:
         raise ValueError(f"records={records}, duration={duration:g} s, dt={dt:g} s, fs={fs:g} Hz, batch={batch}: the "
                          f"integration state or the output would hold more than {MAX_VALUES:,} values (2 GiB); "
                          "simulate fewer or shorter records per call")
@@ -392,7 +406,19 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     n -= n % q
     if n < q:
         raise ValueError(f"duration must be at least one output sample (1/fs), got {duration}")
-    if fleet is None:
+    drawn = None if fleet is None else [fleet.draw(params, sd) for sd in seeds]
+    return dict(records=records, speed=speed, dt=dt, fs=fs, batch=batch, params=params, gains=gains, fleet=fleet,
+                q=q, n=n, nout=n // q, turb=turb, rotors=rotors, ftimes=ftimes, seeds=seeds, drawn=drawn,
+                altitude=altitude, span=span)
+
+
+def _integrate(plan: dict, first: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+    """Records ``first .. stop - 1`` of ``plan`` integrated and decimated: the output ``(records, nout, channels)``
+    and the step of the loss of control of each record (-1: none). A record depends only on its own entries."""
+    speed, dt, batch, params, q, n = plan["speed"], plan["dt"], plan["batch"], plan["params"], plan["q"], plan["n"]
+    altitude, turb, rotors, ftimes, seeds = plan["altitude"], plan["turb"], plan["rotors"], plan["ftimes"], plan["seeds"]
+    records = stop - first
+    if plan["fleet"] is None:
         tr = trim(speed, params=params, altitude=altitude)
         X0 = np.tile(tr["state"], (records, 1))
         I0 = np.tile(tr["integrators"], (records, 1))
@@ -400,22 +426,22 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         zref = tr["state"][2]
     else:
         # each record's aircraft (from its seed) and its own trim: the integrators start at its trim controls
-        drawn = [fleet.draw(params, sd) for sd in seeds]
+        drawn = plan["drawn"][first:stop]
         trims = [trim(speed, params=p, altitude=altitude) for p, _ in drawn]
         X0 = np.array([t["state"] for t in trims])
         I0 = np.array([t["integrators"] for t in trims])
         P = np.array([p.to_array() for p, _ in drawn])
         zref = -altitude
-    G = gains.to_array()
+    G = plan["gains"].to_array()
     limits = np.array(LOSS_LIMITS)
-    models = {lvl: DrydenTurbulence(altitude=altitude, airspeed=max(speed, 1.0), span=span, intensity=lvl)
+    models = {lvl: DrydenTurbulence(altitude=altitude, airspeed=max(speed, 1.0), span=plan["span"], intensity=lvl)
               for lvl in INTENSITIES}
     samplers = {lvl: m.sampler(dt) for lvl, m in models.items()}
-    nout = n // q
+    nout = plan["nout"]
     data = np.empty((records, nout, _core.N_OUT))
     lost_step = np.empty(records, dtype=np.int64)
     for start in range(0, records, batch):
-        idx = range(start, min(start + batch, records))
+        idx = range(first + start, first + min(start + batch, records))
         nb = len(idx)
         gusts = np.zeros((nb, n, 6))
         for j, i in enumerate(idx):
@@ -440,26 +466,38 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
             dec = out
         data[start:start + nb] = dec
         lost_step[start:start + nb] = lost
-    time = np.arange(nout) / fs
+    return data, lost_step
+
+
+def _dataset(plan: dict, values: dict, lost_step) -> Any:
+    """The Dataset of :func:`simulate_hexacopter` from each channel's ``(record, time)`` values and the loss steps
+    (numpy or dask arrays)."""
+    import xarray as xr
+
+    records, fs, dt, speed, fleet = plan["records"], plan["fs"], plan["dt"], plan["speed"], plan["fleet"]
+    rotors, params, gains = plan["rotors"], plan["params"], plan["gains"]
+    time = np.arange(plan["nout"]) / fs
     state = ["healthy" if r == 0 else f"rotor{r}" for r in rotors]
     coords = {"record": np.arange(records), "time": ("time", time, {"units": "s"}),
-              "state": ("record", state), "turbulence": ("record", turb),
+              "state": ("record", state), "turbulence": ("record", plan["turb"]),
               "speed": ("record", np.full(records, speed), {"units": "m/s"}),
-              "seed": ("record", np.array(seeds, dtype=np.int64)),
-              "failure_time": ("record", np.array(ftimes), {"units": "s"}),
+              "seed": ("record", np.array(plan["seeds"], dtype=np.int64)),
+              "failure_time": ("record", np.array(plan["ftimes"]), {"units": "s"}),
               "failed_rotor": ("record", np.array(rotors, dtype=np.int64))}
     if fleet is not None:
         for name, (unit, desc) in FLEET_COORDS.items():
-            coords[name] = ("record", np.array([v[name] for _, v in drawn]), {"units": unit, "long_name": desc})
-    vars_ = {name: (("record", "time"), data[:, :, j], {"units": unit, "long_name": _DESCRIPTIONS[name]})
-             for j, (name, unit) in enumerate(CHANNELS.items())}
+            coords[name] = ("record", np.array([v[name] for _, v in plan["drawn"]]),
+                            {"units": unit, "long_name": desc})
+    vars_ = {name: (("record", "time"), values[name], {"units": unit, "long_name": _DESCRIPTIONS[name]})
+             for name, unit in CHANNELS.items()}
     vars_["lost_control"] = ("record", lost_step >= 0)
     vars_["lost_control_time"] = ("record", np.where(lost_step >= 0, lost_step * dt, np.nan), {"units": "s"})
     ds = xr.Dataset(vars_, coords=coords)
     ds.attrs.update({
         "title": "tsfdi hexacopter simulation (Dryden turbulence, rotor failures)",
         "integration": f"RK4, dt={dt} s; decimated to {fs} Hz with scipy.signal.resample_poly (zero phase)",
-        "altitude_m": altitude, "span_m": span, "rotor_spin": "rotor 1 clockwise seen from above, alternating",
+        "altitude_m": plan["altitude"], "span_m": plan["span"],
+        "rotor_spin": "rotor 1 clockwise seen from above, alternating",
         "parameters": repr(params.to_dict()), "gains": repr(gains.to_dict()),
         "yaw_sign": "positive = nose right (NED)",
     })
@@ -473,7 +511,7 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
 def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, duration: float = 60.0,
                             failure_time: float = 10.0, speed: float = 5.0,
                             states=STATES, turbulence=("light", "moderate", "severe"),
-                            fleet: FleetSpread | None = None, **kwargs):
+                            fleet: FleetSpread | None = None, chunks: int | None = None, **kwargs):
     """The benchmark design of the paper's Table 1: states x turbulence levels x ``records_per_case``.
 
     Record ``k`` (in the order state, turbulence, repetition) gets the seed
@@ -484,10 +522,17 @@ def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, dur
     centre-of-gravity offset, motor constants and inertia are drawn from its seed around the nominal
     parameters (see :class:`FleetSpread`) and stored as record coordinates (:data:`FLEET_COORDS`); the
     turbulence of every record is the same as without it. ``None`` (default): one aircraft, as before.
+
+    ``chunks=n`` returns the data set backed by dask, chunked along ``record`` by ``n`` records, without simulating
+    anything: a chunk is simulated when it is computed, on the current dask scheduler, so a fleet of any size can be
+    written to zarr or netCDF chunk by chunk (``ds.to_zarr(path)``, ``tsfdi simulate --chunk``) or analysed as it is
+    simulated (:mod:`tsfdi.fleet`). Its values are those of ``chunks=None``, bit for bit: a record depends only on its
+    seed and configuration. Each computation of a chunk simulates it again: write the fleet once, then open it.
     Other keyword arguments go to :func:`simulate_hexacopter`.
     """
     records_per_case = int_like(records_per_case, "records_per_case", minimum=1)
     seed = int_like(seed, "seed", minimum=0)
+    chunks = int_like(chunks, "chunks", minimum=1, optional=True)
     for name, value in (("states", states), ("turbulence", turbulence)):
         if isinstance(value, str) or not len(value):
             raise ValueError(f"{name} must be a non-empty sequence, got {value!r}")
@@ -496,11 +541,37 @@ def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, dur
     rows = [(s, t) for s in states for t in turbulence for _ in range(records_per_case)]
     rotors = [0 if s == "healthy" else _state_rotor(s) for s, _ in rows]
     seeds = [int(np.random.SeedSequence([seed, k]).generate_state(1)[0]) for k in range(len(rows))]
-    ds = simulate_hexacopter(duration=duration, speed=speed, turbulence=[t for _, t in rows],
-                             failed_rotor=rotors, failure_time=failure_time, seed=seeds, fleet=fleet, **kwargs)
+    design = dict(duration=duration, speed=speed, turbulence=[t for _, t in rows], failed_rotor=rotors,
+                  failure_time=failure_time, seed=seeds, fleet=fleet, **kwargs)
+    ds = simulate_hexacopter(**design) if chunks is None else _chunked_dataset(design, chunks)
     ds.attrs["base_seed"] = seed
     ds.attrs["records_per_case"] = records_per_case
     return ds
+
+
+def _chunked_dataset(design: dict, chunks: int) -> Any:
+    """:func:`simulate_hexacopter` of ``design`` as a Dataset backed by dask, one delayed simulation per ``chunks``
+    records."""
+    import dask
+    import dask.array as da
+
+    parameters = inspect.signature(simulate_hexacopter).parameters
+    unknown = sorted(set(design) - set(parameters))
+    if unknown:
+        raise TypeError(f"make_hexacopter_dataset got unexpected keyword argument(s) {unknown}")
+    plan = _plan(**{**{k: p.default for k, p in parameters.items()}, **design}, chunk=chunks)
+    nout, nchan = plan["nout"], len(CHANNELS)
+    outputs, losses = [], []
+    for first in range(0, plan["records"], chunks):
+        stop = min(first + chunks, plan["records"])
+        # each chunk carries the entries of its own records only
+        sub = {**plan, **{k: plan[k][first:stop] for k in ("turb", "rotors", "ftimes", "seeds")},
+               "drawn": None if plan["drawn"] is None else plan["drawn"][first:stop]}
+        part = dask.delayed(_integrate, nout=2)(sub, 0, stop - first)
+        outputs.append(da.from_delayed(part[0], (stop - first, nout, nchan), dtype=np.float64))
+        losses.append(da.from_delayed(part[1], (stop - first,), dtype=np.int64))
+    data = da.concatenate(outputs)
+    return _dataset(plan, {name: data[:, :, j] for j, name in enumerate(CHANNELS)}, da.concatenate(losses))
 
 
 def _state_rotor(state: str) -> int:
@@ -539,14 +610,22 @@ def encode_for_file(ds, variables=SHIPPED_VARIABLES):
     enc = {}
     for v in variables:
         s = PACK_SCALE[v]
-        x = out[v].values
-        m = np.nanmax(np.abs(x)) / s if np.isfinite(x).any() else 0
-        if m > 2.1e9:
-            raise ValueError(f"{v} exceeds the int32 range with scale_factor {s} (max |x| = {m * s:g})")
+        if out[v].chunks is not None:           # backed by dask: each chunk is checked when it is computed
+            out[v] = out[v].copy(data=out[v].data.map_blocks(_int32_range, v, s, dtype=out[v].dtype))
+        else:
+            _int32_range(out[v].values, v, s)
         # chunks of 20 records compress ~10 % better than one record per chunk (zlib sees more context)
         enc[v] = {"dtype": "int32", "scale_factor": s, "_FillValue": _INT32_FILL, "zlib": True, "complevel": 9,
                   "shuffle": True, "chunksizes": (min(20, out.sizes["record"]), out.sizes["time"])}
     return out, enc
+
+
+def _int32_range(x: np.ndarray, name: str, scale: float) -> np.ndarray:
+    """``x`` if ``round(x / scale)`` fits in int32 (:func:`encode_for_file`), else a ``ValueError`` naming ``name``."""
+    m = np.nanmax(np.abs(x)) / scale if np.isfinite(x).any() else 0
+    if m > 2.1e9:
+        raise ValueError(f"{name} exceeds the int32 range with scale_factor {scale} (max |x| = {m * scale:g})")
+    return x
 
 
 def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
@@ -567,7 +646,8 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
     Returns
     -------
     xarray.DataArray
-        Dims ``(record, time, channel)`` with the dataset's record coordinates.
+        Dims ``(record, time, channel)`` with the dataset's record coordinates; backed by dask, not read, when the
+        dataset's variables are.
     """
     import xarray as xr
 
@@ -581,7 +661,8 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
         raise ValueError(f"data lacks the variable(s) {missing}")
     t = np.asarray(data["time"].values, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
-    arrs = [np.asarray(data[v].transpose("record", "time").values, dtype=np.float64)
+    # numpy arrays, or dask arrays left lazy (a fleet read chunk by chunk where it is used: tsfdi.fleet)
+    arrs = [data[v].transpose("record", "time").data.astype(np.float64, copy=False)
             for v in ("roll", "pitch", "r" if use_r else "yaw")]
     if use_r:
         names = list(SIGNAL_CHANNELS)

@@ -1,0 +1,225 @@
+"""Many records on dask: a fleet's records streamed through the current dask scheduler.
+
+tsfdi works one record at a time: the windowed engine filters a record once through every model, the monitor runs
+over one stream. A fleet is many records. An xarray ``Dataset`` or ``DataArray`` backed by dask and chunked along
+``record`` -- ``xarray.open_zarr(path)``, ``xarray.open_dataset(path, chunks={"record": 50})`` or
+``make_hexacopter_dataset(..., chunks=50)`` -- is one more input kind of :func:`tsfdi.evaluate`,
+:func:`tsfdi.fit_baselines` and :meth:`tsfdi.Monitor.screen`. Its chunks of records go to the current dask scheduler
+(the threads or processes scheduler, or a ``dask.distributed`` Client: whichever ``dask.compute`` would use), each
+chunk is read and processed where it runs, and the results come back chunk by chunk, in record order, with at most
+a few chunks per worker in flight: the driver never holds the records, and the results are those of the serial
+loop over the same records, in the same order.
+
+:func:`map_records` is that loop, and the only place where tsfdi hands records to dask; :func:`compute` runs any
+other dask computation (writing a simulated fleet to zarr or netCDF) on the same scheduler with a progress bar.
+
+Examples
+--------
+>>> from distributed import Client, LocalCluster                              # doctest: +SKIP
+>>> client = Client(LocalCluster(n_workers=4, threads_per_worker=1))           # doctest: +SKIP
+>>> fleet = xarray.open_zarr("fleet.zarr")                                      # doctest: +SKIP
+>>> ev = tsfdi.evaluate(fleet, baselines)   # the chunks run on the cluster     # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections import deque
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from tsfdi._validation import boolean
+
+__all__ = ["is_chunked", "record_chunks", "map_records", "compute"]
+
+#: chunks of records in flight per worker thread: one running, one queued, so that no worker waits for the driver
+AHEAD = 2
+
+
+def _record_variables(data: Any) -> list:
+    """The variables of an xarray object that run along ``record`` (data variables first)."""
+    import xarray as xr
+
+    if isinstance(data, xr.DataArray):
+        return [data.variable] if "record" in data.dims else []
+    if isinstance(data, xr.Dataset):
+        return [v for v in (*data.data_vars.values(), *data.coords.values()) if "record" in v.dims]
+    return []
+
+
+def is_chunked(data: Any) -> bool:
+    """Whether ``data`` is an xarray ``Dataset`` / ``DataArray`` with a ``record`` dimension whose values are dask
+    arrays (read or computed chunk by chunk), the input kind that :func:`map_records` streams."""
+    return any(v.chunks is not None for v in _record_variables(data))
+
+
+def record_chunks(data: Any) -> list[slice]:
+    """The chunks of records of ``data``: one slice of record positions per dask chunk along ``record``, from the
+    first dask-backed variable along it (data variables before coordinates); one slice of every record for data not
+    backed by dask.
+
+    Raises
+    ------
+    TypeError
+        ``data`` is not an xarray object with a ``record`` dimension.
+    """
+    variables = _record_variables(data)
+    if not variables:
+        raise TypeError(f"data must be an xarray Dataset or DataArray with a 'record' dimension, got "
+                        f"{type(data).__name__}")
+    lazy = next((v for v in variables if v.chunks is not None), None)
+    sizes = lazy.chunksizes["record"] if lazy is not None else (data.sizes["record"],)
+    out, start = [], 0
+    for size in sizes:
+        out.append(slice(start, start + int(size)))
+        start += int(size)
+    return out
+
+
+def _client() -> Any:
+    """The ``dask.distributed`` Client that ``dask.compute`` would use now, else None."""
+    from dask.base import get_scheduler
+
+    get = get_scheduler()
+    owner = getattr(get, "__self__", None)
+    try:
+        from distributed import Client
+    except ImportError:
+        return None
+    return owner if isinstance(owner, Client) else None
+
+
+def _workers(client: Any) -> int:
+    """Worker threads of the current scheduler."""
+    if client is not None:
+        return max(1, sum(client.nthreads().values()))
+    import dask
+    from dask.base import get_scheduler
+
+    get = get_scheduler()
+    if get is not None and getattr(get, "__module__", "") == "dask.local":     # the synchronous scheduler
+        return 1
+    return max(1, int(dask.config.get("num_workers", None) or os.cpu_count() or 1))
+
+
+def _call(func: Callable, chunk: Any, where: slice, args: tuple) -> Any:
+    return func(chunk, where, *args)
+
+
+def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, desc: str = "tsfdi") -> Iterator:
+    """``func(chunk, where, *args)`` for every chunk of records of ``data``, run on the current dask scheduler and
+    yielded in record order.
+
+    Parameters
+    ----------
+    func : callable
+        Called once per chunk with ``chunk``, the chunk's records read into memory (an xarray object of the kind of
+        ``data``, its values numpy arrays), ``where``, the slice of their positions in ``data``, and ``args``. It runs
+        on a worker: with processes or a distributed cluster it must be picklable (a module-level function), and
+        what it returns travels back to the driver, so it should return what the records reduce to, not the records.
+    data : xarray.Dataset or xarray.DataArray
+        Records along a ``record`` dimension, backed by dask (:func:`is_chunked`); each dask chunk along ``record``
+        is one call (:func:`record_chunks`). Rechunk with ``data.chunk(record=n)`` for another granularity.
+    *args
+        Passed to every call. With a distributed Client they are sent to the cluster once (``Client.scatter``),
+        not once per chunk.
+    progress : bool
+        Show a tqdm progress bar over the records.
+    desc : str
+        Label of the progress bar.
+
+    Yields
+    ------
+    object
+        ``func``'s result of each chunk, in record order.
+
+    Notes
+    -----
+    With a ``dask.distributed`` Client (the one ``dask.compute`` would use) every chunk is one future
+    (``Client.compute``) and at most ``AHEAD`` chunks per worker thread are in flight; the driver waits for the
+    oldest, so the results come in order and a slow chunk holds back at most that many. With the threads, processes
+    or synchronous scheduler the chunks are computed ``AHEAD`` per worker at a time by ``dask.compute``. Either way
+    the driver holds at most that many results at once, whatever the number of records. An exception raised by
+    ``func`` on a worker is raised here, with its type.
+    """
+    import dask
+
+    progress = boolean(progress, "progress")
+    if not callable(func):
+        raise TypeError(f"func must be callable, got {type(func).__name__}")
+    chunks = record_chunks(data)
+    client = _client()
+    ahead = AHEAD * _workers(client)
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=int(data.sizes["record"]), desc=desc, unit="record")
+    try:
+        if client is None:
+            for first in range(0, len(chunks), ahead):
+                batch = chunks[first:first + ahead]
+                results = dask.compute(*[dask.delayed(_call)(func, data.isel(record=s), s, args) for s in batch])
+                for s, result in zip(batch, results):
+                    if bar is not None:
+                        bar.update(s.stop - s.start)
+                    yield result
+            return
+        shared = client.scatter([args], hash=False)[0]
+        queue: deque = deque()
+        try:
+            for s in chunks:
+                queue.append((s, client.compute(dask.delayed(_call)(func, data.isel(record=s), s, shared))))
+                if len(queue) >= ahead:
+                    yield _next(queue, bar)
+            while queue:
+                yield _next(queue, bar)
+        finally:
+            if queue:
+                client.cancel([f for _, f in queue])
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _next(queue: deque, bar: Any) -> Any:
+    where, future = queue.popleft()
+    result = future.result()
+    if bar is not None:
+        bar.update(where.stop - where.start)
+    return result
+
+
+def compute(obj: Any, *, progress: bool = False) -> Any:
+    """Compute a dask object (an array, a Dataset, the ``Delayed`` of ``Dataset.to_zarr(..., compute=False)``) on the
+    current dask scheduler, with dask's progress bar.
+
+    Parameters
+    ----------
+    obj : dask collection
+    progress : bool
+        Show ``distributed.progress`` with a Client, else ``dask.diagnostics.ProgressBar`` (on stderr).
+
+    Returns
+    -------
+    object
+        The computed value.
+    """
+    import dask
+
+    progress = boolean(progress, "progress")
+    client = _client()
+    if client is not None:
+        future = client.compute(obj)
+        if progress:
+            from distributed import progress as show
+
+            show(future)
+        return future.result()
+    if not progress:
+        return dask.compute(obj)[0]
+    from dask.diagnostics import ProgressBar
+
+    with ProgressBar(out=sys.stderr):
+        return dask.compute(obj)[0]
