@@ -107,7 +107,8 @@ def test_statuses_and_ranking(models):
     ident = tsfdi.identify(y, models, tsfdi.LjungBox(50, 1e-3))
     assert ident.status == "identified" and ident.label == "rotor2" and ident.accepted == ("rotor2",)
     assert ident.ranking[0] == "rotor2"
-    assert "rotor2" in repr(ident) and "identified" in ident.summary()
+    assert "rotor2" in repr(ident) and "identified" in str(ident.summary())
+    assert "<table" in ident._repr_html_() and ident.summary().tables[0][1].equals(ident.to_frame())
     # ambiguous: the same model twice
     amb = tsfdi.identify(y, {"a": models["rotor2"], "b": models["rotor2"], "h": models["healthy"]},
                          tsfdi.LjungBox(50, 1e-3))

@@ -9,7 +9,6 @@ ambiguity ("confusion between those types of failures"), none means no decision.
 
 from __future__ import annotations
 
-import html
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,6 +20,7 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import ARXResults
+from tsfdi.summary import Summary
 from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
 
 __all__ = ["detect", "identify", "identify_windows", "Identification", "WindowedIdentification"]
@@ -173,21 +173,19 @@ class Identification:
                              "reject": bool(d.channel_reject[i]), "model_accepted": not d.reject})
         return pd.DataFrame(rows).set_index(["model", "channel"])
 
-    def summary(self) -> str:
-        lines = [f"Identification by {self.test}: status = {self.status}, label = {self.label}",
-                 f"  accepted: {', '.join(self.accepted) or '-'}",
-                 f"  ranking:  {', '.join(self.ranking)}"]
-        lines.append(self.to_frame().to_string())
-        return "\n".join(lines)
+    def summary(self) -> Summary:
+        """The outcome (test, status, label, accepted models, ranking) and the decision of every model and channel,
+        as text (``str``) and HTML tables."""
+        header = [("Test", self.test), ("Status", self.status), ("Label", self.label),
+                  ("Accepted", ", ".join(self.accepted) or "-"), ("Ranking", ", ".join(self.ranking))]
+        return Summary("Identification", header, [("Decision per model and channel", self.to_frame())])
 
     def __repr__(self) -> str:
         return (f"Identification(status={self.status!r}, label={self.label!r}, accepted={self.accepted}, "
                 f"test={self.test!r})")
 
     def _repr_html_(self) -> str:
-        return (f"<div><b>Identification</b> by {html.escape(self.test)}: status = <b>{self.status}</b>, "
-                f"label = <b>{html.escape(str(self.label))}</b><br>accepted: "
-                f"{html.escape(', '.join(self.accepted) or '-')}{self.to_frame().to_html()}</div>")
+        return self.summary()._repr_html_()
 
     def plot(self, ax: Any = None, **kwargs: Any) -> Any:
         """Grouped bars of the statistic per model and channel against the critical limit
