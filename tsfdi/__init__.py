@@ -3,9 +3,10 @@
 The flow, one module per step: models (:mod:`tsfdi.models`, order selection in :mod:`tsfdi.selection`) ->
 residual tests (:mod:`tsfdi.detection`) -> the windowed engine (:mod:`tsfdi.windows`) -> detection and
 identification (:mod:`tsfdi.identification`) -> the sliding-window monitor of paper 003 (:mod:`tsfdi.monitoring`)
-and the online detectors of papers 001/002 (:mod:`tsfdi.online`) -> baselines of many records
-(:mod:`tsfdi.baselines`) -> evaluation (:mod:`tsfdi.evaluation`). :mod:`tsfdi.datasets`, :mod:`tsfdi.plotting`
-and :mod:`tsfdi.study` are imported on first use.
+and the online detectors of papers 001/002 (:mod:`tsfdi.online`), fault isolation by structured residuals
+(:mod:`tsfdi.isolation`) -> baselines of many records (:mod:`tsfdi.baselines`) -> evaluation
+(:mod:`tsfdi.evaluation`); fleets of records on dask through :mod:`tsfdi.fleet`. :mod:`tsfdi.datasets`,
+:mod:`tsfdi.plotting`, :mod:`tsfdi.study` and :mod:`tsfdi.fleet` are imported on first use.
 """
 
 import importlib
@@ -43,16 +44,16 @@ __all__ = [
     "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "OnlineCalibration", "Records", "fit_baselines",
     "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
     # imported on first use
-    "datasets", "plotting", "study", "plot_acf", "align",
+    "datasets", "plotting", "study", "fleet", "plot_acf", "align",
     "TsfdiWarning", "__version__",
 ]
 
-_LAZY_MODULES = ("datasets", "plotting", "study")
+_LAZY_MODULES = ("datasets", "plotting", "study", "fleet")
 
 
 def __getattr__(name: str):
-    """``tsfdi.datasets``, ``tsfdi.plotting`` and ``tsfdi.study`` (and ``tsfdi.plot_acf``, ``tsfdi.align``) on first
-    use."""
+    """``tsfdi.datasets``, ``tsfdi.plotting``, ``tsfdi.study`` and ``tsfdi.fleet`` (and ``tsfdi.plot_acf``,
+    ``tsfdi.align``) on first use."""
     if name in _LAZY_MODULES:
         return importlib.import_module(f"tsfdi.{name}")
     if name == "plot_acf":
