@@ -75,13 +75,15 @@ def test_identification_one_held_out_flight(bench, fold0, capsys):
     assert set(ident.label) <= set(conditions) | {"ambiguous", "none"}
     lik = ident[ident.rule == "likelihood"]
     assert lik.label.isin(conditions).all()          # the likelihood rule always names a model
+    assert ident[ident.rule == "pvalue"].label.isin(conditions).all()
+    assert set(ident.rule) == {"paper", "likelihood", "pvalue"}
     per = ident.groupby(["family", "rule"]).size()
     assert per.nunique() == 1 and per.iloc[0] >= 10   # every family and rule labels the same windows
     summary = bench.ident_summary(ident)
     assert np.isfinite(summary.to_numpy()).all() and ((summary >= 0) & (summary <= 100)).all().all()
     bench.report_identification(ident, conditions)
     out = capsys.readouterr().out
-    assert "confusion (likelihood rule" in out and "cut4" in out
+    assert "confusion (likelihood rule" in out and "confusion (pvalue rule" in out and "cut4" in out
 
 
 def test_missing_data_fails_loudly(bench, tmp_path):

@@ -94,17 +94,19 @@ class Signal:
         return (self.kind != "numpy" and self.vector
                 and list(self.channels) != [f"y{i}" for i in range(self.nchan)])
 
-    def match_channels(self, channels: Any, name: str, *, named: bool = True) -> "Signal":
+    def match_channels(self, channels: Any, name: str, *, named: bool = True,
+                       reference: str = "the model was fitted on") -> "Signal":
         """This signal with its channels in the order of ``channels``.
 
         A named signal matched against named ``channels`` (``named=True``: the model was fitted on named data)
         is reordered by name; a missing or an extra channel raises a ``ValueError`` naming it. Otherwise the
-        channels are matched by position and only their number is checked.
+        channels are matched by position and only their number is checked. ``reference`` says where ``channels``
+        come from in the message (``"{reference} channels [...]"``).
         """
         channels = [str(c) for c in channels]
         if not (named and self.named):
             if self.nchan != len(channels):
-                raise ValueError(f"{name} has {self.nchan} channel(s) but the model was fitted on {len(channels)} "
+                raise ValueError(f"{name} has {self.nchan} channel(s) but {reference} {len(channels)} "
                                  f"({channels})")
             return self
         have = [str(c) for c in self.channels]
@@ -115,7 +117,7 @@ class Signal:
         if missing or extra:
             what = "; ".join(p for p in (f"missing channel(s) {missing}" if missing else "",
                                          f"extra channel(s) {extra}" if extra else "") if p)
-            raise ValueError(f"{name}: {what}; the model was fitted on channels {channels}")
+            raise ValueError(f"{name}: {what}; {reference} channels {channels}")
         if have == channels:
             return self
         order = [have.index(c) for c in channels]

@@ -115,7 +115,8 @@ class Records:
         if len(k) != 1:
             raise ValueError(f"every record of {name} must have the same number of channels, got {sorted(k)}")
         # named records (DataFrames, DataArrays with a channel coordinate) in the channel order of the first
-        sigs = [sigs[0]] + [s.match_channels(sigs[0].channels, f"{name}[{i}]", named=sigs[0].named)
+        sigs = [sigs[0]] + [s.match_channels(sigs[0].channels, f"{name}[{i}]", named=sigs[0].named,
+                                                 reference=f"{name}[0] has")
                             for i, s in enumerate(sigs[1:], start=1)]
         n = len(sigs)
         refuse_masked(states, "states")

@@ -97,3 +97,14 @@ def test_bad_records():
         tsfdi.ARX([a[:, 0], a[:, 1]], a[:, 2], 1, 1)
     with pytest.raises(ValueError, match=r"u\[1\] has 100 samples but y\[1\] has 300"):
         tsfdi.ARX([a[:, 0], a[:, 1]], [a[:, 2], a[:100, 2]], 1, 1)
+
+
+def test_records_with_other_channel_names_are_named_against_the_first_record():
+    rng = np.random.default_rng(4)
+    a = pd.DataFrame(rng.standard_normal((300, 2)), columns=["p", "q"])
+    b = a.rename(columns={"q": "r"})
+    with pytest.raises(ValueError, match=r"y\[1\]: missing channel\(s\) \['q'\]; extra channel\(s\) \['r'\]; "
+                                         r"y\[0\] has channels \['p', 'q'\]"):
+        tsfdi.VAR([a, b], 2)
+    with pytest.raises(ValueError, match=r"data\[1\]: .*; data\[0\] has channels"):
+        tsfdi.fit_baselines([a, b], states=["healthy", "healthy"], fs=10.0)

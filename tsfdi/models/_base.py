@@ -66,7 +66,8 @@ def _same_channels(records: list[Signal], name: str) -> tuple[Signal, ...]:
     for i, r in enumerate(records[1:], start=1):
         if not (r.named and first.named) and r.nchan != first.nchan:
             raise ValueError(f"{name}[{i}] has {r.nchan} channel(s) but {name}[0] has {first.nchan}")
-        out.append(r.match_channels(first.channels, f"{name}[{i}]", named=first.named))
+        out.append(r.match_channels(first.channels, f"{name}[{i}]", named=first.named,
+                                      reference=f"{name}[0] has"))
     return tuple(out)
 
 
