@@ -184,10 +184,14 @@ class IsolationSeries:
         return _status(self.fired, self._matches.sum(axis=1))
 
     @property
-    def labels(self) -> list:
+    def _codes(self) -> np.ndarray:
+        """Position of the isolated sensor of every row, -1 where none is isolated."""
         m = self._matches
-        one = m.sum(axis=1) == 1
-        return [self.sensors[int(np.argmax(row))] if ok else None for row, ok in zip(m, one)]
+        return np.where(m.sum(axis=1) == 1, m.argmax(axis=1), -1)
+
+    @property
+    def labels(self) -> list:
+        return [self.sensors[c] if c >= 0 else None for c in self._codes.tolist()]
 
     @property
     def first_detection(self) -> int | None:
@@ -210,13 +214,12 @@ class IsolationSeries:
         time of an isolation that must persist, e.g. ``hold=40`` samples = 2 s at 20 Hz); ``None`` if none.
         ``labels[row]`` is the sensor. ``hold=1`` gives :attr:`first_isolation`."""
         hold = int_like(hold, "hold", minimum=1)
-        run, prev = 0, None
-        for i, lab in enumerate(self.labels):
-            run = run + 1 if lab is not None and lab == prev else int(lab is not None)
-            prev = lab
-            if run >= hold:
-                return i
-        return None
+        code = self._codes
+        rows = np.arange(code.size)
+        # length of the run of equal codes ending at every row
+        first = np.maximum.accumulate(np.where(np.diff(code, prepend=-2) != 0, rows, 0))
+        hit = np.flatnonzero((code >= 0) & (rows - first + 1 >= hold))
+        return int(hit[0]) if hit.size else None
 
     def __len__(self) -> int:
         return int(self.fired.shape[0])

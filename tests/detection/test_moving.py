@@ -164,3 +164,28 @@ def test_pandas_alarm_series_keeps_the_index():
 def test_bad_input_names_the_argument(call, exc, match):
     with pytest.raises(exc, match=match):
         call()
+
+
+def test_alfa_benchmark_protocol(shared_data):
+    """benchmarks/alfa_sensor_validation.py: fitting, calibration and held-out flights are disjoint (9 without
+    failure, 18 + 18 pre-failure parts), the gyro's declared sensor noise is 0.02 deg/s, the added noise of a
+    configuration is one draw per gyro update, and a record's statistic is the test's on its prediction errors."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "alfa_sensor_validation.py"
+    spec = importlib.util.spec_from_file_location("alfa_sensor_validation_bench", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    root = shared_data / "alfa"
+    fit, calibration, held, names = bench.setup(root)
+    assert (len(fit), len(calibration), len(held)) == (9, 18, 18)
+    assert not set(names["calibration"]) & set(names["held-out"]) and len(set(sum(names.values(), []))) == 45
+    assert not any(f.isna().any().any() for f in fit + calibration + held)
+    assert min(len(f) for f in calibration + held) > (bench.ARM_S + bench.LEAD_S + 20) * bench.FS
+    assert abs(np.degrees(bench.sensor_noise(root)) - 0.02) < 1e-6
+    q = held[0]["q"].to_numpy()
+    noisy = bench.gyro(held[0], 10.0, 1e-3, 1)
+    updates = np.r_[True, np.diff(q) != 0]
+    assert np.all(np.diff(noisy - q)[~updates[1:]] == 0)          # held between the gyro's updates
+    assert 0.5e-3 * np.sqrt(99) < np.std((noisy - q)[updates]) < 1.5e-3 * np.sqrt(99)
