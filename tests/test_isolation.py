@@ -321,3 +321,11 @@ def test_alfa_benchmark_offsets_closed_form(shared_data):
     rec.append(o)
     np.testing.assert_allclose(bench.adapt(raw, valid, np.array([1.0, -2.0, 0.5]), 0.002), np.array(rec),
                                rtol=1e-12, atol=1e-12)
+
+
+def test_residual_columns_are_named_against_the_residual_set():
+    rs = ResidualSet(TABLE2)
+    frame = pd.DataFrame(np.random.default_rng(0).standard_normal((200, 3)), columns=["R1", "R2", "Rx"])
+    with pytest.raises(ValueError, match=r"residuals: missing channel\(s\) \['R3'\]; extra channel\(s\) \['Rx'\]; "
+                                         r"the residual set is built on channels \['R1', 'R2', 'R3'\]"):
+        rs.isolate(frame)

@@ -431,7 +431,7 @@ class ResidualSet:
 
     def _signal(self, residuals: Any, name: str = "residuals") -> Any:
         sig = as_signal(residuals, name, vector=len(self.names) > 1 or None, allow_constant=True)
-        return sig.match_channels(self.names, name)
+        return sig.match_channels(self.names, name, reference="the residual set is built on")
 
     def _column(self, sig: Any, i: int, start: int = 0, stop: int | None = None) -> Any:
         stop = sig.nobs if stop is None else stop
