@@ -1,12 +1,15 @@
 """The same workloads timed on this tree and on an earlier commit of tsfdi, in one run.
 
 Used by ``identify_speed.py`` and ``evaluate_speed.py`` (``--against REF``, default :data:`REFERENCE`, the last
-commit before the windowed engine of issue 16). The earlier ``tsfdi`` package is exported with ``git archive`` into
-a temporary folder; each measurement is a fresh interpreter (``python previous_commit.py WORKLOAD``) with that folder
-or this repository first on ``PYTHONPATH``, the two trees alternating so that a slow spell of the machine hits
-both. A worker builds its inputs, runs the workload twice to compile (numba) and warm caches, then times
-``repeat`` units of as many calls as take about 0.1 s and prints the median time per call; the comparison reports the median over rounds of each tree and the ratio
-previous / current (above 1: the current tree is faster).
+commit before the windowed engine of issue 16) and ``rls_throughput.py`` (default there: the commit before issue 18).
+The earlier ``tsfdi`` package is exported with ``git archive`` into a temporary folder; each measurement is a fresh
+interpreter (``python previous_commit.py WORKLOAD REPEAT CLOCK``) with that folder or this repository first on
+``PYTHONPATH``, the two trees alternating so that a slow spell of the machine hits both. A worker builds its inputs,
+runs the workload twice to compile (numba) and warm caches, then times ``repeat`` units of as many calls as take
+about 0.1 s and prints the median time per call; the comparison reports the median over rounds of each tree and the
+ratio previous / current (above 1: the current tree is faster). Time is wall-clock time, or with ``clock="cpu"``
+the process's CPU time (user + system, page faults included), which other jobs on a shared machine disturb far less
+for single-threaded work.
 
 The workloads use only calls whose meaning did not change, spelled for each tree where the spelling did
 (``evaluate(methods=...)`` before, ``evaluate(tests=...)`` after).
@@ -14,8 +17,10 @@ The workloads use only calls whose meaning did not change, spelled for each tree
 
 from __future__ import annotations
 
+import atexit
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -31,20 +36,26 @@ ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = "899984e"
 
 
-def median_time(fn, repeat: int, number: int = 1) -> float:
-    """Median over ``repeat`` units of the time per call of ``fn``, each unit ``number`` calls."""
+CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
+
+
+def median_time(fn, repeat: int, number: int = 1, clock: str = "wall") -> float:
+    """Median over ``repeat`` units of the time per call of ``fn``, each unit ``number`` calls, by ``clock``
+    (a key of :data:`CLOCKS`)."""
+    now = CLOCKS[clock]
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = now()
         for _ in range(number):
             fn()
-        times.append((time.perf_counter() - t0) / number)
+        times.append((now() - t0) / number)
     return float(statistics.median(times))
 
 
 def previous_tree(ref: str) -> Path:
-    """``tsfdi`` of commit ``ref`` unpacked under a temporary folder (kept for the process's lifetime)."""
+    """``tsfdi`` of commit ``ref`` unpacked under a temporary folder (removed when the process exits)."""
     out = Path(tempfile.mkdtemp(prefix=f"tsfdi-{ref}-"))
+    atexit.register(shutil.rmtree, out, True)
     archive = out / "tree.tar"
     subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", "-o", str(archive), ref, "tsfdi"], check=True)
     with tarfile.open(archive) as tar:
@@ -52,31 +63,33 @@ def previous_tree(ref: str) -> Path:
     return out
 
 
-def _run(tree: Path, workload: str, repeat: int) -> float:
+def _run(tree: Path, workload: str, repeat: int, clock: str) -> float:
     env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
-    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), workload, str(repeat)], env=env,
+    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), workload, str(repeat), clock], env=env,
                           capture_output=True, text=True, cwd=str(tree))
     if proc.returncode != 0:
         raise RuntimeError(f"workload {workload} failed on {tree}:\n{proc.stderr[-3000:]}")
     return float(json.loads(proc.stdout.strip().splitlines()[-1])["median_s"])
 
 
-def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3) -> None:
-    """Time every ``workloads`` entry (name -> (description, repeat)) on this tree and on ``against``; print a table.
+def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3, clock: str = "wall") -> None:
+    """Time every ``workloads`` entry (name -> (description, repeat)) on this tree and on ``against`` by ``clock``
+    ("wall" or "cpu", see the module docstring); print a table.
 
     A workload counts as not slower when the current median is at most 5 % above the previous one (timing noise of
     this machine between interleaved runs)."""
     prev = previous_tree(against)
     head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                           text=True).stdout.strip()
+    what = "wall-clock" if clock == "wall" else "CPU"
     print(f"\nThis tree (HEAD {head} + working tree) against commit {against}, {rounds} interleaved rounds per tree, "
-          "each a fresh interpreter timing the median of its runs after a warm-up run:")
+          f"each a fresh interpreter timing the median {what} time of its runs after a warm-up run:")
     print(f"  {'workload':<58} {'previous':>10} {'current':>10} {'prev/curr':>10}  verdict")
     for name, (what, repeat) in workloads.items():
         old, new = [], []
         for _ in range(rounds):
-            old.append(_run(prev, name, repeat))
-            new.append(_run(ROOT, name, repeat))
+            old.append(_run(prev, name, repeat, clock))
+            new.append(_run(ROOT, name, repeat, clock))
         mo, mn = statistics.median(old), statistics.median(new)
         verdict = "not slower" if mn <= 1.05 * mo else "SLOWER"
         print(f"  {what:<58} {mo * 1e3:8.1f}ms {mn * 1e3:8.1f}ms {mo / mn:9.2f}x  {verdict}")
@@ -152,19 +165,33 @@ def monitor_workload():
     return lambda: [mon.run(x) for x in recs]
 
 
+def _rls_workload(d: int):
+    """``RecursiveARX(d // 2, d - d // 2, 0, 0.99).run`` on white noise: 500,000 samples (100,000 at ``d >= 60``)."""
+    import numpy as np
+
+    from tsfdi import RecursiveARX
+
+    rng = np.random.default_rng(0)
+    n = 500_000 if d < 60 else 100_000
+    u, y = rng.standard_normal(n), rng.standard_normal(n)
+    return lambda: RecursiveARX(d // 2, d - d // 2, 0, 0.99).run(y, u)
+
+
 WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
-             "evaluate": evaluate_workload, "monitor": monitor_workload}
+             "evaluate": evaluate_workload, "monitor": monitor_workload,
+             "rls_d4": lambda: _rls_workload(4), "rls_d20": lambda: _rls_workload(20),
+             "rls_d60": lambda: _rls_workload(60)}
 
 
-def _worker(name: str, repeat: int) -> None:
+def _worker(name: str, repeat: int, clock: str) -> None:
     fn = WORKLOADS[name]()
     t0 = time.perf_counter()
     fn()                                                    # compile and warm up
     fn()
     once = time.perf_counter() - t0
     number = max(1, int(0.1 / max(once / 2, 1e-9)))         # calls per timed unit: at least ~0.1 s of work
-    print(json.dumps({"median_s": median_time(fn, repeat, number)}))
+    print(json.dumps({"median_s": median_time(fn, repeat, number, clock)}))
 
 
 if __name__ == "__main__":
-    _worker(sys.argv[1], int(sys.argv[2]))
+    _worker(sys.argv[1], int(sys.argv[2]), sys.argv[3])

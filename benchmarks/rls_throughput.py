@@ -1,7 +1,13 @@
-"""RLS throughput of tsfdi.RecursiveARX (numba, symmetric update) against a plain numpy per-sample RLS.
+"""RLS throughput of tsfdi.RecursiveARX (numba, symmetric update) against a plain numpy per-sample RLS, and
+against the same calls on an earlier commit.
 
-Prints samples/s (median of repeats) for parameter dimension 4, 20 and 60 and the ratio to the numpy loop
-run in the same process. Target (issue 4): >= 3e6 samples/s at dimension 20.
+1. Samples/s (median of repeats) of ``RecursiveARX(na, nb, 0, 0.99).run`` for parameter dimension 4, 20 and 60
+   and the ratio to the numpy loop run in the same process. Target (issue 4): >= 3e6 samples/s at dimension 20.
+2. The same ``run`` calls on this tree and on commit ``--against`` (default :data:`REFERENCE`, the commit before
+   the issue 18 safeguards), through ``previous_commit.py``: fresh interpreters alternating between the two
+   trees, CPU time, median over rounds. Target: not slower.
+
+Run: ``python benchmarks/rls_throughput.py [--against REF] [--rounds N]``.
 """
 
 import os
@@ -43,6 +49,10 @@ def median_time(fn, repeats):
     return float(np.median(ts)), float(np.min(ts))
 
 
+#: The commit before issue 18 (input contract, numerical safeguards of RecursiveARX).
+REFERENCE = "39c9c1c"
+
+
 def main():
     rng = np.random.default_rng(0)
     n_fast, n_ref = 500_000, 20_000
@@ -64,4 +74,14 @@ def main():
 
 
 if __name__ == "__main__":
+    import argparse
+
+    from previous_commit import compare
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", default=REFERENCE, help=f"earlier commit to compare with (default {REFERENCE})")
+    parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds per tree (default 5)")
+    args = parser.parse_args()
     main()
+    compare({f"rls_d{d}": (f"RecursiveARX.run, d={d}, {'100,000' if d >= 60 else '500,000'} samples", 7)
+             for d in (4, 20, 60)}, args.against, rounds=args.rounds, clock="cpu")

@@ -78,6 +78,16 @@ def test_trend_and_two_inputs_match_least_squares():
     np.testing.assert_allclose(m.theta_[2:], np.ravel(batch.b), rtol=0, atol=1e-6)
 
 
+@pytest.mark.parametrize("na, nb, trend", [(1, 0, "n"), (1, 1, "n"), (2, 1, "n"), (2, 2, "c"), (3, 4, "n")])
+def test_odd_and_even_dimensions_match_least_squares(na, nb, trend):
+    # the kernel forms P phi two rows at a time, the last row alone when d = 1, 3, 5, 7 is odd
+    y, u = simulate_arx(3000, 5)
+    m = RecursiveARX(na, nb, 1, P0=1e10, trend=trend)
+    m.run(y, u)
+    X, Y, _ = regressor(y, u, na, nb, 1, trend=trend == "c")
+    np.testing.assert_allclose(m.theta_, np.linalg.lstsq(X, Y, rcond=None)[0], rtol=0, atol=1e-6)
+
+
 def test_forgetting_equals_exponentially_weighted_least_squares():
     y, u = simulate_arx(100_000, 3)
     lam = 0.99

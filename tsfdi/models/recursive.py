@@ -69,32 +69,26 @@ MAX_SAMPLE = 1e152
 MAX_P0 = 1e100
 
 
-@numba.njit(cache=True, nogil=True, inline="always", fastmath={"reassoc", "contract", "arcp", "nsz"})
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _m_phi(P, phi, px, capped, any_cap, inv_lam, half):  # pragma: no cover - compiled
     """``px = M phi`` and ``phi' px``: ``M = P`` when no coordinate is capped (the kernel folds ``1 / lambda``
     into ``s``), else ``M = F o P`` with ``F[i, k] = 1 / lambda``, ``1 / sqrt(lambda)`` or 1 as neither, one or
-    both of ``i, k`` are capped."""
+    both of ``i, k`` are capped. The kernel's own loop does the uncapped case; this one serves the rest."""
     d = phi.shape[0]
     for i in range(d):
         px[i] = 0.0
-    if not any_cap:
-        for k in range(d):
-            pk = phi[k]
-            for i in range(d):
-                px[i] += P[k, i] * pk
-    else:
-        for k in range(d):
-            pk = phi[k]
-            for i in range(d):
-                f = 1.0 if capped[i] and capped[k] else (half if capped[i] or capped[k] else inv_lam)
-                px[i] += P[k, i] * f * pk
+    for k in range(d):
+        pk = phi[k]
+        for i in range(d):
+            f = 1.0 if not any_cap or (capped[i] and capped[k]) else (half if capped[i] or capped[k] else inv_lam)
+            px[i] += P[k, i] * f * pk
     s = 0.0
     for i in range(d):
         s += phi[i] * px[i]
     return s
 
 
-@numba.njit(cache=True, nogil=True, inline="always", fastmath={"reassoc", "contract", "arcp", "nsz"})
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _diagonal(P, pcap, lam, capped):  # pragma: no cover - compiled
     """Check the variances after ``P`` changed and flag the coordinates capped at the next sample.
 
@@ -131,6 +125,53 @@ def _diagonal(P, pcap, lam, capped):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
+def _condition(P, pcap, phi, px, s, capped, any_cap, inv_lam, half, lam_s, halted):  # pragma: no cover
+    """Repair ``P`` before an update whose ``s = phi' M phi`` is negative, beyond ``_MAX_WEIGHT lambda`` or not a
+    number (rare). Returns the new ``s`` (and ``px``) and whether ``P``'s diagonal needs :func:`_diagonal`.
+
+    ``s < 0``: ``P`` lost its positive definiteness to rounding (its condition number beyond ~1e16: a direction
+    excited by data far larger than ``1 / sqrt(P)`` while another is not). A ridge on the diagonal, twice what
+    makes ``phi' M phi`` positive plus ``_RIDGE`` times the largest variance, restores it.
+
+    ``s > _MAX_WEIGHT lambda`` (while adapting): the sample would outweigh ``P``'s information by more than
+    ``1 / _MAX_WEIGHT``, and the symmetric update would lose ``P``'s last digits (and its positive definiteness).
+    ``P`` and ``pcap`` shrink so that ``phi' M phi`` is exactly ``_MAX_WEIGHT lambda``: the prior dropped is then
+    ``< 1e-12`` of the sample's weight.
+    """
+    d = phi.shape[0]
+    touched = False
+    if s < 0.0:
+        w = 0.0
+        top = 0.0
+        for i in range(d):
+            f = 1.0 if not any_cap or capped[i] else inv_lam
+            w += f * phi[i] * phi[i]
+            top = max(top, P[i, i])
+        mu = 2.0 * (-s) / w + _RIDGE * top
+        for i in range(d):
+            P[i, i] += mu
+        s = _m_phi(P, phi, px, capped, any_cap, inv_lam, half)
+        touched = True
+    if not halted and not s <= _MAX_WEIGHT * lam_s:
+        top = 0.0
+        for i in range(d):
+            top = max(top, abs(phi[i]))
+        sq = 0.0
+        for i in range(d):
+            sq += (phi[i] / top) * px[i]
+        g = _MAX_WEIGHT * lam_s / sq
+        for i in range(d):
+            px[i] = px[i] * g / top
+            pcap[i] = pcap[i] * g / top
+            for k in range(d):
+                P[i, k] = P[i, k] * g / top
+        s = 0.0
+        for i in range(d):
+            s += phi[i] * px[i]
+    return s, touched
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, var_tol, var_min, zthr, arm_after,
                 pcap, theta, P, ybuf, ubuf, ist, fst,
                 out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
@@ -142,6 +183,11 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
     scales ``P`` down, ``pcap`` follows (see ``RecursiveARX``).
     The error statistics ``fst = [mean, M2, unit]`` are kept in units of ``fst[2]``, a power of two set by the
     first nonzero error, so that their squares stay in the floating-point range at any data scale.
+
+    Speed (a few loop passes of length ``d`` per sample dominate for small ``d``): the counters and statistics
+    live in local variables and go back to ``ist`` / ``fst`` at the end; ``P phi`` is computed by row dot
+    products, two rows per pass over ``phi``, with ``phi' P phi`` in the same pass; the parameter step and the
+    scaling of ``v`` share one loop; the rare repairs of ``P`` sit behind one range check of ``phi' P phi``.
     """
     n = y.shape[0]
     d = theta.shape[0]
@@ -155,14 +201,23 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
     px = np.empty(d)
     capped = np.zeros(d, dtype=np.bool_)
     any_cap = _diagonal(P, pcap, lam, capped)
-    inv_unit = 1.0 / fst[_F_UNIT] if fst[_F_UNIT] != 0.0 else 1.0
+    valid, stable_cnt, model_stable, nw = ist[_I_VALID], ist[_I_STABLE_CNT], ist[_I_MODEL_STABLE], ist[_I_NW]
+    var_cnt, var_stable, alarmed, skipped = ist[_I_VAR_CNT], ist[_I_VAR_STABLE], ist[_I_ALARMED], ist[_I_SKIPPED]
+    seen, first_alarm, frozen = ist[_I_SEEN], ist[_I_FIRST_ALARM], ist[_I_FROZEN]
+    mean, m2, unit = fst[_F_MEAN], fst[_F_M2], fst[_F_UNIT]
+    inv_unit = 1.0 / unit if unit != 0.0 else 1.0
+    scale = unit if unit != 0.0 else 1.0
+    var_out = m2 / (nw - 1) * scale * scale if nw >= 2 else np.nan     # the statistics in the data's unit
+    mean_out = mean * scale if nw >= 1 else np.nan
+    # no adaptation from the first alarm on (freeze_on_alarm) or while frozen (freeze())
+    halted = frozen == 1 or (freeze_on_alarm and alarmed == 1)
     for t in range(n):
         yt = y[t]
         finite = np.isfinite(yt)
         for j in range(nin):
             if not np.isfinite(u[t, j]):
                 finite = False
-        ist[_I_SEEN] += 1
+        seen += 1
         # shift the input history (u_j[t] goes to column 0)
         for j in range(nin):
             for k in range(nu - 1, 0, -1):
@@ -172,12 +227,12 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
         e = np.nan
         z = np.nan
         if not finite:
-            ist[_I_SKIPPED] += 1
-            ist[_I_VALID] = 0
+            skipped += 1
+            valid = 0
             flags |= _SKIPPED
         else:
-            ist[_I_VALID] += 1
-        if finite and ist[_I_VALID] > t0:
+            valid += 1
+        if finite and valid > t0:
             # regressor
             if trend == 1:
                 phi[0] = 1.0
@@ -190,122 +245,101 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
             for i in range(d):
                 yhat += phi[i] * theta[i]
             e = yt - yhat
-            # anti-windup: a coordinate whose variance would pass its P0 value is not forgotten at this sample
-            # (M = F o P with F[i, k] = 1 / lambda, 1 / sqrt(lambda) or 1 as neither, one or both are capped;
+            # px = M phi and s = phi' px. M = P (1 / lambda folded into s) unless a coordinate is capped
+            # (anti-windup: a coordinate whose variance would pass its P0 value is not forgotten at this sample;
             # the flags come from _diagonal, run whenever P changes)
-            # px = M phi (row axpy over the symmetric P); M = P / lambda, folded into s, when nothing is capped
             lam_s = lam if not any_cap else 1.0
-            s = _m_phi(P, phi, px, capped, any_cap, inv_lam, half)
-            if s < 0.0:
-                # P lost its positive definiteness to rounding (its condition number beyond ~1e16: a direction
-                # excited by data far larger than 1 / sqrt(P) while another is not): a ridge on the diagonal,
-                # twice what makes phi' M phi positive plus _RIDGE times the largest variance, restores it
-                w = 0.0
-                top = 0.0
-                for i in range(d):
-                    f = 1.0 if not any_cap or capped[i] else inv_lam
-                    w += f * phi[i] * phi[i]
-                    top = max(top, P[i, i])
-                mu = 2.0 * (-s) / w + _RIDGE * top
-                for i in range(d):
-                    P[i, i] += mu
-                s = _m_phi(P, phi, px, capped, any_cap, inv_lam, half)
-                touched = True
-            else:
-                touched = False
-            updating = not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1)
-            if updating and not s <= _MAX_WEIGHT * lam_s:
-                # the sample would outweigh P's information by more than 1 / _MAX_WEIGHT: the symmetric update
-                # would lose P's last digits (and its positive definiteness). Shrink P so that phi' M phi is
-                # exactly _MAX_WEIGHT lambda: the prior dropped is then < 1e-12 of the sample's weight.
-                top = 0.0
-                for i in range(d):
-                    top = max(top, abs(phi[i]))
-                sq = 0.0
-                for i in range(d):
-                    sq += (phi[i] / top) * px[i]
-                g = _MAX_WEIGHT * lam_s / sq
-                for i in range(d):
-                    px[i] = px[i] * g / top
-                    pcap[i] = pcap[i] * g / top
-                    for k in range(d):
-                        P[i, k] = P[i, k] * g / top
+            if not any_cap:
                 s = 0.0
-                for i in range(d):
-                    s += phi[i] * px[i]
+                for i in range(0, d - 1, 2):
+                    a0 = 0.0
+                    a1 = 0.0
+                    for k in range(d):
+                        a0 += P[i, k] * phi[k]
+                        a1 += P[i + 1, k] * phi[k]
+                    px[i] = a0
+                    px[i + 1] = a1
+                    s += phi[i] * a0 + phi[i + 1] * a1
+                if d % 2 == 1:
+                    a0 = 0.0
+                    for k in range(d):
+                        a0 += P[d - 1, k] * phi[k]
+                    px[d - 1] = a0
+                    s += phi[d - 1] * a0
+            else:
+                s = _m_phi(P, phi, px, capped, any_cap, inv_lam, half)
+            touched = False
+            if not 0.0 <= s <= _MAX_WEIGHT * lam_s:
+                s, touched = _condition(P, pcap, phi, px, s, capped, any_cap, inv_lam, half, lam_s, halted)
             s += lam_s
             # parameter step L(k) e(k), L = P phi / (lambda + phi' P phi)
             ge = e / s
-            step_max = 0.0
-            for i in range(d):
-                st = abs(px[i] * ge)
-                if st > step_max:
-                    step_max = st
             # model-stability gate (paper 001, section IV-B)
-            if ist[_I_MODEL_STABLE] == 0:
+            if model_stable == 0:
+                step_max = 0.0
+                for i in range(d):
+                    step_max = max(step_max, abs(px[i] * ge))
                 if step_max < eps:
-                    ist[_I_STABLE_CNT] += 1
+                    stable_cnt += 1
                 else:
-                    ist[_I_STABLE_CNT] = 0
-                if ist[_I_STABLE_CNT] >= n_stable:
-                    ist[_I_MODEL_STABLE] = 1
-            if ist[_I_MODEL_STABLE] == 1:
+                    stable_cnt = 0
+                if stable_cnt >= n_stable:
+                    model_stable = 1
+            if model_stable == 1:
                 flags |= _MODEL_STABLE
-                nw = ist[_I_NW]
-                mean = fst[_F_MEAN]
-                m2 = fst[_F_M2]
-                unit = fst[_F_UNIT]
-                if unit == 0.0 and e != 0.0:
+                if unit == 0.0 and e != 0.0 and not halted:
+                    # the first nonzero error sets the unit (while halted the statistics are 0 in any unit)
                     unit = 2.0 ** np.floor(np.log2(abs(e)))
                     inv_unit = 1.0 / unit
                 en = e * inv_unit     # e in the statistics' unit (exact: a power of two)
-                if ist[_I_VAR_STABLE] == 1:
+                if var_stable == 1:
                     sd = np.sqrt(m2 / (nw - 1))
                     z = (en - mean) / sd if sd > 0 else (np.inf if en != mean else 0.0)
-                    if abs(z) > zthr and ist[_I_SEEN] > arm_after:
+                    if abs(z) > zthr and seen > arm_after:
                         flags |= _ALARM
-                        if ist[_I_ALARMED] == 0:
-                            ist[_I_ALARMED] = 1
-                            ist[_I_FIRST_ALARM] = ist[_I_SEEN] - 1
-                if not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
+                        if alarmed == 0:
+                            alarmed = 1
+                            first_alarm = seen - 1
+                            halted = halted or freeze_on_alarm
+                if not halted:
                     # Welford (paper 001, eq. 8)
                     nw += 1
                     delta = en - mean
                     mean += delta / nw
+                    m2_old = m2
                     m2 += delta * (en - mean)
-                    if ist[_I_VAR_STABLE] == 0 and nw >= 3:
-                        v_old = fst[_F_M2] / (nw - 2)
+                    if var_stable == 0 and nw >= 3:
+                        v_old = m2_old / (nw - 2)
                         v_new = m2 / (nw - 1)
                         if nw >= var_min and abs(v_new - v_old) <= var_tol * v_old:
-                            ist[_I_VAR_CNT] += 1
+                            var_cnt += 1
                         else:
-                            ist[_I_VAR_CNT] = 0
-                        if ist[_I_VAR_CNT] >= n_stable:
-                            ist[_I_VAR_STABLE] = 1
-                    ist[_I_NW] = nw
-                    fst[_F_MEAN] = mean
-                    fst[_F_M2] = m2
-                    fst[_F_UNIT] = unit
-                if ist[_I_VAR_STABLE] == 1:
+                            var_cnt = 0
+                        if var_cnt >= n_stable:
+                            var_stable = 1
+                    var_out = m2 / (nw - 1) * unit * unit if nw >= 2 else np.nan
+                    mean_out = mean * unit
+                if var_stable == 1:
                     flags |= _VAR_STABLE
-            # parameter and covariance update (eqs. 6-7 / 15-16), skipped once frozen: the alarmed sample
+            # parameter and covariance update (eqs. 6-7 / 15-16), skipped once halted: the alarmed sample
             # itself does not enter the model
-            if not ((freeze_on_alarm and ist[_I_ALARMED] == 1) or ist[_I_FROZEN] == 1):
-                for i in range(d):
-                    theta[i] += px[i] * ge
+            if not halted:
                 c = 1.0 / np.sqrt(lam_s * s)
                 for i in range(d):
+                    theta[i] += px[i] * ge
                     px[i] *= c
                 if not any_cap:
-                    # the plain update, with the check of _diagonal folded in: a variance that is not positive
-                    # and finite, or one that reaches its cap, sends P through _diagonal below
                     for i in range(d):
                         vi = px[i]
                         for k in range(d):
                             P[i, k] = P[i, k] * inv_lam - vi * px[k]
+                    # the check of _diagonal: a variance that is not positive and finite, or one that reaches
+                    # its cap, sends P through _diagonal below
+                    ok = True
+                    for i in range(d):
                         p = P[i, i]
-                        if not (0.0 < p < lam * pcap[i]):
-                            touched = True
+                        ok &= (p > 0.0) & (p < lam * pcap[i])
+                    touched |= not ok
                 else:
                     for i in range(d):
                         vi = px[i]
@@ -323,11 +357,14 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
         for i in range(d):
             out_params[t, i] = theta[i]
         out_err[t] = e
-        unit = fst[_F_UNIT] if fst[_F_UNIT] != 0.0 else 1.0
-        out_var[t] = fst[_F_M2] / (ist[_I_NW] - 1) * unit * unit if ist[_I_NW] >= 2 else np.nan
-        out_mean[t] = fst[_F_MEAN] * unit if ist[_I_NW] >= 1 else np.nan
+        out_var[t] = var_out
+        out_mean[t] = mean_out
         out_z[t] = z
         out_flags[t] = flags
+    ist[_I_VALID], ist[_I_STABLE_CNT], ist[_I_MODEL_STABLE], ist[_I_NW] = valid, stable_cnt, model_stable, nw
+    ist[_I_VAR_CNT], ist[_I_VAR_STABLE], ist[_I_ALARMED], ist[_I_SKIPPED] = var_cnt, var_stable, alarmed, skipped
+    ist[_I_SEEN], ist[_I_FIRST_ALARM], ist[_I_FROZEN] = seen, first_alarm, frozen
+    fst[_F_MEAN], fst[_F_M2], fst[_F_UNIT] = mean, m2, unit
 
 
 @dataclass(frozen=True, eq=False)
@@ -753,7 +790,7 @@ class RecursiveARX:
         out_var = np.empty(n)
         out_mean = np.empty(n)
         out_z = np.empty(n)
-        out_flags = np.empty(n, dtype=np.int64)
+        out_flags = np.empty(n, dtype=np.uint8)
         _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
                     self.freeze_on_alarm, self.eps, self.stable_samples, self.variance_tol,
                     self.min_variance_samples, self.threshold, self.arm_after, self._pcap, self.theta_, self.P_,
