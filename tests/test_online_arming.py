@@ -73,6 +73,7 @@ def test_the_model_turns_stable_exactly_where_the_gate_says(gaps):
     k = gate_sample(y, u)
     assert 25 <= k < 500
     det = OnlineDetector(["b"], na=1, nb=1, nonfinite="skip")
+    assert det.models[0].gate == "relative" and det.models[0].eps == det.eps == 1e-2     # the estimator's own gate
     with pytest.warns(ConvergenceWarning, match="its parameter step never stayed below eps"):
         det.run(y[:k], u[:k])
     assert not det.models[0].model_stable

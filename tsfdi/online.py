@@ -261,7 +261,7 @@ class OnlineDetector:
     Welford mean at arming). No alarm of any source is raised among the first ``arm_after`` samples (baseline phase).
 
     A pair is *armed* (its Z-score and GLRT can alarm) once its model is stable by the scale-free gate of the Notes
-    and then its error variance is stable (:class:`tsfdi.RecursiveARX`). :meth:`run` warns
+    (:class:`tsfdi.RecursiveARX` with ``gate="relative"``) and then its error variance is stable. :meth:`run` warns
     (:class:`~tsfdi.exceptions.ConvergenceWarning`, once per pair and stream) when it returns with a pair that has
     not armed, naming the pair and the time of the last sample: no alarm could be raised for it.
 
@@ -317,20 +317,19 @@ class OnlineDetector:
     step :math:`\|L(k)\hat e(k)\|_\infty < \epsilon` "for some time", with :math:`\epsilon` "a small positive number"
     and no unit. An absolute bound depends on the units of ``y`` and ``u`` (a gain from a command in rad/s to a
     rate in deg/s is 57 times that to a rate in rad/s) and arms at once while the estimate is still at its
-    start ``theta = 0`` on quiet data. Here the step is measured relative to the model it changes. With
-    :math:`\Delta\theta(k) = \theta(k) - \theta(k-1)` and :math:`D(k)` the diagonal of regressor scales -- 1 for
-    the constant, :math:`\max_{t \le k}|y(t)|` for every :math:`a_i`, :math:`\max_{t \le k}|u_j(t)|` for every
-    :math:`b_{ji}` -- sample :math:`k` passes when
+    start ``theta = 0`` on quiet data. The pairs' models therefore use the relative gate of
+    :class:`tsfdi.RecursiveARX` (``gate="relative"``, see its Notes): sample :math:`k` passes when
 
     .. math:: \|D(k)\,\Delta\theta(k)\|_\infty < \epsilon\, \|D(k)\,\theta(k-1)\|_\infty ,
 
-    i.e. no term of the prediction :math:`\phi(k)'\theta` moves by more than the fraction :math:`\epsilon` of the
-    largest term. Both sides are in the units of ``y``: the gate is unchanged when ``y`` and each input are
-    rescaled, together or separately (the estimator itself is equivariant when ``P0`` is rescaled with them,
-    :math:`P_0 \propto 1/c^2` per regressor). The model is stable once ``stable_samples`` consecutive regression
-    samples pass (paper 001's "for some time"; samples without a prediction error neither count nor break the
-    run); from then on the error variance is tracked as in :class:`tsfdi.RecursiveARX`. A model that never
-    moves from ``theta = 0`` (an output that does not depend on its regressors) never passes: paper 001 notes that
+    with :math:`\Delta\theta(k) = \theta(k) - \theta(k-1)` (0 while the model is frozen) and :math:`D(k)` the
+    diagonal of regressor scales (1 for the constant, :math:`\max_{t \le k}|y(t)|` for every :math:`a_i`,
+    :math:`\max_{t \le k}|u_j(t)|` for every :math:`b_{ji}`): no term of the prediction
+    :math:`\phi(k)'\theta` moves by more than the fraction :math:`\epsilon` of the largest term. Both sides are in
+    the units of ``y``: the gate is unchanged when ``y`` and each input are rescaled, together or separately. The
+    model is stable once ``stable_samples`` consecutive regression samples pass (paper 001's "for some time");
+    from then on the error variance is tracked as in :class:`tsfdi.RecursiveARX`. A model that never moves from
+    ``theta = 0`` (an output that does not depend on its regressors) never passes: paper 001 notes that
     uncorrelated pairs are "very unlikely to allow for the model estimation to stabilize".
 
     The moving average of the a-priori errors over ``w`` samples, ``m(k) = (1/w) sum_{i=k-w+1}^{k} e(i)``, is
@@ -384,10 +383,9 @@ class OnlineDetector:
         self._models = [RecursiveARX(na, nb, nk, forgetting_factor, n_inputs=self.n_inputs,
                                      threshold=self.threshold if zs else 1e300,
                                      freeze_on_alarm=self.freeze_on_alarm and zs, nonfinite=self.nonfinite,
-                                     arm_after=self.arm_after if zs else 0, **rls_options)
+                                     arm_after=self.arm_after if zs else 0, eps=self.eps, gate="relative",
+                                     **rls_options)
                         for _ in names]
-        for m in self._models:
-            m.eps = 0.0      # the estimators' own (absolute) gate stays shut: _estimate opens it (see Notes)
         self.reset()
 
     def reset(self) -> None:
@@ -404,16 +402,13 @@ class OnlineDetector:
         self._stat_alarmed = np.zeros(k, dtype=bool)
         self._last_alarm = np.zeros(k, dtype=bool)
         self._nobs = 0
-        # arming gate per pair: passing regression samples in a row so far, largest |y| and |u_j| so far
-        self._passes = np.zeros(k, dtype=np.int64)
-        self._scales = np.zeros((k, 1 + self.n_inputs))
         self._warned = np.zeros(k, dtype=bool)
         self._last_time: Any = None      # index label of the last sample (None for numpy input)
 
     @property
     def models(self) -> tuple:
-        """The per-pair :class:`tsfdi.RecursiveARX` estimators (read their state, do not feed them; the detector
-        opens their own absolute stability gate ``eps`` where its scale-free gate passes, see Notes)."""
+        """The per-pair :class:`tsfdi.RecursiveARX` estimators (``gate="relative"``; read their state, do not feed
+        them)."""
         return tuple(self._models)
 
     @property
@@ -444,54 +439,6 @@ class OnlineDetector:
             return np.abs(m)
         return m
 
-    def _estimate(self, c: int, y: np.ndarray, u: np.ndarray) -> list:
-        """Run pair ``c``'s estimator over a block under the scale-free arming gate (Notes); the result parts.
-
-        Until the model is stable the block is first run with the estimator's own gate shut (its parameters do not
-        depend on the gate before it opens), the gate of the Notes is evaluated on that parameter history, and the
-        block is run again from the same state with the estimator's gate shut up to the run of passing samples
-        that reaches ``stable_samples`` (or the run still going at the end of the block) and open from there, so
-        that the estimator counts exactly those samples and turns stable where the gate does.
-        """
-        m = self._models[c]
-        n = y.shape[0]
-        # regressor scales: the largest |y| and |u_j| so far (finite samples)
-        sy = np.maximum.accumulate(np.r_[self._scales[c, 0], np.where(np.isfinite(y), np.abs(y), 0.0)])[1:]
-        su = np.maximum.accumulate(np.vstack([self._scales[c, 1:], np.where(np.isfinite(u), np.abs(u), 0.0)]),
-                                   axis=0)[1:]
-        if n:
-            self._scales[c] = np.r_[sy[-1], su[-1]]
-        if m.model_stable or n == 0:
-            return [m.run(y, u)]
-        state = m.get_state()
-        probe = m.run(y, u)
-        reg = np.flatnonzero(np.isfinite(np.asarray(probe.resid, dtype=float)))     # samples with a regression
-        if reg.size == 0:                                        # nothing to count: the probe is the run
-            return [probe]
-        m.set_state(state)
-        theta = np.vstack([state.theta, np.asarray(probe.params, dtype=float)])
-        scale = np.column_stack([np.ones((n, int(m.trend == "c"))), np.repeat(sy[:, None], m.na, axis=1),
-                                 np.repeat(su, m.nb, axis=1)])
-        passes = (np.abs(np.diff(theta, axis=0)) * scale).max(axis=1) < self.eps * (np.abs(theta[:-1]) * scale).max(
-            axis=1)
-        ok = passes[reg]
-        last_fail = np.maximum.accumulate(np.where(ok, -1, np.arange(ok.size)))
-        count = np.arange(ok.size) - last_fail + np.where(last_fail < 0, self._passes[c], 0)
-        self._passes[c] = count[-1]
-        hit = np.flatnonzero(count >= m.stable_samples)
-        # the run of passing samples that arms, else the one still going at the end of the block; its first
-        # sample (0: a run carried over from the previous block, already counted by the estimator)
-        first = int(last_fail[hit[0] if hit.size else -1]) + 1
-        opened = n if first == ok.size else 0 if first == 0 else int(reg[first])
-        parts = []
-        if opened > 0:
-            parts.append(m.run(y[:opened], u[:opened]))
-        if opened < n:
-            m.eps = np.inf
-            parts.append(m.run(y[opened:], u[opened:]))
-            m.eps = 0.0
-        return parts
-
     @staticmethod
     def _join(parts: list) -> tuple:
         """Errors, Z-scores, Z-score alarms, variance-stable flags, variances and means of result parts."""
@@ -503,21 +450,18 @@ class OnlineDetector:
 
     def _run_mean(self, c: int, m: RecursiveARX, yc: np.ndarray, uc: np.ndarray, start: int):
         """Run pair ``c`` in "mean" mode, freezing its model at the first alarm (exactly as sample by sample)."""
-        snap = None
-        if self.freeze_on_alarm and not self._stat_alarmed[c]:
-            snap = m.get_state(), self._passes[c], self._scales[c].copy()
-        parts = self._estimate(c, yc, uc)
+        snap = m.get_state() if self.freeze_on_alarm and not self._stat_alarmed[c] else None
+        parts = [m.run(yc, uc)]
         e = self._join(parts)[0]
         stat = self._mean_statistic(c, e)
         pos = start + np.arange(yc.shape[0])
         hit = np.flatnonzero((np.nan_to_num(stat, nan=-np.inf) > self.threshold) & (pos >= self.arm_after))
         if snap is not None and hit.size:
             i = int(hit[0])
-            m.set_state(snap[0])
-            self._passes[c], self._scales[c] = snap[1], snap[2]
-            parts = self._estimate(c, yc[:i], uc[:i]) if i > 0 else []
+            m.set_state(snap)
+            parts = [m.run(yc[:i], uc[:i])] if i > 0 else []
             m.freeze()
-            parts += self._estimate(c, yc[i:], uc[i:])
+            parts.append(m.run(yc[i:], uc[i:]))
             e = self._join(parts)[0]
             stat = self._mean_statistic(c, e)
         if hit.size:
@@ -588,7 +532,7 @@ class OnlineDetector:
             yc = np.ascontiguousarray(sy.values[:, c])
             uc = np.ascontiguousarray(su.values[:, c * ni:(c + 1) * ni])
             if self.statistic == "zscore":
-                e, z, zal, vstable, var, mean = self._join(self._estimate(c, yc, uc))
+                e, z, zal, vstable, var, mean = self._join([m.run(yc, uc)])
                 stat = z
             else:
                 e, z, stat, zal, vstable, var, mean = self._run_mean(c, m, yc, uc, start)

@@ -285,6 +285,8 @@ def test_bad_arguments():
         RecursiveARX(1, 1, nonfinite="ignore")
     with pytest.raises(TypeError, match="freeze_on_alarm"):
         RecursiveARX(1, 1, freeze_on_alarm="yes")
+    with pytest.raises(ValueError, match="gate"):
+        RecursiveARX(1, 1, gate="scale-free")
     m = RecursiveARX(1, 1)
     with pytest.raises(ValueError, match="same length"):
         m.run(np.ones(10), np.ones(9))
@@ -373,7 +375,7 @@ def test_get_state_set_state_resumes_exactly(freeze):
     assert m.frozen == freeze
     again = m.run(y[2500:], u[2500:])
     _assert_same_run(first, again)
-    for name in ("theta", "P", "y_history", "u_history", "counters", "error_stats"):
+    for name in ("theta", "P", "y_history", "u_history", "counters", "error_stats", "P_bound", "regressor_scales"):
         np.testing.assert_array_equal(getattr(m.get_state(), name), getattr(end, name), err_msg=name)
     # the snapshot is a read-only copy, reusable, and restores into another estimator with the same options
     assert not s.theta.flags.writeable and not s.counters.flags.writeable
@@ -393,3 +395,122 @@ def test_set_state_rejects_foreign_states():
     with pytest.raises(ValueError, match="u_history"):
         m.set_state(bad)
     np.testing.assert_array_equal(m.theta_, np.zeros(4))
+
+
+# ------------------------------------------------------------------------------------------- relative gate
+def two_input_arx(n=3000, seed=4):
+    """y = 0.3 + 0.6 y[-1] + 0.5 u0 - 0.2 u0[-1] + 0.7 u1 + 0.1 u1[-1] + e (sd 0.2), with a few NaN samples."""
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, 2))
+    y = np.zeros(n)
+    for t in range(1, n):
+        y[t] = 0.3 + 0.6 * y[t - 1] + 0.5 * u[t, 0] - 0.2 * u[t - 1, 0] + 0.7 * u[t, 1] + 0.1 * u[t - 1, 1] \
+            + 0.2 * rng.standard_normal()
+    y[[30, 31, 80]] = np.nan       # skipped samples: no prediction error, they neither count nor break a run
+    u[55, 1] = np.nan
+    return y, u
+
+
+def two_input_model(scales=(1.0, 1.0, 1.0), gate="relative"):
+    """The two-input model of ``two_input_arx`` with a ``P0`` that makes its estimate equivariant when y, u0, u1
+    are scaled by ``scales`` (``P0 ~ 1 / regressor**2``; the constant's regressor is 1)."""
+    cy, c0, c1 = scales
+    p0 = 1e4 / np.array([1.0, cy, c0, c0, c1, c1]) ** 2
+    return RecursiveARX(1, 2, 0, 0.995, P0=np.diag(p0), n_inputs=2, trend="c", nonfinite="skip", gate=gate)
+
+
+def first_stable(res):
+    return int(np.argmax(res.model_stable)) if res.model_stable.any() else -1
+
+
+def test_relative_gate_is_the_equation_of_the_notes():
+    """The first stable sample is where ||D dtheta|| < eps ||D theta(k-1)|| held for stable_samples samples with a
+    prediction error in a row, computed here from the parameter history (which the gate does not change)."""
+    y, u = two_input_arx()
+    res = two_input_model().run(y, u)
+    theta = np.vstack([np.zeros((1, 6)), np.asarray(res.params)])
+    ymax = np.fmax.accumulate(np.abs(y))
+    umax = np.fmax.accumulate(np.abs(u), axis=0)
+    scale = np.column_stack([np.ones_like(y), ymax, umax[:, 0], umax[:, 0], umax[:, 1], umax[:, 1]])
+    step = (np.abs(np.diff(theta, axis=0)) * scale).max(axis=1)
+    size = (np.abs(theta[:-1]) * scale).max(axis=1)
+    run, expected = 0, -1
+    for k in np.flatnonzero(np.isfinite(np.asarray(res.resid))):
+        run = run + 1 if step[k] < 1e-2 * size[k] else 0
+        if run == 25:
+            expected = k
+            break
+    assert expected == 134
+    assert first_stable(res) == expected
+    np.testing.assert_array_equal(res.model_stable, np.arange(len(y)) >= expected)
+    # the gate does not touch the estimate: the same parameters as under the absolute gate
+    absolute = two_input_model(gate="absolute").run(y, u)
+    np.testing.assert_array_equal(np.asarray(absolute.params), np.asarray(res.params))
+
+
+@pytest.mark.parametrize("scales", [(1e-3, 1e-3, 1e-3), (1e3, 1e3, 1e3), (1e3, 1.0, 1.0), (1.0, 1e-3, 1e3),
+                                    (1e-3, 1e3, 1.0)])
+def test_relative_gate_arms_at_the_same_sample_in_any_units(scales):
+    y, u = two_input_arx()
+    ref = first_stable(two_input_model().run(y, u))
+    cy, c0, c1 = scales
+    got = two_input_model(scales).run(y * cy, u * [c0, c1])
+    assert first_stable(got) == ref
+    assert ref > 0
+
+
+def test_absolute_gate_depends_on_the_units():
+    """What gate="relative" is for: the absolute bound arms the same equivariant estimate elsewhere, or never."""
+    y, u = two_input_arx()
+
+    def stable_at(cy):
+        return first_stable(two_input_model((cy, 1.0, 1.0), gate="absolute").run(y * cy, u))
+
+    at = [stable_at(c) for c in (1e-3, 1.0, 1e3)]
+    assert len(set(at)) == 3 and -1 in at, at
+
+
+def test_relative_gate_state_round_trip():
+    y, u = two_input_arx()
+    k = first_stable(two_input_model().run(y, u))
+    m = two_input_model()
+    m.run(y[:k - 10], u[:k - 10])                  # inside the arming run: its counter and the scales are live
+    state = m.get_state()
+    assert not m.model_stable and state.counters[1] > 0
+    np.testing.assert_array_equal(state.regressor_scales,
+                                  [np.nanmax(np.abs(y[:k - 10])), *np.nanmax(np.abs(u[:k - 10]), axis=0)])
+    assert not state.regressor_scales.flags.writeable
+    first = m.run(y[k - 10:], u[k - 10:])
+    assert first_stable(first) == 10
+    # restored into the same or a fresh estimator: the rest of the stream again, identical, sample by sample too
+    m.set_state(state)
+    _assert_same_run(first, m.run(y[k - 10:], u[k - 10:]))
+    other = two_input_model()
+    other.set_state(state)
+    _assert_same_run(first, other.run(y[k - 10:], u[k - 10:]))
+    other.set_state(state)
+    for t in range(k - 10, k):
+        other.update(y[t], u[t])
+    assert not other.model_stable
+    other.update(y[k], u[k])
+    assert other.model_stable
+    # scales that do not fit the inputs are refused before anything is copied; reset() clears them
+    before = other.get_state()
+    with pytest.raises(ValueError, match="regressor_scales"):
+        other.set_state(dataclasses.replace(state, regressor_scales=np.zeros(2)))
+    np.testing.assert_array_equal(other.get_state().regressor_scales, before.regressor_scales)
+    other.reset()
+    np.testing.assert_array_equal(other.get_state().regressor_scales, np.zeros(3))
+
+
+def test_relative_gate_counts_a_frozen_step_as_zero():
+    """While adaptation is halted the step taken is 0: a frozen model away from theta = 0 passes the gate."""
+    y, u = two_input_arx()
+    m = two_input_model()
+    m.run(y[:100], u[:100])
+    assert not m.model_stable
+    carried = int(m.get_state().counters[1])       # passing samples in a row so far
+    m.freeze()
+    res = m.run(y[100:200], u[100:200])             # no NaN here: every sample has a prediction error
+    assert np.all(np.asarray(res.params) == m.theta_)
+    assert first_stable(res) == 24 - carried < 34   # adapting, the model arms at sample 134

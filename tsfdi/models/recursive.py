@@ -18,7 +18,8 @@ exponentially weighted least-squares solution.
 On top of the estimator sits the online detector of paper 001, section IV:
 
 1. the model is *stable* once ``||L(k) e(k)||_inf < eps`` (the parameter step) for ``stable_samples``
-   consecutive samples;
+   consecutive samples (``gate="relative"``: the step relative to the parameters, both weighted by the scales
+   of their regressors, a bound free of the units of ``y`` and ``u``);
 2. from then on the variance of the a-priori prediction errors is tracked with Welford's recursion
    (paper 001, eq. 8); it is *stable* once it has at least ``min_variance_samples`` samples and its relative
    change per sample stays below ``variance_tol`` for ``stable_samples`` consecutive samples;
@@ -173,7 +174,7 @@ def _condition(P, pcap, phi, px, s, capped, any_cap, inv_lam, half, lam_s, halte
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
 def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, var_tol, var_min, zthr, arm_after,
-                pcap, theta, P, ybuf, ubuf, ist, fst,
+                pcap, theta, P, ybuf, ubuf, ist, fst, smax,
                 out_params, out_err, out_var, out_mean, out_z, out_flags):  # pragma: no cover
     """Process samples ``y[t], u[t, :]`` in order, updating the state arrays in place.
 
@@ -183,6 +184,10 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
     scales ``P`` down, ``pcap`` follows (see ``RecursiveARX``).
     The error statistics ``fst = [mean, M2, unit]`` are kept in units of ``fst[2]``, a power of two set by the
     first nonzero error, so that their squares stay in the floating-point range at any data scale.
+    With ``smax`` an array the model-stability gate is the relative one of ``RecursiveARX`` (``gate="relative"``),
+    whose regressor scales ``smax = [max |y|, max |u_0|, ...]`` over the finite samples are kept up to date here;
+    ``smax=None`` (the absolute gate) is a separate compilation without that code (numba prunes the ``is None``
+    branches on an argument's type).
 
     Speed (a few loop passes of length ``d`` per sample dominate for small ``d``): the counters and statistics
     live in local variables and go back to ``ist`` / ``fst`` at the end; ``P phi`` is computed by row dot
@@ -217,6 +222,12 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
         for j in range(nin):
             if not np.isfinite(u[t, j]):
                 finite = False
+        if smax is not None:    # the relative gate's regressor scales, sample t included
+            if np.isfinite(yt):
+                smax[0] = max(smax[0], abs(yt))
+            for j in range(nin):
+                if np.isfinite(u[t, j]):
+                    smax[1 + j] = max(smax[1 + j], abs(u[t, j]))
         seen += 1
         # shift the input history (u_j[t] goes to column 0)
         for j in range(nin):
@@ -274,12 +285,24 @@ def _rls_kernel(y, u, na, nb, nk, trend, lam, freeze_on_alarm, eps, n_stable, va
             s += lam_s
             # parameter step L(k) e(k), L = P phi / (lambda + phi' P phi)
             ge = e / s
-            # model-stability gate (paper 001, section IV-B)
+            # model-stability gate (paper 001, section IV-B): ||L e||_inf < eps, or relative to the model with
+            # the regressor scales w (1, max |y|, max |u_j|): ||w o dtheta||_inf < eps ||w o theta||_inf, where the
+            # step taken is 0 while halted
             if model_stable == 0:
                 step_max = 0.0
-                for i in range(d):
-                    step_max = max(step_max, abs(px[i] * ge))
-                if step_max < eps:
+                bound = eps
+                if smax is not None:
+                    g = 0.0 if halted else ge
+                    size = 0.0
+                    for i in range(d):
+                        w = 1.0 if i < trend else (smax[0] if i < off_b else smax[1 + (i - off_b) // nb])
+                        step_max = max(step_max, abs(px[i] * g) * w)
+                        size = max(size, abs(theta[i]) * w)
+                    bound = eps * size
+                else:
+                    for i in range(d):
+                        step_max = max(step_max, abs(px[i] * ge))
+                if step_max < bound:
                     stable_cnt += 1
                 else:
                     stable_cnt = 0
@@ -446,6 +469,9 @@ class RecursiveARXState:
     P_bound : ndarray, shape (d,)
         Anti-windup bound of each variance ``P[i, i]``: the diagonal of ``P0``, scaled down with ``P`` by a
         dominant sample (see :class:`RecursiveARX`, Notes).
+    regressor_scales : ndarray, shape (1 + n_inputs,)
+        Largest ``|y|`` and largest ``|u_j|`` of every input over the finite samples so far: the regressor scales
+        of ``gate="relative"`` (zeros under ``gate="absolute"``, which does not keep them).
     """
 
     theta: np.ndarray
@@ -455,10 +481,11 @@ class RecursiveARXState:
     counters: np.ndarray
     error_stats: np.ndarray
     P_bound: np.ndarray
+    regressor_scales: np.ndarray
 
 
 class RecursiveARX:
-    """ARX model estimated online by recursive least squares with forgetting and Z-score alarms.
+    r"""ARX model estimated online by recursive least squares with forgetting and Z-score alarms.
 
     Parameters
     ----------
@@ -485,7 +512,11 @@ class RecursiveARX:
     threshold : float, default 4.5
         Z-score alarm threshold (paper 001 uses 4.5, a two-sided 99.99932 % Gaussian interval).
     eps : float, default 1e-2
-        Model-stability bound on ``||L(k) e(k)||_inf`` (absolute, in parameter units).
+        Model-stability bound: on the parameter step ``||L(k) e(k)||_inf`` in parameter units
+        (``gate="absolute"``), or on the step as a fraction of the parameters (``gate="relative"``; see Notes).
+    gate : {"absolute", "relative"}, default "absolute"
+        Model-stability gate: paper 001's absolute bound on the parameter step, or the scale-free one of the
+        Notes (the same for any units of ``y`` and ``u``).
     stable_samples : int, default 25
         Consecutive samples the stability conditions must hold (model and variance).
     variance_tol : float, default 0.01
@@ -526,6 +557,29 @@ class RecursiveARX:
     samples minimises ``sum_t lambda^(N-t) e_t^2 + lambda^N |theta - theta0|^2 / p0`` (for ``lambda < 1`` the
     prior term is weighted by the anti-windup rule below instead of ``lambda^N``).
 
+    **Model-stability gate.** A sample with a prediction error passes the gate when
+
+    .. math:: \|L(k)\,e(k)\|_\infty < \epsilon \qquad (\texttt{gate="absolute"})
+
+    (paper 001, section IV-B: when the parameter step stays below :math:`\epsilon` "for some time (with
+    :math:`\epsilon` set to a small positive number), the model can be considered as stable for fault
+    detection"), or, with :math:`\Delta\theta(k) = \theta(k) - \theta(k-1)` (the step taken: 0 while adaptation
+    is halted) and :math:`D(k)` the diagonal of regressor scales -- 1 for the constant, :math:`\max_{t \le k}|y(t)|`
+    for every :math:`a_i`, :math:`\max_{t \le k}|u_j(t)|` for every :math:`b_{ji}`, maxima over the finite
+    samples --
+
+    .. math:: \|D(k)\,\Delta\theta(k)\|_\infty < \epsilon\, \|D(k)\,\theta(k-1)\|_\infty
+              \qquad (\texttt{gate="relative"}).
+
+    The model is stable once ``stable_samples`` consecutive samples with a prediction error pass (samples
+    without one neither count nor break the run). The absolute bound is in parameter units: a gain from a
+    command in rad/s to a rate in deg/s is 57 times that to a rate in rad/s, so one ``eps`` arms in one set of
+    units and never in another, and it passes at once while the estimate is still near ``theta0 = 0`` on quiet
+    data. In the relative gate no term of the prediction :math:`\phi(k)'\theta` moves by more than the fraction
+    :math:`\epsilon` of the largest term; both sides are in the units of ``y``, so it is unchanged when ``y`` and
+    each input are rescaled, together or separately (the estimate itself follows when ``P0`` is rescaled with
+    them, :math:`P_0 \propto 1/c^2` per regressor). A model that stays at ``theta = 0`` never passes it.
+
     **Numerical safeguards** (none acts on well-excited data of moderate scale):
 
     * *Covariance windup*: a coordinate whose variance ``P[i, i] / lambda`` would exceed its initial value
@@ -563,7 +617,7 @@ class RecursiveARX:
 
     def __init__(self, na: int, nb: int, nk: int = 0, forgetting_factor: float = 1.0, P0: Any = 1e4,
                  n_inputs: int = 1, *, trend: str = "n", theta0: Any = None, threshold: float = 4.5,
-                 eps: float = 1e-2, stable_samples: int = 25, variance_tol: float = 0.01,
+                 eps: float = 1e-2, gate: str = "absolute", stable_samples: int = 25, variance_tol: float = 0.01,
                  min_variance_samples: int = 50, freeze_on_alarm: bool = False, nonfinite: str = "raise",
                  arm_after: int = 0):
         self.na = int_like(na, "na", minimum=0)
@@ -574,6 +628,7 @@ class RecursiveARX:
         self.forgetting_factor = float_like(forgetting_factor, "forgetting_factor", minimum=0.5, maximum=1.0)
         self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
         self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
+        self.gate = option(gate, "gate", ("absolute", "relative"))
         self.stable_samples = int_like(stable_samples, "stable_samples", minimum=1)
         self.variance_tol = float_like(variance_tol, "variance_tol", minimum=0.0)
         self.min_variance_samples = int_like(min_variance_samples, "min_variance_samples", minimum=3)
@@ -642,11 +697,12 @@ class RecursiveARX:
         self._ist[_I_FIRST_ALARM] = -1
         self._fst = np.zeros(3)
         self._pcap = np.diag(self._P0).copy()   # anti-windup bound of each variance (see Notes)
+        self._smax = np.zeros(1 + self.n_inputs)     # regressor scales of the relative gate (see Notes)
 
     def get_state(self) -> RecursiveARXState:
         """Snapshot of the estimator state (deep copies): parameters, ``P`` and its anti-windup bound, the
-        regressor buffers, the sample counters, the stability / alarm / frozen flags and the Welford error
-        statistics.
+        regressor buffers, the sample counters, the stability / alarm / frozen flags, the Welford error
+        statistics and the regressor scales of the relative gate.
 
         ``s = m.get_state(); m.run(b); m.set_state(s); m.run(b)`` gives identical outputs from both runs.
         """
@@ -658,7 +714,7 @@ class RecursiveARX:
         return RecursiveARXState(theta=frozen_copy(self.theta_), P=frozen_copy(self.P_),
                                  y_history=frozen_copy(self._ybuf), u_history=frozen_copy(self._ubuf),
                                  counters=frozen_copy(self._ist), error_stats=frozen_copy(self._fst),
-                                 P_bound=frozen_copy(self._pcap))
+                                 P_bound=frozen_copy(self._pcap), regressor_scales=frozen_copy(self._smax))
 
     def set_state(self, state: RecursiveARXState) -> None:
         """Restore a snapshot taken by :meth:`get_state` (of this estimator or one with the same options).
@@ -671,7 +727,7 @@ class RecursiveARX:
         pairs = ((self.theta_, state.theta, "theta"), (self.P_, state.P, "P"),
                  (self._ybuf, state.y_history, "y_history"), (self._ubuf, state.u_history, "u_history"),
                  (self._ist, state.counters, "counters"), (self._fst, state.error_stats, "error_stats"),
-                 (self._pcap, state.P_bound, "P_bound"))
+                 (self._pcap, state.P_bound, "P_bound"), (self._smax, state.regressor_scales, "regressor_scales"))
         for mine, theirs, name in pairs:
             if np.shape(theirs) != mine.shape:
                 raise ValueError(f"state.{name} has shape {np.shape(theirs)}, this estimator needs {mine.shape}: "
@@ -691,7 +747,7 @@ class RecursiveARX:
 
     @property
     def model_stable(self) -> bool:
-        """Whether the stability gate ``||L e||_inf < eps`` has held for ``stable_samples`` samples."""
+        """Whether the model-stability gate (``gate``, see Notes) has held for ``stable_samples`` samples."""
         return bool(self._ist[_I_MODEL_STABLE])
 
     @property
@@ -791,10 +847,11 @@ class RecursiveARX:
         out_mean = np.empty(n)
         out_z = np.empty(n)
         out_flags = np.empty(n, dtype=np.uint8)
+        smax = self._smax if self.gate == "relative" else None      # None: compiled without the relative gate
         _rls_kernel(yv, uv, self.na, self.nb, self.nk, int(self.trend == "c"), self.forgetting_factor,
                     self.freeze_on_alarm, self.eps, self.stable_samples, self.variance_tol,
                     self.min_variance_samples, self.threshold, self.arm_after, self._pcap, self.theta_, self.P_,
-                    self._ybuf, self._ubuf, self._ist, self._fst, out_params, out_err, out_var, out_mean, out_z,
+                    self._ybuf, self._ubuf, self._ist, self._fst, smax, out_params, out_err, out_var, out_mean, out_z,
                     out_flags)
         return out_params, out_err, out_var, out_mean, out_z, out_flags
 
