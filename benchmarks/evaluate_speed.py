@@ -53,11 +53,12 @@ def main() -> None:
         ev = tsfdi.evaluate(sig, bases, models=("var",), tests=WHITENESS, windows=WINDOWS, progress=False)
         times.append(time.perf_counter() - t0)
     n_eval = int(ev.records["evaluated"].sum())
-    n_win = len(ev.detection)
-    n_tests = n_win + len(ev.identification) * 3
+    n_win = int(ev.detection_counts["windows"].sum())
+    n_ident = int(ev.identification_counts["windows"].sum())
+    n_tests = n_win + n_ident * 3
     t_fast = statistics.median(times)
     print(f"tsfdi.evaluate: {n_eval} of {n_rec} records evaluated (others: fitting records / lost control), "
-          f"{n_win} windows x healthy model + {len(ev.identification)} windows x 3 fault models "
+          f"{n_win} windows x healthy model + {n_ident} windows x 3 fault models "
           f"= {n_tests} VAR residual tests over windows {WINDOWS}")
     print(f"  median of 3 runs: {t_fast:.2f} s  (runs: {', '.join(f'{t:.2f}' for t in times)})  "
           f"-> {'PASS' if t_fast < 30 else 'FAIL'} (< 30 s)")
@@ -76,7 +77,8 @@ def main() -> None:
         times_all.append(time.perf_counter() - t0)
     t_all = statistics.median(times_all)
     print(f"tsfdi.evaluate on all {int(ev_all.records['evaluated'].sum())} records (speed only, fitting records "
-          f"not excluded): {len(ev_all.detection)} + {len(ev_all.identification)} x 3 windows, median of 3 runs "
+          f"not excluded): {ev_all.detection_counts['windows'].sum()} + "
+          f"{ev_all.identification_counts['windows'].sum()} x 3 windows, median of 3 runs "
           f"{t_all:.2f} s -> {'PASS' if t_all < 30 else 'FAIL'} (< 30 s)")
 
     # calibrated thresholds: leave-one-record-out refits (10 fitting records hold 20 disjoint 20 s windows, fewer than

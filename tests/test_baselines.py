@@ -227,16 +227,18 @@ def test_empirical_thresholds_leave_one_out(synthetic):
                         tests={"whiteness": lb, "variance": FTest(alpha=0.01, threshold="empirical")},
                         windows=("5s",), settle=5.0, progress=False)
     assert ev.thresholds == "empirical"
-    assert not set(ev.identification["record"]) & set(b.fit_records)
+    assert not set(ev.records.loc[ev.records["evaluated"], "record"]) & set(b.fit_records)
     c = ev.calibration.set_index(["method", "state", "channel"]).sort_index()
     np.testing.assert_allclose(c.loc[("whiteness", "f2"), "empirical"], cal["f2"].threshold_)
     np.testing.assert_allclose(c.loc[("whiteness", "f2"), "distribution"], stats.chi2.ppf(0.99, 20))
-    # detection decisions are those of the calibrated healthy test on each window
-    rec5 = recs[4]                                                               # healthy, evaluated
-    d = ev.detection[(ev.detection["record"] == 4) & (ev.detection["method"] == "whiteness")]
-    e = np.asarray(b.models["var"]["healthy"].residuals(rec5))
-    first = cal["healthy"].test(e[:500 - 2])
-    assert bool(d["alarm"].iloc[0]) == first.reject
+    # detection decisions are those of the calibrated healthy test on each window (500 samples, 498 residuals of
+    # VAR(2), 1 s apart) of the healthy evaluated records
+    alarms = 0
+    for i in np.flatnonzero(ev.records["evaluated"] & (ev.records["state"] == "healthy")):
+        e = np.asarray(b.models["var"]["healthy"].residuals(recs[i]))
+        alarms += sum(bool(cal["healthy"].test(e[s:s + 500 - 2]).reject) for s in range(0, len(recs[i]) - 499, 100))
+    d = ev.detection_counts.query("model == 'var' and method == 'whiteness' and state == 'healthy'")
+    assert 0 < alarms == d.loc[d["alarm"], "windows"].sum()
     # the theoretical threshold on the same baselines gives the distributional thresholds
     ev2 = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",), windows=("5s",),
                          tests={"whiteness": LjungBox(lags=20, alpha=0.01)}, settle=5.0, progress=False)

@@ -31,8 +31,8 @@ def test_demo_reduced(tmp_path, capsys):
     assert "| var | whiteness | 100.00/0.00/0.00 | 0.00/100.00/0.00 | 0.00/0.00/100.00 |" in report
     # the two-sided binomial p-value of 2 alarms in 9 disjoint windows at 0.3 %, its 99 % band 0-1, outside it
     assert "| var | whiteness | 20 | 23.577 | 0.3 | 123 | 9 | 2 | 0.001 | 0 | 1 | False | 0 | 0 | 10 | 10 |" in report
-    ident = pd.read_csv(out / "identification_windows.csv.gz")
-    assert len(ident) == 180 and set(ident["window"]) == {20.0}
+    ident = pd.read_csv(out / "identification_counts.csv.gz")
+    assert ident["windows"].sum() == 180 and set(ident["window"]) == {20.0}
     figs = sorted(p.name for p in (out / "figures").glob("*.png"))
     assert "variance_evolution.png" in figs and "order_selection_var_healthy.png" in figs
     assert "confusion_var_whiteness_20s_paper.png" in figs

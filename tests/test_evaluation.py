@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
-from _synthetic_fdi import FS, dataset
+from _synthetic_fdi import FS
 from scipy import stats
 
 import tsfdi
@@ -26,12 +26,17 @@ def test_evaluate_synthetic(synthetic, fitted):
     assert ev.alphas == {(m, meth): 1e-3 for m in ("var", "y0") for meth in ("whiteness", "variance")}
     assert ev.lags == {5.0: 20, 20.0: 20} and ev.nchan == {"var": 2, "y0": 1}
     # fitting records are excluded
-    assert not set(ev.identification["record"]) & set(fitted.fit_records)
+    assert not set(ev.records.loc[ev.records["evaluated"], "record"]) & set(fitted.fit_records)
     assert set(ev.records.loc[~ev.records["evaluated"], "skipped"]) == {"fitting record"}
-    # windows: starts >= failure + settle = 15 s, 1 s apart, up to 40 - W
-    w20 = ev.identification.query("model == 'var' and method == 'whiteness' and window == 20.0")
-    assert sorted(w20["start"].unique()) == list(np.arange(15.0, 21.0))
-    assert len(w20) == 8 * 6
+    # windows: starts >= failure + settle = 15 s, 1 s apart, up to 40 - W: 6 per fault record, 8 of them
+    w20 = ev.identification_counts.query("model == 'var' and method == 'whiteness' and window == 20.0")
+    assert w20["windows"].sum() == 8 * 6
+    # detection: every 20 s window of the 12 evaluated records (4 healthy, 8 faulty), (40 - 20) / 1 + 1 each
+    d20 = ev.detection_counts.query("model == 'var' and method == 'whiteness' and window == 20.0")
+    assert d20["windows"].sum() == 12 * 21
+    # the counts are one row per distinct outcome
+    assert not ev.identification_counts.drop(columns="windows").duplicated().any()
+    assert not ev.detection_counts.drop(columns="windows").duplicated().any()
     rates = ev.rates()
     corr = rates.xs(("var", "whiteness", 20.0), level=("model", "method", "window"))["correct"]
     assert (corr.xs("paper", level="rule") >= 90).all()
@@ -53,6 +58,11 @@ def test_evaluate_synthetic(synthetic, fitted):
     assert "Identification" in ev.summary()
 
 
+def _counted(windows: pd.DataFrame, count: str = "windows") -> pd.DataFrame:
+    """Hand-made per-window (or per-record) rows collapsed to counts of their distinct rows, as evaluate keeps them."""
+    return windows.groupby(list(windows.columns), sort=False, dropna=False).size().rename(count).reset_index()
+
+
 def test_confusion_closed_form():
     """Hand-made windows: confusion, rates, Table 4 and detection rates from counts."""
     ident = pd.DataFrame({
@@ -71,8 +81,21 @@ def test_confusion_closed_form():
         "alarm": [False, True, False, False, False, True, True, False, False, False]})
     recs = pd.DataFrame({"record": [0, 1, 2, 3]})
     recs.attrs["healthy"] = "h"
-    ev = Evaluation(identification=ident, detection=det, faults=("a", "b"), rules=("paper", "likelihood"),
-                    alphas={("var", "whiteness"): 0.01}, lags={5.0: 20}, records=recs, nchan={"var": 3})
+    keys = ["turbulence", "model", "method", "window", "state"]
+
+    def evaluation(det):
+        flags = det.assign(turbulence="x", disjoint=det["start"] % det["window"] == 0)
+        delays = pd.DataFrame({"turbulence": "x", "model": "var", "method": "whiteness", "window": 5.0, "state": "a",
+                               "delay": [4.0, np.nan]})         # record 1: 10 s - 6 s; record 2: no alarm after 6 s
+        return Evaluation(identification_counts=_counted(ident.drop(columns=["record", "start"])),
+                          detection_counts=_counted(flags[keys + ["fault_true", "pre", "alarm", "disjoint"]]),
+                          detection_delays=_counted(delays, "records"), faults=("a", "b"),
+                          rules=("paper", "likelihood"), alphas={("var", "whiteness"): 0.01}, lags={5.0: 20},
+                          records=recs, nchan={"var": 3})
+
+    ev = evaluation(det)
+    assert ev.identification_counts["windows"].tolist() == [2, 1, 1, 2, 1, 1]     # rows 0 / 2 and 4 / 6 alike
+    assert ev.detection_counts["windows"].tolist() == [1, 1, 2, 2, 1, 1, 1, 1]
     # decisions per true state: the faults decided, then ambiguous and none; every row adds to 100
     conf = ev.confusion("paper").xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
     assert list(conf.columns) == ["a", "b", "ambiguous", "none"]
@@ -99,9 +122,7 @@ def test_confusion_closed_form():
     assert (d["disjoint_windows"], d["disjoint_alarms"], d["false_alarm_pvalue"]) == (1, 0, 1.0)
     det2 = det.assign(start=[0, 5, 10, 15] + det["start"].tolist()[4:], alarm=[True, False, False, True]
                       + det["alarm"].tolist()[4:])
-    d2 = Evaluation(identification=ident, detection=det2, faults=("a", "b"), rules=("paper", "likelihood"),
-                    alphas={("var", "whiteness"): 0.01}, lags={5.0: 20}, records=recs,
-                    nchan={"var": 3}).detection_rates().loc[("var", "whiteness", 5.0)]
+    d2 = evaluation(det2).detection_rates().loc[("var", "whiteness", 5.0)]
     p0 = 1 - 0.99 ** 3
     assert (d2["disjoint_windows"], d2["disjoint_alarms"]) == (4, 2)
     # two-sided: twice the smaller tail, P(X >= 2) here
@@ -180,44 +201,63 @@ def test_windows_as_time_spans_or_samples(synthetic, fitted):
     lb = LjungBox(lags=20, alpha=1e-3)
     ref = tsfdi.evaluate(recs, fitted, tests={"whiteness": lb}, windows=("5s",), step="1s", **kw)
     got = tsfdi.evaluate(recs, fitted, tests={"whiteness": lb}, windows=(500,), step=100, **kw)
-    pd.testing.assert_frame_equal(got.identification, ref.identification, check_exact=True)
-    pd.testing.assert_frame_equal(got.detection, ref.detection, check_exact=True)
-    pd.testing.assert_frame_equal(got.calibration, ref.calibration, check_exact=True)
-    assert sorted(ref.identification["window"].unique()) == [5.0]
+    for name in ("identification_counts", "detection_counts", "detection_delays", "calibration"):
+        pd.testing.assert_frame_equal(getattr(got, name), getattr(ref, name), check_exact=True, obj=name)
+    assert sorted(ref.identification_counts["window"].unique()) == [5.0]
     one = tsfdi.evaluate(recs, fitted, tests=lb, windows=pd.Timedelta(seconds=5), **kw)
-    assert set(one.identification["method"]) == {"LjungBox"}
-    pd.testing.assert_frame_equal(one.identification.drop(columns="method"),
-                                  ref.identification.drop(columns="method"), check_exact=True)
+    assert set(one.identification_counts["method"]) == {"LjungBox"}
+    pd.testing.assert_frame_equal(one.identification_counts.drop(columns="method"),
+                                  ref.identification_counts.drop(columns="method"), check_exact=True)
     # per model tests: the y0 rows of {"var": lb, "y0": lb} are those of lb for every model
     per = tsfdi.evaluate(recs, fitted, tests={"whiteness": {"var": lb, "y0": LjungBox(lags=20, alpha=1e-3)}},
                          windows=("5s",), **kw)
-    pd.testing.assert_frame_equal(per.identification, ref.identification, check_exact=True)
+    pd.testing.assert_frame_equal(per.identification_counts, ref.identification_counts, check_exact=True)
     # the default test is the paper's whiteness test at alpha = 1e-3
     dflt = tsfdi.evaluate(recs, fitted, windows=("5s",), **kw)
-    pd.testing.assert_frame_equal(dflt.identification, ref.identification, check_exact=True)
+    pd.testing.assert_frame_equal(dflt.identification_counts, ref.identification_counts, check_exact=True)
 
 
-def test_identification_rows_are_the_engine_windows(synthetic, fitted):
-    """Each identification row: the acceptances and labels of the windowed engine on the record."""
+def _sorted(frame: pd.DataFrame) -> pd.DataFrame:
+    return frame.sort_values(list(frame.columns)).reset_index(drop=True)
+
+
+def test_counts_are_the_engine_windows(synthetic, fitted):
+    """The counts are those of the windowed engine run record by record, each window's outcome kept in a table and
+    counted at the end (pandas ``groupby().size()``), the delays read off each record's windows."""
     recs, states, ft = synthetic
     lb = LjungBox(lags=20, alpha=1e-3)
     ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var",), tests=lb,
                         windows=("5s",), settle=5.0, rules=("paper", "likelihood", "pvalue"), progress=False)
-    i = 8                                                            # an evaluated f1 record
-    rows = ev.identification[ev.identification["record"] == i]
-    ws = ResidualWindows({f: fitted.models["var"][f] for f in fitted.faults}).fit(recs[i]).statistics(
-        lb, window=500, step=100)
-    keep = ws.starts >= 1500
-    np.testing.assert_allclose(rows["start"].to_numpy(), ws.starts[keep] / FS)
-    for j, f in enumerate(fitted.faults):
-        np.testing.assert_array_equal(rows[f"acc_{f}"].to_numpy(), ws.accepted[keep, j])
     names = np.array(list(fitted.faults) + ["ambiguous", "none"], dtype=object)
-    for rule in ("paper", "likelihood", "pvalue"):
-        lab = decide(ws.accepted[keep], rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
-        np.testing.assert_array_equal(rows[f"label_{rule}"].to_numpy(), names[np.where(lab >= 0, lab, lab + 4)])
-    det = ev.detection[ev.detection["record"] == i]
-    wh = ResidualWindows({"h": fitted.models["var"]["healthy"]}).fit(recs[i]).statistics(lb, window=500, step=100)
-    np.testing.assert_array_equal(det["alarm"].to_numpy(), wh.reject[:, 0])
+    healthy = ResidualWindows({"h": fitted.models["var"]["healthy"]})
+    faults = ResidualWindows({f: fitted.models["var"][f] for f in fitted.faults})
+    ident, det, delays = [], [], []
+    for i in np.flatnonzero(ev.records["evaluated"]):
+        key = {"turbulence": "", "model": "var", "method": "LjungBox", "window": 5.0, "state": states[i]}
+        wh = healthy.fit(recs[i]).statistics(lb, window=500, step=100)
+        start, end = wh.starts / FS, wh.starts / FS + 5.0
+        fault = states[i] != "healthy"
+        pre = (end <= ft[i]) | (not fault)
+        alarm = wh.reject[:, 0]
+        det.append(pd.DataFrame({**key, "fault_true": fault & (start >= ft[i]), "pre": pre, "alarm": alarm,
+                                 "disjoint": wh.starts % 500 == 0}))
+        if not fault:
+            continue
+        hit = alarm & ~pre
+        delays.append({**key, "delay": end[hit][0] - ft[i] if hit.any() else np.nan})
+        ws = faults.fit(recs[i]).statistics(lb, window=500, step=100)
+        keep = ws.starts >= ft[i] * FS + 500
+        rows = pd.DataFrame({**key, **{f"acc_{f}": ws.accepted[keep, j] for j, f in enumerate(fitted.faults)}})
+        for rule in ("paper", "likelihood", "pvalue"):
+            lab = decide(ws.accepted[keep], rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
+            rows[f"label_{rule}"] = names[np.where(lab >= 0, lab, lab + 4)]
+        ident.append(rows)
+    pd.testing.assert_frame_equal(_sorted(ev.identification_counts), _sorted(_counted(pd.concat(ident))),
+                                  check_exact=True)
+    pd.testing.assert_frame_equal(_sorted(ev.detection_counts), _sorted(_counted(pd.concat(det))), check_exact=True)
+    pd.testing.assert_frame_equal(_sorted(ev.detection_delays), _sorted(_counted(pd.DataFrame(delays), "records")),
+                                  check_exact=True)
+    assert ev.detection_counts["disjoint"].any() and ev.detection_delays["delay"].notna().any()
 
 
 def test_paper_tests_have_the_alphas_of_table_3():
@@ -254,5 +294,6 @@ def test_evaluate_with_paper_tests(synthetic, fitted):
     for m in ("var", "y0"):
         one = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=(m,),
                              tests={"variance": FTest(alpha=1e-8)}, windows=(500,), settle=5.0, progress=False)
-        sub = ev.identification.query("model == @m and method == 'variance'").reset_index(drop=True)
-        pd.testing.assert_frame_equal(sub, one.identification, check_exact=True)
+        for name in ("identification_counts", "detection_counts", "detection_delays"):
+            sub = getattr(ev, name).query("model == @m and method == 'variance'").reset_index(drop=True)
+            pd.testing.assert_frame_equal(sub, getattr(one, name), check_exact=True, obj=name)

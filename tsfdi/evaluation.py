@@ -2,7 +2,8 @@
 
 :func:`evaluate` runs detection with the healthy model and identification with the fault models on every sliding
 window of every record that was *not* used for fitting, for the models x tests x window lengths x turbulence levels
-asked for, and returns an :class:`Evaluation` holding the per-window outcomes, the Table 4 analogue (percent of
+asked for, and returns an :class:`Evaluation` holding the window outcomes counted (per distinct outcome, summed over
+records and window positions, so that its size does not grow with the records), the Table 4 analogue (percent of
 windows of each true failure accepted as each rotor), unique-correct, ambiguity and no-decision rates, detection
 false-alarm and missed-fault rates and detection delays.
 
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -46,19 +48,33 @@ __all__ = ["OUTCOMES", "Evaluation", "detection_metrics", "evaluate", "first_ala
 
 @dataclass(frozen=True, eq=False)
 class Evaluation:
-    """Outcome of :func:`evaluate`.
+    """Outcome of :func:`evaluate`: the window outcomes counted, and the rates and delays read from the counts.
+
+    Every table is a count of windows (or records) per distinct outcome, summed over the records and the window
+    positions: its size does not grow with the number of records, and the tables of two sets of records add up
+    (``pandas.concat`` then a ``groupby(...).sum()`` over every column but the count), which is how chunks of a fleet
+    on dask are combined. The outcome of one window of one record is not kept; run :func:`tsfdi.identify_windows` or
+    :class:`tsfdi.Monitor` on that record for it.
 
     Attributes
     ----------
-    identification : pandas.DataFrame
-        One row per (record, model, method, window length, window) of a fault record, windows starting at least
-        ``settle`` s after the failure: ``record, state, turbulence, model, method, window, start``, one bool
-        column ``acc_<fault>`` per fault model (its test accepts), and ``label_<rule>`` per rule (the identified
-        fault or ``""``; for ``"paper"`` ``"ambiguous"`` / ``"none"`` when not unique).
-    detection : pandas.DataFrame
-        One row per (record, model, method, window length, window) of every evaluated record: ``fault_true``
-        (the window starts after the failure), ``alarm`` (the healthy model's test rejects), ``pre`` (the window
-        ends before the failure), ``start``, ``end``.
+    identification_counts : pandas.DataFrame
+        Windows of the fault records starting at least ``settle`` s after the failure, tested with every fault
+        model: one row per distinct combination of ``turbulence, model, method, window, state`` (the true
+        failure), the bool columns ``acc_<fault>``, one per fault model (its test accepts), and ``label_<rule>``,
+        one per rule (the identified fault, ``"ambiguous"`` or ``"none"``), with ``windows``, the number of such
+        windows.
+    detection_counts : pandas.DataFrame
+        Windows of every evaluated record tested with the healthy model: one row per distinct combination of
+        ``turbulence, model, method, window, state`` and the flags ``fault_true`` (the window starts at or after
+        the failure), ``pre`` (it ends at or before the failure; every window of a healthy record), ``alarm`` (the
+        test rejects) and ``disjoint`` (it starts at a multiple of the window length: the windows that do not
+        overlap), with ``windows``.
+    detection_delays : pandas.DataFrame
+        Fault records with a window ending after the failure: one row per distinct combination of ``turbulence,
+        model, method, window, state`` and ``delay`` (s, from the failure to the end of the first flagged window
+        ending after it; NaN: no such window is flagged, a missed record), with ``records``, the number of such
+        records.
     faults : tuple of str
     rules : tuple of str
     alphas : dict
@@ -67,6 +83,8 @@ class Evaluation:
         window length (s) -> Ljung-Box lags.
     records : pandas.DataFrame
         The records evaluated (id, state, turbulence) and those skipped with the reason.
+    nchan : dict
+        model -> number of channels tested.
     thresholds : {"theoretical", "empirical"}
         How the test thresholds were set (``"empirical"`` when any test was calibrated).
     calibration : pandas.DataFrame
@@ -74,10 +92,17 @@ class Evaluation:
         distribution's critical value (``distribution``) and, for a test with ``threshold="empirical"``, the calibrated
         one (``empirical``), its calibration sample size and estimate (``"empirical"`` quantile or ``"gpd"``
         tail).
+
+    Notes
+    -----
+    The rates are ratios of these counts: a percent of windows is ``100 * (windows with the outcome) / (windows)``,
+    the mean of the per-window flags, and the delays' median and maximum come from the ``delay`` values repeated
+    ``records`` times.
     """
 
-    identification: pd.DataFrame
-    detection: pd.DataFrame
+    identification_counts: pd.DataFrame
+    detection_counts: pd.DataFrame
+    detection_delays: pd.DataFrame
     faults: tuple
     rules: tuple
     alphas: dict
@@ -88,6 +113,17 @@ class Evaluation:
     calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     # -- identification
+    def _percent(self, flags: dict, keys: Sequence[str] = ("model", "method", "window", "state")) -> pd.DataFrame:
+        """Percent of the identification windows of each ``keys`` group for which each of ``flags`` (name -> bool
+        Series over the rows of :attr:`identification_counts`) holds, indexed ``(model, method, window, true)``."""
+        df = self.identification_counts
+        n = df["windows"]
+        by = [df[k] for k in keys]
+        hits = pd.DataFrame({c: n.where(f, 0) for c, f in flags.items()}).groupby(by, sort=False).sum()
+        tab = hits.div(n.groupby(by, sort=False).sum(), axis=0) * 100.0
+        tab.index = tab.index.set_names(["model", "method", "window", "true"])
+        return tab
+
     def confusion(self, rule: str = "paper") -> pd.DataFrame:
         """Percent of the windows of each true failure labelled as each fault, ``"ambiguous"`` or ``"none"`` by
         ``rule``, per model, method and window length: every row adds up to 100.
@@ -102,14 +138,8 @@ class Evaluation:
         DataFrame indexed by ``(model, method, window, true)`` with one column per fault, then ``ambiguous``
         and ``none`` (percent of the row's windows).
         """
-        rule = option(rule, "rule", self.rules)
-        df = self.identification
-        lab = df[f"label_{rule}"].where(df[f"label_{rule}"] != "", "none")
-        cols = [*self.faults, "ambiguous", "none"]
-        tab = pd.concat({c: lab == c for c in cols}, axis=1).groupby(
-            [df[k] for k in ("model", "method", "window", "state")], sort=False).mean() * 100.0
-        tab.index = tab.index.set_names(["model", "method", "window", "true"])
-        return tab
+        lab = self.identification_counts[f"label_{option(rule, 'rule', self.rules)}"]
+        return self._percent({c: lab == c for c in [*self.faults, "ambiguous", "none"]})
 
     def _accepted(self, rule: str) -> pd.DataFrame:
         """Percent of the windows of each true failure accepted as each fault (``"paper"``: several may be
@@ -117,30 +147,23 @@ class Evaluation:
         rule = option(rule, "rule", self.rules)
         if rule != "paper":
             return self.confusion(rule)[list(self.faults)]
-        df = self.identification
-        tab = df.groupby(["model", "method", "window", "state"], sort=False)[[f"acc_{f}" for f in self.faults]]\
-            .mean() * 100.0
-        tab.columns = list(self.faults)
-        tab.index = tab.index.set_names(["model", "method", "window", "true"])
-        return tab
+        return self._percent({f: self.identification_counts[f"acc_{f}"] for f in self.faults})
 
     def rates(self) -> pd.DataFrame:
         """Per model, method, window length, true failure and rule: percent of windows identified uniquely and
         correctly (``correct``), uniquely but wrongly (``wrong``), ambiguous (``ambiguous``) and with no
         decision (``none``), and the number of windows."""
-        df = self.identification
-        keys = ["model", "method", "window", "state"]
+        df = self.identification_counts
         parts = []
         for rule in self.rules:
             lab = df[f"label_{rule}"]
             known = lab.isin(self.faults)
-            flags = pd.DataFrame({"correct": known & (lab == df["state"]), "wrong": known & (lab != df["state"]),
-                                  "ambiguous": lab == "ambiguous", "none": (lab == "none") | (lab == "")})
-            g = flags.groupby([df[k] for k in keys], sort=False)
-            t = g.mean() * 100.0
-            t["windows"] = g.size()
+            t = self._percent({"correct": known & (lab == df["state"]), "wrong": known & (lab != df["state"]),
+                               "ambiguous": lab == "ambiguous", "none": lab == "none"})
+            t["windows"] = df.groupby([df[k] for k in ("model", "method", "window", "state")],
+                                      sort=False)["windows"].sum().to_numpy()
             t["rule"] = rule
-            parts.append(t.reset_index().rename(columns={"state": "true"}))
+            parts.append(t.reset_index())
         return pd.concat(parts, ignore_index=True).set_index(["model", "method", "window", "true", "rule"])
 
     def table4(self, window: float | None = None, rule: str = "paper") -> pd.DataFrame:
@@ -163,8 +186,8 @@ class Evaluation:
     def detection_rates(self) -> pd.DataFrame:
         r"""Per model, method and window length: ``false_alarm`` (percent of healthy-record windows flagged),
         ``expected_false_alarm`` (percent, ``1 - (1 - alpha)^k`` for ``k`` channels tested at ``alpha``),
-        ``disjoint_windows`` and ``disjoint_alarms`` (the healthy windows that do not overlap: in each record those
-        starting at a multiple of the window length from its first window, and how many of them are flagged),
+        ``disjoint_windows`` and ``disjoint_alarms`` (the healthy windows that do not overlap: those starting at a
+        multiple of the window length, and how many of them are flagged),
         ``false_alarm_pvalue`` (two-sided binomial p-value of ``disjoint_alarms`` alarms in ``disjoint_windows``
         independent windows at the expected rate, :math:`\min(1, 2\min(P(X \le x), P(X \ge x)))`: sliding windows
         1 s apart share most of their samples, so one excursion flags a run of them and only the disjoint ones can
@@ -175,41 +198,34 @@ class Evaluation:
         ``missed_records`` (fault records with no alarm after the failure), ``delay_median`` and ``delay_max``
         (s, from the failure to the end of the first flagged window ending after it). A rate or delay over no
         window (no healthy record, no window after a failure, no detection) is NaN."""
-        det = self.detection
         keys = ["model", "method", "window"]
+        delays = self.detection_delays
         rows = []
-        for key, g in det.groupby(keys, sort=False):
-            h = g[g["state"] == self._healthy]
-            first = h.groupby("record", sort=False)["start"].transform("min")
-            lag = (h["start"] - first) / key[2]
-            disjoint = h[np.isclose(lag, np.round(lag))]
-            f = g[(g["state"] != self._healthy) & g["fault_true"]]
-            post = g[(g["state"] != self._healthy) & ~g["pre"]]
-            delays = []
-            missed = 0
-            for _, r in post.groupby("record", sort=False):
-                hit = r[r["alarm"]]
-                if len(hit):
-                    delays.append(float(hit["end"].iloc[0] - r["failure_time"].iloc[0]))
-                else:
-                    missed += 1
-            a = self.alphas[(key[0], key[1])]
-            k = self.nchan.get(key[0], 1)
-            p0 = 1.0 - (1.0 - a) ** k
-            n_dis, x_dis = len(disjoint), int(disjoint["alarm"].sum())
+        for key, g in self.detection_counts.groupby(keys, sort=False):
+            n = g["windows"]
+            healthy = g["state"] == self._healthy
+            n_h, x_h = int(n[healthy].sum()), int(n[healthy & g["alarm"]].sum())
+            n_dis, x_dis = int(n[healthy & g["disjoint"]].sum()), int(n[healthy & g["disjoint"] & g["alarm"]].sum())
+            fault = ~healthy & g["fault_true"]
+            n_f, x_f = int(n[fault].sum()), int(n[fault & g["alarm"]].sum())
+            d = delays[(delays["model"] == key[0]) & (delays["method"] == key[1]) & (delays["window"] == key[2])]
+            hit = d["delay"].notna()
+            missed = int(d.loc[~hit, "records"].sum())
+            d = np.repeat(d["delay"][hit].to_numpy(), d["records"][hit].to_numpy())
+            p0 = 1.0 - (1.0 - self.alphas[(key[0], key[1])]) ** self.nchan.get(key[0], 1)
             lo, hi = stats.binom.ppf([0.005, 0.995], n_dis, p0) if n_dis else (np.nan, np.nan)
             p_two = min(1.0, 2.0 * min(stats.binom.cdf(x_dis, n_dis, p0), stats.binom.sf(x_dis - 1, n_dis, p0))) \
                 if n_dis else np.nan
             rows.append({"model": key[0], "method": key[1], "window": key[2],
-                         "false_alarm": 100.0 * h["alarm"].mean() if len(h) else np.nan,
-                         "expected_false_alarm": 100.0 * p0, "healthy_windows": len(h),
+                         "false_alarm": 100.0 * (x_h / n_h) if n_h else np.nan,
+                         "expected_false_alarm": 100.0 * p0, "healthy_windows": n_h,
                          "disjoint_windows": n_dis, "disjoint_alarms": x_dis,
                          "false_alarm_pvalue": p_two, "disjoint_band_low": lo, "disjoint_band_high": hi,
                          "false_alarm_in_band": bool(lo <= x_dis <= hi) if n_dis else False,
-                         "missed_fault": 100.0 * (1.0 - f["alarm"].mean()) if len(f) else np.nan,
+                         "missed_fault": 100.0 * (1.0 - x_f / n_f) if n_f else np.nan,
                          "missed_records": missed,
-                         "delay_median": float(np.median(delays)) if delays else np.nan,
-                         "delay_max": float(np.max(delays)) if delays else np.nan})
+                         "delay_median": float(np.median(d)) if d.size else np.nan,
+                         "delay_max": float(np.max(d)) if d.size else np.nan})
         return pd.DataFrame(rows).set_index(keys)
 
     @property
@@ -219,7 +235,7 @@ class Evaluation:
     def summary(self) -> str:
         """Table 4 (paper rule) per window length, the rates of every rule and the detection rates as text."""
         parts = []
-        for w in sorted(self.identification["window"].unique()):
+        for w in sorted(self.identification_counts["window"].unique()):
             for rule in self.rules:
                 parts.append(f"Identification, {w:g} s windows, rule {rule!r} (percent of windows of each true "
                              f"failure {'accepted' if rule == 'paper' else 'labelled'} as {'/'.join(self.faults)}):")
@@ -231,8 +247,8 @@ class Evaluation:
         return "\n\n".join(parts)
 
     def __repr__(self) -> str:
-        return (f"Evaluation(windows={len(self.identification)} identification, {len(self.detection)} detection, "
-                f"faults={self.faults}, rules={self.rules})")
+        return (f"Evaluation(windows={self.identification_counts['windows'].sum()} identification, "
+                f"{self.detection_counts['windows'].sum()} detection, faults={self.faults}, rules={self.rules})")
 
 
 def _named_tests(tests: Any, models: list) -> dict:
@@ -267,8 +283,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         Records as accepted by :func:`~tsfdi.fit_baselines`; the records in ``baselines.fit_records`` and records
         that lost control (NaN) are skipped. Either xarray kind may be backed by dask, chunked along ``record``
         (a fleet opened with ``xarray.open_zarr``, :mod:`tsfdi.fleet`): its chunks are then evaluated on the
-        current dask scheduler (threads, processes or a ``dask.distributed`` Client) and only their per-window
-        tables come back, in record order, so the result is the one of the same records in memory.
+        current dask scheduler (threads, processes or a ``dask.distributed`` Client) and only their counts come
+        back, added in record order, so the result is the one of the same records in memory.
     baselines : Baselines or mapping
         From :func:`~tsfdi.fit_baselines`, or a mapping turbulence level -> :class:`~tsfdi.Baselines`
         (condition-scheduled baselines: each record is tested with the models of its own turbulence level; levels
@@ -306,16 +322,20 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     Returns
     -------
     Evaluation
+        The windows counted per distinct outcome (:attr:`Evaluation.identification_counts`,
+        :attr:`~Evaluation.detection_counts`, :attr:`~Evaluation.detection_delays`) and the rates read from them.
 
     Notes
     -----
     Every record is filtered once through each model and all windows' statistics come from
-    prefix sums (:class:`tsfdi.windows.ResidualWindows`).
+    prefix sums (:class:`tsfdi.windows.ResidualWindows`). Each record's windows are counted as soon as they are
+    tested: the number of distinct outcomes is bounded by the models, tests, window lengths, states and turbulence
+    levels (and the distinct detection delays), not by the records, and counts add up exactly in any order.
 
     With data backed by dask, the driver reads the record coordinates and the first record only; each worker reads
-    its chunk, checks it for non-finite values (skipped records, as in memory) and returns the rows of its windows
-    (:func:`tsfdi.fleet.map_records`). The driver's memory then grows with the result tables (one row per window,
-    about 100 bytes), not with the records (``8 * channels`` bytes per sample).
+    its chunk, checks it for non-finite values (skipped records, as in memory) and returns the counts of its windows
+    (:func:`tsfdi.fleet.map_records`), which the driver adds. The driver then holds the counts and one row per record
+    in :attr:`Evaluation.records`, whatever the number of windows.
     """
     if isinstance(baselines, Baselines):
         by_level = None
@@ -381,7 +401,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
             "detection": detection}
-    ident_parts, det_parts = [], []
+    counts = _new_counts()
     if rec.source is None:
         idx = np.flatnonzero(use)
         iterator = idx
@@ -390,22 +410,19 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
 
             iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
         for i in iterator:
-            ident, det = _evaluate_record(rec.values[i], rec.ids[i], rec.state[i], rec.turbulence[i],
-                                          rec.failure_time[i], plan)
-            ident_parts += ident
-            det_parts += det
+            _evaluate_record(rec.values[i], rec.state[i], rec.turbulence[i], rec.failure_time[i], plan, counts)
     else:
-        # records backed by dask: every chunk runs on the current dask scheduler, the per-window tables come back
-        # chunk by chunk in record order, so the tables are those of the loop above
+        # records backed by dask: every chunk runs on the current dask scheduler and comes back as its counts, added
+        # in record order: integer counts, so the tables are those of the loop above
         from tsfdi.fleet import map_records, record_chunks
 
         valid = rec.valid.copy()
         chunks = map_records(_evaluate_chunk, rec.source, dataclasses.replace(rec, source=None), use, plan,
                              progress=progress, desc="tsfdi evaluate")
-        for where, (ok, ident, det) in zip(record_chunks(rec.source), chunks):
+        for where, (ok, part) in zip(record_chunks(rec.source), chunks):
             valid[where] = ok
-            ident_parts += [ident] if ident is not None else []
-            det_parts += [det] if det is not None else []
+            for name, c in part.items():
+                counts[name].update(c)
         rec = dataclasses.replace(rec, valid=valid)
         use &= valid
         if not use.any():
@@ -416,12 +433,11 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     recs = pd.DataFrame({"record": rec.ids, "state": rec.state, "turbulence": rec.turbulence,
                          "evaluated": use, "skipped": reasons})
     recs.attrs["healthy"] = healthy
-    ident = pd.concat(ident_parts, ignore_index=True) if ident_parts else pd.DataFrame(
-        columns=["record", "state", "turbulence", "model", "method", "window", "start"]
-        + [f"acc_{f}" for f in faults] + [f"label_{r}" for r in rules])
-    det = pd.concat(det_parts, ignore_index=True) if det_parts else pd.DataFrame(
-        columns=["record", "state", "turbulence", "model", "method", "window", "start", "end", "failure_time",
-                 "fault_true", "pre", "alarm"])
+    keys = ["turbulence", "model", "method", "window", "state"]
+    ident = _count_table(counts["identification"], [*keys, *(f"acc_{f}" for f in faults),
+                                                   *(f"label_{r}" for r in rules), "windows"])
+    det = _count_table(counts["detection"], [*keys, "fault_true", "pre", "alarm", "disjoint", "windows"])
+    delays = _count_table(counts["delays"], [*keys, "delay", "records"]).astype({"delay": np.float64})
     cal_rows = []
     for lvl, b in ([("", first)] if by_level is None else by_level.items()):
         for (m, meth), t in tests.items():
@@ -439,8 +455,9 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                             row["calibration_size"] = int(cal[state].calibration_[c].size)
                             row["estimate"] = cal[state].thresholds_[c].method_
                         cal_rows.append(row)
-    return Evaluation(identification=ident, detection=det, faults=faults, rules=rules, alphas=alphas, lags=lag_of,
-                      records=recs, nchan={m: len(first.model_channels(m)) for m in models},
+    return Evaluation(identification_counts=ident, detection_counts=det, detection_delays=delays, faults=faults,
+                      rules=rules, alphas=alphas, lags=lag_of, records=recs,
+                      nchan={m: len(first.model_channels(m)) for m in models},
                       thresholds="empirical" if empirical else "theoretical", calibration=pd.DataFrame(cal_rows))
 
 
@@ -453,15 +470,33 @@ def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
     return cal[base.healthy], {f: cal[f] for f in base.faults}
 
 
-def _evaluate_record(x_all: np.ndarray, rid: Any, state: str, turb: str, ft: float, plan: dict) -> tuple[list, list]:
-    """The identification and detection rows of one record (``evaluate``): every window of every length, model and
-    test."""
+def _new_counts() -> dict:
+    """Empty counts of :func:`evaluate`: identification and detection windows and delays per distinct outcome."""
+    return {"identification": Counter(), "detection": Counter(), "delays": Counter()}
+
+
+def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = (), names: Sequence = ()) -> None:
+    """Add windows to ``counter``, one entry per distinct outcome: ``key``, then the window's ``flags`` (windows x
+    k, bool) and the ``names`` its ``codes`` (arrays of one int per window) point to."""
+    rows, n = np.unique(np.column_stack([flags, *codes]), axis=0, return_counts=True)
+    k = flags.shape[1]
+    for row, c in zip(rows.tolist(), n.tolist()):
+        counter[(*key, *(bool(v) for v in row[:k]), *(names[v] for v in row[k:]))] += c
+
+
+def _count_table(counter: Counter, columns: list) -> pd.DataFrame:
+    """The counts as a table: one row per key, in order of first appearance, the count last (int64)."""
+    return pd.DataFrame([(*key, n) for key, n in counter.items()], columns=columns).astype({columns[-1]: np.int64})
+
+
+def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: dict, counts: dict) -> None:
+    """Add the windows of one record (``evaluate``), every length, model and test, to ``counts``
+    (:func:`_new_counts`)."""
     healthy, faults, fs, step_n = plan["healthy"], plan["faults"], plan["fs"], plan["step"]
     detection, rules = plan["detection"], plan["rules"]
     level = turb if plan["by_level"] else None
-    is_fault = state != healthy
-    label_names = np.array(list(faults) + ["ambiguous", "none"], dtype=object)
-    ident_parts, det_parts = [], []
+    is_fault = bool(state != healthy)
+    names = [*faults, "ambiguous", "none"]
     for m, (per_state, chans) in plan["models"][level].items():
         sig = as_signal(x_all[:, chans], "signal", allow_constant=True)
         # each record is filtered once through every (member) model; the windows of every length and
@@ -474,16 +509,17 @@ def _evaluate_record(x_all: np.ndarray, rid: Any, state: str, turb: str, ft: flo
             rw_f.fit(sig)
         for meth in plan["methods"]:
             for W in plan["windows"]:
-                w = round(W / fs, 9)
+                key = (turb, m, meth, round(W / fs, 9), state)
                 test_h, test_f = plan["tests"][(level, m, meth, W)]
                 if detection:
                     wh = rw_h.statistics(test_h, window=W, step=step_n, loglik=False)
                     st, en = wh.starts / fs, (wh.starts + W) / fs
-                    det_parts.append(pd.DataFrame({
-                        "record": rid, "state": state, "turbulence": turb, "model": m,
-                        "method": meth, "window": w, "start": st, "end": en,
-                        "failure_time": ft, "fault_true": is_fault & (st >= ft),
-                        "pre": ~is_fault | (en <= ft), "alarm": wh.reject[:, 0]}))
+                    alarm, pre = wh.reject[:, 0], (en <= ft) | (not is_fault)
+                    _count(counts["detection"], key,
+                           np.column_stack([is_fault & (st >= ft), pre, alarm, wh.starts % W == 0]))
+                    if not pre.all():                    # a fault record with windows ending after the failure
+                        hit = np.flatnonzero(alarm & ~pre)
+                        counts["delays"][(*key, float(en[hit[0]] - ft) if hit.size else None)] += 1
                 if not is_fault:
                     continue
                 ws = rw_f.statistics(test_f, window=W, step=step_n)
@@ -491,30 +527,19 @@ def _evaluate_record(x_all: np.ndarray, rid: Any, state: str, turb: str, ft: flo
                 if not keep.any():
                     continue
                 acc = ws.accepted[keep]
-                cols = {"record": rid, "state": state, "turbulence": turb, "model": m,
-                        "method": meth, "window": w, "start": ws.starts[keep] / fs}
-                for j, f in enumerate(faults):
-                    cols[f"acc_{f}"] = acc[:, j]
-                for rule in rules:
-                    lab = decide(acc, rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep])
-                    cols[f"label_{rule}"] = label_names[np.where(lab >= 0, lab, np.where(
-                        lab == AMBIGUOUS, len(faults), len(faults) + 1))]
-                ident_parts.append(pd.DataFrame(cols))
-    return ident_parts, det_parts
+                codes = [decide(acc, rule, loglik=ws.loglik[keep], pvalue=ws.min_pvalue[keep]) for rule in rules]
+                codes = [np.where(c >= 0, c, np.where(c == AMBIGUOUS, len(faults), len(faults) + 1)) for c in codes]
+                _count(counts["identification"], key, acc, codes, names)
 
 
 def _evaluate_chunk(chunk: Any, where: slice, labels: Records, use: np.ndarray, plan: dict) -> tuple:
     """One chunk of records backed by dask, on a worker (``evaluate``): which of its records are valid, and the
-    identification and detection rows of those evaluated (``None`` for none)."""
+    counts of the windows of those evaluated."""
     rec = labels.read(where, chunk)
-    ident_parts, det_parts = [], []
+    counts = _new_counts()
     for j in np.flatnonzero(use[where] & rec.valid):
-        ident, det = _evaluate_record(rec.values[j], rec.ids[j], rec.state[j], rec.turbulence[j],
-                                      rec.failure_time[j], plan)
-        ident_parts += ident
-        det_parts += det
-    return (rec.valid, pd.concat(ident_parts, ignore_index=True) if ident_parts else None,
-            pd.concat(det_parts, ignore_index=True) if det_parts else None)
+        _evaluate_record(rec.values[j], rec.state[j], rec.turbulence[j], rec.failure_time[j], plan, counts)
+    return rec.valid, counts
 
 
 # ------------------------------------------------------------------------------------ per-record scoring

@@ -200,7 +200,7 @@ def demo_report(bases: dict, ev: Evaluation, *, markdown: bool = False) -> str:
                "q_insample: median in-sample Ljung-Box Q (20 lags, 20 s blocks), dimensionless.\n")
     out.append(show(t2.set_index(["turbulence", "state", "model", "signals"]).round(
         {"spp": 2, "rss_sss": 5, "q_insample": 2})))
-    for w in sorted(ev.identification["window"].unique()):
+    for w in sorted(ev.identification_counts["window"].unique()):
         for rule in ev.rules:
             what = "accepted" if rule == "paper" else "labelled"
             out.append(f"\n## Table 4 analogue, {w:g} s windows, rule '{rule}'\n\nPercent of the windows of each true "
@@ -255,19 +255,19 @@ def _caption(stem: str) -> str:
 
 def write_report(bases: dict, ev: Evaluation, data: Any, out: Any, *, figures: bool = True) -> list:
     """Write ``report.md`` (:func:`demo_report` as markdown; with ``figures`` it embeds them, paths relative to
-    ``out``), ``identification_windows.csv.gz`` (the per-window identification table) and, with ``figures``,
-    :func:`write_figures` under ``out/figures``. Returns the paths written, the report first."""
+    ``out``), ``identification_counts.csv.gz`` (the identification windows counted per distinct outcome) and,
+    with ``figures``, :func:`write_figures` under ``out/figures``. Returns the paths written, the report first."""
     from pathlib import Path
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "report.md", out / "identification_windows.csv.gz"]
+    paths = [out / "report.md", out / "identification_counts.csv.gz"]
     figs = write_figures(bases, ev, data, out / "figures") if figures else []
     text = demo_report(bases, ev, markdown=True)
     if figs:
         text += "\n" + markdown_figures(figs, out)
     paths[0].write_text(text)
-    ev.identification.to_csv(paths[1], index=False)
+    ev.identification_counts.to_csv(paths[1], index=False)
     return paths + figs
 
 

@@ -147,9 +147,21 @@ def calibrated_one_set(data) -> tuple[pd.DataFrame, list[str], dict]:
     return tab, lines, orders
 
 
+def pct(g: pd.DataFrame, mask: pd.Series) -> float:
+    """Percent of the windows counted in ``g`` (rows of ``Evaluation.identification_counts`` / ``detection_counts``)
+    for which ``mask`` holds."""
+    return float(g.loc[mask, "windows"].sum() / g["windows"].sum() * 100.0)
+
+
+def correct_pct(g: pd.DataFrame, state: str, rule: str = "paper") -> float:
+    """Percent of the windows of true failure ``state`` in ``g`` labelled ``state`` by ``rule``."""
+    g = g[g["state"] == state]
+    return pct(g, g[f"label_{rule}"] == state)
+
+
 def level_lines(ev) -> list[str]:
     """Per turbulence level: VAR + whiteness paper rule at 20 s and the best improved rule at 5 s."""
-    df = ev.identification
+    df = ev.identification_counts
     df = df[df["model"] == "var"]
     lines = []
     for lvl in dict.fromkeys(df["turbulence"]):
@@ -157,7 +169,7 @@ def level_lines(ev) -> list[str]:
 
         def correct(meth, w, rule):
             h = g[(g["method"] == meth) & (g["window"] == w)]
-            return {f: 100.0 * (h.loc[h["state"] == f, f"label_{rule}"] == f).mean() for f in ev.faults}
+            return {f: correct_pct(h, f, rule) for f in ev.faults}
 
         p20 = correct("whiteness", 20.0, "paper")
         best = max(((rule, meth, correct(meth, 5.0, rule)) for rule in ev.rules[1:] for meth in ("whiteness", "variance")),
@@ -183,10 +195,9 @@ def variants(data) -> pd.DataFrame:
         row = {"fit_records": n, "pool": pool, "order": str(order),
                "var_orders": f"{orders[0]}-{orders[-1]}" if len(orders) > 1 else str(orders[0])}
         for lvl in ("light", "moderate", "severe"):
-            sub = ev.identification
+            sub = ev.identification_counts
             sub = sub[(sub["turbulence"] == lvl) & (sub["window"] == 20.0)]
-            row[f"paper 20 s {lvl} (min over rotors)"] = min(
-                100.0 * (sub.loc[sub["state"] == f, "label_paper"] == f).mean() for f in ev.faults)
+            row[f"paper 20 s {lvl} (min over rotors)"] = min(correct_pct(sub, f) for f in ev.faults)
         row["likelihood 5 s all (min)"] = r.xs(("var", "whiteness", 5.0, "likelihood"),
                                                level=("model", "method", "window", "rule")).min()
         d = ev.detection_rates().loc[("var", "whiteness", 20.0)]
@@ -303,14 +314,14 @@ def what_if_tables(bases, ev) -> tuple[dict, pd.DataFrame, dict]:
         thr[name] = b["severe"].steady_thresholds
     rows = []
     for name, e in evs.items():
-        df = e.identification
+        df = e.identification_counts
         df = df[(df["model"] == "var") & (df["method"] == "whiteness") & (df["window"] == 20.0)]
         for (lvl, st), g in df.groupby(["turbulence", "state"], sort=False):
             other = g[[f"acc_{f}" for f in e.faults if f != st]].any(axis=1)
             rows.append({"turbulence": lvl, "state": st, "aircraft": name,
-                         "correct unique (%)": 100.0 * (g["label_paper"] == st).mean(),
-                         "matching model rejected (%)": 100.0 * (~g[f"acc_{st}"]).mean(),
-                         "another failure accepted (%)": 100.0 * other.mean()})
+                         "correct unique (%)": pct(g, g["label_paper"] == st),
+                         "matching model rejected (%)": pct(g, ~g[f"acc_{st}"]),
+                         "another failure accepted (%)": pct(g, other)})
     df = pd.DataFrame(rows)
     t = {v: df.pivot_table(index=["turbulence", "state"], columns="aircraft", values=v, sort=False)[list(evs)]
          .round(1) for v in ("correct unique (%)", "matching model rejected (%)", "another failure accepted (%)")}
@@ -335,8 +346,8 @@ def loo_alpha(bases_e, data) -> tuple[pd.DataFrame, list[str]]:
         a = tab.attrs["selected"]
         ev = tsfdi.evaluate(sig, bases_e, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
                             turbulence=lvl, rules=["paper"], progress=False)
-        idents.append(ev.identification)
-        dets.append(ev.detection)
+        idents.append(ev.identification_counts)
+        dets.append(ev.detection_counts)
         r = ev.rates()["correct"].xs(("var", "whiteness", "paper"), level=("model", "method", "rule"))
         d = ev.detection_rates().loc[("var", "whiteness")]
         for w in sorted(d.index):
@@ -352,10 +363,10 @@ def loo_alpha(bases_e, data) -> tuple[pd.DataFrame, list[str]]:
                          "two-sided binomial p": float(f"{d.loc[w, 'false_alarm_pvalue']:.2g}"),
                          "missed faults (%)": round(float(d.loc[w, "missed_fault"]), 2),
                          "median delay (s)": float(d.loc[w, "delay_median"])})
-    df = pd.concat(idents)
+    df = pd.concat(idents, ignore_index=True)
     df = df[df["window"] == 20.0]
-    rates = {f: 100.0 * (df.loc[df["state"] == f, "label_paper"] == f).mean() for f in sorted(set(df["state"]))}
-    low = min(100.0 * (g["label_paper"] == st).mean() for (_, st), g in df.groupby(["turbulence", "state"]))
+    rates = {f: correct_pct(df, f) for f in sorted(set(df["state"]))}
+    low = min(correct_pct(g, st) for (_, st), g in df.groupby(["turbulence", "state"]))
     ok = all(v >= 99.6 for v in rates.values())
     lines = ["- VAR + whiteness, paper rule, 20 s, alpha chosen per level on the fitting records: correct "
              "unique identification " + ", ".join(f"{f} {v:.2f}%" for f, v in rates.items())
@@ -363,20 +374,20 @@ def loo_alpha(bases_e, data) -> tuple[pd.DataFrame, list[str]]:
              + ("**met**." if ok else "**not met**.")]
     # detection over all levels: alarms on healthy windows against the sum of the per-level expectations
     tab = pd.DataFrame(rows)
-    det = pd.concat(dets)
+    det = pd.concat(dets, ignore_index=True)
     first = next(iter(bases_e.values()))
     chosen = dict(zip(tab["turbulence"], tab["alpha per channel"]))
     for w, g in det[det["state"] == first.healthy].groupby("window"):
         # independent trials: the non-overlapping windows of each record; expectation pooled over the levels
-        lag = (g["start"] - g.groupby("record")["start"].transform("min")) / w
-        dj = g[np.isclose(lag, np.round(lag))]
-        p0 = sum((1.0 - (1.0 - chosen[lvl]) ** len(first.channels)) * len(h)
-                 for lvl, h in dj.groupby("turbulence")) / len(dj)
-        lo, hi = stats.binom.ppf([0.005, 0.995], len(dj), p0)
-        x = int(dj["alarm"].sum())
+        dj = g[g["disjoint"]]
+        n_dj = int(dj["windows"].sum())
+        p0 = sum((1.0 - (1.0 - chosen[lvl]) ** len(first.channels)) * h["windows"].sum()
+                 for lvl, h in dj.groupby("turbulence")) / n_dj
+        lo, hi = stats.binom.ppf([0.005, 0.995], n_dj, p0)
+        x = int(dj.loc[dj["alarm"], "windows"].sum())
         lines.append(f"- Detection (healthy model at the chosen alpha, {w:g} s): non-overlapping healthy "
-                     f"windows flagged {x} of {len(dj)}, two-sided 99 % band {lo:.0f}-{hi:.0f} at the expected "
-                     f"{100 * p0:.3g}% (all {len(g)} sliding windows: {100.0 * g['alarm'].mean():.2f}%) -> "
+                     f"windows flagged {x} of {n_dj}, two-sided 99 % band {lo:.0f}-{hi:.0f} at the expected "
+                     f"{100 * p0:.3g}% (all {g['windows'].sum()} sliding windows: {pct(g, g['alarm']):.2f}%) -> "
                      + ("**met**." if lo <= x <= hi else "**not met**."))
     return tab.set_index(["turbulence", "alpha per channel", "held-out correct at 20 s, alpha 1e-3 (%)",
                           "held-out correct at 20 s (%)", "held-out windows", "window (s)"]), lines
@@ -425,12 +436,12 @@ def side_by_side(ev, ev_e) -> pd.DataFrame:
     chi-square and the calibrated thresholds."""
     rows = []
     for name, e in (("chi2", ev), ("empirical", ev_e)):
-        df = e.identification
+        df = e.identification_counts
         df = df[(df["model"] == "var") & (df["method"] == "whiteness")]
         for (lvl, w, st), g in df.groupby(["turbulence", "window", "state"], sort=False):
             for rule in e.rules:
                 rows.append({"turbulence": lvl, "window": w, "rule": rule, "true": st, "thresholds": name,
-                             "correct": 100.0 * (g[f"label_{rule}"] == st).mean()})
+                             "correct": pct(g, g[f"label_{rule}"] == st)})
     t = pd.DataFrame(rows).pivot_table(index=["turbulence", "window", "rule", "true"], columns="thresholds",
                                        values="correct", sort=False)
     return t.round(2)
@@ -443,19 +454,21 @@ def calibrated_lines(ev_e) -> list[str]:
     lines = [f"- VAR + whiteness, calibrated thresholds, paper rule, 20 s: correct unique identification "
              f"{', '.join(f'{k} {v:.2f}%' for k, v in v20.items())} -> target >= 99.6% per rotor "
              f"**{'met' if (v20 >= 99.6).all() else 'not met'}**."]
-    df = ev_e.identification
+    df = ev_e.identification_counts
     df = df[(df["model"] == "var") & (df["window"] == 20.0)]
     for lvl in dict.fromkeys(df["turbulence"]):
         g = df[df["turbulence"] == lvl]
-        c = {f: 100.0 * (g.loc[g["state"] == f, "label_paper"] == f).mean() for f in ev_e.faults}
+        c = {f: correct_pct(g, f) for f in ev_e.faults}
         lines.append(f"  - **{lvl}**: {', '.join(f'{k} {v:.2f}%' for k, v in c.items())} "
                      f"(>= 99.6%: **{'met' if min(c.values()) >= 99.6 else 'not met'}**).")
     d = ev_e.detection_rates()
     for w in sorted(d.index.get_level_values("window").unique()):
         lines.append(detection_line(f"VAR, whiteness, calibrated, {w:g} s", d.loc[("var", "whiteness", w)]))
-    det = ev_e.detection
+    det = ev_e.detection_counts
     det = det[(det["model"] == "var") & (det["state"] == "healthy")]
-    fa = det.groupby(["window", "turbulence"], sort=False)["alarm"].mean().unstack() * 100.0
+    fa = det.assign(flagged=det["windows"].where(det["alarm"], 0)).groupby(["window", "turbulence"], sort=False)[
+        ["flagged", "windows"]].sum()
+    fa = (fa["flagged"] / fa["windows"]).unstack() * 100.0
     lines.append("- Detection false alarms per level (percent of healthy windows, calibrated): " + "; ".join(
         f"{w:g} s: " + ", ".join(f"{lvl} {v:.2f}%" for lvl, v in row.items()) for w, row in fa.iterrows()) + ".")
     return lines

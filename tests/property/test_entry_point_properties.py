@@ -432,7 +432,7 @@ def test_evaluate(windows, step, settle, rules, models, tests, kind):
     det = ev.detection_rates()
     for col in ("false_alarm", "missed_fault"):             # NaN: no window of that kind (documented)
         assert (det[col].between(0, 100) | det[col].isna()).all()
-    if len(ev.identification):
+    if ev.identification_counts["windows"].sum():
         assert ev.rates()[["correct", "wrong", "ambiguous", "none"]].sum(axis=1).round(6).eq(100).all()
 
 
