@@ -55,7 +55,10 @@ def test_evaluate_synthetic(synthetic, fitted):
     assert row["disjoint_windows"] == n_disjoint and row["false_alarm_pvalue"] > 1e-3
     assert row["missed_records"] == 0
     assert 0 < row["delay_median"] <= 5.0
-    assert "Identification" in ev.summary()
+    summ = ev.summary()
+    assert isinstance(summ, tsfdi.summary.Summary) and "Identification, 20 s windows" in str(summ)
+    assert dict(summ.header)["Identification windows"] == int(ev.identification_counts["windows"].sum())
+    assert summ.tables[-1][1].equals(det) and "<table>" in ev._repr_html_()
 
 
 def _counted(windows: pd.DataFrame, count: str = "windows") -> pd.DataFrame:

@@ -57,7 +57,7 @@ def assert_same_evaluation(a, b):
         pd.testing.assert_frame_equal(getattr(a, name), getattr(b, name), check_exact=True, obj=name)
     assert (a.faults, a.rules, a.alphas, a.lags, a.nchan, a.thresholds) == \
         (b.faults, b.rules, b.alphas, b.lags, b.nchan, b.thresholds)
-    assert a.summary() == b.summary()
+    assert str(a.summary()) == str(b.summary())
 
 
 def assert_same_baselines(a, b):

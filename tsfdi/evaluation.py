@@ -41,6 +41,7 @@ from tsfdi._validation import boolean, float_like, option
 from tsfdi.baselines import Baselines, Records
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.summary import Summary
 from tsfdi.windows import AMBIGUOUS, RULES, ResidualWindows, decide
 
 __all__ = ["OUTCOMES", "Evaluation", "detection_metrics", "evaluate", "first_alarm", "score_records"]
@@ -232,19 +233,23 @@ class Evaluation:
     def _healthy(self) -> str:
         return str(self.records.attrs.get("healthy", "healthy"))
 
-    def summary(self) -> str:
-        """Table 4 (paper rule) per window length, the rates of every rule and the detection rates as text."""
-        parts = []
-        for w in sorted(self.identification_counts["window"].unique()):
-            for rule in self.rules:
-                parts.append(f"Identification, {w:g} s windows, rule {rule!r} (percent of windows of each true "
-                             f"failure {'accepted' if rule == 'paper' else 'labelled'} as {'/'.join(self.faults)}):")
-                parts.append(self.table4(w, rule).to_string())
-        parts.append("Rates (percent of windows):")
-        parts.append(self.rates().round(2).to_string())
-        parts.append("Detection with the healthy model:")
-        parts.append(self.detection_rates().round(4).to_string())
-        return "\n\n".join(parts)
+    def summary(self) -> Summary:
+        """Table 4 (percent of the windows of each true failure accepted / labelled as each fault) per window
+        length and rule, the rates of every rule and the detection rates, as text (``str``) and HTML tables."""
+        header = [("Faults", ", ".join(self.faults)), ("Rules", ", ".join(self.rules)),
+                  ("Records evaluated", f"{int(self.records['evaluated'].sum())} of {len(self.records)}"),
+                  ("Identification windows", int(self.identification_counts["windows"].sum())),
+                  ("Detection windows", int(self.detection_counts["windows"].sum())),
+                  ("Thresholds", self.thresholds)]
+        tables = [(f"Identification, {w:g} s windows, rule {rule!r} (percent of the windows of each true failure "
+                   f"{'accepted' if rule == 'paper' else 'labelled'} as each fault)", self.table4(w, rule))
+                  for w in sorted(self.identification_counts["window"].unique()) for rule in self.rules]
+        tables.append(("Rates (percent of windows)", self.rates()))
+        tables.append(("Detection with the healthy model", self.detection_rates()))
+        return Summary("Evaluation", header, tables)
+
+    def _repr_html_(self) -> str:
+        return self.summary()._repr_html_()
 
     def __repr__(self) -> str:
         return (f"Evaluation(windows={self.identification_counts['windows'].sum()} identification, "
