@@ -1,7 +1,8 @@
 """CrazyPAD benchmark (issue 17): detection and identification of propeller defects on real Crazyflie flights.
 
 Run: ``python benchmarks/crazypad.py`` (reads ``../shared/data/crazypad`` next to the repository; BLAS pinned to
-one thread; about 1 min on one core). Prints the choices, then three sections, with PASS/FAIL against the targets.
+one thread; it prints its run time, 2-3 min on the 2-core development machine). Prints the choices, then three
+sections, with PASS/FAIL against the targets.
 
 Data. Controller logs of CrazyPAD (``tsfdi.datasets.load_crazypad``). Every log holds two airborne segments (two
 short flights, ~5-6 s each once trimmed), so a *flight* below is one log, and its two segments always go together:
