@@ -273,7 +273,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypa
     page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "cli.md").read_text()
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
-    assert len(commands) == 9
+    assert len(commands) == 11
     ulog = shared_data / "px4" / "sample.ulg"
     if not ulog.is_file():
         raise FileNotFoundError(f"shared PX4 log missing at {ulog}: the CLI page's example needs it")
@@ -282,7 +282,8 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypa
     printed = {}
     for line in commands:
         assert main(shlex.split(line)[1:]) == 0, (line, capsys.readouterr().err)
-        printed[line.split()[1]] = capsys.readouterr().out
+        key = line.split()[1] + (" calibrated" if "--threshold calibrated" in line else "")
+        printed[key] = capsys.readouterr().out
     # select-order: the orders the page quotes
     assert re.search(r"Selected \(min BIC\) +6\n", printed["select-order"])
     assert re.search(r"RSS/SSS stable from +8\n", printed["select-order"])
@@ -298,3 +299,5 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypa
     table = [row.split() for row in printed["detect"].splitlines() if re.match(r"\s+\d+\s+\d", row)]
     faults = [(float(r[1]), r[-1] == "True") for r in table]
     assert faults and all(f == (start < 10.0) for start, f in faults)
+    # calibrated thresholds on the rest of the PX4 log: 0 of the 17 one-second windows flagged
+    assert printed["detect calibrated"].strip().splitlines()[-1] == "fault in 0 of 17 window(s)"

@@ -699,11 +699,39 @@ def _test(args: argparse.Namespace) -> Any:
     return LjungBox(lags=args.lags, alpha=args.alpha) if args.method == "whiteness" else FTest(alpha=args.alpha)
 
 
+def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
+    """The test of ``args``: one with the theoretical threshold for every model, or (``--threshold calibrated``)
+    one per model, calibrated for windows of ``window`` signal samples on the held-out residuals of the records
+    the model was fitted on (stored in its file): each record through the model fitted on the others, a single
+    record cut into blocks (:meth:`tsfdi.VAR.held_out_residuals`). ``models`` maps a name (the key the engine
+    uses) to ``(flag text, results)``."""
+    if args.threshold == "theoretical":
+        return _test(args)
+    if window is None:
+        raise ValueError("--threshold calibrated needs --window: the threshold is calibrated for windows of one "
+                         "length")
+    out = {}
+    for name, (flag, res) in models.items():
+        try:
+            out[name] = _test(args).calibrate(res.model.held_out_residuals(), window=window)
+        except ValueError as exc:
+            recs = res.model.records
+            raise ValueError(f"--threshold calibrated, {flag}: {exc} (the null sample: held-out residuals of the "
+                             f"{len(recs)} record(s), {sum(r.nobs for r in recs)} samples, the model was fitted "
+                             "on)") from None
+    return out
+
+
 def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
     p.add_argument("--method", choices=("whiteness", "variance"), default="whiteness",
                    help="residual test: Ljung-Box whiteness test or F test of the residual variance")
     p.add_argument("--alpha", type=_probability, default=1e-3, help="type I risk per channel and tested window")
     p.add_argument("--lags", type=_count, default=lags, help="Ljung-Box lags")
+    p.add_argument("--threshold", choices=("theoretical", "calibrated"), default="theoretical",
+                   help="theoretical: the test's chi-square / F law, exact only for the data the model was fitted "
+                        "on; calibrated: the law of the statistic fitted to the model's held-out residuals (each "
+                        "record it was fitted on, through the model fitted on the others; one record is cut into "
+                        "blocks), so that --alpha holds on new records (needs --window)")
 
 
 def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool = False) -> None:
@@ -1012,9 +1040,9 @@ def _detect(args: argparse.Namespace) -> int:
     baseline = _load("--baseline", args.baseline, args.baseline)
     data = _read_records(args, default_columns=_channels(baseline))
     _check_channels(data, {f"--baseline {args.baseline}": baseline})
-    test = _test(args)
     rows = []
     if args.window is None:
+        test = _tests(args, {}, None)
         data = _drop_short(data, *_min_samples(args, {"baseline": baseline}))
         for i, frame in enumerate(data.frames):
             try:
@@ -1029,6 +1057,7 @@ def _detect(args: argparse.Namespace) -> int:
     else:
         W, S = _windows_in_samples(args, data, {"baseline": baseline})
         data = _drop_short(data, W, f"--window {args.window}")
+        test = _tests(args, {"baseline": (f"--baseline {args.baseline}", baseline)}, W)
         for i, frame in enumerate(data.frames):
             try:
                 ws = ResidualWindows({"baseline": baseline}).fit(frame).statistics(test, window=W, step=S,
@@ -1081,12 +1110,12 @@ def _identify(args: argparse.Namespace) -> int:
     models = _load_models("--models", args.models)
     data = _read_records(args, default_columns=_channels(next(iter(models.values()))))
     _check_channels(data, {f"--models {n}": m for n, m in models.items()})
-    test = _test(args)
     if args.window is None:
         data = _drop_short(data, *_min_samples(args, models))
     else:
         W, S = _windows_in_samples(args, data, models)
         data = _drop_short(data, W, f"--window {args.window}")
+    test = _tests(args, {n: (f"--models {n}", m) for n, m in models.items()}, None if args.window is None else W)
     rows = []
     for i, frame in enumerate(data.frames):
         n = len(frame)
@@ -1143,10 +1172,16 @@ def _monitor(args: argparse.Namespace) -> int:
     W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
     data = _drop_short(data, W, f"--window {args.window}")
     V = window_samples(args.steady_window, "--steady-window", data.fs, minimum=2)
-    test = _test(args)
+    tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
+                          **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
+    if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
+        detection_test = tests.pop("")
+        test = tests or None
+    else:
+        test, detection_test = tests, None
     try:
-        monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.fs, test=test, steady_window=V,
-                          rule=args.rule)
+        monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.fs, test=test,
+                          detection_test=detection_test, steady_window=V, rule=args.rule)
     except (ValueError, TypeError) as exc:
         raise ValueError(f"--baseline / --models: {exc}") from None
     rows = []

@@ -1,0 +1,132 @@
+"""``--threshold calibrated`` of ``tsfdi detect / identify / monitor``: every model's test calibrated on the held-out
+residuals of the records stored in its file, exactly as the library does it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from _synthetic_fdi import FS, record
+
+import tsfdi
+from tsfdi.cli import main
+from tsfdi.identification import identify_windows
+
+WINDOW = 200                 # samples: the "2s" of the commands below at FS = 100 Hz
+
+
+def _csv(x: np.ndarray, path, t0: float = 0.0) -> None:
+    pd.DataFrame({"time": t0 + np.arange(x.shape[0]) / FS, "a": x[:, 0], "b": x[:, 1]}).to_csv(path, index=False)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """Models of the healthy, f1 and f2 states fitted by ``tsfdi fit`` on one 80 s record each, and a record that
+    is healthy for 20 s, then f2."""
+    d = tmp_path_factory.mktemp("calibrated")
+    rng = np.random.default_rng(5)
+    paths = {}
+    for s in ("healthy", "f1", "f2"):
+        _csv(record(s, 8000, rng), d / f"{s}.csv")
+        paths[s] = d / f"{s}.npz"
+        assert main(["fit", str(d / f"{s}.csv"), "--out", str(paths[s]), "--max-lags", "6"]) == 0
+    x = record("f2", 4000, rng, failure=2000)
+    _csv(x, d / "current.csv", t0=50.0)
+    return d, paths, x
+
+
+def _tests(paths, names, **kw):
+    return {n: tsfdi.LjungBox(lags=20, alpha=1e-2).calibrate(tsfdi.load(paths[n]).model.held_out_residuals(),
+                                                            window=WINDOW, **kw) for n in names}
+
+
+def test_detect_calibrated_is_the_library_calibration(files, capsys):
+    d, paths, x = files
+    common = ["detect", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--window", "2s", "--step",
+              "1s", "--alpha", "0.01"]
+    assert main(common + ["--threshold", "calibrated", "--out", str(d / "cal.csv")]) == 0
+    assert main(common + ["--out", str(d / "theo.csv")]) == 0
+    capsys.readouterr()
+    cal, theo = pd.read_csv(d / "cal.csv"), pd.read_csv(d / "theo.csv")
+    test = _tests(paths, ["healthy"])["healthy"]
+    for j, c in enumerate(("a", "b")):
+        np.testing.assert_allclose(cal[f"threshold_{c}"], test.threshold_[j], rtol=1e-12)
+        assert (theo[f"threshold_{c}"] != cal[f"threshold_{c}"]).all()
+    ws = tsfdi.ResidualWindows({"baseline": tsfdi.load(paths["healthy"])}).fit(x).statistics(
+        test, window=WINDOW, step=100)
+    np.testing.assert_array_equal(cal["fault"], ws.reject[:, 0])
+    np.testing.assert_allclose(cal["pvalue_a"], ws.pvalue[:, 0, 0], rtol=1e-9)
+    # healthy for 20 s, f2 after: the windows inside the f2 part are flagged
+    assert cal["fault"][cal["start"] >= 70.0].all()
+
+
+def test_identify_calibrated_per_model(files, capsys):
+    d, paths, x = files
+    out = d / "ident.csv"
+    assert main(["identify", str(d / "current.csv"), "--models", f"f1={paths['f1']}", f"f2={paths['f2']}",
+                 "--window", "2s", "--step", "1s", "--alpha", "0.01", "--threshold", "calibrated", "--rule", "pvalue",
+                 "--out", str(out)]) == 0
+    capsys.readouterr()
+    t = pd.read_csv(out, keep_default_na=False)
+    models = {n: tsfdi.load(paths[n]) for n in ("f1", "f2")}
+    wins = identify_windows(x, models, _tests(paths, ["f1", "f2"]), window=WINDOW, step=100)
+    for j, n in enumerate(("f1", "f2")):
+        np.testing.assert_allclose(t[f"pvalue_{n}"], wins.windows.min_pvalue[:, j], rtol=1e-9)
+        np.testing.assert_array_equal(t[f"accept_{n}"], wins.accepted[:, j])
+    assert t["label"].tolist() == [lab or "" for lab in wins.decide("pvalue")]
+    assert (t["label"][t["start"] >= 70.0] == "f2").all()
+
+
+def test_monitor_calibrated(files, capsys):
+    d, paths, x = files
+    out = d / "events.csv"
+    assert main(["monitor", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--models",
+                 f"f1={paths['f1']}", f"f2={paths['f2']}", "--window", "2s", "--step", "1s", "--alpha", "0.01",
+                 "--lags", "20", "--threshold", "calibrated", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    tests = _tests(paths, ["healthy", "f1", "f2"])
+    ref = tsfdi.Monitor(tsfdi.load(paths["healthy"]), {n: tsfdi.load(paths[n]) for n in ("f1", "f2")},
+                        window=WINDOW, step=100, fs=FS, detection_test=tests.pop("healthy"), test=tests,
+                        steady_window="10s").run(x)
+    assert f"detection at {50.0 + ref.detection_time:g} s, label {ref.label}" in printed
+    assert ref.label == "f2" and 70.0 <= 50.0 + ref.detection_time <= 73.0
+    events = pd.read_csv(out)
+    assert len(events) == len(ref.to_frame())
+
+
+def test_calibrated_errors(files, tmp_path, capsys):
+    d, paths, x = files
+    assert main(["detect", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--threshold",
+                 "calibrated"]) == 2
+    assert "--threshold calibrated needs --window" in capsys.readouterr().err
+    # a model fitted on one 40 s record: held out in 10 blocks of 4 s, 20 non-overlapping 2 s windows, too few
+    _csv(record("healthy", 4000, np.random.default_rng(2)), tmp_path / "short.csv")
+    assert main(["fit", str(tmp_path / "short.csv"), "--out", str(tmp_path / "short.npz"), "--max-lags", "4"]) == 0
+    capsys.readouterr()
+    assert main(["detect", str(d / "current.csv"), "--baseline", str(tmp_path / "short.npz"), "--window", "2s",
+                 "--threshold", "calibrated"]) == 2
+    err = capsys.readouterr().err
+    assert f"--threshold calibrated, --baseline {tmp_path / 'short.npz'}: " in err
+    assert "holds 20 independent" in err and "at least 30 are needed" in err
+    assert "1 record(s), 4000 samples" in err
+
+
+def test_px4_healthy_continuation(shared_data, tmp_path, capsys):
+    """The example of docs/guide/cli.md: a gyroscope VAR fitted on 12-50 s of the PX4 sample log (lying still,
+    three records between logging gaps); the rest of the log (50-68 s, still) tested on 1 s windows at alpha 0.01
+    per channel: the chi-square thresholds flag 4 of 17 windows (the two-sided 99 % binomial band of 17 windows at
+    the family-wise 3 % of three channels ends at 3), the calibrated ones none."""
+    log = shared_data / "px4" / "sample.ulg"
+    if not log.is_file():
+        raise FileNotFoundError(f"shared PX4 log missing at {log}: this test needs ../shared/data/px4/sample.ulg")
+    data = [str(log), "--topics", "sensor_combined", "--fs", "50", "--columns",
+            ",".join(f"sensor_combined.gyro_rad[{i}]" for i in range(3))]
+    model = tmp_path / "gyro.npz"
+    assert main(["fit", *data, "--start", "12s", "--stop", "50s", "--out", str(model)]) == 0
+    found = {}
+    for threshold in ("theoretical", "calibrated"):
+        capsys.readouterr()
+        assert main(["detect", *data, "--start", "50s", "--stop", "68s", "--baseline", str(model), "--window", "1s",
+                     "--alpha", "0.01", "--threshold", threshold]) == 0
+        found[threshold] = capsys.readouterr().out.strip().splitlines()[-1]
+    assert found == {"theoretical": "fault in 4 of 17 window(s)", "calibrated": "fault in 0 of 17 window(s)"}
