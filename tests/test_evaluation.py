@@ -196,6 +196,39 @@ def test_bad_input(synthetic, fitted):
         tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, windows=("1ms",), progress=False)
 
 
+def test_absent_parts_are_left_out_or_refused_by_name(synthetic, fitted):
+    """detection=False: empty detection tables, no detection part in the summary, detection_rates refused naming
+    the option (it raised a raw KeyError, and so did summary()); no fault record evaluated: no Table 4."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0, progress=False)
+    full = tsfdi.evaluate(recs, fitted, **kw)
+    ev = tsfdi.evaluate(recs, fitted, detection=False, **kw)
+    assert ev.detection_counts.empty and ev.detection_delays.empty
+    assert list(ev.detection_counts.columns) == list(full.detection_counts.columns)
+    assert list(ev.detection_delays.columns) == list(full.detection_delays.columns)
+    with pytest.raises(ValueError, match="no detection windows: evaluate was run with detection=False"):
+        ev.detection_rates()
+    # the summary of the run with detection, less its detection part; the identification tables are the same
+    summ, ref = ev.summary(), full.summary()
+    assert summ.header == [row for row in ref.header if row[0] != "Detection windows"]
+    assert [title for title, _ in summ.tables] == [title for title, _ in ref.tables][:-1]
+    assert ref.tables[-1][0] == "Detection with the healthy model" and "Detection" not in str(summ)
+    for (_, mine), (_, theirs) in zip(summ.tables, ref.tables):
+        pd.testing.assert_frame_equal(mine, theirs)
+    assert "<table>" in ev._repr_html_() and "0 detection" in repr(ev)
+    pd.testing.assert_frame_equal(ev.identification_counts, full.identification_counts)
+    # healthy records only (record 0 is a fitting record): nothing to identify, detection as usual
+    healthy = [i for i, s in enumerate(states) if s == "healthy"]
+    ev = tsfdi.evaluate([recs[i] for i in healthy], fitted, **{**kw, "states": [states[i] for i in healthy],
+                                                              "failure_times": ft[healthy]})
+    assert ev.identification_counts.empty and ev.rates().empty
+    with pytest.raises(ValueError, match="no identification windows"):
+        ev.table4()
+    assert ev.detection_rates().loc[("var", "whiteness", 5.0), "healthy_windows"] == 4 * 36
+    assert [title for title, _ in ev.summary().tables] == ["Rates (percent of windows)",
+                                                           "Detection with the healthy model"]
+
+
 def test_windows_as_time_spans_or_samples(synthetic, fitted):
     """windows / step follow pandas rolling: "5s" at 100 Hz and 500 samples give the same evaluation; a single test
     is labelled by its class name; tests may differ per model."""

@@ -139,6 +139,30 @@ def test_nonfinite_and_bad_input():
         OnlineDetector(2, na=-1)
 
 
+def test_rls_options_are_passed_on_or_refused_by_name():
+    # gate is the detector's own choice: it was a duplicate keyword of RecursiveARX (a TypeError from Python)
+    with pytest.raises(TypeError, match=r"^gate is set by OnlineDetector: .*gate='relative'.* P0, trend, theta0"):
+        OnlineDetector(2, gate="absolute")
+    with pytest.raises(TypeError, match=r"^gate is set by OnlineDetector"):
+        OnlineDetector(2, gate="relative")
+    with pytest.raises(TypeError, match=r"^gates is not an option of OnlineDetector"):
+        OnlineDetector(2, gates="absolute")
+    # every option reaches every pair's model: its own parameters under their name, the others as given
+    det = OnlineDetector(["a", "b"], na=1, nb=2, nk=1, forgetting_factor=0.99, threshold=3.0, freeze_on_alarm=False,
+                         nonfinite="raise", n_inputs=2, arm_after=5, eps=0.05, P0=10.0, trend="c",
+                         theta0=[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], stable_samples=7, variance_tol=0.02,
+                         min_variance_samples=9)
+    for m in det.models:
+        assert (m.na, m.nb, m.nk, m.n_inputs, m.trend) == (1, 2, 1, 2, "c")
+        assert (m.forgetting_factor, m.threshold, m.freeze_on_alarm, m.nonfinite) == (0.99, 3.0, False, "raise")
+        assert (m.arm_after, m.eps, m.gate) == (5, 0.05, "relative")
+        assert (m.stable_samples, m.variance_tol, m.min_variance_samples) == (7, 0.02, 9)
+        np.testing.assert_array_equal(m.P_, 10.0 * np.eye(6))
+        np.testing.assert_array_equal(m.theta_, [0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
+    # ... and the alarm-free copies of calibrate()
+    assert det._alarm_free_copy().models[1].stable_samples == 7
+
+
 # ------------------------------------------------------------------ moving-average statistic, baseline phase
 def thrust_like(n=3000, change=2000, drop=1.0, seed=11):
     """y = 0.5 + 0.8 u1 - 0.3 u2 + noise (sd 0.3) with a level drop ``drop`` from ``change`` (loss of thrust)."""

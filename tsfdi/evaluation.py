@@ -172,6 +172,9 @@ class Evaluation:
         ``"a/b/c"``, the percent of its windows accepted (or labelled) as each fault, for one window length."""
         conf = self._accepted(rule)
         wins = sorted(conf.index.get_level_values("window").unique())
+        if not wins:
+            raise ValueError("this evaluation has no identification windows (no fault record was evaluated): there "
+                             "is no Table 4")
         window = wins[-1] if window is None else float(window)
         if window not in wins:
             raise ValueError(f"window must be one of the evaluated lengths {wins}, got {window}")
@@ -198,7 +201,15 @@ class Evaluation:
         ``missed_fault`` (percent of fault-record windows starting after the failure not flagged),
         ``missed_records`` (fault records with no alarm after the failure), ``delay_median`` and ``delay_max``
         (s, from the failure to the end of the first flagged window ending after it). A rate or delay over no
-        window (no healthy record, no window after a failure, no detection) is NaN."""
+        window (no healthy record, no window after a failure, no detection) is NaN.
+
+        Raises
+        ------
+        ValueError
+            The evaluation has no detection windows: :func:`evaluate` was run with ``detection=False``."""
+        if self.detection_counts.empty:
+            raise ValueError("this evaluation has no detection windows: evaluate was run with detection=False; run it "
+                             "with detection=True for the detection rates")
         keys = ["model", "method", "window"]
         delays = self.detection_delays
         rows = []
@@ -235,17 +246,21 @@ class Evaluation:
 
     def summary(self) -> Summary:
         """Table 4 (percent of the windows of each true failure accepted / labelled as each fault) per window
-        length and rule, the rates of every rule and the detection rates, as text (``str``) and HTML tables."""
+        length and rule, the rates of every rule and the detection rates, as text (``str``) and HTML tables.
+
+        Without detection windows (``evaluate(..., detection=False)``) it has no detection part."""
+        detected = not self.detection_counts.empty
         header = [("Faults", ", ".join(self.faults)), ("Rules", ", ".join(self.rules)),
                   ("Records evaluated", f"{int(self.records['evaluated'].sum())} of {len(self.records)}"),
                   ("Identification windows", int(self.identification_counts["windows"].sum())),
-                  ("Detection windows", int(self.detection_counts["windows"].sum())),
+                  *([("Detection windows", int(self.detection_counts["windows"].sum()))] if detected else []),
                   ("Thresholds", self.thresholds)]
         tables = [(f"Identification, {w:g} s windows, rule {rule!r} (percent of the windows of each true failure "
                    f"{'accepted' if rule == 'paper' else 'labelled'} as each fault)", self.table4(w, rule))
                   for w in sorted(self.identification_counts["window"].unique()) for rule in self.rules]
         tables.append(("Rates (percent of windows)", self.rates()))
-        tables.append(("Detection with the healthy model", self.detection_rates()))
+        if detected:
+            tables.append(("Detection with the healthy model", self.detection_rates()))
         return Summary("Evaluation", header, tables)
 
     def _repr_html_(self) -> str:
@@ -319,6 +334,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         Decision rules (:data:`tsfdi.windows.RULES`); ``"paper"`` is always included.
     detection : bool
         Also test every window of every record with the healthy model (false alarms, missed faults, delays).
+        With ``False`` the detection tables of the result are empty, :meth:`Evaluation.detection_rates` raises
+        ``ValueError`` and :meth:`Evaluation.summary` has no detection part.
     progress : bool
         Show a tqdm progress bar over records.
     states, failure_times, fs :

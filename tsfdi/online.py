@@ -31,6 +31,8 @@ _MIN_EMPIRICAL = 5.0     # expected episodes at the target rate needed for the e
 _MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
 _TAIL_EPISODES = 20      # episodes above the base level of the tail fit
 _MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit accepts
+#: the RecursiveARX options OnlineDetector passes on (it sets the others: gate, threshold, freeze_on_alarm, ...)
+_RLS_OPTIONS = ("P0", "trend", "theta0", "stable_samples", "variance_tol", "min_variance_samples")
 
 @dataclass(frozen=True, eq=False)
 class OnlineDetection:
@@ -301,8 +303,10 @@ class OnlineDetector:
         both weighted by the scale of their regressor (see Notes); a fraction, so the same for any units of ``y``
         and ``u``.
     **rls_options
-        Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``stable_samples`` (consecutive samples
-        the model and the variance gates must hold), ``variance_tol``, ``min_variance_samples``.
+        Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``theta0``, ``stable_samples``
+        (consecutive samples the model and the variance gates must hold), ``variance_tol``,
+        ``min_variance_samples``. The others are set by the detector (``gate="relative"``, see Notes) or are its
+        own parameters above; passing one raises ``TypeError``.
 
     Attributes
     ----------
@@ -357,6 +361,11 @@ class OnlineDetector:
                 raise ValueError(f"pairs must have distinct names, got {names}")
         else:
             raise TypeError(f"pairs must be a positive int or a non-empty sequence of names, got {pairs!r}")
+        for key in rls_options:
+            if key not in _RLS_OPTIONS:
+                why = ("is set by OnlineDetector: its pairs use the scale-free gate='relative' (its Notes)"
+                       if key == "gate" else "is not an option of OnlineDetector")
+                raise TypeError(f"{key} {why}; the RecursiveARX options it passes on are {', '.join(_RLS_OPTIONS)}")
         self.pairs = names
         self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
         self.nonfinite = option(nonfinite, "nonfinite", ("skip", "raise"))

@@ -514,3 +514,52 @@ def test_relative_gate_counts_a_frozen_step_as_zero():
     res = m.run(y[100:200], u[100:200])             # no NaN here: every sample has a prediction error
     assert np.all(np.asarray(res.params) == m.theta_)
     assert first_stable(res) == 24 - carried < 34   # adapting, the model arms at sample 134
+
+
+# --- joint bound of P0 and the sample magnitude (Notes, Scale) ----------------------------------------------
+def test_large_p0_with_large_samples_is_refused_not_collapsed():
+    # P0 = 1e50 with samples of 1e140: the compiled loop's products phi_i (P0 phi)_i overflow, P collapsed to 0
+    # and theta stayed at 0 without a word; the pair is now refused before anything is processed
+    y, u = simulate_arx(300, 31)
+    c = 1e140 / max(np.abs(y).max(), np.abs(u).max())
+    m = RecursiveARX(2, 2, 1, P0=1e50)
+    with pytest.raises(ValueError, match=r"[yu] has a sample of magnitude .*: P0 \(largest absolute row sum "
+                                         r"1e\+50\) allows samples within \+-1e\+129 only"):
+        m.run(c * y, c * u)
+    with pytest.raises(ValueError, match=r"y has a sample of magnitude 1e\+140 .* lower P0"):
+        m.update(1e140, 1.0)
+    assert m.nobs == 0 and not m.theta_.any() and m.P_[0, 0] == 1e50      # nothing was processed
+    # a matrix P0 counts by its largest absolute row sum; below 1e4 the bound is the plain 1e152
+    with pytest.raises(ValueError, match=r"P0 \(largest absolute row sum 3e\+50\)"):
+        RecursiveARX(1, 1, P0=np.array([[1e50, 1e50], [1e50, 2e50]])).update(1e130, 0.0)
+    RecursiveARX(1, 1, P0=1e4).update(1e152, -1e152)
+
+
+@pytest.mark.parametrize("lam, shape", [(1.0, "scalar"), (0.99, "scalar"), (1.0, "matrix")])
+def test_estimate_is_least_squares_wherever_p0_and_scale_are_accepted(lam, shape):
+    """Sweep P0 x the largest sample: every pair accepted gives the (weighted) batch least-squares estimate, every
+    pair refused has P0 * sample**2 above 1e308 (fresh compile in CI: the failure came from fastmath codegen)."""
+    y, u = simulate_arx(1500, 32, nk=0)
+    top = max(np.abs(y).max(), np.abs(u).max())
+    y, u = y / top, u / top
+    X, Y, _ = regressor(y, u, 2, 2, 0)
+    w = np.sqrt(lam ** np.arange(len(Y))[::-1])
+    ref = np.linalg.lstsq(X * w[:, None], Y * w, rcond=None)[0]
+    shape_P0 = np.eye(4) if shape == "scalar" else 0.5 * np.eye(4) + 0.125 * np.ones((4, 4))   # row sums 1
+    refused = []
+    for p0 in (1e-4, 1.0, 1e4, 1e20, 1e50, 1e80, 1e100):
+        for mag in (1e-100, 1.0, 1e100, 1e103, 1e120, 1e128, 1e130, 1e140, 1e150, 1e152):
+            m = RecursiveARX(2, 2, 0, lam, P0=p0 * shape_P0 if shape == "matrix" else p0)
+            try:
+                m.run(mag * y, mag * u)
+            except ValueError as exc:
+                assert "P0" in str(exc)
+                refused.append((p0, mag))
+                continue
+            if p0 * mag**2 >= 1e8:      # the prior (precision 1 / P0 against data of size mag**2) weighs nothing
+                np.testing.assert_allclose(m.theta_, ref, atol=1e-3, err_msg=f"P0={p0:g}, samples up to {mag:g}")
+            assert p0 * mag**2 <= 1e308
+    assert refused == [(p0, mag) for p0 in (1e-4, 1.0, 1e4, 1e20, 1e50, 1e80, 1e100)
+                       for mag in (1e-100, 1.0, 1e100, 1e103, 1e120, 1e128, 1e130, 1e140, 1e150, 1e152)
+                       if p0 * mag**2 > 1e308]
+    assert (1e50, 1e140) in refused and (1e4, 1e152) not in refused

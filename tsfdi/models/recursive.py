@@ -68,6 +68,8 @@ _RIDGE = 2.0**-40
 #: up to 16,384 parameters, stay in the floating-point range
 MAX_SAMPLE = 1e152
 MAX_P0 = 1e100
+#: largest ``||P0||_inf * sample**2``: every product ``phi_i (P0 phi)_i`` stays finite (RecursiveARX, Notes, Scale)
+MAX_P0_SAMPLE2 = 1e308
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
@@ -502,7 +504,8 @@ class RecursiveARX:
     P0 : float or ndarray, default 1e4
         Initial covariance ``P(0)``: a positive scalar (times the identity) or a symmetric positive-definite
         ``(d, d)`` matrix, with diagonal at most ``1e100``. Large values make the estimate forget the initial
-        ``theta0`` quickly.
+        ``theta0`` quickly. Above ``1e4`` (its largest absolute row sum :math:`\|P_0\|_\infty`) it lowers the
+        largest sample accepted below ``1e152``: :math:`\|P_0\|_\infty\, x^2 \le 10^{308}` (Notes, *Scale*).
     n_inputs : int, default 1
         Number of input signals.
     trend : {"n", "c"}, default "n"
@@ -599,8 +602,28 @@ class RecursiveARX:
       its condition number beyond ``~1e16``, e.g. with collinear regressors and strong forgetting) gets a
       ridge on the diagonal (``2**-40`` times its largest variance plus twice the deficit); one that is no
       longer finite is reset to ``diag(P_bound)``, keeping ``theta``.
-    * *Scale*: samples are accepted up to ``1e152`` in magnitude (``ValueError`` beyond, naming ``y`` or ``u``
-      and the sample); the error statistics are kept in units of a power of two set by the first nonzero
+    * *Scale*: a sample :math:`x` (output or input) is accepted when
+
+      .. math:: |x| \le 10^{152} \quad\text{and}\quad \|P_0\|_\infty\, x^2 \le 10^{308},
+                \qquad \|P_0\|_\infty = \max_i \textstyle\sum_k |P_0[i, k]|
+
+      (``P0`` itself for a scalar), so up to ``1e152`` for ``P0 <= 1e4`` (the default) and up to
+      :math:`10^{152} \sqrt{10^4 / \|P_0\|_\infty}` above, e.g. ``1e129`` for ``P0 = 1e50``, ``1e104`` for
+      ``P0 = 1e100``; ``ValueError`` beyond, naming ``y`` or ``u``, the sample and, for the joint bound, ``P0``.
+      The joint bound keeps every product :math:`\phi_i (P\phi)_i` of :math:`\phi'P\phi` finite. A sum of them
+      that overflows is handled as a dominant sample, but the compiled loop (``fastmath``) may form the
+      rescaling's :math:`\sum_i (\phi_i / \max_k|\phi_k|)\,(P\phi)_i` as :math:`\sum_i \phi_i (P\phi)_i /
+      \max_k|\phi_k|`: a product that overflows turns the rescaling factor to 0, ``P`` collapses to 0 and the
+      estimate stays at ``theta0`` without a warning (observed as soon as one product passes the largest double,
+      ``1.8e308``, e.g. ``P0 = 1e50`` with samples of ``1e130``). At the first samples :math:`P = P_0` and
+
+      .. math:: |\phi_i (P_0 \phi)_i| \le |\phi_i| \sum_k |P_0[i, k]|\,|\phi_k| \le \|P_0\|_\infty\, x^2
+                \le 10^{308};
+
+      later the data have shrunk ``P`` (:math:`P(k) \preceq P(k-1)` for :math:`\lambda = 1`, each variance capped
+      at its ``P0`` value for :math:`\lambda < 1`). The tests check the estimate against batch least squares for
+      scalar and matrix ``P0`` from ``1e-4`` to ``1e100`` and samples from ``1e-100`` to ``1e152``, on both sides
+      of the bound. The error statistics are kept in units of a power of two set by the first nonzero
       error, so the Z-scores do not depend on the data's scale (``variance`` may underflow to 0 for errors below
       ``~1e-154``).
 
@@ -662,6 +685,9 @@ class RecursiveARX:
             except np.linalg.LinAlgError:
                 raise ValueError("P0 must be positive definite") from None
             self._P0 = 0.5 * (P0 + P0.T)
+        # largest sample magnitude: ||P0||_inf * x**2 <= MAX_P0_SAMPLE2 (Notes, Scale)
+        p0 = float(np.abs(self._P0).sum(axis=1).max())
+        self._max_sample = MAX_SAMPLE if p0 * MAX_SAMPLE**2 <= MAX_P0_SAMPLE2 else float(np.sqrt(MAX_P0_SAMPLE2 / p0))
         if theta0 is None:
             self._theta0 = np.zeros(d)
         else:
@@ -819,8 +845,10 @@ class RecursiveARX:
         return np.ascontiguousarray(uv)
 
     def _check_samples(self, yv: np.ndarray, uv: np.ndarray) -> None:
-        """Non-finite samples under ``nonfinite="raise"`` and samples beyond ``MAX_SAMPLE``: ``ValueError``."""
-        if all(v.size == 0 or (-MAX_SAMPLE <= v.min() and v.max() <= MAX_SAMPLE) for v in (yv, uv)):
+        """Non-finite samples under ``nonfinite="raise"`` and samples beyond ``MAX_SAMPLE`` or the joint bound with
+        ``P0`` (Notes, *Scale*): ``ValueError``."""
+        top = self._max_sample
+        if all(v.size == 0 or (-top <= v.min() and v.max() <= top) for v in (yv, uv)):
             return      # every sample finite and in range (a NaN fails both comparisons): two reductions, no copy
         if self.nonfinite == "raise":
             bad_y = ~np.isfinite(yv)
@@ -831,12 +859,18 @@ class RecursiveARX:
                 raise ValueError(f"{which} contains NaN/inf (first at sample {first} of this call); pass "
                                  "nonfinite='skip' to skip and count such samples")
         for name, v in (("y", yv), ("u", uv)):
-            big = np.abs(v) > MAX_SAMPLE
+            big = np.abs(v) > top
             big &= ~np.isinf(v)     # NaN compares False; inf is a non-finite sample, not a large one
             if big.any():
                 first = int(np.argwhere(big)[0, 0])
-                raise ValueError(f"{name} has a sample of magnitude {np.abs(v[first]).max():.3g} (first at sample "
-                                 f"{first} of this call): samples must lie within +-{MAX_SAMPLE:g}; rescale {name}")
+                where = (f"{name} has a sample of magnitude {np.abs(v[first]).max():.3g} (first at sample {first} of "
+                         f"this call)")
+                if top == MAX_SAMPLE:
+                    raise ValueError(f"{where}: samples must lie within +-{MAX_SAMPLE:g}; rescale {name}")
+                p0 = np.abs(self._P0).sum(axis=1).max()
+                raise ValueError(f"{where}: P0 (largest absolute row sum {p0:.3g}) allows samples within "
+                                 f"+-{top:.3g} only, so that P0 * sample**2 <= {MAX_P0_SAMPLE2:g} (RecursiveARX "
+                                 f"Notes, Scale); rescale {name} or lower P0")
 
     def _call(self, yv: np.ndarray, uv: np.ndarray):
         n = yv.shape[0]
@@ -876,7 +910,7 @@ class RecursiveARX:
             ``y`` or ``u`` not real numbers (bools and strings are refused, as :meth:`run` refuses them).
         ValueError
             ``u`` with another number of inputs, NaN / inf under ``nonfinite="raise"``, or a sample beyond
-            ``+-1e152``; the estimator is left unchanged.
+            ``+-1e152`` (less with ``P0`` above ``1e4``, Notes, *Scale*); the estimator is left unchanged.
         """
         if isinstance(y, (bool, np.bool_, str, bytes)) or np.asarray(y).dtype.kind not in "iuf" or np.ndim(y):
             raise TypeError(f"y must be a real number, got {y!r} ({type(y).__name__})")
@@ -894,7 +928,7 @@ class RecursiveARX:
                 raise TypeError(f"u must be real number(s), got {u!r}") from None
             if uv.shape[1] != self.n_inputs:
                 raise ValueError(f"u must hold n_inputs={self.n_inputs} value(s), got {uv.shape[1]}")
-        if not (abs(yf) <= MAX_SAMPLE) or not (np.abs(uv) <= MAX_SAMPLE).all():   # rare: the full check
+        if not (abs(yf) <= self._max_sample) or not (np.abs(uv) <= self._max_sample).all():   # rare: the full check
             self._check_samples(yv, uv)
         _, err, _, _, _, _ = self._call(yv, np.ascontiguousarray(uv))
         return float(err[0])
@@ -918,8 +952,8 @@ class RecursiveARX:
         ------
         ValueError
             ``y`` / ``u`` of different lengths or with NaN / inf under ``nonfinite="raise"``, a sample beyond
-            ``+-1e152``, or a parameter history of more than 2 GiB (run a long signal in chunks: the results are
-            identical); nothing is processed.
+            ``+-1e152`` (less with ``P0`` above ``1e4``, Notes, *Scale*), or a parameter history of more than
+            2 GiB (run a long signal in chunks: the results are identical); nothing is processed.
         TypeError
             Non-numeric (or bool) ``y`` / ``u``.
         """
