@@ -1,6 +1,8 @@
 """Online detection on every labelled ALFA flight of the shared copy (Keipour et al. Table I style).
 
-Run: ``python benchmarks/alfa_detection.py`` (reads ``../shared/data/alfa`` next to the repository; ~1 min).
+Run: ``python benchmarks/alfa_detection.py [--data PATH]`` (reads ``../shared/data/alfa`` next to the repository,
+or the ALFA folder ``PATH`` of the same layout; ~1 min). Every flight of the copy's ``flights.csv`` is used; the
+counts below are those of the shared copy.
 
 Inputs: only non-leaking columns of ``merged_20hz`` (45 flights: 36 with a failure, 9 without) -- IMU angular
 rates and specific forces, the autopilot navigation errors (airspeed and altitude errors) and the attitude
@@ -23,18 +25,20 @@ A. *paper 001, fixed*: Keipour et al.'s detector as their section V.B states it:
    25 samples, variance tolerance 1 % for 25 samples after >= 50 errors, no GLRT (that is paper 002's addition);
    two pairs, roll and pitch (paper 001 uses the commanded roll and pitch and their errors). On the merged copy
    the commanded angles are not kept, so the pairs (y, u) are roll rate / roll tracking error and pitch rate /
-   pitch tracking error. A-K: the same detector on the 7 engine flights with commanded and measured attitude,
-   which are Keipour's 7 engine tests (Table I: 100 % accuracy, mean detection 2.28 s), with their exact pairing
-   (input u = commanded angle, output y = measured - commanded).
+   pitch tracking error. A-K: the same detector on the 7 engine flights with commanded and measured attitude, which
+   are Keipour's 7 engine tests (Table I: 100 % accuracy, mean detection 2.28 s), with their exact pairing (input u
+   = commanded angle, output y = measured - commanded). Those files are sampled at the nav-info message times (steps
+   from 4.5 to 164 ms, median about 50 ms: not a uniform grid), so the detector gets their samples as arrays, one
+   step per message as paper 001 counts them; the alarm time is read from the message times.
 
    Measured with other settings (not kept, since they are not the paper's): ARX(2, 2) instead of the 1 s FIR
    alarms before the onset on all 45 merged and all 7 engine flights (the measured attitude of this copy
    changes in steps about every 0.4 s, so an autoregressive term makes every step a large prediction error);
    adding paper 002's streaming GLRT (window 20, alpha 1e-6) to the 1 s FIR alarms before the onset on 44 of
    the 45 merged and all 7 engine flights, because the FIR errors are correlated and shift their mean for
-   seconds at a time. With nb = 25 samples (1.25 s here) A-K detects 4 of the 7 engine failures instead of 3
-   (a false alarm becomes a detection 9.6 s after the onset, and the first flight is detected 1.8 s after the
-   onset instead of 12.9 s). Keipour's 7 of 7 at 2.28 s is not reproduced on this copy of their flights.
+   seconds at a time. With nb = 25 samples (1.25 s here) A-K detects the same 4 of the 7 engine failures, the
+   first flight 1.8 s after the onset instead of 12.9 s. Keipour's 7 of 7 at 2.28 s is not reproduced on this
+   copy of their flights.
 B. *physical residuals, thresholds by leave-one-flight-out*. Three channels whose structure was fixed from
    flight mechanics, each an RLS model, a moving average of its a-priori prediction errors and a threshold in
    physical units, armed after a baseline phase of 20 s from the start of the record (the record starts at the
@@ -148,7 +152,8 @@ Keipour's 22 flights. Paper 001's Table I is over 22 flights that it does not li
 recorded up to 2018-09-11, with the engine failures restricted to the 7 kept with commanded and measured
 attitude, match Table I's count for every failure type (``keipour_flights`` checks this), so the script also
 prints A and C (held-out outcomes of the 45-flight folds) on those 22 flights next to Table I as published. This
-subset is an inference from the counts.
+subset is an inference from the counts; on a copy where the same rule does not give Table I's counts (a fuller
+copy), the script prints the counts it found and skips this comparison.
 
 Also measured while looking at all 45 flights (so outside the folds), and not kept: a level channel on the
 pitch tracking error (|moving average of delta_pitch| over 0.5 s, threshold chosen in the folds) detects the
@@ -164,6 +169,7 @@ import os
 
 os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
+import argparse  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -231,7 +237,7 @@ FIXED_IN_ADVANCE = (
     "Fixed before looking at any held-out outcome: inputs (no throttle / rc-out / field.data / label), channel\n"
     "structures and RLS options, moving-average windows, the 20 s baseline phase, the threshold grids, the\n"
     "scoring rules and the fold criterion (accuracy, then mean detection time). Chosen inside each\n"
-    "leave-one-flight-out fold from the other 44 flights: which channels are on and their thresholds.\n"
+    "leave-one-flight-out fold from the other {others} flights: which channels are on and their thresholds.\n"
     "Chosen after looking at all 45 flights (so not covered by the folds): the structure of the thrust channel\n"
     "(about a dozen variants compared), the decision to keep the effectiveness channels out of B (B5 is\n"
     "printed to show that effect) and the structure and grid of C's roll_gain channel (24 variants compared).")
@@ -530,7 +536,8 @@ def keipour_flights(tab):
     counts = pd.Series(kind[mask.to_numpy()]).value_counts().to_dict()
     expected = {k: v[0] for k, v in KEIPOUR_TABLE_I.items()}
     if counts != expected:
-        raise RuntimeError(f"inferred Keipour subset has counts {counts}, Table I has {expected}")
+        raise RuntimeError(f"its flights up to 2018-09-11 (engine failures: those with commanded and measured "
+                           f"attitude) count {counts} per failure type, Table I {expected}")
     return mask.to_numpy(), kind
 
 
@@ -616,9 +623,13 @@ def lofo(onset, times, grids):
     return alarm, [label(j) for j in chosen], A[fit], label(fit), {c: int(k) for c, k in idx(fit).items()}
 
 
-def main():
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, default=ROOT, metavar="PATH",
+                        help="the ALFA folder (flights.csv, merged_20hz/); default ../shared/data/alfa")
+    root = parser.parse_args(argv).data
     t0 = time.perf_counter()
-    tab = list_alfa(ROOT)
+    tab = list_alfa(root)
     flights = [prepare(load_alfa(p)) for p in tab.merged_path]
     onset = tab.onset_s.to_numpy(dtype=float)
     fault = tab.fault.to_numpy()
@@ -627,8 +638,8 @@ def main():
         """Outcome and detection time of every flight for the first-alarm times ``alarm`` (s, nan: none)."""
         return score_records(onset, alarm, records=tab.flight, kind=fault)
 
-    print(f"{len(flights)} flights ({(fault != 'none').sum()} with a failure) from {ROOT}")
-    print(FIXED_IN_ADVANCE)
+    print(f"{len(flights)} flights ({(fault != 'none').sum()} with a failure) from {root}")
+    print(FIXED_IN_ADVANCE.format(others=len(flights) - 1))
     pd.set_option("display.width", 200)
     pd.set_option("display.max_rows", 100)
     pd.set_option("display.max_colwidth", 80)
@@ -647,7 +658,7 @@ def main():
         y = pd.DataFrame({a: df[f"{a}_measured"] - df[f"{a}_commanded"] for a in PAPER_PAIRS})
         u = df[[f"{a}_commanded" for a in PAPER_PAIRS]]
         det = paper_detector()
-        out = det.run(y.set_axis(list(PAPER_PAIRS), axis=1), u)
+        out = det.run(y.to_numpy(), u.to_numpy())     # one step per message: the times are not uniform
         onset_k.append(df.attrs["onset_s"])
         alarm_k.append(first_alarm_s(df, out))
     sc_k = score_records(onset_k, alarm_k, records=eng.flight, kind=["engine"] * len(eng))
@@ -716,7 +727,7 @@ def main():
                         "Bfit_channel": which})
     print("\nPer flight (A: paper 001 settings; B_lofo: physical channels, held-out; B_fit: all-flight thresholds)")
     print(per.to_string(index=False))
-    print("\nB: channel set and thresholds chosen in the 45 leave-one-flight-out folds (count)")
+    print(f"\nB: channel set and thresholds chosen in the {len(flights)} leave-one-flight-out folds (count)")
     print(pd.Series(chosen).value_counts().to_string())
     print("\nB5: the same with the two control-effectiveness channels among the candidates (count)")
     print(pd.Series(chosen5).value_counts().to_string())
@@ -728,8 +739,8 @@ def main():
     fit = {c: (grids[c][k] if k < len(grids[c]) else None) for c, k in idx_fit.items()}
     same = set(fit) == set(ALFA_SETTINGS) and all(
         fit[c] is not None and abs(fit[c] - ALFA_SETTINGS[c]) < 1e-9 for c in ALFA_SETTINGS)
-    print(f"B-fit thresholds (all 45 flights, in-sample): {label_fit}; shipped ALFA_SETTINGS {ALFA_SETTINGS} "
-          f"{'equal' if same else 'DIFFER from'} them")
+    print(f"B-fit thresholds (all {len(flights)} flights, in-sample): {label_fit}; shipped ALFA_SETTINGS "
+          f"{ALFA_SETTINGS} {'equal' if same else 'DIFFER from'} them")
     # C-PF (issue 17): C's channels, thresholds for a required false-alarm probability per flight
     stats_c = {c: [channel_statistic(df, c) for df in flights] for c in PF_CHANNELS}
     t_end = np.array([(df.index[-1] - df.index[0]).total_seconds() for df in flights])
@@ -737,11 +748,11 @@ def main():
     c_fit = {c: (grids_c[c][k] if k < len(grids_c[c]) else np.nan) for c, k in idx_cfit.items()}
     sc_pf = pf_report(tab, healthy_s, stats_c, score, sc_c, c_fit)
     for name, sc in {
-            "A (fixed, paper 001 settings, roll and pitch pairs, 45 merged flights)": sc_a,
-            "A-K (fixed, paper 001 settings, Keipour's commanded/measured pairing, 7 engine flights)": sc_k,
+            f"A (fixed, paper 001 settings, roll and pitch pairs, {len(flights)} merged flights)": sc_a,
+            f"A-K (fixed, paper 001 settings, Keipour's commanded/measured pairing, {len(eng)} engine flights)": sc_k,
             "B (physical channels, channel set + thresholds by leave-one-flight-out, held-out outcomes)": sc_b,
             "B5 (B plus roll/pitch effectiveness candidates, chosen by leave-one-flight-out, held-out)": sc_b5,
-            "B-fit (same, thresholds fitted on all 45 flights: in-sample, optimistic)": sc_f,
+            f"B-fit (same, thresholds fitted on all {len(flights)} flights: in-sample, optimistic)": sc_f,
             "C (B plus the roll-effectiveness GLRT candidate, chosen by leave-one-flight-out, held-out)": sc_c,
             f"C, thresholds for P_F = {PF_FLIGHT:g} per flight (C-PF: set in each fold on the fitting flights' "
             "healthy parts only, held-out)": sc_pf,
@@ -750,18 +761,23 @@ def main():
         print(f"\nTable I-like summary, configuration {name}")
         print(table(sc).to_string())
     # like-for-like: the same outcomes restricted to (by inference) Keipour et al.'s 22 test flights
-    sub, kind = keipour_flights(tab)
-    kinds = ["engine", "ailerons", "rudder", "rudder+ailerons", "elevator", "none"]
-    ref = pd.DataFrame(KEIPOUR_TABLE_I, index=["flights", "mean_det_s"]).T.reindex(kinds)
-    print(f"\nKeipour et al.'s 22 test flights (inferred from Table I's per-type counts; see keipour_flights):\n"
-          f"  {', '.join(tab.flight[sub].str.replace('carbonZ_', ''))}")
-    print("Paper 001, Table I, as published (their detector and their 25 Hz commanded / measured signals):")
-    print(ref.to_string(na_rep="-"))
-    print("all: " + ", ".join(f"{k} {v:g}" for k, v in KEIPOUR_TOTALS.items()))
-    for name, sc in {"A (paper 001 settings on this copy)": sc_a,
-                     "C (held-out outcomes of the 45-flight leave-one-flight-out)": sc_c}.items():
-        print(f"\nSame 22 flights, configuration {name}")
-        print(table(sc[sub], kind[sub], kinds).to_string())
+    try:
+        sub, kind = keipour_flights(tab)
+    except RuntimeError as e:           # another copy: the rule does not give Table I's counts
+        print(f"\nKeipour et al.'s 22 test flights cannot be inferred on this copy: {e}; the comparison with "
+              "paper 001's Table I is skipped")
+    else:
+        kinds = ["engine", "ailerons", "rudder", "rudder+ailerons", "elevator", "none"]
+        ref = pd.DataFrame(KEIPOUR_TABLE_I, index=["flights", "mean_det_s"]).T.reindex(kinds)
+        print(f"\nKeipour et al.'s 22 test flights (inferred from Table I's per-type counts; see keipour_flights):\n"
+              f"  {', '.join(tab.flight[sub].str.replace('carbonZ_', ''))}")
+        print("Paper 001, Table I, as published (their detector and their 25 Hz commanded / measured signals):")
+        print(ref.to_string(na_rep="-"))
+        print("all: " + ", ".join(f"{k} {v:g}" for k, v in KEIPOUR_TOTALS.items()))
+        for name, sc in {"A (paper 001 settings on this copy)": sc_a,
+                         f"C (held-out outcomes of the {len(flights)}-flight leave-one-flight-out)": sc_c}.items():
+            print(f"\nSame 22 flights, configuration {name}")
+            print(table(sc[sub], kind[sub], kinds).to_string())
 
     print("\nTargets: precision >= 0.90, recall >= 0.90, mean detection time <= 2.0 s "
           "(Keipour et al., 22 flights: 0.882 / 0.882 / 2.02 s)")

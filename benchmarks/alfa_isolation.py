@@ -2,12 +2,14 @@
 
 Protocol
 --------
-Data: the four ALFA flights of ``../shared/data/alfa/engine_commanded_measured`` that carry a pitot airspeed
-(carbonZ_2018-07-18-15-53-31_1 / _2 and carbonZ_2018-07-30-16-39-00_1 / _2; the three 2018-09-11 flights log an
-airspeed of exactly 0), with the local-position velocity of the same flights from ``merged_20hz/engine``, put on one
-20 Hz grid by :func:`tsfdi.datasets.align` (zero-order hold). Only the fault-free part is used: from ``SETTLE`` = 40 s
-after the start of the log (the autopilot's wind estimate is still converging before) to the engine-failure onset:
-76, 33, 77 and 52 s of flight.
+Data: every flight of ``engine_commanded_measured`` (in ``../shared/data/alfa``, or the ALFA copy given by
+``--data``) that carries a pitot airspeed (one not identically zero) and has its ``merged_20hz/engine`` counterpart,
+sorted by name (:func:`pitot_flights`). In the shared copy these are four: carbonZ_2018-07-18-15-53-31_1 / _2 and
+carbonZ_2018-07-30-16-39-00_1 / _2 (the three 2018-09-11 flights log an airspeed of exactly 0). The local-position
+velocity of the same flights comes from ``merged_20hz/engine``; both are put on one 20 Hz grid by
+:func:`tsfdi.datasets.align` (zero-order hold). Only the fault-free part is used: from ``SETTLE`` = 40 s after the
+start of the log (the autopilot's wind estimate is still converging before) to the engine-failure onset: 76, 33, 77
+and 52 s of flight in the shared copy.
 
 Three airspeed estimates (paper 002, section 4.1):
 
@@ -31,7 +33,7 @@ Table 2 for *hold* samples (:meth:`tsfdi.isolation.IsolationSeries.confirmed`).
 
 Settings fixed on training flights, results on held-out flights: leave-one-flight-out
 -------------------------------------------------------------------------------------
-Each of the four flights is held out once; the three others are the training flights of that fold.
+Each flight is held out once; the others (three in the shared copy) are the training flights of that fold.
 
 1. The *settings* -- GLRT window (50, 100, 200 samples), false-alarm probability per sample (1e-3, 5e-4 as in
    paper 002's Fig. 2, 2e-4), offset forgetting factor (0.995, 0.998, 0.999), level-flight gate (3 m/s, 5 m/s,
@@ -72,8 +74,8 @@ script, whose constants were chosen by looking at the leave-one-out results of a
 120 without false isolation: that figure was not out of sample. Four flights are too few to choose the settings on
 some and confirm them on another.
 
-Run: ``python benchmarks/alfa_isolation.py`` (about three minutes; ``--quick`` skips the stricter protocol and the
-variant).
+Run: ``python benchmarks/alfa_isolation.py [--data PATH]`` (about three minutes; ``--quick`` skips the stricter
+protocol and the variant; ``--data``: an ALFA folder of the shared copy's layout, default ``../shared/data/alfa``).
 """
 
 from __future__ import annotations
@@ -96,8 +98,6 @@ from tsfdi.datasets.faults import inject_fault
 from tsfdi.isolation import IsolationSeries, airspeed_from_gps, airspeed_parity
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "alfa"
-FLIGHTS = ("carbonZ_2018-07-18-15-53-31_1_engine_failure", "carbonZ_2018-07-18-15-53-31_2_engine_failure",
-           "carbonZ_2018-07-30-16-39-00_1_engine_failure", "carbonZ_2018-07-30-16-39-00_2_engine_failure")
 FS = 20.0
 SETTLE = 40.0           # s from the start of the log: the wind estimate has converged
 ARM = int(5.0 * FS)     # samples of offset adaptation before the tests are armed
@@ -131,6 +131,21 @@ GRID = [Settings(w, p, f, g, HOLDS[0]) for w, p, f, g in itertools.product(
 
 
 # ------------------------------------------------------------------------------------------------------ data
+def pitot_flights(data: Path) -> list[str]:
+    """The flights of ``data / "engine_commanded_measured"`` whose airspeed is not identically zero (a pitot
+    reading) and that have a ``merged_20hz/engine`` counterpart (the ground velocity), sorted by name."""
+    folder = data / "engine_commanded_measured"
+    if not folder.is_dir():
+        raise FileNotFoundError(f"ALFA data not found: {folder} (give the ALFA folder with --data; default "
+                                "../shared/data/alfa)")
+    out = []
+    for path in sorted(folder.glob("*.csv.gz")):
+        flight = path.name.removesuffix(".csv.gz")
+        if (data / "merged_20hz" / "engine" / path.name).is_file() and load_alfa(path)["airspeed"].abs().max() > 0:
+            out.append(flight)
+    return out
+
+
 def load(flight: str) -> pd.DataFrame:
     """The fault-free part of one flight on a 20 Hz grid."""
     ecm = load_alfa(DATA / "engine_commanded_measured" / f"{flight}.csv.gz")
@@ -399,16 +414,22 @@ def report(title: str, healthy: pd.DataFrame, faulty: pd.DataFrame) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    global DATA                     # load() reads the folder given by --data
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the main protocol only, without the variants")
+    parser.add_argument("--data", type=Path, default=DATA, metavar="PATH",
+                        help="the ALFA folder (engine_commanded_measured/, merged_20hz/); default ../shared/data/alfa")
     args = parser.parse_args(argv)
-    if not DATA.is_dir():
-        raise FileNotFoundError(f"ALFA data not found: {DATA} (the benchmark needs ../shared/data/alfa)")
+    DATA = args.data
     t0 = time.perf_counter()
-    flights = [load(f) for f in FLIGHTS]
-    print("flights: " + ", ".join(f"{f[8:30]} ({len(a) / FS:.0f} s)" for f, a in zip(FLIGHTS, flights)))
+    names = pitot_flights(DATA)
+    if len(names) < 3:
+        raise ValueError(f"{DATA}: {len(names)} engine flight(s) with a pitot airspeed and a merged_20hz counterpart "
+                         f"{names}; the protocol needs at least 3 (two to fit, one held out)")
+    flights = [load(f) for f in names]
+    print("flights: " + ", ".join(f"{f[8:30]} ({len(a) / FS:.0f} s)" for f, a in zip(names, flights)))
     print(f"settings grid: {len(GRID) * len(HOLDS)} combinations; each flight held out once, the settings chosen "
-          "on the three others")
+          "on the others")
     protocols = [("settings chosen on the training flights (fitted, calibrated and faulted on them)", False)]
     if not args.quick:
         protocols.append(("stricter: settings chosen by leave-one-flight-out inside the training flights", True))
@@ -416,7 +437,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"\n#### {title}")
         magnitudes = [5.0] if nested or args.quick else [5.0, 3.0]
         tables = {m: ([], []) for m in magnitudes}
-        for h, name in enumerate(FLIGHTS):
+        for h, name in enumerate(names):
             train = [a for i, a in enumerate(flights) if i != h]
             settings, key = select(train, 5.0, nested)
             print(f"fold {h + 1}, held out {name[8:30]}: {settings} (on the training flights: {-key[1]} correct, "

@@ -1,23 +1,24 @@
 """Paper 004's sensor-validation protocol on real ALFA flights: the pitch-rate gyro, injected faults, MT / UD / FA.
 
-Run: ``python benchmarks/alfa_sensor_validation.py`` (reads ``../shared/data/alfa`` next to the repository; about a
-minute). Samy, Postlethwaite, Gu (paper 004) validate the pitch gyro of a simulated UAV with an online EMRAN
-network that predicts it from other signals, the moving average of squared prediction errors (eq. 6) with and
-without residual padding, and six injected faults (constant bias, hard and soft additive at 5 % and 20 % of the
-sensor range) under three sensor-noise configurations; Tables 2-3 give the mean detection time (MT), the undetected
-faults (UD) and the false alarms (FA, % of the fault-free time above the threshold). This script runs the same
-protocol on real flights, with three models side by side: ``EMRAN`` (``tsfdi.EMRAN``), ``RecursiveARX`` (online
-least squares) and ``ARX`` (batch least squares, fixed).
+Run: ``python benchmarks/alfa_sensor_validation.py [--data PATH]`` (reads ``../shared/data/alfa`` next to the
+repository, or the ALFA folder ``PATH`` of the same layout; about a minute). Samy, Postlethwaite, Gu (paper 004)
+validate the pitch gyro of a simulated UAV with an online EMRAN network that predicts it from other signals, the
+moving average of squared prediction errors (eq. 6) with and without residual padding, and six injected faults
+(constant bias, hard and soft additive at 5 % and 20 % of the sensor range) under three sensor-noise configurations;
+Tables 2-3 give the mean detection time (MT), the undetected faults (UD) and the false alarms (FA, % of the
+fault-free time above the threshold). This script runs the same protocol on real flights, with three models side by
+side: ``EMRAN`` (``tsfdi.EMRAN``), ``RecursiveARX`` (online least squares) and ``ARX`` (batch least squares, fixed).
 
 Flights: settings fixed on training flights, results on held-out flights
 ------------------------------------------------------------------------
-The 45 flights of ``merged_20hz`` (``flights.csv`` order); of a flight with a failure only the part before the
-failure onset is used (fault-free).
+The flights of ``merged_20hz`` (``flights.csv`` order; 45 in the shared copy, whose counts are given below); of a
+flight with a failure only the part before the failure onset is used (fault-free).
 
 * Fitting flights (``FIT``): the 9 flights without failure; the models are trained on them.
-* Calibration flights (``CALIBRATION``): the pre-failure parts of the 18 flights with a failure at even positions
-  (1st, 3rd, ...): the thresholds (the largest fault-free statistic) and every choice below (inputs, filter,
-  window, online-learning variant) are made on them, with faults injected into them for the choices.
+* Calibration flights (``CALIBRATION``): the pre-failure parts of the 18 flights with a failure at positions 1, 3,
+  5, ... (every other one of the 36, from the first): the thresholds (the largest fault-free statistic) and every
+  choice below (inputs, filter, window, online-learning variant) are made on them, with faults injected into them
+  for the choices.
 * Held-out flights (``HELD_OUT``): the pre-failure parts of the other 18 flights with a failure, used once for the
   results.
 
@@ -37,7 +38,9 @@ the span of the pitch rate of its manoeuvres): here the range (max - min) of the
 Noise configurations: paper 004's configurations 2 and 3 have two and ten times the *sensor-noise* standard
 deviation of configuration 1 (the flights as measured). The gyro's sensor noise :math:`\\sigma_0` is the standard
 deviation declared in the IMU messages (``field.angular_velocity_covariance`` of ``mavros-imu-data`` in the
-official-format sample of ALFA, the driver's setting for this gyro, 0.02 deg/s); white Gaussian noise of standard
+official-format sample of ALFA, the driver's setting for this gyro, 0.02 deg/s; the median over every
+``<flight>-mavros-imu-data.csv[.gz]`` file of ``official_format_sample/``, one in the shared copy; without such a
+file the script stops and says so); white Gaussian noise of standard
 deviation :math:`\\sqrt{k^2 - 1}\\,\\sigma_0` (k = 2, 10) is added to each gyro update (held like the gyro) of every
 calibration and held-out flight, seeded per flight (thresholds recalibrated per configuration). For comparison the
 script prints the smallest variability of the gyro over 10 s of the fitting flights: the aircraft is never still in
@@ -137,6 +140,7 @@ import os
 
 os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
+import argparse  # noqa: E402
 import copy  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
@@ -153,7 +157,7 @@ from tsfdi.evaluation import sensor_validation_metrics  # noqa: E402
 from tsfdi.models import ARX, EMRAN, RecursiveARX  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "alfa"
-IMU_SAMPLE = "carbonZ_2018-07-18-15-53-31_1_engine_failure-mavros-imu-data.csv.gz"
+IMU_TOPIC = "mavros-imu-data"    # the IMU messages of the official layout, with the declared gyro covariance
 FS = 20.0
 G = 9.81
 GYRO = "field.angular_velocity.y"
@@ -205,8 +209,15 @@ def setup(root=ROOT):
 
 
 def sensor_noise(root=ROOT):
-    """The gyro's standard deviation declared in the IMU messages of the official-format sample (rad/s)."""
-    cov = pd.read_csv(root / "official_format_sample" / IMU_SAMPLE, usecols=["field.angular_velocity_covariance4"])
+    """The gyro's standard deviation declared in the IMU messages of the official-format sample (rad/s): the
+    median over every ``<flight>-mavros-imu-data.csv[.gz]`` file of ``root / "official_format_sample"``."""
+    folder = root / "official_format_sample"
+    files = sorted(p for p in folder.glob(f"*-{IMU_TOPIC}.csv*") if p.name.endswith((".csv", ".csv.gz")))
+    if not files:
+        raise FileNotFoundError(f"no '<flight>-{IMU_TOPIC}.csv[.gz]' file in {folder}: the benchmark reads the "
+                                "gyro's declared noise (field.angular_velocity_covariance4) from an ALFA flight of "
+                                "the official layout there")
+    cov = pd.concat([pd.read_csv(p, usecols=["field.angular_velocity_covariance4"]) for p in files])
     return float(np.sqrt(cov.iloc[:, 0].median()))
 
 
@@ -489,12 +500,17 @@ def protocol(title, inputs, paper_emran, fit, calibration, held, sigma0, sensor_
     return results
 
 
-def main():
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, default=ROOT, metavar="PATH",
+                        help="the ALFA folder (flights.csv, merged_20hz/, official_format_sample/); default "
+                             "../shared/data/alfa")
+    root = parser.parse_args(argv).data
     t0 = time.perf_counter()
-    fit, calibration, held, names = setup()
+    fit, calibration, held, names = setup(root)
     allq = pd.concat(fit)["q"]
     sensor_range = float(allq.max() - allq.min())
-    sigma0 = sensor_noise()
+    sigma0 = sensor_noise(root)
     print(f"fitting flights ({len(fit)}, no failure): " + ", ".join(n[8:].replace("_no_failure", "")
                                                                      for n in names["fit"]))
     for key, frames in (("calibration", calibration), ("held-out", held)):

@@ -1,17 +1,23 @@
 """CrazyPAD benchmark (issue 17): detection and identification of propeller defects on real Crazyflie flights.
 
-Run: ``python benchmarks/crazypad.py`` (reads ``../shared/data/crazypad`` next to the repository; BLAS pinned to
-one thread; it prints its run time, 2-3 min on the 2-core development machine). Prints the choices, then three
-sections, with PASS/FAIL against the targets.
+Run: ``python benchmarks/crazypad.py [--data PATH]`` (reads ``../shared/data/crazypad`` next to the repository,
+or the CrazyPAD folder ``PATH`` of the same layout; BLAS pinned to one thread; it prints its run time, 2-3 min on
+the 2-core development machine). Prints the choices, then three sections, with PASS/FAIL against the targets.
 
-Data. Controller logs of CrazyPAD (``tsfdi.datasets.load_crazypad``). Every log holds two airborne segments (two
-short flights, ~5-6 s each once trimmed), so a *flight* below is one log, and its two segments always go together:
-fitted together, held out together. The corrupt log ``weight_on_string_W2_near_M3/E8_log02`` (drone flipped,
-saturated commands) is excluded. Normal flights exist for drone E8 only (5 logs); some conditions were flown by
-E9 only or by both drones (printed), and the two airframes differ, so results are also given per drone.
+Data. Controller logs of CrazyPAD (``tsfdi.datasets.load_crazypad``). The conditions are those of the copy's
+``flights.csv`` (normal flight first, then the 9 of the shared copy in their order, then any other sorted by
+name). Every log holds two airborne segments (two short flights, ~5-6 s each once trimmed), so a *flight* below
+is one log, and its two segments always go together: fitted together, held out together. A log is left out as
+corrupt when, in one of its airborne segments, the thrust command stays at its full scale (65535, a uint16) for
+0.5 s or more: the controller has lost authority and the flight is no longer a stabilised one. In the shared copy
+this rule leaves out ``weight_on_string_W2_near_M3/E8_log02`` only (the drone flipped: the body z specific force
+falls to -1 g, the thrust command sits at full scale for 7.8 s and 9.2 s of its two segments; the largest thrust
+command of every other log is below 84 % of full scale). Normal flights: drone E8 only in the shared copy (5
+logs); normal logs of several drones are pooled. Some conditions were flown by E9 only or by both drones
+(printed), and the two airframes differ, so results are also given per drone.
 
-Choices, all made on normal flights only (in section 1 on the 4 fitting logs of each fold, in sections 2-3 on the
-5 normal logs), never on a faulty flight:
+Choices, all made on normal flights only (in section 1 on the fitting logs of each fold, 4 in the shared copy, in
+sections 2-3 on all normal logs, 5), never on a faulty flight:
 
 - margin (take-off, landing): from the altitude ``stateEstimate.z`` (not a tested channel): the time from
   thrust-on until z first enters +-10 % of the hover height (median z of the segment's central half), and from z
@@ -38,26 +44,28 @@ The commands and the mean-shift test were added after the first runs of this ben
 variance and whiteness tests miss the largest cut (section 2): that choice was made looking at faulty flights,
 which the conditions withheld from the shared copy check.
 
-1. False alarms, leave one normal flight out (5 folds): VAR fitted on the other 4 logs (8 segments), tests
-   calibrated on its held-out residuals; windows of 1 s and 2 s, step = window (independent trials) and step
-   0.1 s (sliding rate, dependent windows), on the held-out flight; per channel and family-wise ("any"),
-   calibrated and theoretical (chi-square / F) thresholds, with the two-sided 99 % binomial band of the count.
+1. False alarms, leave one normal flight out (one fold per normal log, 5 in the shared copy): VAR fitted on the
+   other logs (4, 8 segments), tests calibrated on its held-out residuals; windows of 1 s and 2 s, step = window
+   (independent trials) and step 0.1 s (sliding rate, dependent windows), on the held-out flight; per channel and
+   family-wise ("any"), calibrated and theoretical (chi-square / F) thresholds, with the two-sided 99 % binomial
+   band of the count.
    Target: realised rate <= 2 alpha at alpha = 1e-2 with 2 s windows, calibrated, for the per-channel tests
    (LB, F, M pooled over channels) and the family-wise ones (LB-S, LB-H, F-S, M-S and the combined detectors).
 2. Detection per condition: VAR on all normal flights (faulty flights are never fitted), tests calibrated on its
    held-out residuals; percent of the non-overlapping 1 s and 2 s windows flagged on every faulty flight, per
    condition and drone. Target: cut_propeller_M3_4mm_4mm_39mm >= 95 % of its 2 s windows.
-3. Identification among the 9 conditions: one VAR per condition, leave one flight out within the condition (the
-   held-out flight's own condition model is fitted on that condition's other logs, every other model on all its
-   logs; normal included), every model with its own tests calibrated on its own held-out residuals; every 2 s
-   window (step 0.5 s) of the held-out flight is decided by the three rules of ``tsfdi.windows.decide``: the
-   paper rule (the single accepted model, else ambiguous / none), the likelihood rule (the accepted model, or any
-   model when none is accepted, with the most likely residuals) and the p-value rule (the same with the largest
-   p-value; the tests are calibrated, so a p-value measures the window against the model's flight-to-flight
-   spread; a combined detector's p-value is the smallest of its parts'). Per condition: percent correct unique /
-   wrong / ambiguous / none, per drone, confusion tables; target: mean correct identification over conditions
-   >= 85 % at 2 s (printed for every rule, test ``LB+F+M``). The p-value rule was added to this section after
-   the likelihood rule had been seen to miss the target on these conditions.
+3. Identification among the conditions (9 in the shared copy): one VAR per condition, leave one flight out within
+   the condition (the held-out flight's own condition model is fitted on that condition's other logs, every other
+   model on all its logs; normal included; a condition with fewer than 2 usable logs cannot be held out so: the
+   script prints that it skips it, and it is not a candidate either), every model with its own tests calibrated on
+   its own held-out residuals; every 2 s window (step 0.5 s) of the held-out flight is decided by the three rules of
+   ``tsfdi.windows.decide``: the paper rule (the single accepted model, else ambiguous / none), the likelihood rule
+   (the accepted model, or any model when none is accepted, with the most likely residuals) and the p-value rule
+   (the same with the largest p-value; the tests are calibrated, so a p-value measures the window against the
+   model's flight-to-flight spread; a combined detector's p-value is the smallest of its parts'). Per condition:
+   percent correct unique / wrong / ambiguous / none, per drone, confusion tables; target: mean correct
+   identification over conditions >= 85 % at 2 s (printed for every rule, test ``LB+F+M``). The p-value rule was
+   added to this section after the likelihood rule had been seen to miss the target on these conditions.
 """
 
 import os
@@ -66,6 +74,7 @@ os.environ["OPENBLAS_NUM_THREADS"] = "1"
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
+import argparse  # noqa: E402
 import functools  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
@@ -84,11 +93,20 @@ ROOT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "crazypa
 FS = None                  # sampling rate (Hz), set by setup()
 
 NORMAL = "normal_flight"
-CONDITIONS = (NORMAL, "cut_propeller_M3_1mm", "cut_propeller_M3_2.5mm_2.5mm_42mm", "cut_propeller_M3_4mm_4mm_39mm",
-              "tape_on_propeller_M1_M3", "tape_on_propeller_M3_M4", "add_weight_W1_near_M3",
-              "add_weight_W1_near_M3_M4", "weight_on_string_W2_near_M3")
-SHORT = dict(zip(CONDITIONS, ("normal", "cut1", "cut2.5", "cut4", "tapeM1M3", "tapeM3M4", "wM3", "wM3M4", "string")))
-CORRUPT = {("weight_on_string_W2_near_M3", "E8_log02"): "drone flipped, saturated commands"}
+#: short labels of the conditions of the shared copy, in the order the benchmark reports them; the conditions of
+#: the copy it reads (``flights.csv``) are set by ``setup()``: these first, the others sorted after them, with a
+#: label made by ``short_label``
+KNOWN = {NORMAL: "normal", "cut_propeller_M3_1mm": "cut1", "cut_propeller_M3_2.5mm_2.5mm_42mm": "cut2.5",
+         "cut_propeller_M3_4mm_4mm_39mm": "cut4", "tape_on_propeller_M1_M3": "tapeM1M3",
+         "tape_on_propeller_M3_M4": "tapeM3M4", "add_weight_W1_near_M3": "wM3", "add_weight_W1_near_M3_M4": "wM3M4",
+         "weight_on_string_W2_near_M3": "string"}
+CONDITIONS = tuple(KNOWN)  # the conditions of the copy, normal first (set by setup())
+SHORT = dict(KNOWN)        # condition -> short label (set by setup())
+MIN_LOGS = 2               # usable logs a condition needs in section 3: one held out, its model on the others
+
+THRUST = "controller.cmd_thrust"
+THRUST_FULL_SCALE = 65535  # the thrust command is a uint16
+SATURATED_S = 0.5          # a log is left out when a segment's thrust command stays at full scale this long (s)
 
 GYRO = ("controller.r_roll", "controller.r_pitch", "controller.r_yaw")
 COMMANDS = ("controller.cmd_roll", "controller.cmd_pitch", "controller.cmd_yaw")
@@ -131,23 +149,76 @@ class Flight:
 
 def setup(root=None) -> None:
     """Point the benchmark at a CrazyPAD folder (default ``../shared/data/crazypad``), fail loudly if it is
-    missing, and read the sampling rate."""
-    global ROOT, FS
+    missing, read its conditions (``CONDITIONS``, ``SHORT``) and the sampling rate."""
+    global ROOT, FS, CONDITIONS, SHORT
     ROOT = Path(root) if root is not None else ROOT
     if not (ROOT / "flights.csv").is_file():
         raise FileNotFoundError(f"CrazyPAD data missing at {ROOT}: the benchmark needs ../shared/data/crazypad")
+    CONDITIONS = conditions_of(pd.read_csv(ROOT / "flights.csv").condition)
+    SHORT = short_labels(CONDITIONS)
+    load_segments.cache_clear()
     load_condition.cache_clear()
     FS = float(np.median([s.attrs["fs"] for f in load_condition(NORMAL, (0.0, 0.0)) for s in f.segments]))
+
+
+def conditions_of(names) -> tuple:
+    """The conditions among ``names`` (the ``condition`` column of ``flights.csv``), each once: normal flight
+    first, then those of ``KNOWN`` in its order, then the others sorted. Raises ValueError without normal
+    flights (every section needs them)."""
+    names = set(names)
+    if NORMAL not in names:
+        raise ValueError(f"flights.csv of {ROOT} has no {NORMAL!r} log: the benchmark needs normal flights")
+    return tuple(c for c in KNOWN if c in names) + tuple(sorted(names - set(KNOWN)))
+
+
+def short_label(condition: str) -> str:
+    """Short label of a condition not in ``KNOWN``: its first word and the words with a digit (motor, weight,
+    size), e.g. ``"tape_on_propeller_M1_M3"`` -> ``"tapeM1M3"``."""
+    words = condition.split("_")
+    return words[0] + "".join(w for w in words[1:] if any(ch.isdigit() for ch in w))
+
+
+def short_labels(conditions) -> dict:
+    """Condition -> short label: ``KNOWN``'s, else ``short_label``'s, else (when that is taken) the name."""
+    out = {c: KNOWN[c] for c in conditions if c in KNOWN}
+    for c in conditions:
+        if c not in out:
+            label = short_label(c)
+            out[c] = c if label in out.values() else label
+    return out
+
+
+def saturated_s(segment: pd.DataFrame) -> float:
+    """Time (s) the thrust command of an airborne segment spends at full scale (``THRUST_FULL_SCALE``)."""
+    return float((segment[THRUST] >= THRUST_FULL_SCALE).sum() / segment.attrs["fs"])
+
+
+@functools.lru_cache(maxsize=None)
+def load_segments(condition: str, margin: tuple) -> tuple:
+    """The airborne segments of every log of one condition with the (take-off, landing) margin in s."""
+    return tuple(load_crazypad(ROOT, condition=condition, kind="controller", airborne=True,
+                               margin=tuple(pd.Timedelta(seconds=m) for m in margin)))
+
+
+def corrupt_logs(condition: str) -> dict:
+    """The logs of one condition that the benchmark leaves out, ``{log: seconds at full thrust per segment}``.
+
+    Rule: a log is corrupt when, in one of its airborne segments (no margin), the thrust command stays at full
+    scale for ``SATURATED_S`` or longer: the controller has lost authority (the drone flipped or crashed; see
+    the module docstring), and a model of stabilised flight does not describe it."""
+    out: dict = {}
+    for s in load_segments(condition, (0.0, 0.0)):
+        out.setdefault(s.attrs["log"], []).append(saturated_s(s))
+    return {log: sat for log, sat in out.items() if max(sat) >= SATURATED_S}
 
 
 @functools.lru_cache(maxsize=None)
 def load_condition(condition: str, margin: tuple) -> tuple:
     """The flights (logs) of one condition with the (take-off, landing) margin in s; corrupt logs left out."""
-    segs = load_crazypad(ROOT, condition=condition, kind="controller", airborne=True,
-                         margin=tuple(pd.Timedelta(seconds=m) for m in margin))
+    corrupt = corrupt_logs(condition)
     flights: dict = {}
-    for s in segs:
-        if (condition, s.attrs["log"]) not in CORRUPT:
+    for s in load_segments(condition, margin):
+        if s.attrs["log"] not in corrupt:
             flights.setdefault((s.attrs["drone"], s.attrs["log"]), []).append(s)
     return tuple(Flight(condition, d, log, tuple(v)) for (d, log), v in sorted(flights.items()))
 
@@ -261,7 +332,9 @@ class Choices:
     order: int
 
     def line(self) -> str:
-        return (f"logs {','.join(log[-2:] for log in self.logs):<14} climb {self.climb_s:4.2f} s, descent "
+        one_drone = len({log.split("_")[0] for log in self.logs}) == 1      # then the log number names a log
+        logs = ",".join(log[-2:] if one_drone else log for log in self.logs)
+        return (f"logs {logs:<14} climb {self.climb_s:4.2f} s, descent "
                 f"{self.descent_s:4.2f} s -> margin ({self.margin[0]:g} s, {self.margin[1]:g} s); with accelz the "
                 f"held-out gyro gen. variance changes by {-100 * self.accelz_gain:+4.1f} % (added if <= "
                 f"{-100 * ACCELZ_GAIN:g} %) -> "
@@ -422,9 +495,11 @@ def fa_verdicts(tab: pd.DataFrame) -> list:
 
 
 # ------------------------------------------------------------------ 2. detection per condition
-def detection(choice: Choices, conditions=CONDITIONS[1:], windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
+def detection(choice: Choices, conditions=None, windows=WINDOWS_S, alphas=ALPHAS) -> tuple:
     """Flagged non-overlapping windows of every faulty flight against the VAR of all normal flights; and the
-    calibration windows per window length."""
+    calibration windows per window length. ``conditions``: the faulty conditions (default: every one of the
+    copy)."""
+    conditions = CONDITIONS[1:] if conditions is None else conditions
     model = fit_model(load_condition(NORMAL, choice.margin), choice.channels, choice.order)
     rows, ncal = [], {}
     for wsec in windows:
@@ -466,11 +541,19 @@ def detection_verdicts(det: pd.DataFrame) -> list:
 
 
 # ------------------------------------------------------------------ 3. identification
-def identification(choice: Choices, conditions=CONDITIONS, alphas=ALPHAS, held_out=None) -> tuple:
+def identified_conditions(margin: tuple) -> tuple:
+    """The conditions of section 3: those with at least ``MIN_LOGS`` usable logs."""
+    return tuple(c for c in CONDITIONS if len(load_condition(c, margin)) >= MIN_LOGS)
+
+
+def identification(choice: Choices, conditions=None, alphas=ALPHAS, held_out=None) -> tuple:
     """Label of every 2 s window of every held-out flight, per test family, alpha and rule (one row per window);
     and the fewest calibration windows behind a model's tests.
 
-    ``held_out``: optional (condition, log) pairs to hold out (default every flight of ``conditions``)."""
+    ``conditions``: the candidate conditions, each with at least ``MIN_LOGS`` usable logs (default
+    ``identified_conditions``); ``held_out``: optional (condition, log) pairs to hold out (default every flight
+    of ``conditions``)."""
+    conditions = identified_conditions(choice.margin) if conditions is None else conditions
     window, step = samples(IDENT_WINDOW_S), samples(IDENT_STEP_S)
     flights = {c: load_condition(c, choice.margin) for c in conditions}
     full = {c: fit_model(fl, choice.channels) for c, fl in flights.items()}
@@ -513,7 +596,8 @@ def ident_summary(ident: pd.DataFrame) -> pd.DataFrame:
     return 100 * per_cond.groupby(level=[0, 1, 2]).mean().unstack("rule")
 
 
-def report_identification(ident: pd.DataFrame, conditions=CONDITIONS) -> None:
+def report_identification(ident: pd.DataFrame, conditions=None) -> None:
+    conditions = CONDITIONS if conditions is None else conditions
     ident = with_outcome(ident)
     order = [SHORT[c] for c in conditions if c in set(ident.condition)]
     print(f"\nmean over conditions of the percent of correct windows, {IDENT_WINDOW_S:g} s windows, step "
@@ -548,24 +632,33 @@ def ident_verdicts(ident: pd.DataFrame) -> list:
 # ------------------------------------------------------------------ main
 def print_data() -> None:
     print(f"CrazyPAD benchmark (issue 17) on {ROOT}, controller logs, fs = {FS:.2f} Hz")
-    for (cond, log), why in CORRUPT.items():
-        print(f"excluded: {cond}/{log} ({why})")
+    for c in CONDITIONS:
+        for log, sat in corrupt_logs(c).items():
+            print(f"excluded: {c}/{log} (thrust command at full scale for {', '.join(f'{t:.1f} s' for t in sat)} of "
+                  f"its airborne segments, >= {SATURATED_S:g} s: loss of control)")
     print("flights per condition (a flight = one log = 2 airborne segments):")
     for c in CONDITIONS:
         drones = pd.Series([f.drone for f in load_condition(c, (0.0, 0.0))]).value_counts().sort_index()
         print(f"  {SHORT[c]:<9} {c:<36} {drones.sum()} logs ({', '.join(f'{d}: {n}' for d, n in drones.items())})")
 
 
-def main() -> None:
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, default=ROOT, metavar="PATH",
+                        help="the CrazyPAD folder (flights.csv, controller/); default ../shared/data/crazypad")
+    args = parser.parse_args(argv)
     t0 = time.perf_counter()
-    setup()
+    setup(args.data)
     print_data()
 
     fa, fold_choices, ncal1 = false_alarms()
+    n = len(normal_logs())
     choice = choose(normal_logs())
     det, ncal2 = detection(choice)
-    ident, ncal3 = identification(choice)
-    print("\n== choices (made on normal flights only: per fold on its 4 fitting logs; sections 2-3 on all 5) ==")
+    identified = identified_conditions(choice.margin)
+    ident, ncal3 = identification(choice, identified)
+    print(f"\n== choices (made on normal flights only: per fold on its {n - 1} fitting logs; sections 2-3 on all {n}) "
+          "==")
     for k, ch in enumerate(fold_choices):
         print(f"  fold {k} (held out {normal_logs()[k]}): {ch.line()}")
     print(f"  sections 2-3 (all normal): {choice.line()}")
@@ -578,10 +671,10 @@ def main() -> None:
           + f"; section 3 (2 s, per condition model): >= {ncal3}")
     orders = ident.groupby("condition").order.agg(lambda s: sorted(set(s)))
     print("  section 3 BIC orders of the held-out flights' own-condition models: "
-          + ", ".join(f"{SHORT[c]} {orders[c]}" for c in CONDITIONS))
+          + ", ".join(f"{SHORT[c]} {orders[c]}" for c in identified))
     print(f"  section 3 detailed test {PRIMARY} ({' + '.join(COMBINED[PRIMARY])}, each at the Sidak share of alpha)")
 
-    print("\n== 1. false alarms on held-out normal flights (leave one log out, 5 folds) ==")
+    print(f"\n== 1. false alarms on held-out normal flights (leave one log out, {n} folds) ==")
     tab = fa_table(fa, len(choice.channels))
     report_false_alarms(tab)
     print("\ntarget: realised FA <= 2 alpha at alpha = 1e-2, 2 s windows, calibrated:")
@@ -592,8 +685,12 @@ def main() -> None:
     print("\ntarget: cut_propeller_M3_4mm_4mm_39mm >= 95 % of its 2 s windows:")
     print("\n".join(detection_verdicts(det)))
 
-    print("\n== 3. identification among the 9 conditions (per-condition VARs, leave one flight out within the "
-          "condition) ==")
+    print(f"\n== 3. identification among the {len(identified)} conditions (per-condition VARs, leave one flight out "
+          "within the condition) ==")
+    for c in CONDITIONS:
+        if c not in identified:
+            print(f"skipped {SHORT[c]} ({c}): {len(load_condition(c, choice.margin))} usable log(s), a condition "
+                  f"needs >= {MIN_LOGS} (one held out, its model fitted on the others)")
     report_identification(ident)
     print(f"\ntarget: mean correct identification over conditions >= 85 % at 2 s ({PRIMARY}):")
     print("\n".join(ident_verdicts(ident)))

@@ -93,3 +93,68 @@ def test_missing_data_fails_loudly(bench, tmp_path):
             bench.setup(tmp_path)
     finally:
         bench.setup(root)
+
+
+# ------------------------------------------------------------------ the data the benchmark finds in a copy
+def fuller_copy(root: Path, shared: Path) -> Path:
+    """A copy of the shared CrazyPAD folder (files linked) with one more condition (one log of
+    tape_on_propeller_M3_M4 under a new name) and one E9 normal flight (an E8 normal log under another name)."""
+    (root / "controller").mkdir(parents=True)
+    for cond in (shared / "controller").iterdir():
+        (root / "controller" / cond.name).symlink_to(cond)
+    (root / "controller" / "normal_flight").unlink()
+    (root / "controller" / "normal_flight").mkdir()
+    for f in (shared / "controller" / "normal_flight").iterdir():
+        (root / "controller" / "normal_flight" / f.name).symlink_to(f)
+    (root / "controller" / "normal_flight" / "E9_log07.csv.gz").symlink_to(
+        shared / "controller" / "normal_flight" / "E8_log01.csv.gz")
+    (root / "controller" / "bent_propeller_M2").mkdir()
+    (root / "controller" / "bent_propeller_M2" / "E8_log00.csv.gz").symlink_to(
+        shared / "controller" / "tape_on_propeller_M3_M4" / "E8_log00.csv.gz")
+    table = (shared / "flights.csv").read_text()
+    (root / "flights.csv").write_text(table + "bent_propeller_M2,E8,E8_log00,2600,25.7\n"
+                                      "normal_flight,E9,E9_log07,2600,25.7\n")
+    return root
+
+
+def test_conditions_and_labels_are_read_from_the_copy(bench):
+    assert bench.CONDITIONS == tuple(bench.KNOWN) and bench.SHORT == bench.KNOWN   # the shared copy: today's order
+    names = ["weight_on_string_W2_near_M3", "cut_propeller_M3_1mm", "normal_flight", "zz_new_M1", "bent_M2_3mm"]
+    assert bench.conditions_of(names) == ("normal_flight", "cut_propeller_M3_1mm", "weight_on_string_W2_near_M3",
+                                          "bent_M2_3mm", "zz_new_M1")
+    with pytest.raises(ValueError, match="normal_flight"):
+        bench.conditions_of(["cut_propeller_M3_1mm"])
+    assert bench.short_label("bent_propeller_M2_3mm") == "bentM23mm"
+    labels = bench.short_labels(("normal_flight", "cut_propeller_M3_1mm", "cut_M3_1mm", "tape_on_propeller_M1_M3",
+                                 "tape_x_M1_M3"))
+    assert labels["cut_propeller_M3_1mm"] == "cut1" and labels["cut_M3_1mm"] == "cutM31mm"
+    assert labels["tape_x_M1_M3"] == "tape_x_M1_M3"              # "tapeM1M3" is taken: the name itself
+    assert len(set(labels.values())) == len(labels)
+
+
+def test_corrupt_log_rule_flags_the_flipped_log_only(bench):
+    flagged = {c: bench.corrupt_logs(c) for c in bench.CONDITIONS}
+    assert {(c, log) for c, logs in flagged.items() for log in logs} == {("weight_on_string_W2_near_M3", "E8_log02")}
+    assert min(flagged["weight_on_string_W2_near_M3"]["E8_log02"]) > 5.0          # both segments, seconds on end
+    top = max(s[bench.THRUST].max() for c in bench.CONDITIONS for s in bench.load_segments(c, (0.0, 0.0))
+              if s.attrs["log"] not in flagged[c])
+    assert top < 0.85 * bench.THRUST_FULL_SCALE                                    # every other log far from it
+    logs = {f.log for f in bench.load_condition("weight_on_string_W2_near_M3", (0.0, 0.0))}
+    assert "E8_log02" not in logs and len(logs) == 5
+
+
+def test_a_fuller_copy_is_discovered(bench, shared_data, tmp_path, capsys):
+    root = bench.ROOT
+    try:
+        bench.setup(fuller_copy(tmp_path / "crazypad", shared_data / "crazypad"))
+        assert bench.CONDITIONS == (*bench.KNOWN, "bent_propeller_M2") and bench.SHORT["bent_propeller_M2"] == "bentM2"
+        assert bench.normal_logs() == ("E8_log00", "E8_log01", "E8_log02", "E8_log03", "E8_log04", "E9_log07")
+        assert "bent_propeller_M2" not in bench.identified_conditions((0.0, 0.0))   # one log: cannot be held out
+        assert bench.identified_conditions((0.0, 0.0)) == tuple(bench.KNOWN)
+        bench.print_data()
+        out = capsys.readouterr().out
+        assert "normal_flight                        6 logs (E8: 5, E9: 1)" in out
+        assert "bentM2    bent_propeller_M2                    1 logs (E8: 1)" in out
+    finally:
+        bench.setup(root)
+    assert bench.CONDITIONS == tuple(bench.KNOWN)

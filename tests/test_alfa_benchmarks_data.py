@@ -1,0 +1,78 @@
+"""The ALFA benchmarks find their flights in the copy they are given (benchmarks/alfa_isolation.py,
+alfa_detection.py, alfa_sensor_validation.py): the shared copy's selection, and a fuller copy's without crashing.
+
+Needs ../shared/data/alfa (the ``shared_data`` fixture fails loudly without it).
+"""
+
+import importlib.util
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tsfdi.datasets.alfa import list_alfa
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def benchmark(name: str):
+    spec = importlib.util.spec_from_file_location(f"{name}_data_bench", BENCHMARKS / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod                    # the dataclasses of a module look it up
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def linked_copy(root: Path, shared: Path) -> Path:
+    """The shared ALFA folder with its files linked one by one (so that files can be added or left out)."""
+    for f in shared.rglob("*"):
+        if f.is_file():
+            (root / f.relative_to(shared)).parent.mkdir(parents=True, exist_ok=True)
+            (root / f.relative_to(shared)).symlink_to(f)
+    return root
+
+
+def test_isolation_flights_are_the_engine_flights_with_a_pitot(shared_data, tmp_path):
+    bench = benchmark("alfa_isolation")
+    shared = shared_data / "alfa"
+    names = bench.pitot_flights(shared)
+    assert names == [f"carbonZ_{n}_engine_failure" for n in ("2018-07-18-15-53-31_1", "2018-07-18-15-53-31_2",
+                                                             "2018-07-30-16-39-00_1", "2018-07-30-16-39-00_2")]
+    root = linked_copy(tmp_path / "alfa", shared)
+    new = "carbonZ_2019-01-01-10-00-00_engine_failure"       # a new flight with a pitot (a copy of one)
+    for folder in ("engine_commanded_measured", "merged_20hz/engine"):
+        (root / folder / f"{new}.csv.gz").symlink_to(shared / folder / f"{names[0]}.csv.gz")
+    (root / "merged_20hz" / "engine" / f"{names[1]}.csv.gz").unlink()      # no ground velocity: left out
+    assert bench.pitot_flights(root) == [names[0], *names[2:], new]
+    with pytest.raises(FileNotFoundError, match="ALFA data not found"):
+        bench.pitot_flights(tmp_path / "missing")
+
+
+def test_keipour_subset_refuses_another_copy_with_its_counts(shared_data):
+    """keipour_flights refuses a copy whose flights up to 2018-09-11 do not count as Table I (the benchmark prints
+    its message and skips the comparison); its message gives the counts found."""
+    bench = benchmark("alfa_detection")
+    tab = list_alfa(shared_data / "alfa")
+    mask, _ = bench.keipour_flights(tab)
+    assert mask.sum() == 22
+    extra = tab[tab.flight.str.contains("rudder_right")].iloc[:1].assign(flight="carbonZ_2018-09-11-18-00-00_rudder")
+    with pytest.raises(RuntimeError, match=r"'rudder': 4.*Table I"):
+        bench.keipour_flights(pd.concat([tab, extra], ignore_index=True))
+
+
+def test_sensor_validation_noise_from_any_official_imu_file(shared_data, tmp_path):
+    bench = benchmark("alfa_sensor_validation")
+    shared = shared_data / "alfa"
+    sigma0 = bench.sensor_noise(shared)
+    assert abs(np.degrees(sigma0) - 0.02) < 1e-6
+    root = linked_copy(tmp_path / "alfa", shared)
+    sample = root / "official_format_sample"
+    (imu,) = sample.glob(f"*-{bench.IMU_TOPIC}.csv.gz")
+    shutil.copy(imu, sample / imu.name.replace("2018-07-18-15-53-31_1", "2019-01-01-10-00-00"))
+    assert bench.sensor_noise(root) == sigma0                 # another flight's messages: the same setting
+    shutil.rmtree(sample)
+    with pytest.raises(FileNotFoundError, match="mavros-imu-data.csv"):
+        bench.sensor_noise(root)
