@@ -157,8 +157,8 @@ class Monitor:
         window times are in seconds with it, in samples without it.
     test : ResidualTest or mapping, optional
         Identification test, :class:`~tsfdi.LjungBox` (default ``LjungBox(lags=25, alpha=1e-3)``) or
-        :class:`~tsfdi.FTest`; or a mapping model name -> test (each fault model with its own calibrated
-        thresholds, ``threshold="empirical"``; then ``detection_test`` is required).
+        :class:`~tsfdi.FTest`; or a mapping model name -> test (each fault model with its own thresholds, e.g.
+        ``test.calibrate(spec.held_out_residuals(), window=...)`` per model; then ``detection_test`` is required).
     detection_test : ResidualTest, optional
         Detection test on the healthy model's residuals (default: ``test``).
     steady_thresholds : array_like, shape (k,), optional
