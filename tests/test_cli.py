@@ -171,3 +171,14 @@ def test_fit_start_stop_are_times_on_the_record_clock(tmp_path, capsys):
     assert main(["fit", str(p), "--out", str(tmp_path / "m.npz"), "--lags", "2", "--start", "0s",
                  "--stop", "110s"]) == 0
     assert "(980 samples)" in capsys.readouterr().out
+
+
+def test_short_selection_by_row_numbers_hints_at_seconds(tmp_path, capsys):
+    """``--start 10 --stop 35`` are rows, not seconds: when the selection is then too short, the error says so."""
+    _write(record("healthy", 4000, np.random.default_rng(3)), tmp_path / "f.csv", "csv")
+    assert main(["fit", str(tmp_path / "f.csv"), "--start", "10", "--stop", "35", "--out", str(tmp_path / "m.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "too short" in err
+    assert "(--start 10 / --stop 35: a bare integer is a row number, not a time; write e.g. '10s' for seconds)" in err
+    assert main(["fit", str(tmp_path / "f.csv"), "--start", "10s", "--stop", "35s", "--out", str(tmp_path / "m.npz"),
+                 "--max-lags", "6"]) == 0

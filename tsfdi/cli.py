@@ -1245,7 +1245,13 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         except (ValueError, TypeError, OSError) as exc:
             subs[args.command].print_usage(sys.stderr)
-            print(f"tsfdi {args.command}: error: {exc}", file=sys.stderr)
+            rows = {f: getattr(args, f) for f in ("start", "stop") if isinstance(getattr(args, f, None), int)}
+            hint = ""
+            if rows and "short" in str(exc):     # a likely slip: --start 10 meant as 10 s
+                given = " / ".join(f"--{f} {n}" for f, n in rows.items())
+                hint = (f" ({given}: a bare integer is a row number, not a time; write e.g. "
+                        f"'{next(iter(rows.values()))}s' for seconds)")
+            print(f"tsfdi {args.command}: error: {exc}{hint}", file=sys.stderr)
             return 2
 
 
