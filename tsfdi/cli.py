@@ -250,6 +250,8 @@ class _Records:
     split : bool
         Whether the records are pieces of longer ones, split at NaN (``--nan-policy omit``) or at the gaps of a
         flight log: a piece too short for the command is then dropped with a note instead of refused.
+    rows : str
+        ``"--start 10 / --stop 35"`` when the part used was selected by row numbers (bare integers), else ``""``.
     """
 
     path: str
@@ -257,10 +259,20 @@ class _Records:
     ids: list
     fs: float
     split: bool = False
+    rows: str = ""
 
     def label(self, i: int) -> str:
         """``"data.csv"`` or ``"sim.nc record 3"``: record ``i`` as named in messages."""
         return f"{self.path} record {self.ids[i]}" if self.ids[i] else self.path
+
+    def about(self, i: int) -> str:
+        """:meth:`label` for an error about record ``i``'s data, with the row numbers that cut it: a user who
+        typed ``--start 10`` meaning seconds sees why the record is short."""
+        if not self.rows:
+            return self.label(i)
+        first = self.rows.split()[1]
+        return (f"{self.label(i)} ({self.rows}: a bare integer is a row number, not a time; write e.g. '{first}s' "
+                "for seconds)")
 
     @property
     def columns(self) -> list[str]:
@@ -586,6 +598,7 @@ def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None
     if isinstance(args.start, float) and isinstance(args.stop, float) and args.stop <= args.start:
         raise ValueError(f"--stop must come after --start, got {args.stop:g} s <= {args.start:g} s")
     first = [0] * len(frames)           # row of the file / record where each frame starts
+    rows = " / ".join(f"--{f} {getattr(args, f)}" for f in ("start", "stop") if isinstance(getattr(args, f), int))
     if args.start is not None or args.stop is not None:
         cut = [[_position(x, f.index.to_numpy(), fs) for x in (args.start, args.stop)] for f in frames]
         keep = [i for i, (f, (a, b)) in enumerate(zip(frames, cut)) if len(f.iloc[a:b])]
@@ -617,7 +630,7 @@ def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None
     if not out_frames:
         raise ValueError(f"--nan-policy omit: every row of {path} holds an empty or NaN value")
     split = kind == "ulog" or len(out_frames) > len(frames)
-    return _Records(path, out_frames, out_ids, float(fs), split)
+    return _Records(path, out_frames, out_ids, float(fs), split, rows)
 
 
 def _drop_short(data: _Records, need: int, why: str) -> _Records:
@@ -628,12 +641,13 @@ def _drop_short(data: _Records, need: int, why: str) -> _Records:
         return data
     if not data.split or len(short) == len(data.frames):
         i = short[0]
-        raise ValueError(f"{data.label(i)} is too short: {data.span(len(data.frames[i]))} at {data.fs:g} Hz, "
+        raise ValueError(f"{data.about(i)} is too short: {data.span(len(data.frames[i]))} at {data.fs:g} Hz, "
                          f"{why} needs at least {need}")
     print(f"note: dropped {len(short)} piece(s) of split records shorter than {need} samples ({why})",
           file=sys.stderr)
     keep = [i for i in range(len(data.frames)) if i not in set(short)]
-    return _Records(data.path, [data.frames[i] for i in keep], [data.ids[i] for i in keep], data.fs, True)
+    return _Records(data.path, [data.frames[i] for i in keep], [data.ids[i] for i in keep], data.fs, True,
+                    data.rows)
 
 
 def _reword(exc: Exception, data: _Records, subs: tuple = ()) -> ValueError:
@@ -642,7 +656,7 @@ def _reword(exc: Exception, data: _Records, subs: tuple = ()) -> ValueError:
     m = re.match(r"(y|signal)(?:\[(\d+)\])?(:? )", msg)
     if m:
         i = int(m.group(2)) if m.group(2) else 0
-        msg = data.label(i if i < len(data.frames) else 0) + m.group(3) + msg[m.end():]
+        msg = data.about(i if i < len(data.frames) else 0) + m.group(3) + msg[m.end():]
     for old, new in subs:
         msg = msg.replace(old, new)
     return ValueError(msg)
@@ -762,7 +776,7 @@ def _windows_in_samples(args: argparse.Namespace, data: _Records, models: dict) 
                          f"at least {need} samples")
     shortest = min(range(len(data.frames)), key=lambda i: len(data.frames[i]))
     if W > len(data.frames[shortest]) and not data.split:
-        raise ValueError(f"--window {args.window}: {data.span(W)} is longer than {data.label(shortest)} "
+        raise ValueError(f"--window {args.window}: {data.span(W)} is longer than {data.about(shortest)} "
                          f"({data.span(len(data.frames[shortest]))} at {data.fs:g} Hz)")
     print(f"window {data.span(W)}, step {data.span(S)}, at {data.fs:g} Hz")
     return W, S
@@ -1245,13 +1259,7 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         except (ValueError, TypeError, OSError) as exc:
             subs[args.command].print_usage(sys.stderr)
-            rows = {f: getattr(args, f) for f in ("start", "stop") if isinstance(getattr(args, f, None), int)}
-            hint = ""
-            if rows and "short" in str(exc):     # a likely slip: --start 10 meant as 10 s
-                given = " / ".join(f"--{f} {n}" for f, n in rows.items())
-                hint = (f" ({given}: a bare integer is a row number, not a time; write e.g. "
-                        f"'{next(iter(rows.values()))}s' for seconds)")
-            print(f"tsfdi {args.command}: error: {exc}{hint}", file=sys.stderr)
+            print(f"tsfdi {args.command}: error: {exc}", file=sys.stderr)
             return 2
 
 
