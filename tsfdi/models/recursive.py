@@ -686,8 +686,8 @@ class RecursiveARX:
                 raise ValueError("P0 must be positive definite") from None
             self._P0 = 0.5 * (P0 + P0.T)
         # largest sample magnitude: ||P0||_inf * x**2 <= MAX_P0_SAMPLE2 (Notes, Scale)
-        p0 = float(np.abs(self._P0).sum(axis=1).max())
-        self._max_sample = MAX_SAMPLE if p0 * MAX_SAMPLE**2 <= MAX_P0_SAMPLE2 else float(np.sqrt(MAX_P0_SAMPLE2 / p0))
+        self._p0_norm = float(np.abs(self._P0).sum(axis=1).max())       # ||P0||_inf
+        self._max_sample = min(MAX_SAMPLE, float(np.sqrt(MAX_P0_SAMPLE2 / self._p0_norm)))
         if theta0 is None:
             self._theta0 = np.zeros(d)
         else:
@@ -867,8 +867,7 @@ class RecursiveARX:
                          f"this call)")
                 if top == MAX_SAMPLE:
                     raise ValueError(f"{where}: samples must lie within +-{MAX_SAMPLE:g}; rescale {name}")
-                p0 = np.abs(self._P0).sum(axis=1).max()
-                raise ValueError(f"{where}: P0 (largest absolute row sum {p0:.3g}) allows samples within "
+                raise ValueError(f"{where}: P0 (largest absolute row sum {self._p0_norm:.3g}) allows samples within "
                                  f"+-{top:.3g} only, so that P0 * sample**2 <= {MAX_P0_SAMPLE2:g} (RecursiveARX "
                                  f"Notes, Scale); rescale {name} or lower P0")
 
