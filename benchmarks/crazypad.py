@@ -596,6 +596,18 @@ def ident_summary(ident: pd.DataFrame) -> pd.DataFrame:
     return 100 * per_cond.groupby(level=[0, 1, 2]).mean().unstack("rule")
 
 
+def flight_summary(ident: pd.DataFrame) -> pd.DataFrame:
+    """Mean over conditions of the percent of held-out flights whose most frequent window label is their condition
+    (a tie counts as wrong), per alpha, family and rule: how far whole-flight decisions get."""
+    def majority(labels: pd.Series) -> str:
+        counts = labels.value_counts()
+        top = counts.index[counts == counts.max()]
+        return top[0] if len(top) == 1 else "tie"
+    voted = ident.groupby(["alpha", "family", "rule", "condition", "log"]).label.agg(majority).reset_index()
+    per_cond = (voted.label == voted.condition).groupby([voted.alpha, voted.family, voted.rule, voted.condition]).mean()
+    return 100 * per_cond.groupby(level=[0, 1, 2]).mean().unstack("rule")
+
+
 def report_identification(ident: pd.DataFrame, conditions=None) -> None:
     conditions = CONDITIONS if conditions is None else conditions
     ident = with_outcome(ident)
@@ -603,6 +615,9 @@ def report_identification(ident: pd.DataFrame, conditions=None) -> None:
     print(f"\nmean over conditions of the percent of correct windows, {IDENT_WINDOW_S:g} s windows, step "
           f"{IDENT_STEP_S:g} s (paper: correct unique; likelihood, pvalue: correct label)")
     print(ident_summary(ident).round(1).to_string())
+    print(f"\n{PRIMARY}, decided per held-out flight (the label most of its windows carry): mean over conditions of "
+          "the percent of correct flights")
+    print(flight_summary(ident).xs(PRIMARY, level="family").round(1).to_string())
     alpha = max(ident.alpha)
     for rule, d in ident[(ident.family == PRIMARY) & (ident.alpha == alpha)].groupby("rule", sort=False):
         print(f"\n{PRIMARY}, alpha {alpha:g}, {rule} rule: percent of the held-out condition's windows")

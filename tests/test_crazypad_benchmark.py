@@ -7,6 +7,7 @@ import importlib.util
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 CUT4 = "cut_propeller_M3_4mm_4mm_39mm"
@@ -84,6 +85,17 @@ def test_identification_one_held_out_flight(bench, fold0, capsys):
     bench.report_identification(ident, conditions)
     out = capsys.readouterr().out
     assert "confusion (likelihood rule" in out and "confusion (pvalue rule" in out and "cut4" in out
+    assert "decided per held-out flight" in out
+
+
+def test_flight_summary_counts_majorities_and_ties(bench):
+    def rows(cond, log, labels):
+        return [{"alpha": 0.01, "family": "LB+F+M", "rule": "pvalue", "condition": cond, "log": log, "label": lb}
+                for lb in labels]
+    ident = pd.DataFrame(rows("a", "l0", "aab") + rows("a", "l1", "abb") + rows("b", "l2", "ab")
+                         + rows("b", "l3", "bbba"))
+    # a: l0 right, l1 wrong -> 50 %; b: l2 a tie (counted wrong), l3 right -> 50 %
+    assert bench.flight_summary(ident).loc[(0.01, "LB+F+M"), "pvalue"] == pytest.approx(50.0)
 
 
 def test_missing_data_fails_loudly(bench, tmp_path):

@@ -206,6 +206,8 @@ def test_absent_parts_are_left_out_or_refused_by_name(synthetic, fitted):
     assert ev.detection_counts.empty and ev.detection_delays.empty
     assert list(ev.detection_counts.columns) == list(full.detection_counts.columns)
     assert list(ev.detection_delays.columns) == list(full.detection_delays.columns)
+    pd.testing.assert_series_equal(ev.detection_counts.dtypes, full.detection_counts.dtypes)
+    pd.testing.assert_series_equal(ev.detection_delays.dtypes, full.detection_delays.dtypes)
     with pytest.raises(ValueError, match="no detection windows: evaluate was run with detection=False"):
         ev.detection_rates()
     # the summary of the run with detection, less its detection part; the identification tables are the same
@@ -222,6 +224,7 @@ def test_absent_parts_are_left_out_or_refused_by_name(synthetic, fitted):
     ev = tsfdi.evaluate([recs[i] for i in healthy], fitted, **{**kw, "states": [states[i] for i in healthy],
                                                               "failure_times": ft[healthy]})
     assert ev.identification_counts.empty and ev.rates().empty
+    pd.testing.assert_series_equal(ev.identification_counts.dtypes, full.identification_counts.dtypes)
     with pytest.raises(ValueError, match="no identification windows"):
         ev.table4()
     assert ev.detection_rates().loc[("var", "whiteness", 5.0), "healthy_windows"] == 4 * 36

@@ -459,7 +459,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     ident = _count_table(counts["identification"], [*keys, *(f"acc_{f}" for f in faults),
                                                    *(f"label_{r}" for r in rules), "windows"])
     det = _count_table(counts["detection"], [*keys, "fault_true", "pre", "alarm", "disjoint", "windows"])
-    delays = _count_table(counts["delays"], [*keys, "delay", "records"]).astype({"delay": np.float64})
+    delays = _count_table(counts["delays"], [*keys, "delay", "records"])
     cal_rows = []
     for lvl, b in ([("", first)] if by_level is None else by_level.items()):
         for (m, meth), t in tests.items():
@@ -506,9 +506,16 @@ def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = ()
         counter[(*key, *(bool(v) for v in row[:k]), *(names[v] for v in row[k:]))] += c
 
 
+_COUNT_TYPES = {"window": np.float64, "delay": np.float64, "fault_true": bool, "pre": bool, "alarm": bool,
+                "disjoint": bool}
+
+
 def _count_table(counter: Counter, columns: list) -> pd.DataFrame:
-    """The counts as a table: one row per key, in order of first appearance, the count last (int64)."""
-    return pd.DataFrame([(*key, n) for key, n in counter.items()], columns=columns).astype({columns[-1]: np.int64})
+    """The counts as a table: one row per key, in order of first appearance, the count last (int64). Columns have
+    the same dtypes whether there are rows or not (labels: pandas' string dtype)."""
+    types = {c: bool if c.startswith("acc_") else _COUNT_TYPES.get(c, str) for c in columns[:-1]}
+    return pd.DataFrame([(*key, n) for key, n in counter.items()], columns=columns).astype(
+        {**types, columns[-1]: np.int64})
 
 
 def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: dict, counts: dict) -> None:
