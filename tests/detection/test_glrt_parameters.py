@@ -227,3 +227,32 @@ def test_glrt_calibrate_accepts_records():
     np.testing.assert_allclose(gl.healthy_statistic_[:, 0], expected)
     one = tsfdi.GLRT(20, threshold=tsfdi.EmpiricalThreshold(1e-2)).calibrate(list(pooled[:3000]))  # numbers: a record
     assert one.healthy_statistic_.shape == (3000, 1)
+
+
+def test_rls_reference_with_the_model_regressors():
+    """Paper 002's use: the GLRT on the RLS parameter history, regressors from ``RecursiveARX.regressors``
+    (after the estimator's start-up, ``SETTLE`` samples); calibrated on healthy records, it stays quiet on the
+    healthy part of a record whose b0 jumps and alarms soon after the jump."""
+    settle = 300
+    rng = np.random.default_rng(21)
+    theta = (0.6, 1.0, -0.4)
+
+    def record(n, jump_at=None):
+        u, e = rng.standard_normal(n), 0.5 * rng.standard_normal(n)
+        y = np.zeros(n)
+        for t in range(1, n):
+            b0 = theta[1] + (1.0 if jump_at is not None and t >= jump_at else 0.0)
+            y[t] = -theta[0] * y[t - 1] + b0 * u[t] + theta[2] * u[t - 1] + e[t]
+        return y, u
+
+    def inputs(y, u):
+        model = tsfdi.RecursiveARX(1, 2, 0, forgetting_factor=0.995)
+        params = model.run(y, u).params
+        keep = slice(settle - model.max_lag, None)       # regressor rows start at sample max_lag
+        return y[settle:], model.regressors(y, u)[keep], params[settle:]
+
+    test = ParameterGLRT(50, threshold=tsfdi.EmpiricalThreshold(1e-3))
+    healthy = [inputs(*record(3000)) for _ in range(3)]
+    test.calibrate([h[0] for h in healthy], [h[1] for h in healthy], [h[2] for h in healthy])
+    d = test.test(*inputs(*record(3000, jump_at=2000)))
+    assert d.reject and 2000 <= settle + d.details["first_alarm"] <= 2100

@@ -563,3 +563,54 @@ def test_estimate_is_least_squares_wherever_p0_and_scale_are_accepted(lam, shape
                        for mag in (1e-100, 1.0, 1e100, 1e103, 1e120, 1e128, 1e130, 1e140, 1e150, 1e152)
                        if p0 * mag**2 > 1e308]
     assert (1e50, 1e140) in refused and (1e4, 1e152) not in refused
+
+
+@pytest.mark.parametrize("na, nb, nk, n_inputs, trend", [(2, 2, 1, 1, "c"), (0, 3, 0, 2, "n"), (3, 0, 0, 1, "c"),
+                                                         (1, 1, 2, 2, "n"), (0, 0, 0, 1, "c")])
+def test_regressors_give_the_a_priori_errors_of_run(na, nb, nk, n_inputs, trend):
+    """e(t) = y(t) - phi(t)' theta(t-1) with run's own parameter history: the regressor of the kernel, exactly."""
+    rng = np.random.default_rng(31)
+    y, u = simulate_arx(400, rng)
+    u = np.column_stack([u] + [rng.standard_normal(400) for _ in range(n_inputs - 1)]) if n_inputs > 1 else u
+    u = u if nb else None
+    kw = dict(n_inputs=n_inputs, trend=trend, forgetting_factor=0.99)
+    res = RecursiveARX(na, nb, nk, **kw).run(y, u)
+    model = RecursiveARX(na, nb, nk, **kw)
+    phi = model.regressors(y, u)
+    lag = model.max_lag
+    assert lag == max(na, nk + nb - 1 if nb else 0) and phi.shape == (400 - lag, model.n_params)
+    theta_before = np.vstack([np.zeros((1, model.n_params)), res.params[:-1]])
+    e = y[lag:] - np.einsum("ij,ij->i", phi, theta_before[lag:])
+    np.testing.assert_allclose(e, res.resid[lag:], rtol=1e-12, atol=1e-12)
+    assert np.isnan(res.resid[:lag]).all() and np.isfinite(res.resid[lag:]).all()
+    assert model.nobs == 0                                  # the estimator's state is not touched
+
+
+def test_regressors_keep_the_kind_index_and_names():
+    rng = np.random.default_rng(32)
+    y, u = simulate_arx(50, rng)
+    idx = pd.date_range("2024-01-01", periods=50, freq="10ms")
+    model = RecursiveARX(2, 2, 1, trend="c")
+    phi = model.regressors(pd.Series(y, index=idx), pd.Series(u, index=idx))
+    assert isinstance(phi, pd.DataFrame) and list(phi.columns) == ["const", "a1", "a2", "b1", "b2"]
+    assert phi.index.equals(idx[2:])
+    np.testing.assert_array_equal(phi["a1"], -y[1:-1])
+    np.testing.assert_array_equal(phi["b2"], u[:-2])
+    assert not np.signbit(RecursiveARX(1, 0).regressors(np.zeros(3))).any()    # -y of 0 is 0.0, not -0.0
+    da = model.regressors(xr.DataArray(y, dims="time", coords={"time": np.arange(50) / 100}), u)
+    assert isinstance(da, xr.DataArray) and da.shape == (48, 5)
+    np.testing.assert_array_equal(da["time"].values, np.arange(2, 50) / 100)
+
+
+def test_regressors_refuse_bad_records_by_name():
+    model = RecursiveARX(2, 2, 1)
+    with pytest.raises(ValueError, match="y"):
+        model.regressors(np.ones(2), np.ones(2))
+    with pytest.raises(ValueError, match="u contains NaN/inf \\(first at sample 3\\)"):
+        model.regressors(np.ones(10), np.r_[np.ones(3), np.nan, np.ones(6)])
+    with pytest.raises(ValueError, match="same length"):
+        model.regressors(np.ones(10), np.ones(9))
+    with pytest.raises(ValueError, match="u is required"):
+        model.regressors(np.ones(10))
+    with pytest.raises(ValueError, match="y"):
+        model.regressors(np.r_[np.ones(5), np.inf, np.ones(4)], np.ones(10))

@@ -713,6 +713,59 @@ class RecursiveARX:
             names += [f"{pre}{k + 1}" for k in range(self.nb)]
         return tuple(names)
 
+    @property
+    def max_lag(self) -> int:
+        """Samples before the first complete regressor: ``max(na, nk + nb - 1)`` (0 without lags), as
+        :attr:`tsfdi.ARX.max_lag`; ``run`` gives NaN prediction errors for the first ``max_lag`` samples."""
+        return max(self.na, self.nk + self.nb - 1 if self.nb else 0)
+
+    def regressors(self, y: Any, u: Any = None) -> Any:
+        r"""The regressor :math:`\varphi(t)` of every sample of a record ``y``, ``u`` that has a complete one.
+
+        Row ``t - max_lag`` is :math:`\varphi(t) = [1,\ -y(t-1), \dots, -y(t-n_a),\ u_0(t-n_k), \dots,
+        u_0(t-n_k-n_b+1),\ u_1(t-n_k), \dots]'` (module docstring; the constant with ``trend="c"`` only), in the
+        order of ``theta`` and :attr:`param_names`, so that the a-priori error of :meth:`run` on the same record is
+        ``e(t) = y(t) - phi(t)' theta(t-1)``. These are the regressors of
+        :class:`~tsfdi.detection.glrt.ParameterGLRT` (paper 002's GLRT on parameter changes). The record is
+        taken on its own: the estimator's state (past samples given to :meth:`update` / :meth:`run`) is not used
+        and not changed.
+
+        Parameters
+        ----------
+        y : array_like, Series or DataArray, shape (nobs,)
+            Output signal, more than :attr:`max_lag` samples.
+        u : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, n_inputs), optional
+            Input signal(s), same length as ``y`` (required when ``nb > 0``).
+
+        Returns
+        -------
+        ndarray, DataFrame or DataArray, shape (nobs - max_lag, d)
+            Samples ``max_lag .. nobs - 1`` (the first :attr:`max_lag` have no complete regressor), in the kind of
+            ``y`` with its index from position ``max_lag`` and the columns :attr:`param_names`; align ``y`` and
+            the parameter history with ``[max_lag:]``.
+
+        Raises
+        ------
+        ValueError
+            ``y`` with at most :attr:`max_lag` samples, ``u`` of another length or number of inputs, or NaN / inf
+            in ``y`` or ``u`` (named, with the first sample).
+        TypeError
+            Non-numeric (or bool) ``y`` / ``u``.
+        """
+        lag = self.max_lag
+        sy = as_signal(y, "y", vector=False, min_nobs=lag + 1, allow_constant=True)
+        yv = sy.values[:, 0]
+        n = yv.shape[0]
+        uv = self._prepare_u(u, n)
+        bad = ~np.isfinite(uv).all(axis=1)
+        if bad.any():
+            raise ValueError(f"u contains NaN/inf (first at sample {int(np.flatnonzero(bad)[0])})")
+        cols = [np.ones(n - lag)] if self.trend == "c" else []
+        cols += [0.0 - yv[lag - i:n - i] for i in range(1, self.na + 1)]      # 0.0 - : no -0.0
+        cols += [uv[lag - self.nk - k:n - self.nk - k, j] for j in range(self.n_inputs) for k in range(self.nb)]
+        phi = np.column_stack(cols) if cols else np.empty((n - lag, 0))
+        return sy.wrap(phi, lag, channels=list(self.param_names), vector=True)
+
     def reset(self) -> None:
         """Return to the initial state (``theta0``, ``P0``, empty history, no alarm)."""
         self.theta_ = self._theta0.copy()
