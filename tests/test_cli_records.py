@@ -192,6 +192,28 @@ def test_csv_time_column_is_the_index(csv_files, capsys):
     assert "(496 samples)" in capsys.readouterr().out
 
 
+def test_csv_time_unit(csv_files, sim, capsys):
+    """A 'timestamp' counting milliseconds (CrazyPAD, many autopilots): read in seconds it gives 0.05 Hz, which the
+    note points out; --time-unit ms gives the model of the same record in seconds, --start / --stop in seconds."""
+    d, df = csv_files
+    df.assign(timestamp=1000 * df["timestamp"]).to_csv(d / "ms.csv", index=False)
+    assert main(["fit", str(d / "ms.csv"), "--lags", "2", "--out", str(d / "o.npz")]) == 0
+    captured = capsys.readouterr()
+    assert "at 0.05 Hz" in captured.out and "give --time-unit ms" in captured.err
+    assert main(["fit", str(d / "ms.csv"), "--time-unit", "ms", "--max-lags", "4", "--start", "110s", "--stop", "2min",
+                 "--out", str(d / "o.npz")]) == 0
+    captured = capsys.readouterr()
+    assert "at 50 Hz" in captured.out and captured.err == ""
+    ref = tsfdi.load(d / "o.npz")
+    np.testing.assert_allclose(np.asarray(ref.model.data.index), df["timestamp"].iloc[500:1000])
+    assert main(["fit", str(d / "stamped.csv"), "--time-unit", "s", "--lags", "2", "--out", str(d / "o.npz")]) == 0
+    assert "at 50 Hz" in capsys.readouterr().out
+    assert main(["fit", str(d / "plain.csv"), "--fs", "50", "--time-unit", "ms", "--out", str(d / "o.npz")]) == 2
+    assert "--time-unit: " in capsys.readouterr().err
+    assert main(["fit", str(sim[1]), "--record", "0", "--time-unit", "ms", "--out", str(d / "o.npz")]) == 2
+    assert "--time-unit is for CSV files" in capsys.readouterr().err
+
+
 def test_nan_policy_omit_splits_into_records(csv_files, capsys):
     d, df = csv_files
     gappy = df.copy()

@@ -38,6 +38,8 @@ COMMANDS: dict[str, tuple[str, Callable, Callable]] = {}
 
 #: names of a CSV column taken as the time index when ``--time-column`` is not given (case-insensitive)
 TIME_COLUMNS = ("time", "t", "timestamp")
+#: units of a numeric CSV time column (``--time-unit``), in seconds
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
 #: a sampling step further than this fraction from the median step is a gap (or jitter) the command refuses
 JITTER = 0.5
@@ -285,13 +287,16 @@ class _Records:
 
 def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-separated columns to use "
                    "(default all numeric columns)", records_help: str = "default every record") -> None:
-    p.add_argument("data", help="CSV file (a time column in s, see --time-column), netCDF file such as "
+    p.add_argument("data", help="CSV file (a time column, see --time-column and --time-unit), netCDF file such as "
                                 "'tsfdi simulate' writes (variables over time, or over record and time), or PX4 "
                                 "flight log (.ulg, see --topics)")
     p.add_argument("--columns", default=None, help=columns_help)
     p.add_argument("--time-column", default=None,
                    help="CSV column holding the time in seconds: the index, never a data channel (default: a "
                         f"column named {' / '.join(TIME_COLUMNS)}; without one --fs is required)")
+    p.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
+                   help="unit of the CSV time column's numbers: s (default), ms, us or ns (e.g. a 'timestamp' in ms "
+                        "since boot); --start / --stop times stay in seconds")
     p.add_argument("--fs", type=_positive, default=None,
                    help="sampling frequency in Hz: needed without a time column (CSV) or coordinate (netCDF), and "
                         "for a flight log (the rate of its grid); beside a time column it must agree with it "
@@ -407,6 +412,9 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
     if tcol is None:
         lower = {c.strip().lower(): c for c in df.columns}
         tcol = next((lower[n] for n in TIME_COLUMNS if n in lower), None)
+    if tcol is None and args.time_unit is not None:
+        raise ValueError(f"--time-unit: {path} has no time column ({' / '.join(TIME_COLUMNS)}); name it with "
+                         "--time-column")
     if tcol is None and args.fs is None:
         raise ValueError(f"{path} has no time column ({' / '.join(TIME_COLUMNS)}): name it with --time-column, or "
                          "give --fs to count the rows as samples at that rate")
@@ -431,8 +439,11 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
         t = np.arange(len(df)) / args.fs
         fs = args.fs
     else:
-        t = _seconds(df[tcol].to_numpy(), f"column {tcol!r}", path)
+        t = _seconds(df[tcol].to_numpy(), f"column {tcol!r}", path) * TIME_UNITS[args.time_unit or "s"]
         fs = _check_time(t, f"column {tcol!r}", path, args.fs)
+        if args.time_column is None and args.time_unit is None and fs < 1.0:
+            print(f"note: read the time column {tcol!r} of {path} in seconds, which gives {fs:.6g} Hz; if it counts "
+                  "milliseconds (or us, ns), give --time-unit ms", file=sys.stderr)
     frame = pd.DataFrame(df[cols].to_numpy(dtype=np.float64), columns=cols, index=pd.Index(t, name="time"))
     return [frame], [""], fs
 
@@ -484,8 +495,10 @@ def _read_netcdf(args: argparse.Namespace, default: list[str] | None, required: 
     import xarray as xr
 
     path = args.data
-    if args.time_column is not None:
-        raise ValueError(f"--time-column is for CSV files; {path} is netCDF (its time is the 'time' coordinate)")
+    for flag in ("time_column", "time_unit"):
+        if getattr(args, flag) is not None:
+            raise ValueError(f"--{flag.replace('_', '-')} is for CSV files; {path} is netCDF (its time is the 'time' "
+                             "coordinate)")
     try:
         with xr.open_dataset(path, engine="h5netcdf") as ds:
             ds = ds.load()
@@ -525,7 +538,7 @@ def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[lis
     from tsfdi.datasets import align, read_ulog
 
     path = args.data
-    for flag in ("time_column", "record", "where"):
+    for flag in ("time_column", "time_unit", "record", "where"):
         if getattr(args, flag):
             raise ValueError(f"--{flag.replace('_', '-')} is not for ULog files; {path} is one")
     topics = _csv_list(args.topics)
@@ -730,9 +743,12 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
             out[name] = _test(args).calibrate(res.model.held_out_residuals(), window=window)
         except ValueError as exc:
             recs = res.model.records
+            cut = (f"; a single record is cut into 10 blocks of about {recs[0].nobs // 10} samples, each held out in "
+                   "turn" if len(recs) == 1 else "")
             raise ValueError(f"--threshold calibrated, {flag}: {exc} (the null sample: held-out residuals of the "
                              f"{len(recs)} record(s), {sum(r.nobs for r in recs)} samples, the model was fitted "
-                             "on)") from None
+                             f"on{cut}); fit the model on more or longer healthy records (several flights), or "
+                             "test shorter windows") from None
     return out
 
 
