@@ -60,6 +60,24 @@ def test_detect_calibrated_is_the_library_calibration(files, capsys):
     assert cal["fault"][cal["start"] >= 70.0].all()
 
 
+@pytest.mark.parametrize("method, test", [("variance", tsfdi.FTest), ("mean", tsfdi.MeanTest)])
+def test_detect_other_methods_calibrated(files, capsys, method, test):
+    """--method variance / mean: the library's FTest / MeanTest, calibrated the same way."""
+    d, paths, x = files
+    out = d / f"{method}.csv"
+    assert main(["detect", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--window", "2s", "--step",
+                 "1s", "--alpha", "0.01", "--method", method, "--threshold", "calibrated", "--out", str(out)]) == 0
+    capsys.readouterr()
+    t = pd.read_csv(out)
+    baseline = tsfdi.load(paths["healthy"])
+    ref = test(alpha=0.01).calibrate(baseline.model.held_out_residuals(), window=WINDOW)
+    ws = tsfdi.ResidualWindows({"baseline": baseline}).fit(x).statistics(ref, window=WINDOW, step=100)
+    for j, c in enumerate(("a", "b")):
+        np.testing.assert_allclose(t[f"threshold_{c}"], ref.threshold_[j], rtol=1e-12)
+        np.testing.assert_allclose(t[f"statistic_{c}"], ws.statistic[:, 0, j], rtol=1e-9)
+    np.testing.assert_array_equal(t["fault"], ws.reject[:, 0])
+
+
 def test_identify_calibrated_per_model(files, capsys):
     d, paths, x = files
     out = d / "ident.csv"

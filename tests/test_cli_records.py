@@ -214,6 +214,47 @@ def test_csv_time_unit(csv_files, sim, capsys):
     assert "--time-unit is for CSV files" in capsys.readouterr().err
 
 
+def test_a_logging_gap_can_be_cut_off(csv_files, capsys):
+    """The even sampling is checked on the rows used: a gap before --start (a log's time on the ground) does not
+    refuse the file, as the message about the gap advises; a gap inside the selection names its file line."""
+    d, df = csv_files
+    gap = df.drop(index=range(50, 60))                   # 0.2 s missing after 101 s
+    gap.to_csv(d / "gap.csv", index=False)
+    assert main(["fit", str(d / "gap.csv"), "--lags", "2", "--out", str(d / "o.npz")]) == 2
+    assert "steps by 0.22 s at line 52 (time 101.2 s)" in capsys.readouterr().err
+    assert main(["fit", str(d / "gap.csv"), "--start", "110s", "--stop", "2min", "--lags", "2", "--out",
+                 str(d / "o.npz")]) == 0
+    assert "at 50 Hz (480 samples)" in capsys.readouterr().out         # 500 rows less the hold-back of 20
+    assert main(["fit", str(d / "gap.csv"), "--start", "100.5s", "--lags", "2", "--out", str(d / "o.npz")]) == 2
+    assert "steps by 0.22 s at line 52 (time 101.2 s)" in capsys.readouterr().err       # file line, not cut row
+
+
+def test_several_data_files(csv_files, capsys):
+    """Several files, read with the same options: fit pools their records (the model of the same records in
+    memory), detect tests each and names it by its file; files that disagree are refused by name."""
+    d, df = csv_files
+    other = df.assign(a=df["a"].to_numpy()[::-1], b=df["b"].to_numpy()[::-1])
+    other.to_csv(d / "other.csv", index=False)
+    assert main(["fit", str(d / "stamped.csv"), str(d / "other.csv"), "--max-lags", "4", "--out",
+                 str(d / "two.npz")]) == 0
+    assert "from 2 record(s) at 50 Hz" in capsys.readouterr().out
+    recs = [f.set_index("timestamp").rename_axis("time") for f in (df, other)]
+    ref = tsfdi.select_order(recs, 4, "var").fit()
+    np.testing.assert_array_equal(np.asarray(tsfdi.load(d / "two.npz").params), np.asarray(ref.params))
+    assert main(["detect", str(d / "stamped.csv"), str(d / "other.csv"), "--baseline", str(d / "two.npz"),
+                 "--window", "5s", "--step", "5s", "--out", str(d / "t.csv")]) == 0
+    capsys.readouterr()
+    t = pd.read_csv(d / "t.csv")
+    assert t["record"].tolist() == [str(d / "stamped.csv")] * 4 + [str(d / "other.csv")] * 4
+    df[["timestamp", "a"]].to_csv(d / "one_column.csv", index=False)
+    df.assign(timestamp=df["timestamp"] * 2).to_csv(d / "slow.csv", index=False)
+    for files, message in (([d / "stamped.csv", d / "one_column.csv"], "gives the column(s) ['a'] but"),
+                           ([d / "stamped.csv", d / "slow.csv"], "is sampled at 25 Hz but"),
+                           ([d / "stamped.csv", d / "stamped.csv"], "is given twice")):
+        assert main(["fit", *map(str, files), "--out", str(d / "o.npz")]) == 2
+        assert message in capsys.readouterr().err
+
+
 def test_nan_policy_omit_splits_into_records(csv_files, capsys):
     d, df = csv_files
     gappy = df.copy()

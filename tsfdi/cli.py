@@ -241,12 +241,12 @@ class _Records:
 
     Attributes
     ----------
-    path : str
-        The data file as the user typed it.
+    files : list of str
+        Per record, the data file it comes from, as the user typed it.
     frames : list of pandas.DataFrame
         One per record: float64 columns named as in the file, index ``time`` in seconds (uniform at ``fs``).
     ids : list of str
-        Record names for tables and messages (``""`` for the single record of a CSV file).
+        Record names within their file (``""`` for the single record of a CSV file).
     fs : float
         Sampling frequency in Hz.
     split : bool
@@ -256,16 +256,26 @@ class _Records:
         ``"--start 10 / --stop 35"`` when the part used was selected by row numbers (bare integers), else ``""``.
     """
 
-    path: str
+    files: list
     frames: list
     ids: list
     fs: float
     split: bool = False
     rows: str = ""
 
+    @property
+    def path(self) -> str:
+        """The data file(s), for messages about all the records."""
+        return ", ".join(dict.fromkeys(self.files))
+
     def label(self, i: int) -> str:
         """``"data.csv"`` or ``"sim.nc record 3"``: record ``i`` as named in messages."""
-        return f"{self.path} record {self.ids[i]}" if self.ids[i] else self.path
+        return f"{self.files[i]} record {self.ids[i]}" if self.ids[i] else self.files[i]
+
+    def names(self) -> list[str]:
+        """The ``record`` column of the tables: the record names within the file, or the labels when the records
+        come from several files (all ``""``: a single record, no column)."""
+        return [self.label(i) for i in range(len(self.frames))] if len(set(self.files)) > 1 else list(self.ids)
 
     def about(self, i: int) -> str:
         """:meth:`label` for an error about record ``i``'s data, with the row numbers that cut it: a user who
@@ -287,9 +297,12 @@ class _Records:
 
 def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-separated columns to use "
                    "(default all numeric columns)", records_help: str = "default every record") -> None:
-    p.add_argument("data", help="CSV file (a time column, see --time-column and --time-unit), netCDF file such as "
-                                "'tsfdi simulate' writes (variables over time, or over record and time), or PX4 "
-                                "flight log (.ulg, see --topics)")
+    p.add_argument("data", nargs="+",
+                   help="one or more data files, read with the same options (the records of several files are "
+                        "pooled by fit / select-order and each tested by detect / identify / monitor): CSV file (a "
+                        "time column, see --time-column and --time-unit), netCDF file such as 'tsfdi simulate' "
+                        "writes (variables over time, or over record and time), or PX4 flight log (.ulg, see "
+                        "--topics)")
     p.add_argument("--columns", default=None, help=columns_help)
     p.add_argument("--time-column", default=None,
                    help="CSV column holding the time in seconds: the index, never a data channel (default: a "
@@ -351,13 +364,14 @@ def _where_row(what: str, i: int) -> str:
     return f"line {i + 2}" if what.startswith("column") else f"position {i}"
 
 
-def _check_time(t: np.ndarray, what: str, source: str, fs: float | None) -> float:
-    """The sampling frequency of the time stamps ``t`` (s), which must be finite, increasing and uniform."""
+def _check_time(t: np.ndarray, what: str, source: str, fs: float | None, first: int = 0) -> float:
+    """The sampling frequency of the time stamps ``t`` (s), which must be finite, increasing and uniform; ``t``
+    starts at row ``first`` of the file (for the line numbers of the messages)."""
     desc = f"{source}: {what}"
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         raise ValueError(f"{desc} holds {bad.size} empty or non-finite time(s), the first at "
-                         f"{_where_row(what, bad[0])}")
+                         f"{_where_row(what, first + bad[0])}")
     if t.size < 2:
         if fs is None:
             raise ValueError(f"{desc} holds a single time: give --fs")
@@ -369,7 +383,7 @@ def _check_time(t: np.ndarray, what: str, source: str, fs: float | None) -> floa
     off = np.flatnonzero(np.abs(step - dt) > JITTER * dt)
     if off.size:
         i = int(off[0])
-        raise ValueError(f"{desc} steps by {step[i]:.6g} s at {_where_row(what, i + 1)} (time {t[i + 1]:.6g} s) "
+        raise ValueError(f"{desc} steps by {step[i]:.6g} s at {_where_row(what, first + i + 1)} (time {t[i + 1]:.6g} s) "
                          f"where the median step is {dt:.6g} s: the rows must be evenly sampled (within "
                          f"{JITTER:.0%}); cut around it with --start / --stop")
     rate = 1.0 / dt
@@ -398,7 +412,7 @@ def _pick_columns(available: list[str], flag_value: str | None, default: list[st
     return available
 
 
-def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float]:
+def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float | None, str | None]:
     from tsfdi._data import read_csv
 
     path = args.data
@@ -436,16 +450,16 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
                              "leave it out with --columns")
         df[c] = values
     if tcol is None:
-        t = np.arange(len(df)) / args.fs
-        fs = args.fs
+        t, fs, clock = np.arange(len(df)) / args.fs, args.fs, None
     else:
         t = _seconds(df[tcol].to_numpy(), f"column {tcol!r}", path) * TIME_UNITS[args.time_unit or "s"]
-        fs = _check_time(t, f"column {tcol!r}", path, args.fs)
-        if args.time_column is None and args.time_unit is None and fs < 1.0:
-            print(f"note: read the time column {tcol!r} of {path} in seconds, which gives {fs:.6g} Hz; if it counts "
-                  "milliseconds (or us, ns), give --time-unit ms", file=sys.stderr)
+        fs, clock = None, f"column {tcol!r}"
+        guess = _rate_guess(t)
+        if args.time_column is None and args.time_unit is None and guess is not None and guess < 1.0:
+            print(f"note: read the time column {tcol!r} of {path} in seconds, which gives {guess:.6g} Hz; if it "
+                  "counts milliseconds (or us, ns), give --time-unit ms", file=sys.stderr)
     frame = pd.DataFrame(df[cols].to_numpy(dtype=np.float64), columns=cols, index=pd.Index(t, name="time"))
-    return [frame], [""], fs
+    return [frame], [""], fs, clock
 
 
 def _select_records(ds: Any, args: argparse.Namespace, required: bool) -> list[int]:
@@ -491,7 +505,8 @@ def _select_records(ds: Any, args: argparse.Namespace, required: bool) -> list[i
     return pick
 
 
-def _read_netcdf(args: argparse.Namespace, default: list[str] | None, required: bool) -> tuple[list, list, float]:
+def _read_netcdf(args: argparse.Namespace, default: list[str] | None,
+                 required: bool) -> tuple[list, list, float | None, str | None]:
     import xarray as xr
 
     path = args.data
@@ -517,23 +532,22 @@ def _read_netcdf(args: argparse.Namespace, default: list[str] | None, required: 
                                  f"{ds[c].dims}, dtype {ds[c].dtype})")
     cols = _pick_columns(available, args.columns, default, path, "variable")
     if "time" in ds.coords:
-        t = _seconds(ds["time"].values, "coordinate 'time'", path)
-        fs = _check_time(t, "coordinate 'time'", path, args.fs)
+        t, fs, clock = _seconds(ds["time"].values, "coordinate 'time'", path), None, "coordinate 'time'"
     elif args.fs is not None:
-        t, fs = np.arange(ds.sizes["time"]) / args.fs, args.fs
+        t, fs, clock = np.arange(ds.sizes["time"]) / args.fs, args.fs, None
     else:
         raise ValueError(f"{path} has no 'time' coordinate: give --fs")
     index = pd.Index(t, name="time")
     if not records:
-        return [pd.DataFrame({c: ds[c].values.astype(np.float64) for c in cols}, index=index)], [""], fs
+        return [pd.DataFrame({c: ds[c].values.astype(np.float64) for c in cols}, index=index)], [""], fs, clock
     pick = _select_records(ds, args, required)
     labels = np.asarray(ds["record"].values) if "record" in ds.coords else np.arange(ds.sizes["record"])
     frames = [pd.DataFrame({c: (ds[c].values[i] if ds[c].dims[0] == "record" else ds[c].values).astype(np.float64)
                             for c in cols}, index=index) for i in pick]
-    return frames, [str(labels[i]) for i in pick], fs
+    return frames, [str(labels[i]) for i in pick], fs, clock
 
 
-def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float]:
+def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float, None]:
     """The topics ``--topics`` of a PX4 log on one grid at ``--fs`` (zero-order hold; split at gaps)."""
     from tsfdi.datasets import align, read_ulog
 
@@ -554,12 +568,21 @@ def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[lis
     cols = _pick_columns([str(c) for c in records[0].columns], args.columns, default, path, "column")
     frames = [pd.DataFrame(r[cols].to_numpy(), columns=cols,
                            index=pd.Index(r.index.total_seconds().to_numpy(), name="time")) for r in records]
-    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs
+    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None
 
 
-def _position(x: int | float | None, t: np.ndarray, fs: float) -> int | None:
-    """``--start`` / ``--stop`` as a row position: a row number as it is, a time (s) on the clock ``t``."""
-    return x if x is None or isinstance(x, int) else int(np.searchsorted(t, x - 0.5 / fs))
+def _position(x: int | float | None, t: np.ndarray, fs: float | None) -> int | None:
+    """``--start`` / ``--stop`` as a row position: a row number as it is, a time (s) on the clock ``t`` (half a
+    sample early, at ``fs``)."""
+    return x if x is None or isinstance(x, int) else int(np.searchsorted(t, x - (0.5 / fs if fs else 0.0)))
+
+
+def _rate_guess(t: np.ndarray) -> float | None:
+    """1 / the median of the positive finite steps of ``t`` (None without one): the rate of a clock not yet
+    checked, for rounding --start / --stop and for hints."""
+    step = np.diff(t)
+    step = step[np.isfinite(step) & (step > 0)]
+    return 1.0 / float(np.median(step)) if step.size else None
 
 
 def _split_at_nan(frame: pd.DataFrame) -> list[pd.DataFrame]:
@@ -571,7 +594,31 @@ def _split_at_nan(frame: pd.DataFrame) -> list[pd.DataFrame]:
 
 def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None = None,
                   required: bool = False) -> _Records:
-    """The records of ``args.data`` selected by the data flags of :func:`_add_data_args`.
+    """The records of the data files ``args.data`` (one or more), each read by :func:`_read_file` with the same
+    flags, in the order given: every file must give the same columns and sampling frequency (within 1 %)."""
+    paths = args.data if isinstance(args.data, list) else [args.data]
+    if len(set(paths)) < len(paths):
+        twice = next(p for p in paths if paths.count(p) > 1)
+        raise ValueError(f"data: {twice} is given twice")
+    parts = [_read_file(argparse.Namespace(**{**vars(args), "data": p}), default_columns=default_columns,
+                        required=required) for p in paths]
+    first = parts[0]
+    for part in parts[1:]:
+        if part.columns != first.columns:
+            raise ValueError(f"data: {part.path} gives the column(s) {part.columns} but {first.path} gives "
+                             f"{first.columns}: every file must give the same ones (choose them with --columns)")
+        if abs(part.fs / first.fs - 1) > 0.01:
+            raise ValueError(f"data: {part.path} is sampled at {part.fs:.6g} Hz but {first.path} at {first.fs:.6g} "
+                             "Hz: every file must have the same rate (within 1 %)")
+    if len(parts) == 1:
+        return first
+    return _Records([f for p in parts for f in p.files], [f for p in parts for f in p.frames],
+                    [i for p in parts for i in p.ids], first.fs, any(p.split for p in parts), first.rows)
+
+
+def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = None,
+               required: bool = False) -> _Records:
+    """The records of the data file ``args.data`` selected by the data flags of :func:`_add_data_args`.
 
     Parameters
     ----------
@@ -600,26 +647,29 @@ def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None
     if kind != "ulog" and args.topics:
         raise ValueError(f"--topics is for PX4 flight logs (.ulg); {path} is not one")
     if kind == "netcdf":
-        frames, ids, fs = _read_netcdf(args, default_columns, required)
+        frames, ids, fs, clock = _read_netcdf(args, default_columns, required)
     elif kind == "ulog":
-        frames, ids, fs = _read_ulog(args, default_columns)
+        frames, ids, fs, clock = _read_ulog(args, default_columns)
     else:
         if args.record or args.where:
             raise ValueError(f"--{'record' if args.record else 'where'} selects records of a netCDF file; {path} "
                              "is read as CSV")
-        frames, ids, fs = _read_csv(args, default_columns)
+        frames, ids, fs, clock = _read_csv(args, default_columns)
     if isinstance(args.start, float) and isinstance(args.stop, float) and args.stop <= args.start:
         raise ValueError(f"--stop must come after --start, got {args.stop:g} s <= {args.start:g} s")
     first = [0] * len(frames)           # row of the file / record where each frame starts
     rows = " / ".join(f"--{f} {getattr(args, f)}" for f in ("start", "stop") if isinstance(getattr(args, f), int))
     if args.start is not None or args.stop is not None:
-        cut = [[_position(x, f.index.to_numpy(), fs) for x in (args.start, args.stop)] for f in frames]
+        rate = fs if fs is not None else _rate_guess(frames[0].index.to_numpy())
+        cut = [[_position(x, f.index.to_numpy(), rate) for x in (args.start, args.stop)] for f in frames]
         keep = [i for i, (f, (a, b)) in enumerate(zip(frames, cut)) if len(f.iloc[a:b])]
         if not keep:
             spans = ", ".join(f"{f.index[0]:g} s to {f.index[-1]:g} s ({len(f)} rows)" for f in frames[:5])
             raise ValueError(f"--start / --stop select no row of {path} (times {spans})")
         first = [len(frames[i].iloc[:cut[i][0]]) for i in keep]
         frames, ids = [frames[i].iloc[slice(*cut[i])] for i in keep], [ids[i] for i in keep]
+    if fs is None:      # the file's clock (shared by its records), checked on the rows used only
+        fs = _check_time(frames[0].index.to_numpy(), clock, path, args.fs, first[0])
     out_frames, out_ids = [], []
     for f, rid, row0 in zip(frames, ids, first):
         bad = ~np.isfinite(f.to_numpy())
@@ -643,7 +693,7 @@ def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None
     if not out_frames:
         raise ValueError(f"--nan-policy omit: every row of {path} holds an empty or NaN value")
     split = kind == "ulog" or len(out_frames) > len(frames)
-    return _Records(path, out_frames, out_ids, float(fs), split, rows)
+    return _Records([path] * len(out_frames), out_frames, out_ids, float(fs), split, rows)
 
 
 def _drop_short(data: _Records, need: int, why: str) -> _Records:
@@ -659,8 +709,8 @@ def _drop_short(data: _Records, need: int, why: str) -> _Records:
     print(f"note: dropped {len(short)} piece(s) of split records shorter than {need} samples ({why})",
           file=sys.stderr)
     keep = [i for i in range(len(data.frames)) if i not in set(short)]
-    return _Records(data.path, [data.frames[i] for i in keep], [data.ids[i] for i in keep], data.fs, True,
-                    data.rows)
+    return _Records([data.files[i] for i in keep], [data.frames[i] for i in keep], [data.ids[i] for i in keep],
+                    data.fs, True, data.rows)
 
 
 def _reword(exc: Exception, data: _Records, subs: tuple = ()) -> ValueError:
@@ -721,9 +771,11 @@ def _check_channels(data: _Records, models: dict) -> None:
 
 
 def _test(args: argparse.Namespace) -> Any:
-    from tsfdi.detection import FTest, LjungBox
+    from tsfdi.detection import FTest, LjungBox, MeanTest
 
-    return LjungBox(lags=args.lags, alpha=args.alpha) if args.method == "whiteness" else FTest(alpha=args.alpha)
+    if args.method == "whiteness":
+        return LjungBox(lags=args.lags, alpha=args.alpha)
+    return FTest(alpha=args.alpha) if args.method == "variance" else MeanTest(alpha=args.alpha)
 
 
 def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
@@ -753,8 +805,10 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
 
 
 def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
-    p.add_argument("--method", choices=("whiteness", "variance"), default="whiteness",
-                   help="residual test: Ljung-Box whiteness test or F test of the residual variance")
+    p.add_argument("--method", choices=("whiteness", "variance", "mean"), default="whiteness",
+                   help="residual test: Ljung-Box whiteness test, F test of the residual variance, or test of a "
+                        "shift of the residual mean (a new trim: what a closed loop leaves of a compensated "
+                        "fault; use it with --threshold calibrated)")
     p.add_argument("--alpha", type=_probability, default=1e-3, help="type I risk per channel and tested window")
     p.add_argument("--lags", type=_count, default=lags, help="Ljung-Box lags")
     p.add_argument("--threshold", choices=("theoretical", "calibrated"), default="theoretical",
@@ -773,11 +827,13 @@ def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool
 
 def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
     """Fewest samples a tested window needs, and why: the largest model order plus the Ljung-Box lags and one,
-    or plus three for the F test."""
+    plus three for the F test, plus one for the mean test."""
     order = max(int(m.lags) for m in models.values())
     if args.method == "whiteness":
         return order + args.lags + 1, f"the models' largest order ({order}) with --lags {args.lags}"
-    return order + 3, f"the models' largest order ({order}) with the F test"
+    if args.method == "variance":
+        return order + 3, f"the models' largest order ({order}) with the F test"
+    return order + 1, f"the models' largest order ({order}) with the mean test"
 
 
 def _windows_in_samples(args: argparse.Namespace, data: _Records, models: dict) -> tuple[int, int]:
@@ -800,8 +856,9 @@ def _windows_in_samples(args: argparse.Namespace, data: _Records, models: dict) 
 
 def _table(rows: list[pd.DataFrame], data: _Records) -> pd.DataFrame:
     """Per-record tables stacked, with a leading ``record`` column when the data holds records."""
-    if any(data.ids):
-        rows = [r.assign(record=rid)[["record", *r.columns]] for r, rid in zip(rows, data.ids)]
+    names = data.names()
+    if any(names):
+        rows = [r.assign(record=rid)[["record", *r.columns]] for r, rid in zip(rows, names)]
     return pd.concat(rows, ignore_index=True)
 
 
