@@ -78,6 +78,27 @@ def test_detect_other_methods_calibrated(files, capsys, method, test):
     np.testing.assert_array_equal(t["fault"], ws.reject[:, 0])
 
 
+def test_min_windows(files, tmp_path, capsys):
+    """--min-windows lowers the support a calibration needs (the library's ScaledChi2Threshold(min_windows=))."""
+    d, paths, x = files
+    _csv(record("healthy", 4000, np.random.default_rng(2)), tmp_path / "short.csv")
+    assert main(["fit", str(tmp_path / "short.csv"), "--out", str(tmp_path / "short.npz"), "--max-lags", "4"]) == 0
+    capsys.readouterr()
+    common = ["detect", str(d / "current.csv"), "--baseline", str(tmp_path / "short.npz"), "--window", "2s",
+              "--alpha", "0.01", "--out", str(tmp_path / "t.csv")]
+    assert main(common + ["--threshold", "calibrated"]) == 2          # 20 windows < 30
+    assert main(common + ["--threshold", "calibrated", "--min-windows", "20"]) == 0
+    capsys.readouterr()
+    res = tsfdi.load(tmp_path / "short.npz")
+    ref = tsfdi.LjungBox(lags=20, alpha=0.01, threshold=tsfdi.ScaledChi2Threshold(0.01, min_windows=20))
+    ref.calibrate(res.model.held_out_residuals(), window=WINDOW)
+    np.testing.assert_allclose(pd.read_csv(tmp_path / "t.csv")["threshold_a"], ref.threshold_[0], rtol=1e-12)
+    for extra, message in ((["--threshold", "calibrated", "--min-windows", "4"], "--min-windows must be at least 5"),
+                           (["--min-windows", "20"], "--min-windows is for --threshold calibrated")):
+        assert main(common + extra) == 2
+        assert message in capsys.readouterr().err
+
+
 def test_identify_calibrated_per_model(files, capsys):
     d, paths, x = files
     out = d / "ident.csv"

@@ -255,6 +255,40 @@ def test_several_data_files(csv_files, capsys):
         assert message in capsys.readouterr().err
 
 
+def test_rows_where_and_margin(csv_files, sim, capsys):
+    """--rows-where keeps the runs where a column (not a channel) compares so, one record each, less --margin at
+    both ends (the airborne parts of a flight log); --trend c fits an intercept."""
+    d, df = csv_files
+    thrust = np.zeros(1000)
+    thrust[100:450] = 1.0                                # airborne 102-109 s and 112-118 s
+    thrust[600:900] = 2.0
+    df.assign(thrust=thrust).to_csv(d / "flight.csv", index=False)
+    out = d / "o.npz"
+    assert main(["fit", str(d / "flight.csv"), "--columns", "a,b", "--rows-where", "thrust>0", "--margin", "1s",
+                 "--lags", "2", "--max-lags", "4", "--trend", "c", "--out", str(out)]) == 0
+    assert "from 2 record(s) at 50 Hz" in capsys.readouterr().out
+    runs = [df.iloc[a:b].set_index("timestamp").rename_axis("time")[["a", "b"]] for a, b in ((150, 400), (650, 850))]
+    ref = tsfdi.select_order(runs, 4, "var", trend="c").fit(2)
+    np.testing.assert_array_equal(np.asarray(tsfdi.load(out).params), np.asarray(ref.params))
+    # two conditions, both hold; the runs are tested as records named by their number
+    assert main(["detect", str(d / "flight.csv"), "--rows-where", "thrust>0", "--rows-where", "thrust<=1",
+                 "--baseline", str(out), "--out", str(d / "t.csv")]) == 0
+    capsys.readouterr()
+    assert pd.read_csv(d / "t.csv")["start"].tolist() == [102.0]
+    for argv, message in ((["--rows-where", "lift>0"], "--rows-where lift>0: "),
+                          (["--rows-where", "thrust>5"], "--rows-where: no row of"),
+                          (["--rows-where", "thrust>0", "--margin", "5s"], "for more than --margin 5 s"),
+                          (["--margin", "1s"], "--margin trims the runs of --rows-where")):
+        assert main(["fit", str(d / "flight.csv"), "--columns", "a,b", *argv, "--out", str(out)]) == 2
+        assert message in capsys.readouterr().err
+    assert main(["fit", str(d / "flight.csv"), "--rows-where", "thrust~0", "--out", str(out)]) == 2
+    assert "must be COLUMN OP NUMBER" in capsys.readouterr().err
+    # a netCDF variable over record and time
+    assert main(["fit", str(sim[1]), "--record", "0,1", "--columns", "roll,pitch", "--rows-where", "roll>-10",
+                 "--max-lags", "4", "--out", str(out)]) == 0
+    assert "from 2 record(s)" in capsys.readouterr().out
+
+
 def test_nan_policy_omit_splits_into_records(csv_files, capsys):
     d, df = csv_files
     gappy = df.copy()
@@ -336,16 +370,20 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypa
     page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "cli.md").read_text()
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
-    assert len(commands) == 11
-    ulog = shared_data / "px4" / "sample.ulg"
-    if not ulog.is_file():
-        raise FileNotFoundError(f"shared PX4 log missing at {ulog}: the CLI page's example needs it")
+    assert len(commands) == 14
+    ulog, crazypad = shared_data / "px4" / "sample.ulg", shared_data / "crazypad"
+    for need in (ulog, crazypad / "controller"):
+        if not need.exists():
+            raise FileNotFoundError(f"shared data missing at {need}: the CLI page's examples need it")
     (tmp_path / "sample.ulg").symlink_to(ulog)
+    (tmp_path / "crazypad").symlink_to(crazypad)
     monkeypatch.chdir(tmp_path)
     printed = {}
     for line in commands:
-        assert main(shlex.split(line)[1:]) == 0, (line, capsys.readouterr().err)
-        key = line.split()[1] + (" calibrated" if "--threshold calibrated" in line else "")
+        argv = shlex.split(line)
+        assert main(argv[1:]) == 0, (line, capsys.readouterr().err)
+        key = argv[1] + (" calibrated" if "--threshold calibrated" in line else "")
+        key += f" {argv[2].split('/')[2]}" if argv[2].startswith("crazypad/") else ""      # its condition
         printed[key] = capsys.readouterr().out
     # select-order: the orders the page quotes
     assert re.search(r"Selected \(min BIC\) +6\n", printed["select-order"])
@@ -364,3 +402,12 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypa
     assert faults and all(f == (start < 10.0) for start, f in faults)
     # calibrated thresholds on the rest of the PX4 log: 0 of the 17 one-second windows flagged
     assert printed["detect calibrated"].strip().splitlines()[-1] == "fault in 0 of 17 window(s)"
+    # CrazyPAD: a baseline from 8 airborne records of 4 normal logs; the fifth normal log clean, the 4 mm cut flagged
+    assert "from 8 record(s) at 101.153 Hz" in printed["fit normal_flight"]
+    assert printed["detect calibrated normal_flight"].strip().splitlines()[-1] == "fault in 0 of 4 window(s)"
+    cut = printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm"]
+    assert cut.strip().splitlines()[-1] == "fault in 4 of 4 window(s)"
+    # without --min-windows 10 the page's "16 non-overlapping windows, fewer than the default 30" is the message
+    line = next(c for c in commands if "crazypad/controller/normal_flight/E8_log04" in c)
+    assert main(shlex.split(line.replace(" --min-windows 10", ""))[1:]) == 2
+    assert "holds 16 independent (non-overlapping) windows, at least 30 are needed" in capsys.readouterr().err

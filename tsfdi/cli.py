@@ -223,6 +223,24 @@ def _where(text: str) -> tuple[str, list[str]]:
     return key.strip(), values
 
 
+#: comparisons of ``--rows-where``, longest first (so that '>=' is not read as '>')
+_COMPARISONS = {">=": np.greater_equal, "<=": np.less_equal, "==": np.equal, "!=": np.not_equal, ">": np.greater,
+                "<": np.less}
+
+
+def _row_condition(text: str) -> tuple[str, str, float]:
+    """``COLUMN OP NUMBER`` with OP one of >=, <=, ==, !=, >, <."""
+    m = re.fullmatch(r"\s*(.+?)\s*(>=|<=|==|!=|>|<)\s*(\S+)\s*", text)
+    try:
+        value = float(m.group(3)) if m else None
+    except ValueError:
+        value = None
+    if value is None or not np.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be COLUMN OP NUMBER with OP one of {', '.join(_COMPARISONS)}, such as "
+                                         f"'controller.cmd_thrust>0', got {text!r}")
+    return m.group(1), m.group(2), value
+
+
 def _order(text: str) -> int | str:
     """A model order >= 1, 'bic' or 'rss_sss'."""
     word = text.strip().lower()
@@ -328,6 +346,14 @@ def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-sep
                         "integer, from 0)")
     p.add_argument("--stop", type=_instant, default=None,
                    help="end of the part used (excluded): a time such as '130s' or a row number")
+    p.add_argument("--rows-where", type=_row_condition, action="append", default=None, metavar="COLUMN>VALUE",
+                   help="keep the rows where a column (used or not) compares so with a number, e.g. "
+                        "'controller.cmd_thrust>0' for the airborne part of a flight (repeatable: every condition "
+                        "holds); each run of kept rows becomes a record (runs too short for the command are "
+                        "dropped), after --start / --stop")
+    p.add_argument("--margin", type=lambda t: _duration(t, strict=False), default=0.0,
+                   help="time left out at both ends of every run of --rows-where, e.g. '1s' after take-off and "
+                        "before landing (default 0s)")
     p.add_argument("--nan-policy", choices=("raise", "omit"), default="raise",
                    help="empty, NaN or infinite values in a used column: 'raise' refuses them, 'omit' splits each "
                         "record at those rows into records (pieces too short for the command are dropped)")
@@ -383,9 +409,10 @@ def _check_time(t: np.ndarray, what: str, source: str, fs: float | None, first: 
     off = np.flatnonzero(np.abs(step - dt) > JITTER * dt)
     if off.size:
         i = int(off[0])
-        raise ValueError(f"{desc} steps by {step[i]:.6g} s at {_where_row(what, first + i + 1)} (time {t[i + 1]:.6g} s) "
+        raise ValueError(f"{desc} steps by {step[i]:.6g} s at {_where_row(what, first + i + 1)} "
+                         f"(time {t[i + 1]:.6g} s) "
                          f"where the median step is {dt:.6g} s: the rows must be evenly sampled (within "
-                         f"{JITTER:.0%}); cut around it with --start / --stop")
+                         f"{JITTER:.0%}); cut around it with --start / --stop or --rows-where")
     rate = 1.0 / dt
     if fs is not None and abs(fs / rate - 1) > 0.01:
         raise ValueError(f"--fs {fs:g}: the {what} of {source} gives {rate:.6g} Hz (median step {dt:.6g} s); "
@@ -412,7 +439,23 @@ def _pick_columns(available: list[str], flag_value: str | None, default: list[st
     return available
 
 
-def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float | None, str | None]:
+def _row_mask(args: argparse.Namespace, available: list[str], path: str, kind: str, values: Any) -> Any:
+    """The rows that meet every ``--rows-where`` condition (None without one); ``values(name)`` gives a column of
+    the file, rows on the last axis. A NaN compares false: its row is left out."""
+    if not args.rows_where:
+        return None
+    mask = True
+    for col, op, value in args.rows_where:
+        if col not in available:
+            raise ValueError(f"--rows-where {col}{op}{value:g}: {path} has no numeric {kind} {col!r}; its numeric "
+                             f"{kind}s are {available}")
+        with np.errstate(invalid="ignore"):
+            mask = mask & _COMPARISONS[op](np.asarray(values(col), dtype=np.float64), value)
+    return mask
+
+
+def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float | None, str | None,
+                                                                           list]:
     from tsfdi._data import read_csv
 
     path = args.data
@@ -439,6 +482,7 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
     skipped = [c for c in data_cols if c not in numeric]
     if args.columns is None and skipped and cols == numeric:
         print(f"note: left out the non-numeric column(s) {skipped} of {path}", file=sys.stderr)
+    mask = _row_mask(args, numeric, path, "column", lambda c: df[c].to_numpy())
     for c in cols:
         col = df[c]
         if pd.api.types.is_bool_dtype(col):
@@ -459,7 +503,7 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
             print(f"note: read the time column {tcol!r} of {path} in seconds, which gives {guess:.6g} Hz; if it "
                   "counts milliseconds (or us, ns), give --time-unit ms", file=sys.stderr)
     frame = pd.DataFrame(df[cols].to_numpy(dtype=np.float64), columns=cols, index=pd.Index(t, name="time"))
-    return [frame], [""], fs, clock
+    return [frame], [""], fs, clock, [mask]
 
 
 def _select_records(ds: Any, args: argparse.Namespace, required: bool) -> list[int]:
@@ -506,7 +550,7 @@ def _select_records(ds: Any, args: argparse.Namespace, required: bool) -> list[i
 
 
 def _read_netcdf(args: argparse.Namespace, default: list[str] | None,
-                 required: bool) -> tuple[list, list, float | None, str | None]:
+                 required: bool) -> tuple[list, list, float | None, str | None, list]:
     import xarray as xr
 
     path = args.data
@@ -538,16 +582,18 @@ def _read_netcdf(args: argparse.Namespace, default: list[str] | None,
     else:
         raise ValueError(f"{path} has no 'time' coordinate: give --fs")
     index = pd.Index(t, name="time")
+    mask = _row_mask(args, available, path, "variable", lambda c: ds[c].values)
     if not records:
-        return [pd.DataFrame({c: ds[c].values.astype(np.float64) for c in cols}, index=index)], [""], fs, clock
+        return [pd.DataFrame({c: ds[c].values.astype(np.float64) for c in cols}, index=index)], [""], fs, clock, [mask]
     pick = _select_records(ds, args, required)
     labels = np.asarray(ds["record"].values) if "record" in ds.coords else np.arange(ds.sizes["record"])
     frames = [pd.DataFrame({c: (ds[c].values[i] if ds[c].dims[0] == "record" else ds[c].values).astype(np.float64)
                             for c in cols}, index=index) for i in pick]
-    return frames, [str(labels[i]) for i in pick], fs, clock
+    masks = [None if mask is None else np.broadcast_to(mask, (ds.sizes["record"], len(t)))[i] for i in pick]
+    return frames, [str(labels[i]) for i in pick], fs, clock, masks
 
 
-def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float, None]:
+def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float, None, list]:
     """The topics ``--topics`` of a PX4 log on one grid at ``--fs`` (zero-order hold; split at gaps)."""
     from tsfdi.datasets import align, read_ulog
 
@@ -568,7 +614,9 @@ def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[lis
     cols = _pick_columns([str(c) for c in records[0].columns], args.columns, default, path, "column")
     frames = [pd.DataFrame(r[cols].to_numpy(), columns=cols,
                            index=pd.Index(r.index.total_seconds().to_numpy(), name="time")) for r in records]
-    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None
+    masks = [_row_mask(args, [str(c) for c in r.columns], path, "column", lambda c, r=r: r[c].to_numpy())
+             for r in records]
+    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None, masks
 
 
 def _position(x: int | float | None, t: np.ndarray, fs: float | None) -> int | None:
@@ -583,6 +631,28 @@ def _rate_guess(t: np.ndarray) -> float | None:
     step = np.diff(t)
     step = step[np.isfinite(step) & (step > 0)]
     return 1.0 / float(np.median(step)) if step.size else None
+
+
+def _runs_where(frames: list, ids: list, first: list, masks: list, args: argparse.Namespace,
+                path: str) -> tuple[list, list, list]:
+    """The runs of rows that meet ``--rows-where`` (``masks``), less ``--margin`` at both ends: one record each,
+    named ``"<record>.<k>"``, with the file row where each starts."""
+    out_frames, out_ids, out_first = [], [], []
+    for f, rid, row0, mask in zip(frames, ids, first, masks):
+        t = f.index.to_numpy()
+        edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+        for k, (a, b) in enumerate(zip(edges[::2], edges[1::2])):
+            a, b = (int(np.searchsorted(t[a:b], t[a] + args.margin) + a),
+                    int(np.searchsorted(t[a:b], t[b - 1] - args.margin, side="right") + a))
+            if b > a:
+                out_frames.append(f.iloc[a:b])
+                out_ids.append(f"{rid}.{k}" if rid else str(k))
+                out_first.append(row0 + a)
+    if not out_frames:
+        conds = " and ".join(f"{c}{op}{v:g}" for c, op, v in args.rows_where)
+        raise ValueError(f"--rows-where: no row of {path} meets {conds}"
+                         + (f" for more than --margin {args.margin:g} s at both ends" if args.margin else ""))
+    return out_frames, out_ids, out_first
 
 
 def _split_at_nan(frame: pd.DataFrame) -> list[pd.DataFrame]:
@@ -647,14 +717,14 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
     if kind != "ulog" and args.topics:
         raise ValueError(f"--topics is for PX4 flight logs (.ulg); {path} is not one")
     if kind == "netcdf":
-        frames, ids, fs, clock = _read_netcdf(args, default_columns, required)
+        frames, ids, fs, clock, masks = _read_netcdf(args, default_columns, required)
     elif kind == "ulog":
-        frames, ids, fs, clock = _read_ulog(args, default_columns)
+        frames, ids, fs, clock, masks = _read_ulog(args, default_columns)
     else:
         if args.record or args.where:
             raise ValueError(f"--{'record' if args.record else 'where'} selects records of a netCDF file; {path} "
                              "is read as CSV")
-        frames, ids, fs, clock = _read_csv(args, default_columns)
+        frames, ids, fs, clock, masks = _read_csv(args, default_columns)
     if isinstance(args.start, float) and isinstance(args.stop, float) and args.stop <= args.start:
         raise ValueError(f"--stop must come after --start, got {args.stop:g} s <= {args.start:g} s")
     first = [0] * len(frames)           # row of the file / record where each frame starts
@@ -668,8 +738,14 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
             raise ValueError(f"--start / --stop select no row of {path} (times {spans})")
         first = [len(frames[i].iloc[:cut[i][0]]) for i in keep]
         frames, ids = [frames[i].iloc[slice(*cut[i])] for i in keep], [ids[i] for i in keep]
-    if fs is None:      # the file's clock (shared by its records), checked on the rows used only
-        fs = _check_time(frames[0].index.to_numpy(), clock, path, args.fs, first[0])
+        masks = [None if masks[i] is None else masks[i][slice(*cut[i])] for i in keep]
+    if args.margin and not args.rows_where:
+        raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
+    if args.rows_where:
+        frames, ids, first = _runs_where(frames, ids, first, masks, args, path)
+    if fs is None:      # the file's clock, checked on the rows used only
+        for k, (f, row0) in enumerate(zip(frames, first)):
+            fs = _check_time(f.index.to_numpy(), clock, path, args.fs if k == 0 else fs, row0)
     out_frames, out_ids = [], []
     for f, rid, row0 in zip(frames, ids, first):
         bad = ~np.isfinite(f.to_numpy())
@@ -692,7 +768,7 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
                          "off with --start / --stop, or give --nan-policy omit to split the record there")
     if not out_frames:
         raise ValueError(f"--nan-policy omit: every row of {path} holds an empty or NaN value")
-    split = kind == "ulog" or len(out_frames) > len(frames)
+    split = kind == "ulog" or bool(args.rows_where) or len(out_frames) > len(frames)
     return _Records([path] * len(out_frames), out_frames, out_ids, float(fs), split, rows)
 
 
@@ -770,12 +846,13 @@ def _check_channels(data: _Records, models: dict) -> None:
                          f"{len(ch)} channel(s) {ch}; choose them with --columns")
 
 
-def _test(args: argparse.Namespace) -> Any:
+def _test(args: argparse.Namespace, threshold: Any = "theoretical") -> Any:
     from tsfdi.detection import FTest, LjungBox, MeanTest
 
     if args.method == "whiteness":
-        return LjungBox(lags=args.lags, alpha=args.alpha)
-    return FTest(alpha=args.alpha) if args.method == "variance" else MeanTest(alpha=args.alpha)
+        return LjungBox(lags=args.lags, alpha=args.alpha, threshold=threshold)
+    test = FTest if args.method == "variance" else MeanTest
+    return test(alpha=args.alpha, threshold=threshold)
 
 
 def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
@@ -784,15 +861,23 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
     the model was fitted on (stored in its file): each record through the model fitted on the others, a single
     record cut into blocks (:meth:`tsfdi.VAR.held_out_residuals`). ``models`` maps a name (the key the engine
     uses) to ``(flag text, results)``."""
+    from tsfdi.detection import ScaledChi2Threshold
+
     if args.threshold == "theoretical":
+        if args.min_windows is not None:
+            raise ValueError("--min-windows is for --threshold calibrated")
         return _test(args)
+    min_windows = 30 if args.min_windows is None else args.min_windows
+    if min_windows < 5:
+        raise ValueError(f"--min-windows must be at least 5, got {min_windows}")
     if window is None:
         raise ValueError("--threshold calibrated needs --window: the threshold is calibrated for windows of one "
                          "length")
     out = {}
     for name, (flag, res) in models.items():
         try:
-            out[name] = _test(args).calibrate(res.model.held_out_residuals(), window=window)
+            estimator = ScaledChi2Threshold(args.alpha, min_windows=min_windows)
+            out[name] = _test(args, estimator).calibrate(res.model.held_out_residuals(), window=window)
         except ValueError as exc:
             recs = res.model.records
             cut = (f"; a single record is cut into 10 blocks of about {recs[0].nobs // 10} samples, each held out in "
@@ -816,6 +901,9 @@ def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
                         "on; calibrated: the law of the statistic fitted to the model's held-out residuals (each "
                         "record it was fitted on, through the model fitted on the others; one record is cut into "
                         "blocks), so that --alpha holds on new records (needs --window)")
+    p.add_argument("--min-windows", type=_count, default=None,
+                   help="--threshold calibrated: fewest non-overlapping windows of held-out residuals the threshold "
+                        "may rest on (default 30, at least 5); with few, its bound over the records is wider")
 
 
 def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool = False) -> None:
@@ -1042,6 +1130,10 @@ def _order_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--model", choices=("ar", "var"), default=None,
                    help="ar (one column) or var (several); default from the number of columns")
     p.add_argument("--max-lags", type=_count, default=20, help="largest order searched")
+    p.add_argument("--trend", choices=("n", "c"), default="n",
+                   help="n: no intercept (signals about zero, as the papers' models); c: an intercept, for signals "
+                        "with a non-zero level such as commands holding a trim (then --method mean tests a change "
+                        "of that level)")
     p.add_argument("--criterion", choices=("logdet", "trace"), default="logdet",
                    help="BIC of a VAR from the log-determinant or the trace of the residual covariance")
 
@@ -1060,7 +1152,8 @@ def _order_selection(args: argparse.Namespace) -> tuple[Any, _Records, str]:
         raise ValueError(f"--model var needs at least two columns, got {data.columns}: add some with --columns")
     ys = [f.iloc[:, 0] if model == "ar" else f for f in data.frames]
     try:
-        sel = select_order(ys if len(ys) > 1 else ys[0], args.max_lags, model, criterion=args.criterion)
+        sel = select_order(ys if len(ys) > 1 else ys[0], args.max_lags, model, trend=args.trend,
+                           criterion=args.criterion)
     except (ValueError, TypeError) as exc:
         raise _reword(exc, data, (("lags=", "--max-lags "),)) from None
     return sel, data, model
