@@ -614,3 +614,13 @@ def test_regressors_refuse_bad_records_by_name():
         model.regressors(np.ones(10))
     with pytest.raises(ValueError, match="y"):
         model.regressors(np.r_[np.ones(5), np.inf, np.ones(4)], np.ones(10))
+
+
+def test_regressors_refuse_an_unbounded_allocation(monkeypatch):
+    import tsfdi.models.lstsq as lstsq
+
+    monkeypatch.setattr(lstsq, "MAX_VALUES", 1000)
+    model = RecursiveARX(2, 2, 1)
+    assert model.regressors(np.ones(250), np.ones(250)).shape == (248, 4)
+    with pytest.raises(ValueError, match="y with 251 samples: the regressors \\(251 x 4\\)"):
+        model.regressors(np.ones(251), np.ones(251))

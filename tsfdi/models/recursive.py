@@ -747,8 +747,8 @@ class RecursiveARX:
         Raises
         ------
         ValueError
-            ``y`` with at most :attr:`max_lag` samples, ``u`` of another length or number of inputs, or NaN / inf
-            in ``y`` or ``u`` (named, with the first sample).
+            ``y`` with at most :attr:`max_lag` samples, ``u`` of another length or number of inputs, NaN / inf
+            in ``y`` or ``u`` (named, with the first sample), or regressors of more than 2 GiB.
         TypeError
             Non-numeric (or bool) ``y`` / ``u``.
         """
@@ -756,6 +756,8 @@ class RecursiveARX:
         sy = as_signal(y, "y", vector=False, min_nobs=lag + 1, allow_constant=True)
         yv = sy.values[:, 0]
         n = yv.shape[0]
+        check_size(n * self.n_params, f"y with {n:,} samples: the regressors ({n:,} x {self.n_params:,}); take them "
+                   "in chunks")
         uv = self._prepare_u(u, n)
         bad = ~np.isfinite(uv).all(axis=1)
         if bad.any():
