@@ -640,8 +640,7 @@ def _runs_where(frames: list, ids: list, first: list, masks: list, args: argpars
     out_frames, out_ids, out_first = [], [], []
     for f, rid, row0, mask in zip(frames, ids, first, masks):
         t = f.index.to_numpy()
-        edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
-        for k, (a, b) in enumerate(zip(edges[::2], edges[1::2])):
+        for k, (a, b) in enumerate(_runs(mask)):
             a, b = (int(np.searchsorted(t[a:b], t[a] + args.margin) + a),
                     int(np.searchsorted(t[a:b], t[b - 1] - args.margin, side="right") + a))
             if b > a:
@@ -655,11 +654,15 @@ def _runs_where(frames: list, ids: list, first: list, masks: list, args: argpars
     return out_frames, out_ids, out_first
 
 
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``(start, stop)`` of every run of True in ``mask``."""
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
+
+
 def _split_at_nan(frame: pd.DataFrame) -> list[pd.DataFrame]:
     """The runs of rows without NaN."""
-    good = np.isfinite(frame.to_numpy()).all(axis=1)
-    edges = np.flatnonzero(np.diff(np.r_[0, good.astype(np.int8), 0]))
-    return [frame.iloc[a:b] for a, b in zip(edges[::2], edges[1::2])]
+    return [frame.iloc[a:b] for a, b in _runs(np.isfinite(frame.to_numpy()).all(axis=1))]
 
 
 def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None = None,
@@ -693,8 +696,8 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
     Parameters
     ----------
     args : argparse.Namespace
-        ``data``, ``columns``, ``time_column``, ``fs``, ``record``, ``where``, ``start``, ``stop``,
-        ``nan_policy``.
+        ``data`` (one path), ``columns``, ``time_column``, ``time_unit``, ``fs``, ``record``, ``where``,
+        ``topics``, ``start``, ``stop``, ``rows_where``, ``margin``, ``nan_policy``.
     default_columns : list of str, optional
         Columns used without ``--columns`` when the file has them all (the channels of a model).
     required : bool
@@ -704,7 +707,8 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
     ------
     ValueError
         Naming the flag, the file and the column: a missing file, column or record, a non-numeric column, NaN
-        (with ``nan_policy="raise"``), a time column that is not evenly sampled or disagrees with ``--fs``.
+        (with ``nan_policy="raise"``), a time column that is not evenly sampled (in the rows used) or disagrees with
+        ``--fs``, a ``--rows-where`` that no row meets.
     """
     path = args.data
     p = Path(path)
