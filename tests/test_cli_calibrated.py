@@ -169,3 +169,23 @@ def test_px4_healthy_continuation(shared_data, tmp_path, capsys):
                      "--alpha", "0.01", "--threshold", threshold]) == 0
         found[threshold] = capsys.readouterr().out.strip().splitlines()[-1]
     assert found == {"theoretical": "fault in 4 of 17 window(s)", "calibrated": "fault in 0 of 17 window(s)"}
+
+
+def test_px4_rows_where(shared_data, tmp_path, capsys):
+    """--rows-where on a flight log: a condition every row meets changes nothing; --margin trims each record (the
+    log's pieces between logging gaps) at both ends; a column of the topics that is not a channel can be used."""
+    log = shared_data / "px4" / "sample.ulg"
+    if not log.is_file():
+        raise FileNotFoundError(f"shared PX4 log missing at {log}: this test needs ../shared/data/px4/sample.ulg")
+    data = [str(log), "--topics", "sensor_combined", "--fs", "50", "--columns",
+            ",".join(f"sensor_combined.gyro_rad[{i}]" for i in range(3)), "--lags", "2", "--max-lags", "2"]
+    fitted = {}
+    for name, extra in (("all", []), ("true", ["--rows-where", "sensor_combined.accelerometer_m_s2[2]>-1000"]),
+                        ("margin", ["--rows-where", "sensor_combined.accelerometer_m_s2[2]>-1000", "--margin",
+                                    "1s"])):
+        assert main(["fit", *data, *extra, "--out", str(tmp_path / f"{name}.npz")]) == 0
+        fitted[name] = capsys.readouterr().out.splitlines()[0]
+    assert fitted["true"] == fitted["all"]
+    records = int(fitted["all"].split(" record(s)")[0].split()[-1])
+    rows = [int(fitted[k].split("(")[-1].split(" samples")[0]) for k in ("all", "margin")]
+    assert rows[0] - rows[1] == records * 2 * 50               # 1 s at 50 Hz off both ends of every record
