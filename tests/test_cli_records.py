@@ -275,6 +275,12 @@ def test_rows_where_and_margin(csv_files, sim, capsys):
                  "--baseline", str(out), "--out", str(d / "t.csv")]) == 0
     capsys.readouterr()
     assert pd.read_csv(d / "t.csv")["start"].tolist() == [102.0]
+    # a True / False column compares as 1 / 0
+    df.assign(armed=thrust == 1.0).to_csv(d / "armed.csv", index=False)
+    assert main(["detect", str(d / "armed.csv"), "--rows-where", "armed==1", "--baseline", str(out), "--out",
+                 str(d / "t.csv")]) == 0
+    capsys.readouterr()
+    assert pd.read_csv(d / "t.csv")["start"].tolist() == [102.0]
     for argv, message in ((["--rows-where", "lift>0"], "--rows-where lift>0: "),
                           (["--rows-where", "thrust>5"], "--rows-where: no row of"),
                           (["--rows-where", "thrust>0", "--margin", "5s"], "for more than --margin 5 s"),

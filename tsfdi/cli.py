@@ -482,7 +482,8 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
     skipped = [c for c in data_cols if c not in numeric]
     if args.columns is None and skipped and cols == numeric:
         print(f"note: left out the non-numeric column(s) {skipped} of {path}", file=sys.stderr)
-    mask = _row_mask(args, numeric, path, "column", lambda c: df[c].to_numpy())
+    flags = [c for c in data_cols if pd.api.types.is_bool_dtype(df[c])]         # True / False compare as 1 / 0
+    mask = _row_mask(args, numeric + flags, path, "column", lambda c: df[c].to_numpy())
     for c in cols:
         col = df[c]
         if pd.api.types.is_bool_dtype(col):
