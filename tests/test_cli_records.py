@@ -275,6 +275,13 @@ def test_rows_where_and_margin(csv_files, sim, capsys):
                  "--baseline", str(out), "--out", str(d / "t.csv")]) == 0
     capsys.readouterr()
     assert pd.read_csv(d / "t.csv")["start"].tolist() == [102.0]
+    # runs at two rates are refused by name (the second run at 25 Hz)
+    slow = df.assign(thrust=thrust).iloc[np.r_[0:500, 500:1000:2]]
+    slow.assign(timestamp=np.r_[slow["timestamp"].to_numpy()[:500], 110 + np.arange(250) / 25]).to_csv(
+        d / "two_rates.csv", index=False)
+    assert main(["fit", str(d / "two_rates.csv"), "--columns", "a,b", "--rows-where", "thrust>0", "--out",
+                 str(out)]) == 2
+    assert "gives 50 Hz in record 0 but 25 Hz in record 1" in capsys.readouterr().err
     # a True / False column compares as 1 / 0
     df.assign(armed=thrust == 1.0).to_csv(d / "armed.csv", index=False)
     assert main(["detect", str(d / "armed.csv"), "--rows-where", "armed==1", "--baseline", str(out), "--out",

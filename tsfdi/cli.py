@@ -749,8 +749,12 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
     if args.rows_where:
         frames, ids, first = _runs_where(frames, ids, first, masks, args, path)
     if fs is None:      # the file's clock, checked on the rows used only
-        for k, (f, row0) in enumerate(zip(frames, first)):
-            fs = _check_time(f.index.to_numpy(), clock, path, args.fs if k == 0 else fs, row0)
+        rates = [_check_time(f.index.to_numpy(), clock, path, args.fs, row0) for f, row0 in zip(frames, first)]
+        fs = rates[0]
+        other = next((k for k, r in enumerate(rates) if abs(r / fs - 1) > 0.01), None)
+        if other is not None:
+            raise ValueError(f"{path}: the {clock} gives {fs:.6g} Hz in record {ids[0]} but {rates[other]:.6g} Hz in "
+                             f"record {ids[other]}: the records must have one rate (within 1 %)")
     out_frames, out_ids = [], []
     for f, rid, row0 in zip(frames, ids, first):
         bad = ~np.isfinite(f.to_numpy())
