@@ -214,6 +214,27 @@ def test_csv_time_unit(csv_files, sim, capsys):
     assert "--time-unit is for CSV files" in capsys.readouterr().err
 
 
+def test_csv_dates_and_times(csv_files, capsys):
+    """A time column of dates and times (ALFA's merged CSV: '%time' = '2018-09-11 18:46:35.350') is the clock in
+    seconds since its first row: the same model as the column in seconds."""
+    d, df = csv_files
+    stamps = pd.Timestamp("2018-09-11 18:46:35.350") + pd.to_timedelta(df["timestamp"] - 100.0, unit="s")
+    df.drop(columns="timestamp").assign(**{"%time": stamps.dt.strftime("%Y-%m-%d %H:%M:%S.%f")})[
+        ["%time", "a", "b"]].to_csv(d / "dated.csv", index=False)
+    assert main(["fit", str(d / "dated.csv"), "--max-lags", "4", "--start", "10s", "--out", str(d / "o.npz")]) == 0
+    assert "from 1 record(s) at 50 Hz (496 samples)" in capsys.readouterr().out
+    ref = df.iloc[500:].set_index("timestamp").rename_axis("time")
+    np.testing.assert_array_equal(np.asarray(tsfdi.load(d / "o.npz").params),
+                                  np.asarray(tsfdi.select_order(ref, 4, "var").fit().params))
+    assert main(["fit", str(d / "dated.csv"), "--time-unit", "ms", "--out", str(d / "o.npz")]) == 2
+    assert "dates and times need no unit" in capsys.readouterr().err
+    df.assign(timestamp=df["timestamp"].astype(str).where(df.index != 7, "soon")).to_csv(d / "bad_time.csv",
+                                                                                        index=False)
+    assert main(["fit", str(d / "bad_time.csv"), "--out", str(d / "o.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "must hold times (numbers, or dates and times" in err and "line 9 holds 'soon'" in err
+
+
 def test_a_logging_gap_can_be_cut_off(csv_files, capsys):
     """The even sampling is checked on the rows used: a gap before --start (a log's time on the ground) does not
     refuse the file, as the message about the gap advises; a gap inside the selection names its file line."""

@@ -37,7 +37,7 @@ __all__ = ["main", "command", "COMMANDS"]
 COMMANDS: dict[str, tuple[str, Callable, Callable]] = {}
 
 #: names of a CSV column taken as the time index when ``--time-column`` is not given (case-insensitive)
-TIME_COLUMNS = ("time", "t", "timestamp")
+TIME_COLUMNS = ("time", "t", "timestamp", "%time")
 #: units of a numeric CSV time column (``--time-unit``), in seconds
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
@@ -323,8 +323,9 @@ def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-sep
                         "--topics)")
     p.add_argument("--columns", default=None, help=columns_help)
     p.add_argument("--time-column", default=None,
-                   help="CSV column holding the time in seconds: the index, never a data channel (default: a "
-                        f"column named {' / '.join(TIME_COLUMNS)}; without one --fs is required)")
+                   help="CSV column holding the time (numbers, see --time-unit, or dates and times): the index, "
+                        "never a data channel (default: a column named "
+                        f"{' / '.join(TIME_COLUMNS).replace('%', '%%')}; without one --fs is required)")
     p.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
                    help="unit of the CSV time column's numbers: s (default), ms, us or ns (e.g. a 'timestamp' in ms "
                         "since boot); --start / --stop times stay in seconds")
@@ -369,19 +370,25 @@ def _check_out(flag: str, path: str | None) -> None:
 
 
 def _seconds(values: Any, what: str, source: str) -> np.ndarray:
-    """Times as float seconds: numbers (seconds), timedeltas, or datetimes (seconds since the first)."""
+    """Times as float seconds: numbers (seconds), timedeltas, or dates and times -- datetime64 or text such as
+    '2018-09-11 18:46:35.350' -- as seconds since the first."""
     v = np.asarray(values)
     if v.dtype.kind == "M":
-        v = v - v[0]
+        valid = np.flatnonzero(~np.isnat(v))
+        v = v - v[valid[0]] if valid.size else v - v
     if v.dtype.kind == "m":
         return v / np.timedelta64(1, "s")
     if v.dtype.kind in "iuf":
         return v.astype(np.float64)
-    t = pd.to_numeric(pd.Series(v), errors="coerce").to_numpy(dtype=np.float64)
-    bad = np.flatnonzero(np.isnan(t) & pd.notna(pd.Series(v)).to_numpy())
+    text = pd.Series(v)
+    t = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64)
+    bad = np.flatnonzero(np.isnan(t) & text.notna().to_numpy())
     if bad.size:
-        raise ValueError(f"{source}: {what} must hold times in seconds; {_where_row(what, bad[0])} holds "
-                         f"{v[bad[0]]!r}")
+        stamps = pd.to_datetime(text, errors="coerce", format="ISO8601")
+        if not (stamps.isna() & text.notna()).any():
+            return _seconds(stamps.to_numpy(), what, source)
+        raise ValueError(f"{source}: {what} must hold times (numbers, or dates and times such as "
+                         f"'2018-09-11 18:46:35.350'); {_where_row(what, bad[0])} holds {v[bad[0]]!r}")
     return t
 
 
@@ -497,6 +504,9 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
     if tcol is None:
         t, fs, clock = np.arange(len(df)) / args.fs, args.fs, None
     else:
+        if args.time_unit is not None and not pd.api.types.is_numeric_dtype(df[tcol]):
+            raise ValueError(f"--time-unit: the time column {tcol!r} of {path} does not hold numbers (its first "
+                             f"value is {df[tcol].iloc[0]!r}); dates and times need no unit")
         t = _seconds(df[tcol].to_numpy(), f"column {tcol!r}", path) * TIME_UNITS[args.time_unit or "s"]
         fs, clock = None, f"column {tcol!r}"
         guess = _rate_guess(t)
