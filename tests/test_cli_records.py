@@ -235,6 +235,38 @@ def test_csv_dates_and_times(csv_files, capsys):
     assert "must hold times (numbers, or dates and times" in err and "line 9 holds 'soon'" in err
 
 
+def test_resample_uneven_time_stamps(csv_files, sim, capsys):
+    """--resample --fs: a CSV log with uneven stamps (ALFA's engine files) put on a grid by zero-order hold, the
+    records of tsfdi.datasets.align; --rows-where compares the held values."""
+    from tsfdi.datasets import align
+
+    d, df = csv_files
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(0.005, 0.035, 1000))              # 5-35 ms steps, about 50 Hz
+    t[600:] += 1.0                                              # a 1 s logging gap
+    log = df.assign(timestamp=t, level=np.where(t > 5.0, 1.0, 0.0))
+    log.to_csv(d / "uneven.csv", index=False)
+    assert main(["fit", str(d / "uneven.csv"), "--columns", "a,b", "--lags", "2", "--max-lags", "4",
+                 "--out", str(d / "o.npz")]) == 2
+    assert "or put the rows on a grid with --resample --fs RATE" in capsys.readouterr().err
+    out = d / "o.npz"
+    for extra in ([], ["--rows-where", "level>0"]):
+        assert main(["fit", str(d / "uneven.csv"), "--columns", "a,b", "--resample", "--fs", "50", *extra,
+                     "--lags", "2", "--max-lags", "4", "--out", str(out)]) == 0
+        capsys.readouterr()
+        frame = log.set_index(pd.to_timedelta(log["timestamp"], unit="s"))[["a", "b", "level"]]
+        recs = align(frame, 50)
+        assert len(recs) == 2                                   # split at the gap
+        if extra:
+            recs = [r[r["level"] > 0] for r in recs]
+        ref = tsfdi.select_order([r[["a", "b"]].to_numpy() for r in recs], 4, "var").fit(2)
+        np.testing.assert_allclose(np.asarray(tsfdi.load(out).params), np.asarray(ref.params), rtol=1e-12)
+    assert main(["fit", str(d / "uneven.csv"), "--resample", "--out", str(out)]) == 2
+    assert "--resample: " in capsys.readouterr().err
+    assert main(["fit", str(sim[1]), "--record", "0", "--resample", "--fs", "50", "--out", str(out)]) == 2
+    assert "--resample is for CSV files" in capsys.readouterr().err
+
+
 def test_a_logging_gap_can_be_cut_off(csv_files, capsys):
     """The even sampling is checked on the rows used: a gap before --start (a log's time on the ground) does not
     refuse the file, as the message about the gap advises; a gap inside the selection names its file line."""

@@ -347,6 +347,9 @@ def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-sep
                         "integer, from 0)")
     p.add_argument("--stop", type=_instant, default=None,
                    help="end of the part used (excluded): a time such as '130s' or a row number")
+    p.add_argument("--resample", action="store_true",
+                   help="CSV file with uneven time stamps: put the rows on a uniform grid at --fs by zero-order hold "
+                        "(as a flight log), split into records at logging gaps")
     p.add_argument("--rows-where", type=_row_condition, action="append", default=None, metavar="COLUMN>VALUE",
                    help="keep the rows where a column (used or not) compares so with a number, e.g. "
                         "'controller.cmd_thrust>0' for the airborne part of a flight (repeatable: every condition "
@@ -419,7 +422,9 @@ def _check_time(t: np.ndarray, what: str, source: str, fs: float | None, first: 
         raise ValueError(f"{desc} steps by {step[i]:.6g} s at {_where_row(what, first + i + 1)} "
                          f"(time {t[i + 1]:.6g} s) "
                          f"where the median step is {dt:.6g} s: the rows must be evenly sampled (within "
-                         f"{JITTER:.0%}); cut around it with --start / --stop or --rows-where")
+                         f"{JITTER:.0%}); cut around it with --start / --stop or --rows-where"
+                         + (", or put the rows on a grid with --resample --fs RATE" if what.startswith("column")
+                            else ""))
     rate = 1.0 / dt
     if fs is not None and abs(fs / rate - 1) > 0.01:
         raise ValueError(f"--fs {fs:g}: the {what} of {source} gives {rate:.6g} Hz (median step {dt:.6g} s); "
@@ -491,6 +496,8 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
         print(f"note: left out the non-numeric column(s) {skipped} of {path}", file=sys.stderr)
     flags = [c for c in data_cols if pd.api.types.is_bool_dtype(df[c])]         # True / False compare as 1 / 0
     mask = _row_mask(args, numeric + flags, path, "column", lambda c: df[c].to_numpy())
+    if args.resample and (tcol is None or args.fs is None):
+        raise ValueError(f"--resample: {path} needs a time column and --fs, the rate of the grid the rows are put on")
     for c in cols:
         col = df[c]
         if pd.api.types.is_bool_dtype(col):
@@ -514,7 +521,29 @@ def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list
             print(f"note: read the time column {tcol!r} of {path} in seconds, which gives {guess:.6g} Hz; if it "
                   "counts milliseconds (or us, ns), give --time-unit ms", file=sys.stderr)
     frame = pd.DataFrame(df[cols].to_numpy(dtype=np.float64), columns=cols, index=pd.Index(t, name="time"))
+    if args.resample:
+        return _resampled(frame, df, args, path, numeric + flags)
     return [frame], [""], fs, clock, [mask]
+
+
+def _resampled(frame: pd.DataFrame, df: pd.DataFrame, args: argparse.Namespace, path: str,
+               comparable: list[str]) -> tuple[list, list, float, None, list]:
+    """``--resample``: the rows of a CSV file put on a uniform grid at ``--fs`` by zero-order hold
+    (:func:`tsfdi.datasets.align`, split at logging gaps and, with ``--nan-policy omit``, at NaN), with the
+    ``--rows-where`` columns held alike."""
+    from tsfdi.datasets import align
+
+    extra = [c for c, _, _ in args.rows_where or [] if c not in frame.columns]
+    source = frame.assign(**{c: df[c].to_numpy(dtype=np.float64) for c in dict.fromkeys(extra)})
+    source.index = pd.to_timedelta(frame.index.to_numpy(), unit="s")
+    try:
+        records = align(source, args.fs, nan_policy=args.nan_policy)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"--resample: {path}: {exc}") from None
+    masks = [_row_mask(args, comparable, path, "column", lambda c, r=r: r[c].to_numpy()) for r in records]
+    frames = [pd.DataFrame(r[list(frame.columns)].to_numpy(), columns=frame.columns,
+                           index=pd.Index(r.index.total_seconds().to_numpy(), name="time")) for r in records]
+    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None, masks
 
 
 def _select_records(ds: Any, args: argparse.Namespace, required: bool) -> list[int]:
@@ -565,8 +594,8 @@ def _read_netcdf(args: argparse.Namespace, default: list[str] | None,
     import xarray as xr
 
     path = args.data
-    for flag in ("time_column", "time_unit"):
-        if getattr(args, flag) is not None:
+    for flag in ("time_column", "time_unit", "resample"):
+        if getattr(args, flag) not in (None, False):
             raise ValueError(f"--{flag.replace('_', '-')} is for CSV files; {path} is netCDF (its time is the 'time' "
                              "coordinate)")
     try:
@@ -609,7 +638,7 @@ def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[lis
     from tsfdi.datasets import align, read_ulog
 
     path = args.data
-    for flag in ("time_column", "time_unit", "record", "where"):
+    for flag in ("time_column", "time_unit", "resample", "record", "where"):
         if getattr(args, flag):
             raise ValueError(f"--{flag.replace('_', '-')} is not for ULog files; {path} is one")
     topics = _csv_list(args.topics)
@@ -787,7 +816,7 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
                          "off with --start / --stop, or give --nan-policy omit to split the record there")
     if not out_frames:
         raise ValueError(f"--nan-policy omit: every row of {path} holds an empty or NaN value")
-    split = kind == "ulog" or bool(args.rows_where) or len(out_frames) > len(frames)
+    split = kind == "ulog" or args.resample or bool(args.rows_where) or len(out_frames) > len(frames)
     return _Records([path] * len(out_frames), out_frames, out_ids, float(fs), split, rows)
 
 
