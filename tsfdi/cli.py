@@ -540,9 +540,16 @@ def _resampled(frame: pd.DataFrame, df: pd.DataFrame, args: argparse.Namespace, 
         records = align(source, args.fs, nan_policy=args.nan_policy)
     except (ValueError, TypeError) as exc:
         raise ValueError(f"--resample: {path}: {exc}") from None
-    masks = [_row_mask(args, comparable, path, "column", lambda c, r=r: r[c].to_numpy()) for r in records]
-    frames = [pd.DataFrame(r[list(frame.columns)].to_numpy(), columns=frame.columns,
+    return _on_grid(records, list(frame.columns), comparable, args, path)
+
+
+def _on_grid(records: list, cols: list[str], comparable: list[str], args: argparse.Namespace,
+             path: str) -> tuple[list, list, float, None, list]:
+    """The records of :func:`tsfdi.datasets.align` (at ``--fs``) as the readers return them: their ``cols``,
+    time in seconds, numbered when several, and the ``--rows-where`` mask of each."""
+    frames = [pd.DataFrame(r[cols].to_numpy(), columns=cols,
                            index=pd.Index(r.index.total_seconds().to_numpy(), name="time")) for r in records]
+    masks = [_row_mask(args, comparable, path, "column", lambda c, r=r: r[c].to_numpy()) for r in records]
     return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None, masks
 
 
@@ -651,12 +658,8 @@ def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[lis
     except (ValueError, TypeError) as exc:
         msg = re.sub(r"^path: ", "data: ", str(exc))
         raise ValueError(re.sub(r"^(topics: |(?=frames\[))", "--topics: ", msg)) from None
-    cols = _pick_columns([str(c) for c in records[0].columns], args.columns, default, path, "column")
-    frames = [pd.DataFrame(r[cols].to_numpy(), columns=cols,
-                           index=pd.Index(r.index.total_seconds().to_numpy(), name="time")) for r in records]
-    masks = [_row_mask(args, [str(c) for c in r.columns], path, "column", lambda c, r=r: r[c].to_numpy())
-             for r in records]
-    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None, masks
+    available = [str(c) for c in records[0].columns]
+    return _on_grid(records, _pick_columns(available, args.columns, default, path, "column"), available, args, path)
 
 
 def _position(x: int | float | None, t: np.ndarray, fs: float | None) -> int | None:
