@@ -268,8 +268,9 @@ class _Records:
     fs : float
         Sampling frequency in Hz.
     split : bool
-        Whether the records are pieces of longer ones, split at NaN (``--nan-policy omit``) or at the gaps of a
-        flight log: a piece too short for the command is then dropped with a note instead of refused.
+        Whether the records are pieces of longer ones: split at NaN (``--nan-policy omit``), into the runs of
+        ``--rows-where``, or at the gaps of a flight log or a ``--resample``-d CSV file. A piece too short for the
+        command is then dropped with a note instead of refused.
     rows : str
         ``"--start 10 / --stop 35"`` when the part used was selected by row numbers (bare integers), else ``""``.
     """
@@ -754,6 +755,8 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
         ``--fs``, a ``--rows-where`` that no row meets.
     """
     path = args.data
+    if args.margin and not args.rows_where:
+        raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
     p = Path(path)
     if not p.exists():
         raise ValueError(f"data: {path} does not exist")
@@ -786,8 +789,6 @@ def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = 
         first = [len(frames[i].iloc[:cut[i][0]]) for i in keep]
         frames, ids = [frames[i].iloc[slice(*cut[i])] for i in keep], [ids[i] for i in keep]
         masks = [None if masks[i] is None else masks[i][slice(*cut[i])] for i in keep]
-    if args.margin and not args.rows_where:
-        raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
     if args.rows_where:
         frames, ids, first = _runs_where(frames, ids, first, masks, args, path)
     if fs is None:      # the file's clock, checked on the rows used only

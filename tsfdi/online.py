@@ -34,6 +34,7 @@ _MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit acc
 #: the RecursiveARX options OnlineDetector passes on (it sets the others: gate, threshold, freeze_on_alarm, ...)
 _RLS_OPTIONS = ("P0", "trend", "theta0", "stable_samples", "variance_tol", "min_variance_samples")
 
+
 @dataclass(frozen=True, eq=False)
 class OnlineDetection:
     """Outcome of :meth:`OnlineDetector.run` over one block of samples.
