@@ -1,12 +1,19 @@
 """CrazyPAD benchmark (issue 17): detection and identification of propeller defects on real Crazyflie flights.
 
-Run: ``python benchmarks/crazypad.py [--data PATH]`` (reads ``../shared/data/crazypad`` next to the repository,
-or the CrazyPAD folder ``PATH`` of the same layout; BLAS pinned to one thread; it prints its run time, 2-3 min on
-the 2-core development machine). Prints the choices, then three sections, with PASS/FAIL against the targets.
+Run: ``python benchmarks/crazypad.py [--data PATH] [--conditions NAMES]`` (reads ``../shared/data/crazypad`` next
+to the repository, or the CrazyPAD folder ``PATH`` of the same layout; BLAS pinned to one thread; it prints its run
+time, 2-3 min on the 2-core development machine with the default conditions). Prints the choices, then three
+sections, with PASS/FAIL against the targets.
 
-Data. Controller logs of CrazyPAD (``tsfdi.datasets.load_crazypad``). The conditions are those of the copy's
-``flights.csv`` (normal flight first, then the 9 of the shared copy in their order, then any other sorted by
-name). Every log holds two airborne segments (two short flights, ~5-6 s each once trimmed), so a *flight* below
+Data. Controller logs of CrazyPAD (``tsfdi.datasets.load_crazypad``). Conditions: by default the nine of the
+published runs (``KNOWN``: normal flight, cut M3 1 / 2.5 / 4 mm, tape M1M3 / M3M4, weight near M3 / M3M4, string
+W2), those of them the copy's ``flights.csv`` holds, so that the numbers stay like-for-like as the copy grows (the
+shared copy now holds 56). ``--conditions`` chooses others: comma-separated condition names or glob patterns,
+e.g. ``--conditions 'cut_propeller_M3_*'`` or ``--conditions '*'`` (every condition of the copy; a copy with
+conditions not in ``KNOWN``, such as the withheld-data check's, needs it to evaluate them). Normal flight is always
+included. Section 3 fits one VAR per condition and holds out every flight: its run time grows with the number of
+conditions (56 conditions take long). Order: normal flight first, then those of ``KNOWN`` in its order, then any
+other sorted by name. Every log holds two airborne segments (two short flights, ~5-6 s each once trimmed), so a *flight* below
 is one log, and its two segments always go together: fitted together, held out together. A log is left out as
 corrupt when, in one of its airborne segments, the thrust command stays at its full scale (65535, a uint16) for
 0.5 s or more: the controller has lost authority and the flight is no longer a stabilised one. In the shared copy
@@ -75,6 +82,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import fnmatch  # noqa: E402
 import functools  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
@@ -147,14 +155,15 @@ class Flight:
         return [s[list(channels)].to_numpy(dtype=np.float64) for s in self.segments]
 
 
-def setup(root=None) -> None:
+def setup(root=None, conditions=None) -> None:
     """Point the benchmark at a CrazyPAD folder (default ``../shared/data/crazypad``), fail loudly if it is
-    missing, read its conditions (``CONDITIONS``, ``SHORT``) and the sampling rate."""
+    missing, choose its conditions (``CONDITIONS``, ``SHORT``; ``conditions`` as in ``select_conditions``) and
+    read the sampling rate."""
     global ROOT, FS, CONDITIONS, SHORT
     ROOT = Path(root) if root is not None else ROOT
     if not (ROOT / "flights.csv").is_file():
         raise FileNotFoundError(f"CrazyPAD data missing at {ROOT}: the benchmark needs ../shared/data/crazypad")
-    CONDITIONS = conditions_of(pd.read_csv(ROOT / "flights.csv").condition)
+    CONDITIONS = select_conditions(pd.read_csv(ROOT / "flights.csv").condition, conditions)
     SHORT = short_labels(CONDITIONS)
     load_segments.cache_clear()
     load_condition.cache_clear()
@@ -169,6 +178,29 @@ def conditions_of(names) -> tuple:
     if NORMAL not in names:
         raise ValueError(f"flights.csv of {ROOT} has no {NORMAL!r} log: the benchmark needs normal flights")
     return tuple(c for c in KNOWN if c in names) + tuple(sorted(names - set(KNOWN)))
+
+
+def select_conditions(names, conditions=None) -> tuple:
+    """The conditions the benchmark uses among ``names`` (the ``condition`` column of ``flights.csv``), in the
+    order of ``conditions_of``; normal flight is always one of them.
+
+    ``conditions``: None for the conditions of ``KNOWN`` that the copy holds (the nine of the published runs), or
+    a str of comma-separated condition names or glob patterns (``fnmatch``, case-sensitive), e.g.
+    ``"cut_propeller_M3_*,tape_on_propeller_M1_M3"`` or ``"*"`` for every condition of the copy. A name or pattern
+    that matches no condition of the copy raises ValueError (with the available names)."""
+    names = set(names)
+    if conditions is None:
+        return conditions_of(names & (set(KNOWN) | {NORMAL}))
+    if not isinstance(conditions, str):
+        raise TypeError(f"conditions must be None or a str of comma-separated names or patterns, got {conditions!r}")
+    chosen = {NORMAL} & names
+    for item in (part.strip() for part in conditions.split(",")):
+        found = {c for c in names if fnmatch.fnmatchcase(c, item)} if item else set()
+        if not found:
+            raise ValueError(f"conditions: {item!r} (of {conditions!r}) matches no condition of {ROOT / 'flights.csv'}"
+                             f"; available: {', '.join(sorted(names))}")
+        chosen |= found
+    return conditions_of(chosen)
 
 
 def short_label(condition: str) -> str:
@@ -661,9 +693,15 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=ROOT, metavar="PATH",
                         help="the CrazyPAD folder (flights.csv, controller/); default ../shared/data/crazypad")
+    parser.add_argument("--conditions", metavar="NAMES",
+                        help="comma-separated conditions or glob patterns ('*': every condition of the copy); "
+                             "normal_flight is always included; default the nine conditions of the published runs")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
-    setup(args.data)
+    try:
+        setup(args.data, args.conditions)
+    except (FileNotFoundError, ValueError) as err:
+        parser.error(str(err))
     print_data()
 
     fa, fold_choices, ncal1 = false_alarms()

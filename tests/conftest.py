@@ -1,4 +1,4 @@
-"""Shared test helpers: the three data kinds, the location of ../shared/data, the synthetic 4-state data set."""
+"""Shared test helpers: the three data kinds, ../shared/data (skipped when missing), the synthetic 4-state data set."""
 
 from __future__ import annotations
 
@@ -25,8 +25,11 @@ settings.register_profile("long", max_examples=2000, deadline=None,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
-#: ../shared next to the repository (CI has it there too); tests that need it fail loudly if it is missing
+#: ../shared next to the repository: the fuller real data copies (not part of a clone; CI has them). A test that
+#: needs them takes the ``shared_data`` fixture (or ``shared_alfa`` / ``shared_crazypad`` / ``shared_px4``): it is
+#: skipped, with the missing folder in the reason, on a clone without them, and fails when REQUIRE_SHARED is "1"
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+REQUIRE_SHARED = "TSFDI_REQUIRE_SHARED"
 
 KINDS = ("numpy", "pandas", "xarray")
 
@@ -66,12 +69,41 @@ def kind(request) -> str:
     return request.param
 
 
+def _shared(*parts: str) -> Path:
+    """``../shared/data/<parts>``; skip the test when that folder is missing (fail it when
+    ``TSFDI_REQUIRE_SHARED=1``), the folder named in the reason."""
+    path = SHARED.joinpath("data", *parts)
+    if path.is_dir():
+        return path
+    name = "/".join(("../shared/data", *parts))
+    reason = f"needs the shared data folder {name} next to the repository ({path} is missing)"
+    if os.environ.get(REQUIRE_SHARED) == "1":
+        pytest.fail(f"{reason}; {REQUIRE_SHARED}=1 requires it", pytrace=False)
+    pytest.skip(reason)
+
+
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
-    path = SHARED / "data"
-    if not path.is_dir():
-        raise FileNotFoundError(f"shared data folder missing: {path} (tests need ../shared/data next to the repo)")
-    return path
+    """The folder ``../shared/data`` (tests that need one of its sub-folders take the fixture of that one)."""
+    return _shared()
+
+
+@pytest.fixture(scope="session")
+def shared_alfa() -> Path:
+    """``../shared/data/alfa``: the processed ALFA copy."""
+    return _shared("alfa")
+
+
+@pytest.fixture(scope="session")
+def shared_crazypad() -> Path:
+    """``../shared/data/crazypad``: the CrazyPAD copy (``flights.csv``, ``controller/``, ``motor/``)."""
+    return _shared("crazypad")
+
+
+@pytest.fixture(scope="session")
+def shared_px4() -> Path:
+    """``../shared/data/px4``: the PX4 ULog files."""
+    return _shared("px4")
 
 
 # the synthetic 4-state data set of test_baselines.py and test_evaluation.py, fitted once per module

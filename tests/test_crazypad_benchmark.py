@@ -1,6 +1,7 @@
 """benchmarks/crazypad.py (issue 17) on a reduced path: one fold, one faulty condition, one held-out flight.
 
-Needs ../shared/data/crazypad (the ``shared_data`` fixture and the benchmark's ``setup`` fail loudly without it).
+Needs ../shared/data/crazypad (skipped without it, see ``shared_crazypad`` in conftest.py). What the tests expect
+of the copy is read from its ``flights.csv``.
 """
 
 import importlib.util
@@ -14,13 +15,18 @@ CUT4 = "cut_propeller_M3_4mm_4mm_39mm"
 
 
 @pytest.fixture(scope="module")
-def bench(shared_data):
+def bench(shared_crazypad):
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "crazypad.py"
     spec = importlib.util.spec_from_file_location("crazypad_bench", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    mod.setup(shared_data / "crazypad")          # raises FileNotFoundError if the CrazyPAD copy is missing
+    mod.setup(shared_crazypad)                   # the default selection: the nine conditions of KNOWN
     return mod
+
+
+@pytest.fixture(scope="module")
+def flights(shared_crazypad) -> pd.DataFrame:
+    return pd.read_csv(shared_crazypad / "flights.csv")
 
 
 @pytest.fixture(scope="module")
@@ -129,8 +135,30 @@ def fuller_copy(root: Path, shared: Path) -> Path:
     return root
 
 
-def test_conditions_and_labels_are_read_from_the_copy(bench):
-    assert bench.CONDITIONS == tuple(bench.KNOWN) and bench.SHORT == bench.KNOWN   # the shared copy: today's order
+def test_conditions_and_labels_are_read_from_the_copy(bench, flights):
+    assert set(bench.KNOWN) <= set(flights.condition)
+    assert bench.CONDITIONS == tuple(bench.KNOWN) and bench.SHORT == bench.KNOWN   # by default the published nine
+    root = bench.ROOT
+    try:
+        bench.setup(root, "*")                                                       # every condition of the copy
+        everything = bench.CONDITIONS
+        assert len(everything) == flights.condition.nunique() and set(everything) == set(flights.condition)
+        assert everything[:len(bench.KNOWN)] == tuple(bench.KNOWN)
+        assert list(everything[len(bench.KNOWN):]) == sorted(set(flights.condition) - set(bench.KNOWN))
+        assert len(set(bench.SHORT.values())) == len(everything)
+        bench.setup(root, "tape_on_propeller_*, cut_propeller_M3_1mm")              # patterns and names
+        tape = sorted(c for c in set(flights.condition) if c.startswith("tape_on_propeller_"))
+        assert len(tape) >= 2
+        assert set(bench.CONDITIONS) == {"normal_flight", "cut_propeller_M3_1mm", *tape}
+        assert bench.CONDITIONS[0] == "normal_flight"                                 # always there, first
+        for bad in ("no_such_*", "normal_flight,,cut_propeller_M3_1mm", "Normal_flight"):
+            with pytest.raises(ValueError, match="conditions: .* matches no condition.*available: add_weight"):
+                bench.setup(root, bad)
+        with pytest.raises(TypeError, match="conditions"):
+            bench.setup(root, ["normal_flight"])
+    finally:
+        bench.setup(root)
+    assert bench.CONDITIONS == tuple(bench.KNOWN)
     names = ["weight_on_string_W2_near_M3", "cut_propeller_M3_1mm", "normal_flight", "zz_new_M1", "bent_M2_3mm"]
     assert bench.conditions_of(names) == ("normal_flight", "cut_propeller_M3_1mm", "weight_on_string_W2_near_M3",
                                           "bent_M2_3mm", "zz_new_M1")
@@ -144,28 +172,39 @@ def test_conditions_and_labels_are_read_from_the_copy(bench):
     assert len(set(labels.values())) == len(labels)
 
 
-def test_corrupt_log_rule_flags_the_flipped_log_only(bench):
-    flagged = {c: bench.corrupt_logs(c) for c in bench.CONDITIONS}
+def test_corrupt_log_rule_flags_the_flipped_log_only(bench, flights):
+    conditions = sorted(set(flights.condition))                                    # every condition of the copy
+    flagged = {c: bench.corrupt_logs(c) for c in conditions}
     assert {(c, log) for c, logs in flagged.items() for log in logs} == {("weight_on_string_W2_near_M3", "E8_log02")}
     assert min(flagged["weight_on_string_W2_near_M3"]["E8_log02"]) > 5.0          # both segments, seconds on end
-    top = max(s[bench.THRUST].max() for c in bench.CONDITIONS for s in bench.load_segments(c, (0.0, 0.0))
-              if s.attrs["log"] not in flagged[c])
-    assert top < 0.85 * bench.THRUST_FULL_SCALE                                    # every other log far from it
+    top = {c: max(s[bench.THRUST].max() for s in bench.load_segments(c, (0.0, 0.0))
+                  if s.attrs["log"] not in flagged[c]) for c in conditions}
+    assert max(top.values()) < bench.THRUST_FULL_SCALE                             # no other log touches full scale
+    assert max(top[c] for c in bench.CONDITIONS) < 0.85 * bench.THRUST_FULL_SCALE  # the published nine: far from it
     logs = {f.log for f in bench.load_condition("weight_on_string_W2_near_M3", (0.0, 0.0))}
-    assert "E8_log02" not in logs and len(logs) == 5
+    assert "E8_log02" not in logs
+    assert len(logs) == (flights.condition == "weight_on_string_W2_near_M3").sum() - 1
 
 
-def test_a_fuller_copy_is_discovered(bench, shared_data, tmp_path, capsys):
+def test_a_fuller_copy_is_discovered(bench, flights, shared_crazypad, tmp_path, capsys):
     root = bench.ROOT
+    fuller = fuller_copy(tmp_path / "crazypad", shared_crazypad)
+    normal = flights[flights.condition == "normal_flight"]
     try:
-        bench.setup(fuller_copy(tmp_path / "crazypad", shared_data / "crazypad"))
-        assert bench.CONDITIONS == (*bench.KNOWN, "bent_propeller_M2") and bench.SHORT["bent_propeller_M2"] == "bentM2"
-        assert bench.normal_logs() == ("E8_log00", "E8_log01", "E8_log02", "E8_log03", "E8_log04", "E9_log07")
-        assert "bent_propeller_M2" not in bench.identified_conditions((0.0, 0.0))   # one log: cannot be held out
-        assert bench.identified_conditions((0.0, 0.0)) == tuple(bench.KNOWN)
+        bench.setup(fuller)
+        assert bench.CONDITIONS == tuple(bench.KNOWN)            # the default selection: a new condition is not in
+        bench.setup(fuller, "*")
+        others = sorted({*flights.condition, "bent_propeller_M2"} - set(bench.KNOWN))
+        assert bench.CONDITIONS == (*bench.KNOWN, *others) and bench.SHORT["bent_propeller_M2"] == "bentM2"
+        bench.setup(fuller, "bent_*")
+        assert bench.CONDITIONS == ("normal_flight", "bent_propeller_M2")
+        assert bench.normal_logs() == (*normal.log, "E9_log07")
+        assert bench.identified_conditions((0.0, 0.0)) == ("normal_flight",)   # one log: cannot be held out
         bench.print_data()
         out = capsys.readouterr().out
-        assert "normal_flight                        6 logs (E8: 5, E9: 1)" in out
+        drones = pd.Series([*normal.drone, "E9"]).value_counts().sort_index()       # E9_log07 added
+        assert (f"normal_flight                        {len(normal) + 1} logs ("
+                + ", ".join(f"{d}: {n}" for d, n in drones.items()) + ")") in out
         assert "bentM2    bent_propeller_M2                    1 logs (E8: 1)" in out
     finally:
         bench.setup(root)

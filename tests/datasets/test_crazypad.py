@@ -1,5 +1,6 @@
-"""list_crazypad / load_crazypad / read_crazypad_log on the shared CrazyPAD copy (fail loudly when
-../shared/data/crazypad is missing) and on small synthetic logs."""
+"""list_crazypad / load_crazypad / read_crazypad_log on the shared CrazyPAD copy (skipped when
+../shared/data/crazypad is missing, see ``shared_crazypad`` in conftest.py; what they expect is read from its
+``flights.csv`` and its files) and on small synthetic logs."""
 
 import gzip
 import re
@@ -18,16 +19,24 @@ RATES = ["controller.r_roll", "controller.r_pitch", "controller.r_yaw"]
 
 
 @pytest.fixture(scope="module")
-def root(shared_data) -> Path:
-    path = shared_data / "crazypad"
-    if not (path / "flights.csv").is_file():
-        raise FileNotFoundError(f"shared CrazyPAD data missing at {path}: tests need ../shared/data/crazypad")
-    return path
+def root(shared_crazypad) -> Path:
+    return shared_crazypad
+
+
+@pytest.fixture(scope="module")
+def flights(root) -> pd.DataFrame:
+    """The copy's own table of its controller logs: what the tests on the copy expect."""
+    return pd.read_csv(root / "flights.csv")
 
 
 @pytest.fixture(scope="module")
 def table(root) -> pd.DataFrame:
     return list_crazypad(root)
+
+
+def motor_files(root: Path, condition: str = "*") -> list[Path]:
+    """The motor logs on disk (flights.csv lists the controller logs only)."""
+    return sorted(root.glob(f"motor/{condition}/*.csv.gz"))
 
 
 def _write_log(path: Path, t_ms, thrust, *, extra=None) -> Path:
@@ -39,20 +48,21 @@ def _write_log(path: Path, t_ms, thrust, *, extra=None) -> Path:
     return path
 
 
-def test_listing_matches_the_flight_table(root, table):
-    flights = pd.read_csv(root / "flights.csv")
+def test_listing_matches_the_flight_table(root, flights, table):
     ctrl = table[table.kind == "controller"]
     assert list(table.columns) == ["kind", "condition", "drone", "log", "rows", "duration_s", "file"]
     assert ctrl.groupby("condition").size().to_dict() == flights.groupby("condition").size().to_dict()
     merged = ctrl.merge(flights, on=["condition", "drone", "log"], suffixes=("", "_ref"), validate="1:1")
-    assert len(merged) == len(flights) == 35
+    assert len(merged) == len(flights) == len(ctrl)
     assert (merged.rows == merged.rows_ref).all()
     np.testing.assert_allclose(merged.duration_s, merged.duration_s_ref, atol=0.006)
     assert all(Path(f).is_file() for f in table.file)
     # motor logs: a separate kind, numbered independently
     motor = list_crazypad(root, kind="motor")
-    assert (motor.kind == "motor").all() and len(motor) == (table.kind == "motor").sum() == 37
-    assert motor.groupby("condition").size()["normal_flight"] == 7
+    on_disk = motor_files(root)
+    assert on_disk and sorted(Path(f) for f in motor.file) == on_disk
+    assert (motor.kind == "motor").all() and len(motor) == (table.kind == "motor").sum() == len(on_disk)
+    assert motor.groupby("condition").size()["normal_flight"] == len(motor_files(root, "normal_flight"))
     assert list_crazypad(str(root), kind="controller").equals(ctrl.reset_index(drop=True))
 
 
@@ -97,9 +107,11 @@ def test_motor_logs_use_the_motor_commands(table):
         assert "pm.vbatMV" in seg and seg["pm.vbatMV"].dtype == np.float64
 
 
-def test_index_fs_attrs_and_values(root, table):
+def test_index_fs_attrs_and_values(root, flights, table):
     recs = load_crazypad(root, condition="normal_flight")
-    assert len(recs) == 10  # 5 logs x 2 airborne segments
+    normal = flights[flights.condition == "normal_flight"]
+    assert len(recs) == 2 * len(normal)  # 2 airborne segments per log
+    assert [(d.attrs["drone"], d.attrs["log"]) for d in recs[::2]] == list(zip(normal.drone, normal.log))
     raw = pd.read_csv(table[(table.kind == "controller") & (table.condition == "normal_flight")].file.iloc[0])
     for df in recs:
         a = df.attrs
@@ -107,8 +119,8 @@ def test_index_fs_attrs_and_values(root, table):
         assert df.index.is_monotonic_increasing and df.index.is_unique
         assert 99.0 < a["fs"] < 102.0 and a["gaps"] == []
         assert (df.dtypes == np.float64).all() and "timestamp" not in df.columns
-        assert a["condition"] == "normal_flight" and a["drone"] == "E8" and a["kind"] == "controller"
-        assert a["log"].startswith("E8_log") and Path(a["file"]).name == a["log"] + ".csv.gz"
+        assert a["condition"] == "normal_flight" and a["kind"] == "controller"
+        assert a["log"].startswith(a["drone"] + "_log") and Path(a["file"]).name == a["log"] + ".csv.gz"
         assert a["onset"] is None and a["faulty"] is False and "10.3390/data9060079" in a["citation"]
     first = recs[0]
     # times relative to the log's first sample; values as logged
@@ -118,14 +130,15 @@ def test_index_fs_attrs_and_values(root, table):
     np.testing.assert_array_equal(first[RATES].to_numpy(), raw[RATES].to_numpy()[k:k + len(first)])
     # a faulty condition, selection by drone, a column subset
     e9 = load_crazypad(root, condition=["cut_propeller_M3_1mm"], drone="E9", columns=RATES)
-    assert len(e9) == 6 and all(d.attrs["drone"] == "E9" and d.attrs["faulty"] for d in e9)
+    n_e9 = ((flights.condition == "cut_propeller_M3_1mm") & (flights.drone == "E9")).sum()
+    assert n_e9 > 0 and len(e9) == 2 * n_e9 and all(d.attrs["drone"] == "E9" and d.attrs["faulty"] for d in e9)
     assert all(list(d.columns) == RATES for d in e9)
     whole = load_crazypad(root, condition="normal_flight", airborne=False, columns="controller.accelz")
     assert [len(d) for d in whole] == list(table[(table.kind == "controller")
                                                  & (table.condition == "normal_flight")].rows)
     assert all(d.attrs["margin"] is None for d in whole)
     motor = load_crazypad(root, kind="motor", condition="normal_flight")
-    assert len(motor) == 14 and all(d.attrs["kind"] == "motor" for d in motor)
+    assert len(motor) == 2 * len(motor_files(root, "normal_flight")) and all(d.attrs["kind"] == "motor" for d in motor)
 
 
 def test_gaps_on_a_synthetic_log(tmp_path):
@@ -173,7 +186,7 @@ def test_repository_layout(tmp_path, table):
         pd.testing.assert_frame_equal(recs[0], read_crazypad_log(src)[0], check_like=False)
 
 
-def test_missing_and_bad_paths(tmp_path, root, table):
+def test_missing_and_bad_paths(tmp_path):
     with pytest.raises(ValueError, match="AerialRoboticsUUST/CrazyPAD"):
         list_crazypad()
     with pytest.raises(ValueError, match="AerialRoboticsUUST/CrazyPAD"):
@@ -189,14 +202,14 @@ def test_missing_and_bad_paths(tmp_path, root, table):
         read_crazypad_log(tmp_path / "nope.csv")
     with pytest.raises(ValueError, match="not a CrazyPAD folder"):
         list_crazypad(tmp_path)
-    f = table.file.iloc[0]
+    only = tmp_path / "only"
+    f = _write_log(only / "controller" / "c" / "E1_log00.csv", np.arange(10.0), np.ones(10))
     with pytest.raises(ValueError, match="read_crazypad_log"):
         load_crazypad(f)
     with pytest.raises(ValueError, match="load_crazypad"):
-        read_crazypad_log(root)
-    _write_log(tmp_path / "only" / "controller" / "c" / "E1_log00.csv", np.arange(10.0), np.ones(10))
+        read_crazypad_log(only)
     with pytest.raises(ValueError, match="no motor log"):
-        load_crazypad(tmp_path / "only", kind="motor")
+        load_crazypad(only, kind="motor")
 
 
 def test_bad_files(tmp_path):
@@ -245,14 +258,20 @@ def test_bad_files(tmp_path):
             read_crazypad_log(d / name)
 
 
-def test_bad_options(root, table):
+def test_bad_options(root, flights, table):
     f = table.file.iloc[0]
     with pytest.raises(ValueError, match=r"condition.*'no_such'.*available.*normal_flight"):
         load_crazypad(root, condition="no_such")
-    with pytest.raises(ValueError, match=r"drone.*'E7'.*available.*'E8', 'E9'"):
-        load_crazypad(root, drone=["E8", "E7"])
-    with pytest.raises(ValueError, match=r"no controller log of condition.*normal_flight.*E9.*available"):
-        load_crazypad(root, condition="normal_flight", drone="E9")
+    drones = sorted(set(flights.drone))
+    assert "E7" not in drones
+    with pytest.raises(ValueError, match=r"drone.*'E7'.*available: " + re.escape(str(drones))):
+        load_crazypad(root, drone=[drones[0], "E7"])
+    # a condition and a drone the copy holds, never flown together (e.g. E9 alone flew the cut_M2_* series)
+    flown = set(zip(flights.condition, flights.drone))
+    condition, drone = next((c, d) for c in sorted(set(flights.condition)) for d in drones if (c, d) not in flown)
+    with pytest.raises(ValueError, match=rf"no controller log of condition \['{re.escape(condition)}'\] and drone "
+                                         rf"\['{drone}'\]; available.*'{re.escape(condition)}'"):
+        load_crazypad(root, condition=condition, drone=drone)
     with pytest.raises(TypeError, match="condition"):
         load_crazypad(root, condition=3)
     with pytest.raises(ValueError, match="kind"):
