@@ -312,9 +312,10 @@ def test_a_one_second_gap_in_a_time_index_is_refused_naming_it():
     with pytest.raises(ValueError, match="y is not uniformly sampled: a gap of 1 s after sample 299"):
         tsfdi.AR(da, lags=2).fit()
     seconds = xr.DataArray(y.to_numpy(), dims="time", coords={"time": (t - t[0]).total_seconds()})
-    sig = as_signal(seconds)                  # numeric time: positions for the models, checked where fs is read
-    with pytest.raises(ValueError, match="signal is not uniformly sampled: a gap of 1 s after sample 299"):
-        sampling_frequency(sig)
+    with pytest.raises(ValueError, match="y is not uniformly sampled: a gap of 1 s after sample 299 at 2.99 s"):
+        as_signal(seconds)                    # a numeric time coordinate holds seconds: the same rule
+    with pytest.raises(ValueError, match="y is not uniformly sampled: a gap of 1 s after sample 299 at 2.99 s"):
+        tsfdi.AR(seconds.to_series().rename_axis("time"), lags=2).fit()
 
 
 def test_a_time_index_must_increase():
@@ -332,3 +333,82 @@ def test_positions_are_not_checked():
     y = np.sin(np.arange(100.0))
     for index in (pd.RangeIndex(100), pd.Index(np.r_[np.arange(50), 1000 + np.arange(50)]), pd.Index(y[::-1])):
         assert as_signal(pd.Series(y, index=index)).nobs == 100
+
+
+def _gap_jitter_frame(descending: bool = False) -> pd.DataFrame:
+    """A log read as docs/guide/logs.md does (``read_csv(...).set_index("time")``): 5-15 ms steps and a 0.5 s gap."""
+    rng = np.random.default_rng(29)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 600))
+    t[300:] += 0.5
+    frame = pd.DataFrame(rng.standard_normal((600, 2)), columns=["p", "q"], index=pd.Index(t, name="time"))
+    return frame.iloc[::-1] if descending else frame
+
+
+def test_model_fitting_follows_the_even_sampling_rule_of_the_time_index():
+    """Issue 29, item 1: the models fitted across a logging gap and a jitter of a numeric "time" index silently."""
+    frame = _gap_jitter_frame()
+    uniform = align(frame, 100)                  # the fix the message names gives records the models accept
+    for fit in (lambda: tsfdi.VAR(frame, 2).fit(), lambda: tsfdi.AR(frame["p"], 2).fit(),
+                lambda: tsfdi.ARX(frame["p"], frame["q"], 2, 1).fit(),
+                lambda: tsfdi.AR(uniform[0]["p"], 2).fit().residuals(frame["p"])):
+        with pytest.raises(ValueError, match=r"y is not uniformly sampled: a short step of [\d.]+ s after sample \d+ "
+                                             r"at [\d.]+ s \(median step .*within 10% of it\); put it on a uniform "
+                                             r"grid with tsfdi.align.*or split the signal at the gap"):
+            fit()
+    with pytest.raises(ValueError, match=r"y is not uniformly sampled: a gap of 0.51 s after sample 299 at 2.99 s"):
+        tsfdi.VAR(frame.set_axis(pd.Index(np.r_[0:300, 350:650] * 0.01, name="time")), 1).fit()
+    # a list of records: each checked, the message naming the record
+    good = pd.DataFrame(frame.to_numpy(), columns=["p", "q"], index=pd.Index(np.arange(600) * 0.01, name="time"))
+    with pytest.raises(ValueError, match=r"y\[1\] is not uniformly sampled"):
+        tsfdi.VAR([good, frame], 1).fit()
+    assert tsfdi.VAR(uniform, 2).fit().nobs > 0
+    assert tsfdi.VAR(good, 2).fit().nobs == 598
+    # an index not named "time" carries positions and is not checked
+    assert tsfdi.VAR(frame.rename_axis("t"), 2).fit().nobs == 598
+
+
+def test_a_descending_time_index_is_refused_by_the_models_and_detect():
+    """Issue 29, item 2: AR / detect accepted a time index that goes back."""
+    frame = _gap_jitter_frame().set_axis(pd.Index(np.arange(600) * 0.01, name="time")).iloc[::-1]
+    with pytest.raises(ValueError, match=r"y has a time index that is not strictly increasing: sample 1 at 5.98 s "
+                                         r"follows 5.99 s"):
+        tsfdi.AR(frame["p"], 2).fit()
+    res = tsfdi.AR(frame["p"].to_numpy(), 2).fit()
+    with pytest.raises(ValueError, match="not strictly increasing: sample 1 at 5.98 s follows 5.99 s"):
+        tsfdi.detect(frame["p"], res, tsfdi.LjungBox(lags=5))
+    da = xr.DataArray(frame["p"].to_numpy(), dims="time", coords={"time": frame.index.to_numpy()})
+    with pytest.raises(ValueError, match="y has a time index that is not strictly increasing"):
+        tsfdi.AR(da, 2).fit()
+
+
+def test_an_fs_contradicting_the_time_index_is_refused():
+    """Issue 29, item 3: a given fs was used silently against a DatetimeIndex (the command line refuses > 1 %)."""
+    n = 500
+    kinds = [pd.Series(np.sin(np.arange(n)), index=pd.date_range("2024", periods=n, freq="10ms")),
+             pd.Series(np.sin(np.arange(n)), index=pd.Index(np.arange(n) * 0.01, name="time")),
+             xr.DataArray(np.sin(np.arange(n)), dims="time", coords={"time": np.arange(n) * 0.01})]
+    for y in kinds:
+        sig = as_signal(y)
+        assert sampling_frequency(sig, 100.5) == 100.5            # within 1 %: the given fs
+        with pytest.raises(ValueError, match=r"fs = 50 Hz disagrees with the time index of signal.*sampled at 100 Hz "
+                                             r"\(median step 0.01 s\), by more than 1%"):
+            sampling_frequency(sig, 50)
+    assert sampling_frequency(as_signal(np.zeros(5) + np.arange(5)), 50) == 50.0     # no time index: fs as given
+    with pytest.raises(ValueError, match="fs = 50 Hz disagrees with the time index"):
+        tsfdi.identify_windows(kinds[0], {"m": tsfdi.AR(np.sin(np.arange(n)) + np.cos(np.arange(n) * 0.3), 2).fit()},
+                               tsfdi.LjungBox(lags=5), window="1s", fs=50)
+
+
+def test_object_arrays_of_numeric_text_are_refused_like_a_string_dtype():
+    """Issue 29, item 4: an object array of numeric strings was parsed as numbers."""
+    text = np.array(["1.5", "2", "3", "0.5"], dtype=object)
+    for data in (text, pd.Series(text), pd.Series(["1.5", "2", "3", "0.5"], dtype="string"),
+                 pd.DataFrame({"a": text, "b": [1.0, 2.0, 3.0, 4.0]}), np.array([1.0, "2"], dtype=object),
+                 np.array([b"1", b"2"], dtype=object)):
+        with pytest.raises(TypeError, match=r"y must contain real numbers, got text \(.*\) in an object array"):
+            as_signal(data)
+    with pytest.raises(TypeError, match=r"y must contain real numbers, got dtype <U3"):
+        as_signal(np.array(["1.5", "2", "3"]))
+    with pytest.raises(TypeError, match=r"y must contain real numbers, got text"):
+        tsfdi.AR(np.r_[np.arange(50.0), 3.0].astype(str).astype(object), 1)
+    assert as_signal(np.array([1, 2.5, np.float32(3)], dtype=object)).values.tolist() == [[1.0], [2.5], [3.0]]

@@ -9,14 +9,17 @@ Results are wrapped back in the caller's kind: a numpy array for numpy input, a 
 coordinate for xarray input. Residuals of a model with ``lags`` lags lose the first ``lags`` samples, so
 their index starts at the original index's position ``lags``.
 
-Time index (decided here for every entry point). A ``DatetimeIndex`` / ``TimedeltaIndex`` (pandas) or a datetime /
-timedelta time coordinate (xarray) is checked by :func:`as_signal`: it must be strictly increasing and uniformly
-sampled, every step within :data:`JITTER` (10 %) of the median step. A non-increasing stamp, a duplicated stamp or a
-gap (one missing sample is already a step of twice the median) raises a ``ValueError`` naming the argument, the
-position and time, pointing to :func:`tsfdi.align` (``gaps="split"``), which puts irregular or multi-rate data on a
-uniform grid. A ``RangeIndex``, an integer or other numeric index and a numpy array carry positions, not
-checked stamps, and are accepted as they are. :func:`sampling_frequency` reads ``fs`` from the time index (also a
-numeric index named ``"time"`` or a numeric xarray time coordinate, in seconds) with the same uniformity check.
+Time index (decided here for every entry point: model fitting, residuals, detection, monitoring). A time index is
+a ``DatetimeIndex`` / ``TimedeltaIndex`` or a numeric index named ``"time"`` (seconds) of a pandas object, or the
+time coordinate of an xarray object (date-times, time spans or numbers in seconds). :func:`as_signal` checks it
+with :func:`time_step`: it must be strictly increasing and uniformly sampled, every step within :data:`JITTER`
+(10 %) of the median step. A non-increasing stamp, a duplicated stamp, a jitter or a gap (one missing sample is
+already a step of twice the median) raises a ``ValueError`` naming the argument (the record of a list), the time
+and the size of the step, and the fix: resample with :func:`tsfdi.align` or split the signal there. A
+``RangeIndex``, any other numeric index and a numpy array carry positions, not stamps, and are accepted as they
+are. :func:`sampling_frequency` reads ``fs`` from the time index, and refuses a given ``fs`` that disagrees with it
+by more than :data:`FS_TOLERANCE` (1 %). Two signals paired sample by sample (``y`` and ``u``) must have the same
+index when both carry one (:func:`check_paired`): nothing is aligned silently.
 """
 
 from __future__ import annotations
@@ -35,11 +38,13 @@ import pandas as pd
 
 from tsfdi._validation import float_like, int_like
 
-__all__ = ["JITTER", "Signal", "as_signal", "is_xarray", "read_csv", "refuse_masked", "rolling_variance",
-           "sampling_frequency", "time_step", "window_samples"]
+__all__ = ["FS_TOLERANCE", "JITTER", "Signal", "as_signal", "check_paired", "is_xarray", "read_csv", "refuse_masked",
+           "rolling_variance", "sampling_frequency", "time_step", "window_samples"]
 
 #: a time index is uniformly sampled when every step lies within this fraction of its median step
 JITTER = 0.1
+#: largest relative disagreement between a given ``fs`` and the rate of the signal's time index
+FS_TOLERANCE = 0.01
 
 
 def is_xarray(obj: Any) -> bool:
@@ -174,6 +179,10 @@ def _numeric(arr: np.ndarray, name: str) -> np.ndarray:
     """``arr`` as float64: integers and floats as they are, an object array of numbers converted; booleans,
     complex numbers, strings, datetimes and timedeltas refused."""
     if arr.dtype.kind == "O":
+        text = next((v for v in arr.flat if isinstance(v, (str, bytes))), None)
+        if text is not None:     # as a string dtype is: numbers written as text are not parsed silently
+            raise TypeError(f"{name} must contain real numbers, got text ({text!r}) in an object array: convert "
+                            "it first, e.g. with pandas.to_numeric")
         try:
             arr = arr.astype(np.float64)
         except OverflowError:
@@ -297,10 +306,35 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         if const.any():
             which = [channels[i] for i in np.flatnonzero(const)]
             raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
-    if isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex)):
-        time_step(index, name)
+    time_step(index, name, numeric=_numeric_time(kind, index))
     return Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
                   channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)
+
+
+def _numeric_time(kind: str, index: pd.Index | None) -> bool:
+    """Whether a numeric ``index`` holds time stamps in seconds: an xarray time coordinate, or a pandas index
+    named ``"time"``."""
+    return index is not None and (kind == "xarray" or index.name == "time")
+
+
+def check_paired(a: Signal, b: Signal, names: tuple[str, str] = ("y", "u")) -> None:
+    """Raise a ``ValueError`` naming both when two signals paired sample by sample carry different indexes.
+
+    Signals of the same length are paired by position; when both carry an index (pandas, xarray) it must be the
+    same, so that sample ``t`` of one is sample ``t`` of the other. Nothing is aligned silently.
+    """
+    ia, ib = a.index, b.index
+    if ia is None or ib is None or len(ia) != len(ib) or ia.equals(ib):
+        return
+    try:
+        diff = np.flatnonzero(~np.asarray(ia == ib, dtype=bool))
+    except (TypeError, ValueError):      # indexes of different kinds (time zones, date-times and numbers)
+        diff = np.zeros(1, dtype=np.int64)
+    i = int(diff[0]) if diff.size else 0
+    raise ValueError(f"{names[0]} and {names[1]} have different indexes (first at sample {i}: {ia[i]!r} in "
+                     f"{names[0]}, {ib[i]!r} in {names[1]}): they are paired sample by sample; give them the same "
+                     f"index (e.g. {names[1]}.reindex({names[0]}.index) after checking that nothing is missing) or "
+                     "pass arrays to pair them by position")
 
 
 def _format_time(value: Any) -> str:
@@ -317,13 +351,23 @@ def time_step(index: pd.Index | None, name: str, *, numeric: bool = False) -> fl
 
     A ``DatetimeIndex`` / ``TimedeltaIndex`` is a time index; a numeric index is one (in seconds) when ``numeric``
     is true. The index must be strictly increasing and every step ``d_i`` must satisfy
-    ``|d_i - median(d)| <= JITTER * median(d)`` (:data:`JITTER` = 10 %).
+    ``|d_i - median(d)| <= JITTER * median(d)`` (:data:`JITTER` = 10 %). This is the one even-sampling rule of
+    the package (Python and command line); its messages speak of the time index and its fix only.
+
+    Parameters
+    ----------
+    index : pandas.Index or None
+        The time stamps.
+    name : str
+        What the index belongs to, for messages (an argument, a record, a file).
+    numeric : bool
+        Whether a numeric index is read as seconds (else it carries positions and is not checked).
 
     Raises
     ------
     ValueError
         Naming ``name``, the position and the time of the first missing (NaT / NaN), non-increasing or
-        non-uniform step, and pointing to :func:`tsfdi.align`.
+        non-uniform step with its size, and the fix: resample with :func:`tsfdi.align`, or split.
     """
     if index is None or len(index) < 2 or isinstance(index, pd.RangeIndex):
         return None
@@ -361,13 +405,20 @@ def sampling_frequency(signal: Signal, fs: Any = None, name: str = "signal") -> 
     A ``DatetimeIndex`` / ``TimedeltaIndex`` gives ``1 / median(step)`` in seconds; a numeric index named
     ``"time"`` (pandas) or a numeric xarray time coordinate is taken to be in seconds. The index must be uniformly
     sampled (:func:`time_step`): a gap or a jitter beyond :data:`JITTER` raises a ``ValueError`` naming ``name``.
-    A ``RangeIndex`` or a numpy array carries no time.
+    A ``RangeIndex`` or a numpy array carries no time. A given ``fs`` that disagrees with the time index's rate by
+    more than :data:`FS_TOLERANCE` (1 %) raises a ``ValueError`` naming both.
     """
-    if fs is not None:
-        return float_like(fs, "fs", minimum=0.0, strict_min=True)
+    rate = None if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
     idx = signal.index
-    dt = time_step(idx, name, numeric=idx is not None and (signal.kind == "xarray" or idx.name == "time"))
-    return None if dt is None else 1.0 / dt
+    dt = time_step(idx, name, numeric=_numeric_time(signal.kind, idx))
+    if dt is None or rate is None:
+        return rate if dt is None else 1.0 / dt
+    if not abs(rate * dt - 1.0) <= FS_TOLERANCE:
+        unit = "" if isinstance(idx, (pd.DatetimeIndex, pd.TimedeltaIndex)) else " (a numeric time index is in seconds)"
+        raise ValueError(f"fs = {rate:g} Hz disagrees with the time index of {name}{unit}, sampled at {1.0 / dt:g} Hz "
+                         f"(median step {dt:g} s), by more than {FS_TOLERANCE:.0%}: leave fs out to use the index, "
+                         "or resample with tsfdi.align")
+    return rate
 
 
 def window_samples(value: Any, name: str, fs: float | None, *, minimum: int = 1) -> int:
