@@ -1,7 +1,7 @@
 """The ALFA benchmarks find their flights in the copy they are given (benchmarks/alfa_isolation.py,
 alfa_detection.py, alfa_sensor_validation.py): the shared copy's selection, and a fuller copy's without crashing.
 
-Needs ../shared/data/alfa (the ``shared_data`` fixture fails loudly without it).
+Needs ../shared/data/alfa (skipped without it, see ``shared_alfa`` in conftest.py).
 """
 
 import importlib.util
@@ -35,9 +35,9 @@ def linked_copy(root: Path, shared: Path) -> Path:
     return root
 
 
-def test_isolation_flights_are_the_engine_flights_with_a_pitot(shared_data, tmp_path):
+def test_isolation_flights_are_the_engine_flights_with_a_pitot(shared_alfa, tmp_path):
     bench = benchmark("alfa_isolation")
-    shared = shared_data / "alfa"
+    shared = shared_alfa
     names = bench.pitot_flights(shared)
     assert names == [f"carbonZ_{n}_engine_failure" for n in ("2018-07-18-15-53-31_1", "2018-07-18-15-53-31_2",
                                                              "2018-07-30-16-39-00_1", "2018-07-30-16-39-00_2")]
@@ -51,11 +51,11 @@ def test_isolation_flights_are_the_engine_flights_with_a_pitot(shared_data, tmp_
         bench.pitot_flights(tmp_path / "missing")
 
 
-def test_keipour_subset_refuses_another_copy_with_its_counts(shared_data):
+def test_keipour_subset_refuses_another_copy_with_its_counts(shared_alfa):
     """keipour_flights refuses a copy whose flights up to 2018-09-11 do not count as Table I (the benchmark prints
     its message and skips the comparison); its message gives the counts found."""
     bench = benchmark("alfa_detection")
-    tab = list_alfa(shared_data / "alfa")
+    tab = list_alfa(shared_alfa)
     mask, _ = bench.keipour_flights(tab)
     assert mask.sum() == 22
     extra = tab[tab.flight.str.contains("rudder_right")].iloc[:1].assign(flight="carbonZ_2018-09-11-18-00-00_rudder")
@@ -63,9 +63,9 @@ def test_keipour_subset_refuses_another_copy_with_its_counts(shared_data):
         bench.keipour_flights(pd.concat([tab, extra], ignore_index=True))
 
 
-def test_sensor_validation_noise_from_any_official_imu_file(shared_data, tmp_path):
+def test_sensor_validation_noise_from_any_official_imu_file(shared_alfa, tmp_path):
     bench = benchmark("alfa_sensor_validation")
-    shared = shared_data / "alfa"
+    shared = shared_alfa
     sigma0 = bench.sensor_noise(shared)
     assert abs(np.degrees(sigma0) - 0.02) < 1e-6
     root = linked_copy(tmp_path / "alfa", shared)

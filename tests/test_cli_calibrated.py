@@ -150,14 +150,12 @@ def test_calibrated_errors(files, tmp_path, capsys):
     assert "1 record(s), 4000 samples" in err
 
 
-def test_px4_healthy_continuation(shared_data, tmp_path, capsys):
+def test_px4_healthy_continuation(shared_px4, tmp_path, capsys):
     """The example of docs/guide/cli.md: a gyroscope VAR fitted on 12-50 s of the PX4 sample log (lying still,
     three records between logging gaps); the rest of the log (50-68 s, still) tested on 1 s windows at alpha 0.01
     per channel: the chi-square thresholds flag 4 of 17 windows (the two-sided 99 % binomial band of 17 windows at
     the family-wise 3 % of three channels ends at 3), the calibrated ones none."""
-    log = shared_data / "px4" / "sample.ulg"
-    if not log.is_file():
-        raise FileNotFoundError(f"shared PX4 log missing at {log}: this test needs ../shared/data/px4/sample.ulg")
+    log = shared_px4 / "sample.ulg"
     data = [str(log), "--topics", "sensor_combined", "--fs", "50", "--columns",
             ",".join(f"sensor_combined.gyro_rad[{i}]" for i in range(3))]
     model = tmp_path / "gyro.npz"
@@ -171,12 +169,10 @@ def test_px4_healthy_continuation(shared_data, tmp_path, capsys):
     assert found == {"theoretical": "fault in 4 of 17 window(s)", "calibrated": "fault in 0 of 17 window(s)"}
 
 
-def test_px4_rows_where(shared_data, tmp_path, capsys):
+def test_px4_rows_where(shared_px4, tmp_path, capsys):
     """--rows-where on a flight log: a condition every row meets changes nothing; --margin trims each record (the
     log's pieces between logging gaps) at both ends; a column of the topics that is not a channel can be used."""
-    log = shared_data / "px4" / "sample.ulg"
-    if not log.is_file():
-        raise FileNotFoundError(f"shared PX4 log missing at {log}: this test needs ../shared/data/px4/sample.ulg")
+    log = shared_px4 / "sample.ulg"
     data = [str(log), "--topics", "sensor_combined", "--fs", "50", "--columns",
             ",".join(f"sensor_combined.gyro_rad[{i}]" for i in range(3)), "--lags", "2", "--max-lags", "2"]
     fitted = {}

@@ -254,7 +254,8 @@ def test_confirmed_equals_the_run_count():
 
 
 # ---------------------------------------------------------------------------------------------- benchmark 2 on ALFA
-def _bench(shared_data):
+def _bench(alfa=None):
+    """benchmarks/alfa_isolation.py, reading the ALFA copy ``alfa`` (its functions on arrays need none)."""
     import importlib.util
     import sys
     from pathlib import Path
@@ -264,17 +265,18 @@ def _bench(shared_data):
     bench = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = bench                  # the dataclasses of the module look it up
     spec.loader.exec_module(bench)
-    bench.DATA = shared_data / "alfa"
+    if alfa is not None:
+        bench.DATA = alfa
     return bench
 
 
-def test_alfa_benchmark_block_run_is_the_sample_loop(shared_data):
+def test_alfa_benchmark_block_run_is_the_sample_loop(shared_alfa):
     """benchmarks/alfa_isolation.py feeds the GLRTs in blocks; the fired residuals equal those of the plain loop
     (offset, one GLRT stream per residual, offset adaptation held while any residual alarms), on flight
     07-30-16-39-00_2 fault-free and with a 5 m/s bias; a fault scenario continued from the fault-free state at its
     start equals the run from scratch."""
-    bench = _bench(shared_data)
-    names = bench.pitot_flights(bench.DATA)             # FileNotFoundError if the ALFA copy is missing
+    bench = _bench(shared_alfa)
+    names = bench.pitot_flights(bench.DATA)
     assert names == [f"carbonZ_{n}_engine_failure" for n in ("2018-07-18-15-53-31_1", "2018-07-18-15-53-31_2",
                                                              "2018-07-30-16-39-00_1", "2018-07-30-16-39-00_2")]
     flights = [bench.load(f) for f in names]
@@ -311,10 +313,10 @@ def test_alfa_benchmark_block_run_is_the_sample_loop(shared_data):
     assert row["isolated 40"] == tail.labels[tail.confirmed(40)] and row["delay_s"] == tail.first_detection / 20
 
 
-def test_alfa_benchmark_offsets_closed_form(shared_data):
+def test_alfa_benchmark_offsets_closed_form():
     """The block offsets of benchmarks/alfa_isolation.py (closed form) equal the recursion, held on invalid
-    samples, over several blocks."""
-    bench = _bench(shared_data)
+    samples, over several blocks (no data needed)."""
+    bench = _bench()
     rng = np.random.default_rng(3)
     raw, valid = rng.normal(size=(1000, 3)), rng.random(1000) > 0.3
     o, rec = np.array([1.0, -2.0, 0.5]), []

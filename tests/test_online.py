@@ -286,7 +286,9 @@ def test_mean_statistic_bad_input():
 
 
 # ------------------------------------------------------------------ real flights with the shipped settings
-def _alfa_benchmark():
+def _alfa_benchmark(alfa=None):
+    """benchmarks/alfa_detection.py, reading the ALFA copy ``alfa`` (the ``shared_alfa`` fixture; its functions on
+    arrays need none)."""
     import importlib.util
     from pathlib import Path
 
@@ -294,14 +296,14 @@ def _alfa_benchmark():
     spec = importlib.util.spec_from_file_location("alfa_detection_bench", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    if not (mod.ROOT / "flights.csv").is_file():
-        raise FileNotFoundError(f"shared ALFA data missing at {mod.ROOT}: tests need ../shared/data/alfa")
+    if alfa is not None:
+        mod.ROOT = alfa
     return mod
 
 
-def test_real_alfa_flights_with_the_shipped_settings():
+def test_real_alfa_flights_with_the_shipped_settings(shared_alfa):
     """Rudder, engine and no-failure flights: alarms shortly after the onset, none on the healthy flight."""
-    B = _alfa_benchmark()
+    B = _alfa_benchmark(shared_alfa)
     from tsfdi.datasets.alfa import list_alfa, load_alfa
 
     tab = list_alfa(B.ROOT).set_index("flight")
@@ -373,9 +375,9 @@ def test_alfa_pf_thresholds_come_from_the_other_flights_healthy_parts_only():
     assert (thr2["b"].drop(index=1) > thr["b"].drop(index=1)).all() and alarm2[1] == 20.0
 
 
-def test_real_alfa_roll_gain_channel_with_the_shipped_threshold():
+def test_real_alfa_roll_gain_channel_with_the_shipped_threshold(shared_alfa):
     """Configuration C's roll-effectiveness GLRT: an aileron failure alarms within 10 s, a healthy flight never."""
-    B = _alfa_benchmark()
+    B = _alfa_benchmark(shared_alfa)
     from tsfdi.datasets.alfa import list_alfa, load_alfa
 
     tab = list_alfa(B.ROOT).set_index("flight")
@@ -397,9 +399,9 @@ def test_real_alfa_roll_gain_channel_with_the_shipped_threshold():
             assert np.nanmax(s[pre]) < thr[0]
 
 
-def test_keipour_subset_has_table_i_counts_and_rejects_others():
+def test_keipour_subset_has_table_i_counts_and_rejects_others(shared_alfa):
     """The inferred 22 test flights of paper 001 match Table I per failure type; a changed table is an error."""
-    B = _alfa_benchmark()
+    B = _alfa_benchmark(shared_alfa)
     from tsfdi.datasets.alfa import list_alfa
 
     tab = list_alfa(B.ROOT)

@@ -1,5 +1,6 @@
 """OnlineDetector's arming gate: scale-free (relative parameter step), exact, streamed, and a warning with the time
-when a pair never arms (issue 19); checked on the two PX4 logs of ../shared/data/px4."""
+when a pair never arms (issue 19); checked on the two PX4 logs of ../shared/data/px4 (skipped without it, see
+``shared_px4`` in conftest.py)."""
 
 import warnings
 
@@ -166,8 +167,8 @@ def rate_pairs(path, fs=None):
             pd.DataFrame(hold(sp, ["roll", "pitch", "yaw"]), index=index, columns=pairs))
 
 
-def test_px4_rate_pairs_arm(shared_data):
-    px4 = shared_data / "px4"
+def test_px4_rate_pairs_arm(shared_px4):
+    px4 = shared_px4
     # sample.ulg (69 s in flight): every axis arms at the set-point rate (84 Hz) after 6-8 s -- paper 001 reports
     # "at least 8 seconds" -- where the absolute bound armed after 25 samples, before the estimate had settled
     y, u = rate_pairs(px4 / "sample.ulg")

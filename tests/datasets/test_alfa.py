@@ -1,4 +1,5 @@
-"""load_alfa / list_alfa on the shared ALFA copies (fail loudly when ../shared/data/alfa is missing)."""
+"""load_alfa / list_alfa on the shared ALFA copies (skipped when ../shared/data/alfa is missing, see
+``shared_alfa`` in conftest.py), and their refusals of bad input (no data needed)."""
 
 from pathlib import Path
 
@@ -9,14 +10,10 @@ import xarray as xr
 
 from tsfdi.datasets.alfa import list_alfa, load_alfa
 
-ALFA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "alfa"
-
 
 @pytest.fixture(scope="module")
-def root() -> Path:
-    if not (ALFA / "flights.csv").is_file():
-        raise FileNotFoundError(f"shared ALFA data missing at {ALFA}: tests need ../shared/data/alfa")
-    return ALFA
+def root(shared_alfa) -> Path:
+    return shared_alfa
 
 
 def test_every_merged_flight_matches_the_flight_table(root):
@@ -85,17 +82,20 @@ def test_xarray_output(root):
     assert "nav_info-roll.commanded" in ds and ds["ground_truth"].dtype == bool
 
 
-def test_bad_input(tmp_path, root):
+def test_bad_options_on_the_copy(root):
+    with pytest.raises(ValueError, match="kind"):
+        load_alfa(root / "official_format_sample", kind="polars")
+    with pytest.raises(ValueError, match="flight"):
+        load_alfa(root / "official_format_sample", flight="nope")
+
+
+def test_bad_input(tmp_path):
     with pytest.raises(FileNotFoundError, match="alfa-dataset"):
         load_alfa(tmp_path / "missing")
     with pytest.raises(ValueError, match="not an official"):
         load_alfa(tmp_path)
     with pytest.raises(TypeError, match="path"):
         load_alfa(3)
-    with pytest.raises(ValueError, match="kind"):
-        load_alfa(root / "official_format_sample", kind="polars")
-    with pytest.raises(ValueError, match="flight"):
-        load_alfa(root / "official_format_sample", flight="nope")
     bad = tmp_path / "x.csv"
     bad.write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match="neither"):

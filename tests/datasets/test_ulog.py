@@ -1,5 +1,6 @@
-"""read_ulog on the two shared PX4 logs (fail loudly when ../shared/data/px4 is missing), align on them, and a
-baseline fitted on one aligned part and tested on others."""
+"""read_ulog on the two shared PX4 logs (skipped when ../shared/data/px4 is missing, see ``shared_px4`` in
+conftest.py), align on them, and a baseline fitted on one aligned part and tested on others; read_ulog's refusals
+of bad input need no data."""
 
 from __future__ import annotations
 
@@ -19,11 +20,10 @@ GYRO = [f"sensor_combined.gyro_rad[{i}]" for i in range(3)]
 
 
 @pytest.fixture(scope="module")
-def px4(shared_data) -> Path:
-    path = shared_data / "px4"
-    if not (path / "sample.ulg").is_file() or not (path / "sample_log_small.ulg").is_file():
-        raise FileNotFoundError(f"shared PX4 logs missing at {path}: tests need ../shared/data/px4/*.ulg")
-    return path
+def px4(shared_px4) -> Path:
+    if not (shared_px4 / "sample.ulg").is_file() or not (shared_px4 / "sample_log_small.ulg").is_file():
+        raise FileNotFoundError(f"shared PX4 logs missing at {shared_px4}: tests need ../shared/data/px4/*.ulg")
+    return shared_px4
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +102,7 @@ def test_unknown_topic_names_it_and_lists_the_file(px4, topic):
         read_ulog(px4 / "sample_log_small.ulg", ["vehicle_attitude", topic])
 
 
-def test_bad_files_name_the_file(tmp_path, px4):
+def test_bad_files_name_the_file(tmp_path):
     with pytest.raises(FileNotFoundError, match="missing.ulg does not exist"):
         read_ulog(tmp_path / "missing.ulg")
     with pytest.raises(ValueError, match="is not a file"):
@@ -115,6 +115,9 @@ def test_bad_files_name_the_file(tmp_path, px4):
     text.write_text("time,x\n0,1\n1,2\n")
     with pytest.raises(ValueError, match="text.ulg is not a readable ULog file"):
         read_ulog(text)
+
+
+def test_cut_and_damaged_copies_of_a_log_name_the_file(tmp_path, px4):
     data = (px4 / "sample.ulg").read_bytes()
     head = tmp_path / "head.ulg"
     head.write_bytes(data[:100])
@@ -149,10 +152,12 @@ def test_argument_types():
         read_ulog(__file__, topics=[])
 
 
-def test_missing_pyulog_says_how_to_install(px4, monkeypatch):
+def test_missing_pyulog_says_how_to_install(tmp_path, monkeypatch):
+    log = tmp_path / "flight.ulg"
+    log.write_bytes(b"ULog\x01\x12\x35\x01")           # never parsed: pyulog cannot be imported
     monkeypatch.setitem(sys.modules, "pyulog", None)
     with pytest.raises(ImportError, match="pip install pyulog"):
-        read_ulog(px4 / "sample.ulg")
+        read_ulog(log)
 
 
 # --- align on the real log ---------------------------------------------------------------------------------------

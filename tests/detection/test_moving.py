@@ -166,7 +166,7 @@ def test_bad_input_names_the_argument(call, exc, match):
         call()
 
 
-def test_alfa_benchmark_protocol(shared_data):
+def test_alfa_benchmark_protocol(shared_alfa):
     """benchmarks/alfa_sensor_validation.py: fitting, calibration and held-out flights are disjoint (9 without
     failure, 18 + 18 pre-failure parts), the gyro's declared sensor noise is 0.02 deg/s, the added noise of a
     configuration is one draw per gyro update, and a record's statistic is the test's on its prediction errors."""
@@ -177,7 +177,7 @@ def test_alfa_benchmark_protocol(shared_data):
     spec = importlib.util.spec_from_file_location("alfa_sensor_validation_bench", path)
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
-    root = shared_data / "alfa"
+    root = shared_alfa
     fit, calibration, held, names = bench.setup(root)
     assert (len(fit), len(calibration), len(held)) == (9, 18, 18)
     assert not set(names["calibration"]) & set(names["held-out"]) and len(set(sum(names.values(), []))) == 45
