@@ -427,7 +427,7 @@ def test_columns_are_matched_by_name(sim, capsys):
     pd.testing.assert_frame_equal(tables[1], tables[3])
 
 
-def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypatch):
+def test_the_cli_page_runs_and_says_true(tmp_path, shared_px4, shared_crazypad, capsys, monkeypatch):
     """Every command of docs/guide/cli.md runs (in its order, in a fresh folder), and its claims hold."""
     import re
     import shlex
@@ -437,7 +437,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_data, capsys, monkeypa
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
     assert len(commands) == 14
-    ulog, crazypad = shared_data / "px4" / "sample.ulg", shared_data / "crazypad"
+    ulog, crazypad = shared_px4 / "sample.ulg", shared_crazypad
     for need in (ulog, crazypad / "controller"):
         if not need.exists():
             raise FileNotFoundError(f"shared data missing at {need}: the CLI page's examples need it")
