@@ -17,6 +17,7 @@ from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
+from tsfdi.io import read_records
 from tsfdi.isolation import Isolation, IsolationSeries, ResidualSet
 from tsfdi.models import (AR, ARX, EMRAN, VAR, ARResults, ARXResults, EMRANResults, HeldOutResiduals, RecursiveARX,
                           RecursiveARXResults, VARResults, load)
@@ -43,6 +44,8 @@ __all__ = [
     # monitoring, online detection, baselines, evaluation
     "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "OnlineCalibration", "Records", "fit_baselines",
     "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
+    # reading data files
+    "read_records",
     # imported on first use
     "datasets", "plotting", "study", "fleet", "plot_acf", "align",
     "TsfdiWarning", "__version__",

@@ -48,6 +48,14 @@ class Records:
         for records in memory.
     length : int or None
         Samples of every record of ``source``.
+    times : list of ndarray or None
+        Per record, its time stamps in seconds (float64, ``(nobs,)``) on the clock of the file it was read from
+        (:func:`tsfdi.read_records`); ``None`` when the records carry no time stamps.
+    files : ndarray of str or None
+        Per record, the file it was read from (:func:`tsfdi.read_records`); ``None`` for records not read from
+        files. :attr:`ids` then names each record within its file: ``""`` for the single record of a CSV file, the
+        ``record`` coordinate of a netCDF file, ``"0"``, ``"1"``, ... for the pieces a file is split into, and
+        ``"2.0"``, ``"2.1"`` for the pieces of record 2.
     """
 
     values: list
@@ -60,6 +68,8 @@ class Records:
     fs: float
     source: Any = None
     length: int | None = None
+    times: list | None = None
+    files: np.ndarray | None = None
 
     @classmethod
     def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
@@ -153,12 +163,23 @@ class Records:
             pos = np.arange(len(self.values))[where]
             return dataclasses.replace(self, values=[self.values[i] for i in pos], state=self.state[pos],
                                        turbulence=self.turbulence[pos], failure_time=self.failure_time[pos],
-                                       ids=self.ids[pos], valid=self.valid[pos])
+                                       ids=self.ids[pos], valid=self.valid[pos],
+                                       times=None if self.times is None else [self.times[i] for i in pos],
+                                       files=None if self.files is None else self.files[pos])
         if chunk is None:
             chunk = self.source.isel(record=where).compute()
         out = Records.from_data(chunk, states=self.state[where], failure_times=self.failure_time[where],
                                 turbulence=self.turbulence[where], fs=self.fs)
         return dataclasses.replace(out, ids=self.ids[where])
+
+    def frames(self) -> list[pd.DataFrame]:
+        """The records in memory as ``DataFrame``s: columns :attr:`channels`, index ``time`` in seconds (from
+        :attr:`times`; a ``RangeIndex`` without them), ready for the models (``tsfdi.VAR(records.frames(), 4)``)."""
+        if self.source is not None:
+            raise ValueError("records backed by dask are not in memory: read them first with Records.read")
+        return [pd.DataFrame(v, columns=list(self.channels),
+                             index=None if self.times is None else pd.Index(self.times[i], name="time"))
+                for i, v in enumerate(self.values)]
 
 
 def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: str) -> tuple:

@@ -3,9 +3,10 @@
 Sub-commands register themselves in :data:`COMMANDS` through :func:`command`: a function that adds its
 options to an ``argparse`` parser and a function that runs it. Adding a sub-command is one decorated pair.
 
-Data files (CSV, netCDF such as ``tsfdi simulate`` writes, PX4 flight logs) are read by :func:`_read_records` into
-records: one ``DataFrame`` per record with the chosen columns as named channels and a ``time`` index in seconds,
-so the models match channels by name. Window lengths and steps follow pandas ``rolling``: a bare integer counts
+Data files (CSV, netCDF such as ``tsfdi simulate`` writes, PX4 flight logs, folders of per-topic CSV files) are
+read by :func:`tsfdi.read_records`, its keywords set by the data flags (``--rows-where`` is ``rows_where``): one
+``DataFrame`` per record with the chosen columns as named channels and a ``time`` index in seconds, so the models
+match channels by name. Window lengths and steps follow pandas ``rolling``: a bare integer counts
 samples, a time span (``"2s"``, ``"500ms"``) is converted with the sampling frequency.
 
 Errors never end in a traceback: :func:`main` prints the sub-command's usage and ``tsfdi <command>: error: ...``
@@ -15,6 +16,7 @@ naming the flag, file and column the user typed, and returns 2, as ``argparse`` 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import re
@@ -22,7 +24,6 @@ import sys
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -30,20 +31,13 @@ import numpy as np
 import pandas as pd
 
 from tsfdi import __version__
+from tsfdi.baselines import Records
+from tsfdi.io import TIME_COLUMNS, TIME_UNITS, read_records
 
 __all__ = ["main", "command", "COMMANDS"]
 
 #: name -> (help, add_arguments(parser), run(args) -> int)
 COMMANDS: dict[str, tuple[str, Callable, Callable]] = {}
-
-#: names of a CSV column taken as the time index when ``--time-column`` is not given (case-insensitive)
-TIME_COLUMNS = ("time", "t", "timestamp", "%time")
-#: units of a numeric CSV time column (``--time-unit``), in seconds
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
-
-#: a sampling step further than this fraction from the median step is a gap (or jitter) the command refuses
-JITTER = 0.5
-
 
 def command(name: str, help: str, add_arguments: Callable[[argparse.ArgumentParser], None]):
     """Register ``run(args) -> int`` as the sub-command ``name``."""
@@ -223,24 +217,6 @@ def _where(text: str) -> tuple[str, list[str]]:
     return key.strip(), values
 
 
-#: comparisons of ``--rows-where``, longest first (so that '>=' is not read as '>')
-_COMPARISONS = {">=": np.greater_equal, "<=": np.less_equal, "==": np.equal, "!=": np.not_equal, ">": np.greater,
-                "<": np.less}
-
-
-def _row_condition(text: str) -> tuple[str, str, float]:
-    """``COLUMN OP NUMBER`` with OP one of >=, <=, ==, !=, >, <."""
-    m = re.fullmatch(r"\s*(.+?)\s*(>=|<=|==|!=|>|<)\s*(\S+)\s*", text)
-    try:
-        value = float(m.group(3)) if m else None
-    except ValueError:
-        value = None
-    if value is None or not np.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be COLUMN OP NUMBER with OP one of {', '.join(_COMPARISONS)}, such as "
-                                         f"'controller.cmd_thrust>0', got {text!r}")
-    return m.group(1), m.group(2), value
-
-
 def _order(text: str) -> int | str:
     """A model order >= 1, 'bic' or 'rss_sss'."""
     word = text.strip().lower()
@@ -253,65 +229,152 @@ def _order(text: str) -> int | str:
 
 
 # ------------------------------------------------------------------------------------------------ reading data
-@dataclass
-class _Records:
-    """The records a command works on.
+#: read_records' keywords and the flags that set them (for its messages)
+_FLAGS = {"paths": "data", "columns": "--columns", "time": "--time-column", "time_unit": "--time-unit", "fs": "--fs",
+          "start": "--start", "stop": "--stop", "rows_where": "--rows-where", "margin": "--margin",
+          "resample": "--resample", "nan_policy": "--nan-policy", "records": "--record", "where": "--where",
+          "topics": "--topics"}
+_KEYWORD = "|".join(_FLAGS)
 
-    Attributes
-    ----------
-    files : list of str
-        Per record, the data file it comes from, as the user typed it.
-    frames : list of pandas.DataFrame
-        One per record: float64 columns named as in the file, index ``time`` in seconds (uniform at ``fs``).
-    ids : list of str
-        Record names within their file (``""`` for the single record of a CSV file).
-    fs : float
-        Sampling frequency in Hz.
-    split : bool
-        Whether the records are pieces of longer ones: split at NaN (``--nan-policy omit``), into the runs of
-        ``--rows-where``, or at the gaps of a flight log or a ``--resample``-d CSV file. A piece too short for the
-        command is then dropped with a note instead of refused.
-    rows : str
-        ``"--start 10 / --stop 35"`` when the part used was selected by row numbers (bare integers), else ``""``.
-    """
 
-    files: list
+def _flags(msg: str) -> str:
+    """A message of :func:`tsfdi.read_records` with its keywords written as the flags that set them."""
+    msg = re.sub(rf"^({_KEYWORD})(?=[ :=])", lambda m: _FLAGS[m.group(1)], msg.replace("start / stop",
+                                                                                       "--start / --stop"))
+    msg = re.sub(rf"\b({_KEYWORD})=(True\b|'[^']*'|[^\s,;)]*)",
+                 lambda m: _FLAGS[m.group(1)] + ("" if m.group(2) == "True" else " " + m.group(2).strip("'")), msg)
+    return re.sub(rf"\b(with|give|out|of|or) ({_KEYWORD})\b(?!-)", lambda m: f"{m.group(1)} {_FLAGS[m.group(2)]}", msg)
+
+
+@dataclasses.dataclass
+class _Data:
+    """The records a command works on (:func:`tsfdi.read_records`), as the command line names them.
+
+    ``split``: whether the records may be pieces of longer ones (``--rows-where``, ``--nan-policy omit``, the gaps
+    of a flight log or of ``--resample``): a piece too short for the command is then dropped with a note instead
+    of refused. ``rows``: ``"--start 10 / --stop 35"`` when the part used was selected by row numbers."""
+
+    rec: Records
     frames: list
-    ids: list
-    fs: float
     split: bool = False
     rows: str = ""
 
     @property
-    def path(self) -> str:
-        """The data file(s), for messages about all the records."""
-        return ", ".join(dict.fromkeys(self.files))
+    def fs(self) -> float:
+        return self.rec.fs
 
-    def label(self, i: int) -> str:
+    @property
+    def columns(self) -> list[str]:
+        return list(self.rec.channels)
+
+    @property
+    def path(self) -> str:
+        return ", ".join(dict.fromkeys(self.rec.files))
+
+    def _short(self) -> dict:
+        """File -> the shortest unique tail of its path (``normal_flight/E8_log00.csv.gz``)."""
+        files = list(dict.fromkeys(self.rec.files))
+        parts = {f: Path(f).parts or (f,) for f in files}
+        for k in range(1, max(len(p) for p in parts.values()) + 1):
+            tails = {f: "/".join(p[-k:]) for f, p in parts.items()}
+            if len(set(tails.values())) == len(files):
+                return tails
+        return {f: f for f in files}
+
+    def label(self, i: int, short: bool = False) -> str:
         """``"data.csv"`` or ``"sim.nc record 3"``: record ``i`` as named in messages."""
-        return f"{self.files[i]} record {self.ids[i]}" if self.ids[i] else self.files[i]
+        f = self._short()[self.rec.files[i]] if short else self.rec.files[i]
+        return f"{f} record {self.rec.ids[i]}" if self.rec.ids[i] else f
 
     def names(self) -> list[str]:
-        """The ``record`` column of the tables: the record names within the file, or the labels when the records
-        come from several files (all ``""``: a single record, no column)."""
-        return [self.label(i) for i in range(len(self.frames))] if len(set(self.files)) > 1 else list(self.ids)
+        """The ``record`` column of the tables: the record names within the file, or, for several files, each
+        file by the shortest tail of its path that tells it from the others, with the record name."""
+        if len(set(self.rec.files)) > 1:
+            return [self.label(i, short=True).replace(" record ", ":") for i in range(len(self.frames))]
+        return [str(i) for i in self.rec.ids]
 
     def about(self, i: int) -> str:
-        """:meth:`label` for an error about record ``i``'s data, with the row numbers that cut it: a user who
-        typed ``--start 10`` meaning seconds sees why the record is short."""
+        """:meth:`label` for an error about record ``i``'s data, with the row numbers that cut it."""
         if not self.rows:
             return self.label(i)
         first = self.rows.split()[1]
         return (f"{self.label(i)} ({self.rows}: a bare integer is a row number, not a time; write e.g. '{first}s' "
                 "for seconds)")
 
-    @property
-    def columns(self) -> list[str]:
-        return [str(c) for c in self.frames[0].columns]
-
     def span(self, n: int) -> str:
         """``"200 samples = 2 s"`` at this sampling frequency."""
         return f"{n} sample{'s' if n != 1 else ''} = {n / self.fs:.6g} s"
+
+    def keep(self, pos: list[int]) -> _Data:
+        return _Data(self.rec.read(np.asarray(pos, dtype=int)), [self.frames[i] for i in pos], True, self.rows)
+
+
+def _choice_needed(args: argparse.Namespace) -> None:
+    """fit / select-order: a netCDF file of several records needs --record or --where (not to pool healthy and
+    failed records by accident); the message lists the values of its per-record coordinates."""
+    import xarray as xr
+
+    if args.record or args.where:
+        return
+    for path in args.data:
+        if Path(path).suffix.lower() not in (".nc", ".nc4", ".netcdf", ".cdf", ".h5") or not Path(path).is_file():
+            continue
+        try:
+            with xr.open_dataset(path, engine="h5netcdf") as ds:
+                n = ds.sizes.get("record", 1)
+                hints = "; ".join(f"{k}: {', '.join(sorted(set(np.asarray(ds[k].values).astype(str).tolist())))}"
+                                  for k in ds.variables if ds[k].dims == ("record",) and k != "record"
+                                  and (ds[k].dtype.kind in "OUSb" or k == "state"))
+        except (OSError, ValueError, TypeError, KeyError):
+            continue                # read_records names the problem
+        if n > 1:
+            raise ValueError(f"{path} holds {n} records: choose the ones to use with --record N[,N...] or --where "
+                             f"KEY=VALUE ({hints or 'records 0..' + str(n - 1)})")
+
+
+def _read(args: argparse.Namespace, columns: list[str] | None = None) -> _Data:
+    """The records of the data files ``args.data`` (:func:`tsfdi.read_records` with the data flags); ``columns``
+    are used without ``--columns`` (the channels of a model)."""
+    if args.margin and not args.rows_where:
+        raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
+    try:
+        rec = read_records(args.data, columns=args.columns or columns, time=args.time_column,
+                           time_unit=args.time_unit, fs=args.fs, start=args.start, stop=args.stop,
+                           rows_where=args.rows_where, margin=args.margin, resample=args.resample,
+                           nan_policy=args.nan_policy, records=[r for g in args.record or [] for r in g] or None,
+                           where=args.where, topics=args.topics)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(_flags(str(exc))) from None
+    rows = " / ".join(f"--{f} {getattr(args, f)}" for f in ("start", "stop") if isinstance(getattr(args, f), int))
+    split = bool(args.topics or args.resample or args.rows_where or args.nan_policy == "omit")
+    return _Data(rec, rec.frames(), split, rows)
+
+
+def _drop_short(data: _Data, need: int, why: str) -> _Data:
+    """The records of at least ``need`` samples: shorter pieces of a split record are dropped with a note, a short
+    record of the file is refused."""
+    short = [i for i, f in enumerate(data.frames) if len(f) < need]
+    if not short:
+        return data
+    if not data.split or len(short) == len(data.frames):
+        i = short[0]
+        raise ValueError(f"{data.about(i)} is too short: {data.span(len(data.frames[i]))} at {data.fs:g} Hz, "
+                         f"{why} needs at least {need}")
+    print(f"note: dropped {len(short)} piece(s) of split records shorter than {need} samples ({why})",
+          file=sys.stderr)
+    return data.keep([i for i in range(len(data.frames)) if i not in set(short)])
+
+
+def _reword(exc: Exception, data: _Data, subs: tuple = ()) -> ValueError:
+    """A library error about ``y`` / ``signal`` (``y[i]`` for record ``i``) told about the user's file."""
+    msg = str(exc)
+    m = re.match(r"(y|signal)(?:\[(\d+)\])?(:? )", msg)
+    if m:
+        i = int(m.group(2)) if m.group(2) else 0
+        msg = data.about(i if i < len(data.frames) else 0) + m.group(3) + msg[m.end():]
+    for old, new in subs:
+        msg = msg.replace(old, new)
+    return ValueError(msg)
 
 
 def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-separated columns to use "
@@ -351,7 +414,7 @@ def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-sep
     p.add_argument("--resample", action="store_true",
                    help="CSV file with uneven time stamps: put the rows on a uniform grid at --fs by zero-order hold "
                         "(as a flight log), split into records at logging gaps")
-    p.add_argument("--rows-where", type=_row_condition, action="append", default=None, metavar="COLUMN>VALUE",
+    p.add_argument("--rows-where", action="append", default=None, metavar="COLUMN>VALUE",
                    help="keep the rows where a column (used or not) compares so with a number, e.g. "
                         "'controller.cmd_thrust>0' for the airborne part of a flight (repeatable: every condition "
                         "holds); each run of kept rows becomes a record (runs too short for the command are "
@@ -371,486 +434,6 @@ def _check_out(flag: str, path: str | None) -> None:
     folder = Path(path).expanduser().parent
     if not folder.is_dir():
         raise ValueError(f"{flag} {path}: the folder {str(folder)!r} does not exist")
-
-
-def _seconds(values: Any, what: str, source: str) -> np.ndarray:
-    """Times as float seconds: numbers (seconds), timedeltas, or dates and times -- datetime64 or text such as
-    '2018-09-11 18:46:35.350' -- as seconds since the first."""
-    v = np.asarray(values)
-    if v.dtype.kind == "M":
-        valid = np.flatnonzero(~np.isnat(v))
-        v = v - v[valid[0]] if valid.size else v - v
-    if v.dtype.kind == "m":
-        return v / np.timedelta64(1, "s")
-    if v.dtype.kind in "iuf":
-        return v.astype(np.float64)
-    text = pd.Series(v)
-    t = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64)
-    bad = np.flatnonzero(np.isnan(t) & text.notna().to_numpy())
-    if bad.size:
-        stamps = pd.to_datetime(text, errors="coerce", format="ISO8601")
-        if not (stamps.isna() & text.notna()).any():
-            return _seconds(stamps.to_numpy(), what, source)
-        raise ValueError(f"{source}: {what} must hold times (numbers, or dates and times such as "
-                         f"'2018-09-11 18:46:35.350'); {_where_row(what, bad[0])} holds {v[bad[0]]!r}")
-    return t
-
-
-def _where_row(what: str, i: int) -> str:
-    """How to point at data row ``i``: a CSV line (header is line 1) or a netCDF position."""
-    return f"line {i + 2}" if what.startswith("column") else f"position {i}"
-
-
-def _check_time(t: np.ndarray, what: str, source: str, fs: float | None, first: int = 0) -> float:
-    """The sampling frequency of the time stamps ``t`` (s), which must be finite, increasing and uniform; ``t``
-    starts at row ``first`` of the file (for the line numbers of the messages)."""
-    desc = f"{source}: {what}"
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        raise ValueError(f"{desc} holds {bad.size} empty or non-finite time(s), the first at "
-                         f"{_where_row(what, first + bad[0])}")
-    if t.size < 2:
-        if fs is None:
-            raise ValueError(f"{desc} holds a single time: give --fs")
-        return fs
-    step = np.diff(t)
-    dt = float(np.median(step))
-    if not dt > 0:
-        raise ValueError(f"{desc} does not increase (median step {dt:g} s)")
-    off = np.flatnonzero(np.abs(step - dt) > JITTER * dt)
-    if off.size:
-        i = int(off[0])
-        raise ValueError(f"{desc} steps by {step[i]:.6g} s at {_where_row(what, first + i + 1)} "
-                         f"(time {t[i + 1]:.6g} s) "
-                         f"where the median step is {dt:.6g} s: the rows must be evenly sampled (within "
-                         f"{JITTER:.0%}); cut around it with --start / --stop or --rows-where"
-                         + (", or put the rows on a grid with --resample --fs RATE" if what.startswith("column")
-                            else ""))
-    rate = 1.0 / dt
-    if fs is not None and abs(fs / rate - 1) > 0.01:
-        raise ValueError(f"--fs {fs:g}: the {what} of {source} gives {rate:.6g} Hz (median step {dt:.6g} s); "
-                         "leave out --fs or fix the time stamps")
-    return rate
-
-
-def _pick_columns(available: list[str], flag_value: str | None, default: list[str] | None, source: str,
-                  kind: str) -> list[str]:
-    """The data columns: those of ``--columns``, else ``default`` when the file has them all, else all."""
-    wanted = _csv_list(flag_value)
-    if wanted:
-        missing = [c for c in wanted if c not in available]
-        if missing:
-            raise ValueError(f"--columns: {source} has no {kind} {', '.join(repr(c) for c in missing)}; its "
-                             f"{kind}s are {available}")
-        if len(set(wanted)) != len(wanted):
-            raise ValueError(f"--columns {flag_value}: a {kind} is named twice")
-        return wanted
-    if default and all(c in available for c in default):
-        return list(default)
-    if not available:
-        raise ValueError(f"{source} has no numeric {kind} over time")
-    return available
-
-
-def _row_mask(args: argparse.Namespace, available: list[str], path: str, kind: str, values: Any) -> Any:
-    """The rows that meet every ``--rows-where`` condition (None without one); ``values(name)`` gives a column of
-    the file, rows on the last axis. A NaN compares false: its row is left out."""
-    if not args.rows_where:
-        return None
-    mask = True
-    for col, op, value in args.rows_where:
-        if col not in available:
-            raise ValueError(f"--rows-where {col}{op}{value:g}: {path} has no numeric {kind} {col!r}; its numeric "
-                             f"{kind}s are {available}")
-        with np.errstate(invalid="ignore"):
-            mask = mask & _COMPARISONS[op](np.asarray(values(col), dtype=np.float64), value)
-    return mask
-
-
-def _read_csv(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float | None, str | None,
-                                                                           list]:
-    from tsfdi._data import read_csv
-
-    path = args.data
-    df = read_csv(path, "data")
-    if len(df) == 0:
-        raise ValueError(f"data: {path} has a header but no rows")
-    df.columns = [str(c) for c in df.columns]
-    tcol = args.time_column
-    if tcol is not None and tcol not in df.columns:
-        raise ValueError(f"--time-column: {path} has no column {tcol!r}; its columns are {list(df.columns)}")
-    if tcol is None:
-        lower = {c.strip().lower(): c for c in df.columns}
-        tcol = next((lower[n] for n in TIME_COLUMNS if n in lower), None)
-    if tcol is None and args.time_unit is not None:
-        raise ValueError(f"--time-unit: {path} has no time column ({' / '.join(TIME_COLUMNS)}); name it with "
-                         "--time-column")
-    if tcol is None and args.fs is None:
-        raise ValueError(f"{path} has no time column ({' / '.join(TIME_COLUMNS)}): name it with --time-column, or "
-                         "give --fs to count the rows as samples at that rate")
-    data_cols = [c for c in df.columns if c != tcol]
-    numeric = [c for c in data_cols if pd.api.types.is_numeric_dtype(df[c]) and not pd.api.types.is_bool_dtype(df[c])]
-    cols = _pick_columns(numeric if args.columns is None and numeric else data_cols, args.columns, default, path,
-                         "column")
-    skipped = [c for c in data_cols if c not in numeric]
-    if args.columns is None and skipped and cols == numeric:
-        print(f"note: left out the non-numeric column(s) {skipped} of {path}", file=sys.stderr)
-    flags = [c for c in data_cols if pd.api.types.is_bool_dtype(df[c])]         # True / False compare as 1 / 0
-    mask = _row_mask(args, numeric + flags, path, "column", lambda c: df[c].to_numpy())
-    if args.resample and (tcol is None or args.fs is None):
-        raise ValueError(f"--resample: {path} needs a time column and --fs, the rate of the grid the rows are put on")
-    for c in cols:
-        col = df[c]
-        if pd.api.types.is_bool_dtype(col):
-            raise ValueError(f"{path}: column {c!r} is not numeric (it holds True / False)")
-        values = pd.to_numeric(col, errors="coerce")
-        bad = np.flatnonzero(values.isna().to_numpy() & col.notna().to_numpy())
-        if bad.size:
-            raise ValueError(f"{path}: column {c!r} is not numeric (line {bad[0] + 2} holds {col.iloc[bad[0]]!r}); "
-                             "leave it out with --columns")
-        df[c] = values
-    if tcol is None:
-        t, fs, clock = np.arange(len(df)) / args.fs, args.fs, None
-    else:
-        if args.time_unit is not None and not pd.api.types.is_numeric_dtype(df[tcol]):
-            raise ValueError(f"--time-unit: the time column {tcol!r} of {path} does not hold numbers (its first "
-                             f"value is {df[tcol].iloc[0]!r}); dates and times need no unit")
-        t = _seconds(df[tcol].to_numpy(), f"column {tcol!r}", path) * TIME_UNITS[args.time_unit or "s"]
-        fs, clock = None, f"column {tcol!r}"
-        guess = _rate_guess(t)
-        if args.time_column is None and args.time_unit is None and guess is not None and guess < 1.0:
-            print(f"note: read the time column {tcol!r} of {path} in seconds, which gives {guess:.6g} Hz; if it "
-                  "counts milliseconds (or us, ns), give --time-unit ms", file=sys.stderr)
-    frame = pd.DataFrame(df[cols].to_numpy(dtype=np.float64), columns=cols, index=pd.Index(t, name="time"))
-    if args.resample:
-        return _resampled(frame, df, args, path, numeric + flags)
-    return [frame], [""], fs, clock, [mask]
-
-
-def _resampled(frame: pd.DataFrame, df: pd.DataFrame, args: argparse.Namespace, path: str,
-               comparable: list[str]) -> tuple[list, list, float, None, list]:
-    """``--resample``: the rows of a CSV file put on a uniform grid at ``--fs`` by zero-order hold
-    (:func:`tsfdi.datasets.align`, split at logging gaps and, with ``--nan-policy omit``, at NaN), with the
-    ``--rows-where`` columns held alike."""
-    from tsfdi.datasets import align
-
-    extra = [c for c, _, _ in args.rows_where or [] if c not in frame.columns]
-    source = frame.assign(**{c: df[c].to_numpy(dtype=np.float64) for c in dict.fromkeys(extra)})
-    source.index = pd.to_timedelta(frame.index.to_numpy(), unit="s")
-    try:
-        records = align(source, args.fs, nan_policy=args.nan_policy)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"--resample: {path}: {exc}") from None
-    return _on_grid(records, list(frame.columns), comparable, args, path)
-
-
-def _on_grid(records: list, cols: list[str], comparable: list[str], args: argparse.Namespace,
-             path: str) -> tuple[list, list, float, None, list]:
-    """The records of :func:`tsfdi.datasets.align` (at ``--fs``) as the readers return them: their ``cols``,
-    time in seconds, numbered when several, and the ``--rows-where`` mask of each."""
-    frames = [pd.DataFrame(r[cols].to_numpy(), columns=cols,
-                           index=pd.Index(r.index.total_seconds().to_numpy(), name="time")) for r in records]
-    masks = [_row_mask(args, comparable, path, "column", lambda c, r=r: r[c].to_numpy()) for r in records]
-    return frames, [str(k) for k in range(len(frames))] if len(frames) > 1 else [""], args.fs, None, masks
-
-
-def _select_records(ds: Any, args: argparse.Namespace, required: bool) -> list[int]:
-    """Positions along ``record`` chosen by ``--record`` and ``--where``."""
-    path, n = args.data, ds.sizes["record"]
-    labels = np.asarray(ds["record"].values) if "record" in ds.coords else np.arange(n)
-    per_record = [k for k in ds.variables if ds[k].dims == ("record",) and k != "record"]
-    pick = list(range(n))
-    if args.record:
-        pick = []
-        for r in (r for group in args.record for r in group):
-            hits = np.flatnonzero(labels == r)
-            if not hits.size:
-                raise ValueError(f"--record {r}: {path} has no record {r}; its records are "
-                                 f"{labels.min()}..{labels.max()} ({n})")
-            pick.append(int(hits[0]))
-    for key, values in args.where or []:
-        if key not in per_record:
-            raise ValueError(f"--where {key}=...: {path} has no per-record coordinate {key!r}; they are {per_record}")
-        v = np.asarray(ds[key].values)
-        match = np.zeros(n, dtype=bool)
-        for text in values:
-            if v.dtype.kind == "b":
-                if text.lower() not in ("true", "false", "1", "0"):
-                    raise ValueError(f"--where {key}={text}: {key} holds True / False")
-                match |= v == (text.lower() in ("true", "1"))
-            elif v.dtype.kind in "iuf":
-                try:
-                    match |= v == float(text)
-                except ValueError:
-                    raise ValueError(f"--where {key}={text}: {key} holds numbers") from None
-            else:
-                match |= v.astype(str) == text
-        if not match[pick].any():
-            raise ValueError(f"--where {key}={','.join(values)}: no selected record of {path} matches; {key} holds "
-                             f"{sorted(set(v.astype(str).tolist()))}")
-        pick = [i for i in pick if match[i]]
-    if required and not args.record and not args.where and n > 1:
-        hints = "; ".join(f"{k}: {', '.join(sorted(set(np.asarray(ds[k].values).astype(str).tolist())))}"
-                          for k in per_record if ds[k].dtype.kind in "OUSb" or k == "state")
-        raise ValueError(f"{path} holds {n} records: choose the ones to use with --record N[,N...] or --where "
-                         f"KEY=VALUE ({hints or 'records ' + str(labels.tolist())})")
-    return pick
-
-
-def _read_netcdf(args: argparse.Namespace, default: list[str] | None,
-                 required: bool) -> tuple[list, list, float | None, str | None, list]:
-    import xarray as xr
-
-    path = args.data
-    for flag in ("time_column", "time_unit", "resample"):
-        if getattr(args, flag) not in (None, False):
-            raise ValueError(f"--{flag.replace('_', '-')} is for CSV files; {path} is netCDF (its time is the 'time' "
-                             "coordinate)")
-    try:
-        with xr.open_dataset(path, engine="h5netcdf") as ds:
-            ds = ds.load()
-    except (OSError, ValueError, TypeError, KeyError) as exc:
-        raise ValueError(f"data: {path} cannot be read as a netCDF file ({type(exc).__name__}: {exc})") from None
-    records = "record" in ds.dims
-    if not records and (args.record or args.where):
-        raise ValueError(f"--{'record' if args.record else 'where'}: {path} has no 'record' dimension (one record)")
-    dims = {("time",), ("record", "time")} if records else {("time",)}
-    available = [str(k) for k, v in ds.data_vars.items() if v.dims in dims and v.dtype.kind in "iuf"]
-    others = [str(k) for k, v in ds.data_vars.items() if str(k) not in available]
-    if args.columns is not None:
-        for c in _csv_list(args.columns) or []:
-            if c in others:
-                raise ValueError(f"--columns: variable {c!r} of {path} is not a numeric series over time (dims "
-                                 f"{ds[c].dims}, dtype {ds[c].dtype})")
-    cols = _pick_columns(available, args.columns, default, path, "variable")
-    if "time" in ds.coords:
-        t, fs, clock = _seconds(ds["time"].values, "coordinate 'time'", path), None, "coordinate 'time'"
-    elif args.fs is not None:
-        t, fs, clock = np.arange(ds.sizes["time"]) / args.fs, args.fs, None
-    else:
-        raise ValueError(f"{path} has no 'time' coordinate: give --fs")
-    index = pd.Index(t, name="time")
-    mask = _row_mask(args, available, path, "variable", lambda c: ds[c].values)
-    if not records:
-        return [pd.DataFrame({c: ds[c].values.astype(np.float64) for c in cols}, index=index)], [""], fs, clock, [mask]
-    pick = _select_records(ds, args, required)
-    labels = np.asarray(ds["record"].values) if "record" in ds.coords else np.arange(ds.sizes["record"])
-    frames = [pd.DataFrame({c: (ds[c].values[i] if ds[c].dims[0] == "record" else ds[c].values).astype(np.float64)
-                            for c in cols}, index=index) for i in pick]
-    masks = [None if mask is None else np.broadcast_to(mask, (ds.sizes["record"], len(t)))[i] for i in pick]
-    return frames, [str(labels[i]) for i in pick], fs, clock, masks
-
-
-def _read_ulog(args: argparse.Namespace, default: list[str] | None) -> tuple[list, list, float, None, list]:
-    """The topics ``--topics`` of a PX4 log on one grid at ``--fs`` (zero-order hold; split at gaps)."""
-    from tsfdi.datasets import align, read_ulog
-
-    path = args.data
-    for flag in ("time_column", "time_unit", "resample", "record", "where"):
-        if getattr(args, flag):
-            raise ValueError(f"--{flag.replace('_', '-')} is not for ULog files; {path} is one")
-    topics = _csv_list(args.topics)
-    if not topics or args.fs is None:
-        raise ValueError(f"--{'topics' if not topics else 'fs'}: {path} is a PX4 flight log; name the topics to "
-                         "read with --topics (e.g. vehicle_attitude,sensor_combined) and the rate of the grid "
-                         "they are aligned on with --fs")
-    try:
-        records = align(read_ulog(path, topics), args.fs, nan_policy=args.nan_policy)
-    except (ValueError, TypeError) as exc:
-        msg = re.sub(r"^path: ", "data: ", str(exc))
-        raise ValueError(re.sub(r"^(topics: |(?=frames\[))", "--topics: ", msg)) from None
-    available = [str(c) for c in records[0].columns]
-    return _on_grid(records, _pick_columns(available, args.columns, default, path, "column"), available, args, path)
-
-
-def _position(x: int | float | None, t: np.ndarray, fs: float | None) -> int | None:
-    """``--start`` / ``--stop`` as a row position: a row number as it is, a time (s) on the clock ``t`` (half a
-    sample early, at ``fs``)."""
-    return x if x is None or isinstance(x, int) else int(np.searchsorted(t, x - (0.5 / fs if fs else 0.0)))
-
-
-def _rate_guess(t: np.ndarray) -> float | None:
-    """1 / the median of the positive finite steps of ``t`` (None without one): the rate of a clock not yet
-    checked, for rounding --start / --stop and for hints."""
-    step = np.diff(t)
-    step = step[np.isfinite(step) & (step > 0)]
-    return 1.0 / float(np.median(step)) if step.size else None
-
-
-def _runs_where(frames: list, ids: list, first: list, masks: list, args: argparse.Namespace,
-                path: str) -> tuple[list, list, list]:
-    """The runs of rows that meet ``--rows-where`` (``masks``), less ``--margin`` at both ends: one record each,
-    named ``"<record>.<k>"``, with the file row where each starts."""
-    out_frames, out_ids, out_first = [], [], []
-    for f, rid, row0, mask in zip(frames, ids, first, masks):
-        t = f.index.to_numpy()
-        for k, (a, b) in enumerate(_runs(mask)):
-            a, b = (int(np.searchsorted(t[a:b], t[a] + args.margin) + a),
-                    int(np.searchsorted(t[a:b], t[b - 1] - args.margin, side="right") + a))
-            if b > a:
-                out_frames.append(f.iloc[a:b])
-                out_ids.append(f"{rid}.{k}" if rid else str(k))
-                out_first.append(row0 + a)
-    if not out_frames:
-        conds = " and ".join(f"{c}{op}{v:g}" for c, op, v in args.rows_where)
-        raise ValueError(f"--rows-where: no row of {path} meets {conds}"
-                         + (f" for more than --margin {args.margin:g} s at both ends" if args.margin else ""))
-    return out_frames, out_ids, out_first
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """``(start, stop)`` of every run of True in ``mask``."""
-    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
-
-
-def _split_at_nan(frame: pd.DataFrame) -> list[pd.DataFrame]:
-    """The runs of rows without NaN."""
-    return [frame.iloc[a:b] for a, b in _runs(np.isfinite(frame.to_numpy()).all(axis=1))]
-
-
-def _read_records(args: argparse.Namespace, *, default_columns: list[str] | None = None,
-                  required: bool = False) -> _Records:
-    """The records of the data files ``args.data`` (one or more), each read by :func:`_read_file` with the same
-    flags, in the order given: every file must give the same columns and sampling frequency (within 1 %)."""
-    paths = args.data if isinstance(args.data, list) else [args.data]
-    if len(set(paths)) < len(paths):
-        twice = next(p for p in paths if paths.count(p) > 1)
-        raise ValueError(f"data: {twice} is given twice")
-    parts = [_read_file(argparse.Namespace(**{**vars(args), "data": p}), default_columns=default_columns,
-                        required=required) for p in paths]
-    first = parts[0]
-    for part in parts[1:]:
-        if part.columns != first.columns:
-            raise ValueError(f"data: {part.path} gives the column(s) {part.columns} but {first.path} gives "
-                             f"{first.columns}: every file must give the same ones (choose them with --columns)")
-        if abs(part.fs / first.fs - 1) > 0.01:
-            raise ValueError(f"data: {part.path} is sampled at {part.fs:.6g} Hz but {first.path} at {first.fs:.6g} "
-                             "Hz: every file must have the same rate (within 1 %)")
-    if len(parts) == 1:
-        return first
-    return _Records([f for p in parts for f in p.files], [f for p in parts for f in p.frames],
-                    [i for p in parts for i in p.ids], first.fs, any(p.split for p in parts), first.rows)
-
-
-def _read_file(args: argparse.Namespace, *, default_columns: list[str] | None = None,
-               required: bool = False) -> _Records:
-    """The records of the data file ``args.data`` selected by the data flags of :func:`_add_data_args`.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        ``data`` (one path), ``columns``, ``time_column``, ``time_unit``, ``fs``, ``record``, ``where``,
-        ``topics``, ``start``, ``stop``, ``rows_where``, ``margin``, ``nan_policy``.
-    default_columns : list of str, optional
-        Columns used without ``--columns`` when the file has them all (the channels of a model).
-    required : bool
-        Refuse a netCDF file of several records without ``--record`` / ``--where``.
-
-    Raises
-    ------
-    ValueError
-        Naming the flag, the file and the column: a missing file, column or record, a non-numeric column, NaN
-        (with ``nan_policy="raise"``), a time column that is not evenly sampled (in the rows used) or disagrees with
-        ``--fs``, a ``--rows-where`` that no row meets.
-    """
-    path = args.data
-    if args.margin and not args.rows_where:
-        raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
-    p = Path(path)
-    if not p.exists():
-        raise ValueError(f"data: {path} does not exist")
-    if p.is_dir():
-        raise ValueError(f"data: {path} is a folder, not a data file")
-    kind = {".nc": "netcdf", ".nc4": "netcdf", ".netcdf": "netcdf", ".cdf": "netcdf", ".h5": "netcdf",
-            ".ulg": "ulog"}.get(p.suffix.lower(), "csv")
-    if kind != "ulog" and args.topics:
-        raise ValueError(f"--topics is for PX4 flight logs (.ulg); {path} is not one")
-    if kind == "netcdf":
-        frames, ids, fs, clock, masks = _read_netcdf(args, default_columns, required)
-    elif kind == "ulog":
-        frames, ids, fs, clock, masks = _read_ulog(args, default_columns)
-    else:
-        if args.record or args.where:
-            raise ValueError(f"--{'record' if args.record else 'where'} selects records of a netCDF file; {path} "
-                             "is read as CSV")
-        frames, ids, fs, clock, masks = _read_csv(args, default_columns)
-    if isinstance(args.start, float) and isinstance(args.stop, float) and args.stop <= args.start:
-        raise ValueError(f"--stop must come after --start, got {args.stop:g} s <= {args.start:g} s")
-    first = [0] * len(frames)           # row of the file / record where each frame starts
-    rows = " / ".join(f"--{f} {getattr(args, f)}" for f in ("start", "stop") if isinstance(getattr(args, f), int))
-    if args.start is not None or args.stop is not None:
-        rate = fs if fs is not None else _rate_guess(frames[0].index.to_numpy())
-        cut = [[_position(x, f.index.to_numpy(), rate) for x in (args.start, args.stop)] for f in frames]
-        keep = [i for i, (f, (a, b)) in enumerate(zip(frames, cut)) if len(f.iloc[a:b])]
-        if not keep:
-            spans = ", ".join(f"{f.index[0]:g} s to {f.index[-1]:g} s ({len(f)} rows)" for f in frames[:5])
-            raise ValueError(f"--start / --stop select no row of {path} (times {spans})")
-        first = [len(frames[i].iloc[:cut[i][0]]) for i in keep]
-        frames, ids = [frames[i].iloc[slice(*cut[i])] for i in keep], [ids[i] for i in keep]
-        masks = [None if masks[i] is None else masks[i][slice(*cut[i])] for i in keep]
-    if args.rows_where:
-        frames, ids, first = _runs_where(frames, ids, first, masks, args, path)
-    if fs is None:      # the file's clock, checked on the rows used only
-        rates = [_check_time(f.index.to_numpy(), clock, path, args.fs, row0) for f, row0 in zip(frames, first)]
-        fs = rates[0]
-        other = next((k for k, r in enumerate(rates) if abs(r / fs - 1) > 0.01), None)
-        if other is not None:
-            raise ValueError(f"{path}: the {clock} gives {fs:.6g} Hz in record {ids[0]} but {rates[other]:.6g} Hz in "
-                             f"record {ids[other]}: the records must have one rate (within 1 %)")
-    out_frames, out_ids = [], []
-    for f, rid, row0 in zip(frames, ids, first):
-        bad = ~np.isfinite(f.to_numpy())
-        if not bad.any():
-            out_frames.append(f)
-            out_ids.append(rid)
-            continue
-        if args.nan_policy == "omit":
-            parts = _split_at_nan(f)
-            out_frames += parts
-            out_ids += [f"{rid}.{k}" if rid else str(k) for k in range(len(parts))]
-            continue
-        j = int(np.flatnonzero(bad.any(axis=0))[0])
-        i = int(np.flatnonzero(bad[:, j])[0])
-        where = f"record {rid} of {path}" if rid else path
-        at = f"line {row0 + i + 2}, " if kind == "csv" else ""
-        what = "variable" if kind == "netcdf" else "column"
-        raise ValueError(f"{where}: {what} {f.columns[j]!r} holds {int(bad[:, j].sum())} empty, NaN or infinite "
-                         f"value(s), the first at {at}time {f.index[i]:.6g} s; leave it out with --columns, cut it "
-                         "off with --start / --stop, or give --nan-policy omit to split the record there")
-    if not out_frames:
-        raise ValueError(f"--nan-policy omit: every row of {path} holds an empty or NaN value")
-    split = kind == "ulog" or args.resample or bool(args.rows_where) or len(out_frames) > len(frames)
-    return _Records([path] * len(out_frames), out_frames, out_ids, float(fs), split, rows)
-
-
-def _drop_short(data: _Records, need: int, why: str) -> _Records:
-    """The records of at least ``need`` samples: shorter pieces of a split record are dropped with a note, a short
-    record of the file is refused."""
-    short = [i for i, f in enumerate(data.frames) if len(f) < need]
-    if not short:
-        return data
-    if not data.split or len(short) == len(data.frames):
-        i = short[0]
-        raise ValueError(f"{data.about(i)} is too short: {data.span(len(data.frames[i]))} at {data.fs:g} Hz, "
-                         f"{why} needs at least {need}")
-    print(f"note: dropped {len(short)} piece(s) of split records shorter than {need} samples ({why})",
-          file=sys.stderr)
-    keep = [i for i in range(len(data.frames)) if i not in set(short)]
-    return _Records([data.files[i] for i in keep], [data.frames[i] for i in keep], [data.ids[i] for i in keep],
-                    data.fs, True, data.rows)
-
-
-def _reword(exc: Exception, data: _Records, subs: tuple = ()) -> ValueError:
-    """A library error about ``y`` / ``signal`` (``y[i]`` for record ``i``) told about the user's file."""
-    msg = str(exc)
-    m = re.match(r"(y|signal)(?:\[(\d+)\])?(:? )", msg)
-    if m:
-        i = int(m.group(2)) if m.group(2) else 0
-        msg = data.about(i if i < len(data.frames) else 0) + m.group(3) + msg[m.end():]
-    for old, new in subs:
-        msg = msg.replace(old, new)
-    return ValueError(msg)
 
 
 # ---------------------------------------------------------------------------------------------------- models
@@ -887,7 +470,7 @@ def _channels(res: Any) -> list[str]:
     return [str(c) for c in res.model.data.channels]
 
 
-def _check_channels(data: _Records, models: dict) -> None:
+def _check_channels(data: _Data, models: dict) -> None:
     """Every model (keyed by how the user gave it, ``"--baseline m.npz"``) has as many channels as the data has
     columns."""
     k = len(data.columns)
@@ -976,7 +559,7 @@ def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
     return order + 1, f"the models' largest order ({order}) with the mean test"
 
 
-def _windows_in_samples(args: argparse.Namespace, data: _Records, models: dict) -> tuple[int, int]:
+def _windows_in_samples(args: argparse.Namespace, data: _Data, models: dict) -> tuple[int, int]:
     """``--window`` and ``--step`` in samples, checked against the records and the models' orders."""
     from tsfdi._data import window_samples
 
@@ -994,7 +577,7 @@ def _windows_in_samples(args: argparse.Namespace, data: _Records, models: dict) 
     return W, S
 
 
-def _table(rows: list[pd.DataFrame], data: _Records) -> pd.DataFrame:
+def _table(rows: list[pd.DataFrame], data: _Data) -> pd.DataFrame:
     """Per-record tables stacked, with a leading ``record`` column when the data holds records."""
     names = data.names()
     if any(names):
@@ -1052,48 +635,12 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def _dask_scheduler(value: str) -> Any:
-    """A context in which ``dask.compute`` runs on the scheduler ``--scheduler`` names."""
-    import dask
-
-    if "://" in value:
-        from distributed import Client
-
-        try:
-            return Client(value, timeout="10s")
-        except (OSError, ValueError) as exc:
-            raise ValueError(f"--scheduler {value}: cannot connect to the dask scheduler ({exc})") from None
-    if value in ("threads", "processes", "synchronous"):
-        return dask.config.set(scheduler=value)
-    raise ValueError(f"--scheduler must be threads, processes, synchronous or the address of a dask.distributed "
-                     f"scheduler such as tcp://10.0.0.1:8786, got {value!r}")
-
-
-def _write_chunks(ds: Any, enc: dict, args: argparse.Namespace, zarr: bool) -> int:
-    """Write a fleet backed by dask chunk by chunk on the ``--scheduler``; the number of records that lost control."""
-    import xarray as xr
-
-    from tsfdi.fleet import compute
-
-    if zarr:        # zarr's own compressor; the record coordinates chunked like the data
-        enc = {v: {k: e[k] for k in ("dtype", "scale_factor", "_FillValue") if k in e} for v, e in enc.items()}
-        enc.update({c: {"chunks": (args.chunk,)} for c, v in ds.coords.items() if v.dims == ("record",)
-                    and c != "record"})
-    elif args.scheduler == "processes":
-        raise ValueError("--scheduler processes cannot write a netCDF file (the processes of dask's local scheduler "
-                         "share no lock on it): write a .zarr store, or use threads or a dask.distributed scheduler")
-    with _dask_scheduler(args.scheduler):
-        store = ds.to_zarr(args.out, mode="w", encoding=enc, compute=False, zarr_format=2) if zarr else \
-            ds.to_netcdf(args.out, engine="h5netcdf", encoding=enc, compute=False)
-        compute(store, progress=not args.no_progress)
-    with xr.open_zarr(args.out) if zarr else xr.open_dataset(args.out, engine="h5netcdf") as written:
-        return int(written["lost_control"].values.sum())
-
-
 @command("simulate", "simulate hexacopter records (Dryden turbulence, rotor failures) to a netCDF file or zarr store "
          "chunked by record, the chunks in parallel on dask", _simulate_args)
 def _simulate(args: argparse.Namespace) -> int:
     import importlib.util
+
+    import xarray as xr
 
     from tsfdi.datasets.hexacopter import FleetSpread, encode_for_file, make_hexacopter_dataset
 
@@ -1121,7 +668,14 @@ def _simulate(args: argparse.Namespace) -> int:
             ds.to_netcdf(args.out, engine="h5netcdf", encoding=enc)
             nlost = int(ds["lost_control"].sum())
         else:
-            nlost = _write_chunks(ds, enc, args, zarr)
+            from tsfdi.fleet import write_fleet
+
+            try:
+                write_fleet(ds, args.out, encoding=enc, scheduler=args.scheduler, progress=not args.no_progress)
+            except ValueError as exc:
+                raise ValueError(f"--{exc}") from None
+            with xr.open_zarr(args.out) if zarr else xr.open_dataset(args.out, engine="h5netcdf") as written:
+                nlost = int(written["lost_control"].values.sum())
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
     print(f"wrote {ds.sizes['record']} records to {args.out} in {time.perf_counter() - t0:.1f} s; "
@@ -1190,11 +744,12 @@ def _order_args(p: argparse.ArgumentParser) -> None:
                    help="BIC of a VAR from the log-determinant or the trace of the residual covariance")
 
 
-def _order_selection(args: argparse.Namespace) -> tuple[Any, _Records, str]:
+def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
     """``select_order`` on the records of ``args`` (pooled when several)."""
     from tsfdi.selection import select_order
 
-    data = _read_records(args, required=True)
+    _choice_needed(args)
+    data = _read(args)
     data = _drop_short(data, args.max_lags + 2, f"--max-lags {args.max_lags}")
     k = len(data.columns)
     model = args.model or ("ar" if k == 1 else "var")
@@ -1215,6 +770,24 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     _order_args(p)
     p.add_argument("--out", required=True, help="output .npz file for the fitted model")
     p.add_argument("--lags", type=_count, default=None, help="fixed order (default: the order of smallest BIC)")
+    p.add_argument("--coefficients", action="store_true", help="print the coefficient tables too (default: the "
+                   "model's header only; tsfdi.load(FILE).summary() shows them in Python)")
+    p.add_argument("--quiet", action="store_true", help="print only the one-line result and where it was saved")
+
+
+def _collinear(data: _Data) -> str:
+    """The channels that make a fit exact: constant ones and ones proportional to an earlier one."""
+    x = np.concatenate([np.asarray(v) for v in data.rec.values])
+    x = x - x.mean(axis=0)
+    norm = np.sqrt((x ** 2).sum(axis=0))
+    said = [f"{c!r} is constant" for c, n in zip(data.columns, norm) if n == 0]
+    unit = x / np.where(norm > 0, norm, 1)
+    for j in range(len(data.columns)):
+        i = next((i for i in range(j) if norm[i] > 0 and norm[j] > 0 and abs(unit[:, i] @ unit[:, j]) > 1 - 1e-9),
+                 None)
+        if i is not None:
+            said.append(f"{data.columns[j]!r} is proportional to {data.columns[i]!r}")
+    return f" ({'; '.join(said)})" if said else ""
 
 
 @command("fit", "fit an AR / VAR baseline model (order by BIC) on records of a CSV, netCDF or flight-log file and "
@@ -1225,13 +798,19 @@ def _fit(args: argparse.Namespace) -> int:
         raise ValueError(f"--lags {args.lags} exceeds --max-lags {args.max_lags}")
     sel, data, model = _order_selection(args)
     res = sel.fit(args.lags)
+    if bool(np.asarray(sel.values["exact"])[list(sel.orders).index(res.lags)]):
+        raise ValueError(f"{model.upper()}({res.lags}) fits the {len(data.columns)} column(s) of {data.path} exactly: "
+                         f"collinear or constant channels{_collinear(data)}, so the model would explain any flight "
+                         "and detect nothing; not saved. Choose the channels with --columns")
     try:
         written = res.save(args.out)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
     print(f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) at {data.fs:g} Hz "
           f"({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}")
-    print(str(res.summary()))
+    if not args.quiet:
+        summary = res.summary()
+        print(str(summary if args.coefficients else dataclasses.replace(summary, tables=[])))
     print(f"saved to {written}")
     return 0
 
@@ -1270,7 +849,7 @@ def _detect(args: argparse.Namespace) -> int:
 
     _check_out("--out", args.out)
     baseline = _load("--baseline", args.baseline, args.baseline)
-    data = _read_records(args, default_columns=_channels(baseline))
+    data = _read(args, _channels(baseline))
     _check_channels(data, {f"--baseline {args.baseline}": baseline})
     rows = []
     if args.window is None:
@@ -1307,7 +886,7 @@ def _detect(args: argparse.Namespace) -> int:
     return 0
 
 
-def _detect_rows(data: _Records, frame: pd.DataFrame, starts: Any, W: int, channels: Any, stat: Any, thr: Any,
+def _detect_rows(data: _Data, frame: pd.DataFrame, starts: Any, W: int, channels: Any, stat: Any, thr: Any,
                  pv: Any, rej: Any) -> pd.DataFrame:
     """One row per window: times on the record's clock, per channel statistic / threshold / p-value, fault."""
     start = frame.index.to_numpy()[np.asarray(starts, dtype=int)]
@@ -1340,7 +919,7 @@ def _identify(args: argparse.Namespace) -> int:
 
     _check_out("--out", args.out)
     models = _load_models("--models", args.models)
-    data = _read_records(args, default_columns=_channels(next(iter(models.values()))))
+    data = _read(args, _channels(next(iter(models.values()))))
     _check_channels(data, {f"--models {n}": m for n, m in models.items()})
     if args.window is None:
         data = _drop_short(data, *_min_samples(args, models))
@@ -1381,12 +960,29 @@ def _monitor_args(p: argparse.ArgumentParser) -> None:
                         "file stem); default none: detection only")
     _window_args(p, "window length", required=True)
     p.add_argument("--steady-window", type=_span, default="10s",
-                   help="rolling-variance window of the steady-state check: an integer counts samples, a time "
-                        "span such as '10s' is converted with the sampling frequency")
+                   help="rolling-variance window of the steady-state check (paper 003): identification starts once "
+                        "the variance of every channel over this window is below its threshold, the largest over "
+                        "the records the --models were fitted on; an integer counts samples, a time span such as "
+                        "'10s' is converted with the sampling frequency")
     _test_args(p, lags=25)
     p.add_argument("--rule", choices=("paper", "likelihood", "pvalue"), default="paper",
                    help="decision rule turning the fault models' acceptances into a label")
     p.add_argument("--out", default=None, help="write the events to this CSV file")
+
+
+def _steady_thresholds(models: dict, baseline: Any, V: int, fs: float) -> np.ndarray | None:
+    """Per channel of the baseline, the largest variance over ``V`` samples (every 0.1 s) in the records the fault
+    models were fitted on, as :func:`tsfdi.fit_baselines` estimates them; None without fault models."""
+    from tsfdi._data import rolling_variance
+
+    if not models:
+        return None
+    chans = _channels(baseline)
+    peaks = [rolling_variance(r.values, V, max(1, round(0.1 * fs))).max(axis=0)[[_channels(m).index(c) for c in chans]]
+             for m in models.values() for r in m.model.records if r.nobs >= V]
+    if not peaks:
+        raise ValueError(f"--steady-window: {V} samples is longer than every record the --models were fitted on")
+    return np.max(peaks, axis=0)
 
 
 @command("monitor", "slide windows over a signal: detection with a healthy baseline, then identification with "
@@ -1398,12 +994,13 @@ def _monitor(args: argparse.Namespace) -> int:
     _check_out("--out", args.out)
     baseline = _load("--baseline", args.baseline, args.baseline)
     models = _load_models("--models", args.models) if args.models else {}
-    data = _read_records(args, default_columns=_channels(baseline))
+    data = _read(args, _channels(baseline))
     given = {f"--baseline {args.baseline}": baseline, **{f"--models {n}": m for n, m in models.items()}}
     _check_channels(data, given)
     W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
     data = _drop_short(data, W, f"--window {args.window}")
     V = window_samples(args.steady_window, "--steady-window", data.fs, minimum=2)
+    steady = _steady_thresholds(models, baseline, V, data.fs)
     tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
                           **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
     if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
@@ -1413,7 +1010,7 @@ def _monitor(args: argparse.Namespace) -> int:
         test, detection_test = tests, None
     try:
         monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.fs, test=test,
-                          detection_test=detection_test, steady_window=V, rule=args.rule)
+                          detection_test=detection_test, steady_thresholds=steady, steady_window=V, rule=args.rule)
     except (ValueError, TypeError) as exc:
         raise ValueError(f"--baseline / --models: {exc}") from None
     rows = []
@@ -1468,13 +1065,16 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     with warnings.catch_warnings():
         warnings.simplefilter("default")
-        warnings.showwarning = lambda message, *a, **k: print(f"tsfdi {args.command}: warning: {message}",
-                                                              file=sys.stderr)
+        warnings.showwarning = lambda message, *a, **k: print(f"tsfdi {args.command}: warning: "
+                                                              f"{_flags(str(message))}", file=sys.stderr)
         try:
             return COMMANDS[args.command][2](args)
         except BrokenPipeError:              # the reader of stdout has gone (``tsfdi ... | head``): stop quietly
             sys.stdout = open(os.devnull, "w")
             return 1
+        except ImportError as exc:          # an optional dependency: its message says what to install
+            print(f"tsfdi {args.command}: error: {exc}", file=sys.stderr)
+            return 2
         except (ValueError, TypeError, OSError) as exc:
             subs[args.command].print_usage(sys.stderr)
             print(f"tsfdi {args.command}: error: {exc}", file=sys.stderr)

@@ -31,7 +31,7 @@ from typing import Any
 
 from tsfdi._validation import boolean
 
-__all__ = ["is_chunked", "record_chunks", "map_records", "compute"]
+__all__ = ["is_chunked", "record_chunks", "map_records", "compute", "dask_scheduler", "write_fleet"]
 
 #: chunks of records in flight per worker thread: one running, one queued, so that no worker waits for the driver
 AHEAD = 2
@@ -223,3 +223,62 @@ def compute(obj: Any, *, progress: bool = False) -> Any:
 
     with ProgressBar(out=sys.stderr):
         return dask.compute(obj)[0]
+
+
+def dask_scheduler(value: str) -> Any:
+    """A context in which ``dask.compute`` runs on the scheduler ``value`` names: ``"threads"``, ``"processes"``,
+    ``"synchronous"``, or the address of a running ``dask.distributed`` scheduler (``"tcp://10.0.0.1:8786"``), to
+    which a ``Client`` is connected (closed when the context ends).
+
+    Raises
+    ------
+    ValueError
+        Another name, or an address that cannot be reached (within 10 s).
+    """
+    import dask
+
+    if isinstance(value, str) and "://" in value:
+        from distributed import Client
+
+        try:
+            return Client(value, timeout="10s")
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"scheduler {value}: cannot connect to the dask scheduler ({exc})") from None
+    if value in ("threads", "processes", "synchronous"):
+        return dask.config.set(scheduler=value)
+    raise ValueError(f"scheduler must be threads, processes, synchronous or the address of a dask.distributed "
+                     f"scheduler such as tcp://10.0.0.1:8786, got {value!r}")
+
+
+def write_fleet(ds: Any, path: str | os.PathLike, *, encoding: dict | None = None, scheduler: str = "threads",
+                progress: bool = False) -> None:
+    """Write a ``Dataset`` backed by dask and chunked along ``record`` chunk by chunk on a dask scheduler: a zarr
+    store (format 2) for a name ending in ``.zarr``, else a netCDF file; memory holds a few chunks at a time.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    path : str or path-like
+    encoding : dict, optional
+        Per variable, as ``Dataset.to_netcdf``; for zarr only ``dtype``, ``scale_factor`` and ``_FillValue`` are
+        kept (zarr's own compressor) and the per-record coordinates are chunked like the data.
+    scheduler : str
+        As :func:`dask_scheduler`. ``"processes"`` cannot write a netCDF file (dask's local processes share no lock on
+        it): write a zarr store, or use threads or a ``dask.distributed`` scheduler.
+    progress : bool
+        Show a progress bar.
+    """
+    zarr = os.fspath(path).lower().endswith(".zarr")
+    enc = dict(encoding or {})
+    if zarr:
+        enc = {v: {k: e[k] for k in ("dtype", "scale_factor", "_FillValue") if k in e} for v, e in enc.items()}
+        chunk = record_chunks(ds)[0]
+        enc.update({c: {"chunks": (chunk.stop - chunk.start,)} for c, v in ds.coords.items()
+                    if v.dims == ("record",) and c != "record"})
+    elif scheduler == "processes":
+        raise ValueError("scheduler processes cannot write a netCDF file (the processes of dask's local scheduler "
+                         "share no lock on it): write a .zarr store, or use threads or a dask.distributed scheduler")
+    with dask_scheduler(scheduler):
+        store = ds.to_zarr(path, mode="w", encoding=enc, compute=False, zarr_format=2) if zarr else \
+            ds.to_netcdf(path, engine="h5netcdf", encoding=enc, compute=False)
+        compute(store, progress=progress)
