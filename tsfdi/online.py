@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, refuse_masked, sampling_frequency
+from tsfdi._data import as_signal, check_paired, refuse_masked, sampling_frequency
 from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
 from tsfdi.exceptions import ConvergenceWarning
@@ -437,6 +437,7 @@ class OnlineDetector:
                              f"all), got {su.nchan}")
         if sy.nobs != su.nobs:
             raise ValueError(f"u and y must have the same length, got len(u)={su.nobs} and len(y)={sy.nobs}")
+        check_paired(sy, su)
         return sy, su
 
     def _mean_statistic(self, c: int, e: np.ndarray) -> np.ndarray:

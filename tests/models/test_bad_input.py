@@ -152,3 +152,43 @@ def test_constant_new_signal_is_allowed_for_residuals():
     res = tsfdi.AR(Y1, 2).fit()
     e = res.residuals(np.full(50, 2.0))
     np.testing.assert_allclose(e, 2.0 * (1 + res.ar_coefs.sum()))
+
+
+def test_arx_too_short_names_the_orders_that_set_the_lags():
+    """Issue 29, item 6: ARX blamed ``na`` when ``nb`` or ``nk`` made the record too short."""
+    y, u = Y1[:20], Y3[:20, 0]
+    with pytest.raises(ValueError, match=r"y is too short for na=2, nb=30, nk=0: 20 samples, at least 62 are needed "
+                                         r"\(hold back 29, the largest lag nk \+ nb - 1, \+ 32 parameters \+ 1\)"):
+        tsfdi.ARX(y, u, 2, 30)
+    with pytest.raises(ValueError, match=r"y is too short for na=2, nb=1, nk=30: 20 samples, at least 34 are needed "
+                                         r"\(hold back 30, the largest lag nk \+ nb - 1,"):
+        tsfdi.ARX(y, u, 2, 1, nk=30)
+    with pytest.raises(ValueError, match=r"y is too short for na=19, nb=1, nk=0: 20 samples.*\(hold back 19, the "
+                                         r"largest lag na,"):
+        tsfdi.ARX(y, u, 19, 1)
+    with pytest.raises(ValueError, match=r"y is too short for na=1, nb=1, nk=0: 20 samples.*\(hold back 25 \+"):
+        tsfdi.ARX(y, u, 1, 1, hold_back=25)
+    with pytest.raises(ValueError, match=r"y is too short for na=1, nb=12, nk=3: 12 usable samples in all records"):
+        tsfdi.ARX([Y1[:20], Y1[20:40]], [Y3[:20, 0], Y3[20:40, 0]], 1, 12, nk=3)
+
+
+def test_pandas_y_and_u_with_different_indexes_are_refused():
+    """Issue 29, item 5: pandas y and u with different indexes were paired by position."""
+    t = pd.date_range("2024", periods=200, freq="10ms")
+    y = pd.Series(Y1, index=t)
+    late = pd.DataFrame({"p": Y3[:, 0]}, index=t + pd.Timedelta("20ms"))
+    with pytest.raises(ValueError, match=r"y and u have different indexes \(first at sample 0: "
+                                         r"Timestamp\('2024-01-01 00:00:00'\) in y, Timestamp\('2024-01-01 "
+                                         r"00:00:00.020000'\) in u\): they are paired sample by sample"):
+        tsfdi.ARX(y, late, 2, 2)
+    shuffled = pd.Series(Y3[:, 0], index=np.r_[0:100, 101, 100, 102:200])
+    with pytest.raises(ValueError, match=r"y and u have different indexes \(first at sample 100: 100 in y, 101 in u\)"):
+        tsfdi.ARX(pd.Series(Y1), shuffled, 2, 2)
+    with pytest.raises(ValueError, match=r"y\[1\] and u\[1\] have different indexes"):
+        tsfdi.ARX([pd.Series(Y1), pd.Series(Y1)], [pd.Series(Y3[:, 0]), shuffled], 2, 2)
+    res = tsfdi.ARX(y, late.set_axis(t), 2, 2).fit()          # the same index: accepted
+    with pytest.raises(ValueError, match=r"y and u have different indexes"):
+        res.residuals(y, late)
+    # arrays, or one array and one labelled signal, are paired by position
+    assert tsfdi.ARX(y, Y3[:, 0], 2, 2).fit().nobs == 198
+    assert tsfdi.ARX(Y1, late, 2, 2).fit().nobs == 198

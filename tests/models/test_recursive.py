@@ -624,3 +624,36 @@ def test_regressors_refuse_an_unbounded_allocation(monkeypatch):
     assert model.regressors(np.ones(250), np.ones(250)).shape == (248, 4)
     with pytest.raises(ValueError, match="y with 251 samples: the regressors \\(251 x 4\\)"):
         model.regressors(np.ones(251), np.ones(251))
+
+
+@pytest.mark.parametrize("trend", ["n", "c"])
+def test_theta0_from_a_batch_arx_fit_seeds_its_coefficients(trend):
+    """Issue 29, item 7: ``RecursiveARX(theta0=ARX(...).fit().params)`` seeded the wrong coefficients (ARX groups its
+    params by lag, RecursiveARX by kind). The ARXResults (or its labelled params) is mapped: with a tiny P0 the
+    estimate stays at theta0 and the a-priori errors are the batch model's residuals."""
+    rng = np.random.default_rng(29)
+    n = 600
+    u = rng.standard_normal((n, 2))
+    y = np.zeros(n)
+    for t in range(3, n):
+        y[t] = (0.5 * y[t - 1] - 0.2 * y[t - 2] + 0.8 * u[t - 1, 0] + 0.3 * u[t - 2, 0] - 0.4 * u[t - 1, 1]
+                + 0.2 * u[t - 3, 1] + (1.0 if trend == "c" else 0.0) + 0.1 * rng.standard_normal())
+    batch = tsfdi.ARX(y, u, 2, 3, nk=1, trend=trend).fit()
+    labelled = tsfdi.ARX(pd.Series(y), pd.DataFrame(u, columns=["p", "q"]), 2, 3, nk=1, trend=trend).fit()
+    for theta0 in (batch, labelled, labelled.params):
+        m = RecursiveARX(2, 3, nk=1, n_inputs=2, trend=trend, theta0=theta0, P0=1e-12)
+        np.testing.assert_array_equal(m.theta_[m.trend == "c":][:2], batch.a)
+        np.testing.assert_array_equal(m.theta_[-6:], batch.b.ravel())
+        e = np.asarray(m.run(y, u).resid)[batch.model.max_lag:]
+        np.testing.assert_allclose(e, batch.residuals(y, u), rtol=0, atol=1e-8)
+    fresh = RecursiveARX(2, 3, nk=1, n_inputs=2, trend=trend, theta0=batch)
+    own = pd.Series(fresh.theta_, index=fresh.param_names)      # labelled in its own order: taken as it is
+    np.testing.assert_array_equal(RecursiveARX(2, 3, nk=1, n_inputs=2, trend=trend, theta0=own).theta_, own)
+    with pytest.raises(ValueError, match=r"theta0 is a ARX fit of other orders: \(na, nb, nk, n_inputs, trend\) = "
+                                         rf"\(2, 3, 1, 2, '{trend}'\), this estimator has \(2, 3, 0, 2, '{trend}'\)"):
+        RecursiveARX(2, 3, nk=0, n_inputs=2, trend=trend, theta0=batch)
+    foreign = labelled.params.set_axis([f"x{i}" for i in range(len(labelled.params))])
+    with pytest.raises(ValueError, match=r"theta0 is labelled \['x0', .*: neither this estimator's parameters"):
+        RecursiveARX(2, 3, nk=1, n_inputs=2, trend=trend, theta0=foreign)
+    ar = tsfdi.AR(y, 2, trend=trend).fit()          # an AR fit seeds an estimator without input
+    np.testing.assert_array_equal(RecursiveARX(2, 0, trend=trend, theta0=ar).theta_, np.asarray(ar.params))

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 from scipy import linalg, stats
 
-from tsfdi._data import Signal, as_signal, is_xarray
+from tsfdi._data import Signal, as_signal, check_paired, is_xarray
 from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
@@ -168,6 +168,7 @@ class LinearTimeSeriesModel:
                 if ur.nobs != yr.nobs:
                     raise ValueError(f"{name} has {ur.nobs} samples but {name.replace('u', 'y', 1)} has {yr.nobs}: "
                                      "they must match")
+                check_paired(yr, ur, (name.replace("u", "y", 1), name))
         if self.u_records is None and self.nb:
             raise ValueError("nb > 0 needs an input signal u")
         if self.na + self.nb < 1:
@@ -179,20 +180,24 @@ class LinearTimeSeriesModel:
         self.hold_back = hold_back
         rows = sum([r.nobs for r in self.records]) - hold_back * len(self.records)
         cols = self.df_eq + self.neqs
+        # the orders that set the size: na alone, or with nb / nk when the input's lags reach furthest
+        orders = f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")
         if rows * cols > MAX_VALUES:
-            orders = f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")
             check_size(rows * cols, f"{orders} on {rows:,} regression rows: the regressor ({rows:,} x {cols:,})")
         minimum = hold_back + self.df_eq + 1
+        held = (f"hold back {hold_back}" if hold_back > self.max_lag or not self.nb else
+                f"hold back {hold_back}, the largest lag {lag_name}," if hold_back == self.na else
+                f"hold back {hold_back}, the largest lag nk + nb - 1,")
         if not self.multi and self.data.nobs < minimum:
-            raise ValueError(f"y is too short for {lag_name}={self.na}: {self.data.nobs} samples, at least "
-                             f"{minimum} are needed (hold back {hold_back} + {self.df_eq} parameters + 1)")
+            raise ValueError(f"y is too short for {orders}: {self.data.nobs} samples, at least "
+                             f"{minimum} are needed ({held} + {self.df_eq} parameters + 1)")
         if self.multi:
             for i, r in enumerate(self.records):
                 if r.nobs <= hold_back:
                     raise ValueError(f"y[{i}] is too short: {r.nobs} samples, at least {hold_back + 1} are needed "
                                      f"(hold back {hold_back} + 1)")
             if rows < self.df_eq + 1:
-                raise ValueError(f"y is too short for {lag_name}={self.na}: {rows} usable samples in all records, "
+                raise ValueError(f"y is too short for {orders}: {rows} usable samples in all records, "
                                  f"at least {self.df_eq + 1} are needed ({self.df_eq} parameters + 1)")
         self._y_peak, self.y_scale, own = _channel_scale([r.values for r in self.records], "y", self.data.channels)
         self.u_scale = None

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from tsfdi._data import as_signal
+from tsfdi._data import as_signal, check_paired
 from tsfdi._validation import check_rng, float_like, int_like
 from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
 from tsfdi.models.archive import register
@@ -107,6 +107,7 @@ class ARXResults(ScalarOutputResults):
         """
         sig = self._new_signal(y)
         usig = self._new_input(u, sig.nobs)
+        check_paired(sig, usig)
         return sig.wrap(self._residuals_array(sig.values, usig.values), self.model.max_lag)
 
     def forecast(self, steps: int, u: Any) -> Any:

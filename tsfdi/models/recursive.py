@@ -5,8 +5,9 @@ The model is the MATLAB ``arx`` / :class:`tsfdi.ARX` convention (papers' sign fo
     y[t] + a_1 y[t-1] + ... + a_na y[t-na] = sum_j (b_j1 u_j[t-nk] + ... + b_jnb u_j[t-nk-nb+1]) [+ c] + e[t]
 
 so the regressor of sample ``t`` is ``phi[t] = [1 (trend "c" only), -y[t-1], ..., -y[t-na],
-u_0[t-nk], ..., u_0[t-nk-nb+1], u_1[t-nk], ...]`` and ``theta = [c, a_1..a_na, b_0, b_1, ...]`` with the
-same order as ``ARXResults.params``.
+u_0[t-nk], ..., u_0[t-nk-nb+1], u_1[t-nk], ...]`` and ``theta = [c, a_1..a_na, b_0, b_1, ...]``: grouped by kind
+(all ``a``, then the ``b`` of each input), whereas ``ARXResults.params`` is grouped by lag (``c, a_1, b_.1, a_2,
+...``). ``RecursiveARX(theta0=arx_results)`` maps a batch fit onto this order.
 
 The estimator is the RLS of Keipour et al. (paper 001, eqs. 4-7) with the forgetting factor of Hansen
 et al. (paper 002, eqs. 14-16), implemented in the symmetric form ``P <- P / lambda - v v'`` with
@@ -41,9 +42,11 @@ from typing import Any
 
 import numba
 import numpy as np
+import pandas as pd
 
-from tsfdi._data import as_signal
+from tsfdi._data import Signal, as_signal, check_paired
 from tsfdi._validation import float_like, int_like, option
+from tsfdi.models._base import ScalarOutputResults
 from tsfdi.models.lstsq import check_size
 
 __all__ = ["RecursiveARX", "RecursiveARXResults", "RecursiveARXState"]
@@ -510,8 +513,13 @@ class RecursiveARX:
         Number of input signals.
     trend : {"n", "c"}, default "n"
         "c" adds a constant as the first parameter.
-    theta0 : array_like, optional
-        Initial parameters (default zeros).
+    theta0 : array_like, Series or ARXResults, optional
+        Initial parameters (default zeros): an array in the order of :attr:`param_names` (``[c, a_1..a_na, b_0,
+        b_1, ...]``, grouped by kind); a Series labelled with :attr:`param_names`, or with the labels of
+        ``ARXResults.params`` (``const, a1, b1.<input>, a2, ...``, grouped by lag), taken by label; or the
+        :class:`~tsfdi.models.arx.ARXResults` of a batch fit of the same orders (``na``, ``nb``, ``nk``,
+        ``n_inputs``, ``trend``), whose coefficients seed the estimate. The *array* ``ARXResults.params`` is
+        grouped by lag, another order: pass the results themselves.
     threshold : float, default 4.5
         Z-score alarm threshold (paper 001 uses 4.5, a two-sided 99.99932 % Gaussian interval).
     eps : float, default 1e-2
@@ -691,11 +699,54 @@ class RecursiveARX:
         if theta0 is None:
             self._theta0 = np.zeros(d)
         else:
-            theta0 = np.asarray(theta0, dtype=np.float64).ravel()
+            theta0 = self._initial_params(theta0)
             if theta0.shape != (d,) or not np.isfinite(theta0).all():
                 raise ValueError(f"theta0 must hold {d} finite values, got shape {theta0.shape}")
             self._theta0 = theta0.copy()
         self.reset()
+
+    def _arx_order(self) -> np.ndarray:
+        """Positions in ``ARXResults.params`` (grouped by lag) of the parameters in the order of ``theta``."""
+        const, k = self.trend == "c", self.n_inputs
+        pos, at = {}, int(const)
+        for g in range(1, max(self.na, self.nb) + 1):
+            if g <= self.na:
+                pos[("a", g)], at = at, at + 1
+            if g <= self.nb:
+                for j in range(k):
+                    pos[("b", j, g)], at = at, at + 1
+        order = [0] * const + [pos[("a", g)] for g in range(1, self.na + 1)]
+        return np.array(order + [pos[("b", j, g)] for j in range(k) for g in range(1, self.nb + 1)], dtype=np.intp)
+
+    def _initial_params(self, theta0: Any) -> np.ndarray:
+        """``theta0`` in the order of ``theta``: an ARX / AR fit or an ARX-labelled Series mapped, else as given."""
+        if isinstance(theta0, ScalarOutputResults):      # an ARX (or AR, for nb = 0) fit
+            m = theta0.model
+            mine = (self.na, self.nb, self.nk if self.nb else 0, self.n_inputs if self.nb else 0, self.trend)
+            theirs = (m.na, m.nb, m.nk if m.nb else 0, m.n_inputs, m.trend)
+            if mine != theirs:
+                raise ValueError(f"theta0 is a {type(m).__name__} fit of other orders: (na, nb, nk, n_inputs, trend) "
+                                 f"= {theirs}, this estimator has {mine}")
+            return np.asarray(theta0.params, dtype=np.float64)[self._arx_order()]
+        if isinstance(theta0, pd.Series):
+            labels = [str(c) for c in theta0.index]
+            if labels == list(self.param_names):
+                return theta0.to_numpy(dtype=np.float64)
+            const = ["const"] if self.trend == "c" else []
+            arx = [lab.split(".")[0] for lab in labels]       # "b1.<input>" -> "b1"
+            expected = const + [n for g in range(1, max(self.na, self.nb) + 1) for n in
+                                ([f"a{g}"] if g <= self.na else []) + [f"b{g}"] * (self.n_inputs * (g <= self.nb))]
+            if arx != expected:
+                raise ValueError(f"theta0 is labelled {labels}: neither this estimator's parameters "
+                                 f"{list(self.param_names)} nor those of an ARX fit of the same orders; pass an "
+                                 "array in the order of param_names, or the ARXResults")
+            return theta0.to_numpy(dtype=np.float64)[self._arx_order()]
+        if isinstance(theta0, (str, bytes)):
+            raise TypeError(f"theta0 must hold real numbers, got {theta0!r}")
+        try:
+            return np.asarray(theta0, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            raise TypeError(f"theta0 must hold real numbers, got {type(theta0).__name__}") from None
 
     # ------------------------------------------------------------------ state
     @property
@@ -758,7 +809,7 @@ class RecursiveARX:
         n = yv.shape[0]
         check_size(n * self.n_params, f"y with {n:,} samples: the regressors ({n:,} x {self.n_params:,}); take them "
                    "in chunks")
-        uv = self._prepare_u(u, n)
+        uv = self._prepare_u(u, sy)
         bad = ~np.isfinite(uv).all(axis=1)
         if bad.any():
             raise ValueError(f"u contains NaN/inf (first at sample {int(np.flatnonzero(bad)[0])})")
@@ -885,7 +936,10 @@ class RecursiveARX:
             raise ValueError("u is required when nb > 0")
         return np.zeros((n, self.n_inputs))
 
-    def _prepare_u(self, u: Any, n: int, name: str = "u") -> np.ndarray:
+    def _prepare_u(self, u: Any, sy: Signal, name: str = "u") -> np.ndarray:
+        """``u`` as a float64 ``(nobs, n_inputs)`` array paired with ``sy``: same length, and the same index when
+        both carry one (never aligned silently)."""
+        n = sy.nobs
         if u is None:
             return self._no_input(n)
         if self.n_inputs == 1:
@@ -897,6 +951,7 @@ class RecursiveARX:
             raise ValueError(f"{name} must have n_inputs={self.n_inputs} column(s), got {uv.shape[1]}")
         if uv.shape[0] != n:
             raise ValueError(f"u and y must have the same length, got len(u)={uv.shape[0]} and len(y)={n}")
+        check_paired(sy, su, ("y", name))
         return np.ascontiguousarray(uv)
 
     def _check_samples(self, yv: np.ndarray, uv: np.ndarray) -> None:
@@ -1013,7 +1068,7 @@ class RecursiveARX:
         """
         sy = as_signal(y, "y", vector=False, min_nobs=1, allow_constant=True, finite=False)
         yv = np.ascontiguousarray(sy.values[:, 0])
-        uv = self._prepare_u(u, yv.shape[0])
+        uv = self._prepare_u(u, sy)
         n, d = yv.shape[0], self.n_params
         check_size(n * d, f"y with {n:,} samples: the parameter history ({n:,} x {d:,}); run it in chunks")
         self._check_samples(yv, uv)
