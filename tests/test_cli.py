@@ -182,3 +182,53 @@ def test_short_selection_by_row_numbers_hints_at_seconds(tmp_path, capsys):
     assert "(--start 10 / --stop 35: a bare integer is a row number, not a time; write e.g. '10s' for seconds)" in err
     assert main(["fit", str(tmp_path / "f.csv"), "--start", "10s", "--stop", "35s", "--out", str(tmp_path / "m.npz"),
                  "--max-lags", "6"]) == 0
+
+
+CRAZYPAD = "data/crazypad/controller/normal_flight/E8_log00.csv.gz"
+
+
+def test_fit_refuses_an_exact_fit(tmp_path, capsys):
+    """Regression: `tsfdi fit` on a CrazyPAD log with all 19 numeric columns (controller.ctr_yaw repeats
+    controller.cmd_yaw) warned that every order fits exactly and saved the model with exit 0; it is refused now,
+    naming the columns and the fix."""
+    from pathlib import Path
+
+    log = Path(__file__).resolve().parents[1] / CRAZYPAD
+    out = tmp_path / "m.npz"
+    assert main(["fit", str(log), "--time-unit", "ms", "--max-lags", "4", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "fits the 19 column(s)" in err and "exactly" in err and "not saved. Choose the channels with --columns" in err
+    assert "'controller.ctr_yaw' is proportional to 'controller.cmd_yaw'" in err and not out.exists()
+    x = np.random.default_rng(2).standard_normal((400, 2))
+    pd.DataFrame({"time": np.arange(400) / 10, "a": x[:, 0], "b": 3 * x[:, 0]}).to_csv(tmp_path / "twins.csv",
+                                                                                     index=False)
+    assert main(["fit", str(tmp_path / "twins.csv"), "--max-lags", "2", "--out", str(out)]) == 2
+    assert "'b' is proportional to 'a'" in capsys.readouterr().err
+
+
+def test_fit_prints_a_compact_summary(tmp_path, capsys):
+    """Regression: fit printed every coefficient (1,031 lines for a CrazyPAD VAR); the header only by default,
+    --coefficients for the tables, --quiet for the result line."""
+    x = np.random.default_rng(4).standard_normal((600, 3))
+    pd.DataFrame({"time": np.arange(600) / 50, "a": x[:, 0], "b": x[:, 1], "c": x[:, 2]}).to_csv(
+        tmp_path / "log.csv", index=False)
+    out = str(tmp_path / "m.npz")
+    printed = {}
+    for flag in ("", "--coefficients", "--quiet"):
+        assert main(["fit", str(tmp_path / "log.csv"), "--lags", "4", "--max-lags", "4", "--out", out,
+                     *([flag] if flag else [])]) == 0
+        printed[flag] = capsys.readouterr().out.splitlines()
+    assert len(printed["--quiet"]) == 2 and printed["--quiet"][-1].startswith("saved to")
+    assert len(printed[""]) < 25 < len(printed["--coefficients"])
+    assert "Samples per parameter" in "\n".join(printed[""])
+
+
+def test_help_says_why_the_defaults_differ_from_python(capsys):
+    """Regression: --alpha 0.001 and --lags 25 (monitor) differ from LjungBox() / FTest() (0.05, 20) without a
+    stated reason."""
+    for name in ("detect", "monitor"):
+        with pytest.raises(SystemExit):
+            main([name, "--help"])
+        text = " ".join(capsys.readouterr().out.split())
+        assert "the test classes of tsfdi default to 0.05" in text
+    assert "25 for monitor, as in paper 003" in text

@@ -529,8 +529,11 @@ def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
                    help="residual test: Ljung-Box whiteness test, F test of the residual variance, or test of a "
                         "shift of the residual mean (a new trim: what a closed loop leaves of a compensated "
                         "fault; use it with --threshold calibrated)")
-    p.add_argument("--alpha", type=_probability, default=1e-3, help="type I risk per channel and tested window")
-    p.add_argument("--lags", type=_count, default=lags, help="Ljung-Box lags")
+    p.add_argument("--alpha", type=_probability, default=1e-3,
+                   help="type I risk per channel and tested window; the test classes of tsfdi default to 0.05 for "
+                        "one test, the command tests many windows (at 0.05, one false alarm in 20 windows)")
+    p.add_argument("--lags", type=_count, default=lags,
+                   help="Ljung-Box lags (20 as LjungBox(); 25 for monitor, as in paper 003)")
     p.add_argument("--threshold", choices=("theoretical", "calibrated"), default="theoretical",
                    help="theoretical: the test's chi-square / F law, exact only for the data the model was fitted "
                         "on; calibrated: the law of the statistic fitted to the model's held-out residuals (each "
