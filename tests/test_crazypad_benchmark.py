@@ -14,12 +14,18 @@ import pytest
 CUT4 = "cut_propeller_M3_4mm_4mm_39mm"
 
 
-@pytest.fixture(scope="module")
-def bench(shared_crazypad):
+def load_benchmark():
+    """A fresh import of benchmarks/crazypad.py, not yet pointed at a copy (its functions on names need none)."""
     path = Path(__file__).resolve().parents[1] / "benchmarks" / "crazypad.py"
     spec = importlib.util.spec_from_file_location("crazypad_bench", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def bench(shared_crazypad):
+    mod = load_benchmark()
     mod.setup(shared_crazypad)                   # the default selection: the nine conditions of KNOWN
     return mod
 
@@ -94,7 +100,8 @@ def test_identification_one_held_out_flight(bench, fold0, capsys):
     assert "decided per held-out flight" in out
 
 
-def test_flight_summary_counts_majorities_and_ties(bench):
+def test_flight_summary_counts_majorities_and_ties():
+    bench = load_benchmark()
     def rows(cond, log, labels):
         return [{"alpha": 0.01, "family": "LB+F+M", "rule": "pvalue", "condition": cond, "log": log, "label": lb}
                 for lb in labels]
@@ -104,13 +111,9 @@ def test_flight_summary_counts_majorities_and_ties(bench):
     assert bench.flight_summary(ident).loc[(0.01, "LB+F+M"), "pvalue"] == pytest.approx(50.0)
 
 
-def test_missing_data_fails_loudly(bench, tmp_path):
-    root = bench.ROOT
-    try:
-        with pytest.raises(FileNotFoundError, match="CrazyPAD data missing"):
-            bench.setup(tmp_path)
-    finally:
-        bench.setup(root)
+def test_missing_data_fails_loudly(tmp_path):
+    with pytest.raises(FileNotFoundError, match="CrazyPAD data missing"):
+        load_benchmark().setup(tmp_path)
 
 
 # ------------------------------------------------------------------ the data the benchmark finds in a copy
@@ -151,14 +154,25 @@ def test_conditions_and_labels_are_read_from_the_copy(bench, flights):
         assert len(tape) >= 2
         assert set(bench.CONDITIONS) == {"normal_flight", "cut_propeller_M3_1mm", *tape}
         assert bench.CONDITIONS[0] == "normal_flight"                                 # always there, first
-        for bad in ("no_such_*", "normal_flight,,cut_propeller_M3_1mm", "Normal_flight"):
-            with pytest.raises(ValueError, match="conditions: .* matches no condition.*available: add_weight"):
-                bench.setup(root, bad)
-        with pytest.raises(TypeError, match="conditions"):
-            bench.setup(root, ["normal_flight"])
     finally:
         bench.setup(root)
     assert bench.CONDITIONS == tuple(bench.KNOWN)
+
+
+def test_condition_selection_order_and_labels():
+    bench = load_benchmark()
+    names = ["tape_x_M1", "weight_on_string_W2_near_M3", "tape_y_M2", "cut_propeller_M3_1mm", "normal_flight"]
+    assert bench.select_conditions(names) == ("normal_flight", "cut_propeller_M3_1mm", "weight_on_string_W2_near_M3")
+    assert bench.select_conditions(names, "tape_*,cut_propeller_M3_1mm") == (
+        "normal_flight", "cut_propeller_M3_1mm", "tape_x_M1", "tape_y_M2")
+    assert bench.select_conditions(names, "*") == bench.conditions_of(names)
+    for bad in ("no_such_*", "tape_x_M1,,tape_y_M2", "Normal_flight", "tape_x"):
+        with pytest.raises(ValueError, match=r"conditions: .* matches no condition.*available: cut_propeller_M3_1mm"):
+            bench.select_conditions(names, bad)
+    with pytest.raises(TypeError, match="conditions"):
+        bench.select_conditions(names, ["normal_flight"])
+    with pytest.raises(ValueError, match="normal_flight"):
+        bench.select_conditions(names[:-1], "*")
     names = ["weight_on_string_W2_near_M3", "cut_propeller_M3_1mm", "normal_flight", "zz_new_M1", "bent_M2_3mm"]
     assert bench.conditions_of(names) == ("normal_flight", "cut_propeller_M3_1mm", "weight_on_string_W2_near_M3",
                                           "bent_M2_3mm", "zz_new_M1")
