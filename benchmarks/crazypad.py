@@ -17,9 +17,9 @@ needs it to evaluate them). Normal flight is always included. Section 3 fits one
 every flight: its run time grows with the number of conditions (56 conditions take long). Order: normal flight
 first, then those of ``KNOWN`` in its order, then any other sorted by name. Every log holds two airborne segments
 (two short flights, ~5-6 s each once trimmed), so a *flight* below is one log, and its two segments always go
-together: fitted together, held out together. A log is left out as corrupt when, in one of its airborne segments, the thrust command stays at its full scale (65535, a uint16) for
-0.5 s or more: the controller has lost authority and the flight is no longer a stabilised one. In the shared copy
-this rule leaves out ``weight_on_string_W2_near_M3/E8_log02`` only, of all its 56 conditions (the drone flipped: the
+together: fitted together, held out together. A log is left out as corrupt when, in one of its airborne segments,
+the thrust command stays at its full scale (65535, a uint16) for 0.5 s or more: the controller has lost authority
+and the flight is no longer a stabilised one. In the shared copy this rule leaves out ``weight_on_string_W2_near_M3/E8_log02`` only, of all its 56 conditions (the drone flipped: the
 body z specific force falls to -1 g, the thrust command sits at full scale for 7.8 s and 9.2 s of its two segments;
 the largest thrust command of every other log is below 84 % of full scale in the nine default conditions, below
 87 % in all 56, and none reaches it). Normal flights: E8 5 logs and E9 3 logs in the shared copy (earlier copies: E8
@@ -42,8 +42,8 @@ sections 2-3 on all normal logs, 8), never on a faulty flight:
 - thresholds: ``test.calibrate(spec.held_out_residuals(), window=..., step=1)`` with the library's calibrated
   threshold (``ScaledChi2Threshold``, see its docstring). Its default of 30 non-overlapping calibration windows
   cannot be met with 2 s windows on these short flights (7 normal logs hold 28, a condition's 2-5 logs fewer), so
-  ``min_windows=5`` is passed; the number of independent windows behind the calibrations is printed. ``held_out_residuals(groups=logs)``
-  holds out the two segments of one log together, as the folds do.
+  ``min_windows=5`` is passed; the number of independent windows behind the calibrations is printed.
+  ``held_out_residuals(groups=logs)`` holds out the two segments of one log together, as the folds do.
 
 Tests: ``LB`` Ljung-Box per channel, ``LB-S`` the same with Sidak correction over the channels, ``LB-H``
 multivariate Ljung-Box (Hosking), ``F`` / ``F-S`` the variance F test without / with Sidak correction, ``M`` /
