@@ -11,20 +11,20 @@ published runs (``KNOWN``: normal flight, cut M3 1 / 2.5 / 4 mm, tape M1M3 / M3M
 W2), those of them the copy's ``flights.csv`` holds, so that a grown copy (the shared one now holds 56) does not
 change which faulty conditions are evaluated; the normal flights are every normal log of the copy (the E9 normal
 logs the shared copy added changed the numbers of all three sections). ``--conditions`` chooses others:
-comma-separated condition names or glob patterns, e.g. ``--conditions 'cut_propeller_M3_*'`` or ``--conditions
-'*'`` (every condition of the copy; a copy with conditions not in ``KNOWN``, such as the withheld-data check's,
-needs it to evaluate them). Normal flight is always included. Section 3 fits one VAR per condition and holds out
-every flight: its run time grows with the number of conditions (56 conditions take long). Order: normal flight
-first, then those of ``KNOWN`` in its order, then any other sorted by name. Every log holds two airborne segments
-(two short flights, ~5-6 s each once trimmed), so a *flight* below is one log, and its two segments always go
-together: fitted together, held out together. A log is left out as corrupt when, in one of its airborne segments,
-the thrust command stays at its full scale (65535, a uint16) for 0.5 s or more: the controller has lost authority
-and the flight is no longer a stabilised one. In the shared copy this rule leaves out ``weight_on_string_W2_near_M3/E8_log02`` only, of all its 56 conditions (the drone flipped: the
-body z specific force falls to -1 g, the thrust command sits at full scale for 7.8 s and 9.2 s of its two segments;
-the largest thrust command of every other log is below 84 % of full scale in the nine default conditions, below
-87 % in all 56, and none reaches it). Normal flights: E8 5 logs and E9 3 logs in the shared copy (earlier copies: E8
-only); normal logs of several drones are pooled. Some conditions were flown by E9 only or by both drones
-(printed), and the two airframes differ, so results are also given per drone.
+comma-separated condition names or glob patterns, e.g. ``--conditions 'cut_propeller_M3_*'`` or ``--conditions '*'``
+(every condition of the copy; a copy with conditions not in ``KNOWN``, such as the withheld-data check's, needs it
+to evaluate them). Normal flight is always included. Section 3 fits one VAR per condition and holds out every
+flight: its run time grows with the number of conditions (56 conditions take long). Order: normal flight first, then
+those of ``KNOWN`` in its order, then any other sorted by name. Every log holds two airborne segments (two short
+flights, ~5-6 s each once trimmed), so a *flight* below is one log, and its two segments always go together: fitted
+together, held out together. A log is left out as corrupt when, in one of its airborne segments, the thrust command
+stays at its full scale (65535, a uint16) for 0.5 s or more: the controller has lost authority and the flight is no
+longer a stabilised one. In the shared copy this rule leaves out ``weight_on_string_W2_near_M3/E8_log02`` only, of
+all its 56 conditions (the drone flipped: the body z specific force falls to -1 g, the thrust command sits at full
+scale for 7.8 s and 9.2 s of its two segments; the largest thrust command of every other log is below 84 % of full
+scale in the nine default conditions, below 87 % in all 56, and none reaches it). Normal flights: E8 5 logs and E9 3
+logs in the shared copy (earlier copies: E8 only); normal logs of several drones are pooled. Some conditions were
+flown by E9 only or by both drones (printed), and the two airframes differ, so results are also given per drone.
 
 Choices, all made on normal flights only (in section 1 on the fitting logs of each fold, 7 in the shared copy, in
 sections 2-3 on all normal logs, 8), never on a faulty flight:
