@@ -455,29 +455,27 @@ def test_columns_are_matched_by_name(sim, capsys):
     pd.testing.assert_frame_equal(tables[1], tables[3])
 
 
-def test_the_cli_page_runs_and_says_true(tmp_path, shared_px4, shared_crazypad, capsys, monkeypatch):
-    """Every command of docs/guide/cli.md runs (in its order, in a fresh folder), and its claims hold."""
+def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
+    """Every command of docs/guide/cli.md runs (in its order, in a fresh folder beside the repository's data/),
+    and its claims hold."""
     import re
     import shlex
     from pathlib import Path
 
-    page = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "cli.md").read_text()
+    root = Path(__file__).resolve().parents[1]
+    page = (root / "docs" / "guide" / "cli.md").read_text()
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
     assert len(commands) == 14
-    ulog, crazypad = shared_px4 / "sample.ulg", shared_crazypad
-    for need in (ulog, crazypad / "controller"):
-        if not need.exists():
-            raise FileNotFoundError(f"shared data missing at {need}: the CLI page's examples need it")
-    (tmp_path / "sample.ulg").symlink_to(ulog)
-    (tmp_path / "crazypad").symlink_to(crazypad)
+    pytest.importorskip("pyulog")
+    (tmp_path / "data").symlink_to(root / "data")
     monkeypatch.chdir(tmp_path)
     printed = {}
     for line in commands:
         argv = shlex.split(line)
         assert main(argv[1:]) == 0, (line, capsys.readouterr().err)
         key = argv[1] + (" calibrated" if "--threshold calibrated" in line else "")
-        key += f" {argv[2].split('/')[2]}" if argv[2].startswith("crazypad/") else ""      # its condition
+        key += f" {argv[2].split('/')[3]}" if argv[2].startswith("data/crazypad/") else ""      # its condition
         printed[key] = capsys.readouterr().out
     # select-order: the orders the page quotes
     assert re.search(r"Selected \(min BIC\) +6\n", printed["select-order"])
@@ -496,12 +494,12 @@ def test_the_cli_page_runs_and_says_true(tmp_path, shared_px4, shared_crazypad, 
     assert faults and all(f == (start < 10.0) for start, f in faults)
     # calibrated thresholds on the rest of the PX4 log: 0 of the 17 one-second windows flagged
     assert printed["detect calibrated"].strip().splitlines()[-1] == "fault in 0 of 17 window(s)"
-    # CrazyPAD: a baseline from 8 airborne records of 4 normal logs; the fifth normal log clean, the 4 mm cut flagged
-    assert "from 8 record(s) at 101.153 Hz" in printed["fit normal_flight"]
-    assert printed["detect calibrated normal_flight"].strip().splitlines()[-1] == "fault in 0 of 4 window(s)"
+    # CrazyPAD: a baseline from the 2 airborne records of a normal log; the other normal log clean, the 4 mm cut flagged
+    assert "from 2 record(s) at 101.153 Hz" in printed["fit normal_flight"]
+    assert printed["detect calibrated normal_flight"].strip().splitlines()[-1] == "fault in 0 of 6 window(s)"
     cut = printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm"]
-    assert cut.strip().splitlines()[-1] == "fault in 4 of 4 window(s)"
-    # without --min-windows 10 the page's "16 non-overlapping windows, fewer than the default 30" is the message
-    line = next(c for c in commands if "crazypad/controller/normal_flight/E8_log04" in c)
-    assert main(shlex.split(line.replace(" --min-windows 10", ""))[1:]) == 2
-    assert "holds 16 independent (non-overlapping) windows, at least 30 are needed" in capsys.readouterr().err
+    assert cut.strip().splitlines()[-1] == "fault in 6 of 6 window(s)"
+    # without --min-windows 5 the page's "6 non-overlapping windows, fewer than the default 30" is the message
+    line = next(c for c in commands if "crazypad/controller/normal_flight/E8_log01" in c)
+    assert main(shlex.split(line.replace(" --min-windows 5", ""))[1:]) == 2
+    assert "holds 6 independent (non-overlapping) windows, at least 30 are needed" in capsys.readouterr().err
