@@ -412,3 +412,17 @@ def test_object_arrays_of_numeric_text_are_refused_like_a_string_dtype():
     with pytest.raises(TypeError, match=r"y must contain real numbers, got text"):
         tsfdi.AR(np.r_[np.arange(50.0), 3.0].astype(str).astype(object), 1)
     assert as_signal(np.array([1, 2.5, np.float32(3)], dtype=object)).values.tolist() == [[1.0], [2.5], [3.0]]
+
+
+def test_a_tiny_or_huge_fs_is_refused_naming_it_before_anything_is_allocated(jittery):
+    """Issue 29, item 9: align(frame, 1e-300) raised a raw OverflowError."""
+    frame = jittery["imu"]
+    for fs in (1e-300, 5e-324, 1e-10):
+        with pytest.raises(ValueError, match=r"fs = [\de.+-]+ gives a grid period of [\de.+inf]+ ns: it must lie between "
+                                             r"1 ns and 146 years"):
+            align(frame, fs)
+    # a grid of 10**15 points is refused before it is allocated
+    long = pd.DataFrame({"a": [0.0, 1.0]}, index=pd.to_timedelta([0.0, 1e6], unit="s"))
+    with pytest.raises(ValueError, match=r"fs = 1e\+09 Hz over 1e\+06 s gives 1000000000000001 x 1 values, more "
+                                         r"than 268435456: lower fs"):
+        align(long, 1e9)

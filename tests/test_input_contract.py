@@ -501,3 +501,19 @@ def test_cli_errors_exit_2_naming_what_the_user_typed(cli_files, capsys, argv, n
     for word in named:
         assert word.format(d=cli_files) in err, (word, err)
     assert "Traceback" not in err
+
+
+def test_a_negative_seed_is_refused_naming_rng(fits):
+    """Issue 29, item 11: simulate(rng=-1) passed numpy's 'expected non-negative integer' through."""
+    from tsfdi.datasets import DrydenTurbulence, dryden_turbulence
+    from tsfdi.datasets.faults import inject_fault
+
+    calls = [lambda: fits["ar"].simulate(50, rng=-1), lambda: fits["var"].simulate(50, rng=-1),
+             lambda: fits["arx"].simulate(U, rng=-1), lambda: DrydenTurbulence().simulate(50, 0.01, rng=-1),
+             lambda: dryden_turbulence(1.0, 100.0, rng=-1), lambda: inject_fault(Y, "noise", 0.1, 10, rng=-1),
+             lambda: tsfdi.datasets.simulate_hexacopter(1, duration=1.0, seed=-1)]
+    for call in calls:
+        with pytest.raises(ValueError, match=r"^(rng must be None, a non-negative int seed or a numpy.random.Generator, "
+                                             r"got -1|seed must be >= 0, got -1)$"):
+            call()
+    assert fits["ar"].simulate(5, rng=np.int64(0)).shape == (5,)

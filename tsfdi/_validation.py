@@ -84,11 +84,13 @@ def option(value: Any, name: str, options: Iterable[str]) -> str:
 
 
 def check_rng(rng: Any, name: str = "rng") -> np.random.Generator:
-    """Turn ``None | int | numpy.random.Generator`` into a ``Generator``."""
+    """Turn ``None | int | numpy.random.Generator`` into a ``Generator``; an int seed must be >= 0."""
     if isinstance(rng, np.random.Generator):
         return rng
     if rng is None or (isinstance(rng, (numbers.Integral, np.integer))
                        and not isinstance(rng, (bool, np.bool_, np.timedelta64))):
+        if rng is not None and int(rng) < 0:
+            raise ValueError(f"{name} must be None, a non-negative int seed or a numpy.random.Generator, got {rng}")
         return np.random.default_rng(rng)
     raise TypeError(f"{name} must be None, an int seed or a numpy.random.Generator, got {type(rng).__name__}")
 

@@ -21,6 +21,7 @@ from tsfdi._data import as_signal, check_paired, refuse_masked, sampling_frequen
 from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
 from tsfdi.exceptions import ConvergenceWarning
+from tsfdi.models.lstsq import check_size
 from tsfdi.models.recursive import RecursiveARX
 
 __all__ = ["OnlineDetector", "OnlineDetection", "OnlineCalibration"]
@@ -294,7 +295,8 @@ class OnlineDetector:
         first).
     statistic : {"zscore", "mean"}, default "zscore"
     window : int, default 20
-        Length of the moving average (``statistic="mean"``).
+        Length of the moving average (``statistic="mean"``); the errors it holds, ``n_pairs * (window - 1)``
+        values, are checked against the 2 GiB limit (2**28 values) before anything is allocated.
     direction : {"both", "down", "up"}, default "both"
         Side of the moving-average test.
     arm_after : int, default 0
@@ -372,6 +374,8 @@ class OnlineDetector:
         self.nonfinite = option(nonfinite, "nonfinite", ("skip", "raise"))
         self.statistic = option(statistic, "statistic", ("zscore", "mean"))
         self.window = int_like(window, "window", minimum=1)
+        check_size(len(names) * (self.window - 1), f"window={self.window} for {len(names)} pair(s): the errors "
+                   f"in the moving window ({len(names):,} x {self.window - 1:,})")
         self.direction = option(direction, "direction", ("both", "down", "up"))
         self.arm_after = int_like(arm_after, "arm_after", minimum=0)
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)

@@ -130,3 +130,29 @@ def test_all_kinds_listed():
 def test_bad_input_names_the_argument(y, call, exc, match):
     with pytest.raises(exc, match=match):
         call(y)
+
+
+@pytest.mark.parametrize("kind", FAULT_KINDS)
+def test_a_fault_that_overflows_is_refused(kind):
+    """Issue 29, item 8: a fault beyond the float64 range was returned as inf."""
+    y = np.sin(np.arange(100.0)) * 1e300
+    with pytest.raises(ValueError, match=rf"magnitude = 1e\+10 times the sensor range [\d.e+]+ gives a {kind} fault "
+                                         r"that leaves the floating-point range \(inf\)"):
+        inject_fault(y, kind, 1e10, 10, ramp=5, rng=0)
+    with pytest.raises(ValueError, match="gives a .* fault that leaves the floating-point range"):
+        inject_fault(np.zeros(100), kind, 1e300, 10, ramp=5, sensor_range=1e300, rng=0)
+    with pytest.raises(ValueError, match="signal's range in the faulty channel overflows float64; give sensor_range"):
+        inject_fault(np.r_[-1e308, 1e308, np.zeros(98)], kind, 0.1, 10, ramp=5, rng=0)
+    faulty, _ = inject_fault(y, kind, 0.5, 10, ramp=5, rng=0)          # a large signal with a fault in range is fine
+    assert np.isfinite(faulty).all()
+
+
+def test_duplicate_column_names_are_refused():
+    """Issue 29, item 8: with duplicate column names only the first was faulted."""
+    frame = pd.DataFrame(np.random.default_rng(0).standard_normal((50, 3)), columns=["p", "q", "p"])
+    for channel in ("p", "q", 0):
+        with pytest.raises(ValueError, match=r"signal has duplicate channel names \['p'\]: a fault is added to one "
+                                             r"channel; rename them first"):
+            inject_fault(frame, "bias", 0.1, 10, channel=channel)
+    faulty, _ = inject_fault(frame.set_axis(["p", "q", "r"], axis=1), "bias", 0.1, 10, channel="r")
+    assert (faulty["r"] != frame.iloc[:, 2]).sum() == 40

@@ -49,7 +49,8 @@ def _period(fs: Any) -> int:
     elif not np.isfinite(fs) or fs <= 0:
         raise ValueError(f"fs must be a positive, finite frequency in Hz, got {fs!r}")
     else:
-        period = round(_NS / float(fs))
+        period = _NS / float(fs)        # inf for a tiny fs: refused below, before rounding
+        period = round(period) if np.isfinite(period) else period
     if not 1 <= period <= 2**62:
         raise ValueError(f"fs = {fs!r} gives a grid period of {period} ns: it must lie between 1 ns and 146 years")
     return period

@@ -76,7 +76,8 @@ def inject_fault(signal: Any, kind: str, magnitude: float, start: Any, *, durati
     ValueError
         An unknown ``kind``; ``start`` / ``duration`` / ``ramp`` out of the signal or not a number of samples or a
         time span (a time span without a time index or ``fs``); a missing or unknown ``channel``; a constant channel
-        without ``sensor_range``; NaN / inf in the signal.
+        without ``sensor_range``; NaN / inf in the signal; duplicate channel names; a fault that leaves the
+        floating-point range (``magnitude`` times the range beyond about 1e308).
     TypeError
         Non-numeric ``signal``, ``magnitude`` or ``sensor_range``.
 
@@ -104,6 +105,10 @@ def inject_fault(signal: Any, kind: str, magnitude: float, start: Any, *, durati
     """
     kind = option(kind, "kind", FAULT_KINDS)
     sig = as_signal(signal, "signal", allow_constant=True)
+    dup = sorted({c for c in sig.channels if sig.channels.count(c) > 1}) if sig.named else []
+    if dup:
+        raise ValueError(f"signal has duplicate channel names {dup}: a fault is added to one channel; rename them "
+                         "first")
     magnitude = float_like(magnitude, "magnitude")
     rate = sampling_frequency(sig, fs, "signal")
     n = sig.nobs
@@ -115,27 +120,34 @@ def inject_fault(signal: Any, kind: str, magnitude: float, start: Any, *, durati
     length = n - first if duration is None else window_samples(duration, "duration", rate)
     stop = min(n, first + length)
     if sensor_range is None:
-        span = float(y.max() - y.min())
+        with np.errstate(over="ignore"):
+            span = float(y.max() - y.min())
         if span == 0.0:
             raise ValueError("signal is constant in the faulty channel: its range is 0; give sensor_range")
+        if not np.isfinite(span):
+            raise ValueError("signal's range in the faulty channel overflows float64; give sensor_range")
     else:
         span = float_like(sensor_range, "sensor_range", minimum=0.0, strict_min=True)
     amp = magnitude * span
     k = np.arange(stop - first, dtype=np.float64)
     out = sig.values.copy()
-    if kind == "bias":
-        out[first:stop, c] += amp
-    elif kind in ("hard", "soft", "drift"):
-        if ramp is None:
-            n_ramp = stop - first if kind == "drift" else window_samples(_DEFAULT_RAMP[kind], "ramp", rate)
+    with np.errstate(over="ignore", invalid="ignore"):     # an overflow is refused below
+        if kind == "bias":
+            out[first:stop, c] += amp
+        elif kind in ("hard", "soft", "drift"):
+            if ramp is None:
+                n_ramp = stop - first if kind == "drift" else window_samples(_DEFAULT_RAMP[kind], "ramp", rate)
+            else:
+                n_ramp = window_samples(ramp, "ramp", rate)
+            shape = (k + 1.0) / n_ramp
+            out[first:stop, c] += amp * (shape if kind == "drift" else np.minimum(shape, 1.0))
+        elif kind == "stuck":
+            out[first:stop, c] = y[max(first - 1, 0)] + amp
         else:
-            n_ramp = window_samples(ramp, "ramp", rate)
-        shape = (k + 1.0) / n_ramp
-        out[first:stop, c] += amp * (shape if kind == "drift" else np.minimum(shape, 1.0))
-    elif kind == "stuck":
-        out[first:stop, c] = y[max(first - 1, 0)] + amp
-    else:
-        out[first:stop, c] += amp * check_rng(rng).standard_normal(stop - first)
+            out[first:stop, c] += amp * check_rng(rng).standard_normal(stop - first)
+    if not np.isfinite(out[first:stop, c]).all():
+        raise ValueError(f"magnitude = {magnitude:g} times the sensor range {span:g} gives a {kind} fault that leaves "
+                         "the floating-point range (inf): give a smaller magnitude or sensor_range")
     labels = np.zeros(n, dtype=bool)
     labels[first:stop] = True
     return sig.wrap(out, 0), sig.wrap(labels, 0, vector=False, name="fault")
