@@ -1,9 +1,9 @@
 """The notebooks in ``notebooks/`` run from top to bottom without error, and are committed without outputs.
 
 Each notebook is executed by nbclient in a fresh kernel with ``notebooks/`` as working folder (notebook 3 reads
-the ALFA copy in ``../shared/data/alfa``, notebook 4 the PX4 log in ``../shared/data/px4``; both fail loudly if it is
-missing). Total run time is kept to about a
-minute on two cores by working on subsets of the data inside the notebooks.
+the ALFA flights shipped in ``data/alfa``, notebook 4 the PX4 log shipped in ``data/px4``: no ``../shared`` is
+needed). Total run time is kept to about a minute on two cores by working on subsets of the data inside the
+notebooks.
 """
 
 from __future__ import annotations
