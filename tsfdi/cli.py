@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import math
 import os
 import re
@@ -57,34 +58,19 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
 
 
 # ------------------------------------------------------------------------------ flag values (argparse types)
-def _finite(text: str) -> float:
-    """A finite number."""
+def _finite(text: str, lo: float = -math.inf, hi: float = math.inf, what: str = "a finite number") -> float:
+    """A finite number in (lo, hi)."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
-    return value
-
-
-def _positive(text: str) -> float:
-    """A finite number > 0."""
-    value = _finite(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
-    return value
-
-
-def _probability(text: str) -> float:
-    """A number strictly between 0 and 1."""
-    value = _finite(text)
-    if not 0 < value < 1:
-        raise argparse.ArgumentTypeError(f"must be strictly between 0 and 1, got {text!r}")
+    if not (math.isfinite(value) and lo < value < hi):
+        raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
     return value
 
 
 def _integer(text: str, minimum: int) -> int:
+    """An integer >= minimum."""
     try:
         value = int(text)
     except ValueError:
@@ -94,19 +80,9 @@ def _integer(text: str, minimum: int) -> int:
     return value
 
 
-def _count(text: str) -> int:
-    """An integer >= 1."""
-    return _integer(text, 1)
-
-
-def _seed(text: str) -> int:
-    """An integer >= 0."""
-    return _integer(text, 0)
-
-
-def _two_or_more(text: str) -> int:
-    """An integer >= 2."""
-    return _integer(text, 2)
+_positive = functools.partial(_finite, lo=0.0, what="> 0")
+_probability = functools.partial(_finite, lo=0.0, hi=1.0, what="strictly between 0 and 1")
+_count, _seed, _two_or_more = (functools.partial(_integer, minimum=m) for m in (1, 0, 2))
 
 
 def _timedelta(text: str) -> pd.Timedelta | None:
@@ -128,28 +104,31 @@ def _bare_number(text: str) -> bool:
         return False
 
 
-def _span(text: str) -> int | str:
-    """A window length or step as in pandas ``rolling``: an integer >= 1 counts samples; a time span > 0 such as
-    '2s' or '500ms' is kept as text (converted with the sampling frequency once it is known)."""
+def _rows_or_time(text: str, minimum: int, bare: str, other: str) -> int | pd.Timedelta:
+    """An integer >= minimum, else a time span (``bare``: the hint for a decimal without a unit)."""
     text = text.strip()
     try:
         n = int(text)
     except ValueError:
-        pass
-    else:
-        if n < 1:
-            raise argparse.ArgumentTypeError(f"must be >= 1 sample or a time span such as '2s', got {text!r}")
-        return n
-    if _bare_number(text):
-        raise argparse.ArgumentTypeError(f"a bare number counts samples and must be an integer >= 1; write a time "
-                                         f"with its unit, e.g. '{text}s' or '{text}ms', got {text!r}")
-    span = _timedelta(text)
-    if span is None:
-        raise argparse.ArgumentTypeError(f"must be a number of samples (an integer such as 200) or a time span "
-                                         f"such as '2s' or '500ms', got {text!r}")
-    if span <= pd.Timedelta(0):
+        span = _timedelta(text)
+        if _bare_number(text) or span is None:
+            raise argparse.ArgumentTypeError((bare if _bare_number(text) else other) + f", got {text!r}") from None
+        return span
+    if n < minimum:
+        raise argparse.ArgumentTypeError(f"must be >= {minimum}" + (" sample or a time span such as '2s'" if minimum
+                                                                    else " (a row number)") + f", got {text!r}")
+    return n
+
+
+def _span(text: str) -> int | str:
+    """A window length or step as in pandas ``rolling``: an integer >= 1 counts samples; a time span > 0 such as
+    '2s' or '500ms' is kept as text (converted with the sampling frequency once it is known)."""
+    value = _rows_or_time(text, 1, f"a bare number counts samples and must be an integer >= 1; write a time with its "
+                          f"unit, e.g. '{text.strip()}s' or '{text.strip()}ms'", "must be a number of samples (an "
+                          "integer such as 200) or a time span such as '2s' or '500ms'")
+    if isinstance(value, pd.Timedelta) and value <= pd.Timedelta(0):
         raise argparse.ArgumentTypeError(f"must be a time span > 0, got {text!r}")
-    return text
+    return value if isinstance(value, int) else text.strip()
 
 
 def _spans(text: str) -> list[int | str]:
@@ -163,22 +142,10 @@ def _spans(text: str) -> list[int | str]:
 def _instant(text: str) -> int | float:
     """A position in a record: an integer counts rows from the first (>= 0); a time span such as '110s' is a time
     on the record's clock, returned in seconds (float)."""
-    text = text.strip()
-    try:
-        n = int(text)
-    except ValueError:
-        pass
-    else:
-        if n < 0:
-            raise argparse.ArgumentTypeError(f"a row number must be >= 0, got {text!r}")
-        return n
-    if _bare_number(text):
-        raise argparse.ArgumentTypeError(f"a bare number is a row number and must be an integer; write a time on "
-                                         f"the record's clock with its unit, e.g. '{text}s', got {text!r}")
-    span = _timedelta(text)
-    if span is None:
-        raise argparse.ArgumentTypeError(f"must be a row number or a time such as '110s' or '2min', got {text!r}")
-    return span.total_seconds()
+    value = _rows_or_time(text, 0, "a bare number is a row number and must be an integer; write a time on the "
+                          f"record's clock with its unit, e.g. '{text.strip()}s'", "must be a row number or a time "
+                          "such as '110s' or '2min'")
+    return value if isinstance(value, int) else value.total_seconds()
 
 
 def _duration(text: str, minimum: float = 0.0, strict: bool = True) -> float:
