@@ -323,9 +323,10 @@ def test_one_test_per_model(models):
     """identify / identify_windows with a mapping name -> test: each candidate with its own (calibrated) test."""
     rng = np.random.default_rng(107)
     y = simulate("rotor2", 3000, rng)
+    # a calibrated threshold holds for the calibrated window: 1000 signal samples, 1000 - order residuals
     tests = {name: tsfdi.LjungBox(30, 1e-3).calibrate(
-        [np.asarray(res.residuals(simulate(name, 2000, rng))) for _ in range(8)], window=400) for name, res in
-        models.items()}
+        [np.asarray(res.residuals(simulate(name, 4000, rng))) for _ in range(8)], window=1000 - res.lags)
+        for name, res in models.items()}
     ident = tsfdi.identify(y[:1000], models, tests)
     for name, res in models.items():
         alone = tsfdi.identify(y[:1000], {name: res}, tests[name]).decisions[name]

@@ -259,3 +259,32 @@ def test_bad_input():
         FTest(0.05, alternative="two-sided").calibrate(e, window=50)
     with pytest.raises(ValueError, match="window"):
         LjungBox(5, 0.05, threshold="empirical").calibrate(rng.standard_normal(500), window=4)
+
+
+def test_calibrated_threshold_refuses_another_window_length():
+    """Issue 29: a test calibrated with window=100 on held-out residuals, applied by detect to a 5,000-sample record,
+    returned a decision silently; its threshold holds for 100-sample windows only, so it refuses and says what to
+    do (identify_windows / Monitor with that window, or calibrate at the tested length)."""
+    rng = np.random.default_rng(29)
+    recs = [ar2(2000, rng) for _ in range(6)]
+    spec = tsfdi.AR(recs, 2)
+    base = spec.fit()
+    for test in (LjungBox(10, 0.01), FTest(0.01), tsfdi.MeanTest(0.01)):
+        test.calibrate(spec.held_out_residuals(), window=100)
+        assert test.calibration_window_ == (98, 2)
+        assert tsfdi.detect(ar2(100, rng), base, test).details["threshold_method"] == "calibrated"
+        with pytest.raises(ValueError, match=r"calibrated on windows of 98 residual samples.*window=100.*"
+                                             r"identify_windows.*Monitor.*window=5000"):
+            tsfdi.detect(ar2(5000, rng), base, test)
+        # the windowed engine applies it to windows of the calibrated length, and refuses another length
+        assert len(tsfdi.identify_windows(ar2(1000, rng), {"h": base}, test, window=100, step=50)) == 19
+        with pytest.raises(ValueError, match="calibrated on windows of 98"):
+            tsfdi.identify_windows(ar2(1000, rng), {"h": base}, test, window=200)
+    # a null sample given as statistics: the window is known only when given
+    q = ljungbox_windows(ar2(20000, rng), 10, 50, 50)
+    free = LjungBox(10, 0.01).calibrate(statistic=q)
+    assert free.calibration_window_ is None and free.test(ar2(300, rng)).statistic.size == 1
+    bound = LjungBox(10, 0.01).calibrate(statistic=q, window=50)
+    assert bound.test(ar2(50, rng)).statistic.size == 1
+    with pytest.raises(ValueError, match="calibrated on windows of 50 residual samples"):
+        bound.test(ar2(300, rng))

@@ -239,7 +239,7 @@ class CalibratedTest(ResidualTest):
             raise ValueError(f"statistic contains {int(np.isnan(s).sum())} NaN value(s)")
         k = s.shape[-1]
         if self.empirical:
-            self._check_calibrated(k)
+            self._check_calibrated(k, nobs)
             return self.threshold_, self.calibrated_pvalue(s)
         return self.null_threshold(k, nobs, **reference), self._null_pvalue(s, nobs, **reference)
 
@@ -325,7 +325,11 @@ class CalibratedTest(ResidualTest):
         window : int
             Window length. With held-out residuals of a model spec (which carry the model's order ``lags``) it
             counts *signal* samples, as in :func:`tsfdi.detect` (a window of ``window`` signal samples has
-            ``window - lags`` residuals); for other residual records it counts residual samples.
+            ``window - lags`` residuals); for other residual records it counts residual samples. With
+            ``statistic``: the residual samples behind each value (optional). The calibrated threshold holds for
+            windows of that length only: :meth:`test` (and :func:`tsfdi.detect`) refuse residuals of another
+            length, saying which window to test (:func:`tsfdi.identify_windows`, :class:`tsfdi.Monitor`) or to
+            calibrate at.
         step : int
             Samples between calibration windows (1: every window; overlapping windows are dependent, see Notes).
         statistic : array_like, shape (n,) or (n, k), optional
@@ -339,8 +343,9 @@ class CalibratedTest(ResidualTest):
         Returns
         -------
         self
-            With ``threshold_`` (ndarray, shape (k,)), ``thresholds_`` (one fitted estimator per channel) and
-            ``calibration_`` (the sorted null sample per channel). A test built with ``threshold="theoretical"``
+            With ``threshold_`` (ndarray, shape (k,)), ``thresholds_`` (one fitted estimator per channel),
+            ``calibration_`` (the sorted null sample per channel) and ``calibration_window_`` (``(residual samples
+            per window, model order)``, ``None`` when unknown: ``statistic`` without ``window``). A test built with ``threshold="theoretical"``
             becomes ``threshold="calibrated"``.
 
         Raises
@@ -396,6 +401,7 @@ class CalibratedTest(ResidualTest):
                 per_record.append(nr // n)
             if not stats_:
                 raise ValueError(f"resid: no record holds a window of {n} residual samples")
+            cal = (n, lags)
             stat = np.concatenate(stats_)
             groups = np.concatenate(groups) if len(stats_) > 1 else None
             n_ind = per_record if len(stats_) > 1 else per_record[0]
@@ -410,6 +416,8 @@ class CalibratedTest(ResidualTest):
             stat = as_signal(statistic, "statistic", allow_constant=True).values
             n_ind = int_like(independent, "independent", minimum=0, optional=True)
             groups = None
+            # the statistic's window (residual samples), when given: the threshold then holds for that length only
+            cal = None if window is None else (int_like(window, "window", minimum=2), 0)
         stat = np.asarray(stat, dtype=np.float64)
         stat = stat.reshape(stat.shape[0], -1)
         k = stat.shape[1]
@@ -440,18 +448,32 @@ class CalibratedTest(ResidualTest):
         self.threshold_ = np.array([t.threshold_ for t in ths])
         self.calibration_ = [t.sample_ for t in ths]
         self.calibration_windows_ = (int(stat.shape[0]), int(np.sum(n_ind)) if n_ind is not None else None)
+        self.calibration_window_ = cal
         return self
 
     def _calibration_reference(self, recs: list, reference: dict) -> dict:
         """What the windowed statistic needs on the calibration records (the F test's reference variance)."""
         return reference
 
-    def _check_calibrated(self, k: int) -> None:
+    def _check_calibrated(self, k: int, nobs: int | None = None) -> None:
+        """A calibrated threshold exists for ``k`` channels and, when the calibration window is known, holds for
+        windows of ``nobs`` residual samples (the length it was calibrated at)."""
         if not self.calibrated:
             raise ValueError(f"{type(self).__name__} has threshold='empirical' but is not calibrated: call "
                              "calibrate(healthy residuals, window=...) first")
         if self.threshold_.shape[0] != k:
             raise ValueError(f"resid has {k} channel(s) but the test was calibrated on {self.threshold_.shape[0]}")
+        cal = getattr(self, "calibration_window_", None)
+        if nobs is not None and cal is not None and int(nobs) != cal[0]:
+            n, lags = cal
+            name = type(self).__name__
+            model = f" of an order-{lags} model, window={n + lags} signal samples" if lags else ""
+            raise ValueError(
+                f"resid has {int(nobs)} samples but {name} was calibrated on windows of {n} residual samples{model}: "
+                "a calibrated threshold holds for windows of its calibrated length only. Test windows of that length "
+                f"(tsfdi.identify_windows(..., window={n + lags}) or tsfdi.Monitor(..., window={n + lags}), or detect "
+                f"on {n + lags} samples), or calibrate at the tested length ({name}.calibrate(..., "
+                f"window={int(nobs) + lags}))")
 
     def calibrated_pvalue(self, statistic: Any) -> np.ndarray:
         """p-value of ``statistic`` (per channel, last axis) under the calibrated null: the fitted law's upper tail

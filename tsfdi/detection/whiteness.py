@@ -325,7 +325,7 @@ class LjungBox(CalibratedTest):
                              f"got {self.model_df}")
         details = {**details, "lags": h, "model_df": self.model_df, "method": self.multivariate, "nchan": s}
         if self.empirical:
-            self._check_calibrated(1)
+            self._check_calibrated(1, n)
             thr = float(self.threshold_[0])
             pv = float(self.calibrated_pvalue(np.array([[q]]))[0, 0])
             details.update(self._calibration_details())
