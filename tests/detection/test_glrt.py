@@ -281,3 +281,21 @@ def test_empirical_threshold_module():
         et.check_fitted()
     et.calibrate(np.random.default_rng(44).exponential(size=5000))
     et.check_fitted()
+
+
+def test_theoretical_threshold_clips_the_window_to_the_record():
+    """Issue 29: GLRT(10**9).test on 300 samples took the union bound over 10**9 change instants (threshold 25.4);
+    a record of 300 samples has 300, so the threshold is that of GLRT(300) (10.8)."""
+    y = np.random.default_rng(29).standard_normal(300)
+    huge, clipped = tsfdi.GLRT(10**9, scale=1.0).test(y), tsfdi.GLRT(300, scale=1.0).test(y)
+    np.testing.assert_allclose(huge.threshold, clipped.threshold, rtol=1e-14)
+    np.testing.assert_allclose(huge.threshold, stats.chi2.isf(1e-3 / 300, 1) / 2, rtol=1e-10)
+    assert huge.details["window"] == 300 and huge.reject == clipped.reject
+    assert tsfdi.GLRT(10**9).threshold_ > huge.threshold[0]          # the full window: for a stream
+    # the parameter GLRT: the same union bound
+    from tsfdi.detection import ParameterGLRT
+
+    x = np.random.default_rng(30).standard_normal((300, 2))
+    a, b = ParameterGLRT(10**9, scale=1.0).test(y, x), ParameterGLRT(300, scale=1.0).test(y, x)
+    np.testing.assert_allclose(a.threshold, b.threshold, rtol=1e-14)
+    assert a.details["window"] == 300

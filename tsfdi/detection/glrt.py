@@ -347,12 +347,20 @@ class GLRT(ResidualTest):
     # ------------------------------------------------------------------ threshold
     @property
     def threshold_(self) -> float:
-        """The threshold :math:`\\gamma` in use."""
+        """The threshold :math:`\\gamma` in use (the theoretical one for the full ``window``; :meth:`test` clips
+        the window to the record, :meth:`critical_value`)."""
+        return self.critical_value()
+
+    def critical_value(self, nobs: int | None = None) -> float:
+        """The threshold :math:`\\gamma` for a record of ``nobs`` samples: the theoretical one takes the union
+        bound over the :math:`\\min(M, \\text{nobs})` change instants such a record has (``None``: :math:`M`);
+        a calibrated or fixed threshold does not depend on it."""
         if isinstance(self.threshold, EmpiricalThreshold):
             self.threshold.check_fitted()
             return self.threshold.threshold_
         if self.threshold == "theoretical":
-            return _chi2_1_isf(math.log(self.alpha) - math.log(self.window)) / 2.0
+            m = self.window if nobs is None else min(self.window, int_like(nobs, "nobs", minimum=1))
+            return _chi2_1_isf(math.log(self.alpha) - math.log(m)) / 2.0
         return float(self.threshold)
 
     @property
@@ -467,7 +475,7 @@ class GLRT(ResidualTest):
         sig = as_signal(resid, "resid", allow_constant=True)
         s = self._scale_for(sig.nchan, sig.values, scale)
         gvals = self._g_values(sig.values, s)
-        gamma = self.threshold_
+        gamma = self.critical_value(sig.nobs)       # a record shorter than the window has fewer change instants
         alarm = gvals > gamma
         k = sig.nchan
         first = np.full(k, -1, dtype=np.int64)
@@ -496,7 +504,7 @@ class GLRT(ResidualTest):
         theoretical = self.threshold == "theoretical"
         details = {"g": sig.wrap(gvals, 0), "alarms": alarms, "first_alarm": first, "change_index": change,
                    "jump": jump, "first_alarm_label": [_label(i) for i in first],
-                   "change_label": [_label(i) for i in change], "window": self.window, "scale": s,
+                   "change_label": [_label(i) for i in change], "window": window, "scale": s,
                    "threshold_method": ("theoretical" if theoretical else
                                         self.threshold.method_ if isinstance(self.threshold, EmpiricalThreshold)
                                         else "fixed"),
@@ -846,14 +854,17 @@ class ParameterGLRT(ResidualTest):
         return (f"ParameterGLRT(window={self.window}, scale={self.scale}, threshold={self.threshold!r}, "
                 f"alpha={self.alpha:g}, joint={self.joint})")
 
-    def critical_value(self, df: int) -> float:
-        """The threshold :math:`\\gamma` for ``df`` tested parameters (the regressors, plus one with ``joint``)."""
+    def critical_value(self, df: int, nobs: int | None = None) -> float:
+        """The threshold :math:`\\gamma` for ``df`` tested parameters (the regressors, plus one with ``joint``) on a
+        record of ``nobs`` samples (the theoretical one: :math:`\\min(M, \\text{nobs})` change instants; ``None``:
+        :math:`M`)."""
         df = int_like(df, "df", minimum=1)
         if isinstance(self.threshold, EmpiricalThreshold):
             self.threshold.check_fitted()
             return self.threshold.threshold_
         if self.threshold == "theoretical":
-            return _chi2_isf(math.log(self.alpha) - math.log(self.window), float(df)) / 2.0
+            m = self.window if nobs is None else min(self.window, int_like(nobs, "nobs", minimum=1))
+            return _chi2_isf(math.log(self.alpha) - math.log(m), float(df)) / 2.0
         return float(self.threshold)
 
     # ------------------------------------------------------------------ inputs
@@ -995,7 +1006,7 @@ class ParameterGLRT(ResidualTest):
         sigma = self._scale_value(r, scale)
         g, best = self._g(y0, phi, ref, sigma)
         d = phi.shape[1]
-        gamma = self.critical_value(d)
+        gamma = self.critical_value(d, y0.shape[0])
         alarms = np.flatnonzero(g > gamma)
         change = pd.Series(np.nan, index=pd.Index(names, name="parameter"), name="change")
         first = change_at = -1
@@ -1009,7 +1020,8 @@ class ParameterGLRT(ResidualTest):
                   self.threshold.method_ if isinstance(self.threshold, EmpiricalThreshold) else "fixed")
         label = None if first < 0 else (sy.index[first] if sy.index is not None else first)
         details = {"g": sy.wrap(g[:, None], 0), "alarms": alarms, "first_alarm": first, "first_alarm_label": label,
-                   "change_index": change_at, "change": change, "scale": sigma, "window": self.window,
+                   "change_index": change_at, "change": change, "scale": sigma,
+                   "window": min(self.window, y0.shape[0]),
                    "threshold_method": method, "alarm_rate": float(alarms.size / max(g.size, 1))}
         return Decision(statistic=np.array([g.max()]), threshold=np.array([gamma]), pvalue=np.array([np.nan]),
                         alpha=self.false_alarm, reject=bool(alarms.size), df=np.array([float(d)]), nobs=sy.nobs,
