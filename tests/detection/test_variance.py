@@ -142,3 +142,24 @@ def test_bad_input():
         tsfdi.FTest(alternative="less")
     with pytest.raises(ValueError, match="correction"):
         tsfdi.FTest(correction="holm")
+
+
+@pytest.mark.parametrize("alpha", [0.05, 1e-12, 1e-300])
+def test_huge_reference_df_gives_the_chi2_limit(alpha):
+    """Issue 29: reference_df >= ~1e295 gave a NaN threshold (and above ~1e13 wrong digits): F(n, d) tends to
+    chi2(n) / n as d grows, and the thresholds and p-values are that limit's, finite, for any reference_df."""
+    from tsfdi.detection.variance import f_isf, f_sf
+
+    y = np.random.default_rng(29).standard_normal(300)
+    limit = stats.chi2.isf(alpha, 300) / 300
+    lower_limit = stats.chi2.ppf(alpha / 2, 300) / 300
+    for df in (1e11, 1e14, 1e200, 1e295, 1.7e308):
+        d = tsfdi.FTest(alpha).test(y, reference_variance=1.0, reference_df=df)
+        np.testing.assert_allclose(d.threshold, limit, rtol=1e-7)
+        np.testing.assert_allclose(d.pvalue, stats.chi2.sf(300 * d.statistic, 300), rtol=1e-7)
+        two = tsfdi.FTest(alpha, alternative="two-sided").test(y, reference_variance=1.0, reference_df=df)
+        np.testing.assert_allclose(two.details["lower_threshold"], lower_limit, rtol=1e-7)
+        assert np.isfinite(two.pvalue).all()
+    # the limit takes over continuously from the exact law
+    np.testing.assert_allclose(f_isf(300, 3e10, alpha), f_isf(300, 2.9e10, alpha), rtol=1e-7)
+    np.testing.assert_allclose(f_sf(1e300, 40, 0.5), stats.chi2.cdf(40 / 0.5, 40), rtol=1e-10)

@@ -359,6 +359,44 @@ def _log_beta_tail(a: np.ndarray, b: np.ndarray, log_y: np.ndarray) -> np.ndarra
     return a * log_y + b * np.log1p(-y) - special.betaln(a, b) - np.log(a) + np.log(h)
 
 
+#: Ratio of the degrees of freedom from which the F law is its chi-square limit, :math:`\mathcal F(n, d) \to
+#: \chi^2(n) / n` as :math:`d \to \infty` (``d >= _CHI2_LIMIT_FROM * max(n, 100)``; relative error of the quantiles
+#: below about 1e-7 down to alpha = 1e-300): scipy's incomplete beta function loses digits beyond about 1e11 degrees
+#: of freedom (1e-4 at 1e14) and gives NaN beyond 1e200.
+_CHI2_LIMIT_FROM = 1e8
+
+
+def _large(df: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Where ``df`` is so much larger than ``other`` that the F law is its chi-square limit in ``df``."""
+    return df / _CHI2_LIMIT_FROM >= np.maximum(other, 100.0)
+
+
+def _f_limit(dfn: np.ndarray, dfd: np.ndarray, v: np.ndarray, quantile: bool, exact: Any) -> np.ndarray:
+    r""":func:`f_isf` (``quantile``: ``v`` is alpha) or :func:`f_sf` (``v`` is the statistic) where one degree of
+    freedom is far larger than the other (:func:`_large`): the chi-square limits :math:`\mathcal F(n, \infty) =
+    \chi^2(n) / n` and :math:`\mathcal F(\infty, d) = d / \chi^2(d)` (the inverse incomplete gamma functions keep
+    the digits of alpha down to 1e-300); ``exact`` elsewhere."""
+    out = np.empty(dfn.shape)
+    big_d, big_n = _large(dfd, dfn), _large(dfn, dfd)
+    rest = ~(big_d | big_n)
+    if rest.any():
+        out[rest] = exact(dfn[rest], dfd[rest], v[rest])
+    upper, lower = ((special.gammainccinv, special.gammaincinv) if quantile else
+                    (special.gammaincc, special.gammainc))
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        m = big_d & ~big_n                              # chi2(n) / n
+        if quantile:
+            out[m] = 2.0 * upper(dfn[m] / 2, v[m]) / dfn[m]
+        else:
+            out[m] = upper(dfn[m] / 2, dfn[m] * v[m] / 2)
+        m = big_n & ~big_d                              # d / chi2(d): upper tail of F is the lower tail of chi2(d)
+        if quantile:
+            out[m] = dfd[m] / (2.0 * lower(dfd[m] / 2, v[m]))
+        else:
+            out[m] = lower(dfd[m] / 2, dfd[m] / (2.0 * v[m]))
+    return out
+
+
 #: smallest alpha for which ``scipy.special.fdtri(dfn, dfd, 1 - alpha)`` is used as it is: ``1 - alpha`` keeps at
 #: least six significant digits of alpha
 _FDTRI_FROM = 1e-10
@@ -374,9 +412,14 @@ def f_isf(dfn: Any, dfd: Any, alpha: Any) -> np.ndarray:
     ``scipy.special.betaincinv`` where its result checks out, else (below ``alpha = 1e-250``, or where the
     inverse is NaN or wrong) Newton's method on :math:`\ln I_y(a, b) = \ln \alpha` in :math:`\ln y`
     (:func:`_log_beta_tail`). (``scipy.special.fdtri(dfn, dfd, 1 - alpha)`` loses the digits of ``alpha`` in
-    ``1 - alpha``: it is ``inf`` below ``alpha`` of about 1e-16.)
+    ``1 - alpha``: it is ``inf`` below ``alpha`` of about 1e-16.) Where one degree of freedom is more than 1e8
+    times the other (and 1e10) -- a baseline's ``reference_df`` up to 1.8e308 -- the chi-square limit
+    :math:`\mathcal F(n, \infty) = \chi^2(n) / n` (:func:`_f_limit`), where the beta function gives wrong or NaN
+    quantiles.
     """
     dfn, dfd, alpha = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (dfn, dfd, alpha)))
+    if np.any(_large(dfd, dfn) | _large(dfn, dfd)):
+        return _f_limit(dfn, dfd, alpha, True, f_isf)
     if np.all(alpha >= _FDTRI_FROM):            # 1 - alpha keeps alpha's digits: scipy's quantile (the fast path)
         return special.fdtri(dfn, dfd, 1.0 - alpha)
     shape = dfn.shape
@@ -405,7 +448,11 @@ def f_isf(dfn: Any, dfd: Any, alpha: Any) -> np.ndarray:
 
 def f_sf(dfn: Any, dfd: Any, f: Any) -> np.ndarray:
     r""":math:`P(\mathcal F(\text{dfn}, \text{dfd}) > f)`: ``scipy.special.fdtrc``, and in log space below
-    1e-250 (:func:`_log_beta_tail`), where scipy's value may be off by a factor of 2 or be 0 for 1e-300."""
+    1e-250 (:func:`_log_beta_tail`), where scipy's value may be off by a factor of 2 or be 0 for 1e-300; the
+    chi-square limit where one degree of freedom is far larger than the other (as :func:`f_isf`)."""
+    dfn, dfd, f = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (dfn, dfd, f)))
+    if np.any(_large(dfd, dfn) | _large(dfn, dfd)):
+        return _f_limit(dfn, dfd, f, False, f_sf)
     p = special.fdtrc(dfn, dfd, f)
     if not np.any(p < _LOG_SPACE_BELOW):
         return p
