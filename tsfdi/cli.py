@@ -804,7 +804,7 @@ def _select_order(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------------------------------- detect
 def _detect_args(p: argparse.ArgumentParser) -> None:
     _add_data_args(p, columns_help="comma-separated columns, matched to the baseline's channels by name (default: "
-                                   "the baseline's channels when the file has them, else all numeric columns)")
+                                   "the baseline's channels)")
     p.add_argument("--baseline", required=True, help="healthy model (.npz from 'tsfdi fit')")
     _window_args(p, "window length (default: each whole record)")
     _test_args(p)
@@ -872,7 +872,7 @@ def _detect_rows(data: _Data, frame: pd.DataFrame, starts: Any, W: int, channels
 # ------------------------------------------------------------------------------------------------- identify
 def _identify_args(p: argparse.ArgumentParser) -> None:
     _add_data_args(p, columns_help="comma-separated columns, matched to the models' channels by name (default: the "
-                                   "models' channels when the file has them, else all numeric columns)")
+                                   "models' channels)")
     p.add_argument("--models", required=True, nargs="+", metavar="NAME=PATH",
                    help="saved models (.npz from 'tsfdi fit'), as NAME=PATH or PATH (name = file stem); each "
                         "name once")
@@ -923,7 +923,7 @@ def _identify(args: argparse.Namespace) -> int:
 # -------------------------------------------------------------------------------------------------- monitor
 def _monitor_args(p: argparse.ArgumentParser) -> None:
     _add_data_args(p, columns_help="comma-separated columns, matched to the baseline's channels by name (default: "
-                                   "the baseline's channels when the file has them, else all numeric columns)")
+                                   "the baseline's channels)")
     p.add_argument("--baseline", required=True, help="healthy model (.npz from 'tsfdi fit')")
     p.add_argument("--models", nargs="+", default=None, metavar="NAME=PATH",
                    help="fault models identifying the windows after a detection, as NAME=PATH or PATH (name = "
