@@ -288,3 +288,35 @@ def test_calibrated_threshold_refuses_another_window_length():
     assert bound.test(ar2(50, rng)).statistic.size == 1
     with pytest.raises(ValueError, match="calibrated on windows of 50 residual samples"):
         bound.test(ar2(300, rng))
+
+
+def test_every_calibrated_test_refuses_a_frozen_stretch_in_healthy_records():
+    """Issue 29: FTest / MeanTest.calibrate accepted healthy records with a frozen stretch (LjungBox refused): one
+    rule for all, naming the record, the channel and where the stretch is; a stretch shorter than a window passes."""
+    rng = np.random.default_rng(31)
+    recs = [pd.DataFrame(rng.standard_normal((1000, 2)), columns=["roll", "pitch"]) for _ in range(4)]
+    recs[2].iloc[300:400, 1] = 0.25
+    for test in (LjungBox(5, 0.01), FTest(0.01), tsfdi.MeanTest(0.01)):
+        with pytest.raises(ValueError, match=r"resid\[2\] holds a constant stretch \(a frozen sensor\) of 100 "
+                                             r"samples in channel 'pitch' at samples \[300, 400\).*window \(100"):
+            test.calibrate(recs, window=100)
+        with pytest.raises(ValueError, match=r"^resid holds a constant stretch"):
+            test.calibrate(recs[2], window=50)
+        assert test.calibrate(recs, window=101).calibrated              # 100 samples: shorter than a window
+
+
+def test_calibration_errors_name_the_channel_and_the_fix():
+    """Issue 29: the calibration error named internal words ("statistic", "channel 0") and not min_windows; it names
+    the records, the bound and how to lower it (ScaledChi2Threshold(min_windows=...), the CLI's --min-windows), and
+    a per-channel failure names the channel."""
+    rng = np.random.default_rng(32)
+    recs = [pd.DataFrame(rng.standard_normal((1000, 2)), columns=["roll", "pitch"]) for _ in range(3)]
+    with pytest.raises(ValueError, match=r"^resid \(the healthy records, windows of 101 residual samples\) holds 27 "
+                                         r"independent .* at least 30 are needed \(min_windows\).*"
+                                         r"ScaledChi2Threshold\(alpha, min_windows=\.\.\.\).*--min-windows") as err:
+        LjungBox(5, 1e-3).calibrate(recs, window=101)
+    assert "channel 0" not in str(err.value)
+    assert LjungBox(5, 1e-3, threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20)).calibrate(
+        recs, window=101).calibrated
+    with pytest.raises(ValueError, match=r"^LjungBox.calibrate, channel 'roll': statistic is too small to calibrate"):
+        LjungBox(5, 1e-5, threshold="empirical").calibrate(recs, window=101)

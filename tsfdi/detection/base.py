@@ -393,27 +393,24 @@ class CalibratedTest(ResidualTest):
             reference = self._calibration_reference(recs, reference)
             stats_, groups, per_record = [], [], []
             for i, r in enumerate(recs):
-                nr = as_signal(r, f"resid[{i}]", allow_constant=True).nobs
-                if nr < n:
+                sig = as_signal(r, f"resid[{i}]", allow_constant=True)
+                if sig.nobs < n:
                     continue                                   # a record shorter than one window gives none
+                refuse_constant_stretch(sig, n, f"resid[{i}]" if isinstance(resid, (list, tuple)) else "resid")
                 stats_.append(np.asarray(self.window_statistic(r, n, step, **reference)))
                 groups.append(np.full(stats_[-1].shape[0], i))
-                per_record.append(nr // n)
+                per_record.append(sig.nobs // n)
             if not stats_:
                 raise ValueError(f"resid: no record holds a window of {n} residual samples")
-            cal = (n, lags)
+            cal, names = (n, lags), sig.channels
             stat = np.concatenate(stats_)
             groups = np.concatenate(groups) if len(stats_) > 1 else None
             n_ind = per_record if len(stats_) > 1 else per_record[0]
-            frozen = ~np.isfinite(stat)
-            if frozen.any():
-                raise ValueError(f"resid holds {int(frozen.any(axis=1).sum())} constant window(s) (a frozen sensor, "
-                                 f"statistic inf) in channel(s) {np.flatnonzero(frozen.any(axis=0)).tolist()}: "
-                                 "healthy calibration records must not contain constant stretches")
         else:
             if resid is not None:
                 raise TypeError("give resid or statistic, not both")
-            stat = as_signal(statistic, "statistic", allow_constant=True).values
+            sig = as_signal(statistic, "statistic", allow_constant=True)
+            stat, names = sig.values, sig.channels
             n_ind = int_like(independent, "independent", minimum=0, optional=True)
             groups = None
             # the statistic's window (residual samples), when given: the threshold then holds for that length only
@@ -421,6 +418,8 @@ class CalibratedTest(ResidualTest):
         stat = np.asarray(stat, dtype=np.float64)
         stat = stat.reshape(stat.shape[0], -1)
         k = stat.shape[1]
+        if len(names) != k:                                 # the joint statistic of a multivariate test
+            names = ("joint",) if k == 1 else tuple(f"y{c}" for c in range(k))
         if self.threshold == self._theoretical:
             self.threshold = "calibrated"
         a = self._channel_alpha(self.alpha, k, getattr(self, "correction", None))
@@ -428,6 +427,16 @@ class CalibratedTest(ResidualTest):
             tpl = self.threshold
         else:
             tpl = ScaledChi2Threshold(a) if self.threshold == "calibrated" else EmpiricalThreshold(a)
+        if isinstance(tpl, ScaledChi2Threshold):
+            have = stat.shape[0] if n_ind is None else int(np.sum(n_ind))
+            if have < tpl.min_windows:
+                held = (f"resid (the healthy records, windows of {cal[0]} residual samples)" if resid is not None
+                        else "statistic")
+                raise ValueError(
+                    f"{held} holds {have} independent (non-overlapping) windows, at least {tpl.min_windows} are needed "
+                    f"(min_windows) to fit the calibrated null law of {type(self).__name__}: give more or longer "
+                    "healthy records (or shorter windows), or lower the bound with "
+                    "threshold=ScaledChi2Threshold(alpha, min_windows=...) (command line: --min-windows), at least 5")
         ths = []
         for c in range(k):
             est = copy.copy(tpl)
@@ -442,7 +451,7 @@ class CalibratedTest(ResidualTest):
                 else:
                     est.calibrate(stat[:, c])
             except ValueError as err:
-                raise ValueError(f"statistic (calibration sample of channel {c}) is too small: {err}") from None
+                raise ValueError(f"{type(self).__name__}.calibrate, channel {names[c]!r}: {err}") from None
             ths.append(est)
         self.thresholds_ = ths
         self.threshold_ = np.array([t.threshold_ for t in ths])
@@ -499,6 +508,31 @@ class CalibratedTest(ResidualTest):
         else:
             out["pvalue_method"] = "empirical: (1 + #{calibration >= statistic}) / (n + 1)"
         return out
+
+
+def refuse_constant_stretch(sig: Signal, length: int, name: str) -> None:
+    """Refuse a healthy calibration record holding a constant stretch (a frozen sensor) of at least ``length``
+    samples -- a whole window -- in some channel: ``ValueError`` naming the record, the channel and where the stretch
+    is. The one rule of every calibrated test (a Ljung-Box :math:`Q` of such a window is ``inf``; the F and mean-shift
+    statistics are finite there and would silently lower or shift the calibrated law)."""
+    x = sig.values
+    if length < 2 or x.shape[0] < length:
+        return
+    same = np.zeros((x.shape[0] + 1, x.shape[1]), dtype=np.int8)
+    same[1:-1] = x[1:] == x[:-1]                        # sample t equals sample t - 1
+    edges = np.diff(same, axis=0)                       # +1: a run of equal samples starts, -1: it ends
+    found = []
+    for c in range(x.shape[1]):
+        starts, stops = np.flatnonzero(edges[:, c] == 1), np.flatnonzero(edges[:, c] == -1)
+        long = np.flatnonzero(stops - starts >= length - 1)
+        if long.size:
+            found.append((int(starts[long[0]]), int(stops[long[0]]) + 1, c))
+    if found:
+        a, b, c = min(found)
+        raise ValueError(f"{name} holds a constant stretch (a frozen sensor) of {b - a} samples in channel "
+                         f"{sig.channels[c]!r} at samples [{a}, {b}): healthy calibration records must not contain a "
+                         f"constant stretch as long as a window ({length} samples); cut it out (split the record "
+                         "there) or leave the record out")
 
 
 def statistic_array(statistic: Any) -> np.ndarray:
