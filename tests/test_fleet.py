@@ -196,6 +196,19 @@ def test_map_records_in_order_with_arguments():
     assert not is_chunked(v) and not is_chunked(data.rename(record="flight"))
 
 
+def test_map_records_reads_a_zarr_store_whose_coordinates_are_one_chunk(tmp_path):
+    """xr.open_zarr gives the data in chunks of records and a record coordinate in one chunk: the chunks are the
+    data's (xarray's chunksizes of the whole object raised 'inconsistent chunks')."""
+    v = np.arange(30.0).reshape(10, 3)
+    xr.Dataset({"v": (("record", "time"), v)}, coords={"state": ("record", list("abcdefghij"))}).chunk(
+        record=4).to_zarr(tmp_path / "f.zarr", zarr_format=2)
+    stored = xr.open_zarr(tmp_path / "f.zarr").assign_coords(state=lambda d: d.state.chunk(record=10))
+    assert record_chunks(stored) == [slice(0, 4), slice(4, 8), slice(8, 10)]
+    with dask.config.set(scheduler="synchronous"):
+        out = list(map_records(_square, stored, 0.0))
+    assert [s for _, s in out] == [float((v[w] ** 2).sum()) for w, _ in out]
+
+
 # ---------------------------------------------------------------------------------------- the driver's memory
 def _synthetic_chunk(first: int, n: int, length: int) -> np.ndarray:
     states = list(SYSTEMS)

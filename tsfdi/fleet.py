@@ -44,7 +44,7 @@ def _record_variables(data: Any) -> list:
     if isinstance(data, xr.DataArray):
         return [data.variable] if "record" in data.dims else []
     if isinstance(data, xr.Dataset):
-        return [v for v in (*data.data_vars.values(), *data.coords.values()) if "record" in v.dims]
+        return [v.variable for v in (*data.data_vars.values(), *data.coords.values()) if "record" in v.dims]
     return []
 
 
