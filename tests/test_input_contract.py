@@ -517,3 +517,13 @@ def test_a_negative_seed_is_refused_naming_rng(fits):
                                              r"got -1|seed must be >= 0, got -1)$"):
             call()
     assert fits["ar"].simulate(5, rng=np.int64(0)).shape == (5,)
+
+
+def test_a_stream_sample_of_numbers_written_as_text_is_refused():
+    """Issue 29, item 4, for the streaming path: ``update(["1.5", "2"])`` parsed the text as numbers."""
+    from tsfdi._validation import sample_vector
+
+    for value in (["1.5", "2"], np.array(["1.5", "2"]), np.array(["1.5", 2.0], dtype=object), [b"1", b"2"]):
+        with pytest.raises(TypeError, match=r"x must be a number or one number per channel, got"):
+            sample_vector(value, 2)
+    assert sample_vector(np.array([1, 2.5], dtype=object), 2).tolist() == [1.0, 2.5]

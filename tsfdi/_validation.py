@@ -101,7 +101,10 @@ def sample_vector(value: Any, nchan: int, name: str = "x") -> np.ndarray:
     if isinstance(value, (str, bytes, bool, np.bool_)) or value is None:
         raise TypeError(f"{name} must be a number or one number per channel, got {value!r}")
     try:
-        v = np.atleast_1d(np.asarray(value, dtype=np.float64))
+        v = np.asarray(value)
+        if v.dtype.kind in "USO" and any(isinstance(e, (str, bytes)) for e in np.ravel(v)):
+            raise TypeError     # numbers written as text are not parsed, as signals' are not
+        v = np.atleast_1d(v.astype(np.float64))
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a number or one number per channel, got {value!r}") from None
     if v.shape != (nchan,):
