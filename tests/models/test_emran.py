@@ -274,3 +274,19 @@ def test_failed_update_leaves_the_network_unchanged():
     with pytest.raises(ValueError):
         net.update(np.nan, 1.0)
     assert (net.nobs, net.bias_, net.weights_.tolist()) == before
+
+
+def test_x_and_y_with_different_indexes_or_a_gap_are_refused():
+    """Issue 29, items 1 and 5: EMRAN paired pandas X and y by position and ran across a logging gap."""
+    import pandas as pd
+
+    rng = np.random.default_rng(29)
+    t = pd.date_range("2024", periods=100, freq="10ms")
+    X = pd.DataFrame(rng.standard_normal((100, 2)), index=t)
+    y = pd.Series(np.sin(X[0].to_numpy()), index=t)
+    with pytest.raises(ValueError, match=r"X and y have different indexes \(first at sample 0"):
+        EMRAN(2).run(X, y.set_axis(t + pd.Timedelta("10ms")))
+    gap = t.delete(range(40, 60))
+    with pytest.raises(ValueError, match=r"y is not uniformly sampled: a gap of 0.21 s after sample 39"):
+        EMRAN(2).run(X.iloc[:80].set_axis(gap), y.iloc[:80].set_axis(gap))
+    assert EMRAN(2).run(X, y).resid.index.equals(t)

@@ -21,7 +21,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from tsfdi._data import as_signal
+from tsfdi._data import as_signal, check_paired
 from tsfdi._validation import float_like, int_like, option
 from tsfdi.models.lstsq import check_size
 
@@ -598,7 +598,8 @@ class EMRAN:
         Raises
         ------
         ValueError
-            ``X`` / ``y`` of different lengths, ``X`` with another number of columns, NaN / inf under
+            ``X`` / ``y`` of different lengths or with different indexes (pandas / xarray, paired sample by
+            sample, never aligned), ``X`` with another number of columns, NaN / inf under
             ``nonfinite="raise"`` or a sample beyond ``+-1e100``; nothing is processed.
         TypeError
             Non-numeric (or bool) ``X`` / ``y``.
@@ -609,6 +610,7 @@ class EMRAN:
         xv = np.ascontiguousarray(sx.values)
         if xv.shape[0] != yv.shape[0]:
             raise ValueError(f"X and y must have the same length, got len(X)={xv.shape[0]} and len(y)={yv.shape[0]}")
+        check_paired(sx, sy, ("X", "y"))
         self._check_samples(xv, yv)
         start = self.nobs
         pred, err, rms, units, flags = self._call(xv, yv)
