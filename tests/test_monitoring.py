@@ -70,10 +70,37 @@ def test_healthy_record_has_no_event(models):
     assert res.events == [] and res.detection_time is None and res.label is None
 
 
-def test_without_thresholds_identifies_from_detection(models, failure_record):
-    res = _monitor(models).run(failure_record)
-    ident = [e for e in res.events if e.kind == "identification"]
-    assert ident[0].window[1] == pytest.approx(res.detection_time)
+def test_steady_state_is_paper_003s_check_at_the_time_it_is_established(models, failure_record):
+    """Issue 29: "steady" was reported at the detection instant and the steady window changed nothing. Without
+    steady_thresholds the thresholds are paper 003's -- the largest rolling variance of every channel over the fault
+    models' (steady) fitting records -- and the steady event is the end of the first variance window wholly after
+    the detection with every channel at or below them; identification starts there."""
+    x = failure_record
+    times = {}
+    for V in ("2s", "5s", "8s"):
+        mon = _monitor(models, steady_window=V)
+        res = mon.run(x)
+        n = mon.steady_window
+        expect = np.max([np.max(rolling_variance(m.model.records[0].values, n, 1), axis=0)
+                         for m in (models["f1"], models["f2"])], axis=0)
+        np.testing.assert_allclose(mon.steady_thresholds, expect)
+        kinds = [e.kind for e in res.events]
+        assert kinds[:2] == ["detection", "steady"]
+        steady = res.events[1]
+        assert steady.window[0] >= res.detection_time and steady.time == pytest.approx(steady.window[0] + n / FS)
+        assert steady.time > res.detection_time                      # not the detection instant
+        end = int(round(steady.time * FS))
+        assert np.all(x[end - n:end].var(axis=0) <= expect)          # the check itself, at that time
+        for t in np.arange(res.detection_time + n / FS, steady.time - 1e-9, 1.0):   # and not one step earlier
+            e = int(round(t * FS))
+            assert not np.all(x[e - n:e].var(axis=0) <= expect)
+        ident = [e for e in res.events if e.kind == "identification"]
+        assert ident and ident[0].window[0] >= steady.window[0]
+        times[V] = steady.time
+    assert len(set(times.values())) > 1                              # the steady window changes the result
+    # detection only: no fault records, no steady-state check unless thresholds are given
+    only = tsfdi.Monitor(models["healthy"], window="5s", step="1s", fs=FS, test=LjungBox(lags=20, alpha=1e-4))
+    assert only.steady_thresholds is None and "steady" not in [e.kind for e in only.run(x).events]
 
 
 def test_streaming_equals_batch(models, failure_record):
@@ -470,3 +497,28 @@ def test_sample_counts_with_a_time_index_give_times_in_seconds(models, failure_r
     res = counts.run(x)
     assert counts.fs == pytest.approx(FS) and 10.0 < res.detection_time <= 12.0
     assert counts.run(failure_record).detection_time == pytest.approx(res.detection_time * FS)   # numpy: samples
+
+
+def test_window_longer_than_the_signal_is_refused(models, failure_record):
+    """Issue 29: Monitor with a window longer than the signal returned 0 windows silently; it names window and the
+    signal length, in samples and seconds (samples only without fs), and a stream's short first block still waits."""
+    with pytest.raises(ValueError, match=r"window \(500 samples \(5 s\)\) is longer than the signal \(300 samples "
+                                         r"\(3 s\)\)"):
+        _monitor(models).run(failure_record[:300])
+    with pytest.raises(ValueError, match=r"window \(500 samples\) is longer than the signal \(300 samples\):"):
+        _monitor(models, window=500, step=100, steady_window=500, fs=None).run(failure_record[:300])
+    with pytest.raises(ValueError, match=r"record 1: window \(500 samples"):
+        _monitor(models).screen([failure_record, failure_record[:300]])
+    mon = _monitor(models)
+    assert mon.update(failure_record[:300]) == [] and len(mon.update(failure_record[300:600])) == 0
+    assert len(mon.result().windows) == 2
+
+
+def test_steady_window_longer_than_the_fault_records_is_refused(models, failure_record):
+    """The default steady-state thresholds come from the fault models' records: a steady_window longer than all of
+    them is refused, naming it in samples and seconds."""
+    with pytest.raises(ValueError, match=r"steady_window \(7000 samples \(70 s\)\) is longer than every record the "
+                                         r"fault model 'f1' was fitted on \(at most 6000 samples \(60 s\)\)"):
+        _monitor(models, steady_window="70s")
+    res = _monitor(models, steady_window="70s", steady_thresholds=[1.0, 1.0, 1.0][:failure_record.shape[1]])
+    assert res.steady_window == 7000

@@ -36,8 +36,9 @@ class MonitorEvent:
         Time from the start of the stream (the end of the window that produced the event): seconds when the
         monitor has ``fs``, samples without.
     kind : {"detection", "steady", "identification"}
-        Fault detected by the healthy model; post-failure steady state reached (rolling variances below the
-        baseline thresholds); a window identified.
+        Fault detected by the healthy model; post-failure steady state reached (the rolling variance of every
+        channel over a window wholly after the detection at or below its steady-state threshold, paper 003; at the
+        end of that variance window); a window identified.
     label : str or None
         The identified model (identification events; ``None`` for an ambiguous or empty decision).
     status : str
@@ -127,16 +128,17 @@ class Monitor:
     1. *healthy*: the window's residuals through the healthy ``baseline`` model are tested with
        ``detection_test``; the first rejection is a ``"detection"`` event at the window's end.
     2. *transient*: the rolling variance of every channel over ``steady_window`` is compared with
-       ``steady_thresholds`` (estimated in the baseline phase as the largest steady-state variances of the
-       fault records, Fig. 7 discussion); the first variance window lying wholly after the detection with every
-       channel below its threshold is a ``"steady"`` event.
+       ``steady_thresholds`` (paper 003, Fig. 7 discussion: estimated in the baseline phase as the largest
+       steady-state variances of the fault records -- by default those of the records the fault models were fitted
+       on); the first variance window lying wholly after the detection with every channel at or below its threshold
+       is a ``"steady"`` event at the end of that variance window, the time the steady state is established.
     3. *steady*: every window starting at or after the start of that variance window is identified: its
        residuals through each fault model in ``models`` are tested with ``test``, and ``rule`` turns the
        decisions into a label (``"identification"`` event per window).
 
     Without fault models (``models=None``) the monitor detects only: every window is tested with the healthy
     model (``fault`` in :attr:`MonitorResult.windows`), the first rejection is the ``"detection"`` event, a
-    ``"steady"`` event follows only with ``steady_thresholds``, and no window is identified.
+    ``"steady"`` event follows only with ``steady_thresholds`` given, and no window is identified.
 
     Parameters
     ----------
@@ -162,10 +164,13 @@ class Monitor:
     detection_test : ResidualTest, optional
         Detection test on the healthy model's residuals (default: ``test``).
     steady_thresholds : array_like, shape (k,), optional
-        Rolling-variance thresholds per channel; ``None`` skips the steady-state check (identification starts
-        with the first window after the detection).
+        Rolling-variance thresholds per channel. ``None`` (default): paper 003's rule on the fault models' own
+        fitting records (steady post-failure records): the largest variance of every channel over every
+        ``steady_window`` of every record (``ValueError`` when a model has no record that long); without fault
+        models no steady-state check is made.
     steady_window : int or time span, optional
-        Length of the rolling-variance window (default ``"10s"``, the paper's).
+        Length of the rolling-variance window (default ``"10s"``, the paper's); it sets both the variance checked
+        and, by default, the thresholds.
     rule : {"paper", "likelihood", "pvalue"}
         Decision rule (see :data:`tsfdi.windows.RULES`).
 
@@ -173,6 +178,8 @@ class Monitor:
     ----------
     window, step, steady_window : int or None
         The lengths in samples; ``None`` for a time span while ``fs`` is not known yet (before the first samples).
+    steady_thresholds : ndarray, shape (k,), or None
+        The thresholds in use (given, or from the fault models once ``steady_window`` is known in samples).
 
     Notes
     -----
@@ -240,8 +247,10 @@ class Monitor:
             raise TypeError(f"detection_test must be a residual test, got {type(detection_test).__name__}")
         self.test, self.detection_test = test, detection_test
         self.rule = option(rule, "rule", RULES)
+        self._steady_given = steady_thresholds is not None
+        self._steady_cache: dict = {}           # steady_window in samples -> the thresholds of the fault models
         if steady_thresholds is None:
-            self.steady_thresholds = None
+            self.steady_thresholds = None          # from the fault models' records once steady_window is known
         else:
             refuse_masked(steady_thresholds, "steady_thresholds")
             try:
@@ -279,6 +288,37 @@ class Monitor:
                 except ValueError as err:
                     raise ValueError(f"{err}{source}") from None
             setattr(self, name, size)
+        if not self._steady_given:
+            V = self.steady_window
+            if self.models and V is not None and V not in self._steady_cache:
+                self._steady_cache[V] = self._model_steady_thresholds(V)
+            self.steady_thresholds = self._steady_cache.get(V) if self.models else None
+
+    def _model_steady_thresholds(self, V: int) -> np.ndarray:
+        """Paper 003's steady-state thresholds: per channel, the largest variance over every ``V``-sample window of
+        the records the fault models were fitted on (steady post-failure records; records shorter than ``V`` give no
+        window, a model without a record that long is refused)."""
+        top = np.zeros(self.nchan)
+        for name, res in self.models.items():
+            recs = list(getattr(getattr(res, "model", None), "records", None) or ())
+            lengths = []
+            for i, rec in enumerate(recs):
+                if rec.named and self._model_named:
+                    rec = rec.match_channels(self._model_channels, f"models[{name!r}] record {i}")
+                lengths.append(rec.nobs)
+                if rec.nobs >= V:
+                    top = np.maximum(top, rolling_variance(rec.values, V, 1).max(axis=0))
+            if not lengths:
+                raise ValueError(f"steady_thresholds: the fault model {name!r} carries no records to take the "
+                                 "steady-state variances from (paper 003: the largest variance of every channel "
+                                 "over its steady post-failure records); give steady_thresholds")
+            if max(lengths) < V:
+                secs = (lambda n: f" ({n / self.fs:g} s)") if self.fs else (lambda n: "")
+                raise ValueError(f"steady_window ({V} samples{secs(V)}) is longer than every record the fault model "
+                                 f"{name!r} was fitted on (at most {max(lengths)} samples{secs(max(lengths))}): the "
+                                 "steady-state thresholds are the largest variances over windows of steady_window "
+                                 "in those records; give a shorter steady_window or steady_thresholds")
+        return top
 
     def reset(self) -> None:
         """Forget the stream: back to the healthy phase at time 0 (with ``fs`` as given to the constructor)."""
@@ -361,10 +401,6 @@ class Monitor:
                 self._detect_pos = end
                 new_events.append(MonitorEvent(self._t(end), "detection", None, "fault",
                                                window=(self._t(start), self._t(end))))
-                if self.steady_thresholds is None and self.models:     # identification starts at once
-                    self._phase, self._steady_pos = "steady", start
-                    new_events.append(MonitorEvent(self._t(end), "steady", None, "steady",
-                                                   window=(self._t(start), self._t(end))))
             if self._phase == "transient" and self.steady_thresholds is not None:
                 var_start = pos0 + lo
                 if lo >= 0 and var_start >= self._detect_pos and np.all(var <= self.steady_thresholds):
@@ -429,9 +465,19 @@ class Monitor:
         Returns
         -------
         MonitorResult
+
+        Raises
+        ------
+        ValueError
+            As :meth:`update`; also for a ``window`` longer than the signal (no window to test).
         """
         self.reset()
         self.update(signal)
+        nobs = self._offset + self._buffer.shape[0]
+        if nobs < self.window:
+            secs = (lambda n: f" ({n / self.fs:g} s)") if self.fs else (lambda n: "")
+            raise ValueError(f"window ({self.window} samples{secs(self.window)}) is longer than the signal ({nobs} "
+                             f"samples{secs(nobs)}): no window to test; give a shorter window or a longer signal")
         return self.result()
 
     def screen(self, records: Any, *, progress: bool = False) -> pd.DataFrame:
