@@ -75,6 +75,10 @@ class MonitorResult:
         Most frequent label over the identified windows (``None`` if none, always ``None`` without fault models).
     models : tuple of str
         The fault models' names; empty for a detection-only monitor.
+    fs : float or None
+        Sampling frequency in Hz: times are in seconds with it, in samples without.
+    steady_thresholds : ndarray, shape (k,), or None
+        The steady-state variance thresholds the monitor used (``None``: no steady-state check).
     """
 
     events: list
@@ -83,6 +87,8 @@ class MonitorResult:
     steady_time: float | None
     label: str | None
     models: tuple = ()
+    fs: float | None = None
+    steady_thresholds: np.ndarray | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The events as a ``DataFrame`` (one row per event)."""
@@ -541,7 +547,8 @@ class Monitor:
         det = next((e.time for e in self._events if e.kind == "detection"), None)
         st = next((e.time for e in self._events if e.kind == "steady"), None)
         return MonitorResult(events=list(self._events), windows=frame, detection_time=det, steady_time=st,
-                             label=label, models=tuple(self.models))
+                             label=label, models=tuple(self.models), fs=self.fs,
+                             steady_thresholds=self.steady_thresholds)
 
 
 def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = False) -> pd.DataFrame:

@@ -179,3 +179,26 @@ def test_monitor_run_on_named_signal_labels_channels():
                            test=tsfdi.LjungBox(lags=10, alpha=1e-3)).run(x.iloc[1500:])
     fig = result.plot()
     assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == CHANNELS
+
+
+def test_monitor_plot_has_no_empty_panel_and_times_have_units():
+    """Issue 29: the monitor plot had empty panels (no label panel content for a detection-only monitor, no variance
+    when the windows are shorter than the steady window) and "detection at 1" without a unit."""
+    rng = np.random.default_rng(29)
+    y = np.r_[rng.standard_normal(600), 4 * rng.standard_normal(600)]
+    base = tsfdi.AR(rng.standard_normal(3000), 2).fit()
+    for fs, unit in ((100.0, "s"), (None, "samples")):
+        mon = tsfdi.Monitor(base, window=200, step=100, steady_window=1000, fs=fs, test=tsfdi.FTest(1e-3))
+        res = mon.run(y)
+        assert res.detection_time is not None
+        fig = res.plot()
+        for ax in fig.axes:                                   # every panel holds data
+            assert ax.get_lines() or ax.collections
+            assert any(np.isfinite(np.asarray(ln.get_ydata(), dtype=float)).any() for ln in ax.get_lines())
+        assert fig.axes[-1].get_xlabel() == f"time of the window end ({unit})"
+        texts = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+        assert f"detection at {res.detection_time:g} {unit}" in texts
+        assert len(fig.axes) == 2                            # variance (late windows) and detection; no label panel
+    # no window long enough for a variance: the detection panel alone
+    res = tsfdi.Monitor(base, window=200, step=100, steady_window=1500, fs=100.0, test=tsfdi.FTest(1e-3)).run(y)
+    assert len(res.plot().axes) == 1

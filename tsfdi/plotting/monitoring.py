@@ -83,15 +83,18 @@ def plot_variance_evolution(signals: Any, *, fs: float = 1.0, window: float = 10
 
 
 def plot_monitor(result: Any, ax: Any = None) -> Any:
-    """Timeline of a :class:`~tsfdi.monitoring.MonitorResult`: rolling variances, healthy-model detection
-    statistic (ratio to its threshold) and the identified label of each window.
+    """Timeline of a :class:`~tsfdi.monitoring.MonitorResult`: rolling variances (with the steady-state thresholds),
+    healthy-model detection statistic (ratio to its threshold) and, when windows were identified, their label.
 
     Parameters
     ----------
     result : MonitorResult
         Its ``windows`` table; each ``variance_<channel>`` column is one curve of the top panel, labelled by
-        ``<channel>``.
-    ax : sequence of three matplotlib Axes, optional
+        ``<channel>``. Times are in seconds when the monitor had ``fs``, in samples otherwise (the axis and the
+        event labels say which).
+    ax : sequence of matplotlib Axes, optional
+        One per panel drawn: the variance panel when some window has a variance (windows shorter than the steady
+        window have none), the detection panel, and the label panel when some window was identified.
 
     Returns
     -------
@@ -100,30 +103,42 @@ def plot_monitor(result: Any, ax: Any = None) -> Any:
     w = result.windows
     if len(w) == 0:
         raise ValueError("result has no window to plot")
-    var_cols = [c for c in w.columns if c.startswith("variance_")]
-    fig, axes = _axes(ax, 3, figsize=(7, 6))
-    for c in var_cols:
-        axes[0].plot(w["end"], w[c], lw=1, label=c.removeprefix("variance_"))
-    axes[0].set_yscale("log")
-    axes[0].set_ylabel("rolling variance")
-    axes[0].legend(title="channel", fontsize="small")
-    axes[1].plot(w["end"], w["detect_statistic"], lw=1, color="C3", label="healthy model")
-    axes[1].axhline(1.0, color="k", ls="--", lw=1, label="threshold")
-    axes[1].set_yscale("log")
-    axes[1].set_ylabel("healthy model\nstatistic / threshold")
-    labs = sorted({str(x) for x in w["label"].dropna()} | {"(none)"})
-    y = [labs.index(str(x)) if x is not None and x == x else labs.index("(none)") for x in w["label"]]
+    unit = "s" if getattr(result, "fs", None) else "samples"
+    var_cols = [c for c in w.columns if c.startswith("variance_") and w[c].notna().any()]
     ident = (w["status"] != "").to_numpy()
-    axes[2].scatter(w["end"][ident], np.asarray(y)[ident], s=10)
-    axes[2].set_yticks(range(len(labs)), labs)
-    axes[2].set_ylabel("label")
-    axes[2].set_xlabel("time of the window end (s)")
+    panels = (["variance"] if var_cols else []) + ["detection"] + (["label"] if ident.any() else [])
+    fig, axes = _axes(ax, len(panels), figsize=(7, 2.2 * len(panels) + 0.4))
+    panel = dict(zip(panels, axes))
+    if var_cols:
+        a = panel["variance"]
+        thr = getattr(result, "steady_thresholds", None)
+        for i, c in enumerate(var_cols):
+            line, = a.plot(w["end"], w[c], lw=1, label=c.removeprefix("variance_"))
+            if thr is not None:
+                j = [x for x in w.columns if x.startswith("variance_")].index(c)
+                a.axhline(float(thr[j]), color=line.get_color(), ls="--", lw=0.8)
+        a.set_yscale("log")
+        a.set_ylabel("rolling variance" + ("\n(dashed: steady-state\nthreshold)" if thr is not None else ""))
+        a.legend(title="channel", fontsize="small")
+    a = panel["detection"]
+    a.plot(w["end"], w["detect_statistic"], lw=1, color="C3", label="healthy model")
+    a.axhline(1.0, color="k", ls="--", lw=1, label="threshold")
+    a.set_yscale("log")
+    a.set_ylabel("healthy model\nstatistic / threshold")
+    if ident.any():
+        a = panel["label"]
+        labs = sorted({str(x) for x in w["label"][ident].dropna()} | {"(none)"})
+        y = [labs.index(str(x)) if x is not None and x == x else labs.index("(none)") for x in w["label"]]
+        a.scatter(w["end"][ident], np.asarray(y)[ident], s=10)
+        a.set_yticks(range(len(labs)), labs)
+        a.set_ylabel("label")
+    axes[-1].set_xlabel(f"time of the window end ({unit})")
     for e in result.events:
         if e.kind in ("detection", "steady"):
             for a in axes:
                 a.axvline(e.time, color="k" if e.kind == "detection" else "g", ls=":", lw=1,
-                          label=f"{e.kind} at {e.time:g}" if a is axes[1] else None)
-    axes[1].legend(fontsize="small")
+                          label=f"{e.kind} at {e.time:g} {unit}" if a is panel["detection"] else None)
+    panel["detection"].legend(fontsize="small")
     fig.tight_layout()
     return fig
 
