@@ -331,8 +331,9 @@ def check_paired(a: Signal, b: Signal, names: tuple[str, str] = ("y", "u")) -> N
     except (TypeError, ValueError):      # indexes of different kinds (time zones, date-times and numbers)
         diff = np.zeros(1, dtype=np.int64)
     i = int(diff[0]) if diff.size else 0
-    raise ValueError(f"{names[0]} and {names[1]} have different indexes (first at sample {i}: {ia[i]!r} in "
-                     f"{names[0]}, {ib[i]!r} in {names[1]}): they are paired sample by sample; give them the same "
+    a_i, b_i = (v.item() if isinstance(v, np.generic) else v for v in (ia[i], ib[i]))
+    raise ValueError(f"{names[0]} and {names[1]} have different indexes (first at sample {i}: {a_i!r} in "
+                     f"{names[0]}, {b_i!r} in {names[1]}): they are paired sample by sample; give them the same "
                      f"index (e.g. {names[1]}.reindex({names[0]}.index) after checking that nothing is missing) or "
                      "pass arrays to pair them by position")
 
