@@ -30,8 +30,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from tsfdi._data import as_signal
 from tsfdi._validation import float_like, int_like, option
-from tsfdi.exceptions import IllConditionedWarning
+from tsfdi.exceptions import ConvergenceWarning, IllConditionedWarning
 from tsfdi.models import AR, ARX, VAR
 from tsfdi.models.criteria import EXACT_FIT_RTOL
 from tsfdi.models.lstsq import nested_fits, triangular_factor
@@ -80,6 +81,9 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
 
     Warns
     -----
+    ConvergenceWarning
+        The BIC minimum is at the search bound ``max_lags`` (:attr:`OrderSelection.at_bound`): the search did not
+        find a minimum inside ``1..max_lags``; the summary says so too.
     IllConditionedWarning
         An ill-conditioned regressor, or orders that fit the data exactly (residual RMS below ``1e-12`` times
         its peak: a deterministic signal); their criteria use the floor of
@@ -100,6 +104,13 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     else:
         if u is not None:
             raise ValueError(f"u is only used with model='arx', not model={family!r}")
+        if family == "ar":
+            first = data[0] if isinstance(data, (list, tuple)) and data else data
+            k = as_signal(first, "data", allow_constant=True).nchan
+            if k > 1:
+                raise ValueError(f"data has {k} channels but model='ar' selects the order of one scalar signal: "
+                                 f"use model='var' for the vector signal (select_order(data, {max_lags}, "
+                                 "model='var')), or select one channel")
         spec = (AR(data, max_lags, trend=trend) if family == "ar"
                 else VAR(data, max_lags, trend=trend, criterion=criterion))
     s = spec.neqs
@@ -123,7 +134,11 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
         warnings.warn(f"orders {orders[values['exact']].tolist()} fit the data exactly (a residual RMS below "
                       f"{EXACT_FIT_RTOL:g} times its peak, or collinear channels): their likelihood is unbounded, so "
                       "their criteria use that floor for the residual variance", IllConditionedWarning, stacklevel=2)
-    return OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
+    out = OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
+    if out.at_bound:
+        warnings.warn(f"the BIC minimum is at the search bound max_lags = {max_lags}: a larger order may fit better; "
+                      f"search further (select_order(..., max_lags={2 * max_lags}))", ConvergenceWarning, stacklevel=2)
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,6 +178,12 @@ class OrderSelection:
         return int(self.orders[np.argmin(self.values["bic"])])
 
     @property
+    def at_bound(self) -> bool:
+        """Whether the BIC minimum is at the search bound ``max_lags`` (with ``max_lags > 1``): a larger order may
+        fit better, search further."""
+        return self.max_lags > 1 and self.selected == self.max_lags
+
+    @property
     def stabilized(self) -> int:
         """Smallest order after which RSS/SSS improves by no more than ``tol`` (relative) at any step (an exact
         fit counts as RSS/SSS = 0: nothing left to improve)."""
@@ -192,10 +213,11 @@ class OrderSelection:
         :attr:`selected`, ``RSS/SSS stable`` at :attr:`stabilized`)."""
         spec = self.spec
         mark = pd.Series("", index=self.table.index)
-        mark[self.selected] = "min BIC"
+        mark[self.selected] = "min BIC (at the search bound)" if self.at_bound else "min BIC"
         mark[self.stabilized] = ", ".join(filter(None, [mark[self.stabilized], "RSS/SSS stable"]))
         header = [("Model", type(spec).__name__), ("Trend", spec.trend), ("Orders", f"1..{self.max_lags}"),
-                  ("Observations (common sample)", sum(spec.nobs_records)), ("Selected (min BIC)", self.selected),
+                  ("Observations (common sample)", sum(spec.nobs_records)), ("Selected (min BIC)",
+                   f"{self.selected} (at the search bound)" if self.at_bound else self.selected),
                   ("RSS/SSS stable from", self.stabilized), ("RSS/SSS tolerance", self.tol)]
         if spec.multi:
             header.insert(2, ("Records", len(spec.records)))
@@ -204,6 +226,9 @@ class OrderSelection:
         notes = ["Every order is fitted on the same sample (the first max_lags samples of each record held back)."]
         if isinstance(spec, ARX):
             notes.append("ARX order p: na = nb = p.")
+        if self.at_bound:
+            notes.append(f"The BIC minimum is at the search bound max_lags = {self.max_lags}: a larger order may fit "
+                         f"better; search further (max_lags = {2 * self.max_lags}).")
         return Summary("Order selection", header, [("Criteria per order", self.table.assign(selected=mark))], notes)
 
     def plot(self, ax=None):

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+import pandas as pd
 import pytest
+from scipy import signal as sps
 from statsmodels.tsa.api import VAR as smVAR
 from statsmodels.tsa.ar_model import ar_select_order
 
@@ -157,3 +161,30 @@ def test_bad_options():
         tsfdi.select_order(y, 5).fit(6)
     with pytest.raises(ValueError, match="y is too short"):
         tsfdi.select_order(y[:40], 30)
+
+
+def test_bic_minimum_at_the_search_bound_is_flagged():
+    """Issue 29: a BIC minimum at max_lags was not flagged: it warns (ConvergenceWarning, a TsfdiWarning) and the
+    summary says so; an interior minimum does not."""
+    from tsfdi.exceptions import ConvergenceWarning, TsfdiWarning
+
+    rng = np.random.default_rng(29)
+    y = sps.lfilter([1.0], [1.0, -0.5, 0.4, -0.3, 0.3, -0.3, 0.3], rng.standard_normal(4000))   # AR(6)
+    with pytest.warns(ConvergenceWarning, match=r"BIC minimum is at the search bound max_lags = 3.*max_lags=6"):
+        sel = tsfdi.select_order(y, 3)
+    assert issubclass(ConvergenceWarning, TsfdiWarning) and sel.at_bound and sel.selected == 3
+    text = str(sel.summary())
+    assert "3 (at the search bound)" in text and "min BIC (at the search bound)" in text and "search further" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        wide = tsfdi.select_order(y, 12)
+    assert not wide.at_bound and "search bound" not in str(wide.summary())
+
+
+def test_vector_data_with_model_ar_suggests_var():
+    """Issue 29: select_order(DataFrame with 3 columns, 10) did not suggest model='var'."""
+    df = pd.DataFrame(np.random.default_rng(30).standard_normal((500, 3)), columns=["roll", "pitch", "yaw"])
+    for data in (df, [df, df]):
+        with pytest.raises(ValueError, match=r"data has 3 channels .*model='var'.*select_order\(data, 10, "
+                                             r"model='var'\)"):
+            tsfdi.select_order(data, 10)
