@@ -338,3 +338,27 @@ def test_one_test_per_model(models):
     np.testing.assert_allclose(wins[0].decisions["rotor2"].statistic, ident.decisions["rotor2"].statistic)
     with pytest.raises(ValueError, match="no test for the model"):
         tsfdi.identify(y[:1000], models, {"rotor2": tests["rotor2"]})
+
+
+def test_windowed_frame_gives_start_and_stop_in_the_inputs_time():
+    """Issue 29: identify_windows(...).to_frame() gave start / stop in samples for a DatetimeIndex input; they are in
+    the input's time (Timestamp, Timedelta, seconds of a numeric 'time' index), in samples without a time index, and
+    the sample positions stay in starts / stops."""
+    import pandas as pd
+
+    rng = np.random.default_rng(29)
+    y = rng.standard_normal(1000)
+    models = {"h": tsfdi.AR(y, 2).fit()}
+    t0 = pd.Timestamp("2024-05-01 12:00")
+    for index, first, second in ((pd.date_range(t0, periods=1000, freq="10ms"), t0, t0 + pd.Timedelta("2.5s")),
+                                 (pd.timedelta_range(0, periods=1000, freq="10ms"), pd.Timedelta(0),
+                                  pd.Timedelta("2.5s")),
+                                 (pd.Index(10.0 + np.arange(1000) / 100, name="time"), 10.0, 12.5)):
+        wins = identify_windows(pd.Series(y, index=index), models, window="1s", step="2.5s")
+        frame = wins.to_frame()
+        assert frame["start"].iloc[0] == first and frame["start"].iloc[1] == second
+        span = frame["stop"].iloc[1] - frame["start"].iloc[1]
+        assert span == (pytest.approx(1.0) if first == 10.0 else pd.Timedelta("1s"))
+        assert wins.starts[:2].tolist() == [0, 250] and wins.stops[:2].tolist() == [100, 350]
+    frame = identify_windows(y, models, window=100, step=250).to_frame()
+    assert frame["start"].tolist()[:2] == [0, 250] and frame["stop"].tolist()[:2] == [100, 350]

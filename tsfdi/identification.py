@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from tsfdi._data import Signal, as_signal, sampling_frequency, window_samples
 from tsfdi.detection.base import ResidualTest
@@ -162,8 +163,6 @@ class Identification:
     def to_frame(self):
         """A ``DataFrame`` with one row per (model, channel): statistic, threshold, p-value, df, reject,
         and whether the model is accepted."""
-        import pandas as pd
-
         rows = []
         for name, d in self.decisions.items():
             for i, c in enumerate(d.channels):
@@ -270,8 +269,14 @@ class WindowedIdentification:
     engine : ResidualWindows
         The fitted engine (:func:`identify_windows` computes the likelihood scores only when the
         ``"likelihood"`` rule is asked for).
+    time : pandas.Index or None
+        The time of every sample of the signal, when it has a time index (a ``DatetimeIndex`` /
+        ``TimedeltaIndex``, a numeric index named ``"time"``, an xarray time coordinate); ``None`` otherwise.
+    fs : float or None
+        The sampling frequency in Hz (given or read from the time index).
     models, channels, starts, stops, statistic, threshold, pvalue, channel_reject :
-        Those of ``windows``; window ``w`` covers signal samples ``[starts[w], stops[w])``.
+        Those of ``windows``; window ``w`` covers signal samples ``[starts[w], stops[w])`` (sample positions,
+        whatever the index).
     accepted : ndarray of bool, shape (n_windows, n_models)
         Model accepted in the window (every channel accepts).
     labels : list
@@ -286,6 +291,8 @@ class WindowedIdentification:
     tests: tuple
     references: tuple = ()
     engine: Any = field(default=None, repr=False, compare=False)
+    time: Any = field(default=None, repr=False, compare=False)
+    fs: float | None = None
 
     models = property(lambda self: self.windows.models)
     channels = property(lambda self: self.windows.channels)
@@ -334,10 +341,20 @@ class WindowedIdentification:
         return (self[w] for w in range(len(self)))
 
     def to_frame(self):
-        """One row per window: start, stop, status, label."""
-        import pandas as pd
+        """One row per window: ``start``, ``stop``, ``status``, ``label``.
 
-        return pd.DataFrame({"start": self.starts, "stop": self.stops, "status": self.status, "label": self.labels})
+        ``start`` / ``stop`` are in the signal's time when it has a time index (:attr:`time`: the time of the
+        window's first sample and that time plus the window's span, the window ``[start, stop)`` as pandas
+        ``Timestamp`` / ``Timedelta`` or seconds), in samples otherwise; the sample positions are always
+        :attr:`starts` / :attr:`stops`."""
+        start, stop = self.starts, self.stops
+        if self.time is not None:
+            t0 = self.time[start]
+            span = self.windows.window / self.fs
+            start = t0
+            stop = t0 + (pd.Timedelta(seconds=span) if isinstance(self.time, (pd.DatetimeIndex, pd.TimedeltaIndex))
+                         else span)
+        return pd.DataFrame({"start": start, "stop": stop, "status": self.status, "label": self.labels})
 
     def __repr__(self) -> str:
         counts = {s: self.status.count(s) for s in STATUS}
@@ -387,5 +404,7 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
         _check_model(res, name, sig, "models")
     engine = ResidualWindows(models).fit(sig)
     ws = engine.statistics(tests, window=window, step=step, loglik=False)
+    timed = sig.index is not None and sampling_frequency(sig, None) is not None      # a time index, not positions
     return WindowedIdentification(ws, tuple(tests.values()),
-                                  tuple(tests[name].reference(res) for name, res in models.items()), engine)
+                                  tuple(tests[name].reference(res) for name, res in models.items()), engine,
+                                  pd.Index(sig.index) if timed else None, rate)
