@@ -300,13 +300,13 @@ def test_a_logging_gap_can_be_cut_off(csv_files, capsys):
     gap = df.drop(index=range(50, 60))                   # 0.2 s missing after 101 s
     gap.to_csv(d / "gap.csv", index=False)
     assert main(["fit", str(d / "gap.csv"), "--lags", "2", "--out", str(d / "o.npz")]) == 2
-    assert "a gap of 0.22 s after sample 49 at 100.98 s" in capsys.readouterr().err
+    assert "a gap of 0.22 s after line 51 at 100.98 s" in capsys.readouterr().err
     assert main(["fit", str(d / "gap.csv"), "--start", "110s", "--stop", "2min", "--lags", "2", "--out",
                  str(d / "o.npz")]) == 0
     assert "at 50 Hz (480 samples)" in capsys.readouterr().out         # 500 rows less the hold-back of 20
     assert main(["fit", str(d / "gap.csv"), "--start", "100.5s", "--lags", "2", "--out", str(d / "o.npz")]) == 2
-    err = capsys.readouterr().err              # the rows used start at file line 27
-    assert "column 'timestamp' (rows from line 27) is not uniformly sampled: a gap of 0.22 s after sample 24" in err
+    err = capsys.readouterr().err              # the rows used start at file line 27; the gap is named by its file line
+    assert "column 'timestamp' is not uniformly sampled: a gap of 0.22 s after line 51 at 100.98 s" in err
 
 
 def test_several_data_files(csv_files, capsys):

@@ -410,16 +410,16 @@ DETECT = ["detect", "{d}/ok.csv", "--baseline", "{d}/m2.npz"]
     (["fit", "{d}", "--out", "{d}/x.npz"], ["is a folder"]),
     # missing / wrong columns
     ([*FIT, "{d}/ok.csv", "--columns", "accel_z"], ["--columns", "ok.csv", "'accel_z'", "['a', 'b']"]),
-    ([*FIT, "{d}/ok.csv", "--columns", "a,a"], ["--columns a,a", "twice"]),
+    ([*FIT, "{d}/ok.csv", "--columns", "a,a"], ["--columns", "named twice", "['a', 'a']"]),
     ([*FIT, "{d}/records.nc", "--record", "0", "--columns", "c"], ["--columns", "records.nc", "'c'", "['a', 'b']"]),
     ([*DETECT, "--columns", "a"], ["--columns", "ok.csv", "['a']", "--baseline", "m2.npz", "2 channel(s)"]),
     ([*FIT, "{d}/ok.csv", "--time-column", "clock"], ["--time-column", "ok.csv", "'clock'"]),
     ([*FIT, "{d}/ok.csv", "--model", "ar"], ["--model ar", "one column", "--columns"]),
     # no time, a time column with a gap, disagreeing --fs
     ([*FIT, "{d}/no_time.csv"], ["no_time.csv", "--time-column", "--fs"]),
-    ([*FIT, "{d}/gap.csv"], ["gap.csv", "column 'time'", "line 252", "--start / --stop"]),
+    ([*FIT, "{d}/gap.csv"], ["gap.csv", "column 'time'", "gap of 1.01 s after line 251", "--resample", "--start / --stop"]),
     ([*FIT, "{d}/ok.csv", "--fs", "50"], ["--fs 50", "ok.csv", "100 Hz"]),
-    ([*FIT, "{d}/same_time.csv"], ["same_time.csv", "column 'time'", "does not increase"]),
+    ([*FIT, "{d}/same_time.csv"], ["same_time.csv", "column 'time'", "not strictly increasing", "line 3"]),
     ([*FIT, "{d}/time_text.csv"], ["time_text.csv", "column 'time'", "line 2", "'t0'"]),
     # NaN: the file, the column, where, and what to do
     ([*FIT, "{d}/nan.csv"], ["nan.csv", "column 'b'", "line 39", "time 0.37 s", "--nan-policy omit", "--columns"]),

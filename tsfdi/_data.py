@@ -347,7 +347,12 @@ def _format_time(value: Any) -> str:
     return f"{float(value):g} s"
 
 
-def time_step(index: pd.Index | None, name: str, *, numeric: bool = False) -> float | None:
+#: the fix the even-sampling messages name, in Python (the command line names its flags instead)
+RESAMPLE_FIX = "put it on a uniform grid with tsfdi.align(..., gaps='split'), or split the signal at the gap"
+
+
+def time_step(index: pd.Index | None, name: str, *, numeric: bool = False, row: Any = None,
+              fix: str = RESAMPLE_FIX) -> float | None:
     """Median step in seconds of a uniformly sampled time index; ``None`` when the index carries no time.
 
     A ``DatetimeIndex`` / ``TimedeltaIndex`` is a time index; a numeric index is one (in seconds) when ``numeric``
@@ -363,6 +368,10 @@ def time_step(index: pd.Index | None, name: str, *, numeric: bool = False) -> fl
         What the index belongs to, for messages (an argument, a record, a file).
     numeric : bool
         Whether a numeric index is read as seconds (else it carries positions and is not checked).
+    row : callable, optional
+        ``row(i)`` names sample ``i`` in messages (e.g. ``"line 252"`` of a CSV file); default ``"sample i"``.
+    fix : str
+        The fix the messages name (:data:`RESAMPLE_FIX`; :func:`tsfdi.read_records` names its own keywords).
 
     Raises
     ------
@@ -376,27 +385,27 @@ def time_step(index: pd.Index | None, name: str, *, numeric: bool = False) -> fl
     if not (stamps or (numeric and pd.api.types.is_numeric_dtype(index.dtype)
                        and not pd.api.types.is_bool_dtype(index.dtype))):
         return None
+    row = row or (lambda i: f"sample {i}")
     if index.hasnans:
-        raise ValueError(f"{name} has a missing time stamp (NaT / NaN) at sample {int(np.argmax(index.isna()))} "
+        raise ValueError(f"{name} has a missing time stamp (NaT / NaN) at {row(int(np.argmax(index.isna())))} "
                          "of its time index")
     if stamps:      # integers in the index's own unit (UTC for a time zone)
         steps = np.diff(index.asi8) / {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}[index.unit]
     else:
         steps = np.diff(np.asarray(index, dtype=np.float64))
-    hint = "put it on a uniform grid with tsfdi.align(..., gaps='split')"
     bad = np.flatnonzero(~(steps > 0))
     if bad.size:
         i = int(bad[0])
-        raise ValueError(f"{name} has a time index that is not strictly increasing: sample {i + 1} at "
-                         f"{_format_time(index[i + 1])} follows {_format_time(index[i])}; sort it or {hint}")
+        raise ValueError(f"{name} has a time index that is not strictly increasing: {row(i + 1)} at "
+                         f"{_format_time(index[i + 1])} follows {_format_time(index[i])}; sort it, or {fix}")
     dt = float(np.median(steps))
     bad = np.flatnonzero(np.abs(steps - dt) > JITTER * dt)
     if bad.size:
         i = int(bad[0])
         what = "gap" if steps[i] > dt else "short step"
-        raise ValueError(f"{name} is not uniformly sampled: a {what} of {steps[i]:g} s after sample {i} at "
+        raise ValueError(f"{name} is not uniformly sampled: a {what} of {steps[i]:g} s after {row(i)} at "
                          f"{_format_time(index[i])} (median step {dt:g} s; every step must be within "
-                         f"{JITTER:.0%} of it); {hint}, or split the signal at the gap")
+                         f"{JITTER:.0%} of it); {fix}")
     return dt
 
 

@@ -206,10 +206,10 @@ _KEYWORD = "|".join(_FLAGS)
 
 def _flags(msg: str) -> str:
     """A message of :func:`tsfdi.read_records` with its keywords written as the flags that set them."""
+    msg = re.sub(rf"\b({_KEYWORD})=(True\b|'[^']*'|[^\s,;)]*)",       # keyword=value first: "records=7: ..."
+                 lambda m: _FLAGS[m.group(1)] + ("" if m.group(2) == "True" else " " + m.group(2).strip("'")), msg)
     msg = re.sub(rf"^({_KEYWORD})(?=[ :=])", lambda m: _FLAGS[m.group(1)], msg.replace("start / stop",
                                                                                        "--start / --stop"))
-    msg = re.sub(rf"\b({_KEYWORD})=(True\b|'[^']*'|[^\s,;)]*)",
-                 lambda m: _FLAGS[m.group(1)] + ("" if m.group(2) == "True" else " " + m.group(2).strip("'")), msg)
     return re.sub(rf"\b(with|give|out|of|or) ({_KEYWORD})\b(?!-)", lambda m: f"{m.group(1)} {_FLAGS[m.group(2)]}", msg)
 
 

@@ -224,12 +224,10 @@ def _check_time(t: np.ndarray, what: str, source: str, fs: float | None, first: 
         if fs is None:
             raise ValueError(f"{desc} holds a single time: give fs")
         return fs
-    name = desc + (f" (rows from {_where_row(what, first)})" if first else "")
-    try:
-        dt = time_step(pd.Index(t), name, numeric=True)
-    except ValueError as exc:
-        fix = "resample=True with fs=RATE puts the rows on a uniform grid, " if csv else ""
-        raise ValueError(f"{exc} ({fix}start / stop or rows_where cut the gap off)") from None
+    name = desc
+    fix = ("resample=True with fs=RATE puts the rows on a uniform grid; " if csv else "") + \
+        "start / stop or rows_where cut the gap off"
+    dt = time_step(pd.Index(t), name, numeric=True, row=lambda i: _where_row(what, first + i), fix=fix)
     rate = 1.0 / dt
     if fs is not None and abs(fs / rate - 1) > 0.01:
         raise ValueError(f"fs={fs:g}: the {what} of {source} gives {rate:.6g} Hz (median step {dt:.6g} s); leave "
