@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import read_csv, time_step
+from tsfdi._data import FS_TOLERANCE, read_csv, time_step
 from tsfdi.baselines import Records
 from tsfdi.exceptions import TsfdiWarning
 
@@ -224,12 +224,11 @@ def _check_time(t: np.ndarray, what: str, source: str, fs: float | None, first: 
         if fs is None:
             raise ValueError(f"{desc} holds a single time: give fs")
         return fs
-    name = desc
     fix = ("resample=True with fs=RATE puts the rows on a uniform grid; " if csv else "") + \
         "start / stop or rows_where cut the gap off"
-    dt = time_step(pd.Index(t), name, numeric=True, row=lambda i: _where_row(what, first + i), fix=fix)
+    dt = time_step(pd.Index(t), desc, numeric=True, row=lambda i: _where_row(what, first + i), fix=fix)
     rate = 1.0 / dt
-    if fs is not None and abs(fs / rate - 1) > 0.01:
+    if fs is not None and abs(fs / rate - 1) > FS_TOLERANCE:
         raise ValueError(f"fs={fs:g}: the {what} of {source} gives {rate:.6g} Hz (median step {dt:.6g} s); leave "
                          "out fs or fix the time stamps")
     return rate
