@@ -1,6 +1,6 @@
 """CrazyPAD benchmark (issue 17): detection and identification of propeller defects on real Crazyflie flights.
 
-Run: ``python benchmarks/crazypad.py [--data PATH] [--conditions NAMES]`` (reads ``../shared/data/crazypad`` next
+Run: ``python benchmarks/crazypad.py [--data PATH] [--conditions NAMES] [--normal-drones DRONES]`` (reads ``../shared/data/crazypad`` next
 to the repository, or the CrazyPAD folder ``PATH`` of the same layout; BLAS pinned to one thread; it prints its run
 time: 2-3 min on the 2-core development machine with the nine conditions and E8's five normal flights, about 7 min
 with the E9 normal flights the shared copy now adds, on a busy machine). Prints the choices, then three
@@ -23,7 +23,8 @@ longer a stabilised one. In the shared copy this rule leaves out ``weight_on_str
 all its 56 conditions (the drone flipped: the body z specific force falls to -1 g, the thrust command sits at full
 scale for 7.8 s and 9.2 s of its two segments; the largest thrust command of every other log is below 84 % of full
 scale in the nine default conditions, below 87 % in all 56, and none reaches it). Normal flights: E8 5 logs and E9 3
-logs in the shared copy (earlier copies: E8 only); normal logs of several drones are pooled. Some conditions were
+logs in the shared copy (earlier copies: E8 only; ``--normal-drones E8`` uses those five, like for like with the
+published runs); normal logs of several drones are pooled. Some conditions were
 flown by E9 only or by both drones (printed), and the two airframes differ, so results are also given per drone.
 
 Choices, all made on normal flights only (in section 1 on the fitting logs of each fold, 7 in the shared copy, in
@@ -114,6 +115,7 @@ KNOWN = {NORMAL: "normal", "cut_propeller_M3_1mm": "cut1", "cut_propeller_M3_2.5
 CONDITIONS = tuple(KNOWN)  # the conditions of the copy, normal first (set by setup())
 SHORT = dict(KNOWN)        # condition -> short label (set by setup())
 MIN_LOGS = 2               # usable logs a condition needs in section 3: one held out, its model on the others
+NORMAL_DRONES = None       # the drones whose normal flights are used (None: every drone; set by setup())
 
 THRUST = "controller.cmd_thrust"
 THRUST_FULL_SCALE = 65535  # the thrust command is a uint16
@@ -158,12 +160,20 @@ class Flight:
         return [s[list(channels)].to_numpy(dtype=np.float64) for s in self.segments]
 
 
-def setup(root=None, conditions=None) -> None:
+def setup(root=None, conditions=None, normal_drones=None) -> None:
     """Point the benchmark at a CrazyPAD folder (default ``../shared/data/crazypad``), fail loudly if it is
-    missing, choose its conditions (``CONDITIONS``, ``SHORT``; ``conditions`` as in ``select_conditions``) and
-    read the sampling rate."""
-    global ROOT, FS, CONDITIONS, SHORT
+    missing, choose its conditions (``CONDITIONS``, ``SHORT``; ``conditions`` as in ``select_conditions``) and the
+    drones whose normal flights are used (``normal_drones``: a str of comma-separated drone names, None for every
+    drone), and read the sampling rate."""
+    global ROOT, FS, CONDITIONS, SHORT, NORMAL_DRONES
     ROOT = Path(root) if root is not None else ROOT
+    NORMAL_DRONES = None if normal_drones is None else tuple(d.strip() for d in normal_drones.split(","))
+    if NORMAL_DRONES is not None:
+        flown = set(pd.read_csv(ROOT / "flights.csv").query("condition == @NORMAL").drone) if (
+            ROOT / "flights.csv").is_file() else set()
+        if flown and not set(NORMAL_DRONES) <= flown:
+            raise ValueError(f"--normal-drones {normal_drones}: the normal flights of {ROOT} are by "
+                             f"{', '.join(sorted(flown))}")
     if not (ROOT / "flights.csv").is_file():
         raise FileNotFoundError(f"CrazyPAD data missing at {ROOT}: the benchmark needs ../shared/data/crazypad")
     CONDITIONS = select_conditions(pd.read_csv(ROOT / "flights.csv").condition, conditions)
@@ -253,7 +263,8 @@ def load_condition(condition: str, margin: tuple) -> tuple:
     corrupt = corrupt_logs(condition)
     flights: dict = {}
     for s in load_segments(condition, margin):
-        if s.attrs["log"] not in corrupt:
+        if s.attrs["log"] not in corrupt and (condition != NORMAL or NORMAL_DRONES is None
+                                              or s.attrs["drone"] in NORMAL_DRONES):
             flights.setdefault((s.attrs["drone"], s.attrs["log"]), []).append(s)
     return tuple(Flight(condition, d, log, tuple(v)) for (d, log), v in sorted(flights.items()))
 
@@ -699,10 +710,13 @@ def main(argv=None) -> None:
     parser.add_argument("--conditions", metavar="NAMES",
                         help="comma-separated conditions or glob patterns ('*': every condition of the copy); "
                              "normal_flight is always included; default the nine conditions of the published runs")
+    parser.add_argument("--normal-drones", metavar="DRONES",
+                        help="comma-separated drones whose normal flights are used (default every drone of the copy; "
+                             "'E8' gives the normal flights of the published runs, like for like)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     try:
-        setup(args.data, args.conditions)
+        setup(args.data, args.conditions, args.normal_drones)
     except (FileNotFoundError, ValueError) as err:
         parser.error(str(err))
     print_data()
