@@ -490,6 +490,15 @@ def test_fs_is_read_from_the_time_index(models, failure_record, index):
     assert streamed == got.events
 
 
+def test_an_fs_contradicting_the_time_index_is_refused(models, failure_record):
+    """fs=50 given for a 100 Hz DatetimeIndex was used silently (windows of half the time span)."""
+    x = as_kind(failure_record, "pandas")
+    with pytest.raises(ValueError, match=r"fs = 50 Hz disagrees with the time index of signal.*100 Hz"):
+        _monitor(models, fs=50.0).run(x)
+    assert _monitor(models, fs=FS).run(x).detection_time == pytest.approx(_monitor(models, fs=None).run(x)
+                                                                          .detection_time)
+
+
 def test_sample_counts_with_a_time_index_give_times_in_seconds(models, failure_record):
     x = as_kind(failure_record, "pandas")
     counts = _monitor(models, window=500, step=100, steady_window=500, fs=None)

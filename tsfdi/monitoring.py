@@ -348,7 +348,9 @@ class Monitor:
         if self._channels is not None:
             return sig.match_channels(self._channels, "signal", named=self._named).values
         sig = sig.match_channels(self._model_channels, "signal", named=self._model_named)
-        if self.fs is None:
+        if self.fs is not None:          # a given fs must agree with the signal's time index, if it has one
+            sampling_frequency(sig, self.fs, "signal")
+        else:
             fs = sampling_frequency(sig, None, "signal")
             spans = [f"{name} = {value!r}" if value is not None else f"{name} = '1s' (the default)"
                      for name, (value, _) in self._lengths.items() if value is None or _is_span(value)]
