@@ -116,14 +116,6 @@ def test_identify_calibrated_per_model(files, capsys):
     assert (t["label"][t["start"] >= 70.0] == "f2").all()
 
 
-def _steady(models, V, fs):
-    """Per channel, the largest variance over V samples (every 0.1 s) in the records the models were fitted on."""
-    from tsfdi._data import rolling_variance
-
-    return np.max([rolling_variance(r.values, V, max(1, round(0.1 * fs))).max(axis=0) for m in models
-                   for r in m.model.records if r.nobs >= V], axis=0)
-
-
 def test_monitor_calibrated(files, capsys):
     d, paths, x = files
     out = d / "events.csv"
@@ -134,8 +126,7 @@ def test_monitor_calibrated(files, capsys):
     tests = _tests(paths, ["healthy", "f1", "f2"])
     ref = tsfdi.Monitor(tsfdi.load(paths["healthy"]), {n: tsfdi.load(paths[n]) for n in ("f1", "f2")},
                         window=WINDOW, step=100, fs=FS, detection_test=tests.pop("healthy"), test=tests,
-                        steady_window="10s", steady_thresholds=_steady([tsfdi.load(paths[n]) for n in ("f1", "f2")],
-                                                                       int(10 * FS), FS)).run(x)
+                        steady_window="10s").run(x)
     assert f"detection at {50.0 + ref.detection_time:g} s, label {ref.label}" in printed
     assert ref.label == "f2" and 70.0 <= 50.0 + ref.detection_time <= 73.0
     events = pd.read_csv(out)

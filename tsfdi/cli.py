@@ -940,21 +940,6 @@ def _monitor_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default=None, help="write the events to this CSV file")
 
 
-def _steady_thresholds(models: dict, baseline: Any, V: int, fs: float) -> np.ndarray | None:
-    """Per channel of the baseline, the largest variance over ``V`` samples (every 0.1 s) in the records the fault
-    models were fitted on, as :func:`tsfdi.fit_baselines` estimates them; None without fault models."""
-    from tsfdi._data import rolling_variance
-
-    if not models:
-        return None
-    chans = _channels(baseline)
-    peaks = [rolling_variance(r.values, V, max(1, round(0.1 * fs))).max(axis=0)[[_channels(m).index(c) for c in chans]]
-             for m in models.values() for r in m.model.records if r.nobs >= V]
-    if not peaks:
-        raise ValueError(f"--steady-window: {V} samples is longer than every record the --models were fitted on")
-    return np.max(peaks, axis=0)
-
-
 @command("monitor", "slide windows over a signal: detection with a healthy baseline, then identification with "
                     "fault models; prints and writes the events", _monitor_args)
 def _monitor(args: argparse.Namespace) -> int:
@@ -970,7 +955,6 @@ def _monitor(args: argparse.Namespace) -> int:
     W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
     data = _drop_short(data, W, f"--window {args.window}")
     V = window_samples(args.steady_window, "--steady-window", data.fs, minimum=2)
-    steady = _steady_thresholds(models, baseline, V, data.fs)
     tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
                           **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
     if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
@@ -980,8 +964,10 @@ def _monitor(args: argparse.Namespace) -> int:
         test, detection_test = tests, None
     try:
         monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.fs, test=test,
-                          detection_test=detection_test, steady_thresholds=steady, steady_window=V, rule=args.rule)
-    except (ValueError, TypeError) as exc:
+                          detection_test=detection_test, steady_window=V, rule=args.rule)
+    except (ValueError, TypeError) as exc:      # the steady-state thresholds come from the --models' records
+        if str(exc).startswith("steady_window"):
+            raise _reword(exc, data, (("steady_window", "--steady-window"), (" or steady_thresholds", ""))) from None
         raise ValueError(f"--baseline / --models: {exc}") from None
     rows = []
     for i, frame in enumerate(data.frames):
