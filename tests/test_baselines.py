@@ -262,3 +262,25 @@ def test_empirical_thresholds_leave_one_out(synthetic):
         b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01), "5s")
     with pytest.raises(TypeError, match="calibrate"):
         tsfdi.fit_baselines(recs, calibrate="yes", **kw)
+
+
+def test_records_names_and_origin(tmp_path):
+    """Records.names() tells records apart by the shortest tail of their files' paths (the record column of the
+    command line's tables), Records.origin(i) names a record's file and id as messages do."""
+    t = np.arange(200) / 100.0
+    for folder in ("run1", "run2"):
+        (tmp_path / folder).mkdir()
+        pd.DataFrame({"time": t, "x": np.sin(t), "y": np.cos(t)}).to_csv(tmp_path / folder / "log.csv", index=False)
+    one = tsfdi.read_records(tmp_path / "run1" / "log.csv")
+    assert one.names() == [""] and one.origin(0) == str(tmp_path / "run1" / "log.csv")
+    two = tsfdi.read_records([tmp_path / "run1" / "log.csv", tmp_path / "run2" / "log.csv"])
+    assert two.names() == ["run1/log.csv", "run2/log.csv"]
+    assert two.origin(1) == str(tmp_path / "run2" / "log.csv")
+    # pieces of split files: the piece's id after the file's tail (and after the file's name in messages)
+    pieces = tsfdi.read_records([tmp_path / "run1" / "log.csv", tmp_path / "run2" / "log.csv"],
+                                rows_where="x<0.5")
+    assert pieces.names()[0] == "run1/log.csv:0" and pieces.names()[-1].startswith("run2/log.csv:")
+    assert pieces.origin(0) == f"{tmp_path / 'run1' / 'log.csv'} record 0"
+    # records not read from files: their ids, record 0 included
+    rec = Records.from_data([np.arange(5.0)[:, None], np.arange(5.0)[::-1, None]], states=["a", "b"])
+    assert rec.names() == ["0", "1"] and rec.origin(0) == "record 0"

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -172,6 +173,27 @@ class Records:
                                 turbulence=self.turbulence[where], fs=self.fs)
         return dataclasses.replace(out, ids=self.ids[where])
 
+    def origin(self, i: int) -> str:
+        """Where record ``i`` comes from, as messages name it: its file, with the record's :attr:`ids` entry when it
+        has one (``"flight.csv"``, ``"sim.nc record 3"``); ``"record 3"`` for records not read from files."""
+        rid = str(self.ids[i])
+        if self.files is None:
+            return f"record {rid}"
+        return f"{self.files[i]} record {rid}" if rid else str(self.files[i])
+
+    def names(self) -> list[str]:
+        """A short name per record that tells it from the others, for the ``record`` column of a table.
+
+        The :attr:`ids` of records read from one file (``""`` for a CSV file's single record) or from none; for
+        records of several files (:func:`tsfdi.read_records` on a list), each file by the shortest tail of its path
+        that tells it from the other files, with the record's id after a colon when it has one
+        (``"normal_flight/E8_log00.csv.gz"``, ``"run2/sim.nc:3"``).
+        """
+        if self.files is None or len(set(self.files)) < 2:
+            return [str(i) for i in self.ids]
+        tails = _shortest_tails(list(dict.fromkeys(self.files)))
+        return [f"{tails[f]}:{rid}" if str(rid) else tails[f] for f, rid in zip(self.files, self.ids)]
+
     def frames(self) -> list[pd.DataFrame]:
         """The records in memory as ``DataFrame``s: columns :attr:`channels`, index ``time`` in seconds (from
         :attr:`times`; a ``RangeIndex`` without them), ready for the models (``tsfdi.VAR(records.frames(), 4)``)."""
@@ -180,6 +202,16 @@ class Records:
         return [pd.DataFrame(v, columns=list(self.channels),
                              index=None if self.times is None else pd.Index(self.times[i], name="time"))
                 for i, v in enumerate(self.values)]
+
+
+def _shortest_tails(files: list) -> dict:
+    """File -> the shortest tail of its path that tells it from the other files (``normal_flight/E8_log00.csv.gz``)."""
+    parts = {f: Path(f).parts or (f,) for f in files}
+    for k in range(1, max(len(p) for p in parts.values()) + 1):
+        tails = {f: "/".join(p[-k:]) for f, p in parts.items()}
+        if len(set(tails.values())) == len(files):
+            return tails
+    return {f: str(f) for f in files}
 
 
 def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: str) -> tuple:

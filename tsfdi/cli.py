@@ -215,7 +215,8 @@ def _flags(msg: str) -> str:
 
 @dataclasses.dataclass
 class _Data:
-    """The records a command works on (:func:`tsfdi.read_records`), as the command line names them.
+    """The records a command works on (:func:`tsfdi.read_records`, named by :meth:`tsfdi.Records.origin` and
+    :meth:`tsfdi.Records.names`) and how the command line speaks of them.
 
     ``split``: whether the records may be pieces of longer ones (``--rows-where``, ``--nan-policy omit``, the gaps
     of a flight log or of ``--resample``): a piece too short for the command is then dropped with a note instead
@@ -238,34 +239,12 @@ class _Data:
     def path(self) -> str:
         return ", ".join(dict.fromkeys(self.rec.files))
 
-    def _short(self) -> dict:
-        """File -> the shortest unique tail of its path (``normal_flight/E8_log00.csv.gz``)."""
-        files = list(dict.fromkeys(self.rec.files))
-        parts = {f: Path(f).parts or (f,) for f in files}
-        for k in range(1, max(len(p) for p in parts.values()) + 1):
-            tails = {f: "/".join(p[-k:]) for f, p in parts.items()}
-            if len(set(tails.values())) == len(files):
-                return tails
-        return {f: f for f in files}
-
-    def label(self, i: int, short: bool = False) -> str:
-        """``"data.csv"`` or ``"sim.nc record 3"``: record ``i`` as named in messages."""
-        f = self._short()[self.rec.files[i]] if short else self.rec.files[i]
-        return f"{f} record {self.rec.ids[i]}" if self.rec.ids[i] else f
-
-    def names(self) -> list[str]:
-        """The ``record`` column of the tables: the record names within the file, or, for several files, each
-        file by the shortest tail of its path that tells it from the others, with the record name."""
-        if len(set(self.rec.files)) > 1:
-            return [self.label(i, short=True).replace(" record ", ":") for i in range(len(self.frames))]
-        return [str(i) for i in self.rec.ids]
-
     def about(self, i: int) -> str:
-        """:meth:`label` for an error about record ``i``'s data, with the row numbers that cut it."""
+        """:meth:`tsfdi.Records.origin` for an error about record ``i``'s data, with the row numbers that cut it."""
         if not self.rows:
-            return self.label(i)
+            return self.rec.origin(i)
         first = self.rows.split()[1]
-        return (f"{self.label(i)} ({self.rows}: a bare integer is a row number, not a time; write e.g. '{first}s' "
+        return (f"{self.rec.origin(i)} ({self.rows}: a bare integer is a row number, not a time; write e.g. '{first}s' "
                 "for seconds)")
 
     def span(self, n: int) -> str:
@@ -549,7 +528,7 @@ def _windows_in_samples(args: argparse.Namespace, data: _Data, models: dict) -> 
 
 def _table(rows: list[pd.DataFrame], data: _Data) -> pd.DataFrame:
     """Per-record tables stacked, with a leading ``record`` column when the data holds records."""
-    names = data.names()
+    names = data.rec.names()
     if any(names):
         rows = [r.assign(record=rid)[["record", *r.columns]] for r, rid in zip(rows, names)]
     return pd.concat(rows, ignore_index=True)
@@ -830,7 +809,7 @@ def _detect(args: argparse.Namespace) -> int:
                 d = detect(frame, baseline, test)
             except (ValueError, TypeError) as exc:
                 raise _reword(exc, data) from None
-            print(f"{data.label(i)} ({data.span(len(frame))} at {data.fs:g} Hz, {frame.index[0]:g} s to "
+            print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.fs:g} Hz, {frame.index[0]:g} s to "
                   f"{frame.index[-1]:g} s):\n{str(d.summary())}\n")
             per_channel = [np.atleast_1d(np.asarray(a))[None, :] for a in (d.statistic, d.threshold, d.pvalue,
                                                                             d.reject)]
@@ -979,7 +958,7 @@ def _monitor(args: argparse.Namespace) -> int:
         t0 = float(frame.index[0])
         for c in ("time", "window_start", "window_end"):       # times on the record's clock
             events[c] = t0 + events[c]
-        print(f"{data.label(i)}: detection at "
+        print(f"{data.rec.origin(i)}: detection at "
               f"{'-' if result.detection_time is None else f'{t0 + result.detection_time:g} s'}, label "
               f"{result.label or '-'}")
         rows.append(events)
