@@ -171,6 +171,32 @@ def test_simulate_errors_name_the_flag(tmp_path, capsys):
     assert not (tmp_path / "x.nc").exists()
 
 
+def test_write_hexacopter_dataset_in_python(tmp_path):
+    """write_hexacopter_dataset: what `tsfdi simulate` writes, from Python; it returns the per-record table."""
+    from tsfdi.datasets.hexacopter import write_hexacopter_dataset
+
+    design = dict(seed=3, duration=2.0, failure_time=1.0, states=("healthy", "rotor2"), turbulence=("light",))
+    ref = make_hexacopter_dataset(2, **design)
+    written = write_hexacopter_dataset(tmp_path / "a.nc", 2, **design)
+    assert written.sizes["record"] == 4 and "time" not in written.dims and "roll" not in written
+    np.testing.assert_array_equal(written["lost_control"].values, ref["lost_control"].values)
+    assert list(written["state"].values) == list(ref["state"].values)
+    with xr.open_dataset(tmp_path / "a.nc", engine="h5netcdf") as ds:
+        xr.testing.assert_identical(ds[["roll", "p"]].load(), ref[["roll", "p"]])
+    # chunked on dask to a zarr store, the shipped packing: the same records within the packing step
+    write_hexacopter_dataset(tmp_path / "b.zarr", 2, shipped=True, chunks=3, scheduler="synchronous", **design)
+    with xr.open_zarr(tmp_path / "b.zarr") as ds:
+        assert "p" not in ds and ds["roll"].encoding["dtype"] == np.int32
+        np.testing.assert_allclose(ds["roll"].values, ref["roll"].values, atol=0.5e-6, rtol=0)
+    with pytest.raises(ValueError, match="chunks: .*zarr store"):
+        write_hexacopter_dataset(tmp_path / "c.zarr", 1, **design)
+    with pytest.raises(TypeError, match="path must be"):
+        write_hexacopter_dataset(3, 1, **design)
+    with pytest.raises(TypeError, match="shipped must be True or False"):
+        write_hexacopter_dataset(tmp_path / "d.nc", 1, shipped="yes", **design)
+    assert not (tmp_path / "c.zarr").exists() and not (tmp_path / "d.nc").exists()
+
+
 # ------------------------------------------------------------------------------------------------- map_records
 def _square(chunk, where, offset):
     if offset == "fail":

@@ -589,9 +589,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
 def _simulate(args: argparse.Namespace) -> int:
     import importlib.util
 
-    import xarray as xr
-
-    from tsfdi.datasets.hexacopter import FleetSpread, encode_for_file, make_hexacopter_dataset
+    from tsfdi.datasets.hexacopter import FleetSpread, write_hexacopter_dataset
 
     _check_out("--out", args.out)
     zarr = Path(args.out).suffix.lower() == ".zarr"
@@ -602,33 +600,19 @@ def _simulate(args: argparse.Namespace) -> int:
         args.chunk = None
     t0 = time.perf_counter()
     fleet = None if args.fleet is None else FleetSpread.from_spec(args.fleet)
-    # backed by dask: nothing is simulated until the chunks are written
-    ds = make_hexacopter_dataset(args.records_per_case, seed=args.seed, duration=args.duration,
-                                 failure_time=args.failure_time, speed=args.speed,
-                                 states=tuple(s.strip() for s in args.states.split(",")),
-                                 turbulence=tuple(s.strip() for s in args.turbulence.split(",")),
-                                 dt=args.dt, fs=args.fs, fleet=fleet, chunks=args.chunk)
-    if args.shipped:
-        ds, enc = encode_for_file(ds)
-    else:
-        enc = {v: {"zlib": True, "shuffle": True} for v in ds.data_vars}
     try:
-        if args.chunk is None:
-            ds.to_netcdf(args.out, engine="h5netcdf", encoding=enc)
-            nlost = int(ds["lost_control"].sum())
-        else:
-            from tsfdi.fleet import write_fleet
-
-            try:
-                write_fleet(ds, args.out, encoding=enc, scheduler=args.scheduler, progress=not args.no_progress)
-            except ValueError as exc:
-                raise ValueError(f"--{exc}") from None
-            with xr.open_zarr(args.out) if zarr else xr.open_dataset(args.out, engine="h5netcdf") as written:
-                nlost = int(written["lost_control"].values.sum())
+        written = write_hexacopter_dataset(args.out, args.records_per_case, seed=args.seed, duration=args.duration,
+                                           failure_time=args.failure_time, speed=args.speed,
+                                           states=tuple(s.strip() for s in args.states.split(",")),
+                                           turbulence=tuple(s.strip() for s in args.turbulence.split(",")),
+                                           dt=args.dt, fs=args.fs, fleet=fleet, shipped=args.shipped,
+                                           chunks=args.chunk, scheduler=args.scheduler, progress=not args.no_progress)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
-    print(f"wrote {ds.sizes['record']} records to {args.out} in {time.perf_counter() - t0:.1f} s; "
-          f"lost control in {nlost} record(s)")
+    except ValueError as exc:                       # tsfdi.fleet's words for the dask scheduler
+        raise ValueError(re.sub(r"^scheduler\b", "--scheduler", str(exc))) from None
+    print(f"wrote {written.sizes['record']} records to {args.out} in {time.perf_counter() - t0:.1f} s; "
+          f"lost control in {int(written['lost_control'].sum())} record(s)")
     return 0
 
 

@@ -125,12 +125,13 @@ References
 from __future__ import annotations
 
 import inspect
+import os
 from typing import Any
 
 import numpy as np
 from scipy import optimize, signal
 
-from tsfdi._validation import MAX_VALUES, check_rng, float_like, int_like, option
+from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
 from tsfdi.datasets._hexacopter_params import (
     FLEET_SEED_KEY,
@@ -142,7 +143,7 @@ from tsfdi.datasets._hexacopter_params import (
 from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, draw_gusts
 
 __all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "FleetSpread", "FLEET_SEED_KEY", "trim",
-           "simulate_hexacopter", "make_hexacopter_dataset", "FLEET_COORDS",
+           "simulate_hexacopter", "make_hexacopter_dataset", "write_hexacopter_dataset", "FLEET_COORDS",
            "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file", "hexacopter_signals", "SIGNAL_CHANNELS"]
 
 #: Output channels and their units.
@@ -547,6 +548,71 @@ def make_hexacopter_dataset(records_per_case: int = 20, *, seed: int = 2024, dur
     ds.attrs["base_seed"] = seed
     ds.attrs["records_per_case"] = records_per_case
     return ds
+
+
+def write_hexacopter_dataset(path: str | os.PathLike, records_per_case: int = 20, *, shipped: bool = False,
+                             chunks: int | None = None, scheduler: str = "threads", progress: bool = False,
+                             **kwargs: Any) -> Any:
+    """Simulate :func:`make_hexacopter_dataset` and write it to a netCDF file or a zarr store (what ``tsfdi
+    simulate`` does).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A netCDF file, or a zarr store (format 2) for a name ending in ``.zarr`` (that needs ``chunks``).
+    records_per_case : int
+        Records per state and turbulence level.
+    shipped : bool
+        Write only :data:`SHIPPED_VARIABLES` packed as int32 counts (:func:`encode_for_file`, the format of the
+        shipped ``data/hexacopter.nc``); default every channel as float64 (zlib and shuffle).
+    chunks : int, optional
+        Records per chunk: the chunks are simulated in parallel on ``scheduler`` and written as they come
+        (:func:`tsfdi.fleet.write_fleet`, needs dask), so memory holds a few chunks whatever the number of records.
+        Default ``None``: the records are simulated in memory and written to a netCDF file.
+    scheduler : str
+        With ``chunks``: ``"threads"``, ``"processes"`` (zarr only), ``"synchronous"`` or the address of a
+        ``dask.distributed`` scheduler (:func:`tsfdi.fleet.dask_scheduler`).
+    progress : bool
+        With ``chunks``: show a progress bar.
+    **kwargs
+        The design of :func:`make_hexacopter_dataset` (``seed``, ``duration``, ``failure_time``, ``states``,
+        ``turbulence``, ``fleet``, ...) and :func:`simulate_hexacopter`'s options (``dt``, ``fs``).
+
+    Returns
+    -------
+    xarray.Dataset
+        What the file holds per record, read back into memory: the record coordinates (state, turbulence,
+        failure time, seed, the fleet's draws) and ``lost_control`` / ``lost_control_time``.
+
+    Examples
+    --------
+    >>> written = write_hexacopter_dataset("flights.nc", 2, duration=10.0, states=("healthy", "rotor1"),
+    ...                                    turbulence=("light",))                    # doctest: +SKIP
+    >>> int(written["lost_control"].sum())                                          # doctest: +SKIP
+    0
+    """
+    import xarray as xr
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a file name (str or path-like), got {type(path).__name__}")
+    shipped = boolean(shipped, "shipped")
+    zarr = os.fspath(path).lower().endswith(".zarr")
+    if zarr and chunks is None:
+        raise ValueError(f"chunks: {os.fspath(path)} is a zarr store, written chunk by chunk on dask: give chunks "
+                         "(records per chunk)")
+    ds = make_hexacopter_dataset(records_per_case, chunks=chunks, **kwargs)
+    if shipped:
+        ds, enc = encode_for_file(ds)
+    else:
+        enc = {v: {"zlib": True, "shuffle": True} for v in ds.data_vars}
+    if chunks is None:
+        ds.to_netcdf(path, engine="h5netcdf", encoding=enc)
+    else:
+        from tsfdi.fleet import write_fleet
+
+        write_fleet(ds, path, encoding=enc, scheduler=scheduler, progress=progress)
+    with xr.open_zarr(path) if zarr else xr.open_dataset(path, engine="h5netcdf") as written:
+        return written.drop_dims("time").load()
 
 
 def _chunked_dataset(design: dict, chunks: int) -> Any:
