@@ -150,6 +150,31 @@ def test_calibrated_errors(files, tmp_path, capsys):
     assert "1 record(s), 4000 samples" in err
 
 
+def test_calibrated_for_is_one_calibration_per_model(files, tmp_path):
+    """LjungBox(...).calibrated_for(models, window=...): per model, a copy of the test calibrated on that model's
+    held-out residuals (what --threshold calibrated uses); the test itself stays uncalibrated."""
+    d, paths, x = files
+    models = {n: tsfdi.load(paths[n]) for n in ("f1", "f2")}
+    test = tsfdi.LjungBox(lags=20, alpha=1e-2)
+    tests = test.calibrated_for(models, window=WINDOW)
+    ref = _tests(paths, ["f1", "f2"])
+    assert list(tests) == ["f1", "f2"] and not test.calibrated
+    for n in ("f1", "f2"):
+        np.testing.assert_array_equal(tests[n].threshold_, ref[n].threshold_)
+    wins = identify_windows(x, models, tests, window=WINDOW, step=100)
+    np.testing.assert_array_equal(wins.accepted, identify_windows(x, models, ref, window=WINDOW, step=100).accepted)
+    # too few held-out windows: the model is named with the size of its null sample and the fix
+    _csv(record("healthy", 4000, np.random.default_rng(2)), tmp_path / "short.csv")
+    short = tsfdi.VAR(pd.read_csv(tmp_path / "short.csv").set_index("time"), 4).fit()
+    with pytest.raises(ValueError, match=r"models\['short'\]: .*at least 30 are needed.*1 record\(s\), 4000 samples"
+                                         r".*cut into 10 blocks.*more or longer healthy records"):
+        test.calibrated_for({"short": short}, window=WINDOW)
+    with pytest.raises(TypeError, match=r"models\['x'\] must be fitted results"):
+        test.calibrated_for({"x": x}, window=WINDOW)
+    with pytest.raises(TypeError, match="models must be a mapping"):
+        test.calibrated_for([models["f1"]], window=WINDOW)
+
+
 def test_px4_healthy_continuation(shared_px4, tmp_path, capsys):
     """The example of docs/guide/cli.md: a gyroscope VAR fitted on 12-50 s of the PX4 sample log (lying still,
     three records between logging gaps); the rest of the log (50-68 s, still) tested on 1 s windows at alpha 0.01

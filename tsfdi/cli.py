@@ -438,10 +438,8 @@ def _test(args: argparse.Namespace, threshold: Any = "theoretical") -> Any:
 
 def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
     """The test of ``args``: one with the theoretical threshold for every model, or (``--threshold calibrated``)
-    one per model, calibrated for windows of ``window`` signal samples on the held-out residuals of the records
-    the model was fitted on (stored in its file): each record through the model fitted on the others, a single
-    record cut into blocks (:meth:`tsfdi.VAR.held_out_residuals`). ``models`` maps a name (the key the engine
-    uses) to ``(flag text, results)``."""
+    one per model calibrated for windows of ``window`` samples (:meth:`tsfdi.LjungBox.calibrated_for`).
+    ``models`` maps a name (the key the engine uses) to ``(flag text, results)``."""
     from tsfdi.detection import ScaledChi2Threshold
 
     if args.threshold == "theoretical":
@@ -454,20 +452,13 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
     if window is None:
         raise ValueError("--threshold calibrated needs --window: the threshold is calibrated for windows of one "
                          "length")
-    out = {}
-    for name, (flag, res) in models.items():
-        try:
-            estimator = ScaledChi2Threshold(args.alpha, min_windows=min_windows)
-            out[name] = _test(args, estimator).calibrate(res.model.held_out_residuals(), window=window)
-        except ValueError as exc:
-            recs = res.model.records
-            cut = (f"; a single record is cut into 10 blocks of about {recs[0].nobs // 10} samples, each held out in "
-                   "turn" if len(recs) == 1 else "")
-            raise ValueError(f"--threshold calibrated, {flag}: {exc} (the null sample: held-out residuals of the "
-                             f"{len(recs)} record(s), {sum(r.nobs for r in recs)} samples, the model was fitted "
-                             f"on{cut}); fit the model on more or longer healthy records (several flights), or "
-                             "test shorter windows") from None
-    return out
+    flags = {f"models[{name!r}]": flag for name, (flag, _) in models.items()}
+    try:
+        return _test(args, ScaledChi2Threshold(args.alpha, min_windows=min_windows)).calibrated_for(
+            {name: res for name, (_, res) in models.items()}, window=window)
+    except ValueError as exc:
+        which, _, rest = str(exc).partition(": ")
+        raise ValueError(f"--threshold calibrated, {flags.get(which, which)}: {rest}") from None
 
 
 def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:

@@ -460,6 +460,63 @@ class CalibratedTest(ResidualTest):
         self.calibration_window_ = cal
         return self
 
+    def calibrated_for(self, models: Any, *, window: int, step: int = 1) -> dict:
+        """A copy of this test per fitted model, each calibrated on that model's held-out residuals.
+
+        One threshold per model, so that ``alpha`` holds on new records of every model's state (paper 002,
+        Fig. 2): for each model, ``copy.deepcopy(test).calibrate(res.model.held_out_residuals(), window=window,
+        step=step)`` -- each record the model was fitted on through the model fitted on the others, a single record
+        cut into 10 blocks (:meth:`tsfdi.VAR.held_out_residuals`). The result is the ``test`` mapping of
+        :func:`tsfdi.identify_windows` and :class:`tsfdi.Monitor` (what ``tsfdi identify / monitor --threshold
+        calibrated`` use).
+
+        Parameters
+        ----------
+        models : mapping
+            Name -> fitted results (AR, VAR) that carry the records they were fitted on (as fitted, or read by
+            :func:`tsfdi.load`).
+        window : int
+            Signal samples per tested window (a window of ``window`` samples has ``window - lags`` residuals, see
+            :meth:`calibrate`); the thresholds hold for that length only.
+        step : int
+            Samples between calibration windows.
+
+        Returns
+        -------
+        dict
+            Name -> calibrated copy of this test; this test is not modified.
+
+        Raises
+        ------
+        ValueError
+            ``models['name']: ...`` when a model's held-out residuals hold too few windows, with the size of that
+            null sample and the fix (more or longer healthy records, or shorter windows).
+
+        Examples
+        --------
+        >>> models = {"rotor1": tsfdi.load("rotor1.npz"), "rotor2": tsfdi.load("rotor2.npz")}  # doctest: +SKIP
+        >>> tests = tsfdi.LjungBox(lags=20, alpha=1e-3).calibrated_for(models, window=200)     # doctest: +SKIP
+        >>> tsfdi.identify_windows(flight, models, tests, window=200, step=100)                 # doctest: +SKIP
+        """
+        if not hasattr(models, "items"):
+            raise TypeError(f"models must be a mapping name -> fitted results, got {type(models).__name__}")
+        out = {}
+        for name, res in models.items():
+            spec = getattr(res, "model", None)
+            if not hasattr(spec, "held_out_residuals"):
+                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR), got {type(res).__name__}")
+            try:
+                out[name] = copy.deepcopy(self).calibrate(spec.held_out_residuals(), window=window, step=step)
+            except ValueError as exc:
+                recs = spec.records
+                cut = (f"; a single record is cut into 10 blocks of about {recs[0].nobs // 10} samples, each held out "
+                       "in turn" if len(recs) == 1 else "")
+                raise ValueError(f"models[{name!r}]: {exc} (the null sample: held-out residuals of the {len(recs)} "
+                                 f"record(s), {sum(r.nobs for r in recs)} samples, the model was fitted on{cut}); fit "
+                                 "the model on more or longer healthy records (several flights), or test shorter "
+                                 "windows") from None
+        return out
+
     def _calibration_reference(self, recs: list, reference: dict) -> dict:
         """What the windowed statistic needs on the calibration records (the F test's reference variance)."""
         return reference
