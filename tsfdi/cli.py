@@ -24,7 +24,7 @@ import re
 import sys
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -311,16 +311,27 @@ def _drop_short(data: _Data, need: int, why: str) -> _Data:
     return data.keep([i for i in range(len(data.frames)) if i not in set(short)])
 
 
-def _reword(exc: Exception, data: _Data, subs: tuple = ()) -> ValueError:
-    """A library error about ``y`` / ``signal`` (``y[i]`` for record ``i``) told about the user's file."""
+def _reword(exc: Exception, data: _Data, subs: tuple = (), record: int = 0) -> ValueError:
+    """A library error about ``y`` / ``signal`` (``y[i]`` for record ``i`` of pooled records, else ``record``) told
+    about the user's file."""
     msg = str(exc)
     m = re.match(r"(y|signal)(?:\[(\d+)\])?(:? )", msg)
     if m:
-        i = int(m.group(2)) if m.group(2) else 0
+        i = int(m.group(2)) if m.group(2) else record
         msg = data.about(i if i < len(data.frames) else 0) + m.group(3) + msg[m.end():]
     for old, new in subs:
         msg = msg.replace(old, new)
     return ValueError(msg)
+
+
+def _each(data: _Data, run: Callable) -> Iterator[tuple[int, pd.DataFrame, Any]]:
+    """``(i, frame, run(frame))`` record by record, a library error told about record ``i`` (:func:`_reword`)."""
+    for i, frame in enumerate(data.frames):
+        try:
+            out = run(frame)
+        except (ValueError, TypeError) as exc:
+            raise _reword(exc, data, record=i) from None
+        yield i, frame, out
 
 
 def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-separated columns to use "
@@ -779,11 +790,7 @@ def _detect(args: argparse.Namespace) -> int:
     if args.window is None:
         test = _tests(args, {}, None)
         data = _drop_short(data, *_min_samples(args, {"baseline": baseline}))
-        for i, frame in enumerate(data.frames):
-            try:
-                d = detect(frame, baseline, test)
-            except (ValueError, TypeError) as exc:
-                raise _reword(exc, data) from None
+        for i, frame, d in _each(data, lambda frame: detect(frame, baseline, test)):
             print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.fs:g} Hz, {frame.index[0]:g} s to "
                   f"{frame.index[-1]:g} s):\n{str(d.summary())}\n")
             per_channel = [np.atleast_1d(np.asarray(a))[None, :] for a in (d.statistic, d.threshold, d.pvalue,
@@ -793,12 +800,8 @@ def _detect(args: argparse.Namespace) -> int:
         W, S = _windows_in_samples(args, data, {"baseline": baseline})
         data = _drop_short(data, W, f"--window {args.window}")
         test = _tests(args, {"baseline": (f"--baseline {args.baseline}", baseline)}, W)
-        for i, frame in enumerate(data.frames):
-            try:
-                ws = ResidualWindows({"baseline": baseline}).fit(frame).statistics(test, window=W, step=S,
-                                                                                   loglik=False)
-            except (ValueError, TypeError) as exc:
-                raise _reword(exc, data) from None
+        for _, frame, ws in _each(data, lambda frame: ResidualWindows({"baseline": baseline}).fit(frame).statistics(
+                test, window=W, step=S, loglik=False)):
             rows.append(_detect_rows(data, frame, ws.starts, W, ws.channels, ws.statistic[:, 0], ws.threshold[:, 0],
                                      ws.pvalue[:, 0], ws.channel_reject[:, 0]))
     table = _table(rows, data)
@@ -852,15 +855,11 @@ def _identify(args: argparse.Namespace) -> int:
         data = _drop_short(data, W, f"--window {args.window}")
     test = _tests(args, {n: (f"--models {n}", m) for n, m in models.items()}, None if args.window is None else W)
     rows = []
-    for i, frame in enumerate(data.frames):
-        n = len(frame)
-        w, s = (n, n) if args.window is None else (W, S)
-        try:
-            wins = identify_windows(frame, models, test, window=w, step=s)
-        except (ValueError, TypeError) as exc:
-            raise _reword(exc, data) from None
+    whole = args.window is None         # each record is one window
+    for _, frame, wins in _each(data, lambda frame: identify_windows(
+            frame, models, test, window=len(frame) if whole else W, step=len(frame) if whole else S)):
         start = frame.index.to_numpy()[wins.starts]
-        table = pd.DataFrame({"start": start, "end": np.round(start + w / data.fs, 9)})
+        table = pd.DataFrame({"start": start, "end": np.round(start + wins.windows.window / data.fs, 9)})
         for j, name in enumerate(wins.models):
             table[f"pvalue_{name}"] = wins.windows.min_pvalue[:, j]
             table[f"accept_{name}"] = wins.accepted[:, j]
@@ -924,11 +923,7 @@ def _monitor(args: argparse.Namespace) -> int:
             raise _reword(exc, data, (("steady_window", "--steady-window"), (" or steady_thresholds", ""))) from None
         raise ValueError(f"--baseline / --models: {exc}") from None
     rows = []
-    for i, frame in enumerate(data.frames):
-        try:
-            result = monitor.run(frame)
-        except (ValueError, TypeError) as exc:
-            raise _reword(exc, data) from None
+    for i, frame, result in _each(data, monitor.run):
         events = result.to_frame()
         t0 = float(frame.index[0])
         for c in ("time", "window_start", "window_end"):       # times on the record's clock
