@@ -214,3 +214,23 @@ def test_a_missing_pyulog_says_how_to_install(monkeypatch, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.strip().splitlines() == [f"tsfdi fit: error: reading a PX4 flight log (.ulg) needs the pyulog package: "
                                         "pip install tsfdi[px4]"]
+
+
+def test_require_choice_lists_a_netcdf_files_records_in_python_and_in_the_cli(files, tmp_path, capsys):
+    """A caller pooling records into one model (fit / select-order) must choose among a netCDF file's records; the
+    message lists the per-record coordinates, in keywords for Python and in flags for the command line."""
+    d, _ = files
+    with pytest.raises(ValueError) as exc:
+        tsfdi.read_records(d / "sim.nc", require_choice=True)
+    assert str(exc.value) == (f"{d / 'sim.nc'} holds 3 records: choose the ones to use with records=N[,N...] or "
+                              "where KEY=VALUE (state: healthy, rotor1; turbulence: light, severe)")
+    assert len(tsfdi.read_records(d / "sim.nc").values) == 3                  # default: every record
+    assert len(tsfdi.read_records(d / "sim.nc", records=[2], require_choice=True).values) == 1
+    assert len(tsfdi.read_records(d / "sim.nc", where={"state": "healthy"}, require_choice=True).values) == 2
+    assert len(tsfdi.read_records(d / "seconds.csv", require_choice=True).values) == 1
+    with pytest.raises(TypeError, match="require_choice must be True or False"):
+        tsfdi.read_records(d / "sim.nc", require_choice="yes")
+    for cmd in ("fit", "select-order"):
+        assert main([cmd, str(d / "sim.nc"), "--out", str(tmp_path / "m.npz")]) == 2
+        assert (f"tsfdi {cmd}: error: {d / 'sim.nc'} holds 3 records: choose the ones to use with --record N[,N...] "
+                "or --where KEY=VALUE (state: healthy, rotor1; turbulence: light, severe)") in capsys.readouterr().err

@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
-import math
 import os
 import re
 import sys
@@ -32,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from tsfdi import __version__
+from tsfdi import cli_options as opt
 from tsfdi.baselines import Records
 from tsfdi.io import TIME_COLUMNS, TIME_UNITS, read_records
 
@@ -47,152 +46,6 @@ def command(name: str, help: str, add_arguments: Callable[[argparse.ArgumentPars
         return run
     return deco
 
-
-class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
-    """``--help`` shows every default except an absent one (``None``) and an off switch (``False``)."""
-
-    def _get_help_string(self, action: argparse.Action) -> str:
-        if action.default is None or action.default is False:
-            return action.help or ""
-        return super()._get_help_string(action)
-
-
-# ------------------------------------------------------------------------------ flag values (argparse types)
-def _finite(text: str, lo: float = -math.inf, hi: float = math.inf, what: str = "a finite number") -> float:
-    """A finite number in (lo, hi)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
-    if not (math.isfinite(value) and lo < value < hi):
-        raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}")
-    return value
-
-
-def _integer(text: str, minimum: int) -> int:
-    """An integer >= minimum."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
-    if value < minimum:
-        raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {text!r}")
-    return value
-
-
-_positive = functools.partial(_finite, lo=0.0, what="> 0")
-_probability = functools.partial(_finite, lo=0.0, hi=1.0, what="strictly between 0 and 1")
-_count, _seed, _two_or_more = (functools.partial(_integer, minimum=m) for m in (1, 0, 2))
-
-
-def _timedelta(text: str) -> pd.Timedelta | None:
-    """``text`` as a time span with a unit (``"2s"``, ``"500ms"``), or ``None`` if it is not one."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")          # pandas' deprecation of upper-case units
-        try:
-            span = pd.Timedelta(text)
-        except (ValueError, TypeError, OverflowError):
-            return None
-    return None if span is pd.NaT else span
-
-
-def _bare_number(text: str) -> bool:
-    """A finite number written without a unit."""
-    try:
-        return math.isfinite(float(text))
-    except ValueError:
-        return False
-
-
-def _rows_or_time(text: str, minimum: int, bare: str, other: str) -> int | pd.Timedelta:
-    """An integer >= minimum, else a time span (``bare``: the hint for a decimal without a unit)."""
-    text = text.strip()
-    try:
-        n = int(text)
-    except ValueError:
-        span = _timedelta(text)
-        if _bare_number(text) or span is None:
-            raise argparse.ArgumentTypeError((bare if _bare_number(text) else other) + f", got {text!r}") from None
-        return span
-    if n < minimum:
-        raise argparse.ArgumentTypeError(f"must be >= {minimum}" + (" sample or a time span such as '2s'" if minimum
-                                                                    else " (a row number)") + f", got {text!r}")
-    return n
-
-
-def _span(text: str) -> int | str:
-    """A window length or step as in pandas ``rolling``: an integer >= 1 counts samples; a time span > 0 such as
-    '2s' or '500ms' is kept as text (converted with the sampling frequency once it is known)."""
-    value = _rows_or_time(text, 1, f"a bare number counts samples and must be an integer >= 1; write a time with its "
-                          f"unit, e.g. '{text.strip()}s' or '{text.strip()}ms'", "must be a number of samples (an "
-                          "integer such as 200) or a time span such as '2s' or '500ms'")
-    if isinstance(value, pd.Timedelta) and value <= pd.Timedelta(0):
-        raise argparse.ArgumentTypeError(f"must be a time span > 0, got {text!r}")
-    return value if isinstance(value, int) else text.strip()
-
-
-def _spans(text: str) -> list[int | str]:
-    """Comma-separated window lengths (each as :func:`_span`)."""
-    parts = _csv_list(text)
-    if not parts:
-        raise argparse.ArgumentTypeError(f"must hold at least one window length such as '10s', got {text!r}")
-    return [_span(p) for p in parts]
-
-
-def _instant(text: str) -> int | float:
-    """A position in a record: an integer counts rows from the first (>= 0); a time span such as '110s' is a time
-    on the record's clock, returned in seconds (float)."""
-    value = _rows_or_time(text, 0, "a bare number is a row number and must be an integer; write a time on the "
-                          f"record's clock with its unit, e.g. '{text.strip()}s'", "must be a row number or a time "
-                          "such as '110s' or '2min'")
-    return value if isinstance(value, int) else value.total_seconds()
-
-
-def _duration(text: str, minimum: float = 0.0, strict: bool = True) -> float:
-    """A time span with its unit (``"60s"``, ``"1ms"``) in seconds; a bare number is refused."""
-    text = text.strip()
-    span = _timedelta(text)
-    if span is None or _bare_number(text):
-        hint = f", e.g. '{text}s'" if _bare_number(text) else " such as '60s' or '1ms'"
-        raise argparse.ArgumentTypeError(f"must be a time span with its unit{hint}, got {text!r}")
-    seconds = span.total_seconds()
-    if seconds < minimum or (strict and seconds <= minimum):
-        raise argparse.ArgumentTypeError(f"must be {'>' if strict else '>='} {minimum:g} s, got {text!r}")
-    return seconds
-
-
-def _time_from_start(text: str) -> float:
-    """A time span >= 0 with its unit, in seconds."""
-    return _duration(text, strict=False)
-
-
-def _csv_list(text: str | None) -> list[str] | None:
-    return None if text is None else [t.strip() for t in text.split(",") if t.strip()]
-
-
-def _records_arg(text: str) -> list[int]:
-    """Comma-separated record numbers."""
-    return [_seed(t) for t in _csv_list(text) or [""]]
-
-
-def _where(text: str) -> tuple[str, list[str]]:
-    """``KEY=VALUE[,VALUE...]``."""
-    key, sep, value = text.partition("=")
-    values = _csv_list(value)
-    if not sep or not key.strip() or not values:
-        raise argparse.ArgumentTypeError(f"must be KEY=VALUE such as 'state=healthy', got {text!r}")
-    return key.strip(), values
-
-
-def _order(text: str) -> int | str:
-    """A model order >= 1, 'bic' or 'rss_sss'."""
-    word = text.strip().lower()
-    if word in ("bic", "rss_sss"):
-        return word
-    try:
-        return _count(word)
-    except argparse.ArgumentTypeError:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 1, 'bic' or 'rss_sss', got {text!r}") from None
 
 
 # ------------------------------------------------------------------------------------------------ reading data
@@ -255,32 +108,10 @@ class _Data:
         return _Data(self.rec.read(np.asarray(pos, dtype=int)), [self.frames[i] for i in pos], True, self.rows)
 
 
-def _choice_needed(args: argparse.Namespace) -> None:
-    """fit / select-order: a netCDF file of several records needs --record or --where (not to pool healthy and
-    failed records by accident); the message lists the values of its per-record coordinates."""
-    import xarray as xr
-
-    if args.record or args.where:
-        return
-    for path in args.data:
-        if Path(path).suffix.lower() not in (".nc", ".nc4", ".netcdf", ".cdf", ".h5") or not Path(path).is_file():
-            continue
-        try:
-            with xr.open_dataset(path, engine="h5netcdf") as ds:
-                n = ds.sizes.get("record", 1)
-                hints = "; ".join(f"{k}: {', '.join(sorted(set(np.asarray(ds[k].values).astype(str).tolist())))}"
-                                  for k in ds.variables if ds[k].dims == ("record",) and k != "record"
-                                  and (ds[k].dtype.kind in "OUSb" or k == "state"))
-        except (OSError, ValueError, TypeError, KeyError):
-            continue                # read_records names the problem
-        if n > 1:
-            raise ValueError(f"{path} holds {n} records: choose the ones to use with --record N[,N...] or --where "
-                             f"KEY=VALUE ({hints or 'records 0..' + str(n - 1)})")
-
-
-def _read(args: argparse.Namespace, columns: list[str] | None = None) -> _Data:
+def _read(args: argparse.Namespace, columns: list[str] | None = None, require_choice: bool = False) -> _Data:
     """The records of the data files ``args.data`` (:func:`tsfdi.read_records` with the data flags); ``columns``
-    are used without ``--columns`` (the channels of a model)."""
+    are used without ``--columns`` (the channels of a model); ``require_choice`` as in read_records (fit /
+    select-order)."""
     if args.margin and not args.rows_where:
         raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
     try:
@@ -288,7 +119,7 @@ def _read(args: argparse.Namespace, columns: list[str] | None = None) -> _Data:
                            time_unit=args.time_unit, fs=args.fs, start=args.start, stop=args.stop,
                            rows_where=args.rows_where, margin=args.margin, resample=args.resample,
                            nan_policy=args.nan_policy, records=[r for g in args.record or [] for r in g] or None,
-                           where=args.where, topics=args.topics)
+                           where=args.where, topics=args.topics, require_choice=require_choice)
     except (ValueError, TypeError) as exc:
         raise ValueError(_flags(str(exc))) from None
     rows = " / ".join(f"--{f} {getattr(args, f)}" for f in ("start", "stop") if isinstance(getattr(args, f), int))
@@ -350,23 +181,23 @@ def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-sep
     p.add_argument("--time-unit", choices=tuple(TIME_UNITS), default=None,
                    help="unit of the CSV time column's numbers: s (default), ms, us or ns (e.g. a 'timestamp' in ms "
                         "since boot); --start / --stop times stay in seconds")
-    p.add_argument("--fs", type=_positive, default=None,
+    p.add_argument("--fs", type=opt.positive, default=None,
                    help="sampling frequency in Hz: needed without a time column (CSV) or coordinate (netCDF), and "
                         "for a flight log (the rate of its grid); beside a time column it must agree with it "
                         "within 1%%")
-    p.add_argument("--record", type=_records_arg, action="append", default=None, metavar="N[,N...]",
+    p.add_argument("--record", type=opt.record_numbers, action="append", default=None, metavar="N[,N...]",
                    help=f"netCDF records to use, by the 'record' coordinate (repeatable; {records_help})")
-    p.add_argument("--where", type=_where, action="append", default=None, metavar="KEY=VALUE[,VALUE...]",
+    p.add_argument("--where", type=opt.where, action="append", default=None, metavar="KEY=VALUE[,VALUE...]",
                    help="netCDF records whose per-record coordinate KEY holds one of the VALUEs, e.g. "
                         "'state=healthy' (repeatable: every condition holds)")
     p.add_argument("--topics", default=None,
                    help="PX4 flight log (.ulg): comma-separated topics to read, put on one grid at --fs (required) "
                         "by zero-order hold and split into records at logging gaps; their columns are "
                         "'topic.field', e.g. 'vehicle_attitude.q[0]'")
-    p.add_argument("--start", type=_instant, default=None,
+    p.add_argument("--start", type=opt.instant, default=None,
                    help="first sample used: a time on the record's clock such as '110s', or a row number (an "
                         "integer, from 0)")
-    p.add_argument("--stop", type=_instant, default=None,
+    p.add_argument("--stop", type=opt.instant, default=None,
                    help="end of the part used (excluded): a time such as '130s' or a row number")
     p.add_argument("--resample", action="store_true",
                    help="CSV file with uneven time stamps: put the rows on a uniform grid at --fs by zero-order hold "
@@ -376,7 +207,7 @@ def _add_data_args(p: argparse.ArgumentParser, *, columns_help: str = "comma-sep
                         "'controller.cmd_thrust>0' for the airborne part of a flight (repeatable: every condition "
                         "holds); each run of kept rows becomes a record (runs too short for the command are "
                         "dropped), after --start / --stop")
-    p.add_argument("--margin", type=lambda t: _duration(t, strict=False), default=0.0,
+    p.add_argument("--margin", type=lambda t: opt.duration(t, strict=False), default=0.0,
                    help="time left out at both ends of every run of --rows-where, e.g. '1s' after take-off and "
                         "before landing (default 0s)")
     p.add_argument("--nan-policy", choices=("raise", "omit"), default="raise",
@@ -477,17 +308,17 @@ def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
                    help="residual test: Ljung-Box whiteness test, F test of the residual variance, or test of a "
                         "shift of the residual mean (a new trim: what a closed loop leaves of a compensated "
                         "fault; use it with --threshold calibrated)")
-    p.add_argument("--alpha", type=_probability, default=1e-3,
+    p.add_argument("--alpha", type=opt.probability, default=1e-3,
                    help="type I risk per channel and tested window; the test classes of tsfdi default to 0.05 for "
                         "one test, the command tests many windows (at 0.05, one false alarm in 20 windows)")
-    p.add_argument("--lags", type=_count, default=lags,
+    p.add_argument("--lags", type=opt.count, default=lags,
                    help="Ljung-Box lags (20 as LjungBox(); 25 for monitor, as in paper 003)")
     p.add_argument("--threshold", choices=("theoretical", "calibrated"), default="theoretical",
                    help="theoretical: the test's chi-square / F law, exact only for the data the model was fitted "
                         "on; calibrated: the law of the statistic fitted to the model's held-out residuals (each "
                         "record it was fitted on, through the model fitted on the others; one record is cut into "
                         "blocks), so that --alpha holds on new records (needs --window)")
-    p.add_argument("--min-windows", type=_count, default=None,
+    p.add_argument("--min-windows", type=opt.count, default=None,
                    help="--threshold calibrated: fewest non-overlapping windows of held-out residuals the threshold "
                         "may rest on (default 30, at least 5); with few, its bound over the records is wider")
 
@@ -495,8 +326,8 @@ def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
 def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool = False) -> None:
     samples = ("a bare integer counts samples (as pandas rolling), a time span such as '2s' or '500ms' is "
                "converted with the sampling frequency")
-    p.add_argument("--window", type=_span, default=None, required=required, help=f"{window_help}: {samples}")
-    p.add_argument("--step", type=_span, default="1s", help=f"distance between window starts: {samples}")
+    p.add_argument("--window", type=opt.span, default=None, required=required, help=f"{window_help}: {samples}")
+    p.add_argument("--step", type=opt.span, default="1s", help=f"distance between window starts: {samples}")
 
 
 def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
@@ -553,18 +384,18 @@ def _write(flag: str, table: pd.DataFrame, path: str | None) -> None:
 def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, help="output file: netCDF, or a zarr store (format 2) for a name ending in "
                                                 ".zarr; either is chunked by record")
-    p.add_argument("--records-per-case", type=_count, default=20, help="records per state and turbulence level")
-    p.add_argument("--seed", type=_seed, default=2024, help="base seed (record k uses SeedSequence([seed, k]))")
-    p.add_argument("--duration", type=_duration, default="60s", help="record length, a time span such as '60s'")
-    p.add_argument("--failure-time", type=_time_from_start, default="10s",
+    p.add_argument("--records-per-case", type=opt.count, default=20, help="records per state and turbulence level")
+    p.add_argument("--seed", type=opt.seed, default=2024, help="base seed (record k uses SeedSequence([seed, k]))")
+    p.add_argument("--duration", type=opt.duration, default="60s", help="record length, a time span such as '60s'")
+    p.add_argument("--failure-time", type=opt.time_from_start, default="10s",
                    help="failure instant from the record's start, a time span such as '10s'")
-    p.add_argument("--speed", type=_finite, default=5.0, help="forward speed in m/s")
+    p.add_argument("--speed", type=opt.finite, default=5.0, help="forward speed in m/s")
     p.add_argument("--states", default="healthy,rotor1,rotor2,rotor6",
                    help="comma-separated states: healthy, rotor1 .. rotor6")
     p.add_argument("--turbulence", default="light,moderate,severe",
                    help="comma-separated Dryden levels: none, light, moderate, severe")
-    p.add_argument("--dt", type=_duration, default="1ms", help="integration step, a time span such as '1ms'")
-    p.add_argument("--fs", type=_positive, default=100.0, help="output sampling frequency in Hz")
+    p.add_argument("--dt", type=opt.duration, default="1ms", help="integration step, a time span such as '1ms'")
+    p.add_argument("--fs", type=opt.positive, default=100.0, help="output sampling frequency in Hz")
     p.add_argument("--fleet", default=None, metavar="SPEC",
                    help="a fleet of aircraft of one type (Hansen et al.): each record's mass, centre-of-gravity "
                         "offset, motor constants and inertia drawn from its seed, uniformly around the nominal "
@@ -576,7 +407,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--shipped", action="store_true",
                    help="write only the shipped variables packed as int32 counts (see data/README.md); "
                         "default: every channel as float64")
-    p.add_argument("--chunk", type=_count, default=20,
+    p.add_argument("--chunk", type=opt.count, default=20,
                    help="records per chunk: the chunks are simulated in parallel on the dask scheduler and written "
                         "as they come, so memory holds a few chunks (each chunk x duration x fs x 19 x 8 bytes, and "
                         "the 1 kHz integration of 16 records at a time), whatever the number of records")
@@ -622,14 +453,14 @@ def _simulate(args: argparse.Namespace) -> int:
 def _demo_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default="tsfdi-demo", help="output folder for the figures and tables")
     p.add_argument("--data", default=None, help="hexacopter netCDF file (default: the shipped data/hexacopter.nc)")
-    p.add_argument("--records-per-case", type=_two_or_more, default=None,
+    p.add_argument("--records-per-case", type=opt.two_or_more, default=None,
                    help="use only the first N records of each state and turbulence level (N >= 2; default all)")
-    p.add_argument("--fit-records", type=_count, default=10,
+    p.add_argument("--fit-records", type=opt.count, default=10,
                    help="baseline records per state and turbulence level, pooled (excluded from the evaluation)")
     p.add_argument("--pool", choices=("level", "all"), default="level",
                    help="baseline models per turbulence level, or one set across levels")
-    p.add_argument("--order", type=_order, default="20", help="model order: an integer, 'bic' or 'rss_sss'")
-    p.add_argument("--windows", type=_spans, default="5s,10s,20s",
+    p.add_argument("--order", type=opt.order, default="20", help="model order: an integer, 'bic' or 'rss_sss'")
+    p.add_argument("--windows", type=opt.spans, default="5s,10s,20s",
                    help="comma-separated window lengths: time spans such as '10s', or integers counting samples")
     p.add_argument("--models", default=None, help="comma-separated models: roll, pitch, yaw_rate, var (default all)")
     p.add_argument("--methods", default="whiteness,variance", help="comma-separated: whiteness, variance")
@@ -652,8 +483,8 @@ def _demo(args: argparse.Namespace) -> int:
         if isinstance(exc, FileNotFoundError):
             raise ValueError(f"--data {args.data}: the file does not exist") from None
         raise ValueError(f"--data {args.data}: cannot be read as a hexacopter netCDF file ({exc})") from None
-    models = _csv_list(args.models)
-    tests = paper_tests(models or [*SIGNAL_CHANNELS, "var"], _csv_list(args.methods))
+    models = opt.csv_list(args.models)
+    tests = paper_tests(models or [*SIGNAL_CHANNELS, "var"], opt.csv_list(args.methods))
     bases, ev = hexacopter_study(data, records_per_case=args.records_per_case, models=models, tests=tests,
                                  windows=args.windows, fit_records=args.fit_records, pool=args.pool,
                                  order=args.order, progress=not args.no_progress)
@@ -670,7 +501,7 @@ def _order_args(p: argparse.ArgumentParser) -> None:
                                    "model")
     p.add_argument("--model", choices=("ar", "var"), default=None,
                    help="ar (one column) or var (several); default from the number of columns")
-    p.add_argument("--max-lags", type=_count, default=20, help="largest order searched")
+    p.add_argument("--max-lags", type=opt.count, default=20, help="largest order searched")
     p.add_argument("--trend", choices=("n", "c"), default="n",
                    help="n: no intercept (signals about zero, as the papers' models); c: an intercept, for signals "
                         "with a non-zero level such as commands holding a trim (then --method mean tests a change "
@@ -683,8 +514,7 @@ def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
     """``select_order`` on the records of ``args`` (pooled when several)."""
     from tsfdi.selection import select_order
 
-    _choice_needed(args)
-    data = _read(args)
+    data = _read(args, require_choice=True)
     data = _drop_short(data, args.max_lags + 2, f"--max-lags {args.max_lags}")
     k = len(data.columns)
     model = args.model or ("ar" if k == 1 else "var")
@@ -704,25 +534,10 @@ def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
 def _fit_args(p: argparse.ArgumentParser) -> None:
     _order_args(p)
     p.add_argument("--out", required=True, help="output .npz file for the fitted model")
-    p.add_argument("--lags", type=_count, default=None, help="fixed order (default: the order of smallest BIC)")
+    p.add_argument("--lags", type=opt.count, default=None, help="fixed order (default: the order of smallest BIC)")
     p.add_argument("--coefficients", action="store_true", help="print the coefficient tables too (default: the "
                    "model's header only; tsfdi.load(FILE).summary() shows them in Python)")
     p.add_argument("--quiet", action="store_true", help="print only the one-line result and where it was saved")
-
-
-def _collinear(data: _Data) -> str:
-    """The channels that make a fit exact: constant ones and ones proportional to an earlier one."""
-    x = np.concatenate([np.asarray(v) for v in data.rec.values])
-    x = x - x.mean(axis=0)
-    norm = np.sqrt((x ** 2).sum(axis=0))
-    said = [f"{c!r} is constant" for c, n in zip(data.columns, norm) if n == 0]
-    unit = x / np.where(norm > 0, norm, 1)
-    for j in range(len(data.columns)):
-        i = next((i for i in range(j) if norm[i] > 0 and norm[j] > 0 and abs(unit[:, i] @ unit[:, j]) > 1 - 1e-9),
-                 None)
-        if i is not None:
-            said.append(f"{data.columns[j]!r} is proportional to {data.columns[i]!r}")
-    return f" ({'; '.join(said)})" if said else ""
 
 
 @command("fit", "fit an AR / VAR baseline model (order by BIC) on records of a CSV, netCDF or flight-log file and "
@@ -734,9 +549,10 @@ def _fit(args: argparse.Namespace) -> int:
     sel, data, model = _order_selection(args)
     res = sel.fit(args.lags)
     if bool(np.asarray(sel.values["exact"])[list(sel.orders).index(res.lags)]):
+        said = "; ".join(sel.spec.collinear_channels())
         raise ValueError(f"{model.upper()}({res.lags}) fits the {len(data.columns)} column(s) of {data.path} exactly: "
-                         f"collinear or constant channels{_collinear(data)}, so the model would explain any flight "
-                         "and detect nothing; not saved. Choose the channels with --columns")
+                         f"collinear or constant channels{f' ({said})' if said else ''}, so the model would explain "
+                         "any flight and detect nothing; not saved. Choose the channels with --columns")
     try:
         written = res.save(args.out)
     except OSError as exc:
@@ -882,7 +698,7 @@ def _monitor_args(p: argparse.ArgumentParser) -> None:
                    help="fault models identifying the windows after a detection, as NAME=PATH or PATH (name = "
                         "file stem); default none: detection only")
     _window_args(p, "window length", required=True)
-    p.add_argument("--steady-window", type=_span, default="10s",
+    p.add_argument("--steady-window", type=opt.span, default="10s",
                    help="rolling-variance window of the steady-state check (paper 003): identification starts once "
                         "the variance of every channel over this window is below its threshold, the largest over "
                         "the records the --models were fitted on; an integer counts samples, a time span such as "
@@ -946,7 +762,7 @@ def _parser() -> tuple[argparse.ArgumentParser, dict]:
     sub = parser.add_subparsers(dest="command", metavar="<command>")
     subs = {}
     for name, (help_, add, _) in COMMANDS.items():
-        subs[name] = sub.add_parser(name, help=help_, description=help_, formatter_class=_HelpFormatter)
+        subs[name] = sub.add_parser(name, help=help_, description=help_, formatter_class=opt.HelpFormatter)
         add(subs[name])
     return parser, subs
 

@@ -52,6 +52,7 @@ class _Options:
     records: list | None
     where: list
     topics: list | None
+    require_choice: bool = False
 
 
 @dataclass
@@ -127,7 +128,7 @@ def _conditions(value: Any) -> list[tuple[str, str, float]]:
 
 
 def _options(columns, time, time_unit, fs, start, stop, rows_where, margin, resample, nan_policy, records, where,
-             topics) -> _Options:
+             topics, require_choice) -> _Options:
     if time is not None and not isinstance(time, str):
         raise TypeError(f"time must be the name of a CSV column, got {time!r}")
     if time_unit is not None and time_unit not in TIME_UNITS:
@@ -149,6 +150,8 @@ def _options(columns, time, time_unit, fs, start, stop, rows_where, margin, resa
         raise ValueError("margin trims the runs of rows_where: give rows_where too")
     if not isinstance(resample, (bool, np.bool_)):
         raise TypeError(f"resample must be True or False, got {resample!r}")
+    if not isinstance(require_choice, (bool, np.bool_)):
+        raise TypeError(f"require_choice must be True or False, got {require_choice!r}")
     if nan_policy not in ("raise", "omit"):
         raise ValueError(f"nan_policy must be 'raise' or 'omit', got {nan_policy!r}")
     if records is not None:
@@ -168,7 +171,7 @@ def _options(columns, time, time_unit, fs, start, stop, rows_where, margin, resa
                 raise ValueError(f"where {key}: give at least one value")
             pairs.append((str(key), [str(v) for v in values]))
     return _Options(_names(columns, "columns"), time, time_unit, fs, start, stop, conditions, float(margin),
-                    bool(resample), nan_policy, records, pairs, _names(topics, "topics"))
+                    bool(resample), nan_policy, records, pairs, _names(topics, "topics"), bool(require_choice))
 
 
 # ----------------------------------------------------------------------------------------------------- times
@@ -408,6 +411,17 @@ def _select_records(ds: Any, opt: _Options, path: str) -> list[int]:
     return pick
 
 
+def _choice_needed(ds: Any, path: str) -> str:
+    """``require_choice``: the message of a netCDF file of several records read without ``records`` or ``where``,
+    listing the values of its per-record coordinates (the text ones and ``state``)."""
+    n = ds.sizes["record"]
+    hints = "; ".join(f"{k}: {', '.join(sorted(set(np.asarray(ds[k].values).astype(str).tolist())))}"
+                      for k in ds.variables if ds[k].dims == ("record",) and k != "record"
+                      and (ds[k].dtype.kind in "OUSb" or k == "state"))
+    return (f"{path} holds {n} records: choose the ones to use with records=N[,N...] or where KEY=VALUE "
+            f"({hints or 'records 0..' + str(n - 1)})")
+
+
 def _read_netcdf(path: str, opt: _Options) -> tuple[list, list, float | None, str | None, list, dict]:
     import xarray as xr
 
@@ -422,6 +436,8 @@ def _read_netcdf(path: str, opt: _Options) -> tuple[list, list, float | None, st
     has_records = "record" in ds.dims
     if not has_records and (opt.records or opt.where):
         raise ValueError(f"{'records' if opt.records else 'where'}: {path} has no 'record' dimension (one record)")
+    if has_records and opt.require_choice and not (opt.records or opt.where) and ds.sizes["record"] > 1:
+        raise ValueError(_choice_needed(ds, path))
     dims = {("time",), ("record", "time")} if has_records else {("time",)}
     available = [str(k) for k, v in ds.data_vars.items() if v.dims in dims and v.dtype.kind in "iuf"]
     for c in opt.columns or []:
@@ -642,7 +658,8 @@ def _runs_where(frames: list, ids: list, first: list, masks: list, origin: list,
 def read_records(paths: str | os.PathLike | Sequence[str | os.PathLike], *, columns: Any = None,
                  time: str | None = None, time_unit: str | None = None, fs: float | None = None, start: Any = None,
                  stop: Any = None, rows_where: Any = None, margin: Any = 0.0, resample: bool = False,
-                 nan_policy: str = "raise", records: Any = None, where: Any = None, topics: Any = None) -> Records:
+                 nan_policy: str = "raise", records: Any = None, where: Any = None, topics: Any = None,
+                 require_choice: bool = False) -> Records:
     """Read data files into records of named channels on a uniform time grid.
 
     Parameters
@@ -696,6 +713,10 @@ def read_records(paths: str | os.PathLike | Sequence[str | os.PathLike], *, colu
         condition holds.
     topics : str or list of str, optional
         Flight logs and topic folders (required there): the topics to read.
+    require_choice : bool
+        For a caller that pools the records into one model: a netCDF file of several records then needs
+        ``records`` or ``where`` (not to pool healthy and failed records by accident), else a ``ValueError``
+        lists the values of the file's per-record coordinates (``state: healthy, rotor1; turbulence: ...``).
 
     Returns
     -------
@@ -714,7 +735,8 @@ def read_records(paths: str | os.PathLike | Sequence[str | os.PathLike], *, colu
         Naming the keyword, the file and the column: a missing file, column, topic or record; a non-numeric
         column; a NaN (``nan_policy="raise"``); a time column that is not evenly sampled in the rows used (the
         library's one rule, :func:`tsfdi.align` or ``resample=True`` being the fix) or disagrees with ``fs``; a
-        ``rows_where`` that no row meets; files that disagree.
+        ``rows_where`` that no row meets; files that disagree; a netCDF file of several records without
+        ``records`` or ``where`` when ``require_choice``.
     TypeError
         A keyword of the wrong type.
     ImportError
@@ -745,7 +767,7 @@ def read_records(paths: str | os.PathLike | Sequence[str | os.PathLike], *, colu
     >>> model = tsfdi.VAR(rec.frames(), 4).fit()                                       # doctest: +SKIP
     """
     opt = _options(columns, time, time_unit, fs, start, stop, rows_where, margin, resample, nan_policy, records,
-                   where, topics)
+                   where, topics, require_choice)
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     if not isinstance(paths, Sequence) or not paths or not all(isinstance(p, (str, os.PathLike)) for p in paths):

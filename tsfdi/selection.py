@@ -131,9 +131,11 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     sss = np.sum(R[:, -s:] ** 2, axis=0)   # = diag(Y'Y): columns of R have the norms of the columns of Z
     values = spec.criteria(sse, sss, widths * s)
     if values["exact"].any():
+        said = "".join(f"; {c}" for c in spec.collinear_channels())
         warnings.warn(f"orders {orders[values['exact']].tolist()} fit the data exactly (a residual RMS below "
-                      f"{EXACT_FIT_RTOL:g} times its peak, or collinear channels): their likelihood is unbounded, so "
-                      "their criteria use that floor for the residual variance", IllConditionedWarning, stacklevel=2)
+                      f"{EXACT_FIT_RTOL:g} times its peak, or collinear channels{said}): their likelihood is "
+                      "unbounded, so their criteria use that floor for the residual variance", IllConditionedWarning,
+                      stacklevel=2)
     out = OrderSelection(spec=spec, orders=orders, values=values, tol=tol)
     if out.at_bound:
         warnings.warn(f"the BIC minimum is at the search bound max_lags = {max_lags}: a larger order may fit better; "

@@ -8,6 +8,7 @@ Cause 3 (scale, exact fits, leaked LinAlgError), cause 4 (RecursiveARX options t
 import warnings
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import linalg
 from scipy import signal as sps
@@ -314,3 +315,15 @@ def test_var_simulate_sigma_is_validated_by_name():
         ar.simulate(10, sigma2="")
     with pytest.raises(ValueError, match="sigma2 must be >= 0"):
         ar.simulate(10, sigma2=-1.0)
+
+
+def test_an_exact_fit_names_the_proportional_channels():
+    """The warning of an exact fit (VAR.fit, select_order) names the channels behind it, as 'tsfdi fit' does."""
+    y = ar2(300, 12)
+    Y = pd.DataFrame({"a": y, "b": ar2(300, 13), "c": -3.0 * y})
+    assert VAR(Y, 2).collinear_channels() == ["'c' is proportional to 'a'"]
+    with pytest.warns(IllConditionedWarning, match="or collinear channels; 'c' is proportional to 'a'\\)"):
+        VAR(Y, 2).fit().llf
+    with pytest.warns(IllConditionedWarning, match="'c' is proportional to 'a'\\)"):
+        tsfdi.select_order([Y, Y * 2], 3, "var")
+    assert VAR(np.column_stack([y, ar2(300, 13)]), 2).collinear_channels() == []

@@ -335,6 +335,29 @@ class LinearTimeSeriesModel:
         return information_criteria(sse, sss, sum(self.nobs_records), df_model, self.neqs, self.criterion,
                                     scale=self.y_scale if self._rescaled else None, peak=self._y_peak)
 
+    def collinear_channels(self) -> list[str]:
+        """The output channels that make a fit exact by being proportional to an earlier one (a constant channel
+        is refused when the model is made).
+
+        Computed on every record's values about their mean (all records pooled). The warning of an exact fit
+        names them; an empty list when the exact fit comes from the dynamics (a deterministic signal) instead.
+
+        Returns
+        -------
+        list of str
+            One phrase per such channel, e.g. ``"'b' is proportional to 'a'"``.
+        """
+        x = np.concatenate([r.values for r in self.records])
+        x = x - x.mean(axis=0)
+        unit = x / np.sqrt((x ** 2).sum(axis=0))
+        names = [str(c) for c in self.data.channels]
+        said = []
+        for j in range(len(names)):
+            i = next((i for i in range(j) if abs(unit[:, i] @ unit[:, j]) > 1 - 1e-9), None)
+            if i is not None:
+                said.append(f"{names[j]!r} is proportional to {names[i]!r}")
+        return said
+
     def fit(self) -> LinearTimeSeriesResults:
         """Estimate the parameters by least squares (QR / SVD, never the normal equations).
 
@@ -647,9 +670,10 @@ class LinearTimeSeriesResults:
     def _criteria(self) -> dict[str, float]:
         values = self.model.criteria(self._sse[None], self._resid_and_sss[1], [self.df_model])
         if values["exact"][0]:
+            said = "".join(f"; {c}" for c in self.model.collinear_channels())
             warnings.warn(f"the {type(self.model).__name__} fits y exactly (a residual RMS below {EXACT_FIT_RTOL:g} "
-                          "times the peak of y, or collinear channels): the likelihood is unbounded, so llf, aic and "
-                          "bic use that floor for the residual variance", IllConditionedWarning, stacklevel=4)
+                          f"times the peak of y, or collinear channels{said}): the likelihood is unbounded, so llf, aic "
+                          "and bic use that floor for the residual variance", IllConditionedWarning, stacklevel=4)
         return values
 
     @property
