@@ -81,10 +81,6 @@ class _Data:
     rows: str = ""
 
     @property
-    def fs(self) -> float:
-        return self.rec.fs
-
-    @property
     def columns(self) -> list[str]:
         return list(self.rec.channels)
 
@@ -102,7 +98,7 @@ class _Data:
 
     def span(self, n: int) -> str:
         """``"200 samples = 2 s"`` at this sampling frequency."""
-        return f"{n} sample{'s' if n != 1 else ''} = {n / self.fs:.6g} s"
+        return f"{n} sample{'s' if n != 1 else ''} = {n / self.rec.fs:.6g} s"
 
     def keep(self, pos: list[int]) -> _Data:
         return _Data(self.rec.read(np.asarray(pos, dtype=int)), [self.frames[i] for i in pos], True, self.rows)
@@ -135,7 +131,7 @@ def _drop_short(data: _Data, need: int, why: str) -> _Data:
         return data
     if not data.split or len(short) == len(data.frames):
         i = short[0]
-        raise ValueError(f"{data.about(i)} is too short: {data.span(len(data.frames[i]))} at {data.fs:g} Hz, "
+        raise ValueError(f"{data.about(i)} is too short: {data.span(len(data.frames[i]))} at {data.rec.fs:g} Hz, "
                          f"{why} needs at least {need}")
     print(f"note: dropped {len(short)} piece(s) of split records shorter than {need} samples ({why})",
           file=sys.stderr)
@@ -331,31 +327,27 @@ def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool
 
 
 def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
-    """Fewest samples a tested window needs, and why: the largest model order plus the Ljung-Box lags and one,
-    plus three for the F test, plus one for the mean test."""
+    """Fewest samples a tested window needs (the models' largest order plus the test's ``min_resid``), and why."""
     order = max(int(m.lags) for m in models.values())
-    if args.method == "whiteness":
-        return order + args.lags + 1, f"the models' largest order ({order}) with --lags {args.lags}"
-    if args.method == "variance":
-        return order + 3, f"the models' largest order ({order}) with the F test"
-    return order + 1, f"the models' largest order ({order}) with the mean test"
+    test = {"whiteness": f"--lags {args.lags}", "variance": "the F test", "mean": "the mean test"}[args.method]
+    return order + _test(args).min_resid, f"the models' largest order ({order}) with {test}"
 
 
 def _windows_in_samples(args: argparse.Namespace, data: _Data, models: dict) -> tuple[int, int]:
     """``--window`` and ``--step`` in samples, checked against the records and the models' orders."""
     from tsfdi._data import window_samples
 
-    W = window_samples(args.window, "--window", data.fs, minimum=2)
-    S = window_samples(args.step, "--step", data.fs, minimum=1)
+    W = window_samples(args.window, "--window", data.rec.fs, minimum=2)
+    S = window_samples(args.step, "--step", data.rec.fs, minimum=1)
     need, why = _min_samples(args, models)
     if W < need:
-        raise ValueError(f"--window {args.window}: {data.span(W)} at {data.fs:g} Hz is too short; {why} needs "
+        raise ValueError(f"--window {args.window}: {data.span(W)} at {data.rec.fs:g} Hz is too short; {why} needs "
                          f"at least {need} samples")
     shortest = min(range(len(data.frames)), key=lambda i: len(data.frames[i]))
     if W > len(data.frames[shortest]) and not data.split:
         raise ValueError(f"--window {args.window}: {data.span(W)} is longer than {data.about(shortest)} "
-                         f"({data.span(len(data.frames[shortest]))} at {data.fs:g} Hz)")
-    print(f"window {data.span(W)}, step {data.span(S)}, at {data.fs:g} Hz")
+                         f"({data.span(len(data.frames[shortest]))} at {data.rec.fs:g} Hz)")
+    print(f"window {data.span(W)}, step {data.span(S)}, at {data.rec.fs:g} Hz")
     return W, S
 
 
@@ -557,7 +549,7 @@ def _fit(args: argparse.Namespace) -> int:
         written = res.save(args.out)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
-    print(f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) at {data.fs:g} Hz "
+    print(f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) at {data.rec.fs:g} Hz "
           f"({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}")
     if not args.quiet:
         summary = res.summary()
@@ -576,7 +568,7 @@ def _select_order_args(p: argparse.ArgumentParser) -> None:
 def _select_order(args: argparse.Namespace) -> int:
     _check_out("--out", args.out)
     sel, data, model = _order_selection(args)
-    print(f"{model.upper()} on {data.columns} from {len(data.frames)} record(s) at {data.fs:g} Hz")
+    print(f"{model.upper()} on {data.columns} from {len(data.frames)} record(s) at {data.rec.fs:g} Hz")
     print(str(sel.summary()))
     _write("--out", sel.table.reset_index(), args.out)
     return 0
@@ -607,7 +599,7 @@ def _detect(args: argparse.Namespace) -> int:
         test = _tests(args, {}, None)
         data = _drop_short(data, *_min_samples(args, {"baseline": baseline}))
         for i, frame, d in _each(data, lambda frame: detect(frame, baseline, test)):
-            print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.fs:g} Hz, {frame.index[0]:g} s to "
+            print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.rec.fs:g} Hz, {frame.index[0]:g} s to "
                   f"{frame.index[-1]:g} s):\n{str(d.summary())}\n")
             per_channel = [np.atleast_1d(np.asarray(a))[None, :] for a in (d.statistic, d.threshold, d.pvalue,
                                                                             d.reject)]
@@ -633,7 +625,7 @@ def _detect_rows(data: _Data, frame: pd.DataFrame, starts: Any, W: int, channels
                  pv: Any, rej: Any) -> pd.DataFrame:
     """One row per window: times on the record's clock, per channel statistic / threshold / p-value, fault."""
     start = frame.index.to_numpy()[np.asarray(starts, dtype=int)]
-    out = {"start": start, "end": np.round(start + W / data.fs, 9)}
+    out = {"start": start, "end": np.round(start + W / data.rec.fs, 9)}
     for j, c in enumerate(channels):
         out[f"statistic_{c}"] = np.asarray(stat)[:, j]
         out[f"threshold_{c}"] = np.asarray(thr)[:, j]
@@ -675,7 +667,7 @@ def _identify(args: argparse.Namespace) -> int:
     for _, frame, wins in _each(data, lambda frame: identify_windows(
             frame, models, test, window=len(frame) if whole else W, step=len(frame) if whole else S)):
         start = frame.index.to_numpy()[wins.starts]
-        table = pd.DataFrame({"start": start, "end": np.round(start + wins.windows.window / data.fs, 9)})
+        table = pd.DataFrame({"start": start, "end": np.round(start + wins.windows.window / data.rec.fs, 9)})
         for j, name in enumerate(wins.models):
             table[f"pvalue_{name}"] = wins.windows.min_pvalue[:, j]
             table[f"accept_{name}"] = wins.accepted[:, j]
@@ -723,7 +715,7 @@ def _monitor(args: argparse.Namespace) -> int:
     _check_channels(data, given)
     W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
     data = _drop_short(data, W, f"--window {args.window}")
-    V = window_samples(args.steady_window, "--steady-window", data.fs, minimum=2)
+    V = window_samples(args.steady_window, "--steady-window", data.rec.fs, minimum=2)
     tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
                           **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
     if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
@@ -732,7 +724,7 @@ def _monitor(args: argparse.Namespace) -> int:
     else:
         test, detection_test = tests, None
     try:
-        monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.fs, test=test,
+        monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.rec.fs, test=test,
                           detection_test=detection_test, steady_window=V, rule=args.rule)
     except (ValueError, TypeError) as exc:      # the steady-state thresholds come from the --models' records
         if str(exc).startswith("steady_window"):

@@ -163,3 +163,19 @@ def test_huge_reference_df_gives_the_chi2_limit(alpha):
     # the limit takes over continuously from the exact law
     np.testing.assert_allclose(f_isf(300, 3e10, alpha), f_isf(300, 2.9e10, alpha), rtol=1e-7)
     np.testing.assert_allclose(f_sf(1e300, 40, 0.5), stats.chi2.cdf(40 / 0.5, 40), rtol=1e-10)
+
+
+def test_min_resid_is_the_shortest_residual_series_each_test_accepts():
+    """min_resid (what the command line adds to a model's order for the shortest window) is what test() accepts."""
+    from tsfdi.detection import FTest, LjungBox, MeanTest
+
+    rng = np.random.default_rng(5)
+    ref = {"reference_variance": 1.0, "reference_df": 100}
+    cases = ((LjungBox(lags=7), 8, {}), (FTest(), 2, ref), (FTest(demean=True), 3, ref),
+             (MeanTest(), 1, {"reference_variance": 1.0}))
+    for test, need, kwargs in cases:
+        assert test.min_resid == need
+        test.test(rng.standard_normal(need) + 1.0, **kwargs)
+        if need > 1:
+            with pytest.raises(ValueError, match="too short"):
+                test.test(rng.standard_normal(need - 1) + 1.0, **kwargs)

@@ -153,6 +153,12 @@ class CalibratedTest(ResidualTest):
     #: Name of the distributional threshold option, the same for every test.
     _theoretical = "theoretical"
 
+    @property
+    def min_resid(self) -> int:
+        """Fewest residual samples :meth:`test` accepts (1 unless the test needs more); a window of a model of
+        order ``p`` needs ``p + min_resid`` samples of the signal, its first ``p`` leaving no residual."""
+        return 1
+
     def _threshold_option(self, threshold: Any) -> Any:
         """Validate the ``threshold`` option: ``"theoretical"``, ``"calibrated"``, ``"empirical"`` or an
         estimator (:class:`~tsfdi.EmpiricalThreshold`, :class:`~tsfdi.ScaledChi2Threshold`)."""

@@ -94,6 +94,11 @@ class FTest(ReferenceVarianceTest):
         if self.empirical and self.alternative != "greater":
             raise ValueError("threshold='empirical' needs alternative='greater' (one upper quantile)")
 
+    @property
+    def min_resid(self) -> int:
+        """Fewest residual samples :meth:`test` accepts: 3 with ``demean`` (two degrees of freedom), else 2."""
+        return 3 if self.demean else 2
+
     def __repr__(self) -> str:
         thr = "" if self.threshold == "theoretical" else f", threshold={self._threshold_name()!r}" + (
             f" (calibrated on {self.calibration_[0].size} windows)" if self.calibrated else " (not calibrated)")
@@ -104,7 +109,7 @@ class FTest(ReferenceVarianceTest):
                          **_: Any) -> np.ndarray:
         """Variance ratio ``F`` of every sliding window (``window`` residual samples, ``step`` apart) against
         ``reference_variance``, shape (n_windows, k), from prefix sums."""
-        sig = self._resid(resid, 3 if self.demean else 2)
+        sig = self._resid(resid, self.min_resid)
         # a calibrated test carries the variance it was calibrated with
         reference_variance = getattr(self, "reference_variance_", reference_variance)
         if reference_variance is None:
@@ -299,7 +304,7 @@ class FTest(ReferenceVarianceTest):
             :math:`\\hat\\sigma_{Vu}^2` per channel (``inf`` if it is beyond the float range, ``|resid|`` above
             about 1e154, while :math:`F` is not).
         """
-        sig = self._resid(resid, 3 if self.demean else 2)
+        sig = self._resid(resid, self.min_resid)
         e = sig.values
         k = sig.nchan
         # a calibrated test carries the variance it was calibrated with

@@ -208,9 +208,14 @@ class LjungBox(CalibratedTest):
             out.append(self._joint_q(np.ascontiguousarray(xt.T), window, sig.nchan))
         return np.array(out)[:, None]
 
+    @property
+    def min_resid(self) -> int:
+        """Fewest residual samples :meth:`test` accepts: ``lags + 1``."""
+        return self.lags + 1
+
     def _prepare(self, resid: Any):
         sig = as_signal(resid, "resid", min_nobs=1, allow_constant=True)
-        if sig.nobs <= self.lags:
+        if sig.nobs < self.min_resid:
             raise ValueError(f"resid is too short: {sig.nobs} samples, more than lags = {self.lags} are needed")
         return sig
 
