@@ -39,7 +39,7 @@ import pandas as pd
 from tsfdi._validation import float_like, int_like
 
 __all__ = ["FS_TOLERANCE", "JITTER", "Signal", "as_signal", "check_paired", "is_xarray", "read_csv", "refuse_masked",
-           "rolling_variance", "sampling_frequency", "time_step", "window_samples"]
+           "rolling_variance", "runs", "sampling_frequency", "time_step", "window_samples"]
 
 #: a time index is uniformly sampled when every step lies within this fraction of its median step
 JITTER = 0.1
@@ -467,6 +467,12 @@ def window_samples(value: Any, name: str, fs: float | None, *, minimum: int = 1)
     if n < minimum:
         raise ValueError(f"{name} must be >= {minimum} samples, got {n}")
     return n
+
+
+def runs(mask: Any) -> list[tuple[int, int]]:
+    """``(start, stop)`` of every run of True in a 1-D boolean ``mask``, in order (``mask[start:stop]`` all True)."""
+    edges = np.flatnonzero(np.diff(np.r_[0, np.asarray(mask, dtype=np.int8), 0]))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
 
 
 def rolling_variance(signal: Any, window: int, step: int = 1) -> np.ndarray:

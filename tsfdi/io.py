@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import FS_TOLERANCE, read_csv, time_step
+from tsfdi._data import FS_TOLERANCE, read_csv, runs, time_step
 from tsfdi.baselines import Records
 from tsfdi.exceptions import TsfdiWarning
 
@@ -272,12 +272,6 @@ def _row_mask(opt: _Options, available: list[str], path: str, kind: str, values:
         with np.errstate(invalid="ignore"):
             mask = mask & _COMPARISONS[op](np.asarray(values(col), dtype=np.float64), value)
     return mask
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """``(start, stop)`` of every run of True in ``mask``."""
-    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
-    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
 
 
 def _piece(rid: str, k: int) -> str:
@@ -614,7 +608,7 @@ def _read_file(path: str, opt: _Options) -> _Part:
             out_origin.append(o)
             continue
         if opt.nan_policy == "omit":
-            parts = [f.iloc[a:b] for a, b in _runs(~bad.any(axis=1))]
+            parts = [f.iloc[a:b] for a, b in runs(~bad.any(axis=1))]
             out_frames += parts
             out_ids += [_piece(rid, k) for k in range(len(parts))]
             out_origin += [o] * len(parts)
@@ -640,7 +634,7 @@ def _runs_where(frames: list, ids: list, first: list, masks: list, origin: list,
     out_frames, out_ids, out_first, out_origin = [], [], [], []
     for f, rid, row0, mask, o in zip(frames, ids, first, masks, origin):
         t = f.index.to_numpy()
-        for k, (a, b) in enumerate(_runs(mask)):
+        for k, (a, b) in enumerate(runs(mask)):
             a, b = (int(np.searchsorted(t[a:b], t[a] + opt.margin) + a),
                     int(np.searchsorted(t[a:b], t[b - 1] - opt.margin, side="right") + a))
             if b > a:

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import is_xarray, window_samples
+from tsfdi._data import is_xarray, runs, window_samples
 from tsfdi._validation import MAX_VALUES, option
 from tsfdi.exceptions import TsfdiWarning
 
@@ -278,17 +278,16 @@ def align(frames: Any, fs: Any, *, method: str = "zoh", gaps: str = "split", max
     else:
         index = pd.DatetimeIndex(grid.astype("datetime64[ns]"), name="time")
         index = index.tz_localize("UTC").tz_convert(tz) if tz is not None else index
-    edges = np.flatnonzero(np.diff(np.concatenate([[False], valid, [False]]).astype(np.int8)))
-    runs = list(zip(edges[::2], edges[1::2]))
-    short = [(a, b) for a, b in runs if b - a < min_length]
+    pieces = runs(valid)
+    short = [(a, b) for a, b in pieces if b - a < min_length]
     if short:
         spans = ", ".join(f"{_time(grid[a], tz)} ({b - a})" for a, b in short[:5])
         warnings.warn(f"align: {len(short)} record(s) shorter than min_length = {min_length} samples left out: "
                       f"{spans}{', ...' if len(short) > 5 else ''}", TsfdiWarning, stacklevel=2)
-    records = [pd.DataFrame(values[a:b], index=index[a:b], columns=columns) for a, b in runs if b - a >= min_length]
+    records = [pd.DataFrame(values[a:b], index=index[a:b], columns=columns) for a, b in pieces if b - a >= min_length]
     if not records:
         raise ValueError(f"align: no record of at least min_length = {min_length} samples at {_NS / period:g} Hz "
-                         f"({len(runs)} shorter one(s) between gaps / NaNs)")
+                         f"({len(pieces)} shorter one(s) between gaps / NaNs)")
     for r in records if isinstance(frames, pd.DataFrame) else ():
         r.attrs = dict(frames.attrs)
     return records

@@ -8,7 +8,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from tsfdi._data import Signal, as_signal
+from tsfdi._data import Signal, as_signal, runs
 from tsfdi._validation import int_like, option, probability
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
@@ -581,15 +581,10 @@ def refuse_constant_stretch(sig: Signal, length: int, name: str) -> None:
     x = sig.values
     if length < 2 or x.shape[0] < length:
         return
-    same = np.zeros((x.shape[0] + 1, x.shape[1]), dtype=np.int8)
-    same[1:-1] = x[1:] == x[:-1]                        # sample t equals sample t - 1
-    edges = np.diff(same, axis=0)                       # +1: a run of equal samples starts, -1: it ends
-    found = []
-    for c in range(x.shape[1]):
-        starts, stops = np.flatnonzero(edges[:, c] == 1), np.flatnonzero(edges[:, c] == -1)
-        long = np.flatnonzero(stops - starts >= length - 1)
-        if long.size:
-            found.append((int(starts[long[0]]), int(stops[long[0]]) + 1, c))
+    same = x[1:] == x[:-1]              # a run [a, b) of same[:, c] is the stretch [a, b + 1) of equal samples
+    found = [next(((a, b + 1, c) for a, b in runs(same[:, c]) if b + 1 - a >= length), None)
+             for c in range(x.shape[1])]
+    found = [f for f in found if f is not None]
     if found:
         a, b, c = min(found)
         raise ValueError(f"{name} holds a constant stretch (a frozen sensor) of {b - a} samples in channel "
