@@ -97,3 +97,51 @@ def test_bad_step():
         d.discretize(-1e-3)
     with pytest.raises(ValueError, match="fs"):
         dryden_turbulence(1.0, fs=0.0)
+
+
+def test_scale_length_sets_all_three_and_keeps_the_intensities():
+    d = DrydenTurbulence(altitude=5.0, airspeed=5.0, intensity="severe", scale_length=0.6096)
+    assert d.length_scales == (0.6096, 0.6096, 0.6096)
+    assert d.linear_sigmas == DrydenTurbulence(altitude=5.0, airspeed=5.0, intensity="severe").linear_sigmas
+    np.testing.assert_allclose(d.std()[:3], d.linear_sigmas, rtol=1e-10)
+    g = dryden_turbulence(1.0, fs=100.0, scale_length=2.0, rng=0)
+    assert g.attrs["L_u_v_w"] == [2.0, 2.0, 2.0]
+
+
+@pytest.mark.parametrize("length", [0.6096, 3.0])
+def test_scale_length_monte_carlo_variance(length):
+    """Sample variance of each linear gust over 4 x 1000 s at 100 Hz equals sigma^2 within 5 standard errors of a
+    variance estimate (chi-square: relative standard error sqrt(2 T_c / T) with the correlation time T_c = 2 L / V
+    taken generously for the second-order v, w filters)."""
+    V = 5.0
+    d = DrydenTurbulence(altitude=5.0, airspeed=V, intensity="moderate", scale_length=length)
+    g = d.simulate(100000, 0.01, rng=11, records=4)
+    var = (g.reshape(-1, 6)[:, :3] ** 2).mean(axis=0)
+    rse = np.sqrt(2.0 * (2.0 * length / V) / 4000.0)
+    np.testing.assert_allclose(var, np.square(d.linear_sigmas), rtol=5 * rse)
+
+
+def test_scale_length_psd_shape():
+    """Welch PSD / analytic PSD in [0.75, 1.33] on log bands from 0.05 to 5 Hz with L = 0.6096 m (corner of the
+    u filter at V / (2 pi L) = 1.3 Hz for V = 5 m/s, inside the bands), and the PSD differs from the
+    MIL-F-8785C one (its u corner is at 0.08 Hz). Linear gusts only: the angular ones have corners near
+    fs / 2 at this span and alias."""
+    fs = 100.0
+    d = DrydenTurbulence(altitude=5.0, airspeed=5.0, intensity="moderate", scale_length=0.6096)
+    g = d.simulate(60000, 1 / fs, rng=3, records=8)
+    f, pxx = signal.welch(g, fs=fs, nperseg=4000, axis=1)
+    pxx = pxx.mean(axis=0)
+    model = d.psd(f).T
+    edges = np.logspace(np.log10(0.05), np.log10(5.0), 9)
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        sel = (f >= lo) & (f < hi)
+        ratio = pxx[sel, :3].mean(axis=0) / model[sel, :3].mean(axis=0)
+        assert np.all((ratio > 0.75) & (ratio < 1.33)), (lo, hi, ratio)
+    default = DrydenTurbulence(altitude=5.0, airspeed=5.0, intensity="moderate").psd([1.3])[0, 0]
+    assert d.psd([1.3])[0, 0] > 3 * default
+
+
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan")])
+def test_bad_scale_length(value):
+    with pytest.raises(ValueError, match="scale_length"):
+        DrydenTurbulence(scale_length=value)

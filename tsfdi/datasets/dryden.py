@@ -18,7 +18,9 @@ Low-altitude scale lengths and intensities (altitude ``h`` in feet, W20 the wind
     = \\frac{1}{(0.177 + 0.000823 h)^{0.4}}
 
 with W20 = 15 / 30 / 45 kn for light / moderate / severe turbulence. The altitude is clamped below at
-10 ft as in MIL-F-8785C. The shaping filters (``V`` the airspeed, ``b`` the span) are
+10 ft as in MIL-F-8785C. ``scale_length=L`` replaces the three scale lengths by one value
+(:math:`L_u = L_v = L_w = L`; paper 003 gives its length scale as the hub-to-hub distance, 0.6096 m); the
+intensities stay those of the altitude and level. The shaping filters (``V`` the airspeed, ``b`` the span) are
 
 .. math::
 
@@ -102,6 +104,12 @@ class DrydenTurbulence:
         W20 = 15 / 30 / 45 kn. Ignored when ``sigmas`` is given.
     sigmas : tuple of 3 floats, optional
         Explicit ``(sigma_u, sigma_v, sigma_w)`` in m/s (each >= 0).
+    scale_length : float, optional
+        One turbulence scale length in metres (> 0) for all three components, ``L_u = L_v = L_w``. Paper 003
+        (Dutta et al., "Data Generation") says its Dryden model depends on "altitude, length scale, and
+        turbulence intensity" with the length scale equal to the hexacopter's hub-to-hub distance 0.6096 m.
+        ``None`` (default): the MIL-F-8785C low-altitude scale lengths of the altitude (module docstring). The
+        intensities (``sigma_u, sigma_v, sigma_w``) do not depend on it; the angular gusts use ``L_w``.
 
     Notes
     -----
@@ -113,11 +121,15 @@ class DrydenTurbulence:
     span: float = 0.6096
     intensity: str = "severe"
     sigmas: tuple | None = None
+    scale_length: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "altitude", float_like(self.altitude, "altitude", minimum=0.0, strict_min=True))
         object.__setattr__(self, "airspeed", float_like(self.airspeed, "airspeed", minimum=0.0, strict_min=True))
         object.__setattr__(self, "span", float_like(self.span, "span", minimum=0.0, strict_min=True))
+        if self.scale_length is not None:
+            object.__setattr__(self, "scale_length", float_like(self.scale_length, "scale_length", minimum=0.0,
+                                                                strict_min=True))
         object.__setattr__(self, "intensity", option(self.intensity, "intensity", tuple(INTENSITIES)))
         if self.sigmas is not None:
             s = np.asarray(self.sigmas, dtype=float)
@@ -129,7 +141,9 @@ class DrydenTurbulence:
     # ----------------------------------------------------------------------------------------------
     @property
     def length_scales(self) -> tuple[float, float, float]:
-        """``(L_u, L_v, L_w)`` in metres (MIL-F-8785C low altitude)."""
+        """``(L_u, L_v, L_w)`` in metres: MIL-F-8785C low altitude, or ``scale_length`` for all three."""
+        if self.scale_length is not None:
+            return self.scale_length, self.scale_length, self.scale_length
         h = max(self.altitude / _FT, 10.0)
         lw = h
         luv = h / (0.177 + 0.000823 * h) ** 1.2
@@ -286,7 +300,7 @@ def draw_gusts(sampler: tuple, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def dryden_turbulence(duration: float, fs: float = 1000.0, *, altitude: float = 5.0, airspeed: float = 5.0,
-                      span: float = 0.6096, intensity: str = "severe", sigmas=None, rng=None):
+                      span: float = 0.6096, intensity: str = "severe", sigmas=None, scale_length=None, rng=None):
     """Dryden gust time histories as an ``xarray.DataArray`` with dims ``(time, component)``.
 
     Parameters
@@ -295,7 +309,7 @@ def dryden_turbulence(duration: float, fs: float = 1000.0, *, altitude: float = 
         Length in seconds (> 0).
     fs : float
         Sampling frequency in Hz (> 0).
-    altitude, airspeed, span, intensity, sigmas
+    altitude, airspeed, span, intensity, sigmas, scale_length
         See :class:`DrydenTurbulence`.
     rng : None, int or numpy.random.Generator
         Source of randomness.
@@ -315,7 +329,8 @@ def dryden_turbulence(duration: float, fs: float = 1000.0, *, altitude: float = 
 
     duration = float_like(duration, "duration", minimum=0.0, strict_min=True)
     fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
-    model = DrydenTurbulence(altitude=altitude, airspeed=airspeed, span=span, intensity=intensity, sigmas=sigmas)
+    model = DrydenTurbulence(altitude=altitude, airspeed=airspeed, span=span, intensity=intensity, sigmas=sigmas,
+                             scale_length=scale_length)
     n = max(int(round(duration * fs)), 1)
     g = model.simulate(n, 1.0 / fs, rng)
     lu, lv, lw = model.length_scales
