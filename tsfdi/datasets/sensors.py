@@ -420,9 +420,12 @@ def sensor_log(record: Any, suite: SensorSuite | None = None, *, rng: Any = None
     Examples
     --------
     >>> from tsfdi.datasets import simulate_hexacopter
-    >>> record = simulate_hexacopter(duration=2.0, fs=1000, turbulence="light").isel(record=0)  # doctest: +SKIP
-    >>> log = sensor_log(record, rng=0)                                                        # doctest: +SKIP
-    >>> log["gyro"].head()                                                                      # doctest: +SKIP
+    >>> record = simulate_hexacopter(duration=2.0, fs=1000, turbulence="light").isel(record=0)
+    >>> log = sensor_log(record, rng=0)
+    >>> list(log)
+    ['gyro', 'accel', 'baro', 'gps', 'attitude', 'commands', 'motors']
+    >>> len(log["gyro"]), len(log["baro"]), len(log["gps"])    # 500, 50, 10 Hz over 1.999 s; GPS from 0.2 s
+    (999, 99, 18)
     """
     suite = SensorSuite() if suite is None else suite
     if not isinstance(suite, SensorSuite):
