@@ -13,9 +13,10 @@ import math
 import numpy as np
 from numba import njit, prange
 
-# output channels at the integration rate
-N_OUT = 19
-N_X = 18  # 12 rigid-body states + 6 rotor speeds
+# output channels at the integration rate: 12 states, 7 controls, specific force (3), rotor speeds (6), motor
+# commands (6)
+N_OUT = 34
+N_X = 24  # 12 rigid-body states + 6 rotor speeds + 6 induced velocities (blade-element rotors only)
 # yaw-rate integrator runs only while at least this fraction of the yaw term reaches the rotors
 YAW_FREEZE = 0.75
 
@@ -65,7 +66,110 @@ def _ned_velocity(x):
 
 
 @njit(cache=True)
-def _deriv(x, wcmd, g, P, alive, dx):
+def _bet(P, om, vhx, vhy, vhz, vi, load):
+    """Blade-element loads of one fixed-pitch rotor (closed form, uniform inflow) and its inflow rate.
+
+    ``om`` rotor speed relative to the air (rad/s, >= 0), ``(vhx, vhy, vhz)`` hub velocity relative to the air
+    in body axes, ``vi`` induced velocity (m/s, down through the disc). ``load`` out: thrust T (N, along -z),
+    torque Q (N m, absorbed), in-plane force per unit in-plane hub velocity (H = -h (vhx, vhy)), rolling
+    moment per unit in-plane hub velocity (m_R, times the spin sign), pitching moment per unit in-plane hub
+    velocity (m_P), d vi / dt.
+    """
+    rho = P[14]
+    nb = P[22]
+    R = P[23]
+    c = P[24]
+    a = P[25]
+    th0 = P[26]
+    thtw = P[27]
+    cd0 = P[28]
+    k = rho * nb * c * R          # rho A sigma
+    vt = om * R                   # tip speed
+    vh2 = vhx * vhx + vhy * vhy
+    vn = vi - vhz                 # flow down through the disc
+    T = k * 0.5 * a * (th0 * (vt * vt / 3.0 + vh2 / 2.0) + thtw * (vt * vt + vh2) / 4.0 - vn * vt / 2.0)
+    Q = k * R * (0.5 * a * vn * (th0 * vt / 3.0 + thtw * vt / 4.0 - vn / 2.0) + cd0 * (vt * vt + vh2) / 8.0)
+    h = k * (0.25 * a * vn * (th0 / 2.0 + thtw / 3.0) + cd0 * vt / 4.0)
+    mr = k * R * 0.5 * a * (th0 * vt / 3.0 + thtw * vt / 4.0 - vn / 4.0)
+    vm = math.sqrt(vh2 + vn * vn)
+    vpos = vn if vn > 0.0 else 0.0
+    # longitudinal inflow gradient kx = 15 pi / 32 tan(chi / 2) (Pitt & Peters), tan(chi / 2) = V_h / (V + V_n)
+    mp = 0.0
+    if vm + vpos > 0.0:
+        mp = k * R * a * vi * vt * (15.0 * math.pi / 32.0) / (16.0 * (vm + vpos))
+    load[0] = T
+    load[1] = Q
+    load[2] = h
+    load[3] = mr
+    load[4] = mp
+    # Pitt-Peters uniform mode: (8/3) rho R^3 dvi/dt = T - 2 rho pi R^2 V_m vi
+    load[5] = (T - 2.0 * rho * math.pi * R * R * vm * vi) / (8.0 / 3.0 * rho * R * R * R)
+
+
+@njit(cache=True)
+def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
+    """Forces and moments of the six blade-element rotors about the centre of gravity (body axes); writes the
+    inflow rates ``dx[18:24]``."""
+    arm = P[5]
+    hr = P[6]
+    ch = P[11]
+    kf = P[12]
+    cgx = P[19]
+    cgy = P[20]
+    load = np.empty(6)
+    Fx = 0.0
+    Fy = 0.0
+    Fz = 0.0
+    Mx = 0.0
+    My = 0.0
+    Mz = 0.0
+    for i in range(6):
+        ang = i * (math.pi / 3.0)
+        xi = arm * math.cos(ang) - cgx
+        yi = arm * math.sin(ang) - cgy
+        zi = -hr
+        spin = 1.0 if i % 2 == 0 else -1.0
+        # one-way rotor: the speed relative to the air (motor speed plus the body's yaw rate relative to the air)
+        om = x[12 + i]
+        if om < 0.0:
+            om = 0.0
+        om = om + spin * rr
+        if om < 0.0:
+            om = 0.0
+        vhx = ur + qr * zi - rr * yi
+        vhy = vr + rr * xi - pr * zi
+        vhz = wr + pr * yi - qr * xi
+        vi = x[18 + i]
+        if alive[i] == 0:
+            # a failed rotor makes no load; its wake decays (Pitt-Peters with T = 0)
+            dx[18 + i] = (-2.0 * P[14] * math.pi * P[23] * P[23] * math.sqrt(vhx * vhx + vhy * vhy + (vi - vhz) ** 2)
+                          * vi) / (8.0 / 3.0 * P[14] * P[23] ** 3)
+            continue
+        _bet(P, om, vhx, vhy, vhz, vi, load)
+        dx[18 + i] = load[5]
+        T = load[0]
+        # in-plane force: blade-element H-force plus the optional lumped rotor drag (blade flexibility)
+        hh = load[2] + ch * om
+        fx = -hh * vhx
+        fy = -hh * vhy
+        fz = -T
+        Fx += fx
+        Fy += fy
+        Fz += fz
+        Mx += yi * fz - zi * fy
+        My += zi * fx - xi * fz
+        Mz += xi * fy - yi * fx
+        # hub moments: rolling moment of the advancing blade (towards the retreating side: spin-dependent)
+        # and pitching moment of the longitudinal inflow gradient plus the optional lumped flapping term
+        mp = load[4] + kf * om
+        Mx += spin * load[3] * vhx - mp * vhy
+        My += spin * load[3] * vhy + mp * vhx
+        Mz += -spin * load[1]
+    return Fx, Fy, Fz, Mx, My, Mz
+
+
+@njit(cache=True)
+def _deriv(x, wcmd, g, P, alive, dx, sf):
     # parameters
     m = P[0]
     grav = P[1]
@@ -111,7 +215,11 @@ def _deriv(x, wcmd, g, P, alive, dx):
     Mx = 0.0
     My = 0.0
     Mz = 0.0
+    if P[21] > 0.0:
+        Fx, Fy, Fz, Mx, My, Mz = _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx)
     for i in range(6):
+        if P[21] > 0.0:
+            break
         ang = i * (math.pi / 3.0)
         xi = arm * math.cos(ang) - cgx
         yi = arm * math.sin(ang) - cgy
@@ -157,6 +265,10 @@ def _deriv(x, wcmd, g, P, alive, dx):
     Fz += -0.5 * rho * cda * vmag * wr
     vh = math.sqrt(ur * ur + vr * vr)
     Mz += kn * vh * vr
+    # specific force (what an accelerometer at the centre of gravity measures), body axes
+    sf[0] = Fx / m
+    sf[1] = Fy / m
+    sf[2] = Fz / m
     # gravity in body axes
     Fx += -m * grav * sth
     Fy += m * grav * sph * cth
@@ -178,20 +290,55 @@ def _deriv(x, wcmd, g, P, alive, dx):
     dx[0], dx[1], dx[2] = _ned_velocity(x)
     for i in range(6):
         dx[12 + i] = (wcmd[i] - x[12 + i]) / tau
+    if P[21] <= 0.0:
+        for i in range(6):
+            dx[18 + i] = 0.0
 
 
 @njit(cache=True)
-def _controller(x, integ, ref, G, P, ctrl, wcmd):
+def _schedule(S, speed, out):
+    """Gain factors ``out`` = (altitude, roll, pitch, yaw) at ground speed ``speed``: linear interpolation in the
+    rows ``[speed, f_altitude, f_roll, f_pitch, f_yaw]`` of ``S`` (speeds increasing), constant beyond the ends."""
+    n = S.shape[0]
+    if n == 1 or speed <= S[0, 0]:
+        for j in range(4):
+            out[j] = S[0, 1 + j]
+        return
+    if speed >= S[n - 1, 0]:
+        for j in range(4):
+            out[j] = S[n - 1, 1 + j]
+        return
+    i = 0
+    while S[i + 1, 0] < speed:
+        i += 1
+    w = (speed - S[i, 0]) / (S[i + 1, 0] - S[i, 0])
+    for j in range(4):
+        out[j] = S[i, 1 + j] + w * (S[i + 1, 1 + j] - S[i, 1 + j])
+
+
+@njit(cache=True)
+def _controller(x, integ, ref, G, P, S, ctrl, wcmd):
     """Cascade of Fig. 2: velocity -> attitude commands -> attitude/altitude loops -> mixer.
 
     integ: [I_theta, I_phi, I_collective, I_roll, I_pitch, I_yaw]; ref: [vn_c, ve_c, Z_c, psi_c];
+    S: gain schedule over the ground speed (:func:`_schedule`; one row of ones: the fixed hover design);
     ctrl out: [Om0, OmR, OmP, OmY, phi_c, theta_c, psi_c] (+ integrator rates in ctrl[7:12]).
     """
+    vn, ve, vd = _ned_velocity(x)
+    f = np.empty(4)
+    _schedule(S, math.sqrt(vn * vn + ve * ve), f)
+    # scheduled gains: each gain times the factor of its loop (a factor 1.0 leaves the gain bit for bit)
     kv, kvi, kz, kzd, kzi, katt, krate, katti, kpsi, kr, maxtilt = (
-        G[0], G[1], G[2], G[3], G[4], G[5], G[6], G[7], G[8], G[9], G[10])
+        G[0], G[1], G[2] * f[0], G[3] * f[0], G[4] * f[0], G[5], G[6], G[7], G[8], G[9] * f[3], G[10])
+    katt_r = katt * f[1]
+    krate_r = krate * f[1]
+    katti_r = katti * f[1]
+    katt_p = katt * f[2]
+    krate_p = krate * f[2]
+    katti_p = katti * f[2]
+    kyi = G[12] * f[3]
     wmin = P[16]
     wmax = P[17]
-    vn, ve, vd = _ned_velocity(x)
     psi = x[5]
     c = math.cos(psi)
     s = math.sin(psi)
@@ -213,8 +360,8 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     om0 = integ[2] + kz * ez + kzd * vd
     e_ph = ph_c - x[3]
     e_th = th_c - x[4]
-    omr = integ[3] + katt * e_ph - krate * x[9]
-    omp = integ[4] + katt * e_th - krate * x[10]
+    omr = integ[3] + katt_r * e_ph - krate_r * x[9]
+    omp = integ[4] + katt_p * e_th - krate_p * x[10]
     # heading error wrapped to (-pi, pi]: after a turn the loop aims at the nearest equivalent heading
     e_psi = ref[3] - psi
     e_psi -= 2.0 * math.pi * math.floor((e_psi + math.pi) / (2.0 * math.pi))
@@ -255,6 +402,9 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     hi = wmax * wmax
     # signed squared speeds: a reversible rotor may be commanded down to -omega_max
     lo = -hi if P[18] > 0.0 else wmin * wmin
+    # one-way rotors: a negative collective asks for the least thrust, not (through its square) for full thrust
+    if P[18] <= 0.0 and om0 < 0.0:
+        om0 = 0.0
     two_om0 = 2.0 * om0
     asked = 0.0
     given = 0.0
@@ -287,19 +437,21 @@ def _controller(x, integ, ref, G, P, ctrl, wcmd):
     ctrl[7] = -kvi * en if not sat else 0.0
     ctrl[8] = kvi * ee if not sat else 0.0
     ctrl[9] = kzi * ez
-    ctrl[10] = katti * e_ph
-    ctrl[11] = katti * e_th
+    ctrl[10] = katti_r * e_ph
+    ctrl[11] = katti_p * e_th
     # yaw-rate integrator: runs while the yaw term reaches the rotors and is not limited; while it is
     # limited (or the rotors cannot deliver it) only unwinding is allowed (anti-windup)
-    di = G[12] * e_r
+    di = kyi * e_r
     if (alpha < YAW_FREEZE or yclip != 0) and di * integ[5] > 0.0:
         di = 0.0
     ctrl[12] = di
 
 
 @njit(cache=True)
-def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps, dt, out, limits):
-    """Integrate one record with RK4 at step ``dt``; write ``N_OUT`` channels per step into ``out``.
+def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, n_steps, dt, out, limits):
+    """Integrate one record with RK4 at step ``dt``; write ``N_OUT`` channels per step into ``out``: the 12
+    rigid-body states, the 7 controller outputs, the specific force (from the first RK4 stage, the state and
+    commands of the step), the 6 rotor speeds and the 6 motor commands.
 
     ``fail_rotor`` is 0-based (-1: none). Returns the step at which control was lost (-1: never).
     ``limits``: [max |roll|, max |pitch| (rad), max altitude error (m)]; ground contact (z > 0) is a loss too.
@@ -315,31 +467,37 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
     ctrl = np.empty(13)
     wcmd = np.empty(6)
     g = np.empty(6)
+    sf = np.empty(3)
     lost = -1
     for k in range(n_steps):
         if k == fail_step and fail_rotor >= 0:
             alive[fail_rotor] = 0
-        _controller(x, integ, ref, G, P, ctrl, wcmd)
-        for j in range(12):
-            out[k, j] = x[j]
-        for j in range(7):
-            out[k, 12 + j] = ctrl[j]
         if lost >= 0:
             for j in range(N_OUT):
                 out[k, j] = np.nan
             continue
+        _controller(x, integ, ref, G, P, S, ctrl, wcmd)
+        for j in range(12):
+            out[k, j] = x[j]
+        for j in range(7):
+            out[k, 12 + j] = ctrl[j]
         for j in range(6):
             g[j] = gust[k, j]
-        _deriv(x, wcmd, g, P, alive, k1)
+        _deriv(x, wcmd, g, P, alive, k1, sf)
+        for j in range(3):
+            out[k, 19 + j] = sf[j]
+        for j in range(6):
+            out[k, 22 + j] = x[12 + j]
+            out[k, 28 + j] = wcmd[j]
         for j in range(N_X):
             xt[j] = x[j] + 0.5 * dt * k1[j]
-        _deriv(xt, wcmd, g, P, alive, k2)
+        _deriv(xt, wcmd, g, P, alive, k2, sf)
         for j in range(N_X):
             xt[j] = x[j] + 0.5 * dt * k2[j]
-        _deriv(xt, wcmd, g, P, alive, k3)
+        _deriv(xt, wcmd, g, P, alive, k3, sf)
         for j in range(N_X):
             xt[j] = x[j] + dt * k3[j]
-        _deriv(xt, wcmd, g, P, alive, k4)
+        _deriv(xt, wcmd, g, P, alive, k4, sf)
         for j in range(N_X):
             x[j] = x[j] + dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
         for j in range(6):
@@ -357,23 +515,33 @@ def simulate_record(x0, integ0, ref, gust, P, G, fail_rotor, fail_step, n_steps,
 
 
 @njit(cache=True, parallel=True)
-def simulate_batch(x0, integ0, ref, gusts, P, G, fail_rotor, fail_step, n_steps, dt, out, limits, lost):
-    """Records in parallel; ``P`` holds one parameter vector per record (rows), ``G`` is shared."""
+def simulate_batch(x0, integ0, ref, gusts, P, G, S, fail_rotor, fail_step, n_steps, dt, out, limits, lost):
+    """Records in parallel; ``P`` holds one parameter vector per record (rows), ``G`` and the schedule ``S``
+    are shared."""
     for i in prange(x0.shape[0]):
-        lost[i] = simulate_record(x0[i], integ0[i], ref[i], gusts[i], P[i], G, fail_rotor[i], fail_step[i],
+        lost[i] = simulate_record(x0[i], integ0[i], ref[i], gusts[i], P[i], G, S, fail_rotor[i], fail_step[i],
                                   n_steps, dt, out[i], limits)
 
 
 @njit(cache=True)
 def derivative(x, wcmd, g, P, alive):
     dx = np.empty(N_X)
-    _deriv(x, wcmd, g, P, alive, dx)
+    sf = np.empty(3)
+    _deriv(x, wcmd, g, P, alive, dx, sf)
     return dx
 
 
 @njit(cache=True)
-def controller(x, integ, ref, G, P):
+def specific_force(x, wcmd, g, P, alive):
+    dx = np.empty(N_X)
+    sf = np.empty(3)
+    _deriv(x, wcmd, g, P, alive, dx, sf)
+    return sf
+
+
+@njit(cache=True)
+def controller(x, integ, ref, G, P, S):
     ctrl = np.empty(13)
     wcmd = np.empty(6)
-    _controller(x, integ, ref, G, P, ctrl, wcmd)
+    _controller(x, integ, ref, G, P, S, ctrl, wcmd)
     return ctrl, wcmd

@@ -1,14 +1,13 @@
 """Parameter set and controller gains of the simulated hexacopter.
 
 The aircraft is a planar PNPNPN hexacopter of the 2-3 kg class of the paper (Dutta et al., Fig. 1): the arm is
-half the hub-to-hub distance 0.6096 m that the paper uses as the Dryden span. The shipped design has bidirectional
-rotors and no rotor drag or weathervane moment, so that after a rotor failure it holds heading and flies in a
-regime where its dynamics are close to linear, as the paper's aircraft does; :data:`REGULAR_HEXACOPTER` is the
-regular aircraft with one-way rotors (``docs/results.md`` compares the two). Each value carries its source or
-reason in the field's comment; the constants are typical of 10-inch propellers on ~700 kV motors
-(thrust and torque coefficients as in the UIUC propeller database for 10x4.5 propellers, rotor drag and
-flapping coefficients of the order identified by Martin & Salaun (2010) and Mahony, Kumar & Corke (2012)
-scaled to this size).
+half the hub-to-hub distance 0.6096 m that the paper uses as the Dryden span. The default
+(``HexacopterParameters()``) is a regular aircraft: fixed-pitch two-blade 10-inch propellers whose loads come
+from blade element theory with a dynamic uniform inflow (the lowest Peters-He mode, Pitt & Peters), one-way
+rotors between an idle and a full speed, rotor drag and hub moments from the blade elements, the weathervane
+moment of the body, and gains scheduled over the forward speed. :data:`BIDIRECTIONAL_HEXACOPTER` is tsfdi's
+previous shipped aircraft (bidirectional rotors, lumped rotor coefficients, no rotor drag or weathervane),
+kept for comparison only. Each value carries its source or reason in the field's comment.
 
 References
 ----------
@@ -17,6 +16,11 @@ References
 .. [2] P. Martin, E. Salaun, "The true role of accelerometer feedback in quadrotor control", ICRA 2010.
 .. [3] J. B. Brandt, M. S. Selig, "Propeller performance data at low Reynolds numbers", AIAA 2011-1255
        (UIUC propeller data base: C_T ~ 0.11, C_P ~ 0.045 for 10-inch APC propellers).
+.. [4] J. G. Leishman, "Principles of Helicopter Aerodynamics", 2nd ed., Cambridge 2006, ch. 2-3 (momentum
+       and blade element theory, linear twist, Glauert's forward-flight inflow) and ch. 10 (dynamic inflow).
+.. [5] D. M. Pitt, D. A. Peters, "Theoretical prediction of dynamic-inflow derivatives", Vertica 5, 1981.
+.. [6] M. Bangura, R. Mahony, "Nonlinear dynamic modeling for high performance control of a quadrotor",
+       ACRA 2012 (blade element and momentum theory for small fixed-pitch rotors).
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from dataclasses import asdict, dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["HexacopterParameters", "ControllerGains", "REGULAR_HEXACOPTER", "FleetSpread", "FLEET_SEED_KEY"]
+__all__ = ["HexacopterParameters", "ControllerGains", "BIDIRECTIONAL_HEXACOPTER", "FleetSpread", "FLEET_SEED_KEY"]
 
 
 @dataclass(frozen=True)
@@ -47,53 +51,51 @@ class HexacopterParameters:
     rotor_height : float
         0.05 m: rotor plane above the centre of gravity (H-forces then make pitch and roll moments).
     k_thrust : float
-        1.57e-5 N s^2: T = k_thrust Omega^2, so that the six rotors carry 2.4 kg at Omega = 500 rad/s
-        (4800 rpm), consistent with C_T ~ 0.11 of a 10-inch propeller.
+        1.57e-5 N s^2: T = k_thrust Omega^2 of the lumped rotor (``blade_element=False``), so that the six
+        rotors carry 2.4 kg at Omega = 500 rad/s (4800 rpm), consistent with C_T ~ 0.11 of a 10-inch
+        propeller [3]. The blade-element rotor's geometry is chosen to give the same hover thrust
+        (:meth:`blade_element_hover`); the blade-element aircraft uses k_thrust only for the first guess of
+        its trim.
     k_torque : float
-        2.5e-7 N m s^2: Q = k_torque Omega^2 (Q/T = 0.016 m, from C_P / C_T of the same propeller).
+        2.5e-7 N m s^2: Q = k_torque Omega^2 of the lumped rotor (Q/T = 0.016 m, from C_P / C_T of the same
+        propeller); matched by the blade-element rotor in hover through ``profile_drag``.
     motor_time_constant : float
         0.03 s: first-order lag of the rotor speed (brushless motor with a 10-inch propeller).
     k_inflow : float
-        7.2e-4 N s/m: T increases by k_inflow Omega w_hub when the hub descends relative to the air
-        (blade-element slope dT/dw ~ 0.36 N/(m/s) at hover); it gives heave and roll/pitch damping and makes
-        vertical and angular gusts act on the aircraft.
+        Lumped rotor only (0 by default; 7.2e-4 N s/m in :data:`BIDIRECTIONAL_HEXACOPTER`): T increases by
+        k_inflow Omega w_hub when the hub descends relative to the air (blade-element slope dT/dw ~ 0.36
+        N/(m/s) at hover). The blade-element rotor has this effect through its inflow.
     k_rotor_drag : float
-        0 (shipped design): rotor H-force -k_rotor_drag Omega v_hub (in-plane air-relative hub velocity).
-        1.2e-4 N s/m (0.36 N/(m/s) for the six rotors at hover) is the order reported for small multirotors and
-        is the value of :data:`REGULAR_HEXACOPTER`. Off in the shipped design because, measured on the same
-        design (``docs/results.md``, "The shipped aircraft and its alternatives"), it makes the post-failure
-        roll / pitch / yaw-rate dynamics of rotors 2 and 6 (mirror images with the same spin) so alike that
-        the paper's whiteness rule cannot tell them apart; the paper's aircraft could.
+        0: additional lumped in-plane rotor force ``-k_rotor_drag Omega v_hub`` (in-plane air-relative hub
+        velocity). The blade-element rotor has its own H-force (profile and induced drag of the blades); a
+        rigid blade-element rotor underestimates the rotor drag measured on flexible small propellers
+        (Mahony et al. [1] report ~1e-4 N s/m per rotor), so this term can add the part from blade flexing
+        (0 by default: no measurement of the paper's propellers is available).
     k_flapping : float
-        4e-6 N s: blade-flapping moment k_flapping Omega (-v_y, v_x) of a rotor whose disc tilts away from
-        the relative wind (0.06 N m at 5 m/s for six rotors).
+        0 (4e-6 N s in :data:`BIDIRECTIONAL_HEXACOPTER`): additional blade-flapping pitching moment
+        ``k_flapping Omega (-v_y, v_x)`` of a rotor whose disc tilts away from the relative wind. The
+        blade-element rotor has its own hub moments (rolling moment of the advancing blade and pitching moment
+        of the longitudinal inflow gradient); this term is for flexible blades, 0 by default as above.
     drag_area : float
         0.04 m^2: C_D A of the central body, drag ``-rho C_D A |v| v / 2``.
     air_density : float
         1.225 kg/m^3 (ISA sea level).
     k_weathervane : float
-        0 (shipped design): yaw moment ``k_weathervane |v_h| v_y`` of the body, legs and arms in sideslip
-        (turns the nose into the relative wind). 8e-4 N s^2 (a side area of ~0.03 m^2 a few cm behind the
-        centre of gravity) in :data:`REGULAR_HEXACOPTER`. Off in the shipped design: it is quadratic in the
-        relative wind, and in severe gusts it makes the post-failure yaw dynamics visibly nonlinear
-        (measured in ``docs/results.md``).
+        8e-4 N s^2 (0 in :data:`BIDIRECTIONAL_HEXACOPTER`): yaw moment ``k_weathervane |v_h| v_y`` of the body,
+        legs and arms in sideslip (turns the nose into the relative wind): a side area of ~0.03 m^2 a few cm
+        behind the centre of gravity.
     omega_min, omega_max : float
-        60 and 1100 rad/s: rotor speed limits (idle -- regular rotors only -- and full throttle: 19 N per
-        rotor, a thrust-to-weight ratio of 4.8, a 10-inch propeller at 10,500 rpm on a 6S battery). After a
-        failure four rotors carry the aircraft; with 900 rad/s (:data:`REGULAR_HEXACOPTER`, ratio 3.2) they
-        reach full speed in severe gusts, and that clipping is the largest nonlinearity left in the
-        post-failure dynamics (measured in ``docs/results.md``).
+        60 and 1100 rad/s: rotor speed limits (idle -- one-way rotors only -- and full throttle: 19 N per
+        rotor, a thrust-to-weight ratio of 4.8 at 2.4 kg and 3.4 with a 30 % payload: a 10-inch propeller at
+        10,500 rpm on a 6S battery). After a failure four rotors carry the aircraft.
     reversible_rotors : bool
-        True (shipped design): bidirectional motors (reversible "3D" speed controllers and symmetric
-        propellers): speeds in ``[-omega_max, omega_max]``, thrust :math:`k_T \\Omega |\\Omega|` and torque
-        :math:`k_Q \\Omega |\\Omega|` change sign with the speed (inflow, rotor drag and flapping scale with
-        :math:`|\\Omega|`, a first-order simplification for the reversed rotor, which only runs slowly in the
-        cases studied). A planar PNPNPN hexacopter with one rotor failed holds heading only with the opposite
-        rotor at zero thrust (Du et al. 2015); a reversible rotor can go there, so after the failure the
-        aircraft holds heading with a small, stationary yaw variance, as the paper's does (Figs. 6-7 and its
-        yaw steady-state threshold of 3e-4 rad^2). False (:data:`REGULAR_HEXACOPTER`): a rotor turns one way
-        only, between ``omega_min`` and ``omega_max``, and its thrust is never negative; the opposite rotor
-        then switches on and off its idle floor in gusts and the heading slips in severe turbulence.
+        False (default): a rotor turns one way only, between ``omega_min`` and ``omega_max`` (the mixer
+        clips the commands, the first-order motor then never leaves that range). True
+        (:data:`BIDIRECTIONAL_HEXACOPTER`, lumped rotor only): bidirectional motors (reversible "3D" speed
+        controllers and symmetric propellers): speeds in ``[-omega_max, omega_max]``, thrust
+        :math:`k_T \\Omega |\\Omega|` and torque :math:`k_Q \\Omega |\\Omega|` change sign with the speed. A
+        planar PNPNPN hexacopter with one rotor failed holds heading only with the opposite rotor at zero
+        thrust (Du et al. 2015); a reversible rotor can go there, a one-way rotor only to its idle speed.
     cg_x, cg_y : float
         0 m (shipped design): offset of the centre of gravity from the hub centre, forward (x) and to the right
         (y) in body axes, e.g. an off-centre payload. The rotors then sit at ``(arm cos psi_i - cg_x,
@@ -101,6 +103,29 @@ class HexacopterParameters:
         inertia stays ``ixx, iyy, izz`` (the parallel-axis term ``mass * cg^2`` is 0.5 % of ``ixx`` at 1 cm
         and neglected) and the body drag acts at the centre of gravity. ``hypot(cg_x, cg_y)`` must be below
         ``arm / 2``. :class:`FleetSpread` draws them per record.
+    blade_element : bool
+        True (default): rotor loads from blade element theory with a dynamic uniform inflow (equations in
+        :mod:`tsfdi.datasets.hexacopter`); False: the lumped coefficients ``k_thrust``, ``k_torque``,
+        ``k_inflow``, ``k_rotor_drag`` and ``k_flapping`` (tsfdi's rotor until the blade-element one).
+    blades : float
+        2: blades per propeller (two-blade 10-inch propellers of this class [3]).
+    rotor_radius : float
+        0.127 m: a 10-inch propeller.
+    chord : float
+        0.02 m: blade chord (mean chord of 10-inch propellers: 15-25 mm); solidity ``blades chord / (pi R)``
+        = 0.100.
+    lift_slope : float
+        5.7 1/rad: section lift-curve slope (0.9 of 2 pi for finite-thickness sections, Leishman [4] ch. 3).
+    root_pitch, twist : float
+        0.50 rad and -0.27 rad: blade pitch ``root_pitch + twist r / R`` from the zero-lift line, linear in
+        the radius. The twist is the linear fit over 0.5-1 R of a constant-pitch propeller
+        (``atan(p / (2 pi r))``, 4.5-inch pitch); the root pitch makes the hover thrust that of ``k_thrust``
+        (:meth:`blade_element_hover`: 1.5702e-5 N s^2 against 1.57e-5; the pitch at 0.75 R, 0.30 rad,
+        includes the zero-lift angle of the cambered section).
+    profile_drag : float
+        0.046: section profile drag coefficient C_d0 (low-Reynolds-number propeller sections, Re ~ 5e4), chosen
+        so that the hover torque is that of ``k_torque`` (:meth:`blade_element_hover`: 2.4988e-7 N m s^2
+        against 2.5e-7; figure of merit 0.71).
     """
 
     mass: float = 2.4
@@ -113,28 +138,37 @@ class HexacopterParameters:
     k_thrust: float = 1.57e-5
     k_torque: float = 2.5e-7
     motor_time_constant: float = 0.03
-    k_inflow: float = 7.2e-4
+    k_inflow: float = 0.0
     k_rotor_drag: float = 0.0
-    k_flapping: float = 4e-6
+    k_flapping: float = 0.0
     drag_area: float = 0.04
     air_density: float = 1.225
-    k_weathervane: float = 0.0
+    k_weathervane: float = 8e-4
     omega_min: float = 60.0
     omega_max: float = 1100.0
-    reversible_rotors: bool = True
+    reversible_rotors: bool = False
     # appended after reversible_rotors: the kernels read the vector of to_array() by position
     cg_x: float = 0.0
     cg_y: float = 0.0
+    blade_element: bool = True
+    blades: float = 2.0
+    rotor_radius: float = 0.127
+    chord: float = 0.02
+    lift_slope: float = 5.7
+    root_pitch: float = 0.50
+    twist: float = -0.27
+    profile_drag: float = 0.046
 
     def __post_init__(self) -> None:
-        if not isinstance(self.reversible_rotors, (bool, np.bool_)):
-            raise TypeError(f"reversible_rotors must be a bool, got {self.reversible_rotors!r}")
-        for name in ("cg_x", "cg_y"):
+        for name in ("reversible_rotors", "blade_element"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TypeError(f"{name} must be a bool, got {getattr(self, name)!r}")
+        for name in ("cg_x", "cg_y", "twist"):
             v = getattr(self, name)
-            if not np.isfinite(v):
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real) or not np.isfinite(v):
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
         for f in fields(self):
-            if f.name in ("reversible_rotors", "cg_x", "cg_y"):
+            if f.name in ("reversible_rotors", "blade_element", "cg_x", "cg_y", "twist"):
                 continue
             v = getattr(self, f.name)
             if not np.isfinite(v) or (v < 0) or (v == 0 and f.name not in
@@ -146,6 +180,24 @@ class HexacopterParameters:
         if np.hypot(self.cg_x, self.cg_y) >= self.arm / 2:
             raise ValueError(f"cg_x, cg_y: the centre-of-gravity offset must be below arm / 2 = {self.arm / 2:g} m, "
                              f"got ({self.cg_x!r}, {self.cg_y!r})")
+        if self.blade_element and self.blade_element_hover()[0] <= 0.0:
+            raise ValueError("root_pitch, twist: the blade-element rotor makes no thrust in hover with this geometry "
+                             f"(root_pitch={self.root_pitch!r}, twist={self.twist!r})")
+
+    def blade_element_hover(self) -> tuple[float, float]:
+        """Static thrust and torque coefficients ``(T / Omega^2, Q / Omega^2)`` (N s^2, N m s^2) of one
+        blade-element rotor in hover (uniform momentum inflow ``v_i = sqrt(T / (2 rho pi R^2))``, solved in
+        closed form): what ``k_thrust`` and ``k_torque`` are for the lumped rotor."""
+        rho, R, a = self.air_density, self.rotor_radius, self.lift_slope
+        k = rho * self.blades * self.chord * R
+        # per unit tip speed^2: T = k a / 2 (th / 3 - l / 2), l = v_i / V_t, and T = 2 rho pi R^2 l^2 V_t^2
+        th = self.root_pitch / 3.0 + self.twist / 4.0
+        # 2 rho pi R^2 l^2 + k a l / 4 - k a th / 2 = 0
+        qa, qb, qc = 2.0 * rho * np.pi * R * R, k * a / 4.0, -k * a * th / 2.0
+        lam = (-qb + np.sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa) if qc < 0 else 0.0
+        ct = 2.0 * rho * np.pi * R * R * lam * lam
+        cq = k * R * (0.5 * a * lam * (th - lam / 2.0) + self.profile_drag / 8.0)
+        return float(ct * R * R), float(cq * R * R)
 
     def to_array(self) -> np.ndarray:
         return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
@@ -154,12 +206,13 @@ class HexacopterParameters:
         return asdict(self)
 
 
-#: The regular hexacopter: unidirectional rotors with a 60 rad/s idle floor, 900 rad/s full speed
-#: (thrust-to-weight 3.2), rotor drag and the weathervane moment. It was tsfdi's shipped design until its
-#: post-failure dynamics were measured to be nonlinear (``docs/results.md``);
-#: ``simulate_hexacopter(params=REGULAR_HEXACOPTER)`` simulates it.
-REGULAR_HEXACOPTER = HexacopterParameters(reversible_rotors=False, omega_max=900.0, k_rotor_drag=1.2e-4,
-                                          k_weathervane=8e-4)
+#: Bidirectional rotors, lumped rotor coefficients, no rotor drag or weathervane: tsfdi's shipped aircraft
+#: until the blade-element aircraft became the default (issue 30), kept for comparison only. With it the
+#: controller flies its single hover design (no gain schedule: the schedule is computed for blade-element
+#: aircraft), and ``simulate_hexacopter(params=BIDIRECTIONAL_HEXACOPTER)`` reproduces that simulator's records
+#: bit for bit (``tests/datasets/test_hexacopter.py::test_bidirectional_preset_reproduces_the_old_records``).
+BIDIRECTIONAL_HEXACOPTER = HexacopterParameters(k_inflow=7.2e-4, k_flapping=4e-6, k_weathervane=0.0,
+                                                reversible_rotors=True, blade_element=False)
 
 
 @dataclass(frozen=True)
@@ -229,7 +282,7 @@ class ControllerGains:
 FLEET_SEED_KEY = 0xF1EE7
 
 #: Largest accepted spreads: relative ones (fractions of the nominal value) and the centre-of-gravity offset (m).
-_FLEET_MAX = {"mass": 0.5, "cg_offset": 0.1, "motor_constant": 0.5, "inertia": 0.5}
+_FLEET_MAX = {"mass": 0.5, "cg_offset": 0.1, "motor_constant": 0.5, "inertia": 0.5, "payload": 0.5}
 
 
 @dataclass(frozen=True)
@@ -240,10 +293,11 @@ class FleetSpread:
     handling due to payloads"; with ``fleet=FleetSpread()`` each record of :func:`~tsfdi.datasets.simulate_hexacopter`
     / :func:`~tsfdi.datasets.make_hexacopter_dataset` flies its own aircraft drawn around the nominal
     :class:`HexacopterParameters`. Every quantity is drawn **uniformly and independently** in the interval given
-    below (so a drawn value never leaves it), with one call ``rng.uniform(-1, 1, 5)`` of
+    below (so a drawn value never leaves it), with one call ``rng.uniform(-1, 1, 6)`` of
     ``rng = numpy.random.default_rng([seed, FLEET_SEED_KEY])`` (``seed``: the record's seed), in the order mass,
-    cg_x, cg_y, motor_constant, inertia: a record's aircraft depends only on its seed, and a spread set to 0
-    leaves that quantity nominal without changing the others.
+    cg_x, cg_y, motor_constant, inertia, payload (the first five are the draws of the five-spread fleet before
+    ``payload`` was added): a record's aircraft depends only on its seed, and a spread set to 0 leaves that
+    quantity nominal without changing the others.
 
     Attributes
     ----------
@@ -255,10 +309,16 @@ class FleetSpread:
         plus ``cg_offset * U`` (a payload off the centre; 1 cm is 3 % of the arm).
     motor_constant : float
         0.03, relative: one factor ``1 + motor_constant * U`` multiplies ``k_thrust`` and ``k_torque`` of all six
-        rotors (another propeller batch: the torque-to-thrust ratio, a property of the propeller shape, is kept).
+        lumped rotors and the ``chord`` of the blade-element rotors (another propeller batch: thrust and torque
+        scale with the solidity at a given inflow).
     inertia : float
         0.05, relative: one factor ``1 + inertia * U`` multiplies ``ixx``, ``iyy`` and ``izz`` (payload and
         battery placement).
+    payload : float
+        0 (no payload), fraction of the gross weight: a payload fraction ``p`` is drawn uniformly in
+        ``[0, payload]`` (``p = payload * (U + 1) / 2``) and the record's mass is its airframe mass (nominal times
+        the ``mass`` factor) divided by ``1 - p``; issue 30 asks for 0-30 % (``payload=0.3``). The payload sits at
+        the centre of gravity (inertia: the ``inertia`` factor only).
 
     Each spread must be a finite number >= 0, at most 0.5 for the relative ones and 0.1 m for ``cg_offset``;
     every record is trimmed for its own aircraft (:func:`~tsfdi.datasets.trim`) and flown with the one gain set
@@ -271,6 +331,7 @@ class FleetSpread:
     cg_offset: float = 0.01
     motor_constant: float = 0.03
     inertia: float = 0.05
+    payload: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -285,17 +346,21 @@ class FleetSpread:
     def draw(self, params: HexacopterParameters, seed: int) -> tuple[HexacopterParameters, dict]:
         """The aircraft of the record with seed ``seed``: ``(parameters, values)``.
 
-        ``values`` holds ``mass`` (kg), ``cg_x`` and ``cg_y`` (m), and the factors ``motor_constant`` and
-        ``inertia`` (1: nominal), the record coordinates of the simulated dataset.
+        ``values`` holds ``mass`` (kg, payload included), ``cg_x`` and ``cg_y`` (m), the factors
+        ``motor_constant`` and ``inertia`` (1: nominal) and ``payload`` (fraction of the gross weight), the record
+        coordinates of the simulated dataset.
         """
-        u = np.random.default_rng([int(seed), FLEET_SEED_KEY]).uniform(-1.0, 1.0, 5)
+        u = np.random.default_rng([int(seed), FLEET_SEED_KEY]).uniform(-1.0, 1.0, 6)
         kmot = 1.0 + self.motor_constant * u[3]
         kin = 1.0 + self.inertia * u[4]
-        values = {"mass": params.mass * (1.0 + self.mass * u[0]),
+        pay = self.payload * (u[5] + 1.0) / 2.0
+        mass = params.mass * (1.0 + self.mass * u[0])
+        values = {"mass": mass / (1.0 - pay) if pay else mass,
                   "cg_x": params.cg_x + self.cg_offset * u[1], "cg_y": params.cg_y + self.cg_offset * u[2],
-                  "motor_constant": kmot, "inertia": kin}
+                  "motor_constant": kmot, "inertia": kin, "payload": pay}
         drawn = replace(params, mass=values["mass"], cg_x=values["cg_x"], cg_y=values["cg_y"],
                         k_thrust=params.k_thrust * kmot, k_torque=params.k_torque * kmot,
+                        chord=params.chord * kmot if params.blade_element else params.chord,
                         ixx=params.ixx * kin, iyy=params.iyy * kin, izz=params.izz * kin)
         return drawn, values
 

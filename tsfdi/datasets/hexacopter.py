@@ -124,6 +124,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import inspect
 import os
 from typing import Any
@@ -134,16 +135,16 @@ from scipy import optimize, signal
 from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_like, option
 from tsfdi.datasets import _hexacopter_core as _core
 from tsfdi.datasets._hexacopter_params import (
+    BIDIRECTIONAL_HEXACOPTER,
     FLEET_SEED_KEY,
-    REGULAR_HEXACOPTER,
     ControllerGains,
     FleetSpread,
     HexacopterParameters,
 )
 from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, draw_gusts
 
-__all__ = ["HexacopterParameters", "REGULAR_HEXACOPTER", "ControllerGains", "FleetSpread", "FLEET_SEED_KEY", "trim",
-           "simulate_hexacopter", "make_hexacopter_dataset", "write_hexacopter_dataset", "FLEET_COORDS",
+__all__ = ["HexacopterParameters", "BIDIRECTIONAL_HEXACOPTER", "ControllerGains", "FleetSpread", "FLEET_SEED_KEY",
+           "trim", "gain_schedule", "SCHEDULE_SPEEDS", "SPEED_SEED_KEY", "simulate_hexacopter", "make_hexacopter_dataset", "write_hexacopter_dataset", "FLEET_COORDS",
            "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file", "hexacopter_signals", "SIGNAL_CHANNELS"]
 
 #: Output channels and their units.
@@ -154,6 +155,9 @@ CHANNELS = {
     "p": "rad/s", "q": "rad/s", "r": "rad/s",
     "collective": "rad/s", "roll_control": "rad/s", "pitch_control": "rad/s", "yaw_control": "rad/s",
     "roll_command": "rad", "pitch_command": "rad", "yaw_command": "rad",
+    "ax": "m/s^2", "ay": "m/s^2", "az": "m/s^2",
+    **{f"rotor_speed{i}": "rad/s" for i in range(1, 7)},
+    **{f"motor_command{i}": "rad/s" for i in range(1, 7)},
 }
 _DESCRIPTIONS = {
     "x": "north position", "y": "east position", "z": "down position (NED)",
@@ -163,6 +167,12 @@ _DESCRIPTIONS = {
     "collective": "collective control Omega_0 (eq. 2)", "roll_control": "roll control Omega_R (eq. 2)",
     "pitch_control": "pitch control Omega_P (eq. 2)", "yaw_control": "yaw control Omega_Y (eq. 2)",
     "roll_command": "commanded roll", "pitch_command": "commanded pitch", "yaw_command": "commanded heading",
+    "ax": "specific force, body x (accelerometer at the centre of gravity: rotor and aerodynamic forces / mass)",
+    "ay": "specific force, body y (accelerometer at the centre of gravity)",
+    "az": "specific force, body z (down; about -g in hover)",
+    **{f"rotor_speed{i}": f"speed of rotor {i} relative to the airframe (motor state)" for i in range(1, 7)},
+    **{f"motor_command{i}": f"speed command of rotor {i} (mixer output, within [omega_min, omega_max])"
+       for i in range(1, 7)},
 }
 STATES = ("healthy", "rotor1", "rotor2", "rotor6")
 TURBULENCE_LEVELS = ("none",) + tuple(INTENSITIES)
@@ -174,7 +184,14 @@ FLEET_COORDS = {
     "cg_y": ("m", "centre-of-gravity offset right of the hub centre"),
     "motor_constant": ("1", "factor on k_thrust and k_torque (1: nominal)"),
     "inertia": ("1", "factor on ixx, iyy, izz (1: nominal)"),
+    "payload": ("1", "payload as a fraction of the gross weight (0: none)"),
 }
+
+#: Forward speeds (m/s) of the trim points of the gain schedule (:func:`gain_schedule`).
+SCHEDULE_SPEEDS = (0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 14.0)
+#: Second entropy word of the generator of a record's forward speed when ``speed`` is a range: ``uniform(low,
+#: high)`` of ``numpy.random.default_rng([seed, SPEED_SEED_KEY])`` (independent of the gusts and the fleet draw).
+SPEED_SEED_KEY = 0x5BEED
 
 #: Bounds beyond which a record is flagged ``lost_control`` (roll, pitch in rad; altitude error in m); a
 #: record is also lost when the aircraft reaches the ground (altitude below 0).
@@ -186,19 +203,23 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
     """Steady level flight north at ``speed`` (m/s) without turbulence.
 
     Solves the longitudinal force and pitching-moment balance for pitch angle, collective and pitch
-    control (roll and yaw controls are zero by symmetry of the alternating rotor directions). An aircraft
-    with a lateral centre-of-gravity offset (``params.cg_y != 0``) is not symmetric: the six force and
+    control (roll and yaw controls are zero by symmetry of the alternating rotor directions) of the lumped-rotor
+    aircraft. The blade-element rotors' rolling hub moments and the yaw torques of rotors at different speeds
+    break that symmetry, as does a lateral centre-of-gravity offset (``params.cg_y != 0``): the six force and
     moment balances are then solved for roll, pitch and the four controls.
 
     Returns
     -------
     dict
-        ``state`` (18: rigid body + rotor speeds), ``integrators`` (6), ``controls``
+        ``state`` (24: rigid body, rotor speeds, induced velocities of the blade-element rotors at their
+        equilibrium; 0 for the lumped rotor), ``integrators`` (6), ``controls``
         (Omega_0, Omega_R, Omega_P, Omega_Y), ``residual`` (max abs derivative at the trim).
     """
     speed = float_like(speed, "speed", minimum=0.0)
     altitude = float_like(altitude, "altitude", minimum=0.0, strict_min=True)
     params = HexacopterParameters() if params is None else params
+    if not isinstance(params, HexacopterParameters):
+        raise TypeError("params must be a HexacopterParameters")
     P = params.to_array()
     alive = np.ones(6, dtype=np.int64)
     g0 = np.zeros(6)
@@ -212,16 +233,17 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
         x[6] = speed * np.cos(th)
         x[8] = speed * np.sin(th)
         # rotor speeds of the thrust-linear mixer (collective and pitch control only)
-        x[12:] = np.sqrt(om0 * om0 + 2.0 * om0 * np.cos(az) * omp)
-        return x
+        x[12:18] = np.sqrt(om0 * om0 + 2.0 * om0 * np.cos(az) * omp)
+        return _steady_inflow(x, P)
 
     def resid(z):
         x = build(z)
-        d = _core.derivative(x, x[12:], g0, P, alive)
+        d = _core.derivative(x, x[12:18], g0, P, alive)
         return [d[6], d[8], d[10] * params.iyy]
 
-    om_h = np.sqrt(params.mass * params.gravity / (6 * params.k_thrust))
-    if params.cg_y != 0.0:
+    kt = params.blade_element_hover()[0] if params.blade_element else params.k_thrust
+    om_h = np.sqrt(params.mass * params.gravity / (6 * kt))
+    if params.cg_y != 0.0 or params.blade_element:
         return _trim_asymmetric(speed, altitude, params, om_h)
     sol, info, ier, msg = optimize.fsolve(resid, [0.0, om_h, 0.0], full_output=True, xtol=1e-14)
     # (fsolve may stop at machine precision with ier != 1; the balance residual decides)
@@ -229,7 +251,7 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
         raise ValueError(f"speed={speed} m/s: the aircraft has no trim (steady level flight) at this speed "
                          f"({msg.strip()})")
     x = build(sol)
-    d = _core.derivative(x, x[12:], g0, P, alive)
+    d = _core.derivative(x, x[12:18], g0, P, alive)
     integ = np.array([sol[0], 0.0, sol[1], 0.0, sol[2], 0.0])
     return {"state": x, "integrators": integ, "controls": np.array([sol[1], 0.0, sol[2], 0.0]),
             "residual": float(np.max(np.abs(d[3:12])))}
@@ -253,12 +275,12 @@ def _trim_asymmetric(speed: float, altitude: float, params: HexacopterParameters
         # body velocity of level flight north at ``speed`` (heading 0)
         x[6:9] = speed * np.array([np.cos(th), np.sin(ph) * np.sin(th), np.cos(ph) * np.sin(th)])
         c2 = om0 * om0 + 2.0 * om0 * (-np.sin(az) * omr + np.cos(az) * omp + yaw_sign * omy)
-        x[12:] = np.sign(c2) * np.sqrt(np.abs(c2))
-        return x
+        x[12:18] = np.sign(c2) * np.sqrt(np.abs(c2))
+        return _steady_inflow(x, P)
 
     def resid(z):
         x = build(z)
-        d = _core.derivative(x, x[12:], g0, P, alive)
+        d = _core.derivative(x, x[12:18], g0, P, alive)
         return np.concatenate([d[6:9], d[9:12] * inertia])
 
     sol, info, ier, msg = optimize.fsolve(resid, [0.0, 0.0, om_h, 0.0, 0.0, 0.0], full_output=True, xtol=1e-14)
@@ -266,12 +288,99 @@ def _trim_asymmetric(speed: float, altitude: float, params: HexacopterParameters
         raise ValueError(f"speed={speed} m/s: the aircraft has no trim (steady level flight) at this speed "
                          f"({msg.strip()})")
     x = build(sol)
-    d = _core.derivative(x, x[12:], g0, P, alive)
+    d = _core.derivative(x, x[12:18], g0, P, alive)
     ph, th, om0, omr, omp, omy = sol
     # integrators [I_theta, I_phi, I_collective, I_roll, I_pitch, I_yaw] that reproduce the trim (heading 0)
     integ = np.array([th, ph, om0, omr, omp, omy])
     return {"state": x, "integrators": integ, "controls": np.array([om0, omr, omp, omy]),
             "residual": float(np.max(np.abs(d[3:12])))}
+
+
+def _steady_inflow(x: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """``x`` with the induced velocities ``x[18:24]`` of the blade-element rotors at their equilibrium (the
+    momentum balance of each rotor, Glauert's formula), by Newton's method (the six are independent); a lumped
+    rotor keeps 0."""
+    if P[21] <= 0.0:
+        return x
+    x = x.copy()
+    alive = np.ones(6, dtype=np.int64)
+    g0 = np.zeros(6)
+    x[18:24] = 5.0
+    for _ in range(60):
+        f = _core.derivative(x, x[12:18], g0, P, alive)[18:24]
+        xe = x.copy()
+        xe[18:24] += 1e-6
+        slope = (_core.derivative(xe, x[12:18], g0, P, alive)[18:24] - f) / 1e-6
+        step = f / slope
+        x[18:24] -= step
+        if np.max(np.abs(step)) < 1e-13:
+            break
+    return x
+
+
+@functools.lru_cache(maxsize=64)
+def gain_schedule(params: HexacopterParameters | None = None) -> np.ndarray:
+    """Gain factors of the controller over the forward speed: rows ``[speed, f_altitude, f_roll, f_pitch, f_yaw]``.
+
+    The gains of :class:`ControllerGains` are the design at hover. At each speed of :data:`SCHEDULE_SPEEDS` the
+    aircraft is trimmed (:func:`trim`) and the control effectiveness of the four controls of eq. 2 is computed
+    numerically (central differences of +-1 rad/s through the mixer, rotor speeds and inflow at their new
+    equilibrium -- the inflow settles in about 10 ms, far faster than the loops): ``dw/dt`` per rad/s of
+    collective, ``dp/dt``, ``dq/dt`` and ``dr/dt`` per rad/s of roll, pitch and yaw control. Design rule: each
+    loop's gains (altitude: ``k_altitude, kd_altitude, ki_altitude``; roll and pitch: ``k_attitude, k_rate,
+    ki_attitude``; yaw rate: ``k_yaw_rate, ki_yaw_rate``) are multiplied by ``E(0) / E(v)``, so that gain times
+    effectiveness -- the closed-loop poles of the hover design, aerodynamic damping aside -- is the same at
+    every trim point. The controller interpolates the factors linearly on its ground speed
+    (``sqrt(v_n^2 + v_e^2)``) and holds the end values beyond 14 m/s. The velocity and heading loops are not
+    scheduled (tilt acts on the acceleration through gravity, the same at every speed).
+
+    A lumped-rotor aircraft (``blade_element=False``, :data:`BIDIRECTIONAL_HEXACOPTER`) flies the fixed hover
+    design: one row ``[0, 1, 1, 1, 1]``.
+
+    Parameters
+    ----------
+    params : HexacopterParameters, optional
+        The aircraft (default ``HexacopterParameters()``); a fleet flies the schedule of its nominal aircraft.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(len(SCHEDULE_SPEEDS), 5)`` (read-only).
+    """
+    params = HexacopterParameters() if params is None else params
+    if not isinstance(params, HexacopterParameters):
+        raise TypeError("params must be a HexacopterParameters")
+    if not params.blade_element:
+        out = np.array([[0.0, 1.0, 1.0, 1.0, 1.0]])
+        out.flags.writeable = False
+        return out
+    P = params.to_array()
+    alive = np.ones(6, dtype=np.int64)
+    g0 = np.zeros(6)
+    az = np.arange(6) * np.pi / 3
+    yaw_sign = np.array([-1.0, 1.0, -1.0, 1.0, -1.0, 1.0])
+    rows = []
+    for v in SCHEDULE_SPEEDS:
+        tr = trim(v, params=params)
+        base = tr["state"]
+        om0, omr, omp, omy = tr["controls"]
+        eff = []
+        for j, out_index in enumerate((8, 9, 10, 11)):
+            d = []
+            for delta in (1.0, -1.0):
+                c = np.array([om0, omr, omp, omy])
+                c[j] += delta
+                x = base.copy()
+                w2 = c[0] ** 2 + 2.0 * c[0] * (-np.sin(az) * c[1] + np.cos(az) * c[2] + yaw_sign * c[3])
+                x[12:18] = np.sqrt(w2)
+                x = _steady_inflow(x, P)
+                d.append(_core.derivative(x, x[12:18], g0, P, alive)[out_index])
+            eff.append(abs(d[0] - d[1]) / 2.0)
+        rows.append([v] + eff)
+    rows = np.array(rows)
+    out = np.column_stack([rows[:, 0], rows[0, 1:] / rows[:, 1:]])
+    out.flags.writeable = False
+    return out
 
 
 def _rotor_index(failed_rotor) -> int:
@@ -287,9 +396,10 @@ def _rotor_index(failed_rotor) -> int:
 MAX_SPEED = 40.0
 
 
-def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 5.0,
+def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
                         turbulence="severe", failed_rotor=0, failure_time=10.0, seed=0,
                         dt: float = 0.001, fs: float = 100.0, altitude: float = 5.0, span: float = 0.6096,
+                        scale_length: float | None = None,
                         params: HexacopterParameters | None = None, gains: ControllerGains | None = None,
                         fleet: FleetSpread | None = None, batch: int = 16):
     """Simulate hexacopter records at 1/dt Hz and return them decimated to ``fs`` as an xarray Dataset.
@@ -301,8 +411,12 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         (shared) or sequences of this length; when omitted it is their common length (or 1).
     duration : float
         Record length in seconds (> 0).
-    speed : float
-        Commanded ground speed north in m/s (>= 0); also the Dryden airspeed (floored at 1 m/s).
+    speed : float or (float, float)
+        Commanded ground speed north in m/s (0 to 40); also the Dryden airspeed (floored at 1 m/s). A pair
+        ``(low, high)``: each record's speed is drawn uniformly in ``[low, high]`` from
+        ``numpy.random.default_rng([seed, SPEED_SEED_KEY])`` with the record's seed (independent of its gusts and
+        fleet draw); the record is trimmed at its speed, flown with the scheduled gains (:func:`gain_schedule`),
+        its Dryden model uses its speed, and the ``speed`` coordinate holds it.
     turbulence : {"none", "light", "moderate", "severe"} or sequence
         Dryden intensity per record.
     failed_rotor : int or sequence
@@ -318,6 +432,9 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
         Output sampling frequency in Hz.
     altitude, span : float
         Flight altitude (m) and Dryden span (m).
+    scale_length : float, optional
+        Dryden scale length (m) of all three linear gusts (:class:`~tsfdi.datasets.DrydenTurbulence`); default
+        ``None``: the MIL-F-8785C low-altitude lengths of ``altitude``.
     params, gains : optional
         :class:`HexacopterParameters` and :class:`ControllerGains`.
     fleet : FleetSpread, optional
@@ -331,26 +448,36 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed: float = 
     Returns
     -------
     xarray.Dataset
-        One variable per channel (see :data:`CHANNELS`), dims ``(record, time)``, units in ``attrs``;
+        One variable per channel (see :data:`CHANNELS`: the states, the controls of eq. 2, the specific force
+        ``ax, ay, az``, the rotor speeds and the motor commands), dims ``(record, time)``, units in ``attrs``;
         per-record coordinates ``state``, ``turbulence``, ``speed``, ``seed``, ``failure_time``,
         ``failed_rotor`` and the variable ``lost_control`` (True where roll or pitch exceeded 1.2 rad, the
         altitude error 20 m or the aircraft reached the ground; the record is NaN from then on); with a
         ``fleet`` also the coordinates of :data:`FLEET_COORDS` and the attribute ``fleet``.
     """
     plan = _plan(records, duration=duration, speed=speed, turbulence=turbulence, failed_rotor=failed_rotor,
-                 failure_time=failure_time, seed=seed, dt=dt, fs=fs, altitude=altitude, span=span, params=params,
-                 gains=gains, fleet=fleet, batch=batch)
+                 failure_time=failure_time, seed=seed, dt=dt, fs=fs, altitude=altitude, span=span,
+                 scale_length=scale_length, params=params, gains=gains, fleet=fleet, batch=batch)
     data, lost_step = _integrate(plan, 0, plan["records"])
     return _dataset(plan, {name: data[:, :, j] for j, name in enumerate(CHANNELS)}, lost_step)
 
 
-def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, seed, dt, fs, altitude, span, params,
-          gains, fleet, batch, chunk=None) -> dict:
+def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, seed, dt, fs, altitude, span,
+          scale_length, params, gains, fleet, batch, chunk=None) -> dict:
     """The arguments of :func:`simulate_hexacopter` checked, and one entry per record (turbulence, failed rotor,
     failure time, seed and, with a fleet, the drawn aircraft); ``chunk``: the records simulated at once (default
     all)."""
     duration = float_like(duration, "duration", minimum=0.0, strict_min=True)
-    speed = float_like(speed, "speed", minimum=0.0, maximum=MAX_SPEED)
+    if isinstance(speed, (str, bytes)) or np.ndim(speed) > 1 or (np.ndim(speed) == 1 and len(speed) != 2):
+        raise ValueError(f"speed must be a number or a (low, high) range in m/s, got {speed!r}")
+    if np.ndim(speed) == 0:
+        speed = float_like(speed, "speed", minimum=0.0, maximum=MAX_SPEED)
+    else:
+        speed = tuple(float_like(v, "speed", minimum=0.0, maximum=MAX_SPEED) for v in speed)
+        if speed[0] > speed[1]:
+            raise ValueError(f"speed: the range (low, high) must have low <= high, got {speed!r}")
+    if scale_length is not None:
+        scale_length = float_like(scale_length, "scale_length", minimum=0.0, strict_min=True)
     dt = float_like(dt, "dt", minimum=0.0, strict_min=True)
     fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
     batch = int_like(batch, "batch", minimum=1)
@@ -399,7 +526,7 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
     seeds = [int_like(s, "seed", minimum=0) for s in per("seed", seed)]
 
     at_once = records if chunk is None else min(chunk, records)
-    if duration / dt * batch * 19 > MAX_VALUES or duration * fs * at_once * len(CHANNELS) > MAX_VALUES:
+    if duration / dt * batch * _core.N_OUT > MAX_VALUES or duration * fs * at_once * len(CHANNELS) > MAX_VALUES:
         raise ValueError(f"records={records}, duration={duration:g} s, dt={dt:g} s, fs={fs:g} Hz, batch={batch}: the "
                          f"integration state or the output would hold more than {MAX_VALUES:,} values (2 GiB); "
                          "simulate fewer or shorter records per call")
@@ -408,36 +535,42 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
     if n < q:
         raise ValueError(f"duration must be at least one output sample (1/fs), got {duration}")
     drawn = None if fleet is None else [fleet.draw(params, sd) for sd in seeds]
-    return dict(records=records, speed=speed, dt=dt, fs=fs, batch=batch, params=params, gains=gains, fleet=fleet,
-                q=q, n=n, nout=n // q, turb=turb, rotors=rotors, ftimes=ftimes, seeds=seeds, drawn=drawn,
-                altitude=altitude, span=span)
+    if isinstance(speed, tuple):
+        speeds = [float(np.random.default_rng([sd, SPEED_SEED_KEY]).uniform(*speed)) for sd in seeds]
+    else:
+        speeds = [speed] * records
+    return dict(records=records, speed=speed, speeds=speeds, dt=dt, fs=fs, batch=batch, params=params, gains=gains,
+                fleet=fleet, q=q, n=n, nout=n // q, turb=turb, rotors=rotors, ftimes=ftimes, seeds=seeds, drawn=drawn,
+                altitude=altitude, span=span, scale_length=scale_length)
 
 
 def _integrate(plan: dict, first: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
     """Records ``first .. stop - 1`` of ``plan`` integrated and decimated: the output ``(records, nout, channels)``
     and the step of the loss of control of each record (-1: none). A record depends only on its own entries."""
-    speed, dt, batch, params, q, n = plan["speed"], plan["dt"], plan["batch"], plan["params"], plan["q"], plan["n"]
+    dt, batch, params, q, n = plan["dt"], plan["batch"], plan["params"], plan["q"], plan["n"]
     altitude, turb, rotors, ftimes, seeds = plan["altitude"], plan["turb"], plan["rotors"], plan["ftimes"], plan["seeds"]
+    speeds = plan["speeds"]
     records = stop - first
-    if plan["fleet"] is None:
-        tr = trim(speed, params=params, altitude=altitude)
-        X0 = np.tile(tr["state"], (records, 1))
-        I0 = np.tile(tr["integrators"], (records, 1))
-        P = np.tile(params.to_array(), (records, 1))
-        zref = tr["state"][2]
-    else:
-        # each record's aircraft (from its seed) and its own trim: the integrators start at its trim controls
-        drawn = plan["drawn"][first:stop]
-        trims = [trim(speed, params=p, altitude=altitude) for p, _ in drawn]
-        X0 = np.array([t["state"] for t in trims])
-        I0 = np.array([t["integrators"] for t in trims])
-        P = np.array([p.to_array() for p, _ in drawn])
-        zref = -altitude
+    # each record's aircraft (its fleet draw, or the one aircraft) trimmed at its own speed; the integrators start at
+    # its trim controls
+    aircraft = [params] * records if plan["fleet"] is None else [p for p, _ in plan["drawn"][first:stop]]
+    trims = {}
+    for p, v in zip(aircraft, speeds[first:stop]):
+        if (p, v) not in trims:
+            trims[(p, v)] = trim(v, params=p, altitude=altitude)
+    X0 = np.array([trims[(p, v)]["state"] for p, v in zip(aircraft, speeds[first:stop])])
+    I0 = np.array([trims[(p, v)]["integrators"] for p, v in zip(aircraft, speeds[first:stop])])
+    P = np.array([p.to_array() for p in aircraft])
+    zref = -altitude
     G = plan["gains"].to_array()
+    S = np.ascontiguousarray(gain_schedule(params))
     limits = np.array(LOSS_LIMITS)
-    models = {lvl: DrydenTurbulence(altitude=altitude, airspeed=max(speed, 1.0), span=plan["span"], intensity=lvl)
-              for lvl in INTENSITIES}
-    samplers = {lvl: m.sampler(dt) for lvl, m in models.items()}
+    samplers = {}
+    for i in range(first, stop):
+        key = (turb[i], max(speeds[i], 1.0))
+        if turb[i] != "none" and key not in samplers:
+            samplers[key] = DrydenTurbulence(altitude=altitude, airspeed=key[1], span=plan["span"], intensity=key[0],
+                                             scale_length=plan["scale_length"]).sampler(dt)
     nout = plan["nout"]
     data = np.empty((records, nout, _core.N_OUT))
     lost_step = np.empty(records, dtype=np.int64)
@@ -447,15 +580,15 @@ def _integrate(plan: dict, first: int, stop: int) -> tuple[np.ndarray, np.ndarra
         gusts = np.zeros((nb, n, 6))
         for j, i in enumerate(idx):
             if turb[i] != "none":
-                gusts[j] = draw_gusts(samplers[turb[i]], n, check_rng(seeds[i]))
+                gusts[j] = draw_gusts(samplers[(turb[i], max(speeds[i], 1.0))], n, check_rng(seeds[i]))
         x0 = X0[start:start + nb]
         i0 = I0[start:start + nb]
-        ref = np.tile([speed, 0.0, zref, 0.0], (nb, 1))
+        ref = np.array([[speeds[i], 0.0, zref, 0.0] for i in idx])
         fr = np.array([rotors[i] - 1 for i in idx], dtype=np.int64)
         fstep = np.array([int(round(ftimes[i] / dt)) if rotors[i] else -1 for i in idx], dtype=np.int64)
         out = np.empty((nb, n, _core.N_OUT))
         lost = np.empty(nb, dtype=np.int64)
-        _core.simulate_batch(x0, i0, ref, gusts, P[start:start + nb], G, fr, fstep, n, dt, out, limits, lost)
+        _core.simulate_batch(x0, i0, ref, gusts, P[start:start + nb], G, S, fr, fstep, n, dt, out, limits, lost)
         del gusts
         if q > 1:
             good = np.nan_to_num(out)
@@ -475,13 +608,14 @@ def _dataset(plan: dict, values: dict, lost_step) -> Any:
     (numpy or dask arrays)."""
     import xarray as xr
 
-    records, fs, dt, speed, fleet = plan["records"], plan["fs"], plan["dt"], plan["speed"], plan["fleet"]
+    records, fs, dt, fleet = plan["records"], plan["fs"], plan["dt"], plan["fleet"]
     rotors, params, gains = plan["rotors"], plan["params"], plan["gains"]
     time = np.arange(plan["nout"]) / fs
     state = ["healthy" if r == 0 else f"rotor{r}" for r in rotors]
     coords = {"record": np.arange(records), "time": ("time", time, {"units": "s"}),
               "state": ("record", state), "turbulence": ("record", plan["turb"]),
-              "speed": ("record", np.full(records, speed), {"units": "m/s"}),
+              "speed": ("record", np.array(plan["speeds"], dtype=float), {"units": "m/s",
+                                                                             "long_name": "commanded speed north"}),
               "seed": ("record", np.array(plan["seeds"], dtype=np.int64)),
               "failure_time": ("record", np.array(plan["ftimes"]), {"units": "s"}),
               "failed_rotor": ("record", np.array(rotors, dtype=np.int64))}
@@ -631,7 +765,7 @@ def _chunked_dataset(design: dict, chunks: int) -> Any:
     for first in range(0, plan["records"], chunks):
         stop = min(first + chunks, plan["records"])
         # each chunk carries the entries of its own records only
-        sub = {**plan, **{k: plan[k][first:stop] for k in ("turb", "rotors", "ftimes", "seeds")},
+        sub = {**plan, **{k: plan[k][first:stop] for k in ("turb", "rotors", "ftimes", "seeds", "speeds")},
                "drawn": None if plan["drawn"] is None else plan["drawn"][first:stop]}
         part = dask.delayed(_integrate, nout=2)(sub, 0, stop - first)
         outputs.append(da.from_delayed(part[0], (stop - first, nout, nchan), dtype=np.float64))
