@@ -72,3 +72,24 @@ def test_simulate_fleet_bad_spec_exits_2(tmp_path, capsys):
         main(["simulate", "--help"])
     out = capsys.readouterr().out
     assert exc.value.code == 0 and "--fleet" in out and "cg_offset" in out and "--records-per-case" in out
+
+
+def test_simulate_aircraft_option(tmp_path):
+    """--aircraft bidirectional writes the records of BIDIRECTIONAL_HEXACOPTER; the default is the regular aircraft."""
+    from tsfdi.datasets import BIDIRECTIONAL_HEXACOPTER
+    kw = dict(seed=3, duration=1.0, failure_time=0.5, states=("rotor2",), turbulence=("light",))
+    for choice, params in (("bidirectional", BIDIRECTIONAL_HEXACOPTER), ("regular", None)):
+        out = tmp_path / f"{choice}.nc"
+        assert main(["simulate", "--out", str(out), "--records-per-case", "1", "--duration", "1s", "--failure-time",
+                     "0.5s", "--states", "rotor2", "--turbulence", "light", "--seed", "3", "--aircraft", choice]) == 0
+        ref = make_hexacopter_dataset(1, params=params, **kw)
+        with xr.open_dataset(out, engine="h5netcdf") as ds:
+            np.testing.assert_array_equal(ds["roll"].values, ref["roll"].values)
+    with xr.open_dataset(tmp_path / "regular.nc", engine="h5netcdf") as a, \
+            xr.open_dataset(tmp_path / "bidirectional.nc", engine="h5netcdf") as b:
+        assert not np.array_equal(a["roll"].values, b["roll"].values)
+
+
+def test_simulate_bad_aircraft_exits_2(tmp_path, capsys):
+    rc = main(["simulate", "--out", str(tmp_path / "x.nc"), "--aircraft", "quad", "--duration", "1s"])
+    assert rc == 2 and "--aircraft" in capsys.readouterr().err

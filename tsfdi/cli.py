@@ -382,6 +382,13 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--failure-time", type=opt.time_from_start, default="10s",
                    help="failure instant from the record's start, a time span such as '10s'")
     p.add_argument("--speed", type=opt.finite, default=5.0, help="forward speed in m/s")
+    p.add_argument("--aircraft", choices=("regular", "bidirectional"), default="regular",
+                   help="regular (default): blade-element rotors that turn one way, rotor drag, weathervane, gains "
+                        "scheduled over the speed; bidirectional: tsfdi's previous aircraft (bidirectional rotors, "
+                        "lumped rotor coefficients, no rotor drag or weathervane), for comparison only")
+    p.add_argument("--scale-length", type=opt.positive, default=None, metavar="M",
+                   help="Dryden scale length in m of the three linear gusts; default: the MIL-F-8785C low-altitude "
+                        "lengths of the altitude")
     p.add_argument("--states", default="healthy,rotor1,rotor2,rotor6",
                    help="comma-separated states: healthy, rotor1 .. rotor6")
     p.add_argument("--turbulence", default="light,moderate,severe",
@@ -401,7 +408,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
                         "default: every channel as float64")
     p.add_argument("--chunk", type=opt.count, default=20,
                    help="records per chunk: the chunks are simulated in parallel on the dask scheduler and written "
-                        "as they come, so memory holds a few chunks (each chunk x duration x fs x 19 x 8 bytes, and "
+                        "as they come, so memory holds a few chunks (each chunk x duration x fs x 34 x 8 bytes, and "
                         "the 1 kHz integration of 16 records at a time), whatever the number of records")
     p.add_argument("--scheduler", default="threads",
                    help="dask scheduler of the chunks: threads, processes, synchronous, or the address of a running "
@@ -414,7 +421,7 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
 def _simulate(args: argparse.Namespace) -> int:
     import importlib.util
 
-    from tsfdi.datasets.hexacopter import FleetSpread, write_hexacopter_dataset
+    from tsfdi.datasets.hexacopter import BIDIRECTIONAL_HEXACOPTER, FleetSpread, write_hexacopter_dataset
 
     _check_out("--out", args.out)
     zarr = Path(args.out).suffix.lower() == ".zarr"
@@ -431,6 +438,8 @@ def _simulate(args: argparse.Namespace) -> int:
                                            states=tuple(s.strip() for s in args.states.split(",")),
                                            turbulence=tuple(s.strip() for s in args.turbulence.split(",")),
                                            dt=args.dt, fs=args.fs, fleet=fleet, shipped=args.shipped,
+                                           params=BIDIRECTIONAL_HEXACOPTER if args.aircraft == "bidirectional" else None,
+                                           scale_length=args.scale_length,
                                            chunks=args.chunk, scheduler=args.scheduler, progress=not args.no_progress)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
