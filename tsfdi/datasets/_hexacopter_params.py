@@ -219,6 +219,10 @@ BIDIRECTIONAL_HEXACOPTER = HexacopterParameters(k_inflow=7.2e-4, k_flapping=4e-6
 class ControllerGains:
     """Gains of the cascade controller (paper's Fig. 2), designed at hover by pole placement.
 
+    The blade-element aircraft schedules the altitude, attitude and yaw-rate gains over the forward speed from this
+    hover design (:func:`tsfdi.datasets.hexacopter.gain_schedule`); the numbers below are the hover design,
+    computed on the lumped-rotor aircraft whose hover thrust and torque the blade-element rotor matches.
+
     The loops, from outside in: velocity (PI in north-east axes, tilt command limited to ``max_tilt`` and
     rotated into the heading frame) -> pitch/roll commands; altitude (PID) -> collective Omega_0; attitude
     (PID) -> Omega_R, Omega_P; heading (P on the wrapped heading error, yaw-rate command limited to
@@ -242,8 +246,8 @@ class ControllerGains:
     with the stiffer loop, 0.6 none); ``max_yaw_control`` 450 rad/s
     (it was 350) covers the yaw term a failed aircraft needs in severe gusts (trim 100-200 rad/s) and the
     yaw-rate integrator (``ki_yaw_rate`` 80, it was 40) rebuilds it faster after such a limit. With these
-    values and the thrust-linear mixer (see :mod:`tsfdi.datasets.hexacopter`) no record of the shipped
-    design (240 x 60 s, severe turbulence included) is lost, and the heading is held after the failure
+    values and the thrust-linear mixer (see :mod:`tsfdi.datasets.hexacopter`) no record of the bidirectional
+    preset's design (240 x 60 s, severe turbulence included) is lost, and the heading is held after the failure
     in light and moderate turbulence; a single gain set serves every record and turbulence level.
     """
 

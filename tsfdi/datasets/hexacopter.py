@@ -20,29 +20,69 @@ plus the six rotor speeds with a first-order lag :math:`\\dot\\Omega_i = (\\Omeg
 
 **Rotors.** Rotor ``i`` (1..6) sits at azimuth :math:`(i-1) 60^\\circ` from the nose, clockwise seen from
 above: rotor 1 front, rotor 2 front-right, rotor 6 front-left. Rotor 1 spins clockwise seen from above and
-the directions alternate (1, 3, 5 clockwise; 2, 4, 6 counter-clockwise). With the hub velocity relative to
-the air :math:`\\mathbf v_h = (\\mathbf v - \\mathbf v_g) + (\\boldsymbol\\omega - \\boldsymbol\\omega_g)
-\\times \\mathbf r_i` (gusts :math:`\\mathbf v_g = (u_g, v_g, w_g)`, :math:`\\boldsymbol\\omega_g = (p_g, q_g,
-r_g)` from :mod:`tsfdi.datasets.dryden`, applied in body axes as in MIL-F-8785C):
+the directions alternate (1, 3, 5 clockwise, :math:`s_i = +1`; 2, 4, 6 counter-clockwise, :math:`s_i = -1`).
+The hub velocity relative to the air is :math:`\\mathbf v_h = (\\mathbf v - \\mathbf v_g) +
+(\\boldsymbol\\omega - \\boldsymbol\\omega_g) \\times \\mathbf r_i` (gusts :math:`\\mathbf v_g = (u_g, v_g,
+w_g)`, :math:`\\boldsymbol\\omega_g = (p_g, q_g, r_g)` from :mod:`tsfdi.datasets.dryden`, applied in body axes
+as in MIL-F-8785C) and the rotor speed relative to the air :math:`\\bar\\Omega_i = \\Omega_i + s_i (r - r_g)`
+(the motor holds :math:`\\Omega_i` relative to the turning airframe).
 
-- thrust :math:`T_i = k_T \\bar\\Omega_i |\\bar\\Omega_i| + k_w |\\bar\\Omega_i| v_{h,z}`, torque
-  :math:`Q_i = k_Q \\bar\\Omega_i |\\bar\\Omega_i|` (bidirectional rotors, the shipped design; with one-way
-  rotors, ``reversible_rotors=False``, the speed stays in ``[omega_min, omega_max]`` and the thrust >= 0), where
-  :math:`\\bar\\Omega_i = \\Omega_i + s_i (r - r_g)` is the rotor
-  speed relative to the air (:math:`s_i = +1` for the clockwise rotors; the motor holds
-  :math:`\\Omega_i` relative to the turning airframe). This gives the rotor yaw damping
-  :math:`-2 k_Q \\Omega_i r` per rotor (Mahony, Kumar & Corke 2012 model the rotor aerodynamics in the
-  air-relative frame); with the rotor drag below, whose hub velocities include :math:`r \\times
-  \\mathbf r_i`, the yaw damping is :math:`\\approx 6 (k_h \\Omega \\ell^2 + 2 k_Q \\Omega)`: 0.035 N m s
-  at hover with rotor drag (``arm`` :math:`\\ell`; :data:`REGULAR_HEXACOPTER`), 0.0015 N m s without (the
-  shipped design): weak, as for every multirotor, so the controller must provide the yaw stiffness;
-- rotor drag (H-force) :math:`-k_h \\Omega_i (v_{h,x}, v_{h,y})`;
-- blade-flapping moment :math:`k_f \\Omega_i (-v_{h,y}, v_{h,x}, 0)`;
+*Blade-element rotor* (the default, ``blade_element=True``). A fixed-pitch rotor of ``blades`` blades of
+radius :math:`R`, chord :math:`c`, lift slope :math:`a`, pitch :math:`\\theta_0 + \\theta_{tw} r/R` and profile
+drag :math:`C_{d0}`, rigid blades, quasi-steady strip theory integrated in closed form over the radius and the
+azimuth (Leishman, *Principles of Helicopter Aerodynamics*, ch. 3; Johnson, *Helicopter Theory*, ch. 5;
+Bangura & Mahony 2012 for small propellers). With :math:`k = \\rho N c R` (:math:`= \\rho A \\sigma`), tip speed
+:math:`V_t = \\bar\\Omega R`, in-plane speed :math:`V_h = |(v_{h,x}, v_{h,y})|` and the flow down through the
+disc :math:`V_n = v_i - v_{h,z}` (:math:`v_i` the induced velocity):
 
-so linear gusts move the attitude through flapping (and rotor drag where it is on), vertical and angular gusts
-through the differential inflow of the hubs. The body adds drag :math:`-\\rho C_D A |\\mathbf v_r| \\mathbf v_r/2`
-and a weathervane yaw moment :math:`k_n |v_{r,h}| v_{r,y}`. A failed rotor's thrust, torque, drag and
-flapping are zero from the failure time on.
+.. math::
+
+    T &= k \\tfrac a2 \\left[\\theta_0 (\\tfrac{V_t^2}{3} + \\tfrac{V_h^2}{2}) + \\theta_{tw} \\tfrac{V_t^2 + V_h^2}{4}
+          - \\tfrac{V_n V_t}{2}\\right], \\qquad
+    Q = k R \\left[\\tfrac a2 V_n (\\tfrac{\\theta_0 V_t}{3} + \\tfrac{\\theta_{tw} V_t}{4} - \\tfrac{V_n}{2})
+          + C_{d0} \\tfrac{V_t^2 + V_h^2}{8}\\right], \\\\
+    \\mathbf H &= -k \\left[\\tfrac a4 V_n (\\tfrac{\\theta_0}{2} + \\tfrac{\\theta_{tw}}{3})
+          + \\tfrac{C_{d0} V_t}{4}\\right] (v_{h,x}, v_{h,y}), \\qquad
+    \\mathbf M_R = s_i\\, k R \\tfrac a2 (\\tfrac{\\theta_0 V_t}{3} + \\tfrac{\\theta_{tw} V_t}{4} - \\tfrac{V_n}{4})
+          (v_{h,x}, v_{h,y}),
+
+(in coefficient form :math:`C_T = \\tfrac{\\sigma a}{2}[\\theta_0(\\tfrac13 + \\tfrac{\\mu^2}{2}) +
+\\tfrac{\\theta_{tw}}{4}(1 + \\mu^2) - \\tfrac\\lambda2]`, :math:`C_H = \\tfrac{\\sigma C_{d0}\\mu}{4} +
+\\tfrac{\\sigma a}{4}\\lambda\\mu(\\tfrac{\\theta_0}{2} + \\tfrac{\\theta_{tw}}{3})`): thrust :math:`T` along
+:math:`-z`, torque :math:`Q` (reaction :math:`-s_i Q` on the body about :math:`z`), the H-force (rotor drag) against
+the in-plane hub velocity, and the rolling hub moment :math:`\\mathbf M_R` of the advancing blade (towards the
+retreating side, so its sign follows the spin). With a longitudinal inflow gradient
+:math:`v_i (1 + k_x \\tfrac rR \\cos\\psi)`, :math:`k_x = \\tfrac{15\\pi}{32}\\tan\\tfrac\\chi2` (Pitt & Peters
+1981; :math:`\\tan\\tfrac\\chi2 = V_h / (\\sqrt{V_h^2 + V_n^2} + \\max(V_n, 0))`), the disc's front lifts more:
+pitching hub moment :math:`k R a v_i V_t k_x / 16` towards the relative wind (nose up in forward flight). The
+gradient changes neither :math:`T` nor :math:`\\mathbf H` (it averages out over the azimuth). The induced
+velocity is a state per rotor, the zeroth (uniform) mode of the Pitt-Peters / Peters-He finite-state wake (the
+paper uses 3 x 4 Peters-He states; this is its lowest mode):
+
+.. math::
+
+    \\tfrac83 \\rho R^3 \\dot v_i = T - 2 \\rho \\pi R^2 \\sqrt{V_h^2 + V_n^2}\\, v_i,
+
+whose equilibrium is Glauert's momentum inflow in forward flight; its time constant is about 10 ms at hover
+(apparent mass :math:`\\tfrac83\\rho R^3`), so RK4 at 1 kHz integrates it accurately, it never divides by zero
+and needs no iteration. The geometry is a two-blade 10-inch propeller whose hover thrust and torque equal the
+lumped coefficients within 0.1 % (:meth:`HexacopterParameters.blade_element_hover`, tested in
+``test_blade_element_hover_matches_the_lumped_coefficients``). The blade elements may give a slightly negative
+thrust at idle when the air comes down through the disc fast (windmill-brake state): that is kept, it is the
+physics of a fixed-pitch propeller; the rotor speed itself never reverses. ``k_rotor_drag`` and ``k_flapping``
+add lumped H-force and flapping moment for flexible blades (0 by default).
+
+*Lumped rotor* (``blade_element=False``, :data:`BIDIRECTIONAL_HEXACOPTER`): thrust :math:`T_i = k_T \\bar\\Omega_i
+|\\bar\\Omega_i| + k_w |\\bar\\Omega_i| v_{h,z}`, torque :math:`Q_i = k_Q \\bar\\Omega_i |\\bar\\Omega_i|`, rotor drag
+:math:`-k_h |\\bar\\Omega_i| (v_{h,x}, v_{h,y})`, blade-flapping moment :math:`k_f |\\bar\\Omega_i| (-v_{h,y},
+v_{h,x}, 0)`; with ``reversible_rotors`` the speeds range over :math:`[-\\Omega_{max}, \\Omega_{max}]`.
+
+*One-way rotors* (default): the mixer clips every command to ``[omega_min, omega_max]`` and the first-order
+motor then stays in that range (tested at 1 kHz in
+``test_one_way_rotors_never_reverse_and_commands_saturate``). The body adds drag :math:`-\\rho C_D A |\\mathbf
+v_r| \\mathbf v_r/2` and a weathervane yaw moment :math:`k_n |v_{r,h}| v_{r,y}`. A failed rotor's thrust, torque,
+H-force and hub moments are zero from the failure time on (its wake decays; the motor keeps following its
+command, as after the loss of a propeller); ``test_failed_rotor_makes_no_load``.
 
 **Controller** (spirit of the paper's Fig. 2, no adaptation after a failure): a PI velocity loop in the
 north-east frame (integrators in world axes, the tilt command limited in magnitude and rotated into the
@@ -73,40 +113,52 @@ loop drives up does not take the yaw authority of the five others). The yaw-rate
 while :math:`\\Omega_Y` is limited or less than 75 % of the yaw term reaches the rotors (anti-windup). One
 gain set (:class:`ControllerGains`) serves every record and turbulence level.
 
+*Gain schedule* (the paper: "designed at multiple trim points, with gain scheduling between these points"). The
+gains of :class:`ControllerGains` are a hover design. :func:`gain_schedule` trims the aircraft at
+:data:`SCHEDULE_SPEEDS` (0-14 m/s every 2 m/s), computes the effectiveness of the four controls there
+numerically (central differences through the mixer and the derivative), and scales each loop's gains by
+:math:`E(0)/E(v)` so that gain times effectiveness -- the closed-loop poles of the hover design -- holds at each
+trim point; the controller interpolates the factors linearly on its ground speed. The lumped-rotor preset flies
+the fixed hover design (factors 1), which keeps its records bit for bit.
+
 *What a failure does here.* A planar PNPNPN hexacopter with one rotor failed can hold all four axes only
-with the opposite rotor at (about) zero thrust (Du et al. 2015; Michieletto et al. 2018). The shipped design has
-bidirectional rotors, so the opposite rotor can go there (and push down in gusts): after the failure the heading
-deviates -- nose right for rotor 1 (clockwise, its reaction torque is lost), nose left for rotors 2 and 6
-(the paper's Fig. 6), by about 0.9 rad within 2 s -- and the heading loop brings it back and holds it at every
-turbulence level: over 30-60 s the heading of the shipped failure records changes by 0.34 rad at most and
-99 % of the yaw rates stay below 0.22 rad/s in severe turbulence. Four rotors then carry the aircraft; the
-1100 rad/s full speed leaves them a margin for severe gusts. So the post-failure roll, pitch and yaw rate
-are stationary and close to linear -- the regime the paper's method assumes. With the regular aircraft
-(:data:`REGULAR_HEXACOPTER`: one-way rotors with a 60 rad/s idle floor, 900 rad/s full speed, rotor drag and
-the weathervane moment) the opposite rotor runs near its idle speed and switches on and off the floor in
-gusts; the yaw margin then depends on the direction of the relative wind, and in severe turbulence the
-heading slips by whole turns in some records. ``docs/results.md`` ("The shipped aircraft and its
-alternatives") measures what each of these differences does to the identification. Roll, pitch, body rates
-and the controls become stationary again after the transient in every case (tests in
-``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading. No record of the shipped design loses
-the aircraft; a configuration that does is flagged in ``lost_control``.
+with the opposite rotor at (about) zero thrust (Du et al. 2015; Michieletto et al. 2018). One-way rotors cannot go
+below their idle speed, so after a failure the default aircraft holds roll, pitch, altitude and speed but not
+always its heading: the heading turns nose right after the loss of a clockwise rotor (1, 3, 5: its reaction
+torque is lost) and nose left after a counter-clockwise one (2, 4, 6; ``test_spin_direction_sets_the_sign_of_the
+_yaw_transient``), and in turbulence the opposite rotor switches on and off its idle floor and the heading may
+keep slipping, by whole turns in some records. Measured on the paper's design at 5 m/s (5 seeds per state and
+level, ``make_hexacopter_dataset(5, seed=3030)``, in the issue-30 report): no record lost; the heading change
+over 30-60 s has a median of 0.02-0.09 rad after rotor 1 or 2 failures in light and moderate turbulence but of
+14-21 rad in severe turbulence, and rotor 6 failures slip at every level (median 0.7-32 rad). At hover the
+aircraft with a failed rotor keeps turning or swinging without any turbulence
+(``test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop``). The bidirectional preset
+(:data:`BIDIRECTIONAL_HEXACOPTER`) can reverse the opposite rotor and holds its heading after the failure at
+every turbulence level (its tests in ``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading;
+a record that loses the aircraft is flagged in ``lost_control``.
 
-**Fleet.** By default every record flies the same aircraft. With ``fleet=FleetSpread(...)`` (Hansen et al.:
-aircraft "of the same type but with small differences in weight and handling due to payloads") each record
-flies its own: mass, centre-of-gravity offset (``cg_x``, ``cg_y``: the rotor arms are then measured from the
-offset centre of gravity), thrust and torque constants and inertia are drawn uniformly around the nominal
-parameters from the record's seed (:class:`FleetSpread`), independently of its gusts, and stored as record
-coordinates. Each record starts at its own trim (a lateral offset breaks the left-right symmetry: :func:`trim` then
-solves all six balances for roll, pitch and the four controls), with the controller's integrators holding
-it; the mixer and the gains are those of the nominal aircraft.
+**Fleet and operating points.** By default every record flies the same aircraft at the same speed. With
+``fleet=FleetSpread(...)`` (Hansen et al.: aircraft "of the same type but with small differences in weight and
+handling due to payloads") each record flies its own: airframe mass, payload (fraction of the gross weight),
+centre-of-gravity offset (``cg_x``, ``cg_y``: the rotor arms are then measured from the offset centre of
+gravity), rotor constants (chord of the blade-element rotor, ``k_thrust``/``k_torque`` of the lumped one) and
+inertia are drawn uniformly around the nominal parameters from the record's seed (:class:`FleetSpread`),
+independently of its gusts, and stored as record coordinates. With ``speed=(low, high)`` each record's speed
+is drawn from its seed too (coordinate ``speed``). Each record starts at its own trim, at its own speed, with the
+controller's integrators holding it; the mixer and the gain schedule are those of the nominal aircraft.
 
-**Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz; the controller and the gusts are held
-constant over a step (sampled-data controller at 1 kHz). Each record is integrated on its own
+**Integration.** Fixed-step classical Runge-Kutta (RK4) at 1 kHz (24 states: rigid body, six rotor speeds, six
+induced velocities); the controller and the gusts are held constant over a step (sampled-data controller at
+1 kHz). The specific force ``ax, ay, az`` (rotor and aerodynamic forces over the mass, body axes: what an
+accelerometer at the centre of gravity measures) comes from the first RK4 stage of each step, ``rotor_speed<i>``
+is the motor state and ``motor_command<i>`` the mixer output at that step. Each record is integrated on its own
 (numba-compiled, records in parallel), so a record depends only on its own seed and configuration.
 
 **Decimation.** From 1000 Hz to 100 Hz with :func:`scipy.signal.resample_poly` (polyphase zero-phase FIR,
 Kaiser window beta 5, 201 taps, cut-off at the new Nyquist frequency 50 Hz, edges padded by linear
-extrapolation): zero phase keeps the attitude aligned with the failure time.
+extrapolation): zero phase keeps the attitude aligned with the failure time. A low-pass filter rings at the corners
+of clipped signals: decimated motor commands and rotor speeds can leave ``[omega_min, omega_max]`` by a few
+rad/s; ``fs=1000`` (no decimation) gives the integration samples themselves.
 
 References
 ----------
@@ -120,6 +172,12 @@ References
        hexarotor is not fail-safe for one rotor loss; a tilted one is).
 .. [4] R. Mahony, V. Kumar, P. Corke, "Multirotor Aerial Vehicles: Modeling, Estimation, and Control of
        Quadrotor", IEEE Robotics & Automation Magazine 19(3), 2012.
+.. [5] J. G. Leishman, "Principles of Helicopter Aerodynamics", 2nd ed., Cambridge University Press, 2006
+       (blade element and momentum theory, ch. 2-3; dynamic inflow, ch. 10).
+.. [6] W. Johnson, "Helicopter Theory", Princeton University Press, 1980 (rotor forces in forward flight).
+.. [7] D. M. Pitt, D. A. Peters, "Theoretical prediction of dynamic-inflow derivatives", Vertica 5, 1981.
+.. [8] M. Bangura, R. Mahony, "Nonlinear dynamic modeling for high performance control of a quadrotor",
+       ACRA 2012.
 """
 
 from __future__ import annotations
