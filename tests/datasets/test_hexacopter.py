@@ -303,10 +303,10 @@ def test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop(rotor):
     rev = simulate_hexacopter(**kw, params=BIDIRECTIONAL_HEXACOPTER)
     assert not bool(regular["lost_control"][0]) and not bool(rev["lost_control"][0])
     assert np.max(np.abs(rev["roll"].values[0, -1000:])) < 0.02
-    # the regular aircraft does not hold its heading: it keeps turning or swinging (measured: heading range after
-    # the failure 1.3-6.2 rad, mean |r| over the last 10 s 0.06-0.41 rad/s for rotors 1, 2, 6)
-    assert np.ptp(regular["yaw"].values[0, 500:]) > 1.0
-    assert np.abs(regular["r"].values[0, -1000:]).mean() > 0.04
+    # the regular aircraft does not hold its heading: it keeps turning (measured with the default rotor drag:
+    # heading range after the failure 0.87-1.26 rad, mean |r| over the last 10 s 0.039-0.088 rad/s for rotors 1, 2, 6)
+    assert np.ptp(regular["yaw"].values[0, 500:]) > 0.5
+    assert np.abs(regular["r"].values[0, -1000:]).mean() > 0.02
     assert np.abs(rev["yaw"].values[0, -1]) < 0.05
     assert np.abs(rev["r"].values[0, -1000:]).mean() < 0.005
 
@@ -573,7 +573,8 @@ def test_specific_force_is_what_an_accelerometer_measures(fs):
     grav = 9.80665 * np.stack([-np.sin(th), np.sin(ph) * np.cos(th), np.cos(ph) * np.cos(th)])
     acc = np.gradient(v, 1.0 / fs, axis=1) + np.cross(w.T, v.T).T - grav
     sf = np.stack([ds[c].values[0] for c in ("ax", "ay", "az")])
-    np.testing.assert_allclose(sf[:, 10:-10], acc[:, 10:-10], atol=0.02 * np.abs(sf).max())
+    # central differences of v err where the held gusts step (one sample in 12,000 off by 2.4 % of the peak)
+    np.testing.assert_allclose(sf[:, 10:-10], acc[:, 10:-10], atol=0.03 * np.abs(sf).max())
 
 
 def test_spin_direction_sets_the_sign_of_the_yaw_transient():
@@ -603,8 +604,9 @@ def test_fleet_and_speed_coordinates_are_stored():
     nom = HexacopterParameters().mass
     airframe = ds["mass"].values * (1 - pay) / nom
     assert np.all(np.abs(airframe - 1) <= f.mass + 1e-12)
-    # each record flies at its own speed: the mean ground speed over the record is its speed
-    np.testing.assert_allclose(ds["x"].values[:, -1] / ds["time"].values[-1], s, rtol=0.1)
+    # each record flies at its own speed: without gusts the mean ground speed over the record is its speed
+    calm = simulate_hexacopter(2, seed=[6, 7], duration=1.0, turbulence="none", speed=(2.0, 12.0))
+    np.testing.assert_allclose(calm["x"].values[:, -1] / calm["time"].values[-1], calm["speed"].values, rtol=0.02)
     # a scalar speed keeps one speed for every record
     one = make_hexacopter_dataset(1, seed=6, duration=1.0, failure_time=0.5, speed=7.0, states=("healthy",))
     assert np.all(one["speed"].values == 7.0)

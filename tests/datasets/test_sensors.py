@@ -354,7 +354,8 @@ def test_on_a_simulated_record_the_sensors_read_the_truth(hover, i):
     acc = log["accel"].mean().to_numpy()
     off = acc - truth_[["ax", "ay", "az"]].mean().to_numpy()
     assert np.abs(off).max() <= suite.accel_bias + 4 * sd_a / math.sqrt(k)
-    np.testing.assert_allclose(acc, [0.0, 0.0, -G], atol=suite.accel_bias + (0.02 if i == 0 else 1.0))
+    if i == 0:  # in calm hover; in severe gusts the rotor drag moves the mean specific force by ~1 m/s^2 in 5 s
+        np.testing.assert_allclose(acc, [0.0, 0.0, -G], atol=suite.accel_bias + 0.02)
     # barometric altitude = -z within its RMS noise (chi-square, mean known)
     baro = log["baro"]
     err = baro["altitude"].to_numpy() + boxcar(truth_["z"], 20, baro.index)

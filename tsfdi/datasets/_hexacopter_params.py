@@ -66,11 +66,15 @@ class HexacopterParameters:
         k_inflow Omega w_hub when the hub descends relative to the air (blade-element slope dT/dw ~ 0.36
         N/(m/s) at hover). The blade-element rotor has this effect through its inflow.
     k_rotor_drag : float
-        0: additional lumped in-plane rotor force ``-k_rotor_drag Omega v_hub`` (in-plane air-relative hub
-        velocity). The blade-element rotor has its own H-force (profile and induced drag of the blades); a
-        rigid blade-element rotor underestimates the rotor drag measured on flexible small propellers
-        (Mahony et al. [1] report ~1e-4 N s/m per rotor), so this term can add the part from blade flexing
-        (0 by default: no measurement of the paper's propellers is available).
+        1.2e-4 N s/m: additional lumped in-plane rotor force ``-k_rotor_drag Omega v_hub`` (in-plane
+        air-relative hub velocity). The blade-element rotor has its own H-force (profile and induced drag of the
+        blades), but a rigid blade-element rotor underestimates the rotor drag measured on flexible small
+        propellers (about 0.076 N/(m/s) for six rotors at hover against the ~0.36 N/(m/s) of the order reported
+        by Mahony et al. [1] and Martin & Salaun [2]); this term adds the part from blade flexing, at the value
+        of that order (0.06 N/(m/s) per rotor at hover). Chosen on paper 003's published physical quantities
+        only: with 0 the largest steady-state heading variance after a failure in severe turbulence is about
+        1,600,000 times the paper's, with 1.2e-4 about 100,000 times (``docs/scripts/hexacopter_quantities.py``;
+        both far off: see the module docstring on one-way rotors).
     k_flapping : float
         0 (4e-6 N s in :data:`BIDIRECTIONAL_HEXACOPTER`): additional blade-flapping pitching moment
         ``k_flapping Omega (-v_y, v_x)`` of a rotor whose disc tilts away from the relative wind. The
@@ -139,7 +143,7 @@ class HexacopterParameters:
     k_torque: float = 2.5e-7
     motor_time_constant: float = 0.03
     k_inflow: float = 0.0
-    k_rotor_drag: float = 0.0
+    k_rotor_drag: float = 1.2e-4
     k_flapping: float = 0.0
     drag_area: float = 0.04
     air_density: float = 1.225
@@ -211,8 +215,8 @@ class HexacopterParameters:
 #: controller flies its single hover design (no gain schedule: the schedule is computed for blade-element
 #: aircraft), and ``simulate_hexacopter(params=BIDIRECTIONAL_HEXACOPTER)`` reproduces that simulator's records
 #: bit for bit (``tests/datasets/test_hexacopter.py::test_bidirectional_preset_reproduces_the_old_records``).
-BIDIRECTIONAL_HEXACOPTER = HexacopterParameters(k_inflow=7.2e-4, k_flapping=4e-6, k_weathervane=0.0,
-                                                reversible_rotors=True, blade_element=False)
+BIDIRECTIONAL_HEXACOPTER = HexacopterParameters(k_inflow=7.2e-4, k_rotor_drag=0.0, k_flapping=4e-6,
+                                                k_weathervane=0.0, reversible_rotors=True, blade_element=False)
 
 
 @dataclass(frozen=True)
