@@ -171,6 +171,18 @@ def test_report_tables_state_units(demo_report):
     assert "ambiguous (%) | none (%)" in text
 
 
+def test_report_says_its_records_are_development_records(demo_report):
+    """The demo's figures are on the shipped development records, on which the study's settings were chosen: the
+    report says so first and points to the evaluation (issue 30)."""
+    from tsfdi.study import DEVELOPMENT_NOTE
+
+    out, _, _ = demo_report
+    text = (out / "report.md").read_text()
+    assert text.startswith(DEVELOPMENT_NOTE)
+    assert "development records" in DEVELOPMENT_NOTE and "not an evaluation" in DEVELOPMENT_NOTE
+    assert "fresh seed" in DEVELOPMENT_NOTE
+
+
 def test_monitor_run_on_named_signal_labels_channels():
     x = var_signal(3000, 5)
     healthy = tsfdi.VAR(x.iloc[:1500], 2).fit()
