@@ -840,14 +840,15 @@ def _state_rotor(state: str) -> int:
 
 #: Packing of the shipped file: int32 counts of these steps (units of the variable per count), zlib + shuffle.
 #: The smallest one-step prediction error (AR(10) residual standard deviation) of each variable over the
-#: healthy light-turbulence records of the shipped design is roll 2.9e-5 rad, pitch 2.4e-5 rad, yaw
-#: 2.5e-7 rad, r 2.2e-5 rad/s, collective 0.10, roll/pitch control 0.35 / 0.28, yaw control 0.0022 rad/s. The
-#: attitude and yaw-rate steps are below 1/20 of it (rounding, standard deviation step/sqrt(12), adds
-#: < 0.03 % to the residual variance), the control steps below 1/10 (< 0.1 %). Tested in
-#: ``tests/datasets/test_hexacopter.py::test_packing_step_far_below_ar_residual``. The body rates p, q
-#: (and the other channels) are in every file written without ``--shipped``; in the shipped file they would
-#: pass the 20 MB budget.
-PACK_SCALE = {"roll": 1e-6, "pitch": 1e-6, "yaw": 1e-8, "p": 5e-5, "q": 5e-5, "r": 1e-6,
+#: healthy light-turbulence records of the shipped design (the blade-element aircraft, seed 2024) is roll
+#: 3.4e-5 rad, pitch 1.9e-5 rad, yaw 5.8e-6 rad, r 6.3e-4 rad/s, collective 0.097, roll/pitch control 0.42 / 0.24,
+#: yaw control 0.065 rad/s. The attitude and yaw-rate steps are below 1/20 of it (rounding, standard deviation
+#: step/sqrt(12), adds < 0.03 % to the residual variance), the control steps below 1/10 (< 0.1 %). Tested in
+#: ``tests/datasets/test_hexacopter.py::test_packing_step_far_below_ar_residual``. The heading step 2e-7 rad
+#: holds headings up to 429 rad (68 turns: a failed one-way-rotor aircraft may spin; the shipped records reach
+#: 38 rad); a larger one raises ``ValueError`` when the file is written. The body rates p, q (and the other
+#: channels) are in every file written without ``--shipped``; in the shipped file they would pass the 20 MB budget.
+PACK_SCALE = {"roll": 1e-6, "pitch": 5e-7, "yaw": 2e-7, "p": 5e-5, "q": 5e-5, "r": 1e-6,
               "collective": 2e-3, "roll_control": 1e-2, "pitch_control": 1e-2, "yaw_control": 1e-4}
 #: Variables of the shipped file: the paper's attitude signals, the yaw rate and the four controls of eq. 2.
 #: Channels of :func:`hexacopter_signals` with ``yaw="rate"`` (the default): roll, pitch and the body yaw rate.
