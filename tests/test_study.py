@@ -59,26 +59,51 @@ def test_documented_run_draws_its_seed(study_script, monkeypatch, capsys):
     assert given == 17 and "debugging only" in out
 
 
-def test_evaluation_records_have_the_shipped_design(study_script):
-    """The evaluation records are simulated with the shipped file's command line, int32 packing included, and the
-    shipped file is what that command line writes."""
+#: a small design with the shape of the shipped command line, for the tests
+SMALL = ("tsfdi simulate --out data/hexacopter.nc --records-per-case 1 --seed 2024 --shipped --duration 2s "
+         "--failure-time 1s --states healthy,rotor1 --turbulence light")
+
+
+def test_evaluation_records_are_the_shipped_kind_of_data(study_script, monkeypatch, tmp_path):
+    """The evaluation records come from the shipped file's own command line with another seed: same options, same
+    int32 packing, the records numbered after the development records'."""
+    import numpy as np
+
+    from tsfdi.cli import main
+    from tsfdi.datasets import load_hexacopter
+    from tsfdi.datasets.hexacopter import PACK_SCALE, SHIPPED_VARIABLES
+
+    monkeypatch.setattr(study_script, "REGENERATE_COMMAND", SMALL)
+    assert study_script.shipped_seed() == 2024
+    evl = study_script.simulate_like_shipped(7, after=240)
+    assert int(evl.attrs["base_seed"]) == 7 and evl.sizes["record"] == 2
+    assert evl["record"].values.tolist() == [240, 241]
+    assert set(SHIPPED_VARIABLES) <= set(evl.data_vars) and "p" not in evl.data_vars     # the shipped variables only
+    counts = evl["pitch"].values / PACK_SCALE["pitch"]
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-6)                      # int32 counts
+    # what the shipped command line itself writes with that seed, value for value
+    out = tmp_path / "same.nc"
+    assert main(["simulate", "--out", str(out), "--records-per-case", "1", "--seed", "7", "--shipped", "--duration",
+                 "2s", "--failure-time", "1s", "--states", "healthy,rotor1", "--turbulence", "light",
+                 "--no-progress"]) == 0
+    ref = load_hexacopter(out)
+    np.testing.assert_array_equal(evl["pitch"].values, ref["pitch"].values)
+    study_script.same_simulator(ref, evl)
+    other = study_script.simulate_like_shipped(7, "--aircraft", "bidirectional")
+    with pytest.raises(ValueError, match="parameters"):
+        study_script.same_simulator(ref, other)
+
+
+def test_shipped_file_has_the_seed_of_its_command_line(study_script):
     from tsfdi.datasets import load_hexacopter
 
-    design = study_script.shipped_design()
-    assert design["shipped"] is True
-    dev = load_hexacopter()
-    assert design["seed"] == int(dev.attrs["base_seed"])
-    assert design["records_per_case"] == int(dev.attrs["records_per_case"])
+    assert study_script.shipped_seed() == int(load_hexacopter().attrs["base_seed"])
 
 
-def test_an_unknown_option_of_the_command_line_stops_the_study(study_script, monkeypatch):
-    monkeypatch.setattr(study_script, "REGENERATE_COMMAND",
-                        "tsfdi simulate --out data/hexacopter.nc --seed 2024 --shipped --dt 0.002")
-    with pytest.raises(ValueError, match="--dt"):
-        study_script.shipped_design()
+def test_a_command_line_that_does_not_pack_stops_the_study(study_script, monkeypatch):
     monkeypatch.setattr(study_script, "REGENERATE_COMMAND", "tsfdi simulate --out x.nc --seed 2024")
-    with pytest.raises(ValueError, match="int32"):
-        study_script.shipped_design()
+    with pytest.raises(ValueError, match="--shipped"):
+        study_script.shipped_command(5, "y.nc")
 
 
 def test_results_print_a_seed_stored_nowhere_else():

@@ -27,7 +27,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
 import shlex  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
@@ -42,13 +41,8 @@ import tsfdi  # noqa: E402
 from tsfdi.baselines import insample_q  # noqa: E402
 from tsfdi.detection import EmpiricalThreshold  # noqa: E402
 from tsfdi.datasets import FleetSpread, load_hexacopter  # noqa: E402
-try:
-    from tsfdi.datasets import BIDIRECTIONAL_HEXACOPTER  # noqa: E402
-except ImportError:   # TEMPORARY until issue 30's default aircraft lands: today's default is the bidirectional one
-    from tsfdi.datasets import HexacopterParameters  # noqa: E402
-    BIDIRECTIONAL_HEXACOPTER = HexacopterParameters()
-from tsfdi.datasets.hexacopter import (SIGNAL_CHANNELS, hexacopter_signals,  # noqa: E402
-                                       write_hexacopter_dataset)
+from tsfdi.cli import main as cli_main  # noqa: E402
+from tsfdi.datasets.hexacopter import SIGNAL_CHANNELS, hexacopter_signals  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
 from tsfdi.study import (PAPER_ALPHA, demo_report, evaluation_seed, hexacopter_study,  # noqa: E402
                          markdown_figures, markdown_table, paper_tests, write_figures)
@@ -60,52 +54,46 @@ WHITENESS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3)}
 FIGS = ROOT / "docs" / "figures" / "study"
 
 
-#: Keywords of write_hexacopter_dataset for the options of REGENERATE_COMMAND (option -> (keyword, converter))
-COMMAND_OPTIONS = {"--records-per-case": ("records_per_case", int), "--seed": ("seed", int),
-                   "--duration": ("duration", float), "--failure-time": ("failure_time", float),
-                   "--speed": ("speed", float), "--states": ("states", lambda v: tuple(v.split(","))),
-                   "--turbulence": ("turbulence", lambda v: tuple(v.split(","))),
-                   "--fleet": ("fleet", FleetSpread.from_spec)}
-
-
-def shipped_design() -> dict:
-    """The design of ``data/hexacopter.nc``: the options of its command line (``REGENERATE_COMMAND``) as keywords
-    of :func:`write_hexacopter_dataset` (``shipped=True``: int32 packing). An option not in
-    :data:`COMMAND_OPTIONS` stops the script, so the evaluation records never silently differ from the shipped
-    design."""
+def shipped_command(seed: int, out, *options: str) -> list[str]:
+    """The arguments of ``tsfdi`` that wrote ``data/hexacopter.nc`` (``REGENERATE_COMMAND``, int32 packing
+    included) with another ``seed`` and output file, and ``options`` appended (``--aircraft bidirectional``,
+    ``--fleet default``): argparse keeps the last value of an option, so every other option of the shipped command
+    line is kept as it is."""
     words = shlex.split(REGENERATE_COMMAND)
-    if words[:2] != ["tsfdi", "simulate"]:
-        raise ValueError(f"REGENERATE_COMMAND is not a 'tsfdi simulate' command: {REGENERATE_COMMAND}")
-    kw, i = {}, 2
-    while i < len(words):
-        opt = words[i]
-        if opt == "--shipped":
-            kw["shipped"], i = True, i + 1
-        elif opt == "--out":
-            i += 2
-        elif opt in COMMAND_OPTIONS:
-            name, conv = COMMAND_OPTIONS[opt]
-            kw[name], i = conv(words[i + 1]), i + 2
-        else:
-            raise ValueError(f"REGENERATE_COMMAND: option {opt} has no keyword in COMMAND_OPTIONS of "
-                             f"docs/scripts/study.py; add it so that the evaluation records keep the shipped design")
-    if not kw.get("shipped"):
-        raise ValueError(f"REGENERATE_COMMAND does not write the shipped int32 packing: {REGENERATE_COMMAND}")
-    return kw
+    if words[:2] != ["tsfdi", "simulate"] or "--shipped" not in words:
+        raise ValueError(f"REGENERATE_COMMAND is not a 'tsfdi simulate ... --shipped' command: {REGENERATE_COMMAND}")
+    return [*words[1:], "--out", str(out), "--seed", str(seed), *options, "--no-progress"]
 
 
-def simulate_like_shipped(seed: int, *, after: int = 0, **extra):
-    """The shipped design (:func:`shipped_design`) simulated from ``seed``, written with the shipped int32 packing
-    and read back (:func:`load_hexacopter`), so that it is the same kind of data as ``data/hexacopter.nc``; the
-    records are numbered from ``after`` on, so that none shares its identifier with a fitting record of the
-    development records. ``extra`` (``params``, ``fleet``) changes the design."""
-    kw = {**shipped_design(), "seed": seed, **extra}
+def shipped_seed() -> int:
+    """The base seed of ``data/hexacopter.nc``: the ``--seed`` of ``REGENERATE_COMMAND``."""
+    words = shlex.split(REGENERATE_COMMAND)
+    if "--seed" not in words[:-1]:
+        raise ValueError(f"REGENERATE_COMMAND gives no --seed: {REGENERATE_COMMAND}")
+    return int(words[words.index("--seed") + 1])
+
+
+def simulate_like_shipped(seed: int, *options: str, after: int = 0):
+    """The shipped design simulated from ``seed`` by the shipped command line (:func:`shipped_command`, with
+    ``options``), written with the shipped int32 packing and read back (:func:`load_hexacopter`), so that it is the
+    same kind of data as ``data/hexacopter.nc``; the records are numbered from ``after`` on, so that none shares its
+    identifier with a fitting record of the development records."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "records.nc"
-        # dask simulates chunks of records in parallel (the values do not depend on the chunks)
-        write_hexacopter_dataset(path, chunks=20 if importlib.util.find_spec("dask") else None, **kw)
+        if cli_main(shipped_command(seed, path, *options)) != 0:
+            raise RuntimeError(f"tsfdi {' '.join(shipped_command(seed, path, *options))} failed")
         data = load_hexacopter(path)
     return data.assign_coords(record=data["record"].values + after)
+
+
+def same_simulator(dev, evl) -> None:
+    """A ``ValueError`` unless the development records were written by the simulator that wrote the evaluation
+    records (every attribute of the files but the base seed equal: aircraft parameters, gains, integration, ...)."""
+    differ = sorted(k for k in set(dev.attrs) | set(evl.attrs)
+                    if k != "base_seed" and str(dev.attrs.get(k)) != str(evl.attrs.get(k)))
+    if differ:
+        raise ValueError(f"data/hexacopter.nc differs from the records the present simulator writes in {differ}: "
+                         f"regenerate it with {REGENERATE_COMMAND}, then run this script")
 
 
 def evaluated(sig, level, baselines):
@@ -372,7 +360,8 @@ def white_noise_null(bases, data, alphas=(1e-3, 1e-2, 5e-2), draws=None, seed=20
 
 def aircraft_comparison(bases, evl, seed: int) -> tuple[dict, pd.DataFrame, dict]:
     """For information only, nothing is chosen from it: the default aircraft against
-    :data:`BIDIRECTIONAL_HEXACOPTER` (the aircraft shipped before issue 30), each with its VAR(20) per level fitted
+    ``tsfdi.datasets.BIDIRECTIONAL_HEXACOPTER`` (the aircraft shipped before issue 30, ``tsfdi simulate
+    --aircraft bidirectional``), each with its VAR(20) per level fitted
     on its records of the shipped design and seed (for the default: the development records, ``bases``) and
     evaluated on its records of the same design from the evaluation ``seed`` (for the default: ``evl``).
 
@@ -387,8 +376,8 @@ def aircraft_comparison(bases, evl, seed: int) -> tuple[dict, pd.DataFrame, dict
                                      windows=("20s",), rules=rules, progress=False)}
     thr = {"default": bases["severe"].steady_thresholds}
     lost = {"default, evaluation": int(evl["lost_control"].sum())}
-    dev_b = simulate_like_shipped(shipped_design()["seed"], params=BIDIRECTIONAL_HEXACOPTER)
-    evl_b = simulate_like_shipped(seed, after=dev_b.sizes["record"], params=BIDIRECTIONAL_HEXACOPTER)
+    dev_b = simulate_like_shipped(shipped_seed(), "--aircraft", "bidirectional")
+    evl_b = simulate_like_shipped(seed, "--aircraft", "bidirectional", after=dev_b.sizes["record"])
     lost["bidirectional, development"] = int(dev_b["lost_control"].sum())
     lost["bidirectional, evaluation"] = int(evl_b["lost_control"].sum())
     b, _ = hexacopter_study(dev_b, models=["var"], tests=WHITENESS, windows=("20s",), rules=rules, progress=False)
@@ -577,14 +566,16 @@ def threshold_table(ev_e) -> pd.DataFrame:
 
 def choices_table(seed: int, paper_orders: dict, cal_orders: dict, selected: dict, chosen: dict) -> pd.DataFrame:
     """What the study chose, and on which records (issue 30): one row per choice."""
-    dev = f"development (data/hexacopter.nc, seed {shipped_design()['seed']})"
+    dev = f"development (data/hexacopter.nc, seed {shipped_seed()})"
     fit = f"fitting records of the {dev.replace('(', '').replace(')', '')}"
     alphas = ", ".join(f"{lvl} {t.attrs['selected']:g}" for lvl, t in selected.items())
+    earlier = "fixed on earlier shipped data, before issue 30; compared again on the development records in "
     rows = [
         ("aircraft: the default `HexacopterParameters()`", "a regular hexacopter (docs/guide/hexacopter.md)",
          "the paper's published physical quantities", "tuned on paper 003's variance thresholds, orders, RSS/SSS and "
          "transients (docs/guide/hexacopter.md), never on identification scores"),
-        ("design of the records", REGENERATE_COMMAND.replace(" --seed 2024", ""), "paper 003, Table 1",
+        ("design of the records", REGENERATE_COMMAND.replace(f" --seed {shipped_seed()}", ""),
+         "paper 003, Table 1",
          "4 states x 3 turbulence levels x 60 s at 100 Hz"),
         ("signals", "roll, pitch, yaw rate", dev, "the heading is close to a unit root at 100 Hz and an AR/VAR of "
          "order 20 does not whiten it"),
@@ -593,14 +584,16 @@ def choices_table(seed: int, paper_orders: dict, cal_orders: dict, selected: dic
          + "/".join(map(str, paper_orders["var"])) + ") by BIC on the first valid development record"),
         ("model family", "VAR of the three signals (scalar AR of each beside it)", "paper 003; " + dev,
          "the Table 4 analogues"),
-        ("VAR order, per-level models", "20", dev, "'Order choice on the pooled records', 'Baseline choices compared'"),
+        ("VAR order, per-level models", "20", dev, earlier + "'Order choice on the pooled records' and "
+         "'Baseline choices compared'"),
         ("VAR order, one set of models", "BIC: VAR(" + "/".join(sorted({str(v) for v in cal_orders.values()})) + ")",
          fit, "search bound 20"),
-        ("fitting records", "first 10 valid per state and level, pooled", dev, "'Baseline choices compared'"),
+        ("fitting records", "first 10 valid per state and level, pooled", dev, earlier + "'Baseline choices "
+         "compared'"),
         ("models per level or one set", "per level (chi-square sections); one set (calibrated method)", dev,
-         "'Baseline choices compared'; one set because the level is not known in flight"),
+         earlier + "'Baseline choices compared'; one set because the level is not known in flight"),
         ("Ljung-Box lags and alpha", "20 lags, 1e-3 per channel", "paper 003 Table 3 (alpha); " + dev + " (lags)",
-         "'What was investigated', 'Detection false alarms against alpha'"),
+         earlier + "'Detection false alarms against alpha'; 'What was investigated'"),
         ("F test alphas", "1e-6 roll, 1e-12 pitch / yaw, 1e-8 VAR", "paper 003 Table 3", ""),
         ("alpha per level, leave one record out", alphas, fit, "`Baselines.select_alpha`"),
         ("improved decision rule at 5 s", f"{chosen[None][0]} ({chosen[None][1]} method)", dev,
@@ -638,21 +631,19 @@ def main() -> None:
     print(f"evaluation seed: {seed}" + ("" if args.seed is None else " (given with --seed: debugging only)"),
           flush=True)
     dev = load_hexacopter()
-    design = shipped_design()
-    for key in ("base_seed", "records_per_case"):
-        want = design["seed" if key == "base_seed" else key]
-        if int(dev.attrs.get(key, -1)) != want:
-            raise ValueError(f"data/hexacopter.nc has {key} = {dev.attrs.get(key)}, its command line says {want}: "
-                             f"regenerate it with {REGENERATE_COMMAND}")
+    if int(dev.attrs.get("base_seed", -1)) != shipped_seed():
+        raise ValueError(f"data/hexacopter.nc has base seed {dev.attrs.get('base_seed')}, not that of its command "
+                         f"line: regenerate it with {REGENERATE_COMMAND}")
     t_sim = time.perf_counter()
     evl = simulate_like_shipped(seed, after=dev.sizes["record"])
     t_sim = time.perf_counter() - t_sim
+    same_simulator(dev, evl)
     print(f"evaluation records simulated in {t_sim:.0f} s", flush=True)
     sig_x = hexacopter_signals(evl)
     names = [*SIGNAL_CHANNELS, "var"]
     paper_tab, paper_det, paper_orders = paper_like_for_like(dev, evl)
     cal_tab, cal_lines, cal_orders, one_set = calibrated_one_set(dev, evl)
-    fleet = simulate_like_shipped(seed, after=dev.sizes["record"], fleet=FleetSpread())
+    fleet = simulate_like_shipped(seed, "--fleet", "default", after=dev.sizes["record"])
     fleet_lost = int(fleet["lost_control"].sum())
     fleet_tab, fleet_lines = [], []
     for thr, (b, tests) in one_set.items():
@@ -733,7 +724,7 @@ stored nowhere else.
 Two sets of records of the same design ({REGENERATE_COMMAND}): 240 records = 4 states (healthy, rotor 1 / 2 / 6
 failure at 10 s) x 3 Dryden turbulence levels x 20 records x 60 s at 100 Hz, packed as int32 counts.
 
-- **Development records**: the shipped `data/hexacopter.nc` (seed {design['seed']}). The models are fitted on
+- **Development records**: the shipped `data/hexacopter.nc` (seed {shipped_seed()}). The models are fitted on
   some of them (fitting records); every choice of the study (table below) was made or compared on them, and the
   figures "on the development records" are on the others.
 - **Evaluation records**: the same design simulated from the evaluation seed above and packed the same way. The
@@ -781,9 +772,10 @@ identification (percent of windows), development and evaluation records:
 ### The same models on a fleet (evaluation seed)
 
 Paper 002's aircraft are "of the same type but with small differences in weight and handling due to payloads".
-The shipped design simulated from the evaluation seed with `fleet=FleetSpread()`: every record draws its mass
-(+-5 %), centre-of-gravity offset (+-1 cm in x and y), motor constants (+-3 %) and inertia (+-5 %) uniformly from
-its seed and is trimmed for its own aircraft ({fleet_lost} records lost control). The one set of models above,
+The shipped design simulated from the evaluation seed with `--fleet default` (`{FleetSpread()!r}`): every
+record draws its mass, centre-of-gravity offset, motor constants and inertia (and payload, when its spread is not
+zero) uniformly from its seed around the nominal aircraft and is trimmed for its own aircraft ({fleet_lost} records
+lost control). The one set of models above,
 fitted on the development records of the nominal aircraft, is applied unchanged to every valid fleet record:
 
 """ + markdown_table(fleet_tab) + """
@@ -943,7 +935,7 @@ sampled well, and in {sig_small} of {n_small} at 1e-3.
 Nothing is chosen from this section: the default aircraft was tuned on the paper's physical quantities, not on
 these scores. `tsfdi.datasets.BIDIRECTIONAL_HEXACOPTER` is the aircraft shipped before (bidirectional rotors, no
 rotor drag, no weathervane moment). Each aircraft gets its per-level VAR(20) fitted on its records of the shipped
-design and seed {design['seed']} (for the default: the development records) and is evaluated on its records of the
+design and seed {shipped_seed()} (for the default: the development records) and is evaluated on its records of the
 same design from the evaluation seed {seed}, all packed like the shipped file (lost records: """
     tail += "; ".join(f"{k}: {v}" for k, v in alt_lost.items()) + """). VAR + whiteness, 20 s windows.
 
