@@ -386,9 +386,15 @@ def _simulate_args(p: argparse.ArgumentParser) -> None:
                    help="regular (default): blade-element rotors that turn one way, rotor drag, weathervane, gains "
                         "scheduled over the speed; bidirectional: tsfdi's previous aircraft (bidirectional rotors, "
                         "lumped rotor coefficients, no rotor drag or weathervane), for comparison only")
-    p.add_argument("--scale-length", type=opt.positive, default=None, metavar="M",
-                   help="Dryden scale length in m of the three linear gusts; default: the MIL-F-8785C low-altitude "
-                        "lengths of the altitude")
+    p.add_argument("--scale-length", type=opt.scale_length, default=argparse.SUPPRESS, metavar="M",
+                   help="Dryden scale length in m of the three linear gusts, or 'mil' for the MIL-F-8785C low-altitude "
+                        "lengths of the altitude (default: tsfdi.datasets.hexacopter.PAPER_SCALE_LENGTH, paper 003's "
+                        "hub-to-hub distance)")
+    p.add_argument("--intensity-scale", type=opt.positive, default=argparse.SUPPRESS, metavar="K",
+                   help="factor on the MIL-F-8785C turbulence intensities (default: "
+                        "tsfdi.datasets.hexacopter.PAPER_INTENSITY_SCALE, chosen on paper 003's published physical "
+                        "quantities; 1: the standard's). The previous shipped file: --aircraft bidirectional "
+                        "--scale-length mil --intensity-scale 1")
     p.add_argument("--states", default="healthy,rotor1,rotor2,rotor6",
                    help="comma-separated states: healthy, rotor1 .. rotor6")
     p.add_argument("--turbulence", default="light,moderate,severe",
@@ -439,7 +445,8 @@ def _simulate(args: argparse.Namespace) -> int:
                                            turbulence=tuple(s.strip() for s in args.turbulence.split(",")),
                                            dt=args.dt, fs=args.fs, fleet=fleet, shipped=args.shipped,
                                            params=BIDIRECTIONAL_HEXACOPTER if args.aircraft == "bidirectional" else None,
-                                           scale_length=args.scale_length,
+                                           **{k: getattr(args, k) for k in ("scale_length", "intensity_scale")
+                                              if hasattr(args, k)},
                                            chunks=args.chunk, scheduler=args.scheduler, progress=not args.no_progress)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None

@@ -55,6 +55,11 @@ probability = functools.partial(finite, lo=0.0, hi=1.0, what="strictly between 0
 count, seed, two_or_more = (functools.partial(integer, minimum=m) for m in (1, 0, 2))
 
 
+def scale_length(text: str) -> float | None:
+    """``--scale-length``: a length in metres (> 0), or ``mil`` for the MIL-F-8785C low-altitude lengths (None)."""
+    return None if text.strip().lower() == "mil" else positive(text)
+
+
 def _timedelta(text: str) -> pd.Timedelta | None:
     """``text`` as a time span with a unit (``"2s"``, ``"500ms"``), or ``None`` if it is not one."""
     with warnings.catch_warnings():

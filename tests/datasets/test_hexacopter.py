@@ -12,6 +12,8 @@ from tsfdi.datasets.hexacopter import (
     CHANNELS,
     FLEET_COORDS,
     PACK_SCALE,
+    PAPER_INTENSITY_SCALE,
+    PAPER_SCALE_LENGTH,
     SHIPPED_VARIABLES,
     ControllerGains,
     FleetSpread,
@@ -170,20 +172,20 @@ def test_shipped_design(shipped):
     assert np.all(shipped.failure_time.values[shipped.failed_rotor.values > 0] == 10.0)
 
 
-def _file_aircraft(ds):
-    """The aircraft of a simulated file, from its ``parameters`` attribute; a file without ``blade_element`` was
-    written by the lumped-rotor simulator."""
+def _file_design(ds):
+    """The aircraft and turbulence settings of a simulated file, from its attributes (``parameters``,
+    ``scale_length_m``, ``intensity_scale``)."""
     import ast
-    kw = ast.literal_eval(ds.attrs["parameters"])
-    kw.setdefault("blade_element", False)
-    return HexacopterParameters(**kw)
+    scale = ds.attrs["scale_length_m"]
+    return dict(params=HexacopterParameters(**ast.literal_eval(ds.attrs["parameters"])),
+                scale_length=None if scale == "mil" else float(scale), intensity_scale=float(ds.attrs["intensity_scale"]))
 
 
 def test_shipped_records_regenerate_bit_for_bit(shipped, tmp_path):
     idx = [0, 70, 150, 235]  # healthy light, rotor1 moderate, rotor2 severe, rotor6 severe
     sub = shipped.isel(record=idx)
     ds = simulate_hexacopter(turbulence=sub.turbulence.values.tolist(), failed_rotor=sub.failed_rotor.values,
-                             failure_time=10.0, seed=sub.seed.values, duration=60.0, params=_file_aircraft(shipped))
+                             failure_time=10.0, seed=sub.seed.values, duration=60.0, **_file_design(shipped))
     out, enc = encode_for_file(ds)
     out.to_netcdf(tmp_path / "x.nc", engine="h5netcdf", encoding=enc)
     with xr.open_dataset(tmp_path / "x.nc", engine="h5netcdf") as back:
@@ -491,7 +493,7 @@ _OLD = {
 def test_bidirectional_preset_reproduces_the_old_records():
     ds = simulate_hexacopter(duration=12.0, turbulence=["severe", "moderate", "light", "none"],
                              failed_rotor=[1, 2, 6, 0], failure_time=10.0, seed=[7, 8, 9, 10],
-                             params=BIDIRECTIONAL_HEXACOPTER)
+                             params=BIDIRECTIONAL_HEXACOPTER, scale_length=None, intensity_scale=1.0)
     for name, values in _OLD.items():
         got = [float(ds[name].values[0, j]) for j in (100, 555, 1050)]
         assert got == values, name
@@ -634,13 +636,21 @@ def test_gain_schedule_design_rule():
     assert ctrl[1] / ref_ctrl[1] == pytest.approx(0.5 * (s[3, 2] + s[4, 2]), rel=1e-12)
 
 
-def test_scale_length_reaches_the_gusts():
+def test_turbulence_settings_reach_the_gusts_and_are_recorded():
     kw = dict(duration=2.0, turbulence="moderate", seed=3)
     a = simulate_hexacopter(**kw)
-    b = simulate_hexacopter(**kw, scale_length=0.6096)
+    assert a.attrs["scale_length_m"] == PAPER_SCALE_LENGTH and a.attrs["intensity_scale"] == PAPER_INTENSITY_SCALE
+    b = simulate_hexacopter(**kw, scale_length=None)
+    assert b.attrs["scale_length_m"] == "mil"
     assert not np.array_equal(a["roll"].values, b["roll"].values)
+    c = simulate_hexacopter(**kw, intensity_scale=2 * PAPER_INTENSITY_SCALE)
+    # the attitude's response is about linear in the gust intensity over 2 s of moderate turbulence
+    ratio = np.std(c["roll"].values - a["roll"].values[0, 0]) / np.std(a["roll"].values - a["roll"].values[0, 0])
+    assert 1.5 < ratio < 2.5
     with pytest.raises(ValueError, match="scale_length"):
         simulate_hexacopter(**kw, scale_length=-1.0)
+    with pytest.raises(ValueError, match="intensity_scale"):
+        simulate_hexacopter(**kw, intensity_scale=0.0)
 
 
 def test_no_record_lost_in_the_paper_design():

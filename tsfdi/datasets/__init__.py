@@ -9,9 +9,11 @@ from tsfdi.datasets.faults import FAULT_KINDS, inject_fault
 from tsfdi.datasets.hexacopter import (BIDIRECTIONAL_HEXACOPTER, ControllerGains, FleetSpread, HexacopterParameters,
                                        hexacopter_signals, make_hexacopter_dataset, simulate_hexacopter, trim,
                                        write_hexacopter_dataset)
+from tsfdi.datasets.sensors import SensorSuite, sensor_log, write_sensor_log
 from tsfdi.datasets.ulog import read_ulog
 
 __all__ = ["list_alfa", "load_alfa", "list_crazypad", "load_crazypad", "read_crazypad_log", "DrydenTurbulence",
            "dryden_turbulence", "HexacopterParameters", "BIDIRECTIONAL_HEXACOPTER", "ControllerGains", "FleetSpread",
            "simulate_hexacopter", "make_hexacopter_dataset", "write_hexacopter_dataset", "trim", "load_hexacopter",
-           "hexacopter_signals", "read_ulog", "align", "inject_fault", "FAULT_KINDS"]
+           "hexacopter_signals", "SensorSuite", "sensor_log", "write_sensor_log", "read_ulog", "align", "inject_fault",
+           "FAULT_KINDS"]

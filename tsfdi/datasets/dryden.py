@@ -110,6 +110,9 @@ class DrydenTurbulence:
         turbulence intensity" with the length scale equal to the hexacopter's hub-to-hub distance 0.6096 m.
         ``None`` (default): the MIL-F-8785C low-altitude scale lengths of the altitude (module docstring). The
         intensities (``sigma_u, sigma_v, sigma_w``) do not depend on it; the angular gusts use ``L_w``.
+    intensity_scale : float
+        Factor (> 0) on the MIL-F-8785C intensities of ``intensity`` (default 1: the standard's). Not used with
+        ``sigmas``.
 
     Notes
     -----
@@ -122,8 +125,11 @@ class DrydenTurbulence:
     intensity: str = "severe"
     sigmas: tuple | None = None
     scale_length: float | None = None
+    intensity_scale: float = 1.0
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "intensity_scale", float_like(self.intensity_scale, "intensity_scale", minimum=0.0,
+                                                               strict_min=True))
         object.__setattr__(self, "altitude", float_like(self.altitude, "altitude", minimum=0.0, strict_min=True))
         object.__setattr__(self, "airspeed", float_like(self.airspeed, "airspeed", minimum=0.0, strict_min=True))
         object.__setattr__(self, "span", float_like(self.span, "span", minimum=0.0, strict_min=True))
@@ -155,7 +161,7 @@ class DrydenTurbulence:
         if self.sigmas is not None:
             return self.sigmas
         h = max(self.altitude / _FT, 10.0)
-        sw = 0.1 * INTENSITIES[self.intensity] * _KT
+        sw = 0.1 * INTENSITIES[self.intensity] * _KT * self.intensity_scale
         su = sw / (0.177 + 0.000823 * h) ** 0.4
         return su, su, sw
 
@@ -300,7 +306,8 @@ def draw_gusts(sampler: tuple, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def dryden_turbulence(duration: float, fs: float = 1000.0, *, altitude: float = 5.0, airspeed: float = 5.0,
-                      span: float = 0.6096, intensity: str = "severe", sigmas=None, scale_length=None, rng=None):
+                      span: float = 0.6096, intensity: str = "severe", sigmas=None, scale_length=None,
+                      intensity_scale: float = 1.0, rng=None):
     """Dryden gust time histories as an ``xarray.DataArray`` with dims ``(time, component)``.
 
     Parameters
@@ -309,7 +316,7 @@ def dryden_turbulence(duration: float, fs: float = 1000.0, *, altitude: float = 
         Length in seconds (> 0).
     fs : float
         Sampling frequency in Hz (> 0).
-    altitude, airspeed, span, intensity, sigmas, scale_length
+    altitude, airspeed, span, intensity, sigmas, scale_length, intensity_scale
         See :class:`DrydenTurbulence`.
     rng : None, int or numpy.random.Generator
         Source of randomness.
@@ -330,7 +337,7 @@ def dryden_turbulence(duration: float, fs: float = 1000.0, *, altitude: float = 
     duration = float_like(duration, "duration", minimum=0.0, strict_min=True)
     fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
     model = DrydenTurbulence(altitude=altitude, airspeed=airspeed, span=span, intensity=intensity, sigmas=sigmas,
-                             scale_length=scale_length)
+                             scale_length=scale_length, intensity_scale=intensity_scale)
     n = max(int(round(duration * fs)), 1)
     g = model.simulate(n, 1.0 / fs, rng)
     lu, lv, lw = model.length_scales

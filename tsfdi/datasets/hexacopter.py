@@ -127,11 +127,13 @@ below their idle speed, so after a failure the default aircraft holds roll, pitc
 always its heading: the heading turns nose right after the loss of a clockwise rotor (1, 3, 5: its reaction
 torque is lost) and nose left after a counter-clockwise one (2, 4, 6; ``test_spin_direction_sets_the_sign_of_the
 _yaw_transient``), and in turbulence the opposite rotor switches on and off its idle floor and the heading may
-keep slipping, by whole turns in some records. Measured on the paper's design at 5 m/s (5 seeds per state and
-level, ``make_hexacopter_dataset(5, seed=3030)``, in the issue-30 report): no record lost; the heading change
-over 30-60 s has a median of 0.02-0.09 rad after rotor 1 or 2 failures in light and moderate turbulence but of
-14-21 rad in severe turbulence, and rotor 6 failures slip at every level (median 0.7-32 rad). At hover the
-aircraft with a failed rotor keeps turning or swinging without any turbulence
+keep slipping. How far depends on the turbulence. In the shipped design (paper's turbulence settings,
+:data:`PAPER_SCALE_LENGTH` and :data:`PAPER_INTENSITY_SCALE`; ``data/README.md``) no record is lost and the heading
+is held: over 30-60 s its range has a median of 0.04-0.05 rad after a failure in light, 0.07-0.09 rad in moderate
+and 0.10-0.17 rad in severe turbulence (healthy 0.02, 0.05, 0.07 rad). With the standard's intensities
+(``intensity_scale=1``) it slips: without rotor drag (issue-30 report, ``make_hexacopter_dataset(5, seed=3030)``)
+the median heading change after rotor 1 or 2 failures was 14-21 rad in severe turbulence, and rotor 6 failures
+slipped at every level. At hover the aircraft with a failed rotor keeps turning slowly without any turbulence
 (``test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop``). The bidirectional preset
 (:data:`BIDIRECTIONAL_HEXACOPTER`) can reverse the opposite rotor and holds its heading after the failure at
 every turbulence level (its tests in ``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading;
@@ -202,7 +204,8 @@ from tsfdi.datasets._hexacopter_params import (
 from tsfdi.datasets.dryden import INTENSITIES, DrydenTurbulence, draw_gusts
 
 __all__ = ["HexacopterParameters", "BIDIRECTIONAL_HEXACOPTER", "ControllerGains", "FleetSpread", "FLEET_SEED_KEY",
-           "trim", "gain_schedule", "SCHEDULE_SPEEDS", "SPEED_SEED_KEY", "simulate_hexacopter", "make_hexacopter_dataset", "write_hexacopter_dataset", "FLEET_COORDS",
+           "trim", "gain_schedule", "SCHEDULE_SPEEDS", "SPEED_SEED_KEY", "simulate_hexacopter", "make_hexacopter_dataset",
+           "write_hexacopter_dataset", "FLEET_COORDS", "PAPER_SCALE_LENGTH", "PAPER_INTENSITY_SCALE",
            "CHANNELS", "STATES", "TURBULENCE_LEVELS", "encode_for_file", "hexacopter_signals", "SIGNAL_CHANNELS"]
 
 #: Output channels and their units.
@@ -454,10 +457,23 @@ def _rotor_index(failed_rotor) -> int:
 MAX_SPEED = 40.0
 
 
+#: Dryden scale length (m) of the simulated data: paper 003 ("Data Generation") gives its Dryden model's "length
+#: scale" as the hub-to-hub distance 0.6096 m; taken as the scale length of all three linear gusts.
+PAPER_SCALE_LENGTH = 0.6096
+#: Factor on the MIL-F-8785C low-altitude intensities (W20 15 / 30 / 45 kn for light / moderate / severe) of the
+#: simulated data. Paper 003 does not publish its intensities; this one factor was chosen, with the scale length
+#: above and nothing else, so that its published physical quantities come out within a factor of 3 on two
+#: development seeds (the post-failure steady-state roll and pitch variances, the pitch AR order and RSS/SSS, the
+#: VAR order; the heading's cannot with one-way rotors): ``docs/scripts/hexacopter_quantities.py``. With the
+#: standard's intensities (1.0) and lengths the steady-state variances are 47-400 times the paper's.
+PAPER_INTENSITY_SCALE = 0.16
+
+
 def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
                         turbulence="severe", failed_rotor=0, failure_time=10.0, seed=0,
                         dt: float = 0.001, fs: float = 100.0, altitude: float = 5.0, span: float = 0.6096,
-                        scale_length: float | None = None,
+                        scale_length: float | None = PAPER_SCALE_LENGTH,
+                        intensity_scale: float = PAPER_INTENSITY_SCALE,
                         params: HexacopterParameters | None = None, gains: ControllerGains | None = None,
                         fleet: FleetSpread | None = None, batch: int = 16):
     """Simulate hexacopter records at 1/dt Hz and return them decimated to ``fs`` as an xarray Dataset.
@@ -490,9 +506,13 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
         Output sampling frequency in Hz.
     altitude, span : float
         Flight altitude (m) and Dryden span (m).
-    scale_length : float, optional
+    scale_length : float or None
         Dryden scale length (m) of all three linear gusts (:class:`~tsfdi.datasets.DrydenTurbulence`); default
-        ``None``: the MIL-F-8785C low-altitude lengths of ``altitude``.
+        :data:`PAPER_SCALE_LENGTH` (paper 003's 0.6096 m); ``None``: the MIL-F-8785C low-altitude lengths of
+        ``altitude``.
+    intensity_scale : float
+        Factor (> 0) on the MIL-F-8785C intensities of each turbulence level; default
+        :data:`PAPER_INTENSITY_SCALE` (chosen on paper 003's published physical quantities); 1: the standard's.
     params, gains : optional
         :class:`HexacopterParameters` and :class:`ControllerGains`.
     fleet : FleetSpread, optional
@@ -515,13 +535,14 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
     """
     plan = _plan(records, duration=duration, speed=speed, turbulence=turbulence, failed_rotor=failed_rotor,
                  failure_time=failure_time, seed=seed, dt=dt, fs=fs, altitude=altitude, span=span,
-                 scale_length=scale_length, params=params, gains=gains, fleet=fleet, batch=batch)
+                 scale_length=scale_length, intensity_scale=intensity_scale, params=params, gains=gains, fleet=fleet,
+                 batch=batch)
     data, lost_step = _integrate(plan, 0, plan["records"])
     return _dataset(plan, {name: data[:, :, j] for j, name in enumerate(CHANNELS)}, lost_step)
 
 
 def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, seed, dt, fs, altitude, span,
-          scale_length, params, gains, fleet, batch, chunk=None) -> dict:
+          scale_length, intensity_scale, params, gains, fleet, batch, chunk=None) -> dict:
     """The arguments of :func:`simulate_hexacopter` checked, and one entry per record (turbulence, failed rotor,
     failure time, seed and, with a fleet, the drawn aircraft); ``chunk``: the records simulated at once (default
     all)."""
@@ -536,6 +557,7 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
             raise ValueError(f"speed: the range (low, high) must have low <= high, got {speed!r}")
     if scale_length is not None:
         scale_length = float_like(scale_length, "scale_length", minimum=0.0, strict_min=True)
+    intensity_scale = float_like(intensity_scale, "intensity_scale", minimum=0.0, strict_min=True)
     dt = float_like(dt, "dt", minimum=0.0, strict_min=True)
     fs = float_like(fs, "fs", minimum=0.0, strict_min=True)
     batch = int_like(batch, "batch", minimum=1)
@@ -599,7 +621,7 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
         speeds = [speed] * records
     return dict(records=records, speed=speed, speeds=speeds, dt=dt, fs=fs, batch=batch, params=params, gains=gains,
                 fleet=fleet, q=q, n=n, nout=n // q, turb=turb, rotors=rotors, ftimes=ftimes, seeds=seeds, drawn=drawn,
-                altitude=altitude, span=span, scale_length=scale_length)
+                altitude=altitude, span=span, scale_length=scale_length, intensity_scale=intensity_scale)
 
 
 def _integrate(plan: dict, first: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
@@ -628,7 +650,8 @@ def _integrate(plan: dict, first: int, stop: int) -> tuple[np.ndarray, np.ndarra
         key = (turb[i], max(speeds[i], 1.0))
         if turb[i] != "none" and key not in samplers:
             samplers[key] = DrydenTurbulence(altitude=altitude, airspeed=key[1], span=plan["span"], intensity=key[0],
-                                             scale_length=plan["scale_length"]).sampler(dt)
+                                             scale_length=plan["scale_length"],
+                                             intensity_scale=plan["intensity_scale"]).sampler(dt)
     nout = plan["nout"]
     data = np.empty((records, nout, _core.N_OUT))
     lost_step = np.empty(records, dtype=np.int64)
@@ -690,6 +713,11 @@ def _dataset(plan: dict, values: dict, lost_step) -> Any:
         "title": "tsfdi hexacopter simulation (Dryden turbulence, rotor failures)",
         "integration": f"RK4, dt={dt} s; decimated to {fs} Hz with scipy.signal.resample_poly (zero phase)",
         "altitude_m": plan["altitude"], "span_m": plan["span"],
+        "dryden": (f"MIL-F-8785C low altitude, scale length "
+                   f"{'MIL-F-8785C' if plan['scale_length'] is None else repr(plan['scale_length']) + ' m'}, "
+                   f"intensities x {plan['intensity_scale']!r}"),
+        "scale_length_m": "mil" if plan["scale_length"] is None else plan["scale_length"],
+        "intensity_scale": plan["intensity_scale"],
         "rotor_spin": "rotor 1 clockwise seen from above, alternating",
         "parameters": repr(params.to_dict()), "gains": repr(gains.to_dict()),
         "yaw_sign": "positive = nose right (NED)",
@@ -841,13 +869,14 @@ def _state_rotor(state: str) -> int:
 #: Packing of the shipped file: int32 counts of these steps (units of the variable per count), zlib + shuffle.
 #: The smallest one-step prediction error (AR(10) residual standard deviation) of each variable over the
 #: healthy light-turbulence records of the shipped design (the blade-element aircraft, seed 2024) is roll
-#: 3.4e-5 rad, pitch 1.9e-5 rad, yaw 5.8e-6 rad, r 6.3e-4 rad/s, collective 0.097, roll/pitch control 0.42 / 0.24,
-#: yaw control 0.065 rad/s. The attitude and yaw-rate steps are below 1/20 of it (rounding, standard deviation
+#: 2.3e-5 rad, pitch 1.1e-5 rad, yaw 6.4e-6 rad, r 7.3e-4 rad/s, collective 0.05, roll/pitch control 0.28 / 0.14,
+#: yaw control 0.076 rad/s. The attitude and yaw-rate steps are below 1/20 of it (rounding, standard deviation
 #: step/sqrt(12), adds < 0.03 % to the residual variance), the control steps below 1/10 (< 0.1 %). Tested in
 #: ``tests/datasets/test_hexacopter.py::test_packing_step_far_below_ar_residual``. The heading step 2e-7 rad
-#: holds headings up to 429 rad (68 turns: a failed one-way-rotor aircraft may spin; the shipped records reach
-#: 38 rad); a larger one raises ``ValueError`` when the file is written. The body rates p, q (and the other
-#: channels) are in every file written without ``--shipped``; in the shipped file they would pass the 20 MB budget.
+#: holds headings up to 429 rad (68 turns: a failed one-way-rotor aircraft may spin in stronger turbulence; the
+#: shipped records stay within 0.73 rad); a larger one raises ``ValueError`` when the file is written. The body
+#: rates p, q (and the other channels) are in every file written without ``--shipped``; in the shipped file they
+#: would pass the 20 MB budget.
 PACK_SCALE = {"roll": 1e-6, "pitch": 5e-7, "yaw": 2e-7, "p": 5e-5, "q": 5e-5, "r": 1e-6,
               "collective": 2e-3, "roll_control": 1e-2, "pitch_control": 1e-2, "yaw_control": 1e-4}
 #: Variables of the shipped file: the paper's attitude signals, the yaw rate and the four controls of eq. 2.
