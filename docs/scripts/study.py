@@ -44,6 +44,7 @@ from tsfdi.datasets import FleetSpread, load_hexacopter  # noqa: E402
 from tsfdi.cli import main as cli_main  # noqa: E402
 from tsfdi.datasets.hexacopter import SIGNAL_CHANNELS, hexacopter_signals  # noqa: E402
 from tsfdi.datasets._shipped import REGENERATE_COMMAND  # noqa: E402
+from tsfdi.datasets.hexacopter import PAPER_INTENSITY_SCALE, PAPER_SCALE_LENGTH  # noqa: E402
 from tsfdi.study import (PAPER_ALPHA, demo_report, evaluation_seed, hexacopter_study,  # noqa: E402
                          markdown_figures, markdown_table, paper_tests, write_figures)
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
@@ -574,6 +575,10 @@ def choices_table(seed: int, paper_orders: dict, cal_orders: dict, selected: dic
         ("aircraft: the default `HexacopterParameters()`", "a regular hexacopter (docs/guide/hexacopter.md)",
          "the paper's published physical quantities", "tuned on paper 003's variance thresholds, orders, RSS/SSS and "
          "transients (docs/guide/hexacopter.md), never on identification scores"),
+        ("turbulence of the records", f"Dryden scale length {PAPER_SCALE_LENGTH:g} m, intensities "
+         f"{PAPER_INTENSITY_SCALE:g} x MIL-F-8785C's", "the paper's published physical quantities (seeds 2024 and 7)",
+         "the paper's 'length scale'; the one intensity factor that brings its variance thresholds, pitch RSS/SSS "
+         "and orders within 3x (docs/guide/hexacopter.md)"),
         ("design of the records", REGENERATE_COMMAND.replace(f" --seed {shipped_seed()}", ""),
          "paper 003, Table 1",
          "4 states x 3 turbulence levels x 60 s at 100 Hz"),

@@ -532,14 +532,6 @@ def derivative(x, wcmd, g, P, alive):
 
 
 @njit(cache=True)
-def specific_force(x, wcmd, g, P, alive):
-    dx = np.empty(N_X)
-    sf = np.empty(3)
-    _deriv(x, wcmd, g, P, alive, dx, sf)
-    return sf
-
-
-@njit(cache=True)
 def controller(x, integ, ref, G, P, S):
     ctrl = np.empty(13)
     wcmd = np.empty(6)
