@@ -299,3 +299,44 @@ def test_theoretical_threshold_clips_the_window_to_the_record():
     a, b = ParameterGLRT(10**9, scale=1.0).test(y, x), ParameterGLRT(300, scale=1.0).test(y, x)
     np.testing.assert_allclose(a.threshold, b.threshold, rtol=1e-14)
     assert a.details["window"] == 300
+
+
+def _numpy_scan(x, window, scale):
+    """The O(N M) scan in plain numpy: one vector operation per post-change length."""
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    g = np.zeros(x.size)
+    for n in range(1, min(window, x.size) + 1):
+        d = c[n:] - c[:-n]
+        np.maximum(g[n - 1:], d * d / (2.0 * scale ** 2 * n), out=g[n - 1:])
+    return g
+
+
+@pytest.mark.parametrize("n, window", [(1, 1), (7, 3), (4095, 500), (4097, 4096), (12_000, 5000), (30_000, 500),
+                                       (9000, 20_000)])
+def test_statistic_equals_numpy_scan(n, window):
+    # the length-outer kernel of GLRT.statistic on records spanning several 4096-sample blocks, windows longer than a
+    # block or than the record, with a mean far from zero (cumulative-sum cancellation)
+    rng = np.random.default_rng(n + window)
+    x = 3.0 * rng.standard_normal(n) + 40.0
+    g = np.asarray(tsfdi.GLRT(window, scale=2.5).statistic(x))
+    np.testing.assert_allclose(g, _numpy_scan(x, window, 2.5), rtol=1e-10)
+    y = 0.7 * rng.standard_normal((n, 2))
+    np.testing.assert_allclose(np.asarray(tsfdi.GLRT(window, scale=0.7).scan(y).g),
+                               np.asarray(tsfdi.GLRT(window, scale=0.7).statistic(y)), rtol=1e-12, atol=1e-300)
+
+
+@pytest.mark.skipif(__import__("platform").machine() not in ("x86_64", "AMD64"), reason="x86-64 assembly")
+def test_scan_kernel_compiles_to_packed_instructions():
+    # the kernel of GLRT.statistic must compile to packed (SIMD) double-precision arithmetic, not scalar code; the
+    # cached dispatcher cannot be inspected, so the same Python function is compiled afresh
+    import re
+
+    import numba
+
+    from tsfdi.detection import glrt as glrt_module
+
+    kernel = numba.njit(nogil=True, fastmath=True)(glrt_module._scan_g.py_func)
+    kernel(np.zeros(10), 0, 5, 0.5)
+    asm = "\n".join(kernel.inspect_asm().values())
+    packed = re.findall(r"\bv?(?:sub|mul)pd\b", asm)
+    assert len(packed) >= 2, "GLRT scan kernel compiled to scalar code"

@@ -61,18 +61,19 @@ def _scan(x, first, window, coef):  # pragma: no cover - compiled
 
 @numba.njit(cache=True, nogil=True, fastmath=True)
 def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
-    """g(k) only, for k in [first, len(x)): O(window) per sample, SIMD-vectorisable.
+    """g(k) only, for k in [first, len(x)): O(window) per sample.
 
-    Window sums are differences of a cumulative sum restarted every block of 4096 outputs (so its
-    magnitude stays bounded on long records); the max over the M lengths has no loop-carried dependency.
+    Window sums are differences of a cumulative sum ``c`` restarted every block of 4096 outputs (so its magnitude
+    stays bounded on long records). Within a block the loop runs over the post-change length ``n`` outside and the
+    outputs ``k`` inside: ``g[k] = max(g[k], (c[k] - c[k - n])^2 coef / n)`` reads ``c`` at two unit-stride offsets
+    and has no loop-carried dependency, so LLVM compiles it to packed subtract / multiply / compare instructions
+    (4 doubles each with AVX2; ``tests/detection/test_glrt.py`` checks the assembly for packed instructions). The other order (max over ``n`` inside,
+    a floating-point max reduction) compiles to scalar code. Each ``g[k]`` is the same max of the same products
+    as the output-outer order, so the values do not depend on the loop order.
     """
     n_all = x.shape[0]
     n_out = n_all - first
-    g = np.empty(n_out)
-    inv = np.empty(window + 1)
-    inv[0] = 0.0
-    for n in range(1, window + 1):
-        inv[n] = coef / n
+    g = np.zeros(n_out)
     block = 4096
     c = np.empty(block + window + 1)
     for b0 in range(first, n_all, block):
@@ -81,17 +82,21 @@ def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
         c[0] = 0.0
         for i in range(lo, b1):
             c[i - lo + 1] = c[i - lo] + x[i]
-        for k in range(b0, b1):
-            m = window if window < k + 1 else k + 1
-            ck = c[k - lo + 1]
-            base = k - lo + 1
-            gmax = 0.0
-            for n in range(1, m + 1):
-                d = ck - c[base - n]
-                v = d * d * inv[n]
-                gmax = v if v > gmax else gmax
-            g[k - first] = gmax
+        gb = g[b0 - first:b1 - first]
+        for n in range(1, window + 1):
+            k0 = max(b0, n - 1)                 # outputs with at least n samples: k + 1 >= n
+            if k0 >= b1:
+                break
+            w = coef / n
+            hi = c[k0 - lo + 1:b1 - lo + 1]     # c at k + 1 (sum up to x[k])
+            low = c[k0 - lo + 1 - n:b1 - lo + 1 - n]
+            gk = gb[k0 - b0:]
+            for j in range(b1 - k0):
+                d = hi[j] - low[j]
+                v = d * d * w
+                gk[j] = v if v > gk[j] else gk[j]
     return g
+
 
 @numba.njit(cache=True, nogil=True)
 def _direct(x, window, coef):  # pragma: no cover - compiled
@@ -289,8 +294,10 @@ class GLRT(ResidualTest):
 
     .. math:: g(k) = \max_{k - M < j \le k} \frac{1}{2\sigma^2 n}\Big(\sum_{i=j}^{k} x_i\Big)^2 .
 
-    Each :math:`g(k)` is accumulated backwards in O(M), O(N M) in all (compiled), instead of the
-    O(N M^2) of recomputing every window sum (:func:`glrt_direct`).
+    :meth:`statistic` and :meth:`test` take the window sums as differences of a cumulative sum, O(N M) in all in
+    compiled packed (SIMD) code; :meth:`scan` (which also returns the change instant and jump) accumulates each
+    :math:`g(k)` backwards in O(M), O(N M) in all (scalar compiled code). Both avoid the O(N M^2) of recomputing
+    every window sum (:func:`glrt_direct`).
 
     Theoretical threshold: for a fixed :math:`j`, :math:`2 S_j^k \sim \chi^2(1)` when the residuals are iid
     Gaussian; the union bound over the :math:`M` change instants gives
