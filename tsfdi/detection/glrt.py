@@ -67,9 +67,10 @@ def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
     stays bounded on long records). Within a block the loop runs over the post-change length ``n`` outside and the
     outputs ``k`` inside: ``g[k] = max(g[k], (c[k] - c[k - n])^2 coef / n)`` reads ``c`` at two unit-stride offsets
     and has no loop-carried dependency, so LLVM compiles it to packed subtract / multiply / compare instructions
-    (4 doubles each with AVX2; ``tests/detection/test_glrt.py`` checks the assembly for packed instructions). The other order (max over ``n`` inside,
-    a floating-point max reduction) compiles to scalar code. Each ``g[k]`` is the same max of the same products
-    as the output-outer order, so the values do not depend on the loop order.
+    (4 doubles each with AVX2; ``tests/detection/test_glrt.py`` checks the assembly for packed instructions). The
+    other order (max over ``n`` inside, a floating-point max reduction) compiles to scalar code. Each ``g[k]`` is
+    the max of the same products in either order (equal to about 1e-16 relative: ``fastmath`` may round a product
+    differently).
     """
     n_all = x.shape[0]
     n_out = n_all - first
