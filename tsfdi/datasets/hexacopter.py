@@ -121,6 +121,12 @@ numerically (central differences through the mixer and the derivative), and scal
 trim point; the controller interpolates the factors linearly on its ground speed. The lumped-rotor preset flies
 the fixed hover design (factors 1), which keeps its records bit for bit.
 
+**Turbulence.** Dryden gusts (:mod:`tsfdi.datasets.dryden`) at the record's airspeed, with paper 003's "length
+scale" 0.6096 m as the scale length of the three linear gusts (:data:`PAPER_SCALE_LENGTH`) and the MIL-F-8785C
+low-altitude intensities of the light / moderate / severe levels times :data:`PAPER_INTENSITY_SCALE` (0.16), the
+one factor chosen on the paper's published physical quantities (``docs/guide/hexacopter.md``); ``scale_length=
+None, intensity_scale=1`` gives the standard's lengths and intensities.
+
 *What a failure does here.* A planar PNPNPN hexacopter with one rotor failed can hold all four axes only
 with the opposite rotor at (about) zero thrust (Du et al. 2015; Michieletto et al. 2018). One-way rotors cannot go
 below their idle speed, so after a failure the default aircraft holds roll, pitch, altitude and speed but not
