@@ -82,6 +82,7 @@ def test_local_cluster_equals_serial(fleet, baselines, serial, tmp_path):
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
             Client(cluster):
         assert_same_evaluation(serial, tsfdi.evaluate(stored, baselines, **OPTIONS))
+        assert_same_evaluation(serial, tsfdi.evaluate(stored, baselines, **OPTIONS))   # the baselines sent before
         lazy_baselines = _fit(stored)
         screened = monitor.screen(stored)
     assert_same_baselines(baselines, lazy_baselines)
@@ -93,6 +94,12 @@ def test_local_cluster_equals_serial(fleet, baselines, serial, tmp_path):
     # the screen table scores records as paper 001 does: onset = failure time, first alarm = detection time
     scores = tsfdi.score_records(screened["failure_time"], screened["detection_time"])
     assert len(scores) == 24
+
+
+def test_one_worker_equals_serial(fleet, baselines, serial):
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
+            Client(cluster):
+        assert_same_evaluation(serial, tsfdi.evaluate(fleet.chunk(record=8), baselines, **OPTIONS))
 
 
 @pytest.mark.parametrize("scheduler", ["synchronous", "threads"])
@@ -233,6 +240,48 @@ def test_map_records_reads_a_zarr_store_whose_coordinates_are_one_chunk(tmp_path
     with dask.config.set(scheduler="synchronous"):
         out = list(map_records(_square, stored, 0.0))
     assert [s for _, s in out] == [float((v[w] ** 2).sum()) for w, _ in out]
+
+
+def _churn(chunk, where, size):
+    """Allocate and free 200 arrays of ``size`` bytes, as a chunk's temporaries: the page faults of this process
+    meanwhile."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for _ in range(200):
+        np.ones(size // 8).sum()
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+
+
+def _allocator(chunk, where):
+    from tsfdi.fleet import worker_allocator
+
+    return worker_allocator()
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="glibc's mallopt: Linux only")
+def test_workers_keep_freed_memory_and_get_the_arguments_once(monkeypatch):
+    """A worker started by dask's nanny (MALLOC_TRIM_THRESHOLD_=65536, which also fixes the mmap threshold at 128
+    kB) maps and unmaps every 2 MB temporary: 200 of them cost about 100,000 page faults. map_records sets the
+    worker's allocator first (worker_allocator): a few. The arguments go to the workers once: a second call with
+    equal arguments refers to them, new ones are sent."""
+    data = xr.Dataset({"v": (("record", "time"), np.zeros((4, 3)))}).chunk(record=1)
+    assert not tsfdi.fleet.worker_allocator()           # the driver is not a dask worker: left as it is
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
+            Client(cluster) as client:
+        sent = []
+        scatter = client.scatter
+        monkeypatch.setattr(client, "scatter", lambda *a, **k: sent.append(a) or scatter(*a, **k))
+        faults = list(map_records(_churn, data, 2**21))
+        assert max(faults[1:]) < 2_000, faults           # the first chunk: the heap grows once
+        assert list(map_records(_allocator, data)) == [True] * 4
+        assert len(sent) == 2
+        small = data.isel(record=slice(0, 2))
+        for offset in (1.0, 1.0, 2.0, 1.0):
+            assert [s for _, s in map_records(_square, small, offset)] == [offset, offset]
+        assert list(map_records(_churn, data, 2**21)) != []
+        # equal arguments sent once while among the last SCATTERED = 2 sets; older ones are released, sent again
+        assert [a[0][0] for a in sent] == [(2**21,), (), (1.0,), (2.0,), (2**21,)]
 
 
 # ---------------------------------------------------------------------------------------- the driver's memory
