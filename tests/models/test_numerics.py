@@ -145,8 +145,10 @@ def test_solver_failure_is_a_value_error(monkeypatch):
         raise linalg.LinAlgError("SVD did not converge")
 
     monkeypatch.setattr(lstsq_module.linalg, "lstsq", no_convergence)
+    # a sinusoid obeys a 2nd-order recursion: three lag columns are collinear, so the fit leaves the normal
+    # equations for the SVD solver, whose failure must surface as a ValueError
     with pytest.raises(ValueError, match="y: the least-squares solver did not converge"):
-        AR(ar2(100, 11), 2).fit()
+        AR(np.sin(0.3 * np.arange(100.0)), 3).fit()
 
 
 # --- cause 3: exact and degenerate fits -------------------------------------------------------------------

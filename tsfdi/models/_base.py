@@ -22,7 +22,8 @@ from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import EXACT_FIT_RTOL, information_criteria
-from tsfdi.models.lstsq import MAX_VALUES, check_size, gram_solve, lag_gram, lagged_design, lstsq
+from tsfdi.models.lstsq import (MAX_VALUES, check_size, gram_factor, gram_solve, lag_gram, lag_products, lag_residuals,
+                                lagged_design, lstsq)
 from tsfdi.summary import Summary
 
 __all__ = ["HeldOutResiduals", "LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults",
@@ -312,11 +313,11 @@ class LinearTimeSeriesModel:
         """Gram matrix of ``[X | Y]`` (:meth:`design_all` in the units of the fit), summed over the records.
 
         An AR / VAR reads it from the lag products of the samples (:func:`~tsfdi.models.lstsq.lag_gram`, no
-        regressor built), an ARX from its explicit regressor.
+        regressor built), an ARX from its explicit regressor. Rows start at :attr:`hold_back` in every record.
         """
         if self.nb == 0:
-            const = bool(self.k_const)
-            return sum(lag_gram(self._scaled_values(i)[0], self.na, const=const) for i in range(len(self.records)))
+            const, p, h = bool(self.k_const), self.na, self.hold_back
+            return sum(lag_gram(self._scaled_values(i)[0][h - p:], p, const=const) for i in range(len(self.records)))
         return sum(Z.T @ Z for Z in (np.hstack(self._record_design(i)) for i in range(len(self.records))))
 
     def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
@@ -359,7 +360,14 @@ class LinearTimeSeriesModel:
         return said
 
     def fit(self) -> LinearTimeSeriesResults:
-        """Estimate the parameters by least squares (QR / SVD, never the normal equations).
+        """Estimate the parameters by least squares.
+
+        The coefficients solve the normal equations of :meth:`gram` by a Cholesky factor, accepted only when
+        every regressor column keeps more than ``GRAM_RELATIVE_FLOOR`` (1e-9) of its energy after projection on
+        the columns before it (:func:`~tsfdi.models.lstsq.gram_factor`, the check of :func:`tsfdi.select_order`
+        and :meth:`held_out_residuals`); otherwise they are recomputed from the explicit regressor by the SVD
+        solver :func:`~tsfdi.models.lstsq.lstsq` (minimum-norm solution, with an
+        :class:`~tsfdi.exceptions.IllConditionedWarning` when the regressor is ill-conditioned).
 
         The fit runs in the units :attr:`y_scale` / :attr:`u_scale` and its coefficients are returned in the
         data's. An exact fit (residuals zero to rounding: a deterministic signal) is a valid result: its
@@ -367,10 +375,46 @@ class LinearTimeSeriesModel:
         floor of :func:`~tsfdi.models.criteria.information_criteria` with an
         :class:`~tsfdi.exceptions.IllConditionedWarning` when first computed.
         """
-        X, Y = self.design_all(scaled=True)
-        res = self.results_class(self, self._from_fit_units(lstsq(X, Y)))
+        k = self.df_eq
+        if self.nb == 0:                     # AR / VAR: the Gram matrix from lag products, no regressor built
+            X = Y = None
+            gram = self.gram()
+            R, xty = gram_factor(gram, k), gram[:k, k:]
+        else:
+            X, Y = self.design_all(scaled=True)
+            R = gram_factor(X.T @ X, k)
+            xty = None if R is None else X.T @ Y
+        if R is None:                       # the normal equations would lose digits: SVD of the regressor
+            if X is None:
+                X, Y = self.design_all(scaled=True)
+            coef = lstsq(X, Y)
+        else:   # Cholesky solve and one step of refinement on the explicit residual (corrected semi-normal eqs.)
+            coef = linalg.cho_solve((R, False), xty, check_finite=False)
+            coef += linalg.cho_solve((R, False), self._regressor_dot_residual(coef, X, Y), check_finite=False)
+        res = self.results_class(self, self._from_fit_units(coef))
         res._warn_unstable()
         return res
+
+    def _regressor_dot_residual(self, coef: np.ndarray, X: np.ndarray | None, Y: np.ndarray | None) -> np.ndarray:
+        """``X'(Y - X coef)`` over all records in the units of the fit: from the given regressor, or for an AR /
+        VAR (``X`` None) from each record's residuals (:func:`~tsfdi.models.lstsq.lag_residuals`) and their lag
+        products with the samples, without building the regressor."""
+        if X is not None:
+            return X.T @ (Y - X @ coef)
+        p, h, c, s = self.na, self.hold_back, self.k_const, self.neqs
+        # the records end to end: a residual of a record's first p samples (they reach into the record before) is
+        # set to zero, so every product e[t] y[t-k] left pairs samples of one record
+        parts = [self._scaled_values(i)[0][h - p:] for i in range(len(self.records))]
+        y = parts[0] if len(parts) == 1 else np.concatenate(parts)
+        e = lag_residuals(y, coef, const=bool(c))
+        for start in np.cumsum([len(q) for q in parts[:-1]]):
+            e[start:start + p] = 0.0
+        D = lag_products(y, p, x=e)                  # D[k][j, a] = sum_t e[t, j] y[t-k, a]
+        out = np.empty((self.df_eq, s))
+        out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
+        if c:
+            out[0] = np.ones(e.shape[0]) @ e         # (numpy sums axis 0 of an (n, s) array slowly for small s)
+        return out
 
     # --- held-out residuals ------------------------------------------------------------------------
     def held_out_residuals(self, blocks: int | None = None, *, groups: Any = None) -> list:

@@ -26,8 +26,8 @@ from scipy import linalg
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "triangular_factor", "nested_fits", "gram_solve",
-           "check_size", "MAX_VALUES"]
+__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "lag_residuals", "triangular_factor", "nested_fits", "gram_factor",
+           "gram_solve", "check_size", "MAX_VALUES"]
 
 #: condition number of the regressor above which a fit warns (digits left < ~6)
 COND_WARN = 1e10
@@ -197,27 +197,76 @@ def _assemble_gram(C, head, tail, S0, n, const, out):  # pragma: no cover - comp
                     S[a] += head[p - 1 - i, a] - tail[p - 1 - i, a]
 
 
-def lag_products(y: np.ndarray, lags: int) -> np.ndarray:
-    """``C[k] = sum_{u=k}^{n-1} y[u] y[u-k]'`` for ``k = 0..lags``, shape ``(lags + 1, s, s)``.
+def _blocks(y: np.ndarray, B: int) -> np.ndarray:
+    """``y`` (n, s) zero-padded to a multiple of ``B`` samples, as rows of ``B`` samples: shape (rows, B s)."""
+    n, s = y.shape
+    rows = -(-n // B)
+    yp = np.zeros((rows * B, s))
+    yp[:n] = y
+    return yp.reshape(rows, B * s)
+
+
+def lag_products(y: np.ndarray, lags: int, x: np.ndarray | None = None) -> np.ndarray:
+    """``C[k] = sum_{u=k}^{n-1} x[u] y[u-k]'`` for ``k = 0..lags`` (``x`` defaults to ``y``), shape
+    ``(lags + 1, s, s)``.
 
     The signal is cut into blocks of ``B = lags + 1`` samples, stacked as the rows of ``M``; every pair of
     samples at most ``lags`` apart lies in one block or in two consecutive blocks, so the two matrix
-    products ``M'M`` and ``M[1:]' M[:-1]`` hold every lag product exactly once per pair and the
+    products ``Mx'M`` and ``Mx[1:]' M[:-1]`` hold every lag product exactly once per pair and the
     ``C[k]`` are sums along their block diagonals. Same O(n lags s^2) work as ``lags + 1`` dot products,
-    done by two BLAS-3 calls.
+    done by two BLAS-3 calls. ``x`` has the shape of ``y``.
     """
     n, s = y.shape
     B = lags + 1
-    rows = -(-n // B)
     within, cross = _product_bins(lags, s)
-    yp = np.zeros((rows * B, s))
-    yp[:n] = y
-    M = yp.reshape(rows, B * s)
+    M = _blocks(y, B)
+    Mx = M if x is None else _blocks(x, B)
     nbins = B * s * s + 1                      # the last bin collects the entries that are not needed
-    C = np.bincount(within, (M.T @ M).ravel(), nbins)
-    if rows > 1:
-        C += np.bincount(cross, (M[1:].T @ M[:-1]).ravel(), nbins)
+    C = np.bincount(within, (Mx.T @ M).ravel(), nbins)
+    if M.shape[0] > 1:
+        C += np.bincount(cross, (Mx[1:].T @ M[:-1]).ravel(), nbins)
     return C[:-1].reshape(B, s, s)
+
+
+def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray:
+    """Residuals of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` with coefficients ``coef``, computed
+    without the regressor: ``e[t] = y[t] - c + sum_k y[t-k] coef_k`` for ``t >= p``, zero for ``t < p``.
+
+    With ``W_0 = I`` and ``W_k`` the block of lag ``k`` (``coef[c + (k-1) s : c + k s]``), the samples cut into
+    blocks of ``B = p + 1`` (rows of ``M``, as :func:`lag_products`) give ``E = M T_0 + M_{-1} T_1`` with two
+    block-Toeplitz ``(B s, B s)`` matrices of the ``W_k``: two BLAS-3 calls, O(n p s^2).
+
+    Parameters
+    ----------
+    y : ndarray, shape (n, s)
+    coef : ndarray, shape (c + p s, s)
+        Regression coefficients, rows ``[const, lag 1 block, ..., lag p block]``.
+    const : bool
+
+    Returns
+    -------
+    ndarray, shape (n, s)
+    """
+    n, s = y.shape
+    c = int(const)
+    p = (coef.shape[0] - c) // s
+    B = p + 1
+    W = np.concatenate([np.eye(s)[None], coef[c:].reshape(p, s, s)])   # W[k][i, j]: input i, equation j
+    a = np.arange(B)
+    lag = a[None, :] - a[:, None]                                         # [b, a] = a - b
+    T0 = np.where((lag >= 0)[:, :, None, None], W[np.clip(lag, 0, p)], 0.0)
+    T1 = np.where((lag < 0)[:, :, None, None], W[np.clip(B + lag, 0, p)], 0.0)
+    T0 = T0.transpose(0, 2, 1, 3).reshape(B * s, B * s)
+    T1 = T1.transpose(0, 2, 1, 3).reshape(B * s, B * s)
+    M = _blocks(y, B)
+    E = M @ T0
+    if M.shape[0] > 1:
+        E[1:] += M[:-1] @ T1
+    e = E.reshape(-1, s)[:n]
+    e[:p] = 0.0
+    if c:
+        e[p:] -= coef[0]
+    return e
 
 
 @functools.lru_cache(maxsize=64)
@@ -284,6 +333,26 @@ def nested_fits(R: np.ndarray, n_targets: int, widths: np.ndarray) -> np.ndarray
     return suffix[np.asarray(widths)]
 
 
+def gram_factor(gram: np.ndarray, k: int) -> np.ndarray | None:
+    """Upper Cholesky factor ``R`` of the leading ``k x k`` block of ``gram`` (``R'R = X'X``), or ``None`` when
+    the normal equations would lose digits.
+
+    The factor is accepted only when it is finite and every column of ``X`` keeps more than
+    ``GRAM_RELATIVE_FLOOR`` of its energy after projection on the columns before it (``R[i, i]**2 / G[i, i]``);
+    otherwise (or when the factorisation fails) the caller solves on the explicit regressor instead.
+    """
+    gxx = gram[:k, :k]
+    try:
+        R = linalg.cholesky(gxx, lower=False, check_finite=False)
+    except linalg.LinAlgError:
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.diag(R) ** 2 / np.diag(gxx)
+    if np.all(np.isfinite(R)) and rel.min() > GRAM_RELATIVE_FLOOR:
+        return R
+    return None
+
+
 def gram_solve(gram: np.ndarray, k: int, design: callable, *, what: str = "the regressor",
                stacklevel: int = 3) -> np.ndarray | None:
     """Least-squares coefficients of ``Y`` on ``X`` from the Gram matrix of ``Z = [X | Y]``.
@@ -300,15 +369,9 @@ def gram_solve(gram: np.ndarray, k: int, design: callable, *, what: str = "the r
         ``None`` when ``X`` is rank deficient (fewer rows than columns, or singular values below
         ``eps * max(X.shape)`` times the largest, numpy's rank rule) or its SVD does not converge.
     """
-    gxx = gram[:k, :k]
-    try:
-        R = linalg.cholesky(gxx, lower=False, check_finite=False)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rel = np.diag(R) ** 2 / np.diag(gxx)
-        if np.all(np.isfinite(R)) and rel.min() > GRAM_RELATIVE_FLOOR:
-            return linalg.cho_solve((R, False), gram[:k, k:], check_finite=False)
-    except linalg.LinAlgError:
-        pass
+    R = gram_factor(gram, k)
+    if R is not None:
+        return linalg.cho_solve((R, False), gram[:k, k:], check_finite=False)
     X, Y = design()
     if X.shape[0] < k:
         return None
