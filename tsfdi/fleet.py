@@ -173,7 +173,8 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
     *args
         Passed to every call. With a distributed Client they are sent to every worker once
         (``Client.scatter(broadcast=True)``), not once per chunk, and kept there for the next calls with the same
-        arguments (the same dask token; the last :data:`SCATTERED` sets of arguments of the last Client).
+        arguments (the same dask token; the last :data:`SCATTERED` sets of arguments of each of the last
+        :data:`SCATTERED` Clients).
     progress : bool
         Show a tqdm progress bar over the records.
     desc : str
@@ -234,11 +235,11 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
             bar.close()
 
 
-#: sets of ``map_records`` arguments kept on the cluster of the last Client used, so that a later call with the same
-#: arguments (the same baselines) refers to them instead of sending them again
+#: sets of ``map_records`` arguments kept on the cluster of each of the last ``SCATTERED`` Clients used, so that a
+#: later call with the same arguments (the same baselines) refers to them instead of sending them again
 SCATTERED = 2
-#: (the Client, {token of the arguments: their Future}), oldest first
-_scattered: tuple = (None, {})
+#: Client id -> (the Client, {token of the arguments: their Future}), oldest first
+_scattered: dict = {}
 
 
 def _scatter(client: Any, args: tuple) -> Any:
@@ -246,10 +247,12 @@ def _scatter(client: Any, args: tuple) -> Any:
     first time, the same Future when arguments with the same dask token were sent before and are still there."""
     from dask.base import tokenize
 
-    global _scattered
-    if _scattered[0] is not client:
-        _scattered = (client, {})
-    cache = _scattered[1]
+    for key in [k for k, (c, _) in _scattered.items() if c.status in ("closing", "closed")]:
+        del _scattered[key]
+    _, cache = _scattered.pop(client.id, (client, {}))
+    _scattered[client.id] = (client, cache)
+    while len(_scattered) > SCATTERED:
+        del _scattered[next(iter(_scattered))]
     token = tokenize(args)
     future = cache.pop(token, None)
     if future is None or future.status != "finished":
