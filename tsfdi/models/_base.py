@@ -22,7 +22,7 @@ from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import EXACT_FIT_RTOL, information_criteria
-from tsfdi.models.lstsq import (MAX_VALUES, check_size, gram_factor, gram_solve, lag_gram, lag_products, lag_residuals,
+from tsfdi.models.lstsq import (MAX_VALUES, check_size, gram_factor, gram_solve, lag_gram, lag_residual_products,
                                 lagged_design, lstsq)
 from tsfdi.summary import Summary
 
@@ -316,8 +316,9 @@ class LinearTimeSeriesModel:
         regressor built), an ARX from its explicit regressor. Rows start at :attr:`hold_back` in every record.
         """
         if self.nb == 0:
-            const, p, h = bool(self.k_const), self.na, self.hold_back
-            return sum(lag_gram(self._scaled_values(i)[0][h - p:], p, const=const) for i in range(len(self.records)))
+            p, h = self.na, self.hold_back
+            return lag_gram([self._scaled_values(i)[0][h - p:] for i in range(len(self.records))], p,
+                            const=bool(self.k_const))
         return sum(Z.T @ Z for Z in (np.hstack(self._record_design(i)) for i in range(len(self.records))))
 
     def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
@@ -397,24 +398,13 @@ class LinearTimeSeriesModel:
 
     def _regressor_dot_residual(self, coef: np.ndarray, X: np.ndarray | None, Y: np.ndarray | None) -> np.ndarray:
         """``X'(Y - X coef)`` over all records in the units of the fit: from the given regressor, or for an AR /
-        VAR (``X`` None) from each record's residuals (:func:`~tsfdi.models.lstsq.lag_residuals`) and their lag
-        products with the samples, without building the regressor."""
+        VAR (``X`` None) from the records' residuals and their lag products with the samples
+        (:func:`~tsfdi.models.lstsq.lag_residual_products`), without building the regressor."""
         if X is not None:
             return X.T @ (Y - X @ coef)
-        p, h, c, s = self.na, self.hold_back, self.k_const, self.neqs
-        # the records end to end: a residual of a record's first p samples (they reach into the record before) is
-        # set to zero, so every product e[t] y[t-k] left pairs samples of one record
-        parts = [self._scaled_values(i)[0][h - p:] for i in range(len(self.records))]
-        y = parts[0] if len(parts) == 1 else np.concatenate(parts)
-        e = lag_residuals(y, coef, const=bool(c))
-        for start in np.cumsum([len(q) for q in parts[:-1]]):
-            e[start:start + p] = 0.0
-        D = lag_products(y, p, x=e)                  # D[k][j, a] = sum_t e[t, j] y[t-k, a]
-        out = np.empty((self.df_eq, s))
-        out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
-        if c:
-            out[0] = np.ones(e.shape[0]) @ e         # (numpy sums axis 0 of an (n, s) array slowly for small s)
-        return out
+        p, h = self.na, self.hold_back
+        return lag_residual_products([self._scaled_values(i)[0][h - p:] for i in range(len(self.records))], coef,
+                                     const=bool(self.k_const))
 
     # --- held-out residuals ------------------------------------------------------------------------
     def held_out_residuals(self, blocks: int | None = None, *, groups: Any = None) -> list:

@@ -26,7 +26,8 @@ from scipy import linalg
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "lag_residuals", "triangular_factor", "nested_fits", "gram_factor",
+__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "lag_residuals", "lag_residual_products",
+           "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
 #: condition number of the regressor above which a fit warns (digits left < ~6)
@@ -107,7 +108,22 @@ def lstsq(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return coef
 
 
-def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
+def _end_to_end(records: list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
+    """The records one after the other with ``lags`` zero samples between two, and where each starts: no
+    product of samples at most ``lags`` apart pairs two records."""
+    if len(records) == 1:
+        return records[0], [0]
+    s = records[0].shape[1]
+    gap = np.zeros((lags, s))
+    parts, starts, pos = [], [], 0
+    for r in records:
+        parts += [r, gap]
+        starts.append(pos)
+        pos += r.shape[0] + lags
+    return np.concatenate(parts[:-1]), starts
+
+
+def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.ndarray:
     """Gram matrix of ``[const, -y[t-1], ..., -y[t-lags], y[t]]`` over ``t = lags .. n-1`` in O(n * lags).
 
     The lag-product blocks are Toeplitz up to end effects. With ``L[i, j] = sum_{t=p}^{n-1} y[t-i] y[t-j]'``
@@ -115,14 +131,17 @@ def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
     ``C_k = sum_{u=k}^{n-1} y[u] y[u-k]'`` (:func:`lag_products`) less the ``u < p`` terms, and shifting
     the summation window by one sample gives
 
-    .. math::  L[i+1, j+1] = L[i, j] + y[p-1-i]\\, y[p-1-j]' - y[n-1-i]\\, y[n-1-j]' .
+    .. math::  L[i+1, j+1] = L[i, j] + y[p-1-i]\, y[p-1-j]' - y[n-1-i]\, y[n-1-j]' .
 
     The cost is the ``p + 1`` lag products over the signal plus ``O(p^2 s^2)`` for the recursion (a
-    compiled kernel), instead of ``O(n p^2 s^2)`` for ``X'X``.
+    compiled kernel), instead of ``O(n p^2 s^2)`` for ``X'X``. For a list of records (the sum of their Gram
+    matrices) the lag products come from the records end to end with ``p`` zero samples between two (one pair
+    of BLAS calls for all), and the end corrections are summed over the records.
 
     Parameters
     ----------
-    y : ndarray, shape (n, s)
+    y : ndarray, shape (n, s), or a list of them
+        The signal, or records of it (each ``n > p`` samples).
     lags : int
         Largest lag ``p`` (``n > p``).
     const : bool
@@ -134,44 +153,49 @@ def lag_gram(y: np.ndarray, lags: int, *, const: bool) -> np.ndarray:
         Column order ``[const, lag 1 block, ..., lag p block, y[t] block]``; lag blocks carry the minus
         sign of the regressor.
     """
-    n, s = y.shape
-    C = lag_products(y, lags)
+    records = y if isinstance(y, list) else [y]
+    s = records[0].shape[1]
+    C = lag_products(_end_to_end(records, lags)[0], lags)
     out = np.empty((int(const) + (lags + 1) * s,) * 2)
     # the column sums through a contiguous copy: numpy reduces axis 0 of an (n, s) array slowly for small s
-    S0 = y[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(y[lags:].T).sum(axis=1)
-    _assemble_gram(C, y[:lags], y[n - lags:], S0, int(n), bool(const), out)
+    S0 = sum(r[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(r[lags:].T).sum(axis=1) for r in records)
+    heads = np.stack([r[:lags] for r in records])
+    tails = np.stack([r[r.shape[0] - lags:] for r in records])
+    rows = sum(r.shape[0] for r in records) - lags * len(records)
+    _assemble_gram(C, heads, tails, S0, int(rows), bool(const), out)
     return out
 
 
 @numba.njit(cache=True)
-def _assemble_gram(C, head, tail, S0, n, const, out):  # pragma: no cover - compiled
-    """Fill ``out`` from the full lag products ``C`` and the first / last ``p`` samples (see :func:`lag_gram`).
+def _assemble_gram(C, heads, tails, S0, rows, const, out):  # pragma: no cover - compiled
+    """Fill ``out`` from the full lag products ``C`` (summed over the records) and the first / last ``p``
+    samples of every record (``heads``, ``tails``: shape (records, p, s)); see :func:`lag_gram`.
 
     In lag space (lag 0 = ``y[t]``) the block ``L[0, k] = C[k] - sum_{u=k}^{p-1} y[u] y[u-k]'`` and
-    ``L[i+1, j+1] = L[i, j] + y[p-1-i] y[p-1-j]' - y[n-1-i] y[n-1-j]'`` (shift the window by one sample).
-    Lag ``i >= 1`` goes to block ``i - 1`` with a minus sign, lag 0 to the last block; the intercept row
-    holds ``sum_t y[t-i]`` by the same recursion.
+    ``L[i+1, j+1] = L[i, j] + y[p-1-i] y[p-1-j]' - y[n-1-i] y[n-1-j]'`` (shift the window by one sample), each
+    correction summed over the records. Lag ``i >= 1`` goes to block ``i - 1`` with a minus sign, lag 0 to the
+    last block; the intercept row holds ``sum_t y[t-i]`` by the same recursion (``rows`` regression rows).
     """
-    p = head.shape[0]
-    s = C.shape[1]
+    nrec, p, s = heads.shape
     c = 1 if const else 0
     L = np.empty((p + 1, p + 1, s, s))
     for k in range(p + 1):
         for a in range(s):
             for b in range(s):
                 acc = C[k, a, b]
-                for u in range(k, p):
-                    acc -= head[u, a] * head[u - k, b]
+                for r in range(nrec):
+                    for u in range(k, p):
+                        acc -= heads[r, u, a] * heads[r, u - k, b]
                 L[0, k, a, b] = acc
     for i in range(p):
-        hi = head[p - 1 - i]
-        ti = tail[p - 1 - i]
         for j in range(i, p):
-            hj = head[p - 1 - j]
-            tj = tail[p - 1 - j]
             for a in range(s):
                 for b in range(s):
-                    L[i + 1, j + 1, a, b] = L[i, j, a, b] + hi[a] * hj[b] - ti[a] * tj[b]
+                    acc = L[i, j, a, b]
+                    for r in range(nrec):
+                        acc += heads[r, p - 1 - i, a] * heads[r, p - 1 - j, b]
+                        acc -= tails[r, p - 1 - i, a] * tails[r, p - 1 - j, b]
+                    L[i + 1, j + 1, a, b] = acc
     for i in range(p + 1):
         bi = p if i == 0 else i - 1
         si = 1.0 if i == 0 else -1.0
@@ -184,8 +208,8 @@ def _assemble_gram(C, head, tail, S0, n, const, out):  # pragma: no cover - comp
                     out[c + bi * s + a, c + bj * s + b] = v
                     out[c + bj * s + b, c + bi * s + a] = v
     if const:
-        out[0, 0] = n - p
-        S = S0.copy()                       # S_i = sum_{t=p}^{n-1} y[t-i]
+        out[0, 0] = rows
+        S = S0.copy()                       # S_i = sum_{t=p}^{n-1} y[t-i], summed over the records
         for i in range(p + 1):
             bi = p if i == 0 else i - 1
             si = 1.0 if i == 0 else -1.0
@@ -194,7 +218,8 @@ def _assemble_gram(C, head, tail, S0, n, const, out):  # pragma: no cover - comp
                 out[1 + bi * s + a, 0] = si * S[a]
             if i < p:
                 for a in range(s):
-                    S[a] += head[p - 1 - i, a] - tail[p - 1 - i, a]
+                    for r in range(nrec):
+                        S[a] += heads[r, p - 1 - i, a] - tails[r, p - 1 - i, a]
 
 
 def _blocks(y: np.ndarray, B: int) -> np.ndarray:
@@ -228,6 +253,27 @@ def lag_products(y: np.ndarray, lags: int, x: np.ndarray | None = None) -> np.nd
     return C[:-1].reshape(B, s, s)
 
 
+def _residual_blocks(y: np.ndarray, coef: np.ndarray, const: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Blocks ``M`` of ``y`` (rows of ``B = p + 1`` samples, :func:`_blocks`) and the residuals ``E`` in the same
+    layout, before any sample is set aside; see :func:`lag_residuals`."""
+    s = y.shape[1]
+    c = int(const)
+    p = (coef.shape[0] - c) // s
+    B = p + 1
+    W = np.concatenate([np.eye(s)[None], coef[c:].reshape(p, s, s)])   # W[k][i, j]: input i, equation j
+    a = np.arange(B)
+    lag = a[None, :] - a[:, None]                                         # [b, a] = a - b
+    T0 = np.where((lag >= 0)[:, :, None, None], W[np.clip(lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
+    T1 = np.where((lag < 0)[:, :, None, None], W[np.clip(B + lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
+    M = _blocks(y, B)
+    E = M @ T0.reshape(B * s, B * s)
+    if M.shape[0] > 1:
+        E[1:] += M[:-1] @ T1.reshape(B * s, B * s)
+    if c:
+        E -= np.tile(coef[0], B)
+    return M, E
+
+
 def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray:
     """Residuals of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` with coefficients ``coef``, computed
     without the regressor: ``e[t] = y[t] - c + sum_k y[t-k] coef_k`` for ``t >= p``, zero for ``t < p``.
@@ -248,25 +294,46 @@ def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray
     ndarray, shape (n, s)
     """
     n, s = y.shape
+    p = (coef.shape[0] - int(const)) // s
+    e = _residual_blocks(y, coef, const)[1].reshape(-1, s)[:n]
+    e[:p] = 0.0
+    return e
+
+
+def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *, const: bool) -> np.ndarray:
+    """``X'(Y - X coef)`` of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` over ``t = p .. n-1``, summed
+    over the records, without the regressor.
+
+    The records end to end (``p`` zero samples between two, as :func:`lag_gram`) give the residuals of all
+    (:func:`lag_residuals`, those of each record's first ``p`` samples and of the gaps set to zero) and their lag
+    products with the samples, ``D[k] = sum_t e[t] y[t-k]'``, by the block products of :func:`lag_products`:
+    four BLAS-3 calls in all. The block of lag ``k`` is ``-D[k]'``, the intercept row ``sum_t e[t]``. This is the
+    right-hand side of a refinement step of the normal equations: accurate to rounding of ``|X| |e|``, where
+    ``X'Y - X'X coef`` from the Gram matrix loses the digits of ``|X| |Y|``.
+    """
+    records = y if isinstance(y, list) else [y]
+    s = records[0].shape[1]
     c = int(const)
     p = (coef.shape[0] - c) // s
-    B = p + 1
-    W = np.concatenate([np.eye(s)[None], coef[c:].reshape(p, s, s)])   # W[k][i, j]: input i, equation j
-    a = np.arange(B)
-    lag = a[None, :] - a[:, None]                                         # [b, a] = a - b
-    T0 = np.where((lag >= 0)[:, :, None, None], W[np.clip(lag, 0, p)], 0.0)
-    T1 = np.where((lag < 0)[:, :, None, None], W[np.clip(B + lag, 0, p)], 0.0)
-    T0 = T0.transpose(0, 2, 1, 3).reshape(B * s, B * s)
-    T1 = T1.transpose(0, 2, 1, 3).reshape(B * s, B * s)
-    M = _blocks(y, B)
-    E = M @ T0
+    cat, starts = _end_to_end(records, p)
+    M, E = _residual_blocks(cat, coef, const)
+    e = E.reshape(-1, s)
+    end = 0
+    for st, r in zip(starts, records):
+        e[end:st + p] = 0.0                         # the gap before the record and its first p samples
+        end = st + r.shape[0]
+    e[end:] = 0.0                                   # the zero padding of the last block
+    within, cross = _product_bins(p, s)
+    nbins = (p + 1) * s * s + 1
+    D = np.bincount(within, (E.T @ M).ravel(), nbins)
     if M.shape[0] > 1:
-        E[1:] += M[:-1] @ T1
-    e = E.reshape(-1, s)[:n]
-    e[:p] = 0.0
+        D += np.bincount(cross, (E[1:].T @ M[:-1]).ravel(), nbins)
+    D = D[:-1].reshape(p + 1, s, s)                 # D[k][j, a] = sum_t e[t, j] y[t-k, a]
+    out = np.empty((c + p * s, s))
+    out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
     if c:
-        e[p:] -= coef[0]
-    return e
+        out[0] = E.sum(axis=0).reshape(p + 1, s).sum(axis=0)
+    return out
 
 
 @functools.lru_cache(maxsize=64)
