@@ -23,6 +23,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 
 from tsfdi._data import as_signal
@@ -30,7 +31,7 @@ from tsfdi._validation import boolean, int_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.variance import FTest
-from tsfdi.detection.whiteness import LjungBox
+from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows
 from tsfdi.models import ARXResults
 
 __all__ = ["RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
@@ -159,10 +160,18 @@ class WindowStatistics:
         return f"WindowStatistics(windows={len(self)}, window={self.window}, step={self.step}, models={self.models})"
 
 
-def _prefix(e: np.ndarray) -> np.ndarray:
-    """Cumulative sums of the lag-0 products ``e_i e_j`` of the residuals (leading zero row)."""
-    k = e.shape[1]
-    return np.concatenate([np.zeros((1, k * k)), np.cumsum((e[:, :, None] * e[:, None, :]).reshape(-1, k * k), axis=0)])
+@numba.njit(cache=True, nogil=True)
+def _prefix(e):  # pragma: no cover - compiled
+    """Cumulative sums of the lag-0 products ``e_i e_j`` of the residuals (leading zero row): shape (N + 1, k * k),
+    column ``i * k + j``."""
+    n, k = e.shape
+    out = np.empty((n + 1, k * k))
+    out[0, :] = 0.0
+    for t in range(n):
+        for i in range(k):
+            for j in range(k):
+                out[t + 1, i * k + j] = out[t, i * k + j] + e[t, i] * e[t, j]
+    return out
 
 
 class ResidualWindows:
@@ -264,6 +273,7 @@ class ResidualWindows:
     def _set(self, resid: dict, nobs: int, channels: Any) -> ResidualWindows:
         self._resid = resid
         self._prefix: dict = {}          # name -> prefix sums of the likelihood score, made when first asked
+        self._lag_products: dict = {}    # (name, lags, demean) -> LjungBoxWindows, shared by every window length
         self.nobs_ = nobs
         self.channels_ = tuple(str(c) for c in channels) if channels is not None else tuple(
             f"y{i}" for i in range(self.nchan))
@@ -325,8 +335,14 @@ class ResidualWindows:
                 if name not in self._prefix:
                     self._prefix[name] = _prefix(self._resid[name])
                 pre = self._prefix[name]
-            parts.append(self._model(res, self._resid[name], pre, test[name] if isinstance(test, Mapping) else test,
-                                     starts, n, step, name, p, pmax, window))
+            t = test[name] if isinstance(test, Mapping) else test
+            lbw = None
+            if isinstance(t, LjungBox) and t.multivariate is None and n > t.lags:
+                key = (name, t.lags, t.demean)
+                if key not in self._lag_products:
+                    self._lag_products[key] = LjungBoxWindows(self._resid[name], t.lags, demean=t.demean)
+                lbw = self._lag_products[key]
+            parts.append(self._model(res, self._resid[name], pre, t, starts, n, step, name, p, pmax, window, lbw))
             nres.append(n)
         stat, pv, thr, rej_c, ll = (np.stack([pt[i] for pt in parts], axis=1) for i in range(5))
         dec = None
@@ -338,10 +354,11 @@ class ResidualWindows:
 
     @staticmethod
     def _model(res: Any, e: np.ndarray, prefix: np.ndarray | None, test: Any, starts: np.ndarray, n: int, step: int,
-               name: str, p: int, pmax: int, window: int) -> tuple:
+               name: str, p: int, pmax: int, window: int, lbw: LjungBoxWindows | None = None) -> tuple:
         """One fitted model with its record residuals ``e`` on every window: statistic, p-value, threshold, channel
         rejection (n_windows, k), the likelihood score (n_windows,; NaN without the residuals' ``prefix`` sums)
-        and the window decisions (or None)."""
+        and the window decisions (or None). ``lbw``: the lag products of ``e`` for a per-channel Ljung-Box test
+        (kept by :meth:`statistics` across window lengths)."""
         nwin, k = starts.size, e.shape[1]
         ref = test.reference(res)
         if isinstance(test, LjungBox) and test.multivariate is None and n <= test.lags:
@@ -350,7 +367,7 @@ class ResidualWindows:
         ds = None
         if (isinstance(test, LjungBox) and test.multivariate is None) or isinstance(test, MeanTest) or (
                 isinstance(test, FTest) and test.alternative == "greater"):
-            stat = test.window_statistic(e, n, step, **ref)
+            stat = lbw.statistic(n, step) if lbw is not None else test.window_statistic(e, n, step, **ref)
             thr, pv = test.threshold_pvalue(stat, n, **ref)
             rej_c = stat > thr
         else:

@@ -256,3 +256,75 @@ def test_public_rules_equal_test(kind):
     assert tsfdi.LjungBox(8).decision([1.0, 50.0], 300).channels == ("y0", "y1")
     with pytest.raises(ValueError, match="statistic"):
         tsfdi.LjungBox(8).decision(np.ones((2, 2)), 300)
+
+
+def _numpy_q(x, lags, demean=True):
+    """Ljung-Box Q of one window in plain numpy: centred lag products summed window by window."""
+    n = x.size
+    xc = x - x.mean() if demean else x
+    c0 = xc @ xc
+    if c0 == 0 or (demean and np.all(x == x[0])):
+        return np.inf
+    rho = np.array([xc[lag:] @ xc[:-lag] for lag in range(1, lags + 1)]) / c0
+    return n * (n + 2) * np.sum(rho ** 2 / (n - np.arange(1, lags + 1)))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_windows_equal_numpy_reference(seed):
+    # the lag-vectorised kernel against Q computed window by window, on records with an offset, a constant stretch
+    # (a frozen sensor: inf) and a quiet stretch after a loud one (computed directly)
+    rng = np.random.default_rng(seed)
+    n, lags = int(rng.integers(1500, 3000)), int(rng.integers(1, 40))
+    window, step, demean = int(rng.integers(lags + 1, min(n, 600))), int(rng.integers(1, 50)), bool(seed % 2)
+    x = sps.lfilter([1], [1, -0.4], rng.standard_normal((n, 2)), axis=0) + [3.0, -1e4]
+    x[n // 4:n // 4 + window + step, 0] = 2.5 if demean else 0.0
+    x[n // 2:, 1] *= 1e-7
+    q = ljungbox_windows(x, lags, window, step, demean=demean)
+    starts = np.arange(0, n - window + 1, step)
+    ref = np.array([[_numpy_q(x[s:s + window, c], lags, demean) for c in range(2)] for s in starts])
+    assert np.array_equal(np.isinf(q), np.isinf(ref)) and np.isinf(q[:, 0]).any()
+    np.testing.assert_allclose(q[np.isfinite(ref)], ref[np.isfinite(ref)], rtol=1e-9, atol=1e-9)
+
+
+def test_lag_products_shared_across_window_lengths(monkeypatch):
+    # one LjungBoxWindows gives every window length the statistics of ljungbox_windows exactly; a record whose lag
+    # products are not kept (above the memory bound) gives the same to rounding
+    from tsfdi.detection import LjungBoxWindows
+    from tsfdi.detection import whiteness
+
+    rng = np.random.default_rng(7)
+    x = sps.lfilter([1], [1, -0.5], rng.standard_normal((5000, 3)), axis=0) + 2.0
+    lbw = LjungBoxWindows(x, 20)
+    for window, step in [(480, 100), (980, 100), (1980, 100), (25, 1), (5000, 7)]:
+        np.testing.assert_array_equal(lbw.statistic(window, step), ljungbox_windows(x, 20, window, step))
+    monkeypatch.setattr(whiteness, "_KEEP_LAGPROD", 3000)
+    blocked = LjungBoxWindows(x, 20)
+    assert blocked._lagprod is None
+    for window, step in [(480, 100), (130, 1), (5000, 1)]:
+        np.testing.assert_allclose(blocked.statistic(window, step), lbw.statistic(window, step), rtol=1e-12)
+    with pytest.raises(ValueError, match="window"):
+        lbw.statistic(20, 1)
+    with pytest.raises(ValueError, match="window"):
+        lbw.statistic(5001, 1)
+    with pytest.raises(TypeError, match="demean"):
+        LjungBoxWindows(x, 20, demean="yes")
+
+
+def test_windowed_engine_on_shipped_data():
+    # ResidualWindows (lag products shared across the window lengths) on the shipped hexacopter records equals
+    # LjungBox.test on every window's residuals, with the same rejections
+    from tsfdi.datasets import load_hexacopter
+    from tsfdi.datasets.hexacopter import hexacopter_signals
+
+    sig = hexacopter_signals(load_hexacopter())
+    x = sig.isel(record=0).values[:3000]
+    models = {"a": tsfdi.VAR(x[:1500], 4).fit(), "b": tsfdi.VAR(x[1500:], 8).fit()}
+    test = tsfdi.LjungBox(20, 1e-3)
+    rw = tsfdi.ResidualWindows(models).fit(x)
+    for window in (500, 1000, 2000):
+        ws = rw.statistics(test, window=window, step=100)
+        for w, s in enumerate(ws.starts):
+            for j, (name, m) in enumerate(models.items()):
+                d = test.test(np.asarray(m.residuals(x))[s:s + window - m.lags])
+                np.testing.assert_allclose(ws.statistic[w, j], d.statistic, rtol=1e-9)
+                assert ws.channel_reject[w, j].tolist() == d.channel_reject.tolist()

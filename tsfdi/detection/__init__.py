@@ -7,9 +7,10 @@ from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.moving import MovingSquaredError, MovingSquaredErrorStream
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
 from tsfdi.detection.variance import FTest
-from tsfdi.detection.whiteness import LjungBox, autocovariance, ljungbox_windows
+from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows, autocovariance, ljungbox_windows
 from tsfdi.detection.zscore import ZScore
 
 __all__ = ["Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest",
-           "MovingSquaredError", "MovingSquaredErrorStream", "ParameterGLRT", "ResidualTest", "ScaledChi2Threshold", "ZScore",
+           "LjungBoxWindows", "MovingSquaredError", "MovingSquaredErrorStream", "ParameterGLRT", "ResidualTest",
+           "ScaledChi2Threshold", "ZScore",
            "autocovariance", "glrt_direct", "ljungbox_windows"]

@@ -14,7 +14,7 @@ from tsfdi._validation import int_like, option
 from tsfdi.detection.base import CalibratedTest, rescale_exponent, statistic_array
 from tsfdi.detection.decision import Decision
 
-__all__ = ["LjungBox", "autocovariance", "ljungbox_windows"]
+__all__ = ["LjungBox", "LjungBoxWindows", "autocovariance", "ljungbox_windows"]
 
 _FFT_MIN_LAGS = 96  # above this many lags (and a long record) the FFT path is used
 
@@ -371,38 +371,99 @@ def ljungbox_windows(resid: Any, lags: int, window: int, step: int = 1, *, demea
         statsmodels ``acorr_ljungbox`` on that window and to :meth:`LjungBox.test`; ``inf`` for a constant
         window (a frozen sensor; with ``demean=False`` an all-zero one), as :meth:`LjungBox.test` says.
 
+    See Also
+    --------
+    LjungBoxWindows : the same for several window lengths of one record, sharing the lag products.
+
     Notes
     -----
     With prefix sums :math:`S`, :math:`S^{(2)}` of :math:`x` and :math:`x^2` and :math:`P_l` of the lag products
     :math:`x_t x_{t-l}`, the centred lag-:math:`l` sum of a window of length :math:`n` and mean :math:`m` is
     :math:`P_l - m (\sum_{t \ge l} x_t + \sum_{t < n - l} x_t) + (n - l) m^2`, so every window costs O(lags)
-    after one O(N * lags) pass. The prefix sums are of the record rescaled by a power of two (exact: :math:`Q` does
-    not change, squares do not overflow) and, with ``demean``, centred on its mean. A difference of prefix sums
-    loses the digits that the sums before the window carry: a window whose centred energy is below ``1e-6`` of
-    :math:`S^{(2)}` at its end (a quiet stretch after a loud one) is computed directly from its own samples in
-    O(window * lags); constant windows are found exactly (no sample differs from the one before it).
+    after one O(N * lags) pass (compiled with the lags as the inner, packed loop). The prefix sums are of the record
+    rescaled by a power of two (exact: :math:`Q` does not change, squares do not overflow) and, with ``demean``,
+    centred on its mean. A difference of prefix sums loses the digits that the sums before the window carry: a
+    window whose centred energy is below ``1e-6`` of :math:`S^{(2)}` at its end (a quiet stretch after a loud one)
+    is computed directly from its own samples in O(window * lags); constant windows are found exactly (no sample
+    differs from the one before it).
     """
-    sig = as_signal(resid, "resid", allow_constant=True)
-    lags = int_like(lags, "lags", minimum=1)
-    window = int_like(window, "window", minimum=2)
-    step = int_like(step, "step", minimum=1)
-    x = sig.values
-    n_all, k = x.shape
-    if window > n_all:
-        raise ValueError(f"window must be <= the record length {n_all}, got {window}")
-    if window <= lags:
-        raise ValueError(f"window must be > lags ({lags}), got {window}")
-    e = rescale_exponent(x)
-    if np.any(np.abs(e) > 1000):                       # 2**-e would not be a float: rescale here
-        x, e = np.ldexp(x, -e), np.zeros_like(e)
-    factor = np.ldexp(1.0, -e)                          # exact rescaling: squares neither overflow nor underflow
-    # global centring (of the rescaled record) limits cancellation in the prefix sums
-    centre = ((np.ldexp(x, -e) if e.any() else x).mean(axis=0) if demean else np.zeros(k))
-    starts = np.arange(0, n_all - window + 1, step, dtype=np.int64)
-    q = np.empty((starts.size, k))
-    for c in range(k):
-        q[:, c] = _windows_q(np.ascontiguousarray(x[:, c]), factor[c], centre[c], lags, window, starts, bool(demean))
-    return q
+    return LjungBoxWindows(resid, lags, demean=demean).statistic(window, step)
+
+
+class LjungBoxWindows:
+    r"""The lag products of a residual record, computed once, and the Ljung-Box statistic of every sliding window
+    of any length and step from them (:func:`ljungbox_windows`, shared across window lengths).
+
+    Parameters
+    ----------
+    resid : array_like, Series, DataFrame or DataArray, shape (N,) or (N, k)
+        Residual record.
+    lags : int
+        Maximum lag.
+    demean : bool
+        Subtract each window's own mean (as statsmodels ``acf``).
+
+    Notes
+    -----
+    The prefix sums of the lag products (``N * lags`` values per channel) are kept when the record holds at most
+    ``2**22`` of them over all channels (32 MB), in one array; a longer record keeps only the O(N) sums and
+    :meth:`statistic` recomputes the lag products for each call, a block of windows at a time, in bounded memory. The statistics are
+    those of :func:`ljungbox_windows` (see its Notes).
+
+    Examples
+    --------
+    >>> lbw = LjungBoxWindows(e, lags=20)                                    # doctest: +SKIP
+    >>> q5, q10 = lbw.statistic(500, 100), lbw.statistic(1000, 100)           # doctest: +SKIP
+    """
+
+    def __init__(self, resid: Any, lags: int, *, demean: bool = True) -> None:
+        sig = as_signal(resid, "resid", allow_constant=True)
+        self.lags = int_like(lags, "lags", minimum=1)
+        if not isinstance(demean, (bool, np.bool_)):
+            raise TypeError(f"demean must be a bool, got {demean!r}")
+        self.demean = bool(demean)
+        x = sig.values
+        e = rescale_exponent(x)
+        if np.any(np.abs(e) > 1000):                   # 2**-e would not be a float: rescale here
+            x, e = np.ldexp(x, -e), np.zeros_like(e)
+        self.nobs = x.shape[0]
+        # per channel: the record (contiguous), its rescaled and centred copy with its prefix sums, the last change
+        self._x = [np.ascontiguousarray(x[:, c]) for c in range(x.shape[1])]
+        self._sums = [_record_sums(xc, np.ldexp(1.0, -int(ec)), self.demean) for xc, ec in zip(self._x, e)]
+        self._lagprod = None
+        if self.nobs * self.lags * len(self._x) <= _KEEP_LAGPROD:
+            # one allocation for every channel (a fresh large block per channel costs page faults, see Notes)
+            self._lagprod = np.empty((len(self._x), self.nobs + 1, self.lags))
+            for (v, *_), out in zip(self._sums, self._lagprod):
+                _lag_prefix(v, 0, v.shape[0], self.lags, out)
+
+    def statistic(self, window: int, step: int = 1) -> np.ndarray:
+        """``Q`` of every window of ``window`` samples, ``step`` apart: shape (n_windows, k), as
+        :func:`ljungbox_windows`."""
+        window = int_like(window, "window", minimum=2)
+        step = int_like(step, "step", minimum=1)
+        if window > self.nobs:
+            raise ValueError(f"window must be <= the record length {self.nobs}, got {window}")
+        if window <= self.lags:
+            raise ValueError(f"window must be > lags ({self.lags}), got {window}")
+        starts = np.arange(0, self.nobs - window + 1, step, dtype=np.int64)
+        q = np.empty((starts.size, len(self._x)))
+        per = max(1, (_KEEP_LAGPROD // self.lags - window) // step)    # windows per block (lag products not kept)
+        for c, (x, (v, s1, s2, last)) in enumerate(zip(self._x, self._sums)):
+            if self._lagprod is not None:
+                q[:, c] = _windows_q(x, v, s1, s2, last, self._lagprod[c], 0, self.lags, window, starts, self.demean)
+                continue
+            # a block of windows at a time: the lag products of the samples they cover, from the block's first one
+            for w0 in range(0, starts.size, per):
+                st = starts[w0:w0 + per]
+                r0, r1 = int(st[0]), int(st[-1]) + window
+                pre = _lag_prefix(v, r0, r1, self.lags, np.empty((r1 - r0 + 1, self.lags)))
+                q[w0:w0 + per, c] = _windows_q(x, v, s1, s2, last, pre, r0, self.lags, window, st, self.demean)
+        return q
+
+
+#: Most lag products (over all channels) a LjungBoxWindows keeps; above, they are recomputed per call in blocks.
+_KEEP_LAGPROD = 2 ** 22
 
 
 #: A window whose centred energy is below this fraction of the prefix sum of squares at its end is computed directly.
@@ -435,65 +496,96 @@ def _direct_q(x, a, window, lags, demean):  # pragma: no cover - compiled
     return q * n * (n + 2)
 
 
+
+
+@numba.njit(cache=True, nogil=True)
+def _record_sums(x, factor, demean):  # pragma: no cover - compiled
+    """The record rescaled by ``factor`` (a power of two) and, with ``demean``, centred on its mean (global centring
+    limits cancellation in the prefix sums), its prefix sums of values and squares, and for every sample the last
+    one up to it that differs from its predecessor (0 if none)."""
+    n = x.shape[0]
+    centre = 0.0
+    if demean:
+        for t in range(n):
+            centre += x[t] * factor
+        centre /= n
+    v = np.empty(n)
+    s1 = np.empty(n + 1)
+    s2 = np.empty(n + 1)
+    last = np.empty(n, dtype=np.int64)
+    s1[0] = 0.0
+    s2[0] = 0.0
+    prev = 0
+    for t in range(n):
+        vt = x[t] * factor - centre
+        v[t] = vt
+        s1[t + 1] = s1[t] + vt
+        s2[t + 1] = s2[t] + vt * vt
+        if t > 0 and x[t] != x[t - 1]:
+            prev = t
+        last[t] = prev
+    return v, s1, s2, last
+
+
+@numba.njit(cache=True, nogil=True)
+def _lag_prefix(v, r0, r1, lags, p):  # pragma: no cover - compiled
+    """Prefix sums of the lag products of ``v[r0:r1]`` into ``p`` (``r1 - r0 + 1`` rows, ``lags`` columns): row
+    ``i``, column ``l - 1`` holds ``sum_{r0 <= t < r0 + i} v[t + l] v[t]`` (for ``r0 + i + l <= r1``; the rows
+    beyond are not used). Returns ``p``.
+
+    The lags are the inner loop: the ``lags`` running sums are independent, so the loop compiles to packed adds
+    instead of one serial (latency-bound) recursion per lag, and each sum adds the same products in the same order.
+    """
+    acc = np.zeros(lags)                 # the running sums of row i
+    p[0, :] = 0.0
+    m = r1 - r0
+    full = max(0, m - lags)              # rows whose every lag stays inside [r0, r1)
+    for i in range(full):
+        t = r0 + i
+        vt = v[t]
+        seg = v[t + 1:t + 1 + lags]
+        row = p[i + 1]
+        for j in range(lags):
+            acc[j] += seg[j] * vt
+            row[j] = acc[j]
+    for i in range(full, m):
+        t = r0 + i
+        vt = v[t]
+        for j in range(min(lags, r1 - 1 - t)):      # lags with t + l < r1
+            acc[j] += v[t + 1 + j] * vt
+        p[i + 1, :] = acc
+    return p
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _windows_q(x, factor, centre, lags, window, starts, demean):  # pragma: no cover - compiled
-    """Q of every window from prefix sums of ``x * factor - centre`` (``x`` rescaled by a power of two, and centred
-    on the record's mean with ``demean``); ``x`` itself (a rescaled record could underflow in a window far quieter
-    than the rest) serves the exact test for constant windows and the direct evaluation of windows the prefix sums
-    cannot resolve."""
-    n_all = x.shape[0]
+def _windows_q(x, v, s1, s2, last, p, r0, lags, window, starts, demean):  # pragma: no cover - compiled
+    """Q of every window from prefix sums of ``v = x * factor - centre`` (``x`` rescaled by a power of two, and
+    centred on the record's mean with ``demean``): ``s1``, ``s2`` of values and squares (from sample 0) and ``p`` of
+    the lag products (:func:`_lag_prefix`, from sample ``r0``). ``x`` itself (a rescaled record could underflow in a
+    window far quieter than the rest) serves the exact test for constant windows (``last``: the last sample up to
+    each one that differs from its predecessor) and the direct evaluation of windows the prefix sums cannot
+    resolve."""
     nw = starts.shape[0]
-    s1 = np.zeros(n_all + 1)
-    s2 = np.zeros(n_all + 1)
-    for t in range(n_all):
-        v = x[t] * factor - centre
-        s1[t + 1] = s1[t] + v
-        s2[t + 1] = s2[t] + v * v
     n = float(window)
-    mean = np.zeros(nw)
-    gamma0 = np.empty(nw)
-    special = np.zeros(nw, dtype=np.int8)   # 1: a constant window, 2: one the prefix sums cannot resolve
-    nspecial = 0
-    last = 0                                # the last sample before b that differs from the one before it
-    t = 1
-    for w in range(nw):                     # starts increase: one sweep finds the last change before each end
+    q = np.empty(nw)
+    for w in range(nw):
         a = starts[w]
         b = a + window
-        while t < b:
-            if x[t] != x[t - 1]:
-                last = t
-            t += 1
-        if demean:
-            mean[w] = (s1[b] - s1[a]) / n
-        gamma0[w] = s2[b] - s2[a] - n * mean[w] * mean[w]
-        if last <= a and (demean or x[a] == 0.0):
-            special[w] = 1
-            nspecial += 1
-        elif not gamma0[w] > _DIRECT_BELOW * s2[b]:
-            special[w] = 2
-            nspecial += 1
-    q = np.zeros(nw)
-    p = np.zeros(n_all + 1)
-    for lag in range(1, lags + 1):
-        # p[i] = sum_{t' < i} xc[t' + lag] xc[t'], xc = x * factor - centre
-        for i in range(n_all - lag):
-            p[i + 1] = p[i] + (x[i + lag] * factor - centre) * (x[i] * factor - centre)
-        inv = 1.0 / (n - lag)
-        for w in range(nw):
-            a = starts[w]
-            b = a + window
-            m = mean[w]
-            lagsum = p[b - lag] - p[a]
+        m = (s1[b] - s1[a]) / n if demean else 0.0
+        gamma0 = s2[b] - s2[a] - n * m * m
+        if last[b - 1] <= a and (demean or x[a] == 0.0):
+            q[w] = np.inf                   # a constant window (a frozen sensor), see LjungBox
+            continue
+        if not gamma0 > _DIRECT_BELOW * s2[b]:
+            q[w] = _direct_q(x, a, window, lags, demean)
+            continue
+        acc = 0.0
+        for lag in range(1, lags + 1):
+            lagsum = p[b - lag - r0, lag - 1] - p[a - r0, lag - 1]
             head = s1[b] - s1[a + lag]
             tail = s1[b - lag] - s1[a]
             c = lagsum - m * (head + tail) + (n - lag) * m * m
-            r = c / gamma0[w]
-            q[w] += r * r * inv
-    q *= n * (n + 2)
-    if nspecial:
-        for w in range(nw):
-            if special[w] == 1:
-                q[w] = np.inf               # a constant window (a frozen sensor), see LjungBox
-            elif special[w] == 2:
-                q[w] = _direct_q(x, starts[w], window, lags, demean)
+            r = c / gamma0
+            acc += r * r * (1.0 / (n - lag))
+        q[w] = acc * (n * (n + 2))
     return q
