@@ -158,9 +158,13 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
     C = lag_products(_end_to_end(records, lags)[0], lags)
     out = np.empty((int(const) + (lags + 1) * s,) * 2)
     # the column sums through a contiguous copy: numpy reduces axis 0 of an (n, s) array slowly for small s
-    S0 = sum(r[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(r[lags:].T).sum(axis=1) for r in records)
-    heads = np.stack([r[:lags] for r in records])
-    tails = np.stack([r[r.shape[0] - lags:] for r in records])
+    S0 = [r[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(r[lags:].T).sum(axis=1) for r in records]
+    S0 = S0[0] if len(S0) == 1 else sum(S0)
+    if len(records) == 1:                   # views, no copies: short inputs pay for every call here
+        heads, tails = records[0][None, :lags], records[0][None, records[0].shape[0] - lags:]
+    else:
+        heads = np.stack([r[:lags] for r in records])
+        tails = np.stack([r[r.shape[0] - lags:] for r in records])
     rows = sum(r.shape[0] for r in records) - lags * len(records)
     _assemble_gram(C, heads, tails, S0, int(rows), bool(const), out)
     return out
