@@ -1,4 +1,4 @@
-"""Fleet scale (issue 21): ``tsfdi.evaluate`` over 2,000 simulated records, serially and on 1 and 2 dask workers.
+"""Fleet scale (issues 21, 36): ``tsfdi.evaluate`` over 2,000 simulated records, serially and on 1 and 2 dask workers.
 
 1. The fleet: 2,000 hexacopter records (4 states x moderate / severe turbulence x 250), 30 s each at 100 Hz, the rotor
    failing at 5 s, written once by ``tsfdi simulate --shipped --chunk 50`` to a zarr store under the cache folder
@@ -7,15 +7,22 @@
 2. Baselines from the store (two fitting records per state and level, VAR by BIC): only those records are read.
 3. ``evaluate`` (VAR, Ljung-Box 20 lags and F test at alpha 1e-3, 5 / 10 / 20 s windows 1 s apart, detection and
    identification) of every other record: serially on the records in memory, and on a ``dask.distributed``
-   cluster of 1 and of 2 worker processes (one thread each, so the GIL is not the limit) reading the store. The
-   clusters are ``SubprocessCluster``: a ``LocalCluster`` whose scheduler runs in a process of its own, as on a real
-   cluster, so that the driver's process holds the client alone (its memory is measured below).
+   cluster of 1 and of 2 worker processes (one thread each, so the GIL is not the limit) reading the store, each
+   through one Client kept for all its runs, as a user would. The clusters are ``SubprocessCluster``: a
+   ``LocalCluster`` whose scheduler runs in a process of its own, as on a real cluster, so that the driver's process
+   holds the client alone (its memory is measured below).
    The three are interleaved ``--repeat`` times (the machine may be shared) and the medians reported; the count
-   tables are checked equal to the serial ones. Speed-up = 1-worker time / 2-worker time (acceptance: >= 1.7 on 2
-   cores). Each run also records the CPU time that other processes of the machine used meanwhile (all busy CPU time
+   tables are checked equal to the serial ones. Each run also reports the CPU time (user and system) and the minor
+   page faults of the process(es) doing the work -- this process for the serial run, the workers
+   (``resource.getrusage`` on each, ``Client.run``) for the dask runs -- which other jobs on a shared machine disturb
+   far less than wall time, and the CPU time that other processes of the machine used meanwhile (all busy CPU time
    minus that of this process and its children); a run during which they used under a tenth of a core is quiet, and
-   with at least two quiet runs of each kind the speed-up is judged on those (both medians are printed).
-4. The driver's memory at 200 and 2,000 records -- ``evaluate`` and ``Monitor.screen`` on the 2 workers, and the
+   with at least two quiet runs of each kind the ratios are judged on those (both medians are printed).
+   Acceptance (issue 36): one worker >= 0.9x the serial speed; two workers >= 1.8x one worker.
+4. The same dask runs with tsfdi of an earlier commit (``--against REF``, default :data:`PREVIOUS`, the commit before
+   issue 36; ``--against ''`` skips it): this script again in a fresh interpreter with that tree first on
+   ``PYTHONPATH`` (``previous_commit.previous_tree``; the workers inherit it), after the runs above.
+5. The driver's memory at 200 and 2,000 records -- ``evaluate`` and ``Monitor.screen`` on the 2 workers, and the
    serial ``evaluate``, which reads the records into the driver: the peak of the driver process's traced allocations
    during the call (tracemalloc: every Python object and numpy buffer allocated by this process, the dask client
    included; the workers and the scheduler are other processes), what is still held when the call has returned (its
@@ -23,10 +30,11 @@
    coarser). ``evaluate`` on dask is measured twice: as is, and with the client's log of its last messages to the
    scheduler (``distributed.admin.low-level-log-length``, 1,000 by default, bounded) turned off. Acceptance: the
    ``evaluate`` (dask) peak flat from 200 to 2,000 records, i.e. growing by less than 2 % of the records' signals.
-5. Throughput in record-hours per second, and a projection (an extrapolation, not a measurement) of the wall time of
+6. Throughput in record-hours per second, and a projection (an extrapolation, not a measurement) of the wall time of
    100,000 flight hours on 64 workers from the measured cost per record.
 
-BLAS is pinned to one thread. Run: ``python benchmarks/fleet_scale.py [--records 2000] [--repeat 3] [--cache DIR]``.
+BLAS is pinned to one thread (here and, inherited, on the workers). Run:
+``python benchmarks/fleet_scale.py [--records 2000] [--repeat 3] [--cache DIR] [--against REF]``.
 """
 
 import os
@@ -37,6 +45,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import gc  # noqa: E402
 import json  # noqa: E402
+import resource  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
@@ -58,6 +67,8 @@ import tsfdi  # noqa: E402
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 
 DURATION, FAILURE, CHUNK = 30.0, 5.0, 50
+#: the commit before issue 36 (dask workers' allocator, baselines sent once)
+PREVIOUS = "f9e25de"
 #: the client keeps its last messages to the scheduler (each chunk's graph) for debugging: this many (default 1000)
 LOG = "distributed.admin.low-level-log-length"
 LEVELS = ("moderate", "severe")
@@ -118,6 +129,90 @@ def timed(fn) -> tuple[float, object, float]:
     return wall, out, max(0.0, (_busy_cpu() - busy) - (_own_cpu() - own))
 
 
+def usage() -> np.ndarray:
+    """User and system CPU seconds and minor page faults of this process so far."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return np.array([r.ru_utime, r.ru_stime, float(r.ru_minflt)])
+
+
+def measure(fn, client=None) -> tuple[float, object, float, np.ndarray]:
+    """:func:`timed`, and the user s, system s and page faults of the process(es) doing the work meanwhile: this one
+    (``client`` None), else every worker of ``client`` added up."""
+    def now():
+        return usage() if client is None else np.sum(list(client.run(usage).values()), axis=0)
+
+    before = now()
+    wall, out, other = timed(fn)
+    return wall, out, other, now() - before
+
+
+def dask_runs(ds, base, clients: dict, repeat: int, runs: dict, driver_cpu: dict, reference=None) -> object:
+    """``repeat`` times: ``evaluate`` serially on ``reference`` (records in memory, when given), then on each client
+    in turn; each run appended to ``runs[name]`` as (wall s, others' CPU s, user s, system s, page faults). Returns
+    the last tables (checked equal to the serial ones when there are)."""
+    memory, ev = reference, None
+    for r in range(repeat):
+        line = []
+        if memory is not None:
+            t, reference, other, u = measure(lambda: tsfdi.evaluate(memory, base, **OPTIONS))
+            runs["serial"].append((t, other, *u))
+            line.append(f"serial {t:.1f} s")
+        for name, client in clients.items():
+            with client.as_current():
+                cpu = time.process_time()
+                t, ev, other, u = measure(lambda: tsfdi.evaluate(ds, base, **OPTIONS), client)
+                driver_cpu.setdefault(name, []).append(time.process_time() - cpu)
+            runs[name].append((t, other, *u))
+            line.append(f"{name} {t:.1f} s")
+            if memory is not None and not same(ev, reference):
+                raise AssertionError(f"{name}: the tables differ from the serial ones")
+        print(f"repeat {r + 1}: " + ", ".join(line), flush=True)
+    return reference if memory is not None else ev
+
+
+def dask_only(store: Path, repeat: int, out: Path) -> None:
+    """Step 4 in the interpreter of an earlier tree: the dask runs alone; their figures and tables to ``out``."""
+    warnings.simplefilter("ignore", UnstableModelWarning)
+    ds = xr.open_zarr(store)
+    base = tsfdi.fit_baselines(ds, fit_records=2, settle=5.0, duration=20.0, models=("var",))
+    runs: dict = {"1 worker": [], "2 workers": []}
+    with SubprocessCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as one, \
+            SubprocessCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as two, \
+            Client(one, set_as_default=False) as c1, Client(two, set_as_default=False) as c2:
+        clients = {"1 worker": c1, "2 workers": c2}
+        for client in clients.values():
+            with client.as_current():
+                tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
+        ev = dask_runs(ds, base, clients, repeat, runs, {})
+    pd.to_pickle({"runs": runs, "tsfdi": tsfdi.__file__,
+                  "tables": {n: getattr(ev, n) for n in ("identification_counts", "detection_counts",
+                                                           "detection_delays", "records")}}, out)
+
+
+def previous(ref: str, store: Path, repeat: int, runs: dict, reference) -> None:
+    """Step 4: the dask runs with tsfdi of commit ``ref`` (a fresh interpreter, its workers too), against ``runs``."""
+    from previous_commit import previous_tree
+
+    tree = previous_tree(ref)
+    out = tree / "runs.pkl"
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    subprocess.run([sys.executable, str(Path(__file__).resolve()), "--repeat", str(repeat), "--dask-only",
+                    str(store), str(out)], check=True, env=env, cwd=str(tree))
+    prev = pd.read_pickle(out)
+    equal = all(prev["tables"][n].equals(getattr(reference, n)) for n in prev["tables"])
+    print(f"\nthe same dask runs with tsfdi of commit {ref} ({prev['tsfdi']}), after the runs above, {repeat} "
+          f"rounds, medians; its tables {'equal to' if equal else 'DIFFER from'} this tree's:")
+    print(f"  {'':>9}  {'previous':>9} {'current':>8} {'prev/curr':>9}   {'CPU prev':>8} {'CPU curr':>8}   "
+          f"{'sys prev':>8} {'sys curr':>8}   {'faults prev':>11} {'faults curr':>11}")
+    for k in ("1 worker", "2 workers"):
+        p, c = np.median(np.array(prev["runs"][k]), axis=0), np.median(np.array(runs[k]), axis=0)
+        print(f"  {k:>9}: {p[0]:8.1f}s {c[0]:7.1f}s {p[0] / c[0]:8.2f}x   {p[2] + p[3]:7.1f}s {c[2] + c[3]:7.1f}s   "
+              f"{p[3]:7.2f}s {c[3]:7.2f}s   {p[4]:11,.0f} {c[4]:11,.0f}")
+    p1, p2 = (np.median(np.array(prev["runs"][k]), axis=0)[0] for k in ("1 worker", "2 workers"))
+    print(f"  previous: 1 worker {statistics.median(r[0] for r in runs['serial']) / p1:.2f}x the serial speed "
+          f"(this run's serial median), 2 workers {p1 / p2:.2f}x one worker")
+
+
 def same(a, b) -> bool:
     return all(getattr(a, n).equals(getattr(b, n))
                for n in ("identification_counts", "detection_counts", "detection_delays", "records"))
@@ -156,7 +251,11 @@ def main() -> None:
     ap.add_argument("--records", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "tsfdi" / "fleet_scale")
+    ap.add_argument("--against", default=PREVIOUS, help="earlier commit whose dask runs are timed too ('': none)")
+    ap.add_argument("--dask-only", nargs=2, type=Path, metavar=("STORE", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.dask_only:
+        return dask_only(args.dask_only[0], args.repeat, args.dask_only[1])
     warnings.simplefilter("ignore", UnstableModelWarning)
 
     store, gen_s, cached = generate(args.cache, args.records)
@@ -175,48 +274,44 @@ def main() -> None:
     t_load, memory, _ = timed(lambda: ds[["roll", "pitch", "r", "lost_control"]].compute())
     print(f"serial path: the records read into memory first ({t_load:.1f} s, not timed below)")
 
-    times: dict = {"serial": [], "1 worker": [], "2 workers": []}
+    runs: dict = {"serial": [], "1 worker": [], "2 workers": []}
     driver_cpu: dict = {}
     with SubprocessCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as one, \
             SubprocessCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as two:
-        for cluster in (one, two):                       # workers import tsfdi and load the store's metadata
-            with Client(cluster):
-                tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
-        reference = None
-        others: dict = {k: [] for k in times}           # CPU seconds other processes of the machine used per run
-        for r in range(args.repeat):
-            t, reference, other = timed(lambda: tsfdi.evaluate(memory, base, **OPTIONS))
-            times["serial"].append(t)
-            others["serial"].append(other)
-            for name, cluster in (("1 worker", one), ("2 workers", two)):
-                with Client(cluster):
-                    cpu = time.process_time()
-                    t, ev, other = timed(lambda: tsfdi.evaluate(ds, base, **OPTIONS))
-                    cpu = time.process_time() - cpu
-                times[name].append(t)
-                others[name].append(other)
-                driver_cpu.setdefault(name, []).append(cpu)
-                if not same(ev, reference):
-                    raise AssertionError(f"{name}: the tables differ from the serial ones")
-            print(f"repeat {r + 1}: " + ", ".join(f"{k} {v[-1]:.1f} s (others {others[k][-1]:.1f} CPU-s)"
-                                                  for k, v in times.items()))
+        with Client(one, set_as_default=False) as c1, Client(two, set_as_default=False) as c2:
+            clients = {"1 worker": c1, "2 workers": c2}
+            for client in clients.values():          # workers import tsfdi and load the store's metadata
+                with client.as_current():
+                    tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
+            reference = dask_runs(ds, base, clients, args.repeat, runs, driver_cpu, reference=memory)
         # a run is quiet when the other processes of the (shared) machine used under a tenth of a core meanwhile
-        quiet = {k: [t for t, o in zip(v, others[k]) if o < 0.1 * t] for k, v in times.items()}
+        quiet = {k: [r for r in v if r[1] < 0.1 * r[0]] for k, v in runs.items()}
         use_quiet = all(len(v) >= 2 for v in quiet.values())
-        for label, runs in (("all runs", times), ("quiet runs", quiet)):
-            if not all(runs.values()):
-                print(f"\nevaluate, {label}: none for " + ", ".join(k for k, v in runs.items() if not v))
+        for label, chosen in (("all runs", runs), ("quiet runs", quiet)):
+            if not all(chosen.values()):
+                print(f"\nevaluate, {label}: none for " + ", ".join(k for k, v in chosen.items() if not v))
                 continue
-            m = {k: statistics.median(v) for k, v in runs.items()}
-            print(f"\nevaluate, median of the {label} ({', '.join(f'{k} {len(v)}' for k, v in runs.items())}; tables "
-                  "equal to the serial ones in every run):")
-            for k, v in m.items():
-                print(f"  {k:>9}: {v:6.1f} s  {n_eval / v:6.1f} records/s  {hours / v:6.3f} record-hours/s")
-            print(f"  speed-up at 2 workers: {m['1 worker'] / m['2 workers']:.2f}x over 1 worker (target >= 1.7), "
-                  f"{m['serial'] / m['2 workers']:.2f}x over the serial path")
+            m = {k: np.median(np.array(v), axis=0) for k, v in chosen.items()}
+            print(f"\nevaluate, median of the {label} ({', '.join(f'{k} {len(v)}' for k, v in chosen.items())}; tables "
+                  "equal to the serial ones in every run); CPU time and page faults of the process(es) doing the "
+                  "work (this one, or the workers added up):")
+            print(f"  {'':>9}  {'wall':>7} {'records/s':>10} {'rec-h/s':>8} {'user':>7} {'system':>7} "
+                  f"{'page faults':>12} {'others CPU':>11}")
+            for k, (t, other, user, system, faults) in m.items():
+                print(f"  {k:>9}: {t:6.1f}s {n_eval / t:10.1f} {hours / t:8.3f} {user:6.1f}s {system:6.2f}s "
+                      f"{faults:12,.0f} {other:10.1f}s")
+            one_x, two_x = m["serial"][0] / m["1 worker"][0], m["1 worker"][0] / m["2 workers"][0]
+            cpu_x = (m["serial"][2] + m["serial"][3]) / (m["1 worker"][2] + m["1 worker"][3])
+            print(f"  1 worker: {one_x:.2f}x the serial speed (acceptance >= 0.9: {'MET' if one_x >= 0.9 else 'NOT MET'}"
+                  f"); by CPU time (user + system) {cpu_x:.2f}x")
+            print(f"  2 workers: {two_x:.2f}x one worker (acceptance >= 1.8: {'MET' if two_x >= 1.8 else 'NOT MET'}), "
+                  f"{m['serial'][0] / m['2 workers'][0]:.2f}x the serial path; the 2 workers' CPU time is "
+                  f"{(m['2 workers'][2] + m['2 workers'][3]) / (m['1 worker'][2] + m['1 worker'][3]):.2f}x one "
+                  "worker's (1.00 = no work added by splitting)")
             if label == ("quiet runs" if use_quiet else "all runs"):
-                med, speedup = m, m["1 worker"] / m["2 workers"]
-        print(f"  (the speed-up judged and projected below: {'quiet runs' if use_quiet else 'all runs'})")
+                med, speedup = {k: v[0] for k, v in m.items()}, two_x
+        print(f"  (the ratios judged and projected below: {'quiet runs' if use_quiet else 'all runs'}; on a machine "
+              "shared with other jobs the wall times of 2 workers on 2 cores are not a clean measurement)")
         print("  driver CPU time during the dask runs (median): " + ", ".join(
             f"{k} {statistics.median(v):.1f} s" for k, v in driver_cpu.items()))
         print(f"  windows: {reference.detection_counts['windows'].sum():,} detection + "
@@ -259,6 +354,9 @@ def main() -> None:
               f"the row per record of Evaluation.records ({t1 * 2**20 / n:.0f} bytes), and the client's log of its "
               f"last 1,000 messages to the scheduler (dask config {LOG}; each chunk's graph is one; bounded) -- "
               f"without it the peak grows by {q1 - q0:+.1f} MB")
+
+    if args.against:
+        previous(args.against, store, args.repeat, runs, reference)
 
     per_hour = med["1 worker"] / hours                  # worker-seconds per record-hour
     print("\nprojection (extrapolated from the measured cost, not measured): 100,000 flight hours on 64 workers")
