@@ -500,10 +500,27 @@ def _new_counts() -> dict:
 def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = (), names: Sequence = ()) -> None:
     """Add windows to ``counter``, one entry per distinct outcome: ``key``, then the window's ``flags`` (windows x
     k, bool) and the ``names`` its ``codes`` (arrays of one int per window) point to."""
-    rows, n = np.unique(np.column_stack([flags, *codes]), axis=0, return_counts=True)
-    k = flags.shape[1]
-    for row, c in zip(rows.tolist(), n.tolist()):
-        counter[(*key, *(bool(v) for v in row[:k]), *(names[v] for v in row[k:]))] += c
+    k, r = flags.shape[1], len(names)
+    if k + len(codes) * max(r, 1).bit_length() > 62:     # too many columns for one integer per row
+        rows, n = np.unique(np.column_stack([flags, *codes]), axis=0, return_counts=True)
+        for row, c in zip(rows.tolist(), n.tolist()):
+            counter[(*key, *(bool(v) for v in row[:k]), *(names[v] for v in row[k:]))] += c
+        return
+    # each distinct row as one mixed-radix integer (first column most significant), so that one 1-D unique gives
+    # the rows in lexicographic order, as a unique of the rows would
+    code = np.zeros(flags.shape[0], dtype=np.int64)
+    for col in flags.T:
+        code = code * 2 + col
+    for col in codes:
+        code = code * r + col
+    values, n = np.unique(code, return_counts=True)
+    for v, c in zip(values.tolist(), n.tolist()):
+        picks = []
+        for _ in codes:
+            v, i = divmod(v, r)
+            picks.append(names[i])
+        bits = [bool((v >> (k - 1 - i)) & 1) for i in range(k)]
+        counter[(*key, *bits, *reversed(picks))] += c
 
 
 _COUNT_TYPES = {"window": np.float64, "delay": np.float64, "fault_true": bool, "pre": bool, "alarm": bool,

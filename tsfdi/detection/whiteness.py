@@ -407,8 +407,8 @@ class LjungBoxWindows:
     -----
     The prefix sums of the lag products (``N * lags`` values per channel) are kept when the record holds at most
     ``2**22`` of them over all channels (32 MB), in one array; a longer record keeps only the O(N) sums and
-    :meth:`statistic` recomputes the lag products for each call, a block of windows at a time, in bounded memory. The statistics are
-    those of :func:`ljungbox_windows` (see its Notes).
+    :meth:`statistic` recomputes the lag products for each call, a block of windows at a time, in bounded memory.
+    The statistics are those of :func:`ljungbox_windows` (see its Notes).
 
     Examples
     --------
@@ -427,15 +427,13 @@ class LjungBoxWindows:
         if np.any(np.abs(e) > 1000):                   # 2**-e would not be a float: rescale here
             x, e = np.ldexp(x, -e), np.zeros_like(e)
         self.nobs = x.shape[0]
-        # per channel: the record (contiguous), its rescaled and centred copy with its prefix sums, the last change
-        self._x = [np.ascontiguousarray(x[:, c]) for c in range(x.shape[1])]
-        self._sums = [_record_sums(xc, np.ldexp(1.0, -int(ec)), self.demean) for xc, ec in zip(self._x, e)]
+        # channels on axis 0: the record, its rescaled and centred copy with its prefix sums, the last change
+        self._x = np.ascontiguousarray(x.T)
+        self._sums = _record_sums(self._x, np.ldexp(1.0, -e), self.demean)
         self._lagprod = None
-        if self.nobs * self.lags * len(self._x) <= _KEEP_LAGPROD:
-            # one allocation for every channel (a fresh large block per channel costs page faults, see Notes)
-            self._lagprod = np.empty((len(self._x), self.nobs + 1, self.lags))
-            for (v, *_), out in zip(self._sums, self._lagprod):
-                _lag_prefix(v, 0, v.shape[0], self.lags, out)
+        if self.nobs * self.lags * x.shape[1] <= _KEEP_LAGPROD:
+            self._lagprod = _lag_prefix(self._sums[0], 0, self.nobs, self.lags,
+                                        np.empty((x.shape[1], self.nobs + 1, self.lags)))
 
     def statistic(self, window: int, step: int = 1) -> np.ndarray:
         """``Q`` of every window of ``window`` samples, ``step`` apart: shape (n_windows, k), as
@@ -447,18 +445,17 @@ class LjungBoxWindows:
         if window <= self.lags:
             raise ValueError(f"window must be > lags ({self.lags}), got {window}")
         starts = np.arange(0, self.nobs - window + 1, step, dtype=np.int64)
-        q = np.empty((starts.size, len(self._x)))
-        per = max(1, (_KEEP_LAGPROD // self.lags - window) // step)    # windows per block (lag products not kept)
-        for c, (x, (v, s1, s2, last)) in enumerate(zip(self._x, self._sums)):
-            if self._lagprod is not None:
-                q[:, c] = _windows_q(x, v, s1, s2, last, self._lagprod[c], 0, self.lags, window, starts, self.demean)
-                continue
-            # a block of windows at a time: the lag products of the samples they cover, from the block's first one
-            for w0 in range(0, starts.size, per):
-                st = starts[w0:w0 + per]
-                r0, r1 = int(st[0]), int(st[-1]) + window
-                pre = _lag_prefix(v, r0, r1, self.lags, np.empty((r1 - r0 + 1, self.lags)))
-                q[w0:w0 + per, c] = _windows_q(x, v, s1, s2, last, pre, r0, self.lags, window, st, self.demean)
+        if self._lagprod is not None:
+            return _windows_q(self._x, *self._sums, self._lagprod, 0, self.lags, window, starts, self.demean)
+        # a block of windows at a time: the lag products of the samples they cover, from the block's first one
+        k = self._x.shape[0]
+        per = max(1, (_KEEP_LAGPROD // (self.lags * k) - window) // step)
+        q = np.empty((starts.size, k))
+        for w0 in range(0, starts.size, per):
+            st = starts[w0:w0 + per]
+            r0, r1 = int(st[0]), int(st[-1]) + window
+            pre = _lag_prefix(self._sums[0], r0, r1, self.lags, np.empty((k, r1 - r0 + 1, self.lags)))
+            q[w0:w0 + per] = _windows_q(self._x, *self._sums, pre, r0, self.lags, window, st, self.demean)
         return q
 
 
@@ -500,92 +497,101 @@ def _direct_q(x, a, window, lags, demean):  # pragma: no cover - compiled
 
 @numba.njit(cache=True, nogil=True)
 def _record_sums(x, factor, demean):  # pragma: no cover - compiled
-    """The record rescaled by ``factor`` (a power of two) and, with ``demean``, centred on its mean (global centring
-    limits cancellation in the prefix sums), its prefix sums of values and squares, and for every sample the last
-    one up to it that differs from its predecessor (0 if none)."""
-    n = x.shape[0]
-    centre = 0.0
-    if demean:
+    """Per channel (row of ``x``): the record rescaled by ``factor`` (a power of two) and, with ``demean``, centred
+    on its mean (global centring limits cancellation in the prefix sums), its prefix sums of values and squares, and
+    for every sample the last one up to it that differs from its predecessor (0 if none)."""
+    k, n = x.shape
+    v = np.empty((k, n))
+    s1 = np.empty((k, n + 1))
+    s2 = np.empty((k, n + 1))
+    last = np.empty((k, n), dtype=np.int64)
+    for c in range(k):
+        f = factor[c]
+        centre = 0.0
+        if demean:
+            for t in range(n):
+                centre += x[c, t] * f
+            centre /= n
+        s1[c, 0] = 0.0
+        s2[c, 0] = 0.0
+        prev = 0
         for t in range(n):
-            centre += x[t] * factor
-        centre /= n
-    v = np.empty(n)
-    s1 = np.empty(n + 1)
-    s2 = np.empty(n + 1)
-    last = np.empty(n, dtype=np.int64)
-    s1[0] = 0.0
-    s2[0] = 0.0
-    prev = 0
-    for t in range(n):
-        vt = x[t] * factor - centre
-        v[t] = vt
-        s1[t + 1] = s1[t] + vt
-        s2[t + 1] = s2[t] + vt * vt
-        if t > 0 and x[t] != x[t - 1]:
-            prev = t
-        last[t] = prev
+            vt = x[c, t] * f - centre
+            v[c, t] = vt
+            s1[c, t + 1] = s1[c, t] + vt
+            s2[c, t + 1] = s2[c, t] + vt * vt
+            if t > 0 and x[c, t] != x[c, t - 1]:
+                prev = t
+            last[c, t] = prev
     return v, s1, s2, last
 
 
 @numba.njit(cache=True, nogil=True)
 def _lag_prefix(v, r0, r1, lags, p):  # pragma: no cover - compiled
-    """Prefix sums of the lag products of ``v[r0:r1]`` into ``p`` (``r1 - r0 + 1`` rows, ``lags`` columns): row
-    ``i``, column ``l - 1`` holds ``sum_{r0 <= t < r0 + i} v[t + l] v[t]`` (for ``r0 + i + l <= r1``; the rows
-    beyond are not used). Returns ``p``.
+    """Prefix sums of the lag products of ``v[:, r0:r1]`` into ``p`` (channels, ``r1 - r0 + 1`` rows, ``lags``
+    columns): row ``i``, column ``l - 1`` holds ``sum_{r0 <= t < r0 + i} v[t + l] v[t]`` (for ``r0 + i + l <= r1``;
+    the rows beyond are not used). Returns ``p``.
 
     The lags are the inner loop: the ``lags`` running sums are independent, so the loop compiles to packed adds
     instead of one serial (latency-bound) recursion per lag, and each sum adds the same products in the same order.
     """
-    acc = np.zeros(lags)                 # the running sums of row i
-    p[0, :] = 0.0
     m = r1 - r0
     full = max(0, m - lags)              # rows whose every lag stays inside [r0, r1)
-    for i in range(full):
-        t = r0 + i
-        vt = v[t]
-        seg = v[t + 1:t + 1 + lags]
-        row = p[i + 1]
-        for j in range(lags):
-            acc[j] += seg[j] * vt
-            row[j] = acc[j]
-    for i in range(full, m):
-        t = r0 + i
-        vt = v[t]
-        for j in range(min(lags, r1 - 1 - t)):      # lags with t + l < r1
-            acc[j] += v[t + 1 + j] * vt
-        p[i + 1, :] = acc
+    acc = np.empty(lags)                 # the running sums of row i
+    for c in range(v.shape[0]):
+        x = v[c]
+        pc = p[c]
+        acc[:] = 0.0
+        pc[0, :] = 0.0
+        for i in range(full):
+            t = r0 + i
+            vt = x[t]
+            seg = x[t + 1:t + 1 + lags]
+            row = pc[i + 1]
+            for j in range(lags):
+                acc[j] += seg[j] * vt
+                row[j] = acc[j]
+        for i in range(full, m):
+            t = r0 + i
+            vt = x[t]
+            for j in range(min(lags, r1 - 1 - t)):      # lags with t + l < r1
+                acc[j] += x[t + 1 + j] * vt
+            pc[i + 1, :] = acc
     return p
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _windows_q(x, v, s1, s2, last, p, r0, lags, window, starts, demean):  # pragma: no cover - compiled
-    """Q of every window from prefix sums of ``v = x * factor - centre`` (``x`` rescaled by a power of two, and
-    centred on the record's mean with ``demean``): ``s1``, ``s2`` of values and squares (from sample 0) and ``p`` of
-    the lag products (:func:`_lag_prefix`, from sample ``r0``). ``x`` itself (a rescaled record could underflow in a
-    window far quieter than the rest) serves the exact test for constant windows (``last``: the last sample up to
-    each one that differs from its predecessor) and the direct evaluation of windows the prefix sums cannot
-    resolve."""
+    """Q of every window (rows) and channel (columns) from prefix sums of ``v = x * factor - centre`` (``x``
+    rescaled by a power of two, and centred on the record's mean with ``demean``; channels on axis 0 of every
+    array): ``s1``, ``s2`` of values and squares (from sample 0) and ``p`` of the lag products (:func:`_lag_prefix`,
+    from sample ``r0``). ``x`` itself (a rescaled record could underflow in a window far quieter than the rest)
+    serves the exact test for constant windows (``last``: the last sample up to each one that differs from its
+    predecessor) and the direct evaluation of windows the prefix sums cannot resolve."""
     nw = starts.shape[0]
+    k = x.shape[0]
     n = float(window)
-    q = np.empty(nw)
-    for w in range(nw):
-        a = starts[w]
-        b = a + window
-        m = (s1[b] - s1[a]) / n if demean else 0.0
-        gamma0 = s2[b] - s2[a] - n * m * m
-        if last[b - 1] <= a and (demean or x[a] == 0.0):
-            q[w] = np.inf                   # a constant window (a frozen sensor), see LjungBox
-            continue
-        if not gamma0 > _DIRECT_BELOW * s2[b]:
-            q[w] = _direct_q(x, a, window, lags, demean)
-            continue
-        acc = 0.0
-        for lag in range(1, lags + 1):
-            lagsum = p[b - lag - r0, lag - 1] - p[a - r0, lag - 1]
-            head = s1[b] - s1[a + lag]
-            tail = s1[b - lag] - s1[a]
-            c = lagsum - m * (head + tail) + (n - lag) * m * m
-            r = c / gamma0
-            acc += r * r * (1.0 / (n - lag))
-        q[w] = acc * (n * (n + 2))
+    q = np.empty((nw, k))
+    for c in range(k):
+        c1, c2, pc = s1[c], s2[c], p[c]
+        for w in range(nw):
+            a = starts[w]
+            b = a + window
+            m = (c1[b] - c1[a]) / n if demean else 0.0
+            gamma0 = c2[b] - c2[a] - n * m * m
+            if last[c, b - 1] <= a and (demean or x[c, a] == 0.0):
+                q[w, c] = np.inf                # a constant window (a frozen sensor), see LjungBox
+                continue
+            if not gamma0 > _DIRECT_BELOW * c2[b]:
+                q[w, c] = _direct_q(x[c], a, window, lags, demean)
+                continue
+            acc = 0.0
+            for lag in range(1, lags + 1):
+                lagsum = pc[b - lag - r0, lag - 1] - pc[a - r0, lag - 1]
+                head = c1[b] - c1[a + lag]
+                tail = c1[b - lag] - c1[a]
+                cov = lagsum - m * (head + tail) + (n - lag) * m * m
+                r = cov / gamma0
+                acc += r * r * (1.0 / (n - lag))
+            q[w, c] = acc * (n * (n + 2))
     return q
