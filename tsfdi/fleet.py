@@ -120,9 +120,10 @@ def worker_allocator() -> bool:
     dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536`` (``distributed.nanny.pre-spawn-environ``), so
     that memory goes back to the kernel; setting it also turns off glibc's adaptive mmap threshold, so that every
     temporary array above 128 KiB is mapped and unmapped: evaluating the shipped data on one worker then costs about
-    520,000 page faults and 0.6 s of system time (1,000 faults and 0.05 s after). A worker whose environment sets
-    ``MALLOC_MMAP_THRESHOLD_`` is left as it is (the user chose), as is any process that is not a dask worker (the
-    driver, dask's threads and processes schedulers: glibc's adaptive thresholds apply there).
+    520,000 page faults and 0.6-0.7 s of system time (1,000 faults and 0.05 s after). A worker whose environment
+    sets ``MALLOC_MMAP_THRESHOLD_`` is left as it is (the user chose), as is any process that is not a dask worker
+    (the driver, dask's threads and processes schedulers: glibc's adaptive thresholds apply there; a
+    ``LocalCluster(processes=False)`` runs its workers in the driver's process, which they then set).
 
     Returns
     -------
