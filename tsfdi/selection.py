@@ -6,7 +6,8 @@ the results objects of the models.
 All candidate orders ``1..max_lags`` are fitted on the **same sample** (the first ``max_lags`` samples are
 held back for every order), so ``select_order(...).table.loc[p, "bic"]`` equals the ``bic`` of the model of
 order ``p`` fitted on that sample (``OrderSelection.fit(p)``) up to rounding (the table comes from one
-triangular factor, the fit from its own QR; they agree to about 1e-9 relative) — statsmodels issue 7143 is
+triangular factor of the largest order, the fit from a Cholesky solve of its own order's Gram matrix with one
+refinement step; they agree to about 1e-9 relative) — statsmodels issue 7143 is
 the counter-example, where they are computed on different samples.
 
 Nothing is refitted order by order. The regressor ``[const, -y[t-1], ..., -y[t-max_lags], y[t]]`` is
@@ -105,14 +106,18 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
         if u is not None:
             raise ValueError(f"u is only used with model='arx', not model={family!r}")
         if family == "ar":
-            first = data[0] if isinstance(data, (list, tuple)) and data else data
-            k = as_signal(first, "data", allow_constant=True).nchan
-            if k > 1:
-                raise ValueError(f"data has {k} channels but model='ar' selects the order of one scalar signal: "
-                                 f"use model='var' for the vector signal (select_order(data, {max_lags}, "
-                                 "model='var')), or select one channel")
-        spec = (AR(data, max_lags, trend=trend) if family == "ar"
-                else VAR(data, max_lags, trend=trend, criterion=criterion))
+            try:
+                spec = AR(data, max_lags, trend=trend)
+            except (ValueError, TypeError):   # the first record checked as before (only on failure: it costs)
+                first = data[0] if isinstance(data, (list, tuple)) and data else data
+                k = as_signal(first, "data", allow_constant=True).nchan
+                if k > 1:
+                    raise ValueError(f"data has {k} channels but model='ar' selects the order of one scalar signal: "
+                                     f"use model='var' for the vector signal (select_order(data, {max_lags}, "
+                                     "model='var')), or select one channel") from None
+                raise
+        else:
+            spec = VAR(data, max_lags, trend=trend, criterion=criterion)
     s = spec.neqs
 
     def design() -> np.ndarray:

@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 import pandas as pd
 from scipy import linalg, stats
+from scipy.linalg import lapack
 
 from tsfdi._data import Signal, as_signal, check_paired, is_xarray
 from tsfdi._validation import int_like, option, probability
@@ -390,8 +391,8 @@ class LinearTimeSeriesModel:
                 X, Y = self.design_all(scaled=True)
             coef = lstsq(X, Y)
         else:   # Cholesky solve and one step of refinement on the explicit residual (corrected semi-normal eqs.)
-            coef = linalg.cho_solve((R, False), xty, check_finite=False)
-            coef += linalg.cho_solve((R, False), self._regressor_dot_residual(coef, X, Y), check_finite=False)
+            coef = lapack.dpotrs(R, xty, lower=0)[0]        # scipy.linalg.cho_solve without its wrapper
+            coef += lapack.dpotrs(R, self._regressor_dot_residual(coef, X, Y), lower=0)[0]
         res = self.results_class(self, self._from_fit_units(coef))
         res._warn_unstable()
         return res

@@ -22,6 +22,7 @@ import warnings
 import numba
 import numpy as np
 from scipy import linalg
+from scipy.linalg import lapack
 
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
@@ -366,13 +367,9 @@ def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int 
     (its first ``R.shape[0] - n_targets`` columns) is ill-conditioned.
     """
     if gram is not None:
-        try:
-            R = linalg.cholesky(gram, lower=False, check_finite=False)
-            rel = np.diag(R) ** 2 / np.diag(gram)
-            if np.all(np.isfinite(R)) and rel.min() > GRAM_RELATIVE_FLOOR:
-                return R
-        except linalg.LinAlgError:
-            pass
+        R = _cholesky(gram)
+        if R is not None:
+            return R
     Z = design()
     R = np.zeros((Z.shape[1], Z.shape[1]))         # square even when Z has fewer rows than columns
     Rq = linalg.qr(Z, mode="r", check_finite=False)[0][: Z.shape[1]]
@@ -412,14 +409,20 @@ def gram_factor(gram: np.ndarray, k: int) -> np.ndarray | None:
     ``GRAM_RELATIVE_FLOOR`` of its energy after projection on the columns before it (``R[i, i]**2 / G[i, i]``);
     otherwise (or when the factorisation fails) the caller solves on the explicit regressor instead.
     """
-    gxx = gram[:k, :k]
-    try:
-        R = linalg.cholesky(gxx, lower=False, check_finite=False)
-    except linalg.LinAlgError:
+    return _cholesky(gram[:k, :k])
+
+
+def _cholesky(gram: np.ndarray) -> np.ndarray | None:
+    """Upper Cholesky factor of ``gram`` by LAPACK ``potrf`` (the routine of ``scipy.linalg.cholesky``, called
+    directly: its wrapper costs more than the factorisation of a small matrix), or ``None`` when the factorisation
+    fails, is not finite or a column keeps no more than ``GRAM_RELATIVE_FLOOR`` of its energy."""
+    R, info = lapack.dpotrf(gram, lower=0, clean=1)
+    if info != 0:
         return None
+    d = R.diagonal()
     with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.diag(R) ** 2 / np.diag(gxx)
-    if np.all(np.isfinite(R)) and rel.min() > GRAM_RELATIVE_FLOOR:
+        rel = d * d / gram.diagonal()
+    if np.isfinite(R).all() and rel.min() > GRAM_RELATIVE_FLOOR:
         return R
     return None
 
@@ -442,7 +445,7 @@ def gram_solve(gram: np.ndarray, k: int, design: callable, *, what: str = "the r
     """
     R = gram_factor(gram, k)
     if R is not None:
-        return linalg.cho_solve((R, False), gram[:k, k:], check_finite=False)
+        return lapack.dpotrs(R, gram[:k, k:], lower=0)[0]      # scipy.linalg.cho_solve without its wrapper
     X, Y = design()
     if X.shape[0] < k:
         return None
