@@ -8,9 +8,12 @@ through each model and tested with ``LjungBox.test``, i.e. ``tsfdi.identify`` pe
 ``acorr_ljungbox`` per window and channel. Prints medians and ratios.
 
 Last, ``evaluate`` and ``Monitor.run`` against the same calls on the commit before the windowed
-engine (``previous_commit.py``; ``--against REF`` picks another commit). Target: not slower.
+engine (``previous_commit.py``; ``--against REF`` picks another commit). Target: not slower. Then ``evaluate``
+against the commit before issue 36 (lag-vectorised Ljung-Box kernel, lag products shared across the window
+lengths). Target: >= 1.7x. The comparisons time process CPU time (``--clock wall``: wall-clock time), which other
+jobs on a shared machine disturb far less; ``--compare-only`` runs only them.
 
-Run: ``python benchmarks/evaluate_speed.py [--against REF]``
+Run: ``python benchmarks/evaluate_speed.py [--against REF] [--clock cpu|wall] [--compare-only]``
 """
 
 import os
@@ -143,11 +146,21 @@ def main() -> None:
 if __name__ == "__main__":
     import argparse
 
-    from previous_commit import REFERENCE, compare
+    from previous_commit import BEFORE_ISSUE_36, REFERENCE, compare
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", default=REFERENCE, help=f"earlier commit to compare with (default {REFERENCE})")
+    parser.add_argument("--clock", default="cpu", choices=("cpu", "wall"),
+                        help="time of the commit comparisons: process CPU time (default) or wall-clock time")
+    parser.add_argument("--compare-only", action="store_true", help="only the commit comparisons")
     args = parser.parse_args()
-    main()
+    if not args.compare_only:
+        main()
     compare({"evaluate": ("evaluate, VAR(20) whiteness, 5/10/20 s, 120 records", 3),
-             "monitor": ("Monitor.run, VAR, 5 s windows, 20 severe records", 3)}, args.against)
+             "monitor": ("Monitor.run, VAR, 5 s windows, 20 severe records", 3)}, args.against, clock=args.clock)
+    # issue 36: the windowed Ljung-Box kernel vectorised over lags, its lag products shared by the window lengths
+    res = compare({"evaluate": ("evaluate, VAR(20) whiteness, 5/10/20 s, 120 records", 5)}, BEFORE_ISSUE_36,
+                  rounds=5, clock=args.clock)
+    old, new = res["evaluate"]
+    print(f"  issue 36 acceptance: evaluate {old / new:.2f}x faster than commit {BEFORE_ISSUE_36} "
+          f"-> {'PASS' if old / new >= 1.7 else 'FAIL'} (>= 1.7x)")

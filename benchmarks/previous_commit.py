@@ -1,7 +1,8 @@
 """The same workloads timed on this tree and on an earlier commit of tsfdi, in one run.
 
 Used by ``identify_speed.py`` and ``evaluate_speed.py`` (``--against REF``, default :data:`REFERENCE`, the last
-commit before the windowed engine of issue 16) and ``rls_throughput.py`` (default there: the commit before issue 18).
+commit before the windowed engine of issue 16; ``evaluate_speed.py`` also against the commit before issue 36),
+``rls_throughput.py`` (default there: the commit before issue 18) and ``glrt_speed.py`` (the commit before issue 36).
 The earlier ``tsfdi`` package is exported with ``git archive`` into a temporary folder; each measurement is a fresh
 interpreter (``python previous_commit.py WORKLOAD REPEAT CLOCK``) with that folder or this repository first on
 ``PYTHONPATH``, the two trees alternating so that a slow spell of the machine hits both. A worker builds its inputs,
@@ -34,6 +35,8 @@ os.environ["OPENBLAS_NUM_THREADS"] = "1"
 ROOT = Path(__file__).resolve().parents[1]
 #: The commit before the one-flow refactor (issue 16).
 REFERENCE = "899984e"
+#: The commit before the windowed kernels and GLRT scan of issue 36.
+BEFORE_ISSUE_36 = "f9e25de"
 
 
 CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
@@ -72,9 +75,9 @@ def _run(tree: Path, workload: str, repeat: int, clock: str) -> float:
     return float(json.loads(proc.stdout.strip().splitlines()[-1])["median_s"])
 
 
-def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3, clock: str = "wall") -> None:
+def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3, clock: str = "wall") -> dict:
     """Time every ``workloads`` entry (name -> (description, repeat)) on this tree and on ``against`` by ``clock``
-    ("wall" or "cpu", see the module docstring); print a table.
+    ("wall" or "cpu", see the module docstring); print a table and return name -> (previous, current) medians in s.
 
     A workload counts as not slower when the current median is at most 5 % above the previous one (timing noise of
     this machine between interleaved runs)."""
@@ -85,6 +88,7 @@ def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3, clock: s
     print(f"\nThis tree (HEAD {head} + working tree) against commit {against}, {rounds} interleaved rounds per tree, "
           f"each a fresh interpreter timing the median {what} time of its runs after a warm-up run:")
     print(f"  {'workload':<58} {'previous':>10} {'current':>10} {'prev/curr':>10}  verdict")
+    out = {}
     for name, (what, repeat) in workloads.items():
         old, new = [], []
         for _ in range(rounds):
@@ -93,6 +97,8 @@ def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3, clock: s
         mo, mn = statistics.median(old), statistics.median(new)
         verdict = "not slower" if mn <= 1.05 * mo else "SLOWER"
         print(f"  {what:<58} {mo * 1e3:8.1f}ms {mn * 1e3:8.1f}ms {mo / mn:9.2f}x  {verdict}")
+        out[name] = (mo, mn)
+    return out
 
 
 # ------------------------------------------------------------------------------------------------- workloads
@@ -165,6 +171,17 @@ def monitor_workload():
     return lambda: [mon.run(x) for x in recs]
 
 
+def glrt_workload():
+    """``GLRT(500, scale=1.0).statistic`` on 60,000 standard normal samples (benchmarks/glrt_speed.py)."""
+    import numpy as np
+
+    import tsfdi
+
+    x = np.random.default_rng(0).standard_normal(60_000)
+    gl = tsfdi.GLRT(500, scale=1.0)
+    return lambda: gl.statistic(x)
+
+
 def _rls_workload(d: int):
     """``RecursiveARX(d // 2, d - d // 2, 0, 0.99).run`` on white noise: 500,000 samples (100,000 at ``d >= 60``)."""
     import numpy as np
@@ -178,7 +195,7 @@ def _rls_workload(d: int):
 
 
 WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
-             "evaluate": evaluate_workload, "monitor": monitor_workload,
+             "evaluate": evaluate_workload, "monitor": monitor_workload, "glrt": glrt_workload,
              "rls_d4": lambda: _rls_workload(4), "rls_d20": lambda: _rls_workload(20),
              "rls_d60": lambda: _rls_workload(60)}
 

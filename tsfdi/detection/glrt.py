@@ -63,7 +63,7 @@ def _scan(x, first, window, coef):  # pragma: no cover - compiled
 def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
     """g(k) only, for k in [first, len(x)): O(window) per sample.
 
-    Window sums are differences of a cumulative sum ``c`` restarted every block of 4096 outputs (so its magnitude
+    Window sums are differences of a cumulative sum ``c`` restarted every block of 2048 outputs (so its magnitude
     stays bounded on long records). Within a block the loop runs over the post-change length ``n`` outside and the
     outputs ``k`` inside: ``g[k] = max(g[k], (c[k] - c[k - n])^2 coef / n)`` reads ``c`` at two unit-stride offsets
     and has no loop-carried dependency, so LLVM compiles it to packed subtract / multiply / compare instructions
@@ -75,7 +75,7 @@ def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
     n_all = x.shape[0]
     n_out = n_all - first
     g = np.zeros(n_out)
-    block = 4096
+    block = 2048                        # g and c of a block stay in the L1 / L2 cache
     c = np.empty(block + window + 1)
     for b0 in range(first, n_all, block):
         b1 = min(b0 + block, n_all)
