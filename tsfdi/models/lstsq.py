@@ -16,7 +16,6 @@ the residual sums of squares of *all* orders at once (see :func:`nested_fits`).
 
 from __future__ import annotations
 
-import functools
 import warnings
 
 import numba
@@ -248,14 +247,9 @@ def lag_products(y: np.ndarray, lags: int, x: np.ndarray | None = None) -> np.nd
     """
     n, s = y.shape
     B = lags + 1
-    within, cross = _product_bins(lags, s)
     M = _blocks(y, B)
     Mx = M if x is None else _blocks(x, B)
-    nbins = B * s * s + 1                      # the last bin collects the entries that are not needed
-    C = np.bincount(within, (Mx.T @ M).ravel(), nbins)
-    if M.shape[0] > 1:
-        C += np.bincount(cross, (Mx[1:].T @ M[:-1]).ravel(), nbins)
-    return C[:-1].reshape(B, s, s)
+    return _diagonal_sums(Mx.T @ M, Mx[1:].T @ M[:-1] if M.shape[0] > 1 else None, lags, s)
 
 
 def _residual_blocks(y: np.ndarray, coef: np.ndarray, const: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -328,12 +322,7 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
         e[end:st + p] = 0.0                         # the gap before the record and its first p samples
         end = st + r.shape[0]
     e[end:] = 0.0                                   # the zero padding of the last block
-    within, cross = _product_bins(p, s)
-    nbins = (p + 1) * s * s + 1
-    D = np.bincount(within, (E.T @ M).ravel(), nbins)
-    if M.shape[0] > 1:
-        D += np.bincount(cross, (E[1:].T @ M[:-1]).ravel(), nbins)
-    D = D[:-1].reshape(p + 1, s, s)                 # D[k][j, a] = sum_t e[t, j] y[t-k, a]
+    D = _diagonal_sums(E.T @ M, E[1:].T @ M[:-1] if M.shape[0] > 1 else None, p, s)   # D[k][j, a]: e[t, j] y[t-k, a]
     out = np.empty((c + p * s, s))
     out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
     if c:
@@ -341,20 +330,31 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
     return out
 
 
-@functools.lru_cache(maxsize=64)
-def _product_bins(p: int, s: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bins of :func:`lag_products`: entry ``(a, i, b, j)`` of ``M'M`` has lag ``a - b``, of ``M[1:]'M[:-1]``
-    lag ``B + a - b``; its bin is ``(lag, i, j)``, or the discard bin ``B s s`` when the lag is outside 0..p."""
+def _diagonal_sums(P: np.ndarray, Q: np.ndarray | None, p: int, s: int) -> np.ndarray:
+    """Sums along the block diagonals of the block products of :func:`lag_products`: entry ``(a, i, b, j)`` of
+    ``P = Mx'M`` has lag ``a - b``, of ``Q = Mx[1:]'M[:-1]`` (``None`` for a single block) lag ``B + a - b``; the
+    entries with a lag in ``0..p`` add up to ``C[lag, i, j]``, shape ``(p + 1, s, s)``. Each sum runs in the
+    order of ``numpy.bincount`` over the flattened product (the kernel it replaces: same values bit for bit)."""
+    C = np.zeros((p + 1, s, s))
+    _add_diagonals(P, 0, p, s, C)
+    if Q is not None:
+        D = np.zeros((p + 1, s, s))
+        _add_diagonals(Q, p + 1, p, s, D)
+        C += D
+    return C
+
+
+@numba.njit(cache=True)
+def _add_diagonals(P, shift, p, s, out):  # pragma: no cover - compiled
+    """``out[shift + a - b, i, j] += P[a s + i, b s + j]`` where ``0 <= shift + a - b <= p``, rows in order."""
     B = p + 1
-    a = np.arange(B)[:, None, None, None]
-    b = np.arange(B)[None, None, :, None]
-    i = np.arange(s)[None, :, None, None]
-    j = np.arange(s)[None, None, None, :]
-
-    def bins(lag):
-        return np.where((lag >= 0) & (lag < B), (lag * s + i) * s + j, B * s * s).ravel()
-
-    return bins(a - b), bins(B + a - b)
+    for a in range(B):
+        for i in range(s):
+            for b in range(B):
+                lag = shift + a - b
+                if 0 <= lag <= p:
+                    for j in range(s):
+                        out[lag, i, j] += P[a * s + i, b * s + j]
 
 
 def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int = 1) -> np.ndarray:
