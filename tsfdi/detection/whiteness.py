@@ -406,7 +406,7 @@ class LjungBoxWindows:
     Notes
     -----
     The prefix sums of the lag products (``N * lags`` values per channel) are kept when the record holds at most
-    ``2**22`` of them over all channels (32 MB), in one array; a longer record keeps only the O(N) sums and
+    ``2**20`` of them over all channels (8 MB), in one array; a longer record keeps only the O(N) sums and
     :meth:`statistic` recomputes the lag products for each call, a block of windows at a time, in bounded memory.
     The statistics are those of :func:`ljungbox_windows` (see its Notes).
 
@@ -460,7 +460,7 @@ class LjungBoxWindows:
 
 
 #: Most lag products (over all channels) a LjungBoxWindows keeps; above, they are recomputed per call in blocks.
-_KEEP_LAGPROD = 2 ** 22
+_KEEP_LAGPROD = 2 ** 20
 
 
 #: A window whose centred energy is below this fraction of the prefix sum of squares at its end is computed directly.
