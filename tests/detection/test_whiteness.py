@@ -328,3 +328,29 @@ def test_windowed_engine_on_shipped_data():
                 d = test.test(np.asarray(m.residuals(x))[s:s + window - m.lags])
                 np.testing.assert_allclose(ws.statistic[w, j], d.statistic, rtol=1e-9)
                 assert ws.channel_reject[w, j].tolist() == d.channel_reject.tolist()
+
+
+def test_residual_windows_share_lag_products_across_lengths(monkeypatch):
+    # ResidualWindows computes each model's lag products once per record and lags, whatever the window lengths
+    import tsfdi.windows
+    from tsfdi.detection import LjungBoxWindows
+
+    made = []
+
+    class Counting(LjungBoxWindows):
+        def __init__(self, *args, **kwargs):
+            made.append(args[1])
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(tsfdi.windows, "LjungBoxWindows", Counting)
+    rng = np.random.default_rng(8)
+    x = sps.lfilter([1], [1, -0.5], rng.standard_normal(3000))
+    models = {"a": tsfdi.AR(x[:1500], 3).fit(), "b": tsfdi.AR(x[1500:], 5).fit()}
+    rw = tsfdi.ResidualWindows(models).fit(x)
+    for window in (300, 600, 1200):
+        ws = rw.statistics(tsfdi.LjungBox(10, 1e-3), window=window, step=50)
+        for j, (name, m) in enumerate(models.items()):
+            np.testing.assert_array_equal(ws.statistic[:, j],
+                                          ljungbox_windows(m.residuals(x), 10, window - m.lags, 50))
+    rw.statistics(tsfdi.LjungBox(15, 1e-3), window=600, step=50)
+    assert made == [10, 10, 15, 15]
