@@ -337,7 +337,8 @@ class ResidualWindows:
                 pre = self._prefix[name]
             t = test[name] if isinstance(test, Mapping) else test
             lbw = None
-            if isinstance(t, LjungBox) and t.multivariate is None and n > t.lags:
+            if (isinstance(t, LjungBox) and t.multivariate is None and n > t.lags
+                    and type(t).window_statistic is LjungBox.window_statistic):   # not a subclass' own
                 key = (name, t.lags, t.demean)
                 if key not in self._lag_products:
                     self._lag_products[key] = LjungBoxWindows(self._resid[name], t.lags, demean=t.demean)
