@@ -156,14 +156,14 @@ def dask_runs(ds, base, clients: dict, repeat: int, runs: dict, driver_cpu: dict
         if memory is not None:
             t, reference, other, u = measure(lambda: tsfdi.evaluate(memory, base, **OPTIONS))
             runs["serial"].append((t, other, *u))
-            line.append(f"serial {t:.1f} s")
+            line.append(f"serial {t:.1f} s (CPU {u[0] + u[1]:.1f} s, {u[2]:,.0f} faults)")
         for name, client in clients.items():
             with client.as_current():
                 cpu = time.process_time()
                 t, ev, other, u = measure(lambda: tsfdi.evaluate(ds, base, **OPTIONS), client)
                 driver_cpu.setdefault(name, []).append(time.process_time() - cpu)
             runs[name].append((t, other, *u))
-            line.append(f"{name} {t:.1f} s")
+            line.append(f"{name} {t:.1f} s (CPU {u[0] + u[1]:.1f} s, {u[2]:,.0f} faults)")
             if memory is not None and not same(ev, reference):
                 raise AssertionError(f"{name}: the tables differ from the serial ones")
         print(f"repeat {r + 1}: " + ", ".join(line), flush=True)
