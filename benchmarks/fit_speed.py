@@ -27,21 +27,24 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
-import json  # noqa: E402
-import statistics  # noqa: E402
-import subprocess  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from previous_commit import CLOCKS, median_time, previous_tree  # noqa: E402
+from previous_commit import CLOCKS, compare, median_time  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the commit before fit() went through the Gram matrix (issue 36)
 AGAINST = "cf49e9f"
 CHANNELS = ("roll", "pitch", "r")
+#: workloads of benchmarks/previous_commit.py timed here: name -> (description, timed units per run)
+WORKLOADS = {
+    "var_fit_c": ("VAR(20, trend='c').fit(), 10 records x 6000 x 3", 7),
+    "var_fit_n": ("VAR(20, trend='n').fit(), 10 records x 6000 x 3", 7),
+    "fit_baselines": ("fit_baselines(shipped data), defaults", 7),
+    "fit_baselines_var10": ("fit_baselines(.., 10 records/state, VAR(20), whole)", 7),
+}
 
 
 def _records(n_records: int = 10):
@@ -51,74 +54,6 @@ def _records(n_records: int = 10):
 
     ds = load_hexacopter(ROOT / "data" / "hexacopter.nc")
     return [np.column_stack([ds[c].isel(record=i).values for c in CHANNELS]) for i in range(n_records)]
-
-
-def _var_fit(trend: str):
-    import tsfdi
-
-    spec = tsfdi.VAR(_records(), 20, trend=trend)
-    return spec.fit
-
-
-def _fit_baselines(**kw):
-    import tsfdi
-    from tsfdi.datasets import load_hexacopter
-    from tsfdi.datasets.hexacopter import hexacopter_signals
-
-    sig = hexacopter_signals(load_hexacopter(ROOT / "data" / "hexacopter.nc"))
-    return lambda: tsfdi.fit_baselines(sig, **kw)
-
-
-WORKLOADS = {
-    "var_fit_c": ("VAR(20, trend='c').fit(), 10 records x 6000 x 3", lambda: _var_fit("c")),
-    "var_fit_n": ("VAR(20, trend='n').fit(), 10 records x 6000 x 3", lambda: _var_fit("n")),
-    "fit_baselines": ("fit_baselines(shipped data), defaults", lambda: _fit_baselines()),
-    "fit_baselines_var10": ("fit_baselines(.., 10 records/state, VAR(20), whole)",
-                            lambda: _fit_baselines(fit_turbulence="severe", duration=None, models=["var"],
-                                                   fit_records=10, order=20)),
-}
-
-
-def _worker(name: str, repeat: int, clock: str) -> None:
-    from tsfdi.exceptions import UnstableModelWarning
-
-    warnings.simplefilter("ignore", UnstableModelWarning)
-    fn = WORKLOADS[name][1]()
-    t0 = time.perf_counter()
-    fn()                                                    # compile and warm up
-    fn()
-    once = time.perf_counter() - t0
-    number = max(1, int(0.1 / max(once / 2, 1e-9)))         # calls per timed unit: at least ~0.1 s of work
-    print(json.dumps({"median_s": median_time(fn, repeat, number, clock)}))
-
-
-def _run(tree: Path, name: str, repeat: int, clock: str) -> float:
-    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
-    proc = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", name, str(repeat), clock],
-                          env=env, capture_output=True, text=True, cwd=str(tree))
-    if proc.returncode != 0:
-        raise RuntimeError(f"workload {name} failed on {tree}:\n{proc.stderr[-3000:]}")
-    return float(json.loads(proc.stdout.strip().splitlines()[-1])["median_s"])
-
-
-def against_previous(against: str, rounds: int, clock: str) -> dict:
-    prev = previous_tree(against)
-    head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                          text=True).stdout.strip()
-    what = "wall-clock" if clock == "wall" else "CPU"
-    print(f"This tree (HEAD {head} + working tree) against commit {against}, {rounds} interleaved rounds per tree, "
-          f"each a fresh interpreter timing the median {what} time of its runs after two warm-up runs:")
-    print(f"  {'workload':<55} {'previous':>10} {'current':>10} {'prev/curr':>10}")
-    ratios = {}
-    for name, (desc, _) in WORKLOADS.items():
-        old, new = [], []
-        for _ in range(rounds):
-            old.append(_run(prev, name, 7, clock))
-            new.append(_run(ROOT, name, 7, clock))
-        mo, mn = statistics.median(old), statistics.median(new)
-        ratios[name] = mo / mn
-        print(f"  {desc:<55} {mo * 1e3:8.2f}ms {mn * 1e3:8.2f}ms {mo / mn:9.1f}x")
-    return ratios
 
 
 def against_statsmodels(clock: str) -> None:
@@ -165,7 +100,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--clock", choices=("cpu", "wall"), default="cpu")
     args = parser.parse_args()
-    ratios = against_previous(args.against, args.rounds, args.clock)
+    ratios = {name: prev / cur for name, (prev, cur) in
+              compare(WORKLOADS, against=args.against, rounds=args.rounds, clock=args.clock).items()}
     against_statsmodels(args.clock)
     print(f"\nIssue 36 acceptance: VAR(20) fit on 10 records >= 30x: {min(ratios['var_fit_c'], ratios['var_fit_n']):.1f}x "
           f"(worse trend); fit_baselines >= 5x: {ratios['fit_baselines']:.1f}x (defaults), "
@@ -173,7 +109,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 1 and sys.argv[1] == "--worker":
-        _worker(sys.argv[2], int(sys.argv[3]), sys.argv[4])
-    else:
-        main()
+    main()

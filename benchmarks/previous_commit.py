@@ -194,13 +194,42 @@ def _rls_workload(d: int):
     return lambda: RecursiveARX(d // 2, d - d // 2, 0, 0.99).run(y, u)
 
 
+def _var_fit_workload(trend: str):
+    """VAR(20).fit() on roll, pitch, r of 10 shipped records (benchmarks/fit_speed.py)."""
+    import numpy as np
+
+    import tsfdi
+    from tsfdi.datasets import load_hexacopter
+
+    ds = load_hexacopter(ROOT / "data" / "hexacopter.nc")
+    records = [np.column_stack([ds[c].isel(record=i).values for c in ("roll", "pitch", "r")]) for i in range(10)]
+    return tsfdi.VAR(records, 20, trend=trend).fit
+
+
+def _fit_baselines_workload(**kw):
+    """fit_baselines on the shipped data (benchmarks/fit_speed.py)."""
+    import tsfdi
+    from tsfdi.datasets import load_hexacopter
+    from tsfdi.datasets.hexacopter import hexacopter_signals
+
+    sig = hexacopter_signals(load_hexacopter(ROOT / "data" / "hexacopter.nc"))
+    return lambda: tsfdi.fit_baselines(sig, **kw)
+
+
 WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
              "evaluate": evaluate_workload, "monitor": monitor_workload, "glrt": glrt_workload,
              "rls_d4": lambda: _rls_workload(4), "rls_d20": lambda: _rls_workload(20),
-             "rls_d60": lambda: _rls_workload(60)}
+             "rls_d60": lambda: _rls_workload(60),
+             "var_fit_c": lambda: _var_fit_workload("c"), "var_fit_n": lambda: _var_fit_workload("n"),
+             "fit_baselines": _fit_baselines_workload,
+             "fit_baselines_var10": lambda: _fit_baselines_workload(fit_turbulence="severe", duration=None,
+                                                                    models=["var"], fit_records=10, order=20)}
 
 
 def _worker(name: str, repeat: int, clock: str) -> None:
+    import warnings
+
+    warnings.simplefilter("ignore")                         # a warning printed per call would be timed too
     fn = WORKLOADS[name]()
     t0 = time.perf_counter()
     fn()                                                    # compile and warm up
