@@ -317,9 +317,7 @@ class LinearTimeSeriesModel:
         regressor built), an ARX from its explicit regressor. Rows start at :attr:`hold_back` in every record.
         """
         if self.nb == 0:
-            p, h = self.na, self.hold_back
-            return lag_gram([self._scaled_values(i)[0][h - p:] for i in range(len(self.records))], p,
-                            const=bool(self.k_const))
+            return lag_gram(self._lag_records(), self.na, const=bool(self.k_const))
         return sum(Z.T @ Z for Z in (np.hstack(self._record_design(i)) for i in range(len(self.records))))
 
     def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
@@ -380,7 +378,8 @@ class LinearTimeSeriesModel:
         k = self.df_eq
         if self.nb == 0:                     # AR / VAR: the Gram matrix from lag products, no regressor built
             X = Y = None
-            gram = self.gram()
+            recs = self._lag_records()
+            gram = lag_gram(recs, self.na, const=bool(self.k_const))
             R, xty = gram_factor(gram, k), gram[:k, k:]
         else:
             X, Y = self.design_all(scaled=True)
@@ -392,20 +391,18 @@ class LinearTimeSeriesModel:
             coef = lstsq(X, Y)
         else:   # Cholesky solve and one step of refinement on the explicit residual (corrected semi-normal eqs.)
             coef = lapack.dpotrs(R, xty, lower=0)[0]        # scipy.linalg.cho_solve without its wrapper
-            coef += lapack.dpotrs(R, self._regressor_dot_residual(coef, X, Y), lower=0)[0]
+            resid_products = (X.T @ (Y - X @ coef) if X is not None else
+                              lag_residual_products(recs, coef, const=bool(self.k_const)))   # X'(Y - X coef)
+            coef += lapack.dpotrs(R, resid_products, lower=0)[0]
         res = self.results_class(self, self._from_fit_units(coef))
         res._warn_unstable()
         return res
 
-    def _regressor_dot_residual(self, coef: np.ndarray, X: np.ndarray | None, Y: np.ndarray | None) -> np.ndarray:
-        """``X'(Y - X coef)`` over all records in the units of the fit: from the given regressor, or for an AR /
-        VAR (``X`` None) from the records' residuals and their lag products with the samples
-        (:func:`~tsfdi.models.lstsq.lag_residual_products`), without building the regressor."""
-        if X is not None:
-            return X.T @ (Y - X @ coef)
+    def _lag_records(self) -> list:
+        """Each record's samples in the units of the fit from ``hold_back - na`` on: the rows of :meth:`gram` and of
+        the AR / VAR fit's refinement (:func:`~tsfdi.models.lstsq.lag_residual_products`, no regressor built)."""
         p, h = self.na, self.hold_back
-        return lag_residual_products([self._scaled_values(i)[0][h - p:] for i in range(len(self.records))], coef,
-                                     const=bool(self.k_const))
+        return [self._scaled_values(i)[0][h - p:] for i in range(len(self.records))]
 
     # --- held-out residuals ------------------------------------------------------------------------
     def held_out_residuals(self, blocks: int | None = None, *, groups: Any = None) -> list:
