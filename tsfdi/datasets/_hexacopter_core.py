@@ -102,8 +102,16 @@ def _bet(P, om, vhx, vhy, vhz, vi, load):
     load[2] = h
     load[3] = mr
     load[4] = mp
-    # Pitt-Peters uniform mode: (8/3) rho R^3 dvi/dt = T - 2 rho pi R^2 V_m vi
-    load[5] = (T - 2.0 * rho * math.pi * R * R * vm * vi) / (8.0 / 3.0 * rho * R * R * R)
+    load[5] = _inflow_rate(P, T, vm, vi)
+
+
+@njit(cache=True)
+def _inflow_rate(P, T, vm, vi):
+    """d vi / dt of the Pitt-Peters uniform mode, (8/3) rho R^3 dvi/dt = T - 2 rho pi R^2 V_m vi (``vm`` the mass-flow
+    velocity through the disc)."""
+    rho = P[14]
+    R = P[23]
+    return (T - 2.0 * rho * math.pi * R * R * vm * vi) / (8.0 / 3.0 * rho * R * R * R)
 
 
 @njit(cache=True)
@@ -142,8 +150,7 @@ def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
         vi = x[18 + i]
         if alive[i] == 0:
             # a failed rotor makes no load; its wake decays (Pitt-Peters with T = 0)
-            dx[18 + i] = (-2.0 * P[14] * math.pi * P[23] * P[23] * math.sqrt(vhx * vhx + vhy * vhy + (vi - vhz) ** 2)
-                          * vi) / (8.0 / 3.0 * P[14] * P[23] ** 3)
+            dx[18 + i] = _inflow_rate(P, 0.0, math.sqrt(vhx * vhx + vhy * vhy + (vi - vhz) ** 2), vi)
             continue
         _bet(P, om, vhx, vhy, vhz, vi, load)
         dx[18 + i] = load[5]
@@ -169,57 +176,27 @@ def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
 
 
 @njit(cache=True)
-def _deriv(x, wcmd, g, P, alive, dx, sf):
-    # parameters
-    m = P[0]
-    grav = P[1]
-    Ixx = P[2]
-    Iyy = P[3]
-    Izz = P[4]
+def _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr):
+    """Forces and moments of the six lumped-coefficient rotors (``blade_element=False``: thrust and torque
+    coefficients, inflow, rotor drag and flapping terms) about the centre of gravity (body axes)."""
     arm = P[5]
     hr = P[6]
     kT = P[7]
     kQ = P[8]
-    tau = P[9]
     cw = P[10]
     ch = P[11]
     kf = P[12]
-    cda = P[13]
-    rho = P[14]
-    kn = P[15]
     rev = P[18] > 0.0
     # centre-of-gravity offset from the hub centre (body x, y): the rotor arms are measured from the CG
     cgx = P[19]
     cgy = P[20]
-    phi = x[3]
-    th = x[4]
-    u = x[6]
-    v = x[7]
-    w = x[8]
-    p = x[9]
-    q = x[10]
-    r = x[11]
-    sph = math.sin(phi)
-    cph = math.cos(phi)
-    sth = math.sin(th)
-    cth = math.cos(th)
-    ur = u - g[0]
-    vr = v - g[1]
-    wr = w - g[2]
-    pr = p - g[3]
-    qr = q - g[4]
-    rr = r - g[5]
     Fx = 0.0
     Fy = 0.0
     Fz = 0.0
     Mx = 0.0
     My = 0.0
     Mz = 0.0
-    if P[21] > 0.0:
-        Fx, Fy, Fz, Mx, My, Mz = _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx)
     for i in range(6):
-        if P[21] > 0.0:
-            break
         ang = i * (math.pi / 3.0)
         xi = arm * math.cos(ang) - cgx
         yi = arm * math.sin(ang) - cgy
@@ -258,6 +235,45 @@ def _deriv(x, wcmd, g, P, alive, dx, sf):
         My += kf * aom * vhx
         # reaction torque, opposite to the rotor's spin (yaw damping -2 k_Q om r through om)
         Mz += -spin * kQ * om * aom
+    return Fx, Fy, Fz, Mx, My, Mz
+
+
+@njit(cache=True)
+def _deriv(x, wcmd, g, P, alive, dx, sf):
+    # parameters
+    m = P[0]
+    grav = P[1]
+    Ixx = P[2]
+    Iyy = P[3]
+    Izz = P[4]
+    tau = P[9]
+    cda = P[13]
+    rho = P[14]
+    kn = P[15]
+    phi = x[3]
+    th = x[4]
+    u = x[6]
+    v = x[7]
+    w = x[8]
+    p = x[9]
+    q = x[10]
+    r = x[11]
+    sph = math.sin(phi)
+    cph = math.cos(phi)
+    sth = math.sin(th)
+    cth = math.cos(th)
+    ur = u - g[0]
+    vr = v - g[1]
+    wr = w - g[2]
+    pr = p - g[3]
+    qr = q - g[4]
+    rr = r - g[5]
+    if P[21] > 0.0:
+        Fx, Fy, Fz, Mx, My, Mz = _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx)
+    else:
+        Fx, Fy, Fz, Mx, My, Mz = _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr)
+        for i in range(6):
+            dx[18 + i] = 0.0        # no inflow states
     # fuselage drag and weathervane yaw moment
     vmag = math.sqrt(ur * ur + vr * vr + wr * wr)
     Fx += -0.5 * rho * cda * vmag * ur
@@ -290,9 +306,6 @@ def _deriv(x, wcmd, g, P, alive, dx, sf):
     dx[0], dx[1], dx[2] = _ned_velocity(x)
     for i in range(6):
         dx[12 + i] = (wcmd[i] - x[12 + i]) / tau
-    if P[21] <= 0.0:
-        for i in range(6):
-            dx[18 + i] = 0.0
 
 
 @njit(cache=True)
