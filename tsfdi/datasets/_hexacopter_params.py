@@ -71,10 +71,10 @@ class HexacopterParameters:
         blades), but a rigid blade-element rotor underestimates the rotor drag measured on flexible small
         propellers (about 0.076 N/(m/s) for six rotors at hover against the ~0.36 N/(m/s) of the order reported
         by Mahony et al. [1] and Martin & Salaun [2]); this term adds the part from blade flexing, at the value
-        of that order (0.06 N/(m/s) per rotor at hover). Chosen on paper 003's published physical quantities
-        only: with 0 the largest steady-state heading variance after a failure in severe turbulence is about
-        1,600,000 times the paper's, with 1.2e-4 about 100,000 times (``docs/scripts/hexacopter_quantities.py``;
-        both far off: see the module docstring on one-way rotors).
+        of that order (0.06 N/(m/s) per rotor at hover). Kept on paper 003's published physical quantities
+        only: with it the failed aircraft's post-failure heading variance, measured by
+        ``docs/scripts/hexacopter_quantities.py`` while tuning, came out lower than with 0 (the heading is the one
+        quantity one-way rotors cannot reach: see the module docstring).
     k_flapping : float
         0 (4e-6 N s in :data:`BIDIRECTIONAL_HEXACOPTER`): additional blade-flapping pitching moment
         ``k_flapping Omega (-v_y, v_x)`` of a rotor whose disc tilts away from the relative wind. The

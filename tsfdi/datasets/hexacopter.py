@@ -137,10 +137,9 @@ keep slipping. How far depends on the turbulence. In the shipped design (paper's
 :data:`PAPER_SCALE_LENGTH` and :data:`PAPER_INTENSITY_SCALE`; ``data/README.md``) no record is lost and the heading
 is held: over 30-60 s its range has a median of 0.04-0.05 rad after a failure in light, 0.07-0.09 rad in moderate
 and 0.10-0.17 rad in severe turbulence (healthy 0.02, 0.05, 0.07 rad). With the standard's intensities
-(``intensity_scale=1``) it slips: without rotor drag (issue-30 report, ``make_hexacopter_dataset(5, seed=3030)``)
-the median heading change after rotor 1 or 2 failures was 14-21 rad in severe turbulence, and rotor 6 failures
-slipped at every level. At hover the aircraft with a failed rotor keeps turning slowly without any turbulence
-(``test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop``). The bidirectional preset
+(``intensity_scale=1``, ``scale_length=None``) it slips by turns in severe turbulence (the MIL-F-8785C column
+of ``docs/figures/hexacopter_quantities.md``, where the heading ranges above are computed too). At hover the
+aircraft with a failed rotor keeps turning slowly without any turbulence (``test_hover_heading_after_failure_needs_the_opposite_rotor_to_stop``). The bidirectional preset
 (:data:`BIDIRECTIONAL_HEXACOPTER`) can reverse the opposite rotor and holds its heading after the failure at
 every turbulence level (its tests in ``tests/datasets/test_hexacopter.py``). ``yaw`` is the unwrapped heading;
 a record that loses the aircraft is flagged in ``lost_control``.
@@ -471,7 +470,8 @@ PAPER_SCALE_LENGTH = 0.6096
 #: above and nothing else, so that its published physical quantities come out within a factor of 3 on two
 #: development seeds (the post-failure steady-state roll and pitch variances, the pitch AR order and RSS/SSS, the
 #: VAR order; the heading's cannot with one-way rotors): ``docs/scripts/hexacopter_quantities.py``. With the
-#: standard's intensities (1.0) and lengths the steady-state variances are 47-400 times the paper's.
+#: standard's intensities (1.0) and lengths the steady-state variances are tens to hundreds of times the
+#: paper's (the MIL-F-8785C column of ``docs/figures/hexacopter_quantities.md``).
 PAPER_INTENSITY_SCALE = 0.16
 
 
