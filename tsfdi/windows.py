@@ -23,8 +23,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numba
 import numpy as np
+from scipy.linalg import solve_triangular
 
 from tsfdi._data import as_signal
 from tsfdi._validation import boolean, int_like, option
@@ -160,18 +160,21 @@ class WindowStatistics:
         return f"WindowStatistics(windows={len(self)}, window={self.window}, step={self.step}, models={self.models})"
 
 
-@numba.njit(cache=True, nogil=True)
-def _prefix(e):  # pragma: no cover - compiled
-    """Cumulative sums of the lag-0 products ``e_i e_j`` of the residuals (leading zero row): shape (N + 1, k * k),
-    column ``i * k + j``."""
-    n, k = e.shape
-    out = np.empty((n + 1, k * k))
-    out[0, :] = 0.0
-    for t in range(n):
-        for i in range(k):
-            for j in range(k):
-                out[t + 1, i * k + j] = out[t, i * k + j] + e[t, i] * e[t, j]
-    return out
+def _sample_loglik(res: Any, e: np.ndarray) -> np.ndarray:
+    r"""Gaussian log-likelihood of every residual row ``e_t`` under the model's innovation law :math:`N(0, \Sigma)`:
+    :math:`-\tfrac12(\ln\det\Sigma + e_t'\Sigma^{-1}e_t + k\ln 2\pi)`, ``-inf`` everywhere for a model without a
+    proper law (singular :math:`\Sigma`)."""
+    k = e.shape[1]
+    sigma = np.asarray(res.sigma if hasattr(res, "sigma") else res.sigma2, dtype=np.float64).reshape(k, k)
+    try:
+        chol = np.linalg.cholesky(sigma)
+    except np.linalg.LinAlgError:
+        chol = None
+    if chol is None or not np.all(np.isfinite(chol)) or np.any(np.diag(chol) <= 0):
+        return np.full(e.shape[0], -np.inf)            # no proper Gaussian law (an exact fit): never the most likely
+    z = solve_triangular(chol, e.T, lower=True, check_finite=False)
+    logdet = 2.0 * np.log(np.diag(chol)).sum()
+    return -0.5 * (logdet + np.einsum("ij,ij->j", z, z) + k * np.log(2 * np.pi))
 
 
 class ResidualWindows:
@@ -272,7 +275,8 @@ class ResidualWindows:
 
     def _set(self, resid: dict, nobs: int, channels: Any) -> ResidualWindows:
         self._resid = resid
-        self._prefix: dict = {}          # name -> prefix sums of the likelihood score, made when first asked
+        self._loglik: dict = {}          # name -> per-sample log-likelihood of the residual rows, made when first asked
+        self._prefix: dict = {}          # name -> its prefix sums (leading zero): the windows' likelihood scores
         self._lag_products: dict = {}    # (name, lags, demean) -> LjungBoxWindows, shared by every window length
         self.nobs_ = nobs
         self.channels_ = tuple(str(c) for c in channels) if channels is not None else tuple(
@@ -280,6 +284,45 @@ class ResidualWindows:
         if len(self.channels_) != self.nchan:
             raise ValueError(f"channels must name the {self.nchan} channel(s), got {list(self.channels_)}")
         return self
+
+    def _sample_loglik(self, name: str) -> np.ndarray:
+        """Per-sample log-likelihood of model ``name``'s residual rows, computed once per record."""
+        if name not in self._loglik:
+            self._loglik[name] = _sample_loglik(self.models[name], self._resid[name])
+        return self._loglik[name]
+
+    def loglik(self, *, common: int | None = None) -> np.ndarray:
+        r"""Gaussian log-likelihood of every model's residual at every sample, on the samples common to all models.
+
+        The per-sample series behind :attr:`WindowStatistics.loglik` (a window's score is its mean over the window's
+        common samples) and the input of the sequential rules (:func:`tsfdi.detection.sequential.msprt`).
+
+        Parameters
+        ----------
+        common : int, optional
+            First signal sample of the series (default: the largest model order, the first sample every model has a
+            residual for); at least that order.
+
+        Returns
+        -------
+        ndarray, shape (nobs - common, n_models)
+            Row ``r`` is signal sample ``common + r``; column ``j`` is model ``j`` (in the order of ``models``):
+            :math:`\ell_{t,j} = -\tfrac12(\ln\det\Sigma_j + e_{t,j}'\Sigma_j^{-1}e_{t,j} + k\ln 2\pi)`, with
+            :math:`\Sigma_j` the fit's ML residual covariance; ``-inf`` for a model without a proper law
+            (singular :math:`\Sigma_j`).
+
+        Raises
+        ------
+        ValueError
+            The engine is not fitted, or ``common`` is below the largest model order or leaves no sample.
+        """
+        if self._resid is None:
+            raise ValueError("ResidualWindows is not fitted: call fit(signal) first")
+        pmax = max(self.orders.values())
+        common = pmax if common is None else int_like(common, "common", minimum=pmax)
+        if common >= self.nobs_:
+            raise ValueError(f"common must be below the signal length {self.nobs_}, got {common}")
+        return np.column_stack([self._sample_loglik(name)[common - p:] for name, p in self.orders.items()])
 
     def statistics(self, test: Any, *, window: int, step: int = 1, common: int | None = None,
                    loglik: bool = True) -> WindowStatistics:
@@ -330,10 +373,11 @@ class ResidualWindows:
         for name, res in self.models.items():
             p = self.orders[name]
             n = window - p
-            pre = None
+            pre = False
             if loglik:
                 if name not in self._prefix:
-                    self._prefix[name] = _prefix(self._resid[name])
+                    ll = self._sample_loglik(name)
+                    self._prefix[name] = np.concatenate([[0.0], np.cumsum(ll)]) if np.isfinite(ll).all() else None
                 pre = self._prefix[name]
             t = test[name] if isinstance(test, Mapping) else test
             lbw = None
@@ -354,10 +398,11 @@ class ResidualWindows:
                                 channel_reject=rej_c, reject=rej_c.any(axis=2), loglik=ll, decisions=dec)
 
     @staticmethod
-    def _model(res: Any, e: np.ndarray, prefix: np.ndarray | None, test: Any, starts: np.ndarray, n: int, step: int,
+    def _model(res: Any, e: np.ndarray, prefix: Any, test: Any, starts: np.ndarray, n: int, step: int,
                name: str, p: int, pmax: int, window: int, lbw: LjungBoxWindows | None = None) -> tuple:
         """One fitted model with its record residuals ``e`` on every window: statistic, p-value, threshold, channel
-        rejection (n_windows, k), the likelihood score (n_windows,; NaN without the residuals' ``prefix`` sums)
+        rejection (n_windows, k), the likelihood score (n_windows,; NaN when ``prefix`` is False, -inf when it is
+        None: a model without a proper Gaussian law; else the prefix sums of the per-sample log-likelihood)
         and the window decisions (or None). ``lbw``: the lag products of ``e`` for a per-channel Ljung-Box test
         (kept by :meth:`statistics` across window lengths)."""
         nwin, k = starts.size, e.shape[1]
@@ -378,18 +423,13 @@ class ResidualWindows:
             thr = np.array([d.threshold for d in ds], dtype=float).reshape(nwin, -1)
             rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
         thr = np.broadcast_to(np.asarray(thr, dtype=float), rej_c.shape)
-        if prefix is None:
+        if prefix is False:
             return stat, pv, thr, rej_c, np.full(nwin, np.nan), ds
-        c2 = prefix
-        # likelihood score on the common samples [s + pmax, s + W): residual rows [s + pmax - p, s + W - p)
+        if prefix is None:            # no proper Gaussian law (singular Sigma): never the most likely
+            return stat, pv, thr, rej_c, np.full(nwin, -np.inf), ds
+        # likelihood score: the mean per-sample log-likelihood (ResidualWindows.loglik) on the common samples
+        # [s + pmax, s + W), residual rows [s + pmax - p, s + W - p)
         off = pmax - p
         m = window - pmax
-        lo, hi = starts + off, starts + off + m
-        # Gaussian log-likelihood per sample of the window's residuals under the model's innovation law N(0, Sigma)
-        sigma = np.asarray(res.sigma if hasattr(res, "sigma") else res.sigma2, dtype=np.float64).reshape(k, k)
-        sign, logdet = np.linalg.slogdet(sigma)
-        if sign <= 0 or not np.isfinite(logdet):      # no proper Gaussian law (an exact fit): never the most likely
-            return stat, pv, thr, rej_c, np.full(nwin, -np.inf), ds
-        second = ((c2[hi] - c2[lo]) / m).reshape(nwin, k, k)   # (1/m) sum e e', not demeaned: a mean shift counts
-        quad = np.einsum("ij,wji->w", np.linalg.inv(sigma), second)
-        return stat, pv, thr, rej_c, -0.5 * (logdet + quad + k * np.log(2 * np.pi)), ds
+        lo = starts + off
+        return stat, pv, thr, rej_c, (prefix[lo + m] - prefix[lo]) / m, ds
