@@ -26,7 +26,7 @@ from scipy.linalg import lapack
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "lag_products", "lag_residuals", "lag_residual_products",
+__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "lag_products", "lag_residuals", "lag_residual_products",
            "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
@@ -123,7 +123,16 @@ def _end_to_end(records: list[np.ndarray], lags: int) -> tuple[np.ndarray, list[
     return np.concatenate(parts[:-1]), starts
 
 
-def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.ndarray:
+def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
+    """The records end to end (:func:`_end_to_end`) cut in blocks of ``lags + 1`` samples (:func:`_blocks`), and
+    where each record starts: the one layout :func:`lag_gram` and :func:`lag_residual_products` both read, built
+    once by a fit that calls both."""
+    cat, starts = _end_to_end(y if isinstance(y, list) else [y], lags)
+    return _blocks(cat, lags + 1), starts
+
+
+def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
+             blocks: tuple[np.ndarray, list[int]] | None = None) -> np.ndarray:
     """Gram matrix of ``[const, -y[t-1], ..., -y[t-lags], y[t]]`` over ``t = lags .. n-1`` in O(n * lags).
 
     The lag-product blocks are Toeplitz up to end effects. With ``L[i, j] = sum_{t=p}^{n-1} y[t-i] y[t-j]'``
@@ -146,6 +155,8 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
         Largest lag ``p`` (``n > p``).
     const : bool
         Prepend the intercept column.
+    blocks : tuple, optional
+        :func:`lag_blocks` of ``y`` and ``lags``, when the caller has them already.
 
     Returns
     -------
@@ -155,7 +166,8 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
     """
     records = y if isinstance(y, list) else [y]
     s = records[0].shape[1]
-    C = lag_products(_end_to_end(records, lags)[0], lags)
+    M = (lag_blocks(records, lags) if blocks is None else blocks)[0]
+    C = _block_products(M, M, lags, s)
     out = np.empty((int(const) + (lags + 1) * s,) * 2)
     # the column sums through a contiguous copy: numpy reduces axis 0 of an (n, s) array slowly for small s
     S0 = [r[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(r[lags:].T).sum(axis=1) for r in records]
@@ -248,15 +260,21 @@ def lag_products(y: np.ndarray, lags: int, x: np.ndarray | None = None) -> np.nd
     n, s = y.shape
     B = lags + 1
     M = _blocks(y, B)
-    Mx = M if x is None else _blocks(x, B)
-    return _diagonal_sums(Mx.T @ M, Mx[1:].T @ M[:-1] if M.shape[0] > 1 else None, lags, s)
+    return _block_products(M if x is None else _blocks(x, B), M, lags, s)
 
 
-def _residual_blocks(y: np.ndarray, coef: np.ndarray, const: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Blocks ``M`` of ``y`` (rows of ``B = p + 1`` samples, :func:`_blocks`) and the residuals ``E`` in the same
-    layout, before any sample is set aside; see :func:`lag_residuals`."""
-    s = y.shape[1]
+def _block_products(Mx: np.ndarray, M: np.ndarray, p: int, s: int) -> np.ndarray:
+    """``C[k] = sum_u x[u] y[u-k]'``, ``k = 0..p``, from the blocks ``Mx`` and ``M`` of ``x`` and ``y``
+    (:func:`_blocks`, ``B = p + 1``): the two block products and the sums along their block diagonals
+    (:func:`lag_products`)."""
+    return _diagonal_sums(Mx.T @ M, Mx[1:].T @ M[:-1] if M.shape[0] > 1 else None, p, s)
+
+
+def _residual_blocks(M: np.ndarray, coef: np.ndarray, const: bool) -> np.ndarray:
+    """The residuals ``E`` in the layout of the blocks ``M`` of a signal (rows of ``B = p + 1`` samples,
+    :func:`_blocks`), before any sample is set aside; see :func:`lag_residuals`."""
     c = int(const)
+    s = coef.shape[1]
     p = (coef.shape[0] - c) // s
     B = p + 1
     W = np.concatenate([np.eye(s)[None], coef[c:].reshape(p, s, s)])   # W[k][i, j]: input i, equation j
@@ -264,13 +282,12 @@ def _residual_blocks(y: np.ndarray, coef: np.ndarray, const: bool) -> tuple[np.n
     lag = a[None, :] - a[:, None]                                         # [b, a] = a - b
     T0 = np.where((lag >= 0)[:, :, None, None], W[np.clip(lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
     T1 = np.where((lag < 0)[:, :, None, None], W[np.clip(B + lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
-    M = _blocks(y, B)
     E = M @ T0.reshape(B * s, B * s)
     if M.shape[0] > 1:
         E[1:] += M[:-1] @ T1.reshape(B * s, B * s)
     if c:
         E -= np.tile(coef[0], B)
-    return M, E
+    return E
 
 
 def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray:
@@ -294,12 +311,13 @@ def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray
     """
     n, s = y.shape
     p = (coef.shape[0] - int(const)) // s
-    e = _residual_blocks(y, coef, const)[1].reshape(-1, s)[:n]
+    e = _residual_blocks(_blocks(y, p + 1), coef, const).reshape(-1, s)[:n]
     e[:p] = 0.0
     return e
 
 
-def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *, const: bool) -> np.ndarray:
+def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *, const: bool,
+                          blocks: tuple[np.ndarray, list[int]] | None = None) -> np.ndarray:
     """``X'(Y - X coef)`` of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` over ``t = p .. n-1``, summed
     over the records, without the regressor.
 
@@ -308,21 +326,22 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
     products with the samples, ``D[k] = sum_t e[t] y[t-k]'``, by the block products of :func:`lag_products`:
     four BLAS-3 calls in all. The block of lag ``k`` is ``-D[k]'``, the intercept row ``sum_t e[t]``. This is the
     right-hand side of a refinement step of the normal equations: accurate to rounding of ``|X| |e|``, where
-    ``X'Y - X'X coef`` from the Gram matrix loses the digits of ``|X| |Y|``.
+    ``X'Y - X'X coef`` from the Gram matrix loses the digits of ``|X| |Y|``. ``blocks``: :func:`lag_blocks` of
+    ``y`` when the caller has them already.
     """
     records = y if isinstance(y, list) else [y]
     s = records[0].shape[1]
     c = int(const)
     p = (coef.shape[0] - c) // s
-    cat, starts = _end_to_end(records, p)
-    M, E = _residual_blocks(cat, coef, const)
+    M, starts = lag_blocks(records, p) if blocks is None else blocks
+    E = _residual_blocks(M, coef, const)
     e = E.reshape(-1, s)
     end = 0
     for st, r in zip(starts, records):
         e[end:st + p] = 0.0                         # the gap before the record and its first p samples
         end = st + r.shape[0]
     e[end:] = 0.0                                   # the zero padding of the last block
-    D = _diagonal_sums(E.T @ M, E[1:].T @ M[:-1] if M.shape[0] > 1 else None, p, s)   # D[k][j, a]: e[t, j] y[t-k, a]
+    D = _block_products(E, M, p, s)                 # D[k][j, a]: e[t, j] y[t-k, a]
     out = np.empty((c + p * s, s))
     out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
     if c:
