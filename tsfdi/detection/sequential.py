@@ -1,0 +1,995 @@
+r"""Sequential decisions on residuals: Wald's SPRT and the multi-hypothesis rule (MSPRT).
+
+A windowed test decides on a fixed number of samples. A sequential test accumulates the log-likelihood ratio of
+the residuals sample by sample and stops as soon as the evidence crosses a bound set by the error probabilities
+asked for, so that each decision comes with its error probabilities and an expected time to decide (the ASN).
+
+* :class:`SPRT`: Wald's sequential probability ratio test of a healthy residual law (H0) against a fault law
+  (H1: a residual variance ratio, a mean shift, or a fault model's residuals), with Wald's bounds
+  (:func:`wald_bounds`), its operating characteristic (:meth:`SPRT.oc`), average sample number
+  (:meth:`SPRT.asn`), a Monte Carlo check (:meth:`SPRT.monte_carlo`) and a scale correction of the per-sample
+  log-likelihood ratio for models estimated from real records (:meth:`SPRT.calibrate`).
+* :func:`msprt`: Armitage's multi-hypothesis rule on the per-sample log-likelihoods of ``M`` candidate models,
+  with the scale correction :func:`msprt_scale`.
+
+References
+----------
+Wald, A. (1945). Sequential tests of statistical hypotheses. *Ann. Math. Statist.* 16(2), 117-186.
+Wald, A. (1947). *Sequential Analysis*. Wiley (OC and ASN approximations, chapters 3 and 4).
+Kopsaftopoulos, F. P., Fassois, S. D. (2015). A vibration model residual-based sequential probability ratio test
+framework for structural health monitoring. *Structural Health Monitoring* 14(4), 359-381 (paper 003, ref. 11).
+Armitage, P. (1950). Sequential analysis with more than two alternative hypotheses, and its relation to
+discriminant function analysis. *J. R. Statist. Soc. B* 12(1), 137-144.
+Baum, C. W., Veeravalli, V. V. (1994). A sequential procedure for multihypothesis testing. *IEEE Trans. Inform.
+Theory* 40(6), 1994-2007.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numba
+import numpy as np
+import pandas as pd
+from scipy import linalg, optimize
+
+from tsfdi._data import as_signal, sampling_frequency
+from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_like, option, probability
+from tsfdi.summary import Summary
+
+__all__ = ["SPRT", "SequentialDecision", "SequentialIdentification", "msprt", "msprt_scale", "wald_bounds"]
+
+_LOG2PI = float(np.log(2.0 * np.pi))
+
+
+def wald_bounds(alpha: float, beta: float) -> tuple[float, float]:
+    r"""Wald's bounds of the sequential probability ratio test.
+
+    Parameters
+    ----------
+    alpha, beta : float
+        Type I (false alarm) and type II (missed fault) error probabilities asked for, each in (0, 1), with
+        ``alpha + beta < 1``.
+
+    Returns
+    -------
+    lower, upper : float
+        :math:`B = \ln(\beta / (1 - \alpha))` and :math:`A = \ln((1 - \beta) / \alpha)`: the test accepts H0 when
+        the cumulative log-likelihood ratio falls to :math:`B` and rejects it when it reaches :math:`A`.
+
+    Notes
+    -----
+    Wald (1945, eqs. 3.30-3.31): with these bounds the realised error probabilities :math:`\alpha', \beta'` satisfy
+    :math:`\alpha' \le \alpha / (1 - \beta)` and :math:`\beta' \le \beta / (1 - \alpha)` (and
+    :math:`\alpha' + \beta' \le \alpha + \beta`) whatever the overshoot of the bounds, provided the per-sample
+    log-likelihood ratio is the true one. The overshoot makes the realised rates smaller than ``alpha``, ``beta``.
+    """
+    alpha = probability(alpha, "alpha")
+    beta = probability(beta, "beta")
+    if alpha + beta >= 1.0:
+        raise ValueError(f"alpha + beta must be < 1, got alpha={alpha:g}, beta={beta:g}")
+    return float(np.log(beta) - np.log1p(-alpha)), float(np.log1p(-beta) - np.log(alpha))
+
+
+# ---------------------------------------------------------------------------------------------------- kernels
+@numba.njit(cache=True, nogil=True)
+def _sprt_paths(z, s0, lower, upper, restart):  # pragma: no cover - compiled
+    """Cumulative sums of the rows of ``z`` from ``s0`` (restarted at 0 at each lower crossing when ``restart``);
+    per row the first crossing (sample index, -1 none) and its side (+1 upper, -1 lower), and the restarts before
+    it."""
+    n, m = z.shape
+    path = np.empty((n, m))
+    first = np.full(n, -1)
+    side = np.zeros(n, dtype=np.int8)
+    restarts = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        s = s0[i]
+        for t in range(m):
+            s += z[i, t]
+            if first[i] < 0:
+                if s >= upper:
+                    first[i] = t
+                    side[i] = 1
+                elif s <= lower:
+                    if restart:
+                        restarts[i] += 1
+                        s = 0.0
+                    else:
+                        first[i] = t
+                        side[i] = -1
+            elif restart and s <= lower:
+                s = 0.0
+            path[i, t] = s
+    return path, first, side, restarts
+
+
+@numba.njit(cache=True, nogil=True)
+def _pairwise_cusum(loglik, scale, bound):  # pragma: no cover - compiled
+    """Dominance paths of the restarted MSPRT: ``W[j, k] = max(0, W[j, k] + scale (l_j - l_k))`` and
+    ``d_j = min_{k != j} W[j, k]``; the first sample where some ``d_j >= bound``."""
+    n, m = loglik.shape
+    w = np.zeros((m, m))
+    dom = np.empty((n, m))
+    first = -1
+    for t in range(n):
+        for j in range(m):
+            lo = np.inf
+            for k in range(m):
+                if k != j:
+                    v = w[j, k] + scale * (loglik[t, j] - loglik[t, k])
+                    v = v if v > 0.0 else 0.0
+                    w[j, k] = v
+                    if v < lo:
+                        lo = v
+            dom[t, j] = lo
+            if first < 0 and lo >= bound:
+                first = t
+    return dom, first
+
+
+# ---------------------------------------------------------------------------------------------------- results
+def _seconds(n: int, dt: float | None) -> float:
+    return float(n * dt) if (dt is not None and n >= 0) else float("nan")
+
+
+@dataclass(frozen=True)
+class SequentialDecision:
+    """Outcome of :meth:`SPRT.test`: Wald's sequential decision on one residual record.
+
+    Attributes
+    ----------
+    reject : bool
+        True when the statistic reached the upper bound (H1, fault); False when it reached the lower bound (H0
+        accepted) or when the record ended first (see ``decided``).
+    decided : bool
+        Whether a bound was crossed within the record. With ``restart=True`` only the upper crossing (the alarm)
+        decides.
+    decision_time : int
+        Samples accumulated up to and including the deciding sample (Wald's :math:`N`; the deciding sample is at
+        position ``decision_time - 1`` of the residuals); -1 when undecided.
+    decision_seconds : float
+        ``decision_time`` times the sampling interval, when the residuals carry a time index (or ``fs`` was given);
+        else nan.
+    statistic : ndarray, shape (nobs,)
+        Path of the cumulative (scaled) log-likelihood ratio :math:`S_t`, over the whole record (also after the
+        decision); with ``restart=True`` the value after each reset to 0.
+    bounds : tuple of float
+        ``(lower, upper)``: Wald's :math:`(B, A)` of :func:`wald_bounds`.
+    alpha, beta : float
+        Error probabilities asked for.
+    restarts : int
+        Lower crossings (resets to 0) before the decision (``restart=True``), else 0.
+    nobs : int
+        Residual samples tested.
+    alternative : str
+        ``"variance"``, ``"mean"`` or ``"model"``.
+    scale : float
+        Factor applied to the per-sample log-likelihood ratio (1 unless calibrated, :meth:`SPRT.calibrate`).
+    channels : tuple of str
+        Residual channel names.
+    time : ndarray or None
+        Seconds since the first residual sample, per sample (None without a time index or ``fs``).
+    details : dict
+        The test's options (ratio, shift, restart).
+    """
+
+    reject: bool
+    decided: bool
+    decision_time: int
+    decision_seconds: float
+    statistic: np.ndarray
+    bounds: tuple
+    alpha: float
+    beta: float
+    restarts: int = 0
+    nobs: int = 0
+    alternative: str = ""
+    scale: float = 1.0
+    channels: tuple = ()
+    time: np.ndarray | None = None
+    details: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        s = np.array(self.statistic, dtype=np.float64, ndmin=1)
+        s.flags.writeable = False
+        object.__setattr__(self, "statistic", s)
+        if self.time is not None:
+            t = np.array(self.time, dtype=np.float64)
+            t.flags.writeable = False
+            object.__setattr__(self, "time", t)
+
+    @property
+    def test(self) -> str:
+        """Name of the test (for the shared decision vocabulary)."""
+        return f"SPRT ({self.alternative})"
+
+    def summary(self) -> Summary:
+        """The decision, its time and the bounds as a :class:`tsfdi.summary.Summary`."""
+        verdict = ("reject H0 (fault)" if self.reject else "accept H0") if self.decided else "undecided"
+        header = [("Test", self.test), ("alpha", self.alpha), ("beta", self.beta),
+                  ("Bounds (B, A)", f"({self.bounds[0]:.4g}, {self.bounds[1]:.4g})"),
+                  ("LLR scale", self.scale), ("Observations", self.nobs), ("Channels", ", ".join(self.channels)),
+                  ("Decision", verdict), ("Decision time (samples)", self.decision_time),
+                  ("Decision time (s)", self.decision_seconds), ("Restarts", self.restarts)]
+        return Summary("Sequential probability ratio test", header, [],
+                       ["Wald's bounds: realised error rates alpha' <= alpha / (1 - beta), beta' <= beta / (1 - alpha) "
+                        "when the per-sample log-likelihood ratio is exact."])
+
+    def __repr__(self) -> str:
+        verdict = ("reject" if self.reject else "accept") if self.decided else "undecided"
+        return (f"SequentialDecision({verdict}, alternative={self.alternative!r}, decision_time={self.decision_time}, "
+                f"alpha={self.alpha:g}, beta={self.beta:g}, nobs={self.nobs}, restarts={self.restarts})")
+
+    def _repr_html_(self) -> str:
+        return self.summary().as_html()
+
+    def plot(self, ax: Any = None, **kwargs: Any) -> Any:
+        """The statistic path with its bounds and the decision time; see
+        :func:`tsfdi.plotting.sequential.plot_sequential_decision`. Returns the matplotlib ``Figure``."""
+        from tsfdi.plotting.sequential import plot_sequential_decision
+
+        return plot_sequential_decision(self, ax=ax, **kwargs)
+
+
+@dataclass(frozen=True)
+class SequentialIdentification:
+    """Outcome of :func:`msprt`: the multi-hypothesis sequential decision on one record.
+
+    Attributes
+    ----------
+    label : int
+        Index of the decided model, -1 when undecided at the end of the record.
+    decision_time : int
+        Samples accumulated from ``start`` up to and including the deciding sample (the deciding sample is at
+        position ``start + decision_time - 1`` of the record); -1 when undecided.
+    decision_seconds : float
+        ``decision_time`` times the sampling interval when known (time index or ``fs``), else nan.
+    statistic : ndarray, shape (nobs - start, M)
+        Dominance path of every model: :math:`d_j(t) = S_j(t) - \\max_{k \\ne j} S_k(t)` (restarted: the smallest
+        pairwise CUSUM ``min_k W_jk(t)``), from ``start`` on; model ``j`` is decided when :math:`d_j` reaches
+        ``bound``.
+    bound : float
+        :math:`\\ln((M - 1) / \\alpha)`.
+    alpha : float
+        Probability of a wrong decision asked for (per true model).
+    models : tuple of str
+        Model names (``m0, m1, ...`` when not given).
+    start : int
+        First accumulated sample.
+    scale : float
+        Factor applied to the log-likelihoods (:func:`msprt_scale`).
+    restart : bool
+        Whether the pairwise statistics were restarted (CUSUM form).
+    time : ndarray or None
+        Seconds since sample ``start`` per accumulated sample, when known.
+    """
+
+    label: int
+    decision_time: int
+    decision_seconds: float
+    statistic: np.ndarray
+    bound: float
+    alpha: float
+    models: tuple
+    start: int = 0
+    scale: float = 1.0
+    restart: bool = False
+    time: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        s = np.array(self.statistic, dtype=np.float64, ndmin=2)
+        s.flags.writeable = False
+        object.__setattr__(self, "statistic", s)
+
+    @property
+    def decided(self) -> bool:
+        """Whether a model was decided within the record."""
+        return self.label >= 0
+
+    @property
+    def name(self) -> str | None:
+        """Name of the decided model, else None."""
+        return self.models[self.label] if self.label >= 0 else None
+
+    @property
+    def status(self) -> str:
+        """``"identified"`` or ``"undecided"``."""
+        return "identified" if self.label >= 0 else "undecided"
+
+    def summary(self) -> Summary:
+        """The decision, its time, the bound and the final dominance of every model."""
+        header = [("Rule", "MSPRT (Armitage 1950)" + (", restarted" if self.restart else "")),
+                  ("alpha", self.alpha), ("Bound ln((M-1)/alpha)", self.bound), ("LLR scale", self.scale),
+                  ("Status", self.status), ("Model", self.name or "-"),
+                  ("Decision time (samples)", self.decision_time), ("Decision time (s)", self.decision_seconds)]
+        t = self.decision_time - 1 if self.decided else self.statistic.shape[0] - 1
+        table = pd.DataFrame({"dominance": self.statistic[t] if t >= 0 else np.full(len(self.models), np.nan)},
+                             index=pd.Index(self.models, name="model"))
+        return Summary("Sequential identification", header, [("Dominance at the decision (or the end)", table)],
+                       ["A model is decided when its log-likelihood exceeds every other's by the bound; the "
+                        "probability of a wrong decision is then at most alpha under each candidate model."])
+
+    def __repr__(self) -> str:
+        return (f"SequentialIdentification(status={self.status!r}, model={self.name!r}, "
+                f"decision_time={self.decision_time}, alpha={self.alpha:g}, models={len(self.models)})")
+
+    def _repr_html_(self) -> str:
+        return self.summary().as_html()
+
+    def plot(self, ax: Any = None, **kwargs: Any) -> Any:
+        """Dominance paths with the bound and the decision time; see
+        :func:`tsfdi.plotting.sequential.plot_sequential_identification`."""
+        from tsfdi.plotting.sequential import plot_sequential_identification
+
+        return plot_sequential_identification(self, ax=ax, **kwargs)
+
+
+# ---------------------------------------------------------------------------------------------------- helpers
+def _covariance(sigma: Any, k: int, name: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """``sigma`` as per-channel variances (k,) or a Cholesky factor of a (k, k) covariance; ``(variances, chol)``
+    with ``chol`` None for a diagonal law."""
+    if sigma is None:
+        raise TypeError(f"{name} is required: the residual variance (a number, one per channel, or a covariance "
+                        "matrix)")
+    if isinstance(sigma, (str, bytes, bool, np.bool_)):
+        raise TypeError(f"{name} must be a positive number, one per channel or a covariance matrix, got {sigma!r}")
+    try:
+        s = np.asarray(sigma, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a positive number, one per channel or a covariance matrix, got "
+                        f"{type(sigma).__name__}") from None
+    if s.ndim == 2 and s.shape == (1, 1):
+        s = s.reshape(1)
+    if s.ndim == 0:
+        s = np.full(k, float(s))
+    if s.ndim == 1:
+        if s.shape != (k,):
+            raise ValueError(f"{name} must have one variance per channel ({k}), got shape {s.shape}")
+        if not ((s > 0) & (s < np.inf)).all():
+            raise ValueError(f"{name} must be finite and > 0, got {s}")
+        return s, None
+    if s.shape != (k, k):
+        raise ValueError(f"{name} must be a ({k}, {k}) covariance matrix for {k} channel(s), got shape {s.shape}")
+    if not np.isfinite(s).all() or not np.allclose(s, s.T, rtol=1e-10, atol=0.0):
+        raise ValueError(f"{name} must be a finite symmetric covariance matrix")
+    try:
+        chol = linalg.cholesky(s, lower=True)
+    except linalg.LinAlgError:
+        raise ValueError(f"{name} must be positive definite") from None
+    return np.diag(s).copy(), chol
+
+
+def _quad_logdet(e: np.ndarray, var: np.ndarray, chol: np.ndarray | None) -> tuple[np.ndarray, float]:
+    """Per-sample :math:`e_t' \\Sigma^{-1} e_t` and :math:`\\ln|\\Sigma|`."""
+    if chol is None:
+        return (e * e / var).sum(axis=1), float(np.log(var).sum())
+    w = linalg.solve_triangular(chol, e.T, lower=True)
+    return (w * w).sum(axis=0), float(2.0 * np.log(np.diag(chol)).sum())
+
+
+def _scale_from_walks(walks: list, block: int, what: str) -> float:
+    r"""The largest scale :math:`c` for which each walk :math:`c\,S` satisfies Wald's identity: per walk the drift
+    :math:`m` per sample (negative: the walk of a wrong hypothesis against the true one) and the long-run variance
+    :math:`v` per sample (batch means of ``block`` samples) give :math:`c = -2 m / v`; the smallest over the walks."""
+    scales = []
+    for name, z in walks:
+        n = z.shape[0] // block
+        if n < 10:
+            raise ValueError(f"{what}: {name} holds {n} blocks of {block} samples, at least 10 are needed to "
+                             "estimate the long-run variance of the log-likelihood ratio; give longer held-out "
+                             "records or a shorter block")
+        m = float(z.mean())
+        if not m < 0:
+            raise ValueError(f"{what}: {name}: the log-likelihood ratio of the wrong hypothesis grows on average "
+                             f"(mean {m:.4g} per sample) on the held-out records: the hypotheses do not separate "
+                             "there, no scale makes the bounds hold")
+        sums = z[: n * block].reshape(n, block).sum(axis=1)
+        v = float(((sums - m * block) ** 2).sum() / (n - 1) / block)
+        scales.append(-2.0 * m / v)
+    return float(min(scales))
+
+
+def _records(resid: Any, name: str) -> list:
+    if isinstance(resid, (list, tuple)):
+        if not resid:
+            raise ValueError(f"{name} must hold at least one record")
+        return list(resid)
+    return [resid]
+
+
+# ---------------------------------------------------------------------------------------------------- SPRT
+class SPRT:
+    r"""Residual-based sequential probability ratio test (Wald 1945; Kopsaftopoulos & Fassois 2015).
+
+    The residuals :math:`e_t` of the healthy model are tested sample by sample: the cumulative log-likelihood
+    ratio :math:`S_n = \sum_{t \le n} z_t` of the fault law (H1) against the healthy law (H0) is compared with
+    Wald's bounds :math:`B < 0 < A` (:func:`wald_bounds`); the test stops at the first :math:`n` where
+    :math:`S_n \ge A` (reject H0: fault) or :math:`S_n \le B` (accept H0).
+
+    Parameters
+    ----------
+    alternative : {"variance", "mean", "model"}
+        The fault hypothesis H1. ``"variance"``: the residual covariance is ``ratio`` times the healthy one
+        (:math:`\sigma_1^2 = r \sigma_0^2` per channel, :math:`\Sigma_1 = r \Sigma_0` for vectors; the form of
+        Kopsaftopoulos & Fassois). ``"mean"``: the residual mean shifts by ``shift`` healthy standard deviations in
+        every channel. ``"model"``: H1 is a fault model whose residuals on the same samples are given to
+        :meth:`test`; :math:`z_t` is the difference of the two models' Gaussian log-likelihoods.
+    ratio : float
+        Variance ratio :math:`r > 0`, :math:`r \ne 1`, of ``"variance"`` (default 2).
+    shift : float or array_like
+        Mean shift :math:`\delta \ne 0` in healthy standard deviations of ``"mean"``, one number or one per channel
+        (default 1).
+    alpha, beta : float
+        Type I (false alarm) and type II (missed fault) error probabilities per decision, in (0, 1).
+    restart : bool
+        Monitoring form: the statistic restarts at 0 each time it crosses the lower bound (H0 accepted so far)
+        and the test decides only at the first upper crossing (the alarm), like a CUSUM.
+
+    Attributes
+    ----------
+    scale_ : float
+        Factor applied to :math:`z_t` after :meth:`calibrate` (1 otherwise).
+
+    Notes
+    -----
+    Per-sample log-likelihood ratio :math:`z_t = \ln f_1(e_t) - \ln f_0(e_t)` for Gaussian residuals with healthy
+    covariance :math:`\Sigma_0` (``sigma``; a variance per channel treats the channels as independent), ``k``
+    channels and :math:`Q_t = e_t' \Sigma_0^{-1} e_t`:
+
+    * variance (Kopsaftopoulos & Fassois 2015, the residual variance form):
+      :math:`z_t = \tfrac12 [(1 - 1/r)\, Q_t - k \ln r]`;
+    * mean, :math:`\mu_1 = \delta \odot \sqrt{\mathrm{diag}\,\Sigma_0}`:
+      :math:`z_t = \mu_1' \Sigma_0^{-1} e_t - \tfrac12 \mu_1' \Sigma_0^{-1} \mu_1`;
+    * model: :math:`z_t = -\tfrac12[\ln|\Sigma_1| + e_{1t}' \Sigma_1^{-1} e_{1t}]
+      + \tfrac12[\ln|\Sigma_0| + e_{0t}' \Sigma_0^{-1} e_{0t}]`.
+
+    Wald's bounds give realised error probabilities :math:`\alpha' \le \alpha / (1 - \beta)` and
+    :math:`\beta' \le \beta / (1 - \alpha)` when :math:`z_t` is the true log-likelihood ratio of independent
+    samples. Residuals of a model estimated from real records are neither white nor exactly Gaussian, and the
+    bounds may then fail in either direction: :meth:`calibrate` estimates a scale of :math:`z_t` that restores
+    them on held-out records.
+
+    Operating characteristic and ASN (Wald 1947, ch. 3-4): for a true law :math:`\theta` let :math:`h(\theta) \ne
+    0` solve :math:`E_\theta[e^{h z}] = 1`; then :math:`P_\theta(\text{accept H0}) \approx
+    L(\theta) = (e^{hA} - 1) / (e^{hA} - e^{hB})` and
+    :math:`E_\theta[N] \approx (L B + (1 - L) A) / E_\theta[z]` (:math:`-AB / E_\theta[z^2]` where
+    :math:`E_\theta[z] = 0`); :math:`h = 1` under H0 and :math:`h = -1` under H1. These neglect the overshoot of
+    the bounds, so they underestimate :math:`E[N]` by about the mean overshoot over :math:`|E[z]|`: a few percent
+    when the per-sample information is small against the bounds (a ratio near 1, a shift below about half a
+    standard deviation, small alpha and beta), tens of percent for a large ratio or shift and loose error rates.
+
+    References
+    ----------
+    Wald (1945), (1947); Kopsaftopoulos & Fassois (2015). See :mod:`tsfdi.detection.sequential`.
+
+    Examples
+    --------
+    >>> res = tsfdi.AR(healthy, 8).fit()                                       # doctest: +SKIP
+    >>> d = SPRT("variance", ratio=2.0).test(res.residuals(flight), sigma=res.sigma2)   # doctest: +SKIP
+    >>> d.reject, d.decision_seconds                                           # doctest: +SKIP
+    """
+
+    def __init__(self, alternative: str = "variance", *, ratio: float | None = None, shift: Any = None,
+                 alpha: float = 0.01, beta: float = 0.01, restart: bool = False) -> None:
+        self.alternative = option(alternative, "alternative", ("variance", "mean", "model"))
+        if self.alternative != "variance" and ratio is not None:
+            raise ValueError(f"ratio is an option of alternative='variance', not {self.alternative!r}")
+        if self.alternative != "mean" and shift is not None:
+            raise ValueError(f"shift is an option of alternative='mean', not {self.alternative!r}")
+        self.ratio = None
+        self.shift = None
+        if self.alternative == "variance":
+            self.ratio = float_like(2.0 if ratio is None else ratio, "ratio", minimum=0.0, strict_min=True)
+            if self.ratio == 1.0:
+                raise ValueError("ratio must differ from 1 (H1 would be H0)")
+        if self.alternative == "mean":
+            sh = 1.0 if shift is None else shift
+            if isinstance(sh, (str, bytes, bool, np.bool_)):
+                raise TypeError(f"shift must be a number or one per channel, got {sh!r}")
+            try:
+                sh = np.asarray(sh, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise TypeError(f"shift must be a number or one per channel, got {type(shift).__name__}") from None
+            if sh.ndim > 1 or sh.size == 0 or not np.isfinite(sh).all() or not (sh != 0).any():
+                raise ValueError(f"shift must be a finite non-zero number or one per channel, got {shift!r}")
+            self.shift = float(sh) if sh.ndim == 0 else sh
+        self.lower, self.upper = wald_bounds(alpha, beta)
+        self.alpha, self.beta = float(alpha), float(beta)
+        self.restart = boolean(restart, "restart")
+        self.scale_ = 1.0
+
+    def __repr__(self) -> str:
+        opt = {"variance": f", ratio={self.ratio:g}", "mean": f", shift={self.shift!r}", "model": ""}[self.alternative]
+        cal = f", scale_={self.scale_:.4g}" if self.scale_ != 1.0 else ""
+        return (f"SPRT({self.alternative!r}{opt}, alpha={self.alpha:g}, beta={self.beta:g}, "
+                f"restart={self.restart}{cal})")
+
+    # -------------------------------------------------------------------------------------------- LLR
+    def _shift(self, k: int) -> np.ndarray:
+        sh = np.asarray(self.shift, dtype=np.float64)
+        if sh.ndim == 0:
+            return np.full(k, float(sh))
+        if sh.shape != (k,):
+            raise ValueError(f"shift has {sh.shape[0]} values but resid has {k} channel(s)")
+        return sh
+
+    def _llr(self, e: np.ndarray, sigma: Any, fault: np.ndarray | None, fault_sigma: Any) -> np.ndarray:
+        """Unscaled :math:`z_t` of a validated (n, k) residual array."""
+        k = e.shape[1]
+        var, chol = _covariance(sigma, k, "sigma")
+        if self.alternative == "variance":
+            q, _ = _quad_logdet(e, var, chol)
+            r = self.ratio
+            return 0.5 * ((1.0 - 1.0 / r) * q - k * np.log(r))
+        if self.alternative == "mean":
+            mu = self._shift(k) * np.sqrt(var)
+            if chol is None:
+                w = mu / var
+            else:
+                w = linalg.cho_solve((chol, True), mu)
+            return e @ w - 0.5 * float(mu @ w)
+        q0, ld0 = _quad_logdet(e, var, chol)
+        var1, chol1 = _covariance(fault_sigma, fault.shape[1], "fault_sigma")
+        q1, ld1 = _quad_logdet(fault, var1, chol1)
+        return 0.5 * ((ld0 - ld1) + (q0 - q1) + (k - fault.shape[1]) * _LOG2PI)
+
+    def _inputs(self, resid: Any, fault_residuals: Any):
+        sig = as_signal(resid, "resid", allow_constant=True)
+        fault = None
+        if self.alternative == "model":
+            if fault_residuals is None:
+                raise TypeError("fault_residuals is required with alternative='model': the fault model's residuals "
+                                "on the same samples as resid")
+            fs = as_signal(fault_residuals, "fault_residuals", allow_constant=True)
+            if fs.nobs != sig.nobs:
+                raise ValueError(f"fault_residuals has {fs.nobs} samples but resid has {sig.nobs}: give both models' "
+                                 "residuals on the same samples (cut the longer one where the other starts)")
+            if sig.index is not None and fs.index is not None and not sig.index.equals(fs.index):
+                raise ValueError("fault_residuals and resid have different time indexes: give both on the same "
+                                 "samples")
+            fault = fs.values
+        elif fault_residuals is not None:
+            raise ValueError(f"fault_residuals is an input of alternative='model', not {self.alternative!r}")
+        return sig, fault
+
+    def loglik_ratio(self, resid: Any, sigma: Any = None, *, fault_residuals: Any = None,
+                     fault_sigma: Any = None) -> np.ndarray:
+        r"""Per-sample log-likelihood ratio :math:`z_t` of H1 against H0 (times ``scale_``).
+
+        Parameters
+        ----------
+        resid : array_like, Series, DataFrame or DataArray
+            Residuals of the healthy model, time on axis 0, one column per channel.
+        sigma : float, array_like (k,) or (k, k)
+            Healthy residual variance: a number, one per channel (channels independent) or a covariance matrix
+            (a fitted AR's ``sigma2``, a VAR's ``sigma``).
+        fault_residuals : array_like, optional
+            ``alternative="model"``: the fault model's residuals on the same samples.
+        fault_sigma : float, array_like (k,) or (k, k), optional
+            ``alternative="model"``: the fault model's residual variance / covariance.
+
+        Returns
+        -------
+        ndarray, shape (nobs,)
+            :math:`z_t` (see the class Notes).
+        """
+        sig, fault = self._inputs(resid, fault_residuals)
+        return self.scale_ * self._llr(sig.values, sigma, fault, fault_sigma)
+
+    def test(self, resid: Any, sigma: Any = None, *, fault_residuals: Any = None, fault_sigma: Any = None,
+             fs: float | None = None) -> SequentialDecision:
+        """Run the sequential test over one residual record.
+
+        Parameters
+        ----------
+        resid, sigma, fault_residuals, fault_sigma :
+            As in :meth:`loglik_ratio`.
+        fs : float, optional
+            Sampling frequency in Hz for ``decision_seconds`` when ``resid`` carries no time index.
+
+        Returns
+        -------
+        SequentialDecision
+            The first crossing of Wald's bounds (see :class:`SequentialDecision`).
+        """
+        sig, fault = self._inputs(resid, fault_residuals)
+        rate = sampling_frequency(sig, fs, "resid")
+        z = self.scale_ * self._llr(sig.values, sigma, fault, fault_sigma)
+        path, first, side, restarts = _sprt_paths(z[None, :], np.zeros(1), self.lower, self.upper, self.restart)
+        t = int(first[0])
+        n = t + 1 if t >= 0 else -1
+        dt = None if rate is None else 1.0 / rate
+        return SequentialDecision(
+            reject=bool(side[0] > 0), decided=t >= 0, decision_time=n, decision_seconds=_seconds(n, dt),
+            statistic=path[0], bounds=(self.lower, self.upper), alpha=self.alpha, beta=self.beta,
+            restarts=int(restarts[0]), nobs=sig.nobs, alternative=self.alternative, scale=self.scale_,
+            channels=tuple(str(c) for c in sig.channels), time=None if dt is None else np.arange(sig.nobs) * dt,
+            details={"ratio": self.ratio, "shift": self.shift, "restart": self.restart})
+
+    # -------------------------------------------------------------------------------------------- calibration
+    def calibrate(self, resid: Any, sigma: Any = None, *, fault_residuals: Any = None, fault_sigma: Any = None,
+                  block: int = 64) -> "SPRT":
+        r"""Estimate the scale ``scale_`` of :math:`z_t` from held-out healthy residuals so that Wald's bounds hold.
+
+        Parameters
+        ----------
+        resid : array_like or list of array_like
+            Held-out residuals of healthy records (records the model was not fitted on, e.g.
+            ``results.model.held_out_residuals()``), one record or a list.
+        sigma, fault_residuals, fault_sigma :
+            As in :meth:`loglik_ratio` (``fault_residuals``: one per record of ``resid``).
+        block : int
+            Samples per batch of the long-run variance estimate (much longer than the correlation time of
+            :math:`z_t`; at least 10 batches are needed).
+
+        Returns
+        -------
+        SPRT
+            This test, with ``scale_`` set.
+
+        Notes
+        -----
+        A true log-likelihood ratio of independent samples is a random walk whose drift :math:`m` and variance
+        :math:`v` per sample satisfy Wald's identity :math:`E_0[e^{z}] = 1`, i.e. :math:`m_0 = -v_0/2` under H0 and
+        :math:`m_1 = v_1/2` under H1 (Gaussian walk). When the residuals are autocorrelated or not Gaussian the
+        walk :math:`S_n` drifts as before but spreads faster or slower, and the bounds' error rates fail. The
+        estimator rescales :math:`z_t` by
+
+        .. math:: c = \min(-2 \hat m_0 / \hat v_0,\ 2 \hat m_1 / \hat v_1)
+
+        with :math:`\hat m` the mean of :math:`z_t` and :math:`\hat v` its long-run variance per sample (batch
+        means over ``block`` samples, which keeps the autocorrelation of :math:`z_t`), so that :math:`c S_n`
+        satisfies the identity again (:math:`c` is Wald's :math:`h` of the realised walk; the smaller of the two
+        keeps both error rates within their bounds, at the price of a longer decision time). Under H1 the residuals
+        are the healthy ones transformed by the fault hypothesis: times :math:`\sqrt r` (variance) or plus the
+        shift (mean), so that the healthy records give both walks. With ``alternative="model"`` only the H0 walk
+        is available from healthy records (:math:`c = -2 \hat m_0 / \hat v_0`); for both sides use
+        :func:`msprt_scale` on records of both states.
+        """
+        block = int_like(block, "block", minimum=1)
+        recs = _records(resid, "resid")
+        faults = [None] * len(recs) if fault_residuals is None else _records(fault_residuals, "fault_residuals")
+        if len(faults) != len(recs):
+            raise ValueError(f"fault_residuals has {len(faults)} record(s) but resid has {len(recs)}")
+        z0, z1 = [], []
+        for i, (r, f) in enumerate(zip(recs, faults)):
+            sig, fault = self._inputs(r, f)
+            e = sig.values
+            z0.append(self._llr(e, sigma, fault, fault_sigma))
+            if self.alternative == "variance":
+                z1.append(self._llr(e * np.sqrt(self.ratio), sigma, None, None))
+            elif self.alternative == "mean":
+                var, _ = _covariance(sigma, e.shape[1], "sigma")
+                z1.append(self._llr(e + self._shift(e.shape[1]) * np.sqrt(var), sigma, None, None))
+        walks = [("H0", np.concatenate(z0))]
+        if z1:
+            walks.append(("H1", -np.concatenate(z1)))
+        self.scale_ = _scale_from_walks(walks, block, "SPRT.calibrate")
+        return self
+
+    # -------------------------------------------------------------------------------------------- theory
+    def _law(self, theta: np.ndarray, nchan: int) -> tuple:
+        """Per-sample law of unscaled z under the true parameter ``theta`` (variance ratio or shift)."""
+        k = nchan
+        if self.alternative == "variance":
+            r = self.ratio
+            a = 0.5 * (1.0 - 1.0 / r)
+            return "variance", a, 0.5 * k * np.log(r)
+        if self.alternative == "mean":
+            d = self._shift(k)
+            return "mean", float(d @ d), float(d.sum())
+        raise ValueError("oc and asn have closed forms for alternative='variance' or 'mean' only; use "
+                         "monte_carlo for a fault model")
+
+    def _theta(self, theta: Any, name: str = "theta") -> np.ndarray:
+        if isinstance(theta, (str, bytes, bool, np.bool_)):
+            raise TypeError(f"{name} must be numbers, got {theta!r}")
+        try:
+            t = np.asarray(theta, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be numbers, got {type(theta).__name__}") from None
+        if not np.isfinite(t).all():
+            raise ValueError(f"{name} must be finite")
+        if self.alternative == "variance" and not (t > 0).all():
+            raise ValueError(f"{name} (true variance ratios) must be > 0")
+        return t
+
+    def _h_moments(self, theta: np.ndarray, nchan: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Wald's h, E[z] and E[z^2] of the scaled z per true ``theta``."""
+        kind, a, b = self._law(theta, nchan)
+        c = self.scale_
+        th = theta.ravel()
+        h = np.empty(th.shape)
+        if kind == "variance":
+            # z = c (a Q - b), Q ~ theta chi2(k): ln E exp(h z) = -h c b - (k/2) ln(1 - 2 h c a theta), convex in h,
+            # 0 at h = 0 with slope E z; the other root lies on the side of -E z, before the pole 1 / (2 c a theta)
+            k = nchan
+            mean = c * (a * k * th - b)
+            var = c * c * 2.0 * a * a * k * th ** 2
+            m2 = var + mean ** 2
+            for i, t in enumerate(th):
+                def g(x, t=t):
+                    return -x * c * b - 0.5 * k * np.log1p(-2.0 * x * c * a * t)
+                if mean[i] == 0.0:
+                    h[i] = 0.0
+                    continue
+                near = -2.0 * mean[i] / var[i] * 1e-6          # a point of g < 0 next to 0 (Gaussian h / 1e6)
+                pole = 1.0 / (2.0 * c * a * t)
+                far = pole * (1.0 - 1e-12) if pole * near > 0 else _grow(g, near * 1e6)
+                h[i] = optimize.brentq(g, min(near, far), max(near, far), xtol=1e-300, rtol=1e-13, maxiter=500)
+        else:
+            dd, dsum = a, b
+            # standardized shift theta per channel: z = c (d'x - d'd/2), x ~ N(theta, I)
+            mean = c * (th * dsum - 0.5 * dd)
+            var = c * c * dd
+            h = -2.0 * mean / var
+            m2 = var + mean ** 2
+        return h.reshape(theta.shape), mean.reshape(theta.shape), m2.reshape(theta.shape)
+
+    def oc(self, theta: Any, *, nchan: int = 1) -> Any:
+        r"""Operating characteristic: Wald's approximation of P(accept H0) under the true parameter ``theta``.
+
+        Parameters
+        ----------
+        theta : float or array_like
+            True variance ratio to the healthy variance (``"variance"``: 1 is H0, ``ratio`` is H1) or true mean
+            shift in healthy standard deviations, the same in every channel (``"mean"``: 0 is H0, ``shift`` H1).
+        nchan : int
+            Number of residual channels (independent, or with the covariance of ``sigma`` for ``"variance"``).
+
+        Returns
+        -------
+        float or ndarray (shape of ``theta``)
+            :math:`L(\theta) = (e^{hA} - 1)/(e^{hA} - e^{hB})` with :math:`h(\theta) \ne 0` solving
+            :math:`E_\theta[e^{h z}] = 1` (:math:`A/(A - B)` where :math:`E_\theta z = 0`); Wald (1947), ch. 3.
+        """
+        nchan = int_like(nchan, "nchan", minimum=1)
+        th = self._theta(theta)
+        h, _, _ = self._h_moments(th, nchan)
+        A, B = self.upper, self.lower
+        with np.errstate(over="ignore", invalid="ignore"):
+            # (e^{hA} - 1)/(e^{hA} - e^{hB}), written to avoid overflow for large |h|
+            num = np.where(h > 0, -np.expm1(-h * A), np.expm1(h * A))
+            den = np.where(h > 0, 1.0 - np.exp(h * (B - A)), np.exp(h * A) - np.exp(h * B))
+            out = np.where(h == 0, A / (A - B), num / den)
+        return float(out) if np.ndim(out) == 0 else out
+
+    def asn(self, theta: Any, *, nchan: int = 1) -> Any:
+        r"""Average sample number: Wald's approximation of :math:`E_\theta[N]` (samples to decide).
+
+        Parameters
+        ----------
+        theta, nchan :
+            As in :meth:`oc`. ``asn(1.0)`` / ``asn(ratio)`` (variance) and ``asn(0.0)`` / ``asn(shift)`` (mean) are
+            :math:`E_0[N] = ((1-\alpha) B + \alpha A) / E_0[z]` and :math:`E_1[N] = (\beta B + (1-\beta) A) / E_1[z]`.
+
+        Returns
+        -------
+        float or ndarray (shape of ``theta``)
+            :math:`(L B + (1 - L) A) / E_\theta[z]`, or :math:`-AB / E_\theta[z^2]` where :math:`E_\theta z = 0`
+            (Wald 1947, ch. 4). It neglects the overshoot of the bounds (see the class Notes); with
+            ``restart=True`` it is the length of one cycle, not the alarm time.
+        """
+        nchan = int_like(nchan, "nchan", minimum=1)
+        th = self._theta(theta)
+        h, mean, m2 = self._h_moments(th, nchan)
+        L = np.asarray(self.oc(th, nchan=nchan))
+        A, B = self.upper, self.lower
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = np.where(h == 0, -A * B / m2, (L * B + (1 - L) * A) / mean)
+        return float(out) if np.ndim(out) == 0 else out
+
+    def monte_carlo(self, theta: Any, *, nchan: int = 1, n_rep: int = 1000, max_samples: int = 100_000,
+                    rng: Any = None) -> pd.DataFrame:
+        """Realised acceptance rate and decision times on simulated white Gaussian residuals.
+
+        Parameters
+        ----------
+        theta, nchan :
+            As in :meth:`oc` (the residuals are drawn standardised, channels independent).
+        n_rep : int
+            Records per ``theta``.
+        max_samples : int
+            Longest record: a record undecided after it counts as undecided.
+        rng : None, int or numpy.random.Generator
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per ``theta``: ``accept`` (fraction accepting H0), ``reject``, ``undecided``, ``mean_n`` and
+            ``std_n`` (decision times of the decided records), and the theory ``oc`` and ``asn`` (variance / mean).
+        """
+        if self.alternative == "model":
+            raise ValueError("monte_carlo simulates the variance and mean alternatives; for a fault model simulate "
+                             "its records and call test")
+        nchan = int_like(nchan, "nchan", minimum=1)
+        n_rep = int_like(n_rep, "n_rep", minimum=1)
+        max_samples = int_like(max_samples, "max_samples", minimum=1)
+        gen = check_rng(rng)
+        th = np.atleast_1d(self._theta(theta))
+        if th.ndim != 1:
+            raise ValueError(f"theta must be a number or a 1-D array, got shape {th.shape}")
+        chunk = max(1, min(1024, MAX_VALUES // (16 * n_rep * nchan)))
+        rows = []
+        sigma = np.ones(nchan)
+        for t in th:
+            s = np.zeros(n_rep)
+            n_dec = np.full(n_rep, -1)
+            side = np.zeros(n_rep, dtype=np.int8)
+            active = np.arange(n_rep)
+            done = 0
+            while active.size and done < max_samples:
+                m = min(chunk, max_samples - done)
+                x = gen.standard_normal((active.size, m, nchan))
+                if self.alternative == "variance":
+                    x *= np.sqrt(t)
+                else:
+                    x += t
+                z = self.scale_ * self._llr(x.reshape(-1, nchan), sigma, None, None).reshape(active.size, m)
+                path, first, sd, _ = _sprt_paths(z, s[active], self.lower, self.upper, self.restart)
+                hit = first >= 0
+                n_dec[active[hit]] = done + first[hit] + 1
+                side[active[hit]] = sd[hit]
+                s[active] = path[:, -1]
+                active = active[~hit]
+                done += m
+            dec = n_dec >= 0
+            rows.append({"theta": float(t), "accept": float(np.mean(side < 0)), "reject": float(np.mean(side > 0)),
+                         "undecided": float(np.mean(~dec)),
+                         "mean_n": float(n_dec[dec].mean()) if dec.any() else float("nan"),
+                         "std_n": float(n_dec[dec].std(ddof=1)) if dec.sum() > 1 else float("nan"),
+                         "oc": self.oc(t, nchan=nchan), "asn": self.asn(t, nchan=nchan)})
+        return pd.DataFrame(rows).set_index("theta")
+
+
+def _grow(f, x: float) -> float:
+    """A point beyond the root of ``f`` on the side of ``x`` (``f`` < 0 near 0 on that side, growing to +inf)."""
+    for _ in range(200):
+        if f(x) > 0:
+            return x
+        x *= 2.0
+    raise ValueError("no root of Wald's equation E[exp(h z)] = 1 found")  # pragma: no cover
+
+
+# ---------------------------------------------------------------------------------------------------- MSPRT
+def msprt(loglik: Any, *, alpha: float = 0.01, start: int = 0, restart: bool = False, scale: float = 1.0,
+          models: Any = None, fs: float | None = None) -> SequentialIdentification:
+    r"""Multi-hypothesis sequential identification (Armitage 1950; Baum & Veeravalli 1994).
+
+    Parameters
+    ----------
+    loglik : array_like, DataFrame or DataArray, shape (nobs, M)
+        Per-sample log-likelihood of each of ``M >= 2`` candidate models (e.g. each model's Gaussian residual
+        log-likelihood on the same samples); the columns name the models.
+    alpha : float
+        Probability of a wrong decision allowed under each candidate model, in (0, 1).
+    start : int
+        First sample accumulated (earlier samples are ignored: e.g. the lags of the longest model).
+    restart : bool
+        CUSUM form for monitoring: every pairwise statistic :math:`W_{jk}` restarts at 0 when it falls below 0, so
+        that evidence gathered before a change does not delay the decision after it.
+    scale : float
+        Factor applied to the log-likelihoods (1: exact models; :func:`msprt_scale` for estimated ones).
+    models : sequence of str, optional
+        Model names (default: the columns of ``loglik``, else ``m0, m1, ...``).
+    fs : float, optional
+        Sampling frequency in Hz for ``decision_seconds`` when ``loglik`` carries no time index.
+
+    Returns
+    -------
+    SequentialIdentification
+
+    Notes
+    -----
+    With :math:`S_j(n) = c \sum_{t = start}^{n} \ell_j(t)` (:math:`c` = ``scale``), model :math:`j` is decided at
+    the first :math:`n` where :math:`S_j(n) - S_k(n) \ge a` for every :math:`k \ne j`, with
+
+    .. math:: a = \ln((M - 1) / \alpha).
+
+    Why this bound: under the true model :math:`i`, :math:`\exp(S_k - S_i)` is a non-negative martingale of mean 1
+    (a likelihood ratio), so by Ville's (Doob's maximal) inequality :math:`P_i(\sup_n S_k - S_i \ge a) \le e^{-a} =
+    \alpha / (M - 1)`; a wrong decision :math:`k \ne i` needs :math:`S_k - S_i \ge a` at some time, hence
+    :math:`P_i(\text{wrong decision}) \le (M - 1) \alpha / (M - 1) = \alpha` for every :math:`i`, whatever the
+    overshoot and whether or not the record ends first. It holds when the log-likelihoods are those of the true
+    laws of the samples (independent given the model); :func:`msprt_scale` corrects estimated models.
+
+    The rule is computed in :math:`O(n M)`: cumulative sums, the two largest :math:`S` per sample, and a vectorised
+    first crossing of the margin between them. With ``restart=True`` the pairwise CUSUMs are computed by a compiled
+    loop in :math:`O(n M^2)`; the bound then sets the mean time between wrong decisions (of order
+    :math:`e^a`) instead of an error probability.
+    """
+    sig = as_signal(loglik, "loglik", allow_constant=True)
+    M = sig.nchan
+    if M < 2:
+        raise ValueError(f"loglik must have one column per candidate model, at least 2, got {M}")
+    alpha = probability(alpha, "alpha")
+    start = int_like(start, "start", minimum=0, maximum=sig.nobs - 1)
+    restart = boolean(restart, "restart")
+    scale = float_like(scale, "scale", minimum=0.0, strict_min=True)
+    names = tuple(str(c) for c in sig.channels) if sig.named else tuple(f"m{j}" for j in range(M))
+    if models is not None:
+        if isinstance(models, (str, bytes)) or len(models) != M:
+            raise ValueError(f"models must hold one name per column of loglik ({M}), got {models!r}")
+        names = tuple(str(m) for m in models)
+    rate = sampling_frequency(sig, fs, "loglik")
+    bound = float(np.log(M - 1) - np.log(alpha))
+    ll = sig.values[start:]
+    if restart:
+        dom, first = _pairwise_cusum(np.ascontiguousarray(ll), scale, bound)
+        label = int(np.argmax(dom[first])) if first >= 0 else -1
+    else:
+        s = np.cumsum(ll, axis=0)
+        if scale != 1.0:
+            s *= scale
+        top2 = np.partition(s, M - 2, axis=1)[:, M - 2:]
+        best, second = top2.max(axis=1), top2.min(axis=1)
+        margin = best - second
+        hit = margin >= bound
+        first = int(np.argmax(hit)) if hit.any() else -1
+        label = int(np.argmax(s[first])) if first >= 0 else -1
+        dom = s - best[:, None]
+        top = s >= best[:, None]
+        dom[top] = margin[np.nonzero(top)[0]]
+    n = first + 1 if first >= 0 else -1
+    dt = None if rate is None else 1.0 / rate
+    return SequentialIdentification(label=label, decision_time=n, decision_seconds=_seconds(n, dt), statistic=dom,
+                                    bound=bound, alpha=alpha, models=names, start=start, scale=scale,
+                                    restart=restart, time=None if dt is None else np.arange(ll.shape[0]) * dt)
+
+
+def msprt_scale(loglik: Any, labels: Any, *, block: int = 64) -> float:
+    r"""Scale of the log-likelihoods that makes :func:`msprt`'s bound hold for estimated models.
+
+    Parameters
+    ----------
+    loglik : list of array_like, each shape (nobs_r, M)
+        Per-sample log-likelihoods of the ``M`` candidate models on held-out records (records the models were not
+        fitted on), one array per record.
+    labels : sequence of int
+        True model index of each record.
+    block : int
+        Samples per batch of the long-run variance estimate (at least 10 batches per true model).
+
+    Returns
+    -------
+    float
+        :math:`c = \min_{i, k \ne i} -2 \hat m_{ik} / \hat v_{ik}` over the true models :math:`i` present and the
+        others :math:`k`, with :math:`\hat m_{ik}` the mean and :math:`\hat v_{ik}` the long-run variance per sample
+        (batch means) of :math:`\ell_k - \ell_i` on the records of model :math:`i`; pass it as ``msprt(...,
+        scale=c)``.
+
+    Notes
+    -----
+    For exact models :math:`\exp(S_k - S_i)` is a martingale under model :math:`i` and a Gaussian walk with drift
+    :math:`m` and variance :math:`v` per sample has :math:`E_i e^{S_k - S_i} = 1` exactly when :math:`m = -v/2`.
+    Estimated models give residuals that are autocorrelated or not Gaussian: the walk spreads faster (or slower)
+    than its drift implies and the bound's error rate no longer holds. Scaling every log-likelihood by :math:`c`
+    restores :math:`E_i e^{c (S_k - S_i)} \approx 1` for the worst pair (:math:`c` is Wald's :math:`h` of the
+    realised walk), hence the bound for every pair. The long-run variance over blocks of ``block`` samples keeps
+    the autocorrelation; choose the block well beyond the correlation time of the log-likelihoods.
+    """
+    block = int_like(block, "block", minimum=1)
+    recs = _records(loglik, "loglik")
+    if isinstance(labels, (str, bytes)):
+        raise TypeError(f"labels must be one model index per record, got {labels!r}")
+    lab = [int_like(v, "labels", minimum=0) for v in np.ravel(np.asarray(labels, dtype=object))]
+    if len(lab) != len(recs):
+        raise ValueError(f"labels has {len(lab)} entries but loglik has {len(recs)} record(s)")
+    arrs = [as_signal(r, f"loglik[{i}]", allow_constant=True).values for i, r in enumerate(recs)]
+    M = arrs[0].shape[1]
+    if M < 2 or any(a.shape[1] != M for a in arrs):
+        raise ValueError(f"loglik: every record must have the same number (>= 2) of model columns, got "
+                         f"{[a.shape[1] for a in arrs]}")
+    bad = [v for v in lab if v >= M]
+    if bad:
+        raise ValueError(f"labels must be model indexes below {M}, got {bad[0]}")
+    walks = []
+    for i in sorted(set(lab)):
+        rows = [a for a, v in zip(arrs, lab) if v == i]
+        for k in range(M):
+            if k != i:
+                # one walk per pair; records joined at block boundaries (the tail of each record is left out)
+                parts = [(a[:, k] - a[:, i])[: (a.shape[0] // block) * block] for a in rows]
+                walks.append((f"true model {i} against model {k}", np.concatenate(parts)))
+    return _scale_from_walks(walks, block, "msprt_scale")
