@@ -42,7 +42,8 @@ from tsfdi.baselines import Baselines, Records
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.summary import Summary
-from tsfdi.windows import AMBIGUOUS, RULES, ResidualWindows, decide
+from tsfdi.detection.sequential import msprt, msprt_scale
+from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
 
 __all__ = ["OUTCOMES", "Evaluation", "detection_metrics", "evaluate", "first_alarm", "score_records"]
 
@@ -93,6 +94,14 @@ class Evaluation:
         distribution's critical value (``distribution``) and, for a test with ``threshold="empirical"``, the calibrated
         one (``empirical``), its calibration sample size and estimate (``"empirical"`` quantile or ``"gpd"``
         tail).
+    sequential_counts : pandas.DataFrame
+        The sequential rule (``rules=(..., "sprt")``; empty without it): one row per distinct combination of
+        ``turbulence, model, state`` (the true failure), ``label`` (the fault identified, ``"undecided"`` when no
+        model dominates by the end of the record) and ``time`` (s from the start, ``settle`` s after the failure,
+        to the decision; NaN undecided), with ``records``, the number of fault records with that outcome.
+    sprt : dict
+        The sequential rule's settings: ``alpha`` (the bound's error probability) and ``scale``, ``(turbulence,
+        model)`` -> the scale correction of the log-likelihood ratios (1.0 without held-out residuals).
 
     Notes
     -----
@@ -112,6 +121,8 @@ class Evaluation:
     nchan: dict = field(default_factory=dict)
     thresholds: str = "theoretical"
     calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
+    sequential_counts: pd.DataFrame = field(default_factory=pd.DataFrame)
+    sprt: dict = field(default_factory=dict)
 
     # -- identification
     def _percent(self, flags: dict, keys: Sequence[str] = ("model", "method", "window", "state")) -> pd.DataFrame:
@@ -186,6 +197,53 @@ class Evaluation:
         frame.index = frame.index.set_names(["model", "method"])
         return frame[[f for f in self.faults if f in frame.columns]]
 
+    # -- sequential identification
+    def sequential_rates(self, quantiles: Sequence[float] = (0.1, 0.9)) -> pd.DataFrame:
+        """The sequential rule (``"sprt"``) per model and true failure: percent of the fault records identified
+        correctly (``correct``), wrongly (``wrong``) and not decided by the record's end (``undecided``), the number
+        of records, and the decision time (s from the start, ``settle`` s after the failure) of the decided
+        records: ``time_mean``, ``time_median`` and the ``quantiles`` (``time_q10``, ... NaN without a decided
+        record).
+
+        Raises
+        ------
+        ValueError
+            The evaluation was run without the ``"sprt"`` rule."""
+        if self.sequential_counts.empty:
+            raise ValueError("this evaluation has no sequential decisions: run evaluate with rules=(..., 'sprt')")
+        qs = [float_like(q, "quantiles", minimum=0.0, maximum=1.0) for q in quantiles]
+        rows = []
+        for (model, true), g in self.sequential_counts.groupby(["model", "state"], sort=False):
+            n = g["records"].to_numpy()
+            lab = g["label"].to_numpy(dtype=object)
+            total = int(n.sum())
+            decided = lab != "undecided"
+            t = np.repeat(g["time"].to_numpy(dtype=float)[decided], n[decided])
+            row = {"model": model, "true": true,
+                   "correct": 100.0 * n[lab == true].sum() / total,
+                   "wrong": 100.0 * n[decided & (lab != true)].sum() / total,
+                   "undecided": 100.0 * n[~decided].sum() / total, "records": total,
+                   "time_mean": float(t.mean()) if t.size else np.nan,
+                   "time_median": float(np.median(t)) if t.size else np.nan}
+            for q in qs:
+                row[f"time_q{100 * q:g}"] = float(np.quantile(t, q)) if t.size else np.nan
+            rows.append(row)
+        return pd.DataFrame(rows).set_index(["model", "true"])
+
+    def sequential_confusion(self) -> pd.DataFrame:
+        """Percent of the fault records of each true failure identified as each fault by the sequential rule, or
+        ``"undecided"``, per model: every row adds up to 100."""
+        if self.sequential_counts.empty:
+            raise ValueError("this evaluation has no sequential decisions: run evaluate with rules=(..., 'sprt')")
+        df = self.sequential_counts
+        tab = df.pivot_table(index=["model", "state"], columns="label", values="records", aggfunc="sum",
+                             fill_value=0, sort=False)
+        tab = tab.reindex(columns=[*self.faults, "undecided"], fill_value=0)
+        tab = tab.div(tab.sum(axis=1), axis=0) * 100.0
+        tab.index = tab.index.set_names(["model", "true"])
+        tab.columns.name = None
+        return tab
+
     # -- detection
     def detection_rates(self) -> pd.DataFrame:
         r"""Per model, method and window length: ``false_alarm`` (percent of healthy-record windows flagged),
@@ -254,11 +312,17 @@ class Evaluation:
                   ("Records evaluated", f"{int(self.records['evaluated'].sum())} of {len(self.records)}"),
                   ("Identification windows", int(self.identification_counts["windows"].sum())),
                   *([("Detection windows", int(self.detection_counts["windows"].sum()))] if detected else []),
-                  ("Thresholds", self.thresholds)]
+                  ("Thresholds", self.thresholds),
+                  *([("Sequential rule", f"sprt, alpha = {self.sprt['alpha']:g}, "
+                      f"{int(self.sequential_counts['records'].sum())} fault records")]
+                    if not self.sequential_counts.empty else [])]
         tables = [(f"Identification, {w:g} s windows, rule {rule!r} (percent of the windows of each true failure "
                    f"{'accepted' if rule == 'paper' else 'labelled'} as each fault)", self.table4(w, rule))
                   for w in sorted(self.identification_counts["window"].unique()) for rule in self.rules]
         tables.append(("Rates (percent of windows)", self.rates()))
+        if not self.sequential_counts.empty:
+            tables.append((f"Sequential identification (MSPRT, alpha = {self.sprt['alpha']:g}; percent of fault "
+                           "records, decision time in s)", self.sequential_rates()))
         if detected:
             tables.append(("Detection with the healthy model", self.detection_rates()))
         return Summary("Evaluation", header, tables)
@@ -294,7 +358,8 @@ def _named_tests(tests: Any, models: list) -> dict:
 def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",), tests: Any = None,
              windows: Sequence[Any] = ("5s", "10s", "20s"), turbulence: Any = None, step: Any = "1s",
              settle: float = 10.0, rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True,
-             progress: bool = True, states: Any = None, failure_times: Any = None, fs: float | None = None) -> Evaluation:
+             progress: bool = True, states: Any = None, failure_times: Any = None, fs: float | None = None,
+             sprt_alpha: float = 0.01) -> Evaluation:
     r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
 
     Parameters
@@ -331,7 +396,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     settle : float
         Identification windows start at least ``settle`` seconds after the failure (post-failure steady state).
     rules : sequence of str
-        Decision rules (:data:`tsfdi.windows.RULES`); ``"paper"`` is always included.
+        Decision rules (:data:`tsfdi.windows.RULES`); ``"paper"`` is always included. ``"sprt"`` adds the
+        sequential rule (:data:`tsfdi.windows.SEQUENTIAL_RULES`): every fault record is identified once, by the
+        multi-hypothesis sequential test of the fault models (:func:`tsfdi.detection.sequential.msprt` on
+        their per-sample log-likelihoods, :meth:`tsfdi.windows.ResidualWindows.loglik`)
+        on its samples from ``settle`` s after the failure to its end (:attr:`Evaluation.sequential_counts`,
+        :meth:`Evaluation.sequential_rates`); it uses neither ``tests`` nor ``windows``.
     detection : bool
         Also test every window of every record with the healthy model (false alarms, missed faults, delays).
         With ``False`` the detection tables of the result are empty, :meth:`Evaluation.detection_rates` raises
@@ -340,6 +410,11 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         Show a tqdm progress bar over records.
     states, failure_times, fs :
         Per-record labels and sampling frequency for a sequence of signals.
+    sprt_alpha : float
+        Error probability of the sequential rule's bound (in (0, 1)). With held-out residuals in the baselines
+        (``fit_baselines(..., calibrate=True)``) the log-likelihood ratios are scale-corrected on them
+        (the held-out records of each fault state through every fault model), so that the bound's error rate holds on records the models were
+        not fitted on; evaluation records are never used for it.
 
     Returns
     -------
@@ -393,7 +468,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     tests = _named_tests(tests, models)
     methods = list(dict.fromkeys(meth for _, meth in tests))
     empirical = any(t.empirical for t in tests.values())
-    rules = tuple(dict.fromkeys(["paper"] + [option(r, "rules", RULES) for r in rules]))
+    if isinstance(rules, str):
+        rules = [rules]
+    rules = [option(r, "rules", RULES + SEQUENTIAL_RULES) for r in rules]
+    sequential = "sprt" in rules
+    rules = tuple(dict.fromkeys(["paper"] + [r for r in rules if r in RULES]))
+    sprt_alpha = float_like(sprt_alpha, "sprt_alpha", minimum=0.0, maximum=1.0, strict_min=True, strict_max=True)
     step_n = window_samples(step, "step", rec.fs)
     settle = float_like(settle, "settle", minimum=0.0)
     healthy, faults = first.healthy, first.faults
@@ -422,7 +502,10 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                       for lvl, b in levels.items() for (m, meth) in tests for W in wins},
             "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
-            "detection": detection}
+            "detection": detection, "sprt": None}
+    if sequential:
+        plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): _sprt_scale(b, m) if b.heldout else 1.0
+                                                       for lvl, b in levels.items() for m in models}}
     counts = _new_counts()
     if rec.source is None:
         idx = np.flatnonzero(use)
@@ -460,6 +543,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                                                    *(f"label_{r}" for r in rules), "windows"])
     det = _count_table(counts["detection"], [*keys, "fault_true", "pre", "alarm", "disjoint", "windows"])
     delays = _count_table(counts["delays"], [*keys, "delay", "records"])
+    seq = _count_table(counts["sequential"], ["turbulence", "model", "state", "label", "time", "records"]) \
+        if sequential else pd.DataFrame()
     cal_rows = []
     for lvl, b in ([("", first)] if by_level is None else by_level.items()):
         for (m, meth), t in tests.items():
@@ -480,7 +565,40 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     return Evaluation(identification_counts=ident, detection_counts=det, detection_delays=delays, faults=faults,
                       rules=rules, alphas=alphas, lags=lag_of, records=recs,
                       nchan={m: len(first.model_channels(m)) for m in models},
-                      thresholds="empirical" if empirical else "theoretical", calibration=pd.DataFrame(cal_rows))
+                      thresholds="empirical" if empirical else "theoretical", calibration=pd.DataFrame(cal_rows),
+                      sequential_counts=seq,
+                      sprt={} if not sequential else {"alpha": sprt_alpha, "scale": {
+                          ("" if lvl is None else lvl, m): v for (lvl, m), v in plan["sprt"]["scale"].items()}})
+
+
+def _heldout_logliks(base: Baselines, m: str) -> list:
+    """``(loglik, state index)`` of every fitting record of every fault state: the per-sample log-likelihoods of the
+    record through every fault model of ``m`` (:meth:`ResidualWindows.loglik`), its own state's model refitted
+    without it (:attr:`Baselines.heldout`), the others fitted on other states' records: out of sample, as on an
+    evaluation record."""
+    chans = base.model_channels(m)
+    models = {f: base.models[m][f] for f in base.faults}
+    out = []
+    for j, state in enumerate(base.faults):
+        for i, seg in enumerate(base.segments[state]):
+            x = seg[:, chans]
+            if x.shape[0] <= max(int(r.lags) for r in models.values()) + 1:
+                continue
+            given = {f: base.heldout[(m, state)][i] if f == state else np.asarray(res.residuals(x)).reshape(
+                x.shape[0] - int(res.lags), -1) for f, res in models.items()}
+            out.append((ResidualWindows(models).fit_residuals(given, x.shape[0]).loglik(), j))
+    return out
+
+
+def _sprt_scale(base: Baselines, m: str) -> float:
+    """Scale correction of the sequential rule for model ``m`` (:func:`~tsfdi.detection.sequential.msprt_scale`)
+    on the held-out fitting records of the fault states (:func:`_heldout_logliks`)."""
+    items = _heldout_logliks(base, m)
+    try:
+        return msprt_scale([ll for ll, _ in items], [j for _, j in items])
+    except ValueError as err:
+        raise ValueError(f"the sequential rule cannot be scale-corrected for model {m!r} on the baselines' held-out "
+                         f"residuals: {err}") from None
 
 
 def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
@@ -494,7 +612,7 @@ def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
 
 def _new_counts() -> dict:
     """Empty counts of :func:`evaluate`: identification and detection windows and delays per distinct outcome."""
-    return {"identification": Counter(), "detection": Counter(), "delays": Counter()}
+    return {"identification": Counter(), "detection": Counter(), "delays": Counter(), "sequential": Counter()}
 
 
 def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = (), names: Sequence = ()) -> None:
@@ -523,7 +641,7 @@ def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = ()
         counter[(*key, *bits, *reversed(picks))] += c
 
 
-_COUNT_TYPES = {"window": np.float64, "delay": np.float64, "fault_true": bool, "pre": bool, "alarm": bool,
+_COUNT_TYPES = {"window": np.float64, "delay": np.float64, "time": np.float64, "fault_true": bool, "pre": bool, "alarm": bool,
                 "disjoint": bool}
 
 
@@ -553,6 +671,17 @@ def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: 
             rw_h.fit(sig)
         if is_fault:
             rw_f.fit(sig)
+            if plan["sprt"] is not None:
+                # one sequential decision per record and model, from the first sample settle s after the failure
+                start = max(int(np.ceil(round((ft + plan["settle"]) * fs, 9))), max(rw_f.orders.values()))
+                if start >= rw_f.nobs_:
+                    raise ValueError(f"a fault record ends before settle = {plan['settle']:g} s after its failure: "
+                                     "nothing left for the sequential rule; give a smaller settle")
+                seq = msprt(rw_f.loglik(common=start), alpha=plan["sprt"]["alpha"],
+                            scale=plan["sprt"]["scale"][(level, m)])
+                label = faults[seq.label] if seq.label >= 0 else "undecided"
+                counts["sequential"][(turb, m, state, label, None if seq.label < 0 else
+                                      round(seq.decision_time / fs, 9))] += 1
         for meth in plan["methods"]:
             for W in plan["windows"]:
                 key = (turb, m, meth, round(W / fs, 9), state)

@@ -34,7 +34,7 @@ from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows
 from tsfdi.models import ARXResults
 
-__all__ = ["RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
+__all__ = ["RULES", "SEQUENTIAL_RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
 
 #: Decision rules. ``"paper"``: one accepted model is an identification, several are ambiguous, none is no decision
 #: (Dutta et al.). ``"likelihood"``: among the accepted models (all models when none is accepted) the one whose
@@ -42,6 +42,11 @@ __all__ = ["RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "
 #: :attr:`WindowStatistics.loglik`), on samples common to every model. ``"pvalue"``: the same with the largest signal-level p-value (the
 #: smallest channel p-value of each model).
 RULES = ("paper", "likelihood", "pvalue")
+
+#: Sequential rules, beside the windowed ones: ``"sprt"``, the multi-hypothesis sequential probability ratio test
+#: (Armitage's rule, :func:`tsfdi.detection.sequential.msprt`) on the per-sample log-likelihoods of the models'
+#: residuals (:meth:`ResidualWindows.loglik`): one decision, and its time, per record (not per window).
+SEQUENTIAL_RULES = ("sprt",)
 
 #: Label codes of :func:`decide` that are not a model index, and the status of each outcome.
 NONE, AMBIGUOUS = -1, -2
