@@ -232,3 +232,35 @@ def test_help_says_why_the_defaults_differ_from_python(capsys):
         text = " ".join(capsys.readouterr().out.split())
         assert "the test classes of tsfdi default to 0.05" in text
     assert "25 for monitor, as in paper 003" in text
+
+
+def test_identify_rule_sprt_is_msprt_per_record(saved_models, capsys):
+    """`tsfdi identify --rule sprt`: one row per record, msprt on the models' per-sample log-likelihoods from the
+    first sample every model has a residual for, decision time on the record's clock."""
+    from tsfdi.detection.sequential import msprt
+    from tsfdi.windows import ResidualWindows
+
+    d, paths, cur, x = saved_models
+    out = d / "ident_sprt.csv"
+    rc = main(["identify", str(cur), "--models", f"f1={paths['f1']}", f"f2={paths['f2']}", "--rule", "sprt",
+               "--sprt-alpha", "1e-4", "--start", "115s", "--out", str(out)])
+    assert rc == 0
+    t = pd.read_csv(out, keep_default_na=False)
+    assert list(t.columns) == ["start", "decision_time", "status", "label"] and len(t) == 1
+    models = {n: tsfdi.load(p) for n, p in paths.items()}
+    rw = ResidualWindows(models)
+    p = max(rw.orders.values())
+    seq = msprt(rw.fit(x[1500:]).loglik(), alpha=1e-4)
+    assert seq.label == 1 and t["label"][0] == "f2" and t["status"][0] == "identified"
+    assert t["start"][0] == pytest.approx(115.0 + p / FS)
+    assert t["decision_time"][0] == pytest.approx(115.0 + (p + seq.decision_time - 1) / FS)
+    capsys.readouterr()
+    assert main(["identify", str(cur), "--models", str(paths["f1"]), str(paths["f2"]), "--rule", "sprt",
+                 "--window", "10s"]) == 2
+    assert "--window" in capsys.readouterr().err
+    assert main(["identify", str(cur), "--models", str(paths["f1"]), str(paths["f2"]), "--rule", "sprt",
+                 "--sprt-alpha", "1"]) == 2
+    assert "--sprt-alpha" in capsys.readouterr().err
+    assert main(["identify", str(cur), "--models", str(paths["f1"]), str(paths["f2"]), "--rule", "sprt",
+                 "--threshold", "calibrated"]) == 2
+    assert "--threshold" in capsys.readouterr().err

@@ -659,9 +659,38 @@ def _identify_args(p: argparse.ArgumentParser) -> None:
                         "name once")
     _window_args(p, "window length (default: each whole record)")
     _test_args(p)
-    p.add_argument("--rule", choices=("paper", "likelihood", "pvalue"), default="paper",
-                   help="decision rule turning the models' acceptances into a label")
+    p.add_argument("--rule", choices=("paper", "likelihood", "pvalue", "sprt"), default="paper",
+                   help="decision rule turning the models' acceptances into a label; 'sprt': one sequential "
+                        "decision per record (the multi-hypothesis sequential probability ratio test on the models' "
+                        "per-sample log-likelihoods, from the record's first sample; no window, no residual test), "
+                        "with its decision time")
+    p.add_argument("--sprt-alpha", type=opt.probability, default=0.01,
+                   help="error probability of the sequential rule's bound (--rule sprt)")
     p.add_argument("--out", default=None, help="write the table to this CSV file")
+
+
+def _identify_sequential(args: argparse.Namespace, data: _Data, models: dict) -> list[pd.DataFrame]:
+    """``identify --rule sprt``: one row per record, the model the sequential test decides for and when."""
+    from tsfdi.detection.sequential import msprt
+    from tsfdi.windows import ResidualWindows
+
+    if args.window is not None:
+        raise ValueError("--window does not apply to --rule sprt (one sequential decision per record); leave it out")
+    if args.threshold != "theoretical":
+        raise ValueError("--threshold calibrated does not apply to --rule sprt (no residual test); leave it out")
+    engine = ResidualWindows(models)
+    order = max(engine.orders.values())
+    data = _drop_short(data, order + 2, f"the models' largest order ({order}) with --rule sprt")
+    rows = []
+    for _, frame, seq in _each(data, lambda frame: msprt(engine.fit(frame).loglik(), alpha=args.sprt_alpha,
+                                                         models=list(models))):
+        t = frame.index.to_numpy()
+        decided = seq.label >= 0
+        rows.append(pd.DataFrame({"start": [t[order]],
+                                  "decision_time": [t[order + seq.decision_time - 1] if decided else np.nan],
+                                  "status": ["identified" if decided else "undecided"],
+                                  "label": [list(models)[seq.label] if decided else ""]}))
+    return rows
 
 
 @command("identify", "identify which saved model fits a signal, per record or window by window", _identify_args)
@@ -672,6 +701,11 @@ def _identify(args: argparse.Namespace) -> int:
     models = _load_models("--models", args.models)
     data = _read(args, _channels(next(iter(models.values()))))
     _check_channels(data, {f"--models {n}": m for n, m in models.items()})
+    if args.rule == "sprt":
+        table = _table(_identify_sequential(args, data, models), data)
+        _show(table)
+        _write("--out", table, args.out)
+        return 0
     if args.window is None:
         data = _drop_short(data, *_min_samples(args, models))
     else:
