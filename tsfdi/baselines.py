@@ -18,6 +18,7 @@ import pandas as pd
 
 from tsfdi._data import as_signal, is_xarray, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, int_like, option, probability
+from tsfdi.coverage import MIN_RECORDS, Coverage, coverage
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
 from tsfdi.monitoring import Monitor
@@ -474,6 +475,44 @@ class Baselines:
             out[state] = t
         self._calibrated[key] = out
         return out
+
+    def covers(self, signal: Any, *, model: str = "var", state: str | None = None, alpha: float = 0.01,
+               lags: int = 2) -> Coverage:
+        """Whether this baseline's fitting records of ``state`` cover a new record (:func:`tsfdi.coverage.coverage`).
+
+        The record's summaries (per channel: mean, log residual scale, residual autocorrelation at lags
+        ``1..lags``) through the model ``model`` of ``state`` are compared with those of the state's fitting
+        segments, each through the model refitted without it (:attr:`heldout` when ``fit_baselines(...,
+        calibrate=True)`` kept it, else computed).
+
+        Parameters
+        ----------
+        signal : array_like, pandas or xarray signal
+            The new record, with the baseline's channels (all of them for ``"var"``, the model's channel for a
+            scalar AR model).
+        model : str
+            A fitted model name (``"var"`` or a channel).
+        state : str, optional
+            The state whose fitting records are compared (default the healthy state).
+        alpha : float
+            False-warning rate of the check on a record like the fitting records.
+        lags : int
+            Residual autocorrelation lags summarised.
+
+        Returns
+        -------
+        Coverage
+        """
+        state = self.healthy if state is None else state
+        models = self.state_models(model)
+        if state not in models:
+            raise ValueError(f"state must be one of {list(models)}, got {state!r}")
+        n = len(self.segments.get(state, ()))
+        if n < MIN_RECORDS:
+            raise ValueError(f"covers needs at least {MIN_RECORDS} fitting records of state {state!r}, the baseline "
+                             f"has {n}: fit it with fit_baselines(..., fit_records='all') or fit_records={MIN_RECORDS}"
+                             " or more")
+        return coverage(models[state], signal, held_out=self.heldout.get((model, state)), alpha=alpha, lags=lags)
 
     def select_alpha(self, model: str = "var", test: ResidualTest | None = None, window: Any = "20s",
                      alphas: Sequence[float] = (1e-3, 1e-4, 1e-5, 1e-6), *, step: Any = "1s") -> pd.DataFrame:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["TsfdiWarning", "IllConditionedWarning", "UnstableModelWarning", "ConvergenceWarning"]
+__all__ = ["TsfdiWarning", "IllConditionedWarning", "UnstableModelWarning", "ConvergenceWarning", "CoverageWarning"]
 
 
 class TsfdiWarning(UserWarning):
@@ -19,3 +19,8 @@ class UnstableModelWarning(TsfdiWarning):
 
 class ConvergenceWarning(TsfdiWarning):
     """An iterative procedure (recursive estimator, simulator) did not settle."""
+
+
+class CoverageWarning(TsfdiWarning):
+    """A record lies outside what a baseline's fitting records cover (:func:`tsfdi.coverage.coverage`): a decision
+    on it is not covered by the baseline's calibration."""

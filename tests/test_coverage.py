@@ -1,0 +1,210 @@
+"""Coverage of a new record by a baseline's fitting records (tsfdi.coverage, Baselines.covers; issue 31 part 2)."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from _synthetic_fdi import FS, dataset, record
+from conftest import as_kind
+from scipy import stats
+
+import tsfdi
+from tsfdi.coverage import ALL, MIN_RECORDS, Coverage, coverage, warn_if_not_covered
+from tsfdi.exceptions import CoverageWarning, TsfdiWarning
+
+A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
+A2 = -0.2 * np.eye(3)
+MU = np.array([1.0, -0.5, 0.2])
+SPREAD = 0.15
+
+
+def fleet(rng: np.random.Generator, count: int, n: int = 2000, noise: float = 1.0, shift: float = 0.0,
+          law: str = "normal") -> list:
+    """``count`` records of ``count`` aircraft of a fleet: VAR(2) y[t] = B1 y[t-1] + B2 y[t-2] + e[t] + mu whose
+    coefficients, channel noise scales and means each vary by +-15 % between aircraft (``law="normal"``: factors
+    1 + N(0, 0.075^2), 95 % of them within +-15 %; ``"uniform"``: uniform on 1 +- 0.15); ``noise`` scales every
+    aircraft's noise, ``shift`` offsets its means (another fleet)."""
+    def u(*shape):
+        if law == "uniform":
+            return 1.0 + SPREAD * rng.uniform(-1.0, 1.0, (count, *shape))
+        return 1.0 + SPREAD / 2 * rng.standard_normal((count, *shape))
+
+    b1, b2, s, mu = A1 * u(3, 3), A2 * u(3, 3), noise * u(3), MU * u(3) + shift
+    e = rng.standard_normal((count, n + 200, 3)) * s[:, None, :]
+    y = np.zeros_like(e)
+    for t in range(2, n + 200):
+        y[:, t] = np.einsum("rij,rj->ri", b1, y[:, t - 1]) + np.einsum("rij,rj->ri", b2, y[:, t - 2]) + e[:, t]
+    return list(y[:, 200:] + mu[:, None, :])
+
+
+def band(n: int, alpha: float, level: float = 0.99) -> tuple:
+    """Two-sided binomial band of the number of warnings among ``n`` independent records."""
+    return tuple(stats.binom.ppf([(1 - level) / 2, (1 + level) / 2], n, alpha))
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    rng = np.random.default_rng(31)
+    return tsfdi.VAR(fleet(rng, 10), 2, trend="c").fit(), rng
+
+
+@pytest.mark.slow
+def test_false_warning_rate_and_power_on_a_simulated_fleet():
+    """Monte Carlo, fixed seed: 150 baselines of 10 aircraft each judge 10 new aircraft of the same fleet (1,500
+    records): the warnings lie in the 99 % binomial band of alpha = 0.01; records of another fleet (noise x1.5, or
+    means offset by 0.5) are warned of in >= 90 %."""
+    rng = np.random.default_rng(2031)
+    same, noisy, shifted = [], [], []
+    for _ in range(150):
+        b = tsfdi.VAR(fleet(rng, 10), 2, trend="c").fit()
+        held = b.model.held_out_residuals()
+        same += [coverage(b, y, held_out=held).covered for y in fleet(rng, 10)]
+        noisy += [coverage(b, y, held_out=held).covered for y in fleet(rng, 1, noise=1.5)]
+        shifted += [coverage(b, y, held_out=held).covered for y in fleet(rng, 1, shift=0.5)]
+    lo, hi = band(len(same), 0.01)
+    warned = len(same) - sum(same)
+    assert lo <= warned <= hi, (warned, (lo, hi))
+    assert np.mean(np.logical_not(noisy)) >= 0.9, np.mean(np.logical_not(noisy))
+    assert np.mean(np.logical_not(shifted)) >= 0.9, np.mean(np.logical_not(shifted))
+
+
+def test_predictive_t_statistics_by_hand(baseline):
+    """Every row of the table is the predictive t of the summary against the fitting records' summaries (computed
+    here from the held-out residuals by hand), with the Sidak share of alpha over the summaries."""
+    b, rng = baseline
+    y = fleet(rng, 1)[0]
+    cov = coverage(b, y, alpha=0.05, lags=1)
+    held = b.model.held_out_residuals()
+    e = np.asarray(b.residuals(y))
+    feats = []
+    for x, r in [(rec.values, np.asarray(h)) for rec, h in zip(b.model.records, held)] + [(y, e)]:
+        ls = 0.5 * np.log((r ** 2).mean(axis=0))
+        rc = r - r.mean(axis=0)
+        acf = np.arctanh((rc[1:] * rc[:-1]).sum(axis=0) / (rc ** 2).sum(axis=0))
+        feats.append(np.r_[x.mean(axis=0), ls, ls.mean(), acf])
+    F, f = np.array(feats[:-1]), feats[-1]
+    n, m = F.shape
+    t = (f - F.mean(0)) / (F.std(0, ddof=1) * np.sqrt(1 + 1 / n))
+    np.testing.assert_allclose(cov.table["t"].to_numpy(), t, rtol=1e-10)
+    np.testing.assert_allclose(cov.table["pvalue"].to_numpy(), 2 * stats.t.sf(abs(t), n - 1), rtol=1e-10)
+    crit = stats.t.ppf(1 - (1 - 0.95 ** (1 / m)) / 2, n - 1)
+    np.testing.assert_allclose(cov.table["upper"] - cov.table["lower"],
+                               2 * crit * F.std(0, ddof=1) * np.sqrt(1 + 1 / n), rtol=1e-10)
+    assert cov.pvalue == pytest.approx(1 - (1 - cov.table["pvalue"].min()) ** m)
+    assert cov.covered == (cov.pvalue > 0.05) == (abs(t) <= crit).all()
+    assert cov.records == 10 and cov.nobs == 2000 and m == 10
+    assert list(cov.table.index[:7]) == [("mean", "y0"), ("mean", "y1"), ("mean", "y2"), ("log_scale", "y0"),
+                                         ("log_scale", "y1"), ("log_scale", "y2"), ("log_scale", ALL)]
+
+
+def test_out_of_fleet_record_names_the_summaries_and_warns(baseline):
+    b, rng = baseline
+    y = fleet(rng, 1)[0]
+    y[:, 1] += 3.0                                        # a new trim of channel 1
+    cov = coverage(b, y)
+    assert not cov.covered and cov.pvalue < 0.01
+    assert cov.out.index[0] == ("mean", "y1") and cov.out["excess"].iloc[0] > 1
+    assert "mean[y1]" in cov.warning_message() and "outside" in cov.warning_message()
+    assert "mean[y1]" in repr(cov)
+    with pytest.warns(CoverageWarning, match=r"detect: the record lies outside .*mean\[y1\]"):
+        warn_if_not_covered(cov, "detect")
+    assert issubclass(CoverageWarning, TsfdiWarning) and issubclass(CoverageWarning, UserWarning)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cov.covered = True
+
+
+def test_covered_record_does_not_warn(baseline):
+    b, rng = baseline
+    cov = coverage(b, b.model.records[0].values)           # a fitting record itself lies within the spread
+    assert cov.covered and "within" in cov.warning_message() and cov.out.empty
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_if_not_covered(cov, "detect")
+    with pytest.raises(TypeError, match="coverage must be a Coverage"):
+        warn_if_not_covered(cov.table, "detect")
+
+
+def test_data_kinds_and_channel_names(kind):
+    """numpy, pandas and xarray records and signals give the same coverage; named channels are matched by name."""
+    rng = np.random.default_rng(7)
+    recs = fleet(rng, 4, n=600)
+    y = fleet(rng, 1, n=600)[0]
+    names = ["roll", "pitch", "yaw"]
+    b = tsfdi.VAR([as_kind(r, kind, names) for r in recs], 2).fit()
+    ref = coverage(tsfdi.VAR(recs, 2).fit(), y)
+    cov = coverage(b, as_kind(y, kind, names))
+    np.testing.assert_allclose(cov.table["t"].to_numpy(), ref.table["t"].to_numpy(), rtol=1e-9)
+    assert cov.covered == ref.covered
+    if kind != "numpy":
+        assert list(cov.table.loc["mean"].index) == names
+        swapped = as_kind(y[:, ::-1], kind, names[::-1])       # same data, columns in another order
+        np.testing.assert_allclose(coverage(b, swapped).table["t"], cov.table["t"], rtol=1e-12)
+        with pytest.raises(ValueError, match="yaw"):
+            coverage(b, as_kind(y[:, :2], kind, names[:2]), name="flight")
+
+
+def test_bad_input(baseline):
+    b, rng = baseline
+    y = fleet(rng, 1, n=300)[0]
+    two = tsfdi.VAR(fleet(rng, 2, n=300), 2).fit()
+    with pytest.raises(ValueError, match=f"at least {MIN_RECORDS} fitting records.*fitted on 2"):
+        coverage(two, y)
+    with pytest.raises(ValueError, match="held_out must hold one residual series per fitting record"):
+        coverage(b, y, held_out=b.model.held_out_residuals()[:3])
+    with pytest.raises(ValueError, match=r"held_out\[0\]"):
+        coverage(b, y, held_out=[h[:, :2] for h in b.model.held_out_residuals()])
+    with pytest.raises(ValueError, match="alpha"):
+        coverage(b, y, alpha=1.5)
+    with pytest.raises(TypeError, match="lags"):
+        coverage(b, y, lags=1.5)
+    with pytest.raises(ValueError, match="flight"):
+        coverage(b, y[:3], name="flight")
+    with pytest.raises(ValueError, match="flight"):
+        coverage(b, np.where(np.arange(300)[:, None] == 5, np.nan, y), name="flight")
+    with pytest.raises(ValueError, match="channel"):
+        coverage(b, y[:, :2])
+    with pytest.raises(TypeError, match="results"):
+        coverage(y, y)
+    u = [rng.standard_normal(300) for _ in range(3)]
+    arx = tsfdi.ARX([r[:, 0] for r in fleet(rng, 3, n=300)], u, na=1, nb=1).fit()
+    with pytest.raises(TypeError, match="ARX"):
+        coverage(arx, y[:, 0])
+
+
+def test_scalar_ar_results():
+    rng = np.random.default_rng(3)
+    recs = [r[:, 0] for r in fleet(rng, 5, n=800)]
+    b = tsfdi.AR(recs, 2).fit()
+    cov = coverage(b, pd.Series(recs[0] + 0.0))
+    assert cov.covered and list(cov.table.index.get_level_values("summary")) == ["mean", "log_scale", "acf1", "acf2"]
+    assert not coverage(b, 3.0 * recs[0]).covered        # three times the noise level
+
+
+def test_baselines_covers(synthetic):
+    """Baselines.covers is coverage() of the state's model with the baseline's held-out residuals (kept by
+    calibrate=True, computed otherwise); too few fitting records are refused with how many are needed."""
+    recs, states, ft = synthetic
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=6, var_max_lags=6)
+    b = tsfdi.fit_baselines(recs, fit_records=4, calibrate=True, **kw)
+    lazy = tsfdi.fit_baselines(recs, fit_records=4, **kw)
+    rng = np.random.default_rng(11)
+    new = record("healthy", 3000, rng)
+    cov = b.covers(new)
+    assert isinstance(cov, Coverage) and cov.records == 4
+    ref = coverage(b.models["var"]["healthy"], new, held_out=b.heldout[("var", "healthy")])
+    pd.testing.assert_frame_equal(cov.table, ref.table)
+    pd.testing.assert_frame_equal(lazy.covers(new).table, cov.table)
+    assert not b.covers(new + np.array([0.0, 2.0])).covered
+    one = b.covers(new[:, 1], model="y1", state="f1", lags=1)
+    assert not one.covered and one.out.index[0][0] == "log_scale"     # f1's noise is twice the healthy one
+    with pytest.raises(ValueError, match="state must be one of"):
+        b.covers(new, state="f9")
+    with pytest.raises(ValueError, match="model must be one of"):
+        b.covers(new, model="z")
+    first = tsfdi.fit_baselines(recs, **kw)                # one fitting record per state
+    with pytest.raises(ValueError, match="at least 3 fitting records of state 'healthy', the baseline has 1"):
+        first.covers(new)

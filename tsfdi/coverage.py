@@ -1,0 +1,236 @@
+r"""Does a baseline cover a new flight? Record-level summaries of a new record against the fitting records' spread.
+
+A residual test calibrated on a baseline's fitting records holds its false-alarm rate on flights like those
+records. A flight with another payload, trim or airframe is outside what the baseline has seen, and a decision on
+it silently changes meaning. :func:`coverage` says when: it compares a few record-level summaries of the new record
+(per channel: the mean of the signal, the log scale of its residuals, the autocorrelation of its residuals at lags
+``1..lags``) with the spread of the same summaries over the fitting records, each fitting record's residuals taken
+through a model *not* fitted on it (:meth:`~tsfdi.models.AR.held_out_residuals`), as the new record's are.
+:meth:`tsfdi.Baselines.covers` is the same check for a baseline's state model. :func:`warn_if_not_covered` emits a
+:class:`~tsfdi.exceptions.CoverageWarning`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from tsfdi._data import as_signal
+from tsfdi._validation import int_like, probability
+from tsfdi.exceptions import CoverageWarning
+
+__all__ = ["Coverage", "coverage", "warn_if_not_covered", "MIN_RECORDS", "ALL"]
+
+#: fitting records needed: the predictive law of a new record's summary is a t law with ``records - 1`` degrees of
+#: freedom, so two records give one degree of freedom (a Cauchy law whose intervals are too wide to warn of
+#: anything) and one gives none
+MIN_RECORDS = 3
+
+#: the ``channel`` label of the summary over all channels: the mean of the channels' log scales (the noise level of
+#: the whole aircraft, which moves every channel's scale together)
+ALL = "all"
+
+
+@dataclass(frozen=True, eq=False)
+class Coverage:
+    """Whether a baseline's fitting records cover a new record (outcome of :func:`coverage`).
+
+    Attributes
+    ----------
+    covered : bool
+        ``False`` when a summary of the new record lies outside its predictive interval (the warning fires).
+    pvalue : float
+        Sidak-adjusted smallest per-summary p-value, ``1 - (1 - min p)^m``: ``covered`` is ``pvalue > alpha``.
+    alpha : float
+        False-warning rate of the check on a record like the fitting records (all summaries together).
+    table : pandas.DataFrame
+        One row per summary, indexed by (``summary``, ``channel``); ``summary`` is ``"mean"`` (the signal's mean,
+        the trim), ``"log_scale"`` (log root-mean-square residual) or ``"acf1"``, ``"acf2"``, ... (Fisher z,
+        ``arctanh``, of the residual autocorrelation at that lag). Columns: ``value`` (the new record's),
+        ``fit_mean``, ``fit_std``, ``fit_min``, ``fit_max`` (over the fitting records), ``lower``, ``upper`` (the
+        predictive interval at the per-summary level), ``t`` (predictive t statistic), ``pvalue`` (two-sided,
+        per summary), ``out`` (outside the interval), ``excess`` (``|t|`` over the interval's half-width in t
+        units: above 1 when out).
+    records : int
+        Fitting records the spread comes from.
+    nobs : int
+        Samples of the new record.
+    """
+
+    covered: bool
+    pvalue: float
+    alpha: float
+    table: pd.DataFrame
+    records: int
+    nobs: int
+
+    @property
+    def out(self) -> pd.DataFrame:
+        """The rows of :attr:`table` outside their predictive interval, largest ``excess`` first."""
+        return self.table[self.table["out"]].sort_values("excess", ascending=False)
+
+    def warning_message(self) -> str:
+        """One sentence: covered, or which summaries lie outside the fitting records' spread and by how much."""
+        m = len(self.table)
+        if self.covered:
+            return (f"the record lies within the spread of the baseline's {self.records} fitting records ({m} "
+                    f"summaries, alpha {self.alpha:g}, p = {self.pvalue:.3g})")
+        parts = [f"{s}[{c}] = {r.value:.4g} (fitting records {r.fit_min:.4g} .. {r.fit_max:.4g}, predictive "
+                 f"interval {r.lower:.4g} .. {r.upper:.4g}, t = {r.t:.3g})" for (s, c), r in self.out.iterrows()]
+        return (f"the record lies outside the spread of the baseline's {self.records} fitting records (p = "
+                f"{self.pvalue:.3g} < alpha {self.alpha:g}, {len(parts)} of {m} summaries out): " + "; ".join(parts)
+                + ". Decisions on it are not covered by the baseline's calibration: fit the baseline on flights "
+                  "like this one")
+
+    def __repr__(self) -> str:
+        return (f"Coverage(covered={self.covered}, pvalue={self.pvalue:.3g}, alpha={self.alpha:g}, "
+                f"records={self.records}, out={[f'{s}[{c}]' for s, c in self.out.index]})")
+
+
+def _summaries(y: np.ndarray, e: np.ndarray, lags: int) -> np.ndarray:
+    """Record-level summaries of one record: per channel the mean of ``y``, the log RMS of the residuals ``e`` (and
+    its mean over the channels when there are several) and the Fisher z of their autocorrelation at lags
+    ``1..lags``; in :func:`_index`'s order (summary-major)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = 0.5 * np.log(np.mean(e * e, axis=0))
+        out = [y.mean(axis=0), scale] + ([scale.mean(keepdims=True)] if scale.size > 1 else [])
+        c = e - e.mean(axis=0)
+        c0 = np.sum(c * c, axis=0)
+        for j in range(1, lags + 1):
+            out.append(np.arctanh(np.sum(c[j:] * c[:-j], axis=0) / c0))
+    return np.concatenate(out)
+
+
+def _index(channels: list, lags: int) -> pd.MultiIndex:
+    chans = [str(c) for c in channels]
+    rows = [(s, c) for s in ("mean", "log_scale") for c in chans] + ([("log_scale", ALL)] if len(chans) > 1 else [])
+    rows += [(f"acf{j}", c) for j in range(1, lags + 1) for c in chans]
+    return pd.MultiIndex.from_tuples(rows, names=["summary", "channel"])
+
+
+def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 0.01, lags: int = 2,
+             name: str = "signal") -> Coverage:
+    r"""Whether the records a model was fitted on cover a new record.
+
+    Parameters
+    ----------
+    results : ARResults or VARResults
+        A model fitted on several records (``tsfdi.VAR([r1, r2, ...], lags).fit()``): its records are the
+        baseline's fitting records.
+    signal : array_like, pandas.Series / DataFrame or xarray.DataArray
+        The new record, with the model's channels (a named signal is matched by name, as
+        :meth:`~tsfdi.VARResults.residuals` does).
+    held_out : sequence of residual series, optional
+        One residual series per fitting record, in record order, each through a model not fitted on it (default
+        ``results.model.held_out_residuals()``; pass ``held_out_residuals(groups=...)`` to hold out related
+        records together).
+    alpha : float
+        False-warning rate on a record like the fitting records, all summaries together (Sidak).
+    lags : int
+        Residual autocorrelation lags summarised (``0``: none).
+    name : str
+        Name of ``signal`` in error messages.
+
+    Returns
+    -------
+    Coverage
+
+    Raises
+    ------
+    ValueError
+        Fewer than :data:`MIN_RECORDS` fitting records; ``held_out`` not one series per record with the model's
+        channels; a record (or ``signal``) too short for ``lags``; non-finite summaries.
+    TypeError
+        ``results`` not an AR / VAR results object (an ARX needs its input: not supported).
+
+    Notes
+    -----
+    For each summary :math:`f` (``m`` of them), with :math:`\bar f` and :math:`s` its mean and standard deviation
+    over the ``n`` fitting records, a new record like them has
+
+    .. math::  t = \frac{f_{new} - \bar f}{s \sqrt{1 + 1/n}} \sim t_{n-1}
+
+    when the records' summaries are independent normal draws (the predictive law, which carries the uncertainty
+    of estimating the spread from few records: with few records the interval widens). The record is covered when
+    every :math:`|t|` is below the :math:`1 - \alpha_m / 2` quantile of :math:`t_{n-1}`, with the Sidak share
+    :math:`\alpha_m = 1 - (1 - \alpha)^{1/m}`. Between-record differences (payload, trim, airframe, noise
+    level) and the within-record estimation noise of the summaries both enter :math:`s`, so records of
+    comparable length should be compared: a much shorter new record has noisier summaries and warns more often,
+    a much longer one less often. Correlated summaries (the residual scales of all channels when the noise level
+    of the whole aircraft changes) make the Sidak share conservative.
+    """
+    alpha = probability(alpha, "alpha")
+    lags = int_like(lags, "lags", minimum=0)
+    model = getattr(results, "model", None)
+    if model is None or not hasattr(model, "records") or not callable(getattr(results, "residuals", None)):
+        raise TypeError(f"results must be fitted AR or VAR results, got {type(results).__name__}")
+    if getattr(model, "u_records", None) is not None:
+        raise TypeError("results must be AR or VAR results: a model with an input (ARX) is not supported")
+    records = model.records
+    n = len(records)
+    if n < MIN_RECORDS:
+        raise ValueError(f"coverage needs at least {MIN_RECORDS} fitting records (the spread of their summaries is "
+                         f"estimated from them), the model was fitted on {n}: fit it on a list of {MIN_RECORDS} or "
+                         "more records")
+    data = model.data
+    k = data.nchan
+    if held_out is None:
+        held_out = model.held_out_residuals()
+    if isinstance(held_out, (str, bytes)) or not hasattr(held_out, "__len__") or len(held_out) != n:
+        raise ValueError(f"held_out must hold one residual series per fitting record ({n}), got "
+                         f"{len(held_out) if hasattr(held_out, '__len__') else type(held_out).__name__}")
+    sig = as_signal(signal, name, min_nobs=model.max_lag + lags + 2, allow_constant=True)
+    sig = sig.match_channels(data.channels, name, named=data.named)
+    new = _summaries(sig.values, np.asarray(results.residuals(sig.values), np.float64).reshape(-1, k), lags)
+    fit = []
+    for i, (rec, e) in enumerate(zip(records, held_out)):
+        e = np.asarray(e, dtype=np.float64)
+        e = e.reshape(e.shape[0], -1) if e.ndim else e
+        if e.ndim != 2 or e.shape[1] != k or e.shape[0] < lags + 2:
+            raise ValueError(f"held_out[{i}] must be a residual series of {k} channel(s) and at least {lags + 2} "
+                             f"samples, got shape {np.shape(e)}")
+        fit.append(_summaries(rec.values, e, lags))
+    F = np.array(fit)
+    idx = _index(data.channels, lags)
+    bad = ~np.isfinite(F)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"summary {idx[j][0]}[{idx[j][1]}] of fitting record {i} is not finite (a constant or "
+                         "perfectly predicted channel)")
+    if not np.all(np.isfinite(new)):
+        j = int(np.flatnonzero(~np.isfinite(new))[0])
+        raise ValueError(f"{name}: summary {idx[j][0]}[{idx[j][1]}] is not finite (a constant or perfectly "
+                         "predicted channel)")
+    m = F.shape[1]
+    centre, sd = F.mean(axis=0), F.std(axis=0, ddof=1)
+    scale = sd * np.sqrt(1.0 + 1.0 / n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(scale > 0, (new - centre) / scale, np.where(new == centre, 0.0, np.inf * np.sign(new - centre)))
+    p = 2.0 * stats.t.sf(np.abs(t), n - 1)
+    share = -np.expm1(np.log1p(-alpha) / m)                     # Sidak share 1 - (1 - alpha)^(1/m)
+    crit = float(stats.t.isf(share / 2.0, n - 1))
+    out = np.abs(t) > crit
+    table = pd.DataFrame({"value": new, "fit_mean": centre, "fit_std": sd, "fit_min": F.min(axis=0),
+                          "fit_max": F.max(axis=0), "lower": centre - crit * scale, "upper": centre + crit * scale,
+                          "t": t, "pvalue": p, "out": out, "excess": np.abs(t) / crit}, index=idx)
+    pmin = float(p.min())
+    family = float(-np.expm1(m * np.log1p(-pmin))) if pmin < 1 else 1.0
+    return Coverage(covered=not bool(out.any()), pvalue=family, alpha=alpha, table=table, records=n, nobs=sig.nobs)
+
+
+def warn_if_not_covered(coverage: Coverage, where: str, *, stacklevel: int = 2) -> None:
+    """Emit a :class:`~tsfdi.exceptions.CoverageWarning` naming ``where`` (``"detect"``, ``"Monitor"``, a file)
+    when ``coverage`` is not covered; nothing otherwise.
+
+    ``stacklevel`` counts from the caller of this function, as :func:`warnings.warn` does from its own caller.
+    """
+    if not isinstance(coverage, Coverage):
+        raise TypeError(f"coverage must be a Coverage (tsfdi.coverage.coverage, Baselines.covers), got "
+                        f"{type(coverage).__name__}")
+    if not coverage.covered:
+        warnings.warn(f"{where}: {coverage.warning_message()}", CoverageWarning, stacklevel=stacklevel + 1)
