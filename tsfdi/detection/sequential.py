@@ -32,7 +32,7 @@ from typing import Any
 import numba
 import numpy as np
 import pandas as pd
-from scipy import linalg, optimize
+from scipy import linalg, optimize, special
 
 from tsfdi._data import as_signal, sampling_frequency
 from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_like, option, probability
@@ -369,9 +369,11 @@ def _quad_logdet(e: np.ndarray, var: np.ndarray, chol: np.ndarray | None) -> tup
 
 
 def _scale_from_walks(walks: list, block: int, what: str) -> float:
-    r"""The largest scale :math:`c` for which each walk :math:`c\,S` satisfies Wald's identity: per walk the drift
-    :math:`m` per sample (negative: the walk of a wrong hypothesis against the true one) and the long-run variance
-    :math:`v` per sample (batch means of ``block`` samples) give :math:`c = -2 m / v`; the smallest over the walks."""
+    r"""The largest scale :math:`c` for which every walk :math:`c\,S` satisfies Wald's identity
+    :math:`E[e^{c S_n}] \approx 1`: per walk (that of a wrong hypothesis against the true one, drifting down), the
+    root :math:`h > 0` of :math:`\hat K(h) + \tfrac{h^2}{2} (\hat v_{lr} - \hat v) = 0`, with :math:`\hat K` the
+    empirical cumulant generating function of one sample, :math:`\hat v` the sample variance and
+    :math:`\hat v_{lr}` the long-run variance per sample (batch means over ``block`` samples); the smallest root."""
     scales = []
     for name, z in walks:
         n = z.shape[0] // block
@@ -385,8 +387,22 @@ def _scale_from_walks(walks: list, block: int, what: str) -> float:
                              f"(mean {m:.4g} per sample) on the held-out records: the hypotheses do not separate "
                              "there, no scale makes the bounds hold")
         sums = z[: n * block].reshape(n, block).sum(axis=1)
-        v = float(((sums - m * block) ** 2).sum() / (n - 1) / block)
-        scales.append(-2.0 * m / v)
+        v_lr = float(((sums - m * block) ** 2).sum() / (n - 1) / block)
+        extra = 0.5 * (v_lr - float(z.var()))
+        log_n = np.log(z.shape[0])
+
+        def f(h, z=z, extra=extra, log_n=log_n):
+            return float(special.logsumexp(h * z) - log_n + h * h * extra)
+
+        h0 = -2.0 * m / v_lr                                # the Gaussian walk's root
+        lo, hi = 1e-6 * h0, h0
+        while f(hi) <= 0:
+            hi *= 2.0
+            if hi > 1e6 * h0:                              # pragma: no cover - f grows at least quadratically
+                raise ValueError(f"{what}: {name}: no root of the cumulant equation")
+        while f(lo) >= 0 and lo > 1e-12 * h0:              # pragma: no cover - f(lo) ~ lo * m < 0
+            lo *= 0.01
+        scales.append(optimize.brentq(f, lo, hi, rtol=1e-10))
     return float(min(scales))
 
 
