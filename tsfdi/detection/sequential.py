@@ -516,7 +516,8 @@ class SPRT:
         self.scale_ = 1.0
 
     def __repr__(self) -> str:
-        opt = {"variance": f", ratio={self.ratio:g}", "mean": f", shift={self.shift!r}", "model": ""}[self.alternative]
+        opt = (f", ratio={self.ratio:g}" if self.alternative == "variance" else
+               f", shift={self.shift!r}" if self.alternative == "mean" else "")
         cal = f", scale_={self.scale_:.4g}" if self.scale_ != 1.0 else ""
         return (f"SPRT({self.alternative!r}{opt}, alpha={self.alpha:g}, beta={self.beta:g}, "
                 f"restart={self.restart}{cal})")

@@ -1,0 +1,237 @@
+"""Sequential tests (issue 33): Wald's bounds, the per-sample log-likelihood ratios against scipy, the decision
+rule against a plain loop, OC / ASN closed forms, the MSPRT kernel, data kinds and input checks."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import matplotlib.figure
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import as_kind
+from scipy import integrate, stats
+
+from tsfdi.detection.sequential import (SPRT, SequentialDecision, SequentialIdentification, msprt, msprt_scale,
+                                        wald_bounds)
+
+
+def loop_sprt(z, lower, upper, restart=False):
+    """Reference: Wald's rule sample by sample."""
+    s, restarts = 0.0, 0
+    for t, v in enumerate(z):
+        s += v
+        if s >= upper:
+            return t + 1, True, restarts
+        if s <= lower:
+            if not restart:
+                return t + 1, False, restarts
+            restarts += 1
+            s = 0.0
+    return -1, False, restarts
+
+
+def loop_msprt(ll, bound, restart=False):
+    m = ll.shape[1]
+    s = np.zeros(m)
+    w = np.zeros((m, m))
+    for t in range(ll.shape[0]):
+        if restart:
+            w = np.maximum(0.0, w + ll[t][:, None] - ll[t][None, :])
+            d = np.array([min(w[j, k] for k in range(m) if k != j) for j in range(m)])
+        else:
+            s += ll[t]
+            d = np.array([s[j] - max(s[k] for k in range(m) if k != j) for j in range(m)])
+        if d.max() >= bound:
+            return int(np.argmax(d)), t + 1
+    return -1, -1
+
+
+def test_wald_bounds():
+    lo, hi = wald_bounds(0.05, 0.1)
+    assert hi == pytest.approx(np.log(0.9 / 0.05)) and lo == pytest.approx(np.log(0.1 / 0.95))
+    with pytest.raises(ValueError, match="alpha"):
+        wald_bounds(0.0, 0.1)
+    with pytest.raises(ValueError, match="beta"):
+        wald_bounds(0.1, 1.0)
+    with pytest.raises(ValueError, match="alpha \\+ beta"):
+        wald_bounds(0.6, 0.5)
+
+
+def test_llr_against_scipy():
+    rng = np.random.default_rng(0)
+    e = rng.standard_normal((50, 2)) * [1.0, 2.0]
+    var = np.array([1.0, 4.0])
+    z = SPRT("variance", ratio=3.0).loglik_ratio(e, var)
+    ref = (stats.norm.logpdf(e, scale=np.sqrt(3 * var)) - stats.norm.logpdf(e, scale=np.sqrt(var))).sum(axis=1)
+    np.testing.assert_allclose(z, ref, rtol=1e-12)
+    cov = np.array([[1.0, 0.6], [0.6, 4.0]])
+    z = SPRT("variance", ratio=0.5).loglik_ratio(e, cov)
+    ref = (stats.multivariate_normal(cov=0.5 * cov).logpdf(e) - stats.multivariate_normal(cov=cov).logpdf(e))
+    np.testing.assert_allclose(z, ref, rtol=1e-10)
+    z = SPRT("mean", shift=[0.5, -1.0]).loglik_ratio(e, cov)
+    mu = np.array([0.5, -2.0])
+    ref = stats.multivariate_normal(mu, cov).logpdf(e) - stats.multivariate_normal(cov=cov).logpdf(e)
+    np.testing.assert_allclose(z, ref, rtol=1e-10)
+    f = rng.standard_normal((50, 2))
+    z = SPRT("model").loglik_ratio(e, cov, fault_residuals=f, fault_sigma=[2.0, 3.0])
+    ref = (stats.multivariate_normal(cov=np.diag([2.0, 3.0])).logpdf(f) - stats.multivariate_normal(cov=cov).logpdf(e))
+    np.testing.assert_allclose(z, ref, rtol=1e-10)
+
+
+@pytest.mark.parametrize("restart", [False, True])
+def test_decision_matches_loop(restart):
+    rng = np.random.default_rng(1)
+    test = SPRT("mean", shift=0.3, alpha=0.05, beta=0.1, restart=restart)
+    for i in range(30):
+        e = rng.standard_normal(400) + (0.3 if i % 2 else 0.0)
+        d = test.test(e, sigma=1.0)
+        n, rej, restarts = loop_sprt(test.loglik_ratio(e, 1.0), test.lower, test.upper, restart)
+        assert (d.decision_time, d.reject, d.decided, d.restarts) == (n, rej, n > 0, restarts)
+        if not restart and n > 0:
+            np.testing.assert_allclose(d.statistic, np.cumsum(test.loglik_ratio(e, 1.0)))
+
+
+def test_kinds_and_seconds(kind):
+    e = np.random.default_rng(2).standard_normal((300, 2)) * 1.4
+    d = SPRT("variance", ratio=2.0).test(as_kind(e, kind, ["p", "q"]), sigma=[1.0, 1.0])
+    ref = SPRT("variance", ratio=2.0).test(e, sigma=[1.0, 1.0])
+    np.testing.assert_array_equal(d.statistic, ref.statistic)
+    assert d.decision_time == ref.decision_time > 0
+    if kind == "numpy":
+        assert np.isnan(d.decision_seconds) and d.time is None and d.channels == ("y0", "y1")
+    else:
+        assert d.decision_seconds == pytest.approx(d.decision_time * 0.01) and d.channels == ("p", "q")
+    assert SPRT().test(e, sigma=1.0, fs=50.0).decision_seconds == pytest.approx(
+        SPRT().test(e, sigma=1.0).decision_time / 50.0)
+
+
+def test_decision_is_frozen_and_displays():
+    d = SPRT("variance").test(np.random.default_rng(3).standard_normal(200) * 2, sigma=1.0)
+    assert isinstance(d, SequentialDecision)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        d.reject = False
+    with pytest.raises(ValueError):
+        d.statistic[0] = 1.0
+    assert "reject" in repr(d) and "Decision time" in str(d.summary())
+    assert isinstance(d.plot(), matplotlib.figure.Figure)
+
+
+def test_oc_asn_closed_forms():
+    for test, null, alt in ((SPRT("variance", ratio=1.8, alpha=0.03, beta=0.07), 1.0, 1.8),
+                            (SPRT("mean", shift=0.4, alpha=0.03, beta=0.07), 0.0, 0.4)):
+        A, B = test.upper, test.lower
+        assert test.oc(null) == pytest.approx(0.97) and test.oc(alt) == pytest.approx(0.07)
+        z0 = test.loglik_ratio(np.zeros(1), 1.0)[0]
+        if test.alternative == "variance":
+            e0 = 0.5 * ((1 - 1 / 1.8) - np.log(1.8))
+            e1 = 0.5 * ((1 - 1 / 1.8) * 1.8 - np.log(1.8))
+        else:
+            e0, e1 = z0, z0 + 0.4 * 0.4
+        assert test.asn(null) == pytest.approx((0.97 * B + 0.03 * A) / e0)
+        assert test.asn(alt) == pytest.approx((0.07 * B + 0.93 * A) / e1)
+        oc = test.oc(np.linspace(null - 0.3 if null else 0.5, alt + 0.5, 9))
+        assert np.all(np.diff(oc) < 0)
+
+
+def test_oc_h_solves_wald_equation():
+    """h(theta) of the variance alternative: E_theta[exp(h z)] = 1, by quadrature over chi2(2)."""
+    test = SPRT("variance", ratio=2.0)
+    for theta in (0.7, 1.3, 1.6, 2.5):
+        h, _, _ = test._h_moments(np.array(theta), 2)
+        f = lambda q: np.exp(h * 0.5 * (0.5 * theta * q - 2 * np.log(2.0)) + stats.chi2.logpdf(q, 2))  # noqa: E731
+        assert integrate.quad(f, 0, np.inf)[0] == pytest.approx(1.0, rel=1e-8)
+
+
+def test_monte_carlo_agrees_with_theory():
+    mc = SPRT("variance", ratio=1.5, alpha=0.05, beta=0.05).monte_carlo([1.0, 1.25, 1.5], n_rep=400, rng=4)
+    assert list(mc.columns) == ["accept", "reject", "undecided", "mean_n", "std_n", "oc", "asn"]
+    assert (mc["undecided"] == 0).all()
+    assert np.all(np.abs(mc["accept"] - mc["oc"]) < 0.08)
+    assert np.all(np.abs(mc["mean_n"] / mc["asn"] - 1) < 0.25)
+
+
+def test_calibrate_white_residuals_keeps_scale_one():
+    e = list(np.random.default_rng(5).standard_normal((20, 2000)))
+    for test in (SPRT("variance", ratio=1.5), SPRT("mean", shift=0.3)):
+        assert test.calibrate(e, 1.0).scale_ == pytest.approx(1.0, abs=0.1)
+        assert "scale_" in repr(test)
+    with pytest.raises(ValueError, match="blocks"):
+        SPRT().calibrate(np.zeros(100), 1.0)
+
+
+@pytest.mark.parametrize("restart", [False, True])
+def test_msprt_matches_loop(restart):
+    rng = np.random.default_rng(6)
+    for i in range(20):
+        ll = rng.standard_normal((300, 4))
+        ll[:, i % 4] += 0.3
+        out = msprt(ll, alpha=0.05, restart=restart)
+        bound = np.log(3 / 0.05)
+        assert out.bound == pytest.approx(bound)
+        assert (out.label, out.decision_time) == loop_msprt(ll, bound, restart)
+    out = msprt(ll, alpha=0.05, start=100, scale=0.5)
+    assert out.statistic.shape == (200, 4)
+    assert (out.label, out.decision_time) == loop_msprt(0.5 * ll[100:], bound)
+
+
+def test_msprt_kinds_names_and_display(kind):
+    ll = np.random.default_rng(7).standard_normal((200, 3))
+    ll[:, 2] += 0.5
+    out = msprt(as_kind(ll, kind, ["healthy", "rotor1", "rotor2"]))
+    assert isinstance(out, SequentialIdentification)
+    assert out.label == 2 and out.decided and out.status == "identified"
+    if kind == "numpy":
+        assert out.models == ("m0", "m1", "m2") and np.isnan(out.decision_seconds)
+    else:
+        assert out.name == "rotor2" and out.decision_seconds == pytest.approx(out.decision_time * 0.01)
+    assert msprt(ll, models=["a", "b", "c"]).name == "c"
+    assert "rotor2" in str(out.summary()) or kind == "numpy"
+    assert isinstance(out.plot(), matplotlib.figure.Figure)
+    undecided = msprt(np.zeros((10, 3)))
+    assert (undecided.label, undecided.decision_time, undecided.name) == (-1, -1, None)
+
+
+def test_plot_oc_asn():
+    from tsfdi.plotting.sequential import plot_oc_asn
+
+    test = SPRT("mean", shift=0.5, alpha=0.05, beta=0.05)
+    fig = plot_oc_asn(test, np.linspace(-0.2, 0.8, 21), monte_carlo=test.monte_carlo([0.0, 0.5], n_rep=50, rng=0))
+    assert isinstance(fig, matplotlib.figure.Figure) and len(fig.axes) == 2
+
+
+@pytest.mark.parametrize("call, exc, match", [
+    (lambda: SPRT("nope"), ValueError, "alternative"),
+    (lambda: SPRT("variance", ratio=1.0), ValueError, "ratio"),
+    (lambda: SPRT("variance", ratio=-2), ValueError, "ratio"),
+    (lambda: SPRT("variance", shift=1.0), ValueError, "shift"),
+    (lambda: SPRT("mean", shift=0.0), ValueError, "shift"),
+    (lambda: SPRT("mean", shift="x"), TypeError, "shift"),
+    (lambda: SPRT(alpha=1.5), ValueError, "alpha"),
+    (lambda: SPRT(restart=1), TypeError, "restart"),
+    (lambda: SPRT().test(np.ones(10)), TypeError, "sigma"),
+    (lambda: SPRT().test(np.ones(10), sigma=-1.0), ValueError, "sigma"),
+    (lambda: SPRT().test(np.ones((10, 2)), sigma=[1.0, 2.0, 3.0]), ValueError, "sigma"),
+    (lambda: SPRT().test(np.ones((10, 2)), sigma=[[1.0, 2.0], [2.0, 1.0]]), ValueError, "sigma"),
+    (lambda: SPRT().test(np.r_[1.0, np.nan], sigma=1.0), ValueError, "resid"),
+    (lambda: SPRT("mean", shift=[1.0, 2.0]).test(np.ones((10, 3)), sigma=1.0), ValueError, "shift"),
+    (lambda: SPRT("model").test(np.ones(10), sigma=1.0), TypeError, "fault_residuals"),
+    (lambda: SPRT("model").test(np.ones(10), sigma=1.0, fault_residuals=np.ones(9), fault_sigma=1.0),
+     ValueError, "fault_residuals"),
+    (lambda: SPRT().test(np.ones(10), sigma=1.0, fault_residuals=np.ones(10)), ValueError, "fault_residuals"),
+    (lambda: SPRT("model").oc(1.0), ValueError, "oc and asn"),
+    (lambda: SPRT().oc(-1.0), ValueError, "theta"),
+    (lambda: SPRT().asn("a"), TypeError, "theta"),
+    (lambda: SPRT().monte_carlo(1.0, n_rep=0), ValueError, "n_rep"),
+    (lambda: msprt(np.ones((10, 1))), ValueError, "loglik"),
+    (lambda: msprt(np.ones((10, 2)), alpha=0), ValueError, "alpha"),
+    (lambda: msprt(np.ones((10, 2)), start=10), ValueError, "start"),
+    (lambda: msprt(np.ones((10, 2)), scale=0), ValueError, "scale"),
+    (lambda: msprt(np.ones((10, 2)), models=["a"]), ValueError, "models"),
+    (lambda: msprt(np.full((10, 2), np.inf)), ValueError, "loglik"),
+    (lambda: msprt_scale([np.ones((700, 2))], [0, 1]), ValueError, "labels"),
+    (lambda: msprt_scale([np.ones((700, 2))], [2]), ValueError, "labels"),
+])
+def test_input_checks(call, exc, match):
+    with pytest.raises(exc, match=match):
+        call()
