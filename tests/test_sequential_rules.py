@@ -111,3 +111,16 @@ def test_evaluate_sprt_scale_comes_from_the_held_out_fitting_records(synthetic):
             labels.append(j)
     scale = ev.sprt["scale"][("", "var")]
     assert scale == msprt_scale(lls, labels) and scale != 1.0
+
+
+def test_evaluate_sprt_needs_two_fault_models(synthetic):
+    recs, states, ft = synthetic
+    keep = [i for i, s in enumerate(states) if s in ("healthy", states[-1])]
+    sub = [recs[i] for i in keep]
+    st = [states[i] for i in keep]
+    ftt = [ft[i] for i in keep]
+    b = tsfdi.fit_baselines(sub, states=st, failure_times=ftt, fs=100.0, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, steady_window="5s")
+    with pytest.raises(ValueError, match="rules: 'sprt'.*two"):
+        tsfdi.evaluate(sub, b, states=st, failure_times=ftt, fs=100.0, models=["var"], windows=["10s"], settle=5.0,
+                       rules=("sprt",), progress=False)

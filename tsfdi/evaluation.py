@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+import weakref
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -474,6 +475,9 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     sequential = "sprt" in rules
     rules = tuple(dict.fromkeys(["paper"] + [r for r in rules if r in RULES]))
     sprt_alpha = float_like(sprt_alpha, "sprt_alpha", minimum=0.0, maximum=1.0, strict_min=True, strict_max=True)
+    if sequential and len(first.faults) < 2:
+        raise ValueError(f"rules: 'sprt' chooses among the fault models and needs at least two, the baselines have "
+                         f"{list(first.faults)}")
     step_n = window_samples(step, "step", rec.fs)
     settle = float_like(settle, "settle", minimum=0.0)
     healthy, faults = first.healthy, first.faults
@@ -590,15 +594,23 @@ def _heldout_logliks(base: Baselines, m: str) -> list:
     return out
 
 
+#: Baselines -> {model: scale} of the sequential rule: computed once per (immutable) baselines and model, as
+#: Baselines.calibrated_tests keeps its calibrated tests; an entry goes with its baselines.
+_SPRT_SCALES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _sprt_scale(base: Baselines, m: str) -> float:
     """Scale correction of the sequential rule for model ``m`` (:func:`~tsfdi.detection.sequential.msprt_scale`)
     on the held-out fitting records of the fault states (:func:`_heldout_logliks`)."""
-    items = _heldout_logliks(base, m)
-    try:
-        return msprt_scale([ll for ll, _ in items], [j for _, j in items])
-    except ValueError as err:
-        raise ValueError(f"the sequential rule cannot be scale-corrected for model {m!r} on the baselines' held-out "
-                         f"residuals: {err}") from None
+    known = _SPRT_SCALES.setdefault(base, {})
+    if m not in known:
+        items = _heldout_logliks(base, m)
+        try:
+            known[m] = msprt_scale([ll for ll, _ in items], [j for _, j in items])
+        except ValueError as err:
+            raise ValueError(f"the sequential rule cannot be scale-corrected for model {m!r} on the baselines' "
+                             f"held-out residuals: {err}") from None
+    return known[m]
 
 
 def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
