@@ -133,7 +133,7 @@ def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray,
 
 def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
              blocks: tuple[np.ndarray, list[int]] | None = None) -> np.ndarray:
-    """Gram matrix of ``[const, -y[t-1], ..., -y[t-lags], y[t]]`` over ``t = lags .. n-1`` in O(n * lags).
+    r"""Gram matrix of ``[const, -y[t-1], ..., -y[t-lags], y[t]]`` over ``t = lags .. n-1`` in O(n * lags).
 
     The lag-product blocks are Toeplitz up to end effects. With ``L[i, j] = sum_{t=p}^{n-1} y[t-i] y[t-j]'``
     (lag space, ``i, j = 0..p``), the first block row follows from the full lag products
