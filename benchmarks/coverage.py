@@ -1,0 +1,207 @@
+"""Coverage benchmark (issue 31, part 2): does a baseline cover a new flight? False-warning rate and power of
+``tsfdi.coverage.coverage`` / ``Baselines.covers``.
+
+Run: ``python benchmarks/coverage.py [--data PATH] [--reps N]`` (BLAS pinned to one thread; prints its run time,
+about 2-3 min on the 2-core development machine). Three sections, each warning at alpha = 0.01 (the check's
+false-warning rate on a record like the fitting records, all summaries together):
+
+1. Simulated fleet (fixed seed): VAR(2) records whose coefficients, channel noise scales and means vary by +-15 %
+   between aircraft (factors 1 + N(0, 0.075^2), or uniform on 1 +- 0.15); per repetition a baseline on 5, 10 or
+   20 aircraft, judged on 10 new aircraft of the same fleet (false warnings, with the two-sided 99 % binomial band
+   of alpha) and on one aircraft of each other fleet: noise x1.5, dynamics x1.4 (both coefficient matrices), means
+   offset by 0.5 (power). Target: in band, and >= 90 % for at least one other fleet, at 10 records.
+2. CrazyPAD (``../shared/data/crazypad``; the choices of ``benchmarks/crazypad.py``: margin, channels, VAR order,
+   made on the normal flights; each log's two airborne segments are fitted and held out together): leave one
+   normal flight out within an airframe (its segments judged against the drone's other normal flights:
+   false-warning rate with its band); fit on one airframe's normal flights, judge the other's (fires?); the
+   payload conditions (add_weight_*, weight_on_string_*) against the same drone's normal flights.
+3. Hexacopter (``tsfdi.datasets.simulate_hexacopter``, default aircraft, 30 s in severe turbulence, the first 5 s
+   dropped; channels roll, pitch, yaw_rate): a VAR on 10 light aircraft (``FleetSpread(payload=0.1)``: payload 0-10 %
+   of the gross weight), judged on 60 more of the same spread (false warnings) and on aircraft with a payload of
+   20-30 % (``FleetSpread(payload=0.3)``, those above 20 %).
+"""
+
+import os
+import sys
+from pathlib import Path
+
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+HERE = Path(__file__).resolve().parent
+# run as a script, this file's folder comes first on sys.path, where its name would shadow the coverage package
+# (numba imports it): the folder is taken off, and crazypad.py loaded from its path
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
+
+import argparse  # noqa: E402
+import importlib.util  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from scipy import stats  # noqa: E402
+
+import tsfdi  # noqa: E402
+from tsfdi.coverage import coverage  # noqa: E402
+
+_spec = importlib.util.spec_from_file_location("crazypad", HERE / "crazypad.py")
+cp = sys.modules["crazypad"] = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(cp)
+
+ALPHA = 0.01
+A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
+A2 = -0.2 * np.eye(3)
+MU = np.array([1.0, -0.5, 0.2])
+SPREAD = 0.15
+
+
+def fleet(rng, count, n=2000, noise=1.0, gain=1.0, shift=0.0, law="normal"):
+    """``count`` aircraft of a fleet, one record each (as in tests/test_coverage.py, plus ``gain`` on the
+    dynamics)."""
+    def u(*shape):
+        if law == "uniform":
+            return 1.0 + SPREAD * rng.uniform(-1.0, 1.0, (count, *shape))
+        return 1.0 + SPREAD / 2 * rng.standard_normal((count, *shape))
+
+    b1, b2, s, mu = gain * A1 * u(3, 3), gain * A2 * u(3, 3), noise * u(3), MU * u(3) + shift
+    e = rng.standard_normal((count, n + 200, 3)) * s[:, None, :]
+    y = np.zeros_like(e)
+    for t in range(2, n + 200):
+        y[:, t] = np.einsum("rij,rj->ri", b1, y[:, t - 1]) + np.einsum("rij,rj->ri", b2, y[:, t - 2]) + e[:, t]
+    return list(y[:, 200:] + mu[:, None, :])
+
+
+def band(n, p=ALPHA):
+    """Two-sided 99 % binomial band of the count of ``n`` Bernoulli(p) trials."""
+    lo, hi = stats.binom.ppf([0.005, 0.995], n, p)
+    return int(lo), int(hi)
+
+
+def rate(flags, p=ALPHA):
+    k, n = int(np.sum(flags)), len(flags)
+    lo, hi = band(n, p)
+    verdict = "in band" if lo <= k <= hi else ("BELOW band" if k < lo else "ABOVE band")
+    return f"{k:4d}/{n:<5d} = {100 * k / n:5.2f} % (99 % band {lo}-{hi}: {verdict})"
+
+
+def warned(res, held, recs):
+    return [not coverage(res, y, held_out=held, alpha=ALPHA).covered for y in recs]
+
+
+# ------------------------------------------------------------------ 1. simulated fleet
+def simulated(reps):
+    print(f"1. Simulated fleet, VAR(2) with +-15 % aircraft-to-aircraft spread, {reps} baselines per row, "
+          f"alpha {ALPHA}")
+    ok = True
+    for law in ("normal", "uniform"):
+        for nfit in (5, 10, 20):
+            rng = np.random.default_rng([31, nfit, law == "uniform"])
+            same, other = [], {"noise x1.5": [], "dynamics x1.4": [], "means +0.5": []}
+            for _ in range(reps):
+                res = tsfdi.VAR(fleet(rng, nfit, law=law), 2, trend="c").fit()
+                held = res.model.held_out_residuals()
+                same += warned(res, held, fleet(rng, 10, law=law))
+                other["noise x1.5"] += warned(res, held, fleet(rng, 1, noise=1.5, law=law))
+                other["dynamics x1.4"] += warned(res, held, fleet(rng, 1, gain=1.4, law=law))
+                other["means +0.5"] += warned(res, held, fleet(rng, 1, shift=0.5, law=law))
+            power = ", ".join(f"{k} {100 * np.mean(v):5.1f} %" for k, v in other.items())
+            print(f"   {law:7s} spread, {nfit:2d} records: same fleet {rate(same)}; other fleets warned: {power}")
+            if law == "normal" and nfit == 10:
+                lo, hi = band(len(same))
+                ok &= lo <= sum(same) <= hi and max(np.mean(v) for v in other.values()) >= 0.9
+    return ok
+
+
+# ------------------------------------------------------------------ 2. CrazyPAD
+def judge(model, flights, channels):
+    """Per flight: one warning flag per airborne segment."""
+    return {f.log: warned(model.results, model.held, f.arrays(channels)) for f in flights}
+
+
+def crazypad(root):
+    cp.setup(root)
+    choice = cp.choose(cp.normal_logs())
+    print(f"2. CrazyPAD ({cp.ROOT}); choices on the normal flights: {choice.line()}")
+    normal = cp.load_condition(cp.NORMAL, choice.margin)
+    drones = sorted({f.drone for f in normal})
+    by_drone = {d: [f for f in normal if f.drone == d] for d in drones}
+    seg_flags, flight_flags = [], []
+    for d, fl in by_drone.items():
+        for i, f in enumerate(fl):
+            model = cp.fit_model([g for j, g in enumerate(fl) if j != i], choice.channels, choice.order)
+            flags = judge(model, [f], choice.channels)[f.log]
+            seg_flags += flags
+            flight_flags.append(any(flags))
+            print(f"   {d} leave {f.log} out: baseline of {len(fl) - 1} flights ({len(model.held)} segments); "
+                  f"segments warned {flags}")
+    print(f"   same airframe, leave one flight out: segments {rate(seg_flags)}")
+    p2 = 1 - (1 - ALPHA) ** 2
+    print(f"   same airframe, flights (either segment warns, nominal {100 * p2:.2f} %): {rate(flight_flags, p2)}")
+    print("   (few trials: a 99 % band this wide cannot tell a rate of 0 % from one of several per cent)")
+    full = {d: cp.fit_model(fl, choice.channels, choice.order) for d, fl in by_drone.items()}
+    for d in drones:
+        for o in drones:
+            if o == d:
+                continue
+            flags = judge(full[d], by_drone[o], choice.channels)
+            segs = [x for v in flags.values() for x in v]
+            print(f"   fit on {d} ({len(by_drone[d])} flights), judge {o}'s normal flights: warned on "
+                  f"{sum(any(v) for v in flags.values())}/{len(flags)} flights, {sum(segs)}/{len(segs)} segments")
+    payload = [c for c in sorted(set(pd.read_csv(cp.ROOT / "flights.csv").condition))
+               if c.startswith(("add_weight", "weight_on_string"))]
+    for c in payload:
+        for d in drones:
+            fl = [f for f in cp.load_condition(c, choice.margin) if f.drone == d]
+            if not fl:
+                continue
+            flags = judge(full[d], fl, choice.channels)
+            segs = [x for v in flags.values() for x in v]
+            print(f"   payload {c} ({d}), against {d}'s normal flights: warned on "
+                  f"{sum(any(v) for v in flags.values())}/{len(flags)} flights, {sum(segs)}/{len(segs)} segments")
+
+
+# ------------------------------------------------------------------ 3. hexacopter
+def hexacopter():
+    from tsfdi.datasets import simulate_hexacopter
+    from tsfdi.datasets.hexacopter import FleetSpread, hexacopter_signals
+
+    def records(payload, seeds):
+        ds = simulate_hexacopter(len(seeds), duration=30.0, failed_rotor=0, seed=list(seeds),
+                                 fleet=FleetSpread(payload=payload))
+        sig = hexacopter_signals(ds).isel(time=slice(500, None))
+        return [sig.isel(record=i) for i in range(len(seeds))], ds["payload"].values
+
+    light, p_light = records(0.1, range(1000, 1070))
+    heavy, p_heavy = records(0.3, range(2000, 2060))
+    heavy = [y for y, p in zip(heavy, p_heavy) if p > 0.2]
+    fit, new = light[:10], light[10:]
+    order = int(tsfdi.select_order(fit, 20, "var", trend="c").selected)
+    spec = tsfdi.VAR(fit, order, trend="c")
+    res, held = spec.fit(), spec.held_out_residuals()
+    print(f"3. Hexacopter, VAR({order}) on 10 aircraft with payload 0-10 % (channels "
+          f"{list(map(str, fit[0].channel.values))})")
+    print(f"   same spread (payload {p_light[10:].min():.2f}-{p_light[10:].max():.2f}): {rate(warned(res, held, new))}")
+    w = warned(res, held, heavy)
+    print(f"   heavier (payload 20-30 %): warned {sum(w)}/{len(w)} = {100 * np.mean(w):.1f} %")
+    tables = [coverage(res, y, held_out=held, alpha=ALPHA).table for y in heavy]
+    t = sum(tab["t"] for tab in tables) / len(tables)
+    crit = float((tables[0]["t"].abs() / tables[0]["excess"]).iloc[0])          # the interval's |t| limit
+    top = t.abs().sort_values(ascending=False).index[:3]
+    print("   heavier: mean predictive t of the summaries that move most: "
+          + ", ".join(f"{s}[{c}] {t[(s, c)]:+.2f}" for s, c in top) + f" (a warning needs |t| > {crit:.2f})")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", default=None, help="CrazyPAD folder (default ../shared/data/crazypad)")
+    ap.add_argument("--reps", type=int, default=100, help="baselines per simulated-fleet row (default 100)")
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    ok = simulated(args.reps)
+    print(f"   target (normal spread, 10 records: in band, >= 90 % on another fleet): {'PASS' if ok else 'FAIL'}")
+    crazypad(args.data)
+    hexacopter()
+    print(f"run time {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
