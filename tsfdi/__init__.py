@@ -12,8 +12,9 @@ and the online detectors of papers 001/002 (:mod:`tsfdi.online`), fault isolatio
 import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
-from tsfdi.detection import (GLRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
-                             ParameterGLRT, ResidualTest, ScaledChi2Threshold, ZScore)
+from tsfdi.detection import (GLRT, SPRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
+                             ParameterGLRT, ResidualTest, ScaledChi2Threshold, SequentialDecision,
+                             SequentialIdentification, ZScore, msprt)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
 from tsfdi.exceptions import TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
@@ -38,6 +39,8 @@ __all__ = [
     "EmpiricalThreshold",
     "ScaledChi2Threshold",
     "ZScore",
+    # sequential decisions
+    "SPRT", "SequentialDecision", "SequentialIdentification", "msprt",
     # windowed engine, detection, identification
     "ResidualWindows", "WindowStatistics", "detect", "identify", "identify_windows", "Identification",
     "WindowedIdentification", "ResidualSet", "Isolation", "IsolationSeries",
