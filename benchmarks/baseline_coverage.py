@@ -1,7 +1,10 @@
 """Coverage benchmark (issue 31, part 2): does a baseline cover a new flight? False-warning rate and power of
-``tsfdi.coverage.coverage`` / ``Baselines.covers``.
+``tsfdi.coverage.coverage`` / ``Baselines.covers``. (Not named ``coverage.py``: run as a script, this folder comes
+first on ``sys.path``, where that name would shadow the ``coverage`` package numba imports and break every
+benchmark.)
 
-Run: ``python benchmarks/coverage.py [--data PATH] [--reps N]`` (BLAS pinned to one thread; prints its run time,
+Run: ``python benchmarks/baseline_coverage.py [--data PATH] [--reps N]`` (BLAS pinned to one thread; prints its
+run time,
 about 2-3 min on the 2-core development machine). Three sections, each warning at alpha = 0.01 (the check's
 false-warning rate on a record like the fitting records, all summaries together):
 
@@ -22,19 +25,14 @@ false-warning rate on a record like the fitting records, all summaries together)
 """
 
 import os
-import sys
-from pathlib import Path
 
 os.environ["OPENBLAS_NUM_THREADS"] = "1"
 os.environ.setdefault("OMP_NUM_THREADS", "1")
-HERE = Path(__file__).resolve().parent
-# run as a script, this file's folder comes first on sys.path, where its name would shadow the coverage package
-# (numba imports it): the folder is taken off, and crazypad.py loaded from its path
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
@@ -43,9 +41,8 @@ from scipy import stats  # noqa: E402
 import tsfdi  # noqa: E402
 from tsfdi.coverage import coverage  # noqa: E402
 
-_spec = importlib.util.spec_from_file_location("crazypad", HERE / "crazypad.py")
-cp = sys.modules["crazypad"] = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(cp)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import crazypad as cp  # noqa: E402
 
 ALPHA = 0.01
 A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
