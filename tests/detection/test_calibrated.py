@@ -316,7 +316,10 @@ def test_calibration_errors_name_the_channel_and_the_fix():
                                          r"ScaledChi2Threshold\(alpha, min_windows=\.\.\.\).*--min-windows") as err:
         LjungBox(5, 1e-3).calibrate(recs, window=101)
     assert "channel 0" not in str(err.value)
-    assert LjungBox(5, 1e-3, threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20)).calibrate(
+    with pytest.raises(ValueError, match=r"^LjungBox.calibrate, channel 'roll': statistic comes from 3 records, at "
+                                         r"least 4 are needed for false_alarm=0.001"):
+        LjungBox(5, 1e-3, threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20)).calibrate(recs, window=101)
+    assert LjungBox(5, 1e-3, threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20, min_records=3)).calibrate(
         recs, window=101).calibrated
     with pytest.raises(ValueError, match=r"^LjungBox.calibrate, channel 'roll': statistic is too small to calibrate"):
         LjungBox(5, 1e-5, threshold="empirical").calibrate(recs, window=101)

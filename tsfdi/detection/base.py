@@ -567,7 +567,13 @@ class CalibratedTest(ResidualTest):
         if method == "scaled-chi2":
             out["null_law"] = [{"scale": t.scale_, "df": t.df_} for t in self.thresholds_]
             out["calibration_records"] = self.thresholds_[0].records_
-            out["pvalue_method"] = "calibrated: mixture over records of P(chi2(df_j) > statistic / scale_j)"
+            out["calibration_effective"] = [t.effective_windows_ for t in self.thresholds_]
+            if self.thresholds_[0].record_law_ is not None:
+                out["record_law"] = [t.record_law_ for t in self.thresholds_]
+                out["pvalue_method"] = ("calibrated: predictive over a new record's log-scale (Student t from the "
+                                        "records) of P(exp(L) chi2(nu) / nu > statistic)")
+            else:
+                out["pvalue_method"] = "calibrated: mixture over records of P(chi2(df_j) > statistic / scale_j)"
         else:
             out["pvalue_method"] = "empirical: (1 + #{calibration >= statistic}) / (n + 1)"
         return out

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from tsfdi._data import as_signal
-from tsfdi._validation import float_like, int_like, probability
+from tsfdi._validation import float_like, int_like, option, probability
 
 __all__ = ["EmpiricalThreshold", "ScaledChi2Threshold"]
 
@@ -198,6 +198,75 @@ def _mixture_quantile(scale: np.ndarray, df: np.ndarray, alpha: float) -> np.nda
 #: shorter record the records are pooled into one law.
 MIN_RECORD_WINDOWS = 3
 
+#: With ``J`` records the predictive law of a new record's log-scale is a Student t with ``J - 1`` degrees of freedom:
+#: :class:`ScaledChi2Threshold` needs the ``J`` whose t quantile at the per-channel ``false_alarm`` is at most this
+#: many times the normal one (the spread known): 3 records at 0.01, 4 at 1e-3, 5 at 1e-4.
+MAX_RECORD_WIDENING = 4.0
+
+#: Gauss-Legendre nodes on ``ln w`` (``w`` a tail probability from 1e-16 to 0.5) per half of the predictive law.
+_NODES = np.polynomial.legendre.leggauss(40)
+
+
+def records_needed(false_alarm: float) -> int:
+    """Fewest records for a predictive record-level threshold at ``false_alarm`` (:data:`MAX_RECORD_WIDENING`)."""
+    from scipy import stats
+
+    z = stats.norm.isf(false_alarm)
+    j = 3
+    while j < 1000 and stats.t.isf(false_alarm, j - 1) > MAX_RECORD_WIDENING * z:
+        j += 1
+    return j
+
+
+def _record_nodes(df: float) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes ``x`` and weights of a standard Student t (``df = inf``: normal) law, for ``E[g(X)]`` of a bounded
+    ``g``: Gauss-Legendre on the log of the tail probability of each half, 1e-16 to 0.5 (what lies beyond, at most
+    2e-16, is left out)."""
+    from scipy import stats
+
+    t, wt = _NODES
+    lo, hi = math.log(1e-16), math.log(0.5)
+    lw = 0.5 * (hi - lo) * t + 0.5 * (hi + lo)
+    w = np.exp(lw)
+    x = stats.norm.isf(w) if not np.isfinite(df) else stats.t.isf(w, df)
+    weight = 0.5 * (hi - lo) * wt * w
+    x = np.concatenate([-x[::-1], x])
+    weight = np.concatenate([weight[::-1], weight])
+    return x, weight / weight.sum()
+
+
+def _predictive_tail(value: Any, spread: float, scale: np.ndarray, df: np.ndarray, nodes: tuple) -> np.ndarray:
+    """``P(S > value)`` for ``S = exp(spread X) c_j chi2(nu_j)``: record ``j`` of the laws ``scale`` / ``df`` with
+    equal weights, ``X`` a Student t on the quadrature ``nodes`` (:func:`_record_nodes`); ``value`` 1-D."""
+    from scipy import special
+
+    x, w = nodes
+    c = np.exp(np.clip(spread * x, -700.0, 700.0))[:, None] * scale
+    v = np.asarray(value, dtype=np.float64).reshape(-1)
+    out = np.empty(v.shape)
+    for a in range(0, v.size, 64):                       # bounded work arrays: 64 x nodes x records
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            tail = special.chdtrc(df, v[a:a + 64, None, None] / c)
+        out[a:a + 64] = tail.mean(axis=2) @ w
+    return out
+
+
+def _predictive_quantile(spread: float, scale: np.ndarray, df: np.ndarray, nodes: tuple, alpha: float) -> float:
+    """``t`` with :func:`_predictive_tail` ``= alpha``, by bisection on ``log t``."""
+    from scipy import special
+
+    x = nodes[0]
+    lo = spread * x.min() + math.log(np.min(scale * special.chdtri(df, min(0.999999, alpha)))) - 1.0
+    hi = spread * x.max() + math.log(np.max(scale * special.chdtri(df, alpha / df.size))) + 1.0
+    lo, hi = max(lo, -700.0), min(hi, 700.0)
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if _predictive_tail(math.exp(mid), spread, scale, df, nodes)[0] > alpha:
+            lo = mid
+        else:
+            hi = mid
+    return math.exp(0.5 * (lo + hi))
+
 
 class ScaledChi2Threshold:
     r"""Threshold of a windowed statistic from scaled chi-square laws fitted to its null sample, record by record.
@@ -277,10 +346,13 @@ class ScaledChi2Threshold:
 
     method_ = "scaled-chi2"
 
-    def __init__(self, false_alarm: float = 1e-3, *, min_windows: int = 30, confidence: float = 0.9,
-                 n_boot: int = 200, df: float | None = None) -> None:
+    def __init__(self, false_alarm: float = 1e-3, *, min_windows: int = 30, record_effect: str = "predictive",
+                 min_records: int | None = None, confidence: float = 0.9, n_boot: int = 200,
+                 df: float | None = None) -> None:
         self.false_alarm = probability(false_alarm, "false_alarm")
         self.min_windows = int_like(min_windows, "min_windows", minimum=5)
+        self.record_effect = option(record_effect, "record_effect", ("predictive", "bootstrap"))
+        self.min_records = int_like(min_records, "min_records", minimum=2, optional=True)
         self.confidence = float_like(confidence, "confidence", minimum=0.5, maximum=1.0, strict_max=True)
         self.n_boot = int_like(n_boot, "n_boot", minimum=10, maximum=100_000)   # a bounded (n_boot, records) array
         self.df = None if df is None else float_like(df, "df", minimum=0.0, strict_min=True, maximum=1e12)
@@ -341,10 +413,21 @@ class ScaledChi2Threshold:
                              "records")
         # a record shorter than MIN_RECORD_WINDOWS windows cannot show its own spread (its windows overlap): pool
         # (with known degrees of freedom only the mean is fitted per record, which overlapping windows estimate well)
-        self.pooled_ = bool(self.df is None and len(parts) > 1 and per.min() < MIN_RECORD_WINDOWS)
         s1 = np.array([p.sum() for p in parts])
         s2 = np.array([np.square(p).sum() for p in parts])
         cnt = np.array([p.size for p in parts], dtype=np.float64)
+        self.sample_ = np.sort(stat)
+        self.nobs_ = n
+        self.independent_ = n_ind
+        self.records_ = len(parts)
+        self.empirical_check_ = float(np.quantile(stat, 1.0 - self.false_alarm)) if n_ind * self.false_alarm >= 10 \
+            else None
+        short = self.df is None and per.min() < MIN_RECORD_WINDOWS      # records that cannot show their own spread
+        if self.record_effect == "predictive" and len(parts) > 1 and not short:
+            return self._predictive(s1, s2, cnt, per)
+        self.record_law_ = None
+        self.effective_windows_ = float(n_ind)
+        self.pooled_ = bool(short and len(parts) > 1)
         if self.pooled_:
             self.scale_, self.df_ = self._laws(s1.sum(keepdims=True), s2.sum(keepdims=True), cnt.sum(keepdims=True))
         else:
@@ -364,11 +447,56 @@ class ScaledChi2Threshold:
             self.threshold_ = self.point_threshold_
         tail = special.chdtrc(self.df_, self.threshold_ / self.scale_).mean()
         self._pvalue_factor = pf / tail if tail > 0 else 1.0
-        self.empirical_check_ = float(np.quantile(stat, 1.0 - pf)) if n_ind * pf >= 10 else None
-        self.sample_ = np.sort(stat)
-        self.nobs_ = n
-        self.independent_ = n_ind
-        self.records_ = len(parts)
+        return self
+
+    def _predictive(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray, per: np.ndarray) -> ScaledChi2Threshold:
+        """The record-level predictive law (see Notes) from the records' window sums ``s1``, ``s2``, counts ``cnt``
+        and independent windows ``per``; sets the threshold and the p-value grid."""
+        from scipy import special
+
+        j = len(cnt)
+        needed = self.min_records if self.min_records is not None else records_needed(self.false_alarm)
+        if j < needed:
+            raise ValueError(
+                f"statistic comes from {j} records, at least {needed} are needed for false_alarm="
+                f"{self.false_alarm:g}: a new record's scale is predicted from the spread of the records, and from "
+                f"{j} records its {self.false_alarm:g} tail is more than {MAX_RECORD_WIDENING:g} times wider than "
+                "with the spread known. Give more healthy records (flights), raise alpha, or set "
+                "ScaledChi2Threshold(min_records=...) (record_effect='bootstrap': the per-record mixture, which does "
+                "not extrapolate the record-to-record spread)")
+        m = s1 / cnt
+        if not np.all(m > 0):
+            raise ValueError("statistic is 0 on every window of some healthy record: no null law can be fitted")
+        self.pooled_ = False
+        self.scale_, self.df_ = self._laws(s1, s2, cnt)
+        # each record's anchor: the log of its own false_alarm quantile; the anchors' between-record variance tau2,
+        # net of their own sampling variance (~ 2 / nu_j per independent window)
+        pf = self.false_alarm
+        anchor = np.log(self.scale_ * special.chdtri(self.df_, pf))
+        law, df = self.scale_, self.df_
+        cv2 = float(np.mean(2.0 / df))
+        sa2 = float(np.var(anchor, ddof=1))
+        tau2 = max(sa2 - float(np.mean(2.0 / df / np.maximum(per, 1.0))), 0.0)
+        # a new record: a record's law moved to the anchor loc + spread * t(J - 1), the predictive law of a new
+        # anchor under a normal random effect estimated from J records (variance tau2 + sa2 / J, Student t tails)
+        loc = float(anchor.mean())
+        spread = math.sqrt(tau2 + sa2 / j)
+        nodes = _record_nodes(j - 1.0)
+        scale = law * np.exp(loc - anchor)
+        self.record_law_ = {"between_sd": math.sqrt(tau2), "scale": spread, "df": j - 1}
+        icc = tau2 / (tau2 + cv2)
+        self.effective_windows_ = float(np.sum(per / (1.0 + (per - 1.0) * icc)))
+        self.threshold_ = _predictive_quantile(spread, scale, df, nodes, pf)
+        self.point_threshold_ = float(_mixture_quantile(self.scale_[None, :], self.df_[None, :], pf)[0])
+        # p-values: the predictive tail on a grid following its nodes, interpolated in log-log, through the threshold
+        q = special.chdtri(np.median(self.df_), np.array([1 - 1e-9, 0.9, 0.5, 0.1, 1e-2, 1e-4, 1e-7, 1e-11, 1e-15]))
+        grid = np.unique(np.clip(spread * nodes[0][:, None] + np.log(q * np.median(scale)), -700.0, 700.0))
+        grid = np.exp(np.unique(np.append(np.quantile(grid, np.linspace(0, 1, 120)), math.log(self.threshold_))))
+        self._predictive_law = (spread, scale, df, nodes)
+        tail = _predictive_tail(grid, *self._predictive_law)
+        keep = np.append(np.diff(tail) < 0, True) & (tail > 0)
+        at = _predictive_tail(self.threshold_, *self._predictive_law)[0]
+        self._pvalue_grid = (np.log(grid[keep]), np.log(tail[keep]) + math.log(pf) - math.log(at))
         return self
 
     def _laws(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -394,6 +522,10 @@ class ScaledChi2Threshold:
 
         self.check_fitted()
         v = np.asarray(value, dtype=np.float64)
+        if self.record_law_ is not None:
+            with np.errstate(divide="ignore"):
+                lv = np.log(v)
+            return np.minimum(1.0, np.exp(np.interp(lv, *self._pvalue_grid)))
         with np.errstate(over="ignore"):                # beyond the float range: a tail of 0
             tail = special.chdtrc(self.df_, v[..., None] / self.scale_).mean(axis=-1)
         return np.minimum(1.0, tail * self._pvalue_factor)

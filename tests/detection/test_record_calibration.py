@@ -1,0 +1,104 @@
+"""Record-level (predictive) calibration holds on the next aircraft of a fleet (issue 31).
+
+The simulated fleet of benchmarks/fleet_calibration.py: VAR(2) records whose coefficients and noise scale
+(log-normal +-15 % per record and channel) vary from aircraft to aircraft. A baseline is fitted on 5, 10 or 20
+records, the F and Ljung-Box tests (Sidak over the channels: alpha is the decision's rate) are calibrated on its
+held-out residuals, and 60 new records (600 disjoint windows of 200 samples) are judged: the realised rate of the
+decision must lie in the two-sided 99.9 % binomial band. The per-record mixture with a bootstrap bound (the previous
+default, ``record_effect="bootstrap"``) treats the windows of a record as independent evidence and does not
+extrapolate the record-to-record spread: its F test flags 5-15 % of new windows at alpha 0.01.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import tsfdi
+from tsfdi.detection.threshold import ScaledChi2Threshold, records_needed
+
+
+def _bench():
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "fleet_calibration.py"
+    spec = importlib.util.spec_from_file_location("fleet_calibration_bench", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+FC = _bench()
+
+
+@pytest.fixture(scope="module")
+def fleet():
+    rng = np.random.default_rng(2031)
+    return FC.fleet_records(rng, 20), FC.fleet_records(rng, FC.NEW)
+
+
+def band(n: int, alpha: float) -> tuple:
+    lo, hi = stats.binom.ppf([0.0005, 0.9995], n, alpha)
+    return lo / n, hi / n
+
+
+@pytest.mark.parametrize("records", [5, 10, 20])
+def test_new_records_of_the_fleet_in_band(fleet, records):
+    fit, new = fleet
+    spec = tsfdi.VAR(fit[:records], 2)
+    base = spec.fit()
+    held = spec.held_out_residuals()
+    resid = [np.asarray(base.residuals(x)) for x in new]
+    windows = len(new) * ((FC.N - 2) // (FC.WINDOW - 2))
+    old_f = []
+    for alpha in (1e-2, 1e-3):
+        lo, hi = band(windows, alpha)
+        for fam in ("F", "LB"):
+            test = FC.make_test(fam, alpha, "predictive").calibrate(held, window=FC.WINDOW)
+            rate = FC.decision_rate(test, resid)
+            assert lo <= rate <= hi, (records, alpha, fam, rate, (lo, hi))
+            law = test.thresholds_[0]
+            assert law.records_ == records and law.record_law_["df"] == records - 1
+            # windows of one record are not independent evidence of a new record's law
+            assert law.effective_windows_ < law.independent_
+        old_f.append(FC.decision_rate(FC.make_test("F", alpha, "bootstrap").calibrate(held, window=FC.WINDOW), resid)
+                     > hi)
+    assert any(old_f)                       # the previous calibration leaves the band on this fleet
+
+
+def test_thresholds_widen_as_records_get_fewer(fleet):
+    fit, _ = fleet
+    thr = {}
+    for records in (5, 10, 20):
+        held = tsfdi.VAR(fit[:records], 2).held_out_residuals()
+        test = tsfdi.FTest(alpha=1e-2, correction="sidak").calibrate(held, window=FC.WINDOW)
+        thr[records] = test.threshold_
+        assert test.threshold_.min() > 1.0
+    assert np.all(thr[5] > thr[10]) and np.all(thr[10] > thr[20]), thr
+
+
+def test_too_few_records_are_refused_with_what_is_needed(fleet):
+    fit, _ = fleet
+    assert [records_needed(a) for a in (1e-2, 1e-3, 1e-4)] == [3, 4, 5]
+    held = tsfdi.VAR(fit[:3], 2).held_out_residuals()
+    with pytest.raises(ValueError, match=r"channel 'y0': statistic comes from 3 records, at least 4 are needed for "
+                                         r"false_alarm=0\.001.*more healthy records.*min_records"):
+        tsfdi.LjungBox(lags=20, alpha=1e-3).calibrate(held, window=FC.WINDOW)
+    ok = tsfdi.LjungBox(lags=20, alpha=1e-3, threshold=ScaledChi2Threshold(1e-3, min_records=3))
+    assert ok.calibrate(held, window=FC.WINDOW).thresholds_[0].records_ == 3
+    with pytest.raises(ValueError, match="record_effect must be one of 'predictive', 'bootstrap'"):
+        ScaledChi2Threshold(1e-3, record_effect="plugin")
+
+
+def test_pvalue_agrees_with_the_threshold(fleet):
+    fit, _ = fleet
+    held = tsfdi.VAR(fit[:10], 2).held_out_residuals()
+    test = tsfdi.LjungBox(lags=20, alpha=1e-2).calibrate(held, window=FC.WINDOW)
+    thr = test.threshold_
+    _, pv = test.threshold_pvalue(np.vstack([thr * 0.999, thr, thr * 1.001, thr * 100]), 198)
+    assert np.all(pv[0] > 1e-2) and np.allclose(pv[1], 1e-2) and np.all(pv[2] < 1e-2)
+    assert np.all(pv[3] < 1e-6) and np.all(np.diff(pv, axis=0) <= 0)
+    d = tsfdi.detect(fit[0][:200], tsfdi.VAR(fit[:10], 2).fit(), test)
+    assert d.details["calibration_records"] == 10 and len(d.details["record_law"]) == 3
