@@ -277,6 +277,19 @@ class ScaledChi2Threshold:
         Required false-alarm probability per tested window (per channel), in (0, 1).
     min_windows : int
         Fewest *independent* (non-overlapping) windows the null sample must hold (default 30).
+    record_effect : {"predictive", "bootstrap"}
+        With several records: ``"predictive"`` (default) models a record effect -- each record's own law, moved to
+        the anchor (log of the ``false_alarm`` quantile) of a *new* record, predicted from the records' anchors as a
+        normal random effect estimated from ``J`` records (Student t with ``J - 1`` degrees of freedom, variance
+        :math:`\tau^2 + s^2 / J`, :math:`\tau^2` the between-record variance net of each anchor's sampling
+        variance); the threshold solves ``P(statistic > t) = false_alarm`` under that predictive law, so that it
+        widens as records get fewer. ``"bootstrap"``: the mixture of the records' laws with the ``confidence``
+        bootstrap bound (the behaviour before issue 31; it does not extrapolate the record-to-record spread). Records
+        too short to show their own spread (fewer than :data:`MIN_RECORD_WINDOWS` independent windows) are pooled
+        with the bootstrap bound either way.
+    min_records : int, optional
+        Fewest records the predictive law accepts; default :func:`records_needed` of ``false_alarm`` (3 at 0.01, 4
+        at 1e-3, 5 at 1e-4: the t quantile at most :data:`MAX_RECORD_WIDENING` times the normal one).
     confidence : float
         With several records: the threshold is the ``confidence`` quantile of its bootstrap distribution over
         records (default 0.9), so that a new record's false-alarm rate exceeds ``false_alarm`` only with
@@ -301,6 +314,13 @@ class ScaledChi2Threshold:
         The null sample (sorted).
     nobs_, independent_, records_ : int
         Windows in the sample, how many of them do not overlap, and the number of records.
+    effective_windows_ : float
+        Independent windows as evidence of a new record's law: per record ``n_j / (1 + (n_j - 1) rho)`` summed,
+        ``n_j`` its non-overlapping windows, ``rho`` the share of the between-record variance (the design effect of
+        windows sharing a record); ``independent_`` without a record law.
+    record_law_ : dict or None
+        The predictive law of a new record's anchor: ``between_sd`` (:math:`\tau`), ``scale`` and ``df`` of its
+        Student t; ``None`` with ``record_effect="bootstrap"``, one record or pooled records.
     empirical_check_ : float or None
         The empirical :math:`1 - P_F` quantile of the sample when it holds at least ``10 / P_F`` independent
         windows (a check of the fitted law), else ``None``.
