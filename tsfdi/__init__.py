@@ -12,11 +12,12 @@ and the online detectors of papers 001/002 (:mod:`tsfdi.online`), fault isolatio
 import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
+from tsfdi.coverage import Coverage
 from tsfdi.detection import (GLRT, SPRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
                              ParameterGLRT, ResidualTest, ScaledChi2Threshold, SequentialDecision,
                              SequentialIdentification, ZScore, msprt)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
-from tsfdi.exceptions import TsfdiWarning
+from tsfdi.exceptions import CoverageWarning, TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
 from tsfdi.io import read_records
 from tsfdi.isolation import Isolation, IsolationSeries, ResidualSet
@@ -46,12 +47,12 @@ __all__ = [
     "WindowedIdentification", "ResidualSet", "Isolation", "IsolationSeries",
     # monitoring, online detection, baselines, evaluation
     "Monitor", "MonitorResult", "MonitorEvent", "OnlineDetector", "OnlineDetection", "OnlineCalibration", "Records", "fit_baselines",
-    "Baselines", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
+    "Baselines", "Coverage", "evaluate", "Evaluation", "first_alarm", "score_records", "detection_metrics",
     # reading data files
     "read_records",
     # imported on first use
     "datasets", "plotting", "study", "fleet", "plot_acf", "align",
-    "TsfdiWarning", "__version__",
+    "TsfdiWarning", "CoverageWarning", "__version__",
 ]
 
 _LAZY_MODULES = ("datasets", "plotting", "study", "fleet")
