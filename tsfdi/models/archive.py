@@ -38,7 +38,9 @@ shape. Archives of format version 1 (written by tsfdi before the checksums) are 
 without the checksums; archives of a newer version are refused, not misread.
 
 This module imports no model family: the families that can be archived (AR, VAR, ARX) register their
-class here with :func:`register` when their module is imported, so the results' ``save`` method (in the
+class here with :func:`register` when their module is imported (the functionally pooled FPAR, FPVAR, FPARX add the
+fields ``k`` (the operating point of every record), ``k_range``, and ``weights`` for a weighted fit, and the
+options ``degree``, ``basis``, ``weights``, ``k_names``), so the results' ``save`` method (in the
 common base module) and :func:`load` share one format module without an import circle.
 """
 
@@ -75,7 +77,17 @@ _BUILDERS = {
     "AR": lambda cls, y, u, o: cls(y, o["na"], o["trend"], hold_back=o["hold_back"]),
     "VAR": lambda cls, y, u, o: cls(y, o["na"], o["trend"], hold_back=o["hold_back"], criterion=o["criterion"]),
     "ARX": lambda cls, y, u, o: cls(y, u, o["na"], o["nb"], o["nk"], o["trend"], hold_back=o["hold_back"]),
+    # functionally pooled families (tsfdi.models.fp): the operating points and the basis ride along
+    "FPAR": lambda cls, y, u, o: cls(y, o["k"], o["na"], o["degree"], o["trend"], basis=o["basis"],
+                                     weights=o["weights"], hold_back=o["hold_back"], k_range=o["k_range"]),
+    "FPVAR": lambda cls, y, u, o: cls(y, o["k"], o["na"], o["degree"], o["trend"], basis=o["basis"],
+                                      weights=o["weights"], hold_back=o["hold_back"], k_range=o["k_range"]),
+    "FPARX": lambda cls, y, u, o: cls(y, u, o["k"], o["na"], o["nb"], o["nk"], o["degree"], o["trend"],
+                                      basis=o["basis"], weights=o["weights"], hold_back=o["hold_back"],
+                                      k_range=o["k_range"]),
 }
+#: the families whose archives hold operating points (fields ``k``, ``k_range``, optionally ``weights``)
+_FP_FAMILIES = ("FPAR", "FPVAR", "FPARX")
 
 # what reading a damaged zip archive or member raises (zipfile, zlib, truncated reads, a bad compression type
 # or encryption flag, a member name that is not valid UTF-8)
@@ -613,10 +625,17 @@ def save(results: Any, path: Any) -> Path:
 
     ymeta = records(model.records, "y")
     umeta = None if model.u_records is None else records(model.u_records, "u")
+    options = {"na": model.na, "nb": model.nb, "nk": model.nk, "trend": model.trend,
+               "hold_back": model.hold_back, "criterion": model.criterion}
+    if type(model).__name__ in _FP_FAMILIES:
+        arrays["k"] = np.asarray(model.k, dtype=np.float64)
+        arrays["k_range"] = np.asarray(model.k_range, dtype=np.float64)
+        if results.weights is not None:
+            arrays["weights"] = np.asarray(results.weights, dtype=np.float64)
+        options.update(degree=list(model.degree), basis=model.basis, weights=model.weights,
+                       k_names=list(model.k_names))
     meta: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": type(model).__name__,
-                            "options": {"na": model.na, "nb": model.nb, "nk": model.nk, "trend": model.trend,
-                                        "hold_back": model.hold_back, "criterion": model.criterion},
-                            "multi": model.multi, "y": ymeta, "u": umeta}
+                            "options": options, "multi": model.multi, "y": ymeta, "u": umeta}
     payload = {"meta": _npy_bytes(np.array(json.dumps(meta)))}
     payload.update((field, _npy_bytes(arr)) for field, arr in arrays.items())
     digests = {field: hashlib.sha256(data).hexdigest() for field, data in payload.items()}
@@ -675,6 +694,16 @@ def load(path: Any) -> Any:
     opts: dict[str, Any] = {k: archive.entry(options, "options.", k, int) for k in ("na", "nb", "nk", "hold_back")}
     opts["trend"] = archive.choice(options, "options.", "trend", ("n", "c"))
     opts["criterion"] = archive.choice(options, "options.", "criterion", ("logdet", "trace"))
+    fp = family in _FP_FAMILIES
+    if fp:
+        degree = archive.entry(options, "options.", "degree", list)
+        k_names = archive.entry(options, "options.", "k_names", list)
+        k_values = archive.float_array("k", len(k_names))
+        opts["k"] = pd.DataFrame(k_values, columns=[str(n) for n in k_names])
+        opts["k_range"] = archive.float_array("k_range", 2)
+        opts["degree"] = [archive.entry({"degree": g}, "options.", "degree", int) for g in degree]
+        opts["basis"] = archive.choice(options, "options.", "basis", ("legendre", "chebyshev"))
+        opts["weights"] = archive.choice(options, "options.", "weights", ("pooled", "point"))
     multi = archive.entry(meta, "", "multi", bool)
     ymeta = archive.entry(meta, "", "y", list)
     umeta = archive.entry(meta, "", "u", list, type(None))
@@ -694,7 +723,13 @@ def load(path: Any) -> Any:
     if params.shape != (model.df_eq, model.neqs):
         raise archive.damaged(f"field 'params' has shape {params.shape}, the stored {family} model needs "
                               f"{(model.df_eq, model.neqs)}")
+    weights = None
+    if fp and opts["weights"] == "point":
+        weights = archive.float_array("weights", model.neqs)
+        if weights.shape[0] != len(model.records) or not (weights > 0).all():
+            raise archive.damaged(f"field 'weights' must hold one positive weight per record and channel, shape "
+                                  f"{(len(model.records), model.neqs)}, got shape {weights.shape}")
     extra = sorted(set(archive.raw) - archive.used)
     if extra:
         raise archive.damaged(f"field(s) {', '.join(repr(f) for f in extra)} are not part of a model file")
-    return model.results_class(model, params)
+    return model.results_class(model, params) if not fp else model.results_class(model, params, weights)

@@ -1,0 +1,1108 @@
+"""Functionally pooled models FP-AR, FP-VAR, FP-ARX and operating-parameter estimation.
+
+A functionally pooled (FP) model is one AR / VAR / ARX whose parameters are smooth functions of one or more
+operating parameters ``k`` (forward speed, gross weight, a fault magnitude such as a cut depth), expanded on a
+functional basis (Kopsaftopoulos and Fassois 2010, 2013; Sakellariou and Fassois 2008, 2016):
+
+.. math::
+
+    \\theta(k) = \\sum_{j=1}^{p} \\theta_j\\, G_j(k), \\qquad
+    y[t] + \\sum_{i=1}^{n_a} A_i(k)\\, y[t-i] = c(k) + \\sum_{m=1}^{n_b} B_m(k)\\, u[t-n_k-m+1] + e[t],
+
+with ``G_j`` Legendre (default) or Chebyshev polynomials of ``k`` mapped onto ``[-1, 1]`` over the range of the
+fitted operating points (tensor products for several parameters). All records, each at its own operating point
+``k_i``, are estimated at once: the regressor of record ``i`` is ``phi[t] (x) G(k_i)``, so the pooled Gram matrix
+is ``sum_i (Phi_i' Phi_i) (x) G(k_i) G(k_i)'`` and the per-record Gram matrices ``Phi_i' Phi_i`` come from the
+lag products of :mod:`tsfdi.models.lstsq` (no FP regressor is built). The parameters keep the papers' sign
+(``a_i`` as in :class:`tsfdi.AR`).
+
+:meth:`FPResults.estimate_k` turns a fitted FP model around: the operating point that best explains a new record
+(maximum likelihood over ``k``) with its confidence interval, i.e. fault-magnitude or operating-point estimation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import warnings
+from functools import cached_property
+from typing import Any, ClassVar
+
+import numpy as np
+import pandas as pd
+from numpy.polynomial import chebyshev, legendre
+from scipy import optimize, stats
+from scipy.linalg import lapack
+
+from tsfdi._validation import int_like, option, probability
+from tsfdi.exceptions import IllConditionedWarning
+from tsfdi.models.ar import AR
+from tsfdi.models.archive import register
+from tsfdi.models.archive import save as save_archive
+from tsfdi.models.arx import ARX
+from tsfdi.models.lstsq import check_size, gram_factor, lag_gram, lag_residual_products, lagged_design, lstsq
+from tsfdi.models.var import VAR
+from tsfdi.summary import Summary
+
+__all__ = ["FPAR", "FPVAR", "FPARX", "FPResults", "OperatingPointEstimate", "FPOrderSelection",
+           "select_fp_order", "fp_basis"]
+
+_VANDER = {"legendre": legendre.legvander, "chebyshev": chebyshev.chebvander}
+_LETTER = {"legendre": "P", "chebyshev": "T"}
+
+
+def _operating_points(k: Any, nrec: int) -> tuple[np.ndarray, list[str]]:
+    """``k`` as a finite float ``(records, d)`` array and the parameter names (a DataFrame's columns, a Series'
+    name, else ``k0, k1, ...``)."""
+    names = None
+    if isinstance(k, pd.DataFrame):
+        names = [str(c) for c in k.columns]
+    elif isinstance(k, pd.Series) and k.name is not None:
+        names = [str(k.name)]
+    try:
+        arr = np.asarray(k, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"k must be real operating parameters, one row per record, got {type(k).__name__}") from None
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[0] != nrec or arr.shape[1] < 1:
+        raise ValueError(f"k must hold one operating point per record ({nrec} records): shape ({nrec},) or "
+                         f"({nrec}, d), got shape {np.shape(k)}")
+    if not np.isfinite(arr).all():
+        raise ValueError("k contains NaN/inf")
+    return np.ascontiguousarray(arr), names or [f"k{j}" for j in range(arr.shape[1])]
+
+
+def fp_basis(k: Any, degree: Any, k_range: Any, basis: str = "legendre") -> np.ndarray:
+    """The functional basis ``G(k)`` of an FP model at the operating points ``k``.
+
+    Parameters
+    ----------
+    k : array_like, shape (m,) or (m, d)
+        Operating points (one row each; a 1-D array is one parameter).
+    degree : int or sequence of int
+        Largest polynomial degree of each parameter (one int for all).
+    k_range : array_like, shape (d, 2)
+        The interval of each parameter mapped onto ``[-1, 1]``.
+    basis : {"legendre", "chebyshev"}
+
+    Returns
+    -------
+    ndarray, shape (m, p)
+        ``p = prod(degree_j + 1)`` functions: the tensor products ``G_{j_1}(k_1) ... G_{j_d}(k_d)``, the index of the
+        last parameter running fastest.
+    """
+    basis = option(basis, "basis", tuple(_VANDER))
+    k = np.asarray(k, dtype=float)
+    k = k[:, None] if k.ndim == 1 else k
+    rng = np.asarray(k_range, dtype=float).reshape(-1, 2)
+    d = rng.shape[0]
+    deg = _degrees(degree, d)
+    if k.ndim != 2 or k.shape[1] != d:
+        raise ValueError(f"k must have {d} operating parameter(s) per point, got shape {k.shape}")
+    x = 2.0 * (k - rng[:, 0]) / (rng[:, 1] - rng[:, 0]) - 1.0
+    G = np.ones((k.shape[0], 1))
+    for j in range(d):
+        V = _VANDER[basis](x[:, j], deg[j])
+        G = (G[:, :, None] * V[:, None, :]).reshape(k.shape[0], -1)
+    return G
+
+
+def _degrees(degree: Any, d: int) -> tuple[int, ...]:
+    if isinstance(degree, (list, tuple, np.ndarray)):
+        deg = tuple(int_like(g, "degree", minimum=0) for g in degree)
+        if len(deg) != d:
+            raise ValueError(f"degree must give one degree per operating parameter ({d}), got {len(deg)}")
+        return deg
+    return (int_like(degree, "degree", minimum=0),) * d
+
+
+class _FPModel:
+    """Common machinery of FPAR, FPVAR and FPARX (see :class:`FPAR` for the parameters)."""
+
+    _point_family: ClassVar[type]
+    results_class: ClassVar[type]
+
+    def __init__(self, y: Any, k: Any, *, lags: int, degree: Any, trend: str, basis: str, weights: str,
+                 hold_back: int | None, k_range: Any, u: Any = None, nb: int = 0, nk: int = 0) -> None:
+        if not isinstance(y, (list, tuple)) or len(y) < 2:
+            raise ValueError("y must be a list of records (at least 2), one per operating point")
+        self.basis = option(basis, "basis", tuple(_VANDER))
+        self.weights = option(weights, "weights", ("pooled", "point"))
+        self.k, self.k_names = _operating_points(k, len(y))
+        d = self.k.shape[1]
+        self.degree = _degrees(degree, d)
+        if k_range is None:
+            rng = np.stack([self.k.min(axis=0), self.k.max(axis=0)], axis=1)
+        else:
+            try:
+                rng = np.asarray(k_range, dtype=float).reshape(d, 2)
+            except (TypeError, ValueError):
+                raise ValueError(f"k_range must be ({d}, 2) bounds (low, high) of the operating parameters, got "
+                                 f"{k_range!r}") from None
+            if not np.isfinite(rng).all() or (self.k < rng[:, 0]).any() or (self.k > rng[:, 1]).any():
+                raise ValueError("k_range must be finite and contain every operating point of k")
+        if not (rng[:, 1] > rng[:, 0]).all():
+            j = int(np.argmin(rng[:, 1] - rng[:, 0]))
+            raise ValueError(f"k: operating parameter {self.k_names[j]!r} takes one value only; an FP model needs "
+                             "records at several operating points")
+        self.k_range = rng
+        for j in range(d):
+            distinct = np.unique(self.k[:, j]).size
+            if distinct <= self.degree[j]:
+                raise ValueError(f"degree={self.degree[j]} for {self.k_names[j]!r} needs at least "
+                                 f"{self.degree[j] + 1} distinct operating points, k has {distinct}")
+        # the point family on all records validates the data (finite, channels matched by name, lengths, sizes)
+        # and gives the records and their common units
+        if u is None:
+            self.point = self._point_family(list(y), lags, trend, hold_back=hold_back)
+        else:
+            self.point = self._point_family(list(y), list(u), lags, nb, nk, trend, hold_back=hold_back)
+        pt = self.point
+        self.G = fp_basis(self.k, self.degree, self.k_range, self.basis)
+        p = self.G.shape[1]
+        cols = pt.df_eq * p + pt.neqs
+        check_size(cols * cols * len(y), f"lags={pt.na} with {p} basis functions: the Gram matrices")
+        if sum(pt.nobs_records) < pt.df_eq * p + 1:
+            raise ValueError(f"y is too short: {sum(pt.nobs_records)} regression rows in all records for "
+                             f"{pt.df_eq * p} coefficients per equation")
+
+    # --- dimensions, names
+    @property
+    def records(self) -> tuple:
+        return self.point.records
+
+    @property
+    def u_records(self) -> tuple | None:
+        return self.point.u_records
+
+    @property
+    def data(self):
+        return self.point.data
+
+    @property
+    def multi(self) -> bool:
+        return True
+
+    na = property(lambda self: self.point.na)
+    nb = property(lambda self: self.point.nb)
+    nk = property(lambda self: self.point.nk)
+    trend = property(lambda self: self.point.trend)
+    hold_back = property(lambda self: self.point.hold_back)
+    max_lag = property(lambda self: self.point.max_lag)
+    neqs = property(lambda self: self.point.neqs)
+    criterion = property(lambda self: "logdet")
+    #: the point family's output kind: False scalar (FP-AR, FP-ARX), True vector (FP-VAR)
+    _vector: ClassVar[bool]
+    #: the name of the output order in messages and summaries
+    _lag_name: ClassVar[str] = "lags"
+
+    @property
+    def n_basis(self) -> int:
+        """Number of basis functions ``p``."""
+        return self.G.shape[1]
+
+    @property
+    def df_point(self) -> int:
+        """Coefficients per equation of the point model (AR / VAR / ARX) at one operating point."""
+        return self.point.df_eq
+
+    @property
+    def df_eq(self) -> int:
+        """FP coefficients per equation, ``df_point * n_basis``."""
+        return self.point.df_eq * self.n_basis
+
+    @property
+    def nobs_records(self) -> list[int]:
+        return self.point.nobs_records
+
+    def basis_names(self) -> list[str]:
+        """Names of the basis functions: ``P0, P1, ...`` (``T`` for Chebyshev), ``P1,2`` for a tensor product."""
+        letter = _LETTER[self.basis]
+        return [letter + ",".join(map(str, idx)) for idx in itertools.product(*[range(g + 1) for g in self.degree])]
+
+    # --- per-record quantities in the units of the fit
+    def _unit_columns(self) -> np.ndarray:
+        """The fit's regressor column ``a`` is the data's times this (inputs and outputs in their fit units)."""
+        pt = self.point
+        col = [np.ones(pt.k_const)]
+        uscale = pt.u_scale if pt.u_scale is not None else np.ones(0)
+        for g in range(1, max(pt.na, pt.nb) + 1):
+            col += ([1.0 / pt.y_scale] if g <= pt.na else []) + ([1.0 / uscale] if g <= pt.nb else [])
+        return np.concatenate(col)
+
+    def _scaled(self, i: int) -> tuple[np.ndarray, np.ndarray | None]:
+        pt = self.point
+        y = pt.records[i].values / pt.y_scale
+        u = None if pt.u_records is None else pt.u_records[i].values / pt.u_scale
+        return y, u
+
+    def _design(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        y, u = self._scaled(i)
+        pt = self.point
+        return lagged_design(y, pt.na, pt.hold_back, const=bool(pt.k_const), u=u, nb=pt.nb, nk=pt.nk)
+
+    def record_grams(self) -> np.ndarray:
+        """Gram matrix of ``[Phi_i | Y_i]`` of every record (units of the fit), shape ``(records, df_point + s,
+        df_point + s)``: from the lag products (:func:`~tsfdi.models.lstsq.lag_gram`) for an FP-AR / FP-VAR, from
+        the explicit regressor for an FP-ARX."""
+        pt = self.point
+        out = []
+        for i in range(len(pt.records)):
+            if pt.nb == 0:
+                y = self._scaled(i)[0][pt.hold_back - pt.na:]
+                out.append(lag_gram(y, pt.na, const=bool(pt.k_const)))
+            else:
+                Z = np.hstack(self._design(i))
+                out.append(Z.T @ Z)
+        return np.stack(out)
+
+    def _pooled_system(self, grams: np.ndarray, w: np.ndarray | None, G: np.ndarray, kp: int
+                       ) -> tuple[np.ndarray, np.ndarray]:
+        """``sum_i w_i (Phi_i'Phi_i) (x) G_i G_i'`` and ``sum_i w_i (Phi_i'Y_i) (x) G_i`` (``w``: one weight per record
+        and equation, shape (records, s), or None), over the first ``kp`` point coefficients."""
+        s = self.neqs
+        q = G.shape[1]
+        XX = grams[:, :kp, :kp]
+        XY = grams[:, :kp, -s:]
+        GG = G[:, :, None] * G[:, None, :]
+        if w is None:
+            A = np.einsum("iab,ijl->ajbl", XX, GG).reshape(kp * q, kp * q)
+            b = np.einsum("iac,ij->ajc", XY, G).reshape(kp * q, s)
+            return A[None], b
+        A = np.einsum("ie,iab,ijl->eajbl", w, XX, GG).reshape(s, kp * q, kp * q)
+        b = np.einsum("ic,iac,ij->ajc", w, XY, G).reshape(kp * q, s)
+        return A, b
+
+    def _solve(self, A: np.ndarray, b: np.ndarray, G: np.ndarray, w: np.ndarray | None) -> np.ndarray:
+        """FP coefficients (fit units, ``(df_eq, s)``) from the pooled normal equations (one system per equation
+        when weighted), with one refinement step on the residual products; the SVD of the explicit FP regressor
+        when the Cholesky factor would lose digits."""
+        out = np.empty(b.shape)
+        for e in range(A.shape[0]):
+            cols = slice(None) if A.shape[0] == 1 else slice(e, e + 1)
+            R = gram_factor(A[e], A.shape[1])
+            if R is None:
+                X, Y = self._fp_design(G, None if w is None else w[:, e])
+                out[:, cols] = lstsq(X, Y[:, cols])
+                continue
+            coef = lapack.dpotrs(R, b[:, cols], lower=0)[0]
+            coef = coef + lapack.dpotrs(R, self._residual_products(coef, G, cols, w, e), lower=0)[0]
+            out[:, cols] = coef
+        return out
+
+    def _fp_design(self, G: np.ndarray, w: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """The explicit FP regressor ``phi[t] (x) G(k_i)`` and target of all records (rows weighted by ``sqrt(w_i)``)."""
+        xs, ys = [], []
+        for i in range(len(self.records)):
+            X, Y = self._design(i)
+            sq = 1.0 if w is None else np.sqrt(w[i])
+            xs.append((X[:, :, None] * G[i][None, None, :]).reshape(X.shape[0], -1) * sq)
+            ys.append(Y * sq)
+        return np.vstack(xs), np.vstack(ys)
+
+    def _residual_products(self, coef: np.ndarray, G: np.ndarray, cols: slice, w: np.ndarray | None,
+                           e: int) -> np.ndarray:
+        """``X_fp' W (Y - X_fp coef)`` = ``sum_i w_i (Phi_i' E_i) (x) G_i`` with ``E_i`` the residuals of record ``i``
+        through ``theta(k_i)`` (:func:`~tsfdi.models.lstsq.lag_residual_products` for an FP-AR / FP-VAR)."""
+        pt = self.point
+        q = G.shape[1]
+        kp = coef.shape[0] // q
+        full = np.zeros((coef.shape[0], self.neqs))
+        full[:, cols] = coef
+        total = np.zeros((kp, q, coef.shape[1]))
+        for i in range(len(self.records)):
+            theta = np.einsum("ajc,j->ac", full.reshape(kp, q, -1), G[i])
+            if pt.nb == 0:
+                y = self._scaled(i)[0][pt.hold_back - pt.na:]
+                r = lag_residual_products(y, theta, const=bool(pt.k_const))[:, cols]
+            else:
+                X, Y = self._design(i)
+                r = X.T @ (Y - X @ theta)[:, cols]
+            total += (1.0 if w is None else w[i, e]) * r[:, None, :] * G[i][None, :, None]
+        return total.reshape(kp * q, -1)
+
+    def fit(self) -> FPResults:
+        """Estimate the FP coefficients by pooled least squares over all records.
+
+        ``weights="pooled"``: ordinary least squares (one noise covariance for every operating point).
+        ``weights="point"``: two-stage weighted least squares, each equation's rows of record ``i`` weighted by
+        ``1 / Sigma_i[j, j]``, the residual variance of that record through the first-stage (pooled) fit: the
+        estimator for a noise level that changes with the operating point (the off-diagonal terms of
+        ``Sigma_i`` are not used: equation by equation, as the point VAR).
+
+        The normal equations are solved by a Cholesky factor with one refinement step on the exact residual
+        products; when the factor would lose digits the explicit FP regressor is solved by SVD
+        (:func:`~tsfdi.models.lstsq.lstsq`, with an :class:`~tsfdi.exceptions.IllConditionedWarning` when
+        ill-conditioned).
+        """
+        grams = self.record_grams()
+        kp = self.df_point
+        A, b = self._pooled_system(grams, None, self.G, kp)
+        coef = self._solve(A, b, self.G, None)
+        w = None
+        if self.weights == "point":
+            s2 = self._record_sse(coef).diagonal(axis1=1, axis2=2) / np.asarray(self.nobs_records)[:, None]
+            if not (s2 > 0).all():
+                raise ValueError("weights='point': a record is fitted exactly (zero residual variance); use "
+                                 "weights='pooled'")
+            w = 1.0 / s2
+            A, b = self._pooled_system(grams, w, self.G, kp)
+            coef = self._solve(A, b, self.G, w)
+        params = coef * np.repeat(self._unit_columns(), self.n_basis)[:, None] * self.point.y_scale[None, :]
+        if not np.isfinite(params).all():
+            raise ValueError("y: the FP coefficients leave the floating-point range; rescale y (and u)")
+        return FPResults(self, params, None if w is None else w)
+
+    def _record_sse(self, coef: np.ndarray) -> np.ndarray:
+        """Residual cross products ``E_i'E_i`` of every record through ``theta(k_i)`` (fit units), (records, s, s)."""
+        return np.stack([e.T @ e for e in self._record_resid(coef)])
+
+    def _record_resid(self, coef: np.ndarray) -> list[np.ndarray]:
+        q = self.n_basis
+        kp = self.df_point
+        out = []
+        for i in range(len(self.records)):
+            theta = np.einsum("ajc,j->ac", coef.reshape(kp, q, -1), self.G[i])
+            X, Y = self._design(i)
+            out.append(Y - X @ theta)
+        return out
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(records={len(self.records)}, {self._lag_name}={self.na}, "
+                f"degree={self.degree}, basis={self.basis!r}, trend={self.trend!r}, weights={self.weights!r})")
+
+
+@register
+class FPAR(_FPModel):
+    """Functionally pooled scalar autoregression FP-AR(na) over operating parameters ``k``.
+
+    .. math::  y[t] + \\sum_{i=1}^{n_a} a_i(k)\\, y[t-i] = c(k) + e[t], \\qquad
+               a_i(k) = \\sum_{j=1}^{p} a_{i,j}\\, G_j(k)
+
+    (Kopsaftopoulos and Fassois 2010, 2013). The records are the point AR's (:class:`tsfdi.AR`) at several operating
+    points, estimated at once by pooled least squares.
+
+    Parameters
+    ----------
+    y : list of array_like, Series, DataFrame (one column) or DataArray
+        One record per operating point (several records may share a point).
+    k : array_like (records,) or (records, d), Series or DataFrame
+        The operating point of every record (one or more parameters; a DataFrame's columns / a Series' name
+        name them).
+    lags : int
+        Order ``na >= 1``.
+    degree : int or sequence of int
+        Largest polynomial degree of the basis in each operating parameter (``p = prod(degree + 1)`` functions,
+        tensor products for several parameters).
+    trend : {"n", "c"}
+        No intercept or an intercept ``c(k)`` (expanded on the basis too).
+    basis : {"legendre", "chebyshev"}
+        Polynomial family on ``k`` mapped onto ``[-1, 1]`` over ``k_range``.
+    weights : {"pooled", "point"}
+        Ordinary pooled least squares, or two-stage weighted least squares with each record's residual variance
+        (see :meth:`fit`).
+    hold_back : int, optional
+        Samples held back at the start of every record (default ``lags``; a common sample for
+        :func:`select_fp_order`).
+    k_range : array_like (d, 2), optional
+        The interval of each parameter mapped onto ``[-1, 1]`` (default: the range of ``k``).
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 records, ``k`` not one finite point per record, a parameter with fewer distinct values than
+        ``degree + 1``, and every check of :class:`tsfdi.AR` on the records (named ``y[i]``).
+    TypeError
+        Non-numeric data or ``k``, a non-integer order or degree.
+
+    Notes
+    -----
+    The standard errors (:attr:`FPResults.bse`) are ordinary (weighted) least squares ones, ``s_j^2 (X'WX)^{-1}``
+    with ``s_j^2 = RSS_j / (nobs - df_eq)`` (statsmodels ``WLS``), and those of ``theta(k)`` follow by the delta
+    method (exact here: ``theta(k)`` is linear in the coefficients).
+    """
+
+    _point_family = AR
+    _vector = False
+
+    def __init__(self, y: Any, k: Any, lags: int, degree: Any = 1, trend: str = "n", *, basis: str = "legendre",
+                 weights: str = "pooled", hold_back: int | None = None, k_range: Any = None) -> None:
+        super().__init__(y, k, lags=lags, degree=degree, trend=trend, basis=basis, weights=weights,
+                         hold_back=hold_back, k_range=k_range)
+
+
+@register
+class FPVAR(_FPModel):
+    """Functionally pooled vector autoregression FP-VAR(na): :class:`FPAR` for a vector output,
+    ``y[t] + sum_i A_i(k) y[t-i] = c(k) + e[t]``, ``A_i(k) = sum_j A_{i,j} G_j(k)``, equation by equation
+    (Sakellariou and Fassois 2016). Parameters as :class:`FPAR`, records as :class:`tsfdi.VAR`'s (channels matched
+    by name)."""
+
+    _point_family = VAR
+    _vector = True
+
+    def __init__(self, y: Any, k: Any, lags: int, degree: Any = 1, trend: str = "n", *, basis: str = "legendre",
+                 weights: str = "pooled", hold_back: int | None = None, k_range: Any = None) -> None:
+        super().__init__(y, k, lags=lags, degree=degree, trend=trend, basis=basis, weights=weights,
+                         hold_back=hold_back, k_range=k_range)
+
+
+@register
+class FPARX(_FPModel):
+    """Functionally pooled ARX(na, nb, nk): :class:`FPAR` with inputs,
+    ``y[t] + sum_i a_i(k) y[t-i] = c(k) + sum_m b_m(k)' u[t-nk-m+1] + e[t]`` (Sakellariou and Fassois 2008). ``u``:
+    one input record per output record, as :class:`tsfdi.ARX`'s; other parameters as :class:`FPAR`."""
+
+    _point_family = ARX
+    _vector = False
+    _lag_name = "na"
+
+    def __init__(self, y: Any, u: Any, k: Any, na: int, nb: int, nk: int = 0, degree: Any = 1, trend: str = "n", *,
+                 basis: str = "legendre", weights: str = "pooled", hold_back: int | None = None,
+                 k_range: Any = None) -> None:
+        if not isinstance(u, (list, tuple)):
+            raise ValueError("u must be a list of input records, one per output record")
+        super().__init__(y, k, lags=na, degree=degree, trend=trend, basis=basis, weights=weights,
+                         hold_back=hold_back, k_range=k_range, u=u, nb=nb, nk=nk)
+
+
+class FPResults:
+    """Results of :meth:`FPAR.fit` / :meth:`FPVAR.fit` / :meth:`FPARX.fit` (immutable).
+
+    Attributes
+    ----------
+    params : ndarray or Series / DataFrame
+        The FP coefficients ``theta_j`` of every point parameter and basis function, rows ``(point parameter,
+        basis function)`` with the point parameter outer (``a1:P0, a1:P1, ..., a2:P0, ...``), one column per
+        equation for an FP-VAR; 1-D for a scalar output with numpy data, labelled for pandas / xarray data.
+    bse, tvalues, pvalues : same shape as params
+        Standard errors ``sqrt(diag(s_j^2 (X'WX)^{-1}))`` (``W`` the record weights, identity when pooled,
+        ``s_j^2 = RSS_j / (nobs - df_eq)`` in the weighted metric), ``params / bse`` and the two-sided normal
+        p-values.
+    sigma_points : ndarray, shape (records, s, s)
+        Maximum-likelihood residual covariance of every record through ``theta(k_i)``.
+    nobs, df_model, llf, aic, bic : int / float
+        Regression rows of all records, coefficients of all equations, Gaussian log-likelihood (pooled ``Sigma``,
+        or the records' own ``Sigma_i`` with ``weights="point"``) and its criteria
+        (``-2 llf + 2 k`` / ``+ k ln nobs``, ``k`` counting the noise covariance parameters).
+    """
+
+    def __init__(self, model: _FPModel, params: np.ndarray, weights: np.ndarray | None = None) -> None:
+        params = np.array(params, dtype=float).reshape(model.df_eq, model.neqs)
+        params.setflags(write=False)
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "_params2d", params)
+        if weights is not None:
+            weights = np.array(weights, dtype=float).reshape(len(model.records), model.neqs)
+            weights.setflags(write=False)
+        object.__setattr__(self, "weights", weights)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+    # --- parameters
+    @property
+    def params2d(self) -> np.ndarray:
+        """FP coefficients (read-only), shape ``(df_eq, neqs)``, row ``a * n_basis + j`` for point parameter ``a``
+        and basis function ``j``."""
+        return self._params2d
+
+    @property
+    def neqs(self) -> int:
+        return self.model.neqs
+
+    def _fit_units(self) -> np.ndarray:
+        m = self.model
+        scale = np.repeat(m._unit_columns(), m.n_basis)[:, None] * m.point.y_scale[None, :]
+        return self._params2d / scale
+
+    def _param_names(self) -> list[str]:
+        return [f"{a}:{g}" for a in self._point_names() for g in self.model.basis_names()]
+
+    def _point_names(self) -> list[str]:
+        """The point model's parameter names (as its ``params``): ``const``, ``a1`` / ``A1.<channel>``,
+        ``b1.<input>``."""
+        m = self.model
+        names = ["const"] if m.point.k_const else []
+        u = m.point.u_data
+        inputs = [] if u is None else ([str(c) for c in u.channels] if u.named or (not u.vector and u.name is not None)
+                                       else [f"u{i}" for i in range(u.nchan)])
+        for g in range(1, max(m.na, m.nb) + 1):
+            if g <= m.na:
+                names += [f"a{g}" if self.neqs == 1 else f"A{g}.{c}" for c in m.data.channels]
+            if g <= m.nb:
+                names += [f"b{g}.{c}" for c in inputs]
+        return names
+
+    def _labelled(self, values: np.ndarray, names: list[str]) -> Any:
+        m = self.model
+        out = values if m._vector else values[:, 0]
+        if m.data.kind == "numpy":
+            return out
+        if not m._vector:
+            return pd.Series(out.copy(), index=names, name=m.data.name)
+        return pd.DataFrame(out.copy(), index=names, columns=list(m.data.channels))
+
+    @property
+    def params(self) -> Any:
+        return self._labelled(self._params2d, self._param_names())
+
+    @cached_property
+    def _resid_fit(self) -> list[np.ndarray]:
+        return self.model._record_resid(self._fit_units())
+
+    @cached_property
+    def _sse_points(self) -> np.ndarray:
+        """``E_i'E_i`` per record in the data's units, (records, s, s)."""
+        sc = self.model.point.y_scale
+        return np.stack([e.T @ e for e in self._resid_fit]) * sc[None, :, None] * sc[None, None, :]
+
+    @property
+    def nobs(self) -> int:
+        return int(sum(self.model.nobs_records))
+
+    @property
+    def df_model(self) -> int:
+        return self.model.df_eq * self.neqs
+
+    @property
+    def df_resid(self) -> int:
+        return self.nobs - self.model.df_eq
+
+    @property
+    def sigma_points(self) -> np.ndarray:
+        return self._sse_points / np.asarray(self.model.nobs_records, dtype=float)[:, None, None]
+
+    @property
+    def sigma_pooled(self) -> np.ndarray:
+        """Maximum-likelihood residual covariance of all records pooled, ``sum_i E_i'E_i / nobs``, (s, s)."""
+        return self._sse_points.sum(axis=0) / self.nobs
+
+    @cached_property
+    def _cov(self) -> np.ndarray:
+        """Covariance of the FP coefficients of every equation, (s, df_eq, df_eq), in the data's units."""
+        m = self.model
+        grams = m.record_grams()
+        A, _ = m._pooled_system(grams, self.weights, m.G, m.df_point)
+        sse = np.stack([e.T @ e for e in self._resid_fit]).diagonal(axis1=1, axis2=2)   # (records, s), fit units
+        rss = sse.sum(axis=0) if self.weights is None else (self.weights * sse).sum(axis=0)
+        s2 = rss / self.df_resid
+        scale = np.repeat(m._unit_columns(), m.n_basis)
+        out = np.empty((self.neqs, m.df_eq, m.df_eq))
+        for e in range(self.neqs):
+            Ae = A[0] if A.shape[0] == 1 else A[e]
+            inv = np.linalg.pinv(Ae, hermitian=True)
+            ys = m.point.y_scale[e]
+            out[e] = s2[e] * inv * np.outer(scale, scale) * ys * ys
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def _bse2d(self) -> np.ndarray:
+        b = np.sqrt(np.maximum(self._cov.diagonal(axis1=1, axis2=2), 0.0)).T
+        b.setflags(write=False)
+        return b
+
+    @property
+    def bse(self) -> Any:
+        return self._labelled(self._bse2d, self._param_names())
+
+    @property
+    def tvalues(self) -> Any:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self._labelled(self._params2d / self._bse2d, self._param_names())
+
+    @property
+    def pvalues(self) -> Any:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self._labelled(2 * stats.norm.sf(np.abs(self._params2d / self._bse2d)), self._param_names())
+
+    # --- evaluation at an operating point
+    def _point(self, k: Any, name: str = "k") -> np.ndarray:
+        """One operating point ``k`` as a finite ``(d,)`` array, or an error naming ``name``."""
+        d = len(self.model.k_names)
+        try:
+            arr = np.asarray(k, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be a real operating point ({d} value(s)), got {k!r}") from None
+        if arr.size != d:
+            raise ValueError(f"{name} must be one operating point with {d} value(s) {self.model.k_names}, got "
+                             f"{arr.size}")
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+        return arr
+
+    def _g(self, k: np.ndarray) -> np.ndarray:
+        m = self.model
+        return fp_basis(k[None, :], m.degree, m.k_range, m.basis)[0]
+
+    def _theta2d(self, k: np.ndarray) -> np.ndarray:
+        m = self.model
+        return np.einsum("ajc,j->ac", self._params2d.reshape(m.df_point, m.n_basis, -1), self._g(k))
+
+    def theta(self, k: Any) -> Any:
+        """The point model's parameters at operating point ``k``: ``theta(k) = sum_j theta_j G_j(k)``, laid out as
+        the point model's ``params`` (:class:`tsfdi.AR` / ``VAR`` / ``ARX``: ``[const, a1, a2, ...]``).
+
+        Outside ``k_range`` the polynomials extrapolate (allowed, not advised)."""
+        return self._labelled(self._theta2d(self._point(k)), self._point_names())
+
+    def theta_bse(self, k: Any) -> Any:
+        """Standard errors of :meth:`theta` at ``k`` (delta method: ``sqrt(g' Cov_a g)`` per point parameter ``a``,
+        exact since ``theta(k)`` is linear in the coefficients), same layout."""
+        m = self.model
+        g = self._g(self._point(k))
+        cov = self._cov.reshape(self.neqs, m.df_point, m.n_basis, m.df_point, m.n_basis)
+        var = np.einsum("eajaj->ae", cov * g[None, None, :, None, None] * g[None, None, None, None, :])
+        return self._labelled(np.sqrt(np.maximum(var, 0.0)), self._point_names())
+
+    def sigma(self, k: Any) -> np.ndarray:
+        """Residual covariance at operating point ``k``, (s, s).
+
+        ``weights="pooled"``: the pooled covariance :attr:`sigma_pooled` at every ``k``. ``weights="point"``: the
+        log-variance of every channel expanded on the model's basis (least squares over the records' ``Sigma_i``
+        diagonals, weighted by their rows) with the pooled correlation, ``D(k) C D(k)``, so positive definite.
+        """
+        kk = self._point(k)
+        if self.weights is None:
+            return self.sigma_pooled.copy()
+        return self._sigma_from_logvar(kk)
+
+    @cached_property
+    def _logvar_coef(self) -> np.ndarray:
+        m = self.model
+        lv = np.log(self.sigma_points.diagonal(axis1=1, axis2=2))
+        sw = np.sqrt(np.asarray(m.nobs_records, dtype=float))[:, None]
+        coef = np.linalg.lstsq(m.G * sw, lv * sw, rcond=None)[0]
+        return coef
+
+    def _sigma_from_logvar(self, k: np.ndarray) -> np.ndarray:
+        pooled = self.sigma_pooled
+        sd = np.sqrt(pooled.diagonal())
+        corr = pooled / np.outer(sd, sd)
+        dk = np.exp(0.5 * (self._g(k) @ self._logvar_coef))
+        return corr * np.outer(dk, dk)
+
+    # --- criteria
+    @cached_property
+    def llf(self) -> float:
+        n = np.asarray(self.model.nobs_records, dtype=float)
+        s = self.neqs
+        if self.weights is None:
+            ld = np.linalg.slogdet(self.sigma_pooled)[1]
+            return float(-0.5 * self.nobs * (s * np.log(2 * np.pi) + ld + s))
+        ld = np.linalg.slogdet(self.sigma_points)[1]
+        return float(-0.5 * np.sum(n * (s * np.log(2 * np.pi) + ld + s)))
+
+    @property
+    def _n_free(self) -> int:
+        s = self.neqs
+        cov = s * (s + 1) // 2 * (1 if self.weights is None else len(self.model.records))
+        return self.df_model + cov
+
+    @property
+    def aic(self) -> float:
+        return -2 * self.llf + 2 * self._n_free
+
+    @property
+    def bic(self) -> float:
+        return -2 * self.llf + self._n_free * np.log(self.nobs)
+
+    # --- new data
+    def _point_results(self, k: np.ndarray):
+        """The point model's results (:class:`tsfdi.ARResults` / ``VARResults`` / ``ARXResults``) with
+        ``theta(k)``: what filters a new signal."""
+        pt = self.model.point
+        return pt.results_class(pt, self._theta2d(k))
+
+    def residuals(self, y: Any, k: Any, u: Any = None) -> Any:
+        """One-step prediction errors of a new signal through the model at operating point ``k``
+        (``theta(k)``), as the point model's ``residuals``: same kind as ``y``, from sample ``max_lag`` on, channels
+        matched by name.
+
+        Parameters
+        ----------
+        y : array_like, Series, DataFrame or DataArray
+        k : float or array_like (d,)
+            The operating point (logged, or estimated by :meth:`estimate_k`).
+        u : optional
+            The inputs (FP-ARX only, required there).
+        """
+        res = self._point_results(self._point(k))
+        if self.model.nb:
+            if u is None:
+                raise ValueError("u is required: an FP-ARX filters a new output with its input")
+            return res.residuals(y, u)
+        if u is not None:
+            raise ValueError("u is given but the model has no input")
+        return res.residuals(y)
+
+    def estimate_k(self, y: Any, u: Any = None, *, alpha: float = 0.05, bounds: Any = None,
+                   grid: int = 201) -> OperatingPointEstimate:
+        """The operating point that best explains a new record: maximum likelihood over ``k``.
+
+        The residuals ``e_t(k)`` of ``y`` through ``theta(k)`` are linear in the basis ``G(k)``
+        (``e_t(k) = y_t - sum_j G_j(k) phi_t' theta_j``), so their cross products for any ``k`` follow from one
+        ``((p + 1) s)^2`` matrix of the record. The noise covariance of the new record is unknown and profiled
+        out: the log-likelihood is ``-n/2 (s ln 2 pi + ln det(E(k)'E(k) / n) + s)``. It is maximised over a grid
+        of the bounds (``grid`` points per parameter, at most 41 per parameter for several), then refined by a
+        bounded search; the standard error is the inverse of the observed information (the curvature of the
+        log-likelihood at ``k_hat``, central differences), and the interval ``k_hat -+ z_{1-alpha/2} se``. The
+        FP coefficients are taken as known (their own uncertainty is not propagated).
+
+        Parameters
+        ----------
+        y, u : signal (and input for an FP-ARX)
+            The new record (channels matched by name).
+        alpha : float
+            The interval has level ``1 - alpha``.
+        bounds : array_like (d, 2), optional
+            Search interval of every parameter (default: the model's ``k_range``; beyond it the polynomials
+            extrapolate).
+        grid : int
+            Grid points of the first search per parameter (>= 5).
+
+        Returns
+        -------
+        OperatingPointEstimate
+        """
+        alpha = probability(alpha)
+        grid = int_like(grid, "grid", minimum=5)
+        m = self.model
+        d = len(m.k_names)
+        if bounds is None:
+            bnd = m.k_range.copy()
+        else:
+            try:
+                bnd = np.asarray(bounds, dtype=float).reshape(d, 2)
+            except (TypeError, ValueError):
+                raise ValueError(f"bounds must be ({d}, 2) intervals (low, high), got {bounds!r}") from None
+            if not np.isfinite(bnd).all() or not (bnd[:, 1] > bnd[:, 0]).all():
+                raise ValueError(f"bounds must be finite intervals with low < high, got {bnd.tolist()}")
+        W, n = self._record_products(y, u)
+        s = self.neqs
+
+        def negllf(kv: np.ndarray) -> float:
+            c = np.r_[1.0, self._g(np.asarray(kv, dtype=float))]
+            S = np.einsum("j,l,jalb->ab", c, c, W) / n
+            sign, ld = np.linalg.slogdet(S)
+            if sign <= 0:
+                return np.inf
+            return 0.5 * n * (s * np.log(2 * np.pi) + ld + s)
+
+        m1 = grid if d == 1 else min(grid, 41)
+        axes = [np.linspace(lo, hi, m1) for lo, hi in bnd]
+        pts = np.array(list(itertools.product(*axes)))
+        vals = np.array([negllf(p) for p in pts])
+        best = pts[int(np.argmin(vals))]
+        step = (bnd[:, 1] - bnd[:, 0]) / (m1 - 1)
+        lo = np.maximum(best - step, bnd[:, 0])
+        hi = np.minimum(best + step, bnd[:, 1])
+        if d == 1:
+            r = optimize.minimize_scalar(lambda x: negllf(np.array([x])), bounds=(lo[0], hi[0]), method="bounded",
+                                         options={"xatol": 1e-10 * (bnd[0, 1] - bnd[0, 0])})
+            k_hat = np.array([r.x])
+        else:
+            r = optimize.minimize(negllf, best, method="L-BFGS-B", bounds=list(zip(lo, hi)))
+            k_hat = np.asarray(r.x, dtype=float)
+        if negllf(k_hat) > negllf(best):
+            k_hat = best
+        # observed information by central differences (one-sided at a bound)
+        h = 1e-3 * (bnd[:, 1] - bnd[:, 0])
+        H = np.empty((d, d))
+        f0 = negllf(k_hat)
+        for a in range(d):
+            for b in range(a, d):
+                ea, eb = np.eye(d)[a] * h[a], np.eye(d)[b] * h[b]
+                if a == b:
+                    H[a, a] = (negllf(k_hat + ea) - 2 * f0 + negllf(k_hat - ea)) / h[a] ** 2
+                else:
+                    H[a, b] = H[b, a] = (negllf(k_hat + ea + eb) - negllf(k_hat + ea - eb)
+                                         - negllf(k_hat - ea + eb) + negllf(k_hat - ea - eb)) / (4 * h[a] * h[b])
+        at_bound = bool(((k_hat - bnd[:, 0]) < 2 * h).any() or ((bnd[:, 1] - k_hat) < 2 * h).any())
+        evals = np.linalg.eigvalsh(H) if np.isfinite(H).all() else np.array([-1.0])
+        if (evals > 0).all():
+            cov = np.linalg.inv(H)
+            se = np.sqrt(np.diag(cov))
+        else:
+            cov = np.full((d, d), np.inf)
+            se = np.full(d, np.inf)
+            warnings.warn("estimate_k: the log-likelihood is not curved downwards at k_hat (flat, or the "
+                          "maximum lies on a bound): no interval from the curvature", IllConditionedWarning,
+                          stacklevel=2)
+        q = stats.norm.isf(alpha / 2)
+        ci = np.stack([k_hat - q * se, k_hat + q * se], axis=1)
+        # the log-likelihood along each parameter through k_hat
+        curve_k = np.stack([np.linspace(lo_, hi_, grid) for lo_, hi_ in bnd])
+        curve = np.empty_like(curve_k)
+        for a in range(d):
+            for i, v in enumerate(curve_k[a]):
+                kk = k_hat.copy()
+                kk[a] = v
+                curve[a, i] = -negllf(kk)
+        for arr in (k_hat, se, ci, cov, curve_k, curve, bnd):
+            arr.setflags(write=False)
+        return OperatingPointEstimate(k_hat=k_hat, bse=se, conf_int=ci, cov=cov, alpha=alpha, llf=-f0, nobs=int(n),
+                                      names=list(m.k_names), bounds=bnd, grid=curve_k, loglik=curve,
+                                      at_bound=at_bound)
+
+    def _record_products(self, y: Any, u: Any) -> tuple[np.ndarray, int]:
+        """``W[j, l] = Z_j' Z_l`` (shape (p+1, s, p+1, s)) of ``Z_0 = y[t]`` and ``Z_j = -phi_t' theta_j`` (the part
+        of the prediction carried by basis function ``j``) of a new record, in the data's units, and its rows.
+
+        Each ``Z`` is a residual series of the point model's ``residuals`` (which validates the record and matches
+        its channels): with zero coefficients it is ``y[t]``, with ``theta_j`` it is ``y[t] - phi_t' theta_j``."""
+        m = self.model
+        pt = m.point
+        if pt.nb and u is None:
+            raise ValueError("u is required: an FP-ARX estimates k from an output and its input")
+        if not pt.nb and u is not None:
+            raise ValueError("u is given but the model has no input")
+        P = self._params2d.reshape(m.df_point, m.n_basis, -1)
+
+        def resid(coef: np.ndarray) -> np.ndarray:
+            res = pt.results_class(pt, coef)
+            e = res.residuals(y, u) if pt.nb else res.residuals(y)
+            return np.asarray(e, dtype=float).reshape(-1, self.neqs)
+
+        Y = resid(np.zeros((m.df_point, self.neqs)))
+        Z = np.stack([Y] + [resid(P[:, j]) - Y for j in range(m.n_basis)], axis=1)   # (n, p+1, s)
+        n = Z.shape[0]
+        Zf = Z.reshape(n, -1)
+        W = (Zf.T @ Zf).reshape(m.n_basis + 1, self.neqs, m.n_basis + 1, self.neqs)
+        return W, n
+
+    # --- output
+    def summary(self, alpha: float = 0.05) -> Summary:
+        """Fit statistics and one coefficient table per equation (coef, std err, z, P>|z|, interval)."""
+        alpha = probability(alpha)
+        m = self.model
+        header = [("Model", type(m).__name__), ("Channels", ", ".join(map(str, m.data.channels))),
+                  ("Order", f"{m._lag_name}={m.na}" + (f", nb={m.nb}, nk={m.nk}" if m.nb else "")),
+                  ("Trend", m.trend), ("Operating parameters", ", ".join(
+                      f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(m.k_names, m.k_range))),
+                  ("Basis", f"{m.basis}, degree {m.degree} ({m.n_basis} functions)"), ("Weights", m.weights),
+                  ("Records", len(m.records)), ("Operating points", len(np.unique(m.k, axis=0))),
+                  ("Observations", self.nobs), ("Parameters", self.df_model), ("Log-likelihood", self.llf),
+                  ("AIC", self.aic), ("BIC", self.bic)]
+        q = stats.norm.isf(alpha / 2)
+        names = self._param_names()
+        tables = []
+        for j, ch in enumerate(m.data.channels):
+            coef, bse = self._params2d[:, j], self._bse2d[:, j]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = coef / bse
+            tables.append((f"Equation {ch}" if m._vector else f"Coefficients of {ch}", pd.DataFrame(
+                {"coef": coef, "std err": bse, "z": z, "P>|z|": 2 * stats.norm.sf(np.abs(z)),
+                 f"[{alpha / 2:g}": coef - q * bse, f"{1 - alpha / 2:g}]": coef + q * bse}, index=names)))
+        notes = ["theta(k) = sum_j theta_j G_j(k); point parameters in the papers' sign "
+                 "(y[t] + sum_i a_i(k) y[t-i] = c(k) + ... + e[t]).",
+                 "std err from s_j^2 (X'WX)^-1, s_j^2 = RSS_j / (nobs - df_eq) (weighted least squares); z and "
+                 "P>|z| from the normal distribution."]
+        return Summary(f"{type(m).__name__} results", header, tables, notes)
+
+    def save(self, path: Any) -> Any:
+        """Save the model (records, operating points, options) and its coefficients for
+        :func:`tsfdi.models.load`; see :mod:`tsfdi.models.archive`."""
+        return save_archive(self, path)
+
+    def __repr__(self) -> str:
+        m = self.model
+        return (f"FPResults({type(m).__name__}, {m._lag_name}={m.na}, degree={m.degree}, nobs={self.nobs}, "
+                f"bic={self.bic:.6g})")
+
+
+for _cls in (FPAR, FPVAR, FPARX):
+    _cls.results_class = FPResults
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class OperatingPointEstimate:
+    """Maximum-likelihood operating point of a record (:meth:`FPResults.estimate_k`), frozen.
+
+    Attributes
+    ----------
+    k_hat : ndarray (d,)
+        The estimate.
+    bse : ndarray (d,)
+        Its standard error from the observed information (``inf`` when the log-likelihood is not curved downwards).
+    conf_int : ndarray (d, 2)
+        ``k_hat -+ z_{1-alpha/2} bse``.
+    cov : ndarray (d, d)
+        Inverse observed information.
+    alpha : float
+    llf : float
+        Maximised (profiled) log-likelihood.
+    nobs : int
+        Residual samples of the record.
+    names : list of str
+        The operating parameters.
+    bounds : ndarray (d, 2)
+        Search interval.
+    grid, loglik : ndarray (d, m)
+        The log-likelihood along each parameter through ``k_hat`` (the others held at ``k_hat``): for one
+        parameter, the likelihood curve.
+    at_bound : bool
+        ``k_hat`` within two difference steps of a bound (the interval is then one-sided in truth).
+    """
+
+    k_hat: np.ndarray
+    bse: np.ndarray
+    conf_int: np.ndarray
+    cov: np.ndarray
+    alpha: float
+    llf: float
+    nobs: int
+    names: list
+    bounds: np.ndarray
+    grid: np.ndarray
+    loglik: np.ndarray
+    at_bound: bool
+
+    def covers(self, k: Any) -> bool:
+        """Whether the interval holds ``k`` in every parameter."""
+        kk = np.asarray(k, dtype=float).reshape(-1)
+        if kk.size != self.k_hat.size or not np.isfinite(kk).all():
+            raise ValueError(f"k must be one finite operating point with {self.k_hat.size} value(s), got {k!r}")
+        return bool(((self.conf_int[:, 0] <= kk) & (kk <= self.conf_int[:, 1])).all())
+
+    def summary(self) -> Summary:
+        table = pd.DataFrame({"k_hat": self.k_hat, "std err": self.bse,
+                              f"[{self.alpha / 2:g}": self.conf_int[:, 0],
+                              f"{1 - self.alpha / 2:g}]": self.conf_int[:, 1],
+                              "low bound": self.bounds[:, 0], "high bound": self.bounds[:, 1]}, index=self.names)
+        return Summary("Operating-point estimate", [("Observations", self.nobs), ("Log-likelihood", self.llf),
+                                                    ("At a bound", self.at_bound)], [("Estimate", table)],
+                       ["Maximum likelihood over the FP model (noise covariance profiled out); interval from the "
+                        "observed information; FP coefficients taken as known."])
+
+    def plot(self, ax: Any = None) -> Any:
+        """The log-likelihood curve with ``k_hat`` and its interval (:func:`tsfdi.plotting.fp.plot_k_estimate`)."""
+        from tsfdi.plotting.fp import plot_k_estimate
+
+        return plot_k_estimate(self, ax=ax)
+
+    def __repr__(self) -> str:
+        parts = ", ".join(f"{n}={v:.6g} [{lo:.6g}, {hi:.6g}]" for n, v, (lo, hi)
+                          in zip(self.names, self.k_hat, self.conf_int))
+        return f"OperatingPointEstimate({parts}, level={1 - self.alpha:g})"
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FPOrderSelection:
+    """Orders and basis degrees of an FP model compared on a common sample (:func:`select_fp_order`), frozen.
+
+    Attributes
+    ----------
+    table : DataFrame
+        ``llf``, ``aic``, ``bic`` and ``df_model`` per ``(lags, degree)`` (a MultiIndex).
+    selected : tuple of int
+        ``(lags, degree)`` of the smallest BIC.
+    spec : dict
+        The arguments that rebuild the FP model (for :meth:`fit`).
+    """
+
+    table: pd.DataFrame
+    selected: tuple
+    spec: dict
+
+    def fit(self, lags: int | None = None, degree: int | None = None) -> FPResults:
+        """Fit the selected (or the given) order and degree on the records, with the common ``hold_back``."""
+        lg, dg = self.selected
+        sp = dict(self.spec)
+        family = sp.pop("family")
+        lags = lg if lags is None else lags
+        degree = dg if degree is None else degree
+        if family is FPARX:
+            sp.pop("nb")
+            return FPARX(sp.pop("y"), sp.pop("u"), sp.pop("k"), lags, lags, sp.pop("nk"), degree, **sp).fit()
+        sp.pop("u"), sp.pop("nb"), sp.pop("nk")
+        return family(sp.pop("y"), sp.pop("k"), lags, degree, **sp).fit()
+
+    def summary(self) -> Summary:
+        return Summary("FP order selection", [("Selected (lags, degree)", str(self.selected))],
+                       [("Criteria", self.table)], ["BIC on a common sample (hold back max_lags in every record)."])
+
+    def __repr__(self) -> str:
+        return f"FPOrderSelection(selected lags={self.selected[0]}, degree={self.selected[1]})"
+
+
+def select_fp_order(y: Any, k: Any, max_lags: int, max_degree: int, model: str = "ar", *, u: Any = None,
+                    nk: int = 0, trend: str = "n", basis: str = "legendre",
+                    k_range: Any = None) -> FPOrderSelection:
+    """Choose the order and the basis degree of an FP model by BIC on a common sample.
+
+    Every ``lags = 1 .. max_lags`` and ``degree = 0 .. max_degree`` (the same degree for every operating parameter)
+    is fitted by pooled least squares on the regression rows from ``max_lags`` on in every record (as
+    :func:`tsfdi.select_order`), all from one Gram matrix per record (the largest order: the lower ones are its
+    leading blocks) and the basis of the largest degree (the lower ones are its leading functions).
+
+    Parameters
+    ----------
+    y, k : as :class:`FPAR` (a list of records and their operating points)
+    max_lags, max_degree : int
+    model : {"ar", "var", "arx"}
+    u, nk : input records and delay of an FP-ARX (``model="arx"`` compares ``na = nb = lags``)
+    trend, basis, k_range : as :class:`FPAR`
+
+    Returns
+    -------
+    FPOrderSelection
+    """
+    model = option(model, "model", ("ar", "var", "arx"))
+    max_lags = int_like(max_lags, "max_lags", minimum=1)
+    max_degree = int_like(max_degree, "max_degree", minimum=0)
+    family = {"ar": FPAR, "var": FPVAR, "arx": FPARX}[model]
+    if model == "arx":
+        if u is None:
+            raise ValueError("model='arx' needs the input records u")
+        nbs = max_lags
+        big = FPARX(y, u, k, max_lags, nbs, nk, max_degree, trend, basis=basis, hold_back=max(max_lags, nk + nbs - 1),
+                    k_range=k_range)
+    else:
+        if u is not None:
+            raise ValueError(f"u is given but model={model!r} has no input; use model='arx'")
+        nbs = 0
+        big = family(y, k, max_lags, max_degree, trend, basis=basis, k_range=k_range)
+    grams = big.record_grams()
+    s = big.neqs
+    c = big.point.k_const
+    m_in = big.point.n_inputs
+    N = sum(big.nobs_records)
+    names = big.basis_names()
+    letter_len = len(_LETTER[big.basis])
+    idx = [tuple(int(v) for v in nm[letter_len:].split(",")) for nm in names]
+    rows = []
+    for lags in range(1, max_lags + 1):
+        keep_point = np.arange(c + lags * (s + m_in))   # the lag groups (outputs and inputs) up to ``lags``
+        sub = np.concatenate([keep_point, np.arange(grams.shape[1] - s, grams.shape[1])])
+        g_lags = grams[:, sub][:, :, sub]
+        kp = keep_point.size
+        for deg in range(max_degree + 1):
+            cols = [j for j, t in enumerate(idx) if max(t) <= deg]
+            G = big.G[:, cols]
+            A, b = big._pooled_system(g_lags, None, G, kp)
+            R = gram_factor(A[0], A.shape[1])
+            if R is None:
+                rows.append((lags, deg, np.nan, np.nan, np.nan, kp * len(cols) * s))
+                continue
+            coef = lapack.dpotrs(R, b, lower=0)[0]
+            YY = g_lags[:, kp:, kp:].sum(axis=0)
+            sse = YY - b.T @ coef
+            sigma = sse / N * np.outer(big.point.y_scale, big.point.y_scale)
+            sign, ld = np.linalg.slogdet(sigma)
+            llf = -0.5 * N * (s * np.log(2 * np.pi) + ld + s) if sign > 0 else np.nan
+            nfree = kp * len(cols) * s + s * (s + 1) // 2
+            rows.append((lags, deg, llf, -2 * llf + 2 * nfree, -2 * llf + nfree * np.log(N), kp * len(cols) * s))
+    table = pd.DataFrame(rows, columns=["lags", "degree", "llf", "aic", "bic", "df_model"]).set_index(
+        ["lags", "degree"])
+    if not np.isfinite(table["bic"]).any():
+        raise ValueError("select_fp_order: no order and degree gives a well-conditioned fit")
+    selected = tuple(int(v) for v in table["bic"].idxmin())
+    spec = {"family": family, "y": list(y), "u": None if u is None else list(u), "k": k, "nb": nbs, "nk": nk,
+            "trend": trend, "basis": basis, "k_range": big.k_range, "hold_back": big.hold_back}
+    return FPOrderSelection(table=table, selected=selected, spec=spec)
