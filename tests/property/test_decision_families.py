@@ -37,7 +37,7 @@ def _noise(seed: int, n: int, k: int = 1) -> np.ndarray:
 @given(make=st.sampled_from(CALIBRATED), window=st.integers(10, 60), n=st.integers(8, 200),
        seed=st.integers(0, 2**16))
 def test_calibrated_window_against_the_tested_length(make, window, n, seed):
-    recs = [_noise(seed + i, 40 * window) for i in range(2)]
+    recs = [_noise(seed + i, 40 * window) for i in range(3)]    # 3 records: the fewest the predictive law takes
     test = make().calibrate(recs, window=window, step=window // 2)
     ref = {"reference_variance": 1.0} if not isinstance(test, LjungBox) else {}
     try:
@@ -100,7 +100,7 @@ def test_ftest_with_any_reference_df_gives_a_finite_threshold(df, alpha, n, two,
 @given(make=st.sampled_from(CALIBRATED), window=st.integers(8, 60), length=st.integers(2, 120),
        where=st.floats(0.0, 1.0), channel=st.integers(0, 1), seed=st.integers(0, 2**16))
 def test_calibration_refuses_a_frozen_stretch_as_long_as_a_window(make, window, length, where, channel, seed):
-    recs = [_noise(seed + i, 40 * window, 2) for i in range(2)]
+    recs = [_noise(seed + i, 40 * window, 2) for i in range(3)]
     start = int(where * (recs[1].shape[0] - length))
     recs[1][start:start + length, channel] = 0.5
     try:
@@ -118,7 +118,8 @@ def test_too_few_calibration_windows_name_min_windows(make, records, per, min_wi
     window = 20
     recs = [_noise(seed + i, per * window, 1) for i in range(records)]
     test = make()
-    test.threshold = tsfdi.ScaledChi2Threshold(test.alpha, min_windows=min_windows)
+    # the per-record mixture: its only refusal is min_windows (the predictive law also refuses too few records)
+    test.threshold = tsfdi.ScaledChi2Threshold(test.alpha, min_windows=min_windows, record_effect="bootstrap")
     try:
         test.calibrate(recs, window=window)
     except ValueError as err:
