@@ -38,7 +38,8 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.glrt import GLRT
 from tsfdi.summary import Summary
 
-__all__ = ["STATUS", "Isolation", "IsolationSeries", "ResidualSet", "airspeed_from_gps", "airspeed_parity"]
+__all__ = ["STATUS", "Isolation", "IsolationSeries", "ResidualSet", "airspeed_from_gps", "airspeed_parity",
+           "climb_rate_from_accel", "climb_rate_from_baro"]
 
 #: The outcomes of an isolation, in this order of precedence.
 STATUS = ("isolated", "several", "not isolable", "none")
@@ -567,3 +568,106 @@ def airspeed_parity(tests: Any = None) -> ResidualSet:
     per residual; calibrate them on healthy flights).
     """
     return ResidualSet.pairwise(("pitot", "gps2air", "thrust"), tests)
+
+
+# ------------------------------------------------------------------------------------- climb rate (multirotor)
+def climb_rate_from_baro(altitude: Any, window: Any, *, fs: float | None = None) -> Any:
+    r"""Climb rate from barometric altitude: the least-squares slope over the last ``window`` samples.
+
+    Parameters
+    ----------
+    altitude : array_like, Series or DataArray, shape (nobs,)
+        Barometric altitude (m, up positive).
+    window : int or time span
+        Samples of each causal slope fit (an int, at least 2), or a time span such as ``"1s"`` (with the time
+        index of ``altitude`` or ``fs``). Over ``window = n`` samples of white noise :math:`\sigma_h` at ``fs``
+        the slope's standard deviation is :math:`\sigma_h f_s \sqrt{12 / (n (n^2 - 1))}` and its delay
+        :math:`(n - 1) / (2 f_s)`.
+    fs : float, optional
+        Sampling frequency (Hz) when ``altitude`` has no time index.
+
+    Returns
+    -------
+    The kind of ``altitude``, ``nobs - window + 1`` samples
+        The climb rate (m/s, up positive) at samples ``window - 1, ..., nobs - 1`` (index kept): the first
+        ``window - 1`` samples have no complete window and are not in the result.
+
+    Raises
+    ------
+    ValueError
+        No sampling frequency (no time index, no ``fs``), a window shorter than 2 samples or longer than
+        ``altitude``, non-finite values.
+    """
+    sig = as_signal(altitude, "altitude", vector=False, allow_constant=True)
+    rate = sampling_frequency(sig, fs, "altitude")
+    if rate is None:
+        raise ValueError("altitude has no time index: pass fs (Hz)")
+    n = window_samples(window, "window", rate, minimum=2)
+    if n > sig.nobs:
+        raise ValueError(f"window must be <= the length of altitude ({sig.nobs} samples), got {n}")
+    t = np.arange(n) / rate
+    kernel = (t - t.mean()) / np.sum((t - t.mean()) ** 2)           # slope weights, oldest sample first
+    slope = np.convolve(sig.values[:, 0], kernel[::-1], mode="valid")
+    return sig.wrap(slope, n - 1, vector=False)
+
+
+def climb_rate_from_accel(accel: Any, attitude: Any, time_constant: Any, *, fs: float | None = None,
+                          gravity: float = 9.80665) -> Any:
+    r"""Climb rate from the accelerometer: the specific force rotated to the vertical, gravity removed,
+    integrated with a slow complementary correction towards zero climb.
+
+    Parameters
+    ----------
+    accel : array_like, DataFrame or DataArray, shape (nobs, 3)
+        Specific force in body axes (m/s^2; x forward, y right, z down: about ``(0, 0, -g)`` in level hover).
+    attitude : array_like, DataFrame or DataArray, shape (nobs, 3)
+        Roll, pitch and yaw (rad, Z-Y-X Euler angles, body to NED) at the samples of ``accel`` (put them on one
+        grid first, e.g. with :func:`tsfdi.align`).
+    time_constant : int or time span
+        :math:`\tau`, the time constant of the correction (samples, or a time span such as ``"5s"``).
+    fs : float, optional
+        Sampling frequency (Hz) when ``accel`` has no time index.
+    gravity : float
+        :math:`g` (m/s^2).
+
+    Returns
+    -------
+    The kind of ``accel``, shape (nobs,)
+        The climb rate (m/s, up positive), named ``"climb_rate"`` for pandas / xarray.
+
+    Notes
+    -----
+    The climb acceleration is :math:`a = -(R_{31} f_x + R_{32} f_y + R_{33} f_z) - g` with
+    :math:`(R_{31}, R_{32}, R_{33}) = (-\sin\theta, \sin\phi\cos\theta, \cos\phi\cos\theta)` the last row of the
+    body-to-NED rotation. Integrated alone it drifts (an accelerometer bias :math:`b` gives :math:`b t`); the
+    estimate is the integral corrected by a proportional-integral loop that pulls it towards zero,
+
+    .. math:: V(s) = \frac{s}{(s + \omega)^2} A(s), \qquad \omega = 1 / \tau,
+
+    discretised by the bilinear transform and started at rest. It follows the climb rate at frequencies well
+    above :math:`\omega` and forgets a constant bias (the loop's integral learns it) after a few :math:`\tau`:
+    a flight holding its altitude on average, climbs and descents shorter than :math:`\tau`. Its low-frequency
+    content is the part the other estimates (barometer, GPS) measure better; a fault of the accelerometer
+    shows as a transient of about :math:`\tau` seconds, a bias step :math:`\Delta b` peaking at
+    :math:`\Delta b\,\tau / e`. Discard the first few :math:`\tau` (the turn-on bias being learned).
+    """
+    from scipy.signal import bilinear, lfilter
+
+    sa = as_signal(accel, "accel", vector=True, allow_constant=True)
+    so = as_signal(attitude, "attitude", vector=True, allow_constant=True)
+    for what, s in (("accel", sa), ("attitude", so)):
+        if s.values.shape[1] != 3:
+            raise ValueError(f"{what} must have 3 columns, got {s.values.shape[1]}")
+    if so.nobs != sa.nobs:
+        raise ValueError(f"attitude must have one row per sample of accel ({sa.nobs}), got {so.nobs}")
+    rate = sampling_frequency(sa, fs, "accel")
+    if rate is None:
+        raise ValueError("accel has no time index: pass fs (Hz)")
+    tau = window_samples(time_constant, "time_constant", rate, minimum=1) / rate
+    gravity = float_like(gravity, "gravity", minimum=0.0, strict_min=True)
+    roll, pitch = so.values[:, 0], so.values[:, 1]
+    f = sa.values
+    down = -np.sin(pitch) * f[:, 0] + np.sin(roll) * np.cos(pitch) * f[:, 1] + np.cos(roll) * np.cos(pitch) * f[:, 2]
+    omega = 1.0 / tau
+    b, a = bilinear([1.0, 0.0], [1.0, 2.0 * omega, omega * omega], rate)
+    return sa.wrap(lfilter(b, a, -(down + gravity)), 0, name="climb_rate", vector=False)
