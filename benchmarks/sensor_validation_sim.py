@@ -372,7 +372,7 @@ def run_target(target, fit, cal, ev):
             line += "".join(f" {fmt(results[(True, cfg, n)][fault]):>16}" for n in MODELS)
             print(line + f"  {PAPER_TABLE3[cfg][j]:8.2f}")
     for padding in (False, True):
-        print(f"thresholds {"with" if padding else "without"} padding (({unit})^2, margin): " + "; ".join(
+        print(f"thresholds {'with' if padding else 'without'} padding (({unit})^2, margin): " + "; ".join(
             f"cfg {c} " + "/".join(f"{thresholds[(padding, c, n)][0]:.3g} x{thresholds[(padding, c, n)][1]:g}"
                                    for n in MODELS) for c in CONFIGS) + "  (EMRAN/RecursiveARX/ARX)")
     print(f"\nSummary per configuration (Table 2 style: MT over detected faults, UD of {6 * len(ev)} faults, FA %)")
