@@ -26,19 +26,21 @@ Theory* 40(6), 1994-2007.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numba
 import numpy as np
 import pandas as pd
-from scipy import linalg, optimize, special
+from scipy import linalg, optimize, special, stats
 
 from tsfdi._data import as_signal, sampling_frequency
 from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_like, option, probability
 from tsfdi.summary import Summary
 
-__all__ = ["SPRT", "SequentialDecision", "SequentialIdentification", "msprt", "msprt_scale", "wald_bounds"]
+__all__ = ["SPRT", "RecordEffect", "SequentialDecision", "SequentialIdentification", "msprt", "msprt_scale",
+           "record_effect", "wald_bounds"]
 
 _LOG2PI = float(np.log(2.0 * np.pi))
 
@@ -1012,3 +1014,278 @@ def msprt_scale(loglik: Any, labels: Any, *, block: int = 64) -> float:
                 parts = [(a[:, k] - a[:, i])[: (a.shape[0] // block) * block] for a in rows]
                 walks.append((f"true model {i} against model {k}", np.concatenate(parts)))
     return _scale_from_walks(walks, block, "msprt_scale")
+
+
+# ---------------------------------------------------------------------------------------------------- record effect
+
+
+def _running_summaries(e: np.ndarray, lags: int, first: int) -> np.ndarray:
+    """Running record summaries of a residual record (n, k) over samples ``0..t`` for ``t >= first``: per channel
+    the mean, the log RMS and the Fisher z of the autocorrelation at lags ``1..lags`` (running mean removed);
+    shape (n - first, (2 + lags) k)."""
+    n = e.shape[0]
+    cnt = np.arange(1, n + 1, dtype=np.float64)[first:, None]
+    mean = np.cumsum(e, axis=0)[first:] / cnt
+    sq = np.cumsum(e * e, axis=0)[first:] / cnt
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = [mean, 0.5 * np.log(sq)]
+        var = sq - mean * mean
+        for j in range(1, lags + 1):
+            prod = np.vstack([np.zeros((j, e.shape[1])), np.cumsum(e[j:] * e[:-j], axis=0)])[first:] / cnt
+            out.append(np.arctanh(np.clip((prod - mean * mean) / var, -0.999999, 0.999999)))
+    return np.hstack(out)
+
+
+def _sample_series(e: np.ndarray, lags: int) -> np.ndarray:
+    """Per-sample series whose long-run variance over ``n`` samples, divided by ``n``, is that of the running
+    summaries of :func:`_running_summaries` (delta method), on samples ``lags..n-1``."""
+    c = e - e.mean(axis=0)
+    v = np.mean(c * c, axis=0)
+    sq = np.mean(e * e, axis=0)
+    out = [e[lags:], (e * e / (2.0 * sq))[lags:]]
+    n = e.shape[0]
+    for j in range(1, lags + 1):
+        r = np.sum(c[j:] * c[:-j], axis=0) / (n * v)
+        x = (c[j:] * c[:-j] - r * c[j:] * c[j:]) / v / (1.0 - r * r)
+        out.append(x[lags - j:])
+    return np.hstack(out)
+
+
+def _residual_records(recs: Any, name: str, k: int | None) -> list:
+    if isinstance(recs, (str, bytes)) or not isinstance(recs, (list, tuple)) or not recs:
+        raise TypeError(f"{name} must be a non-empty list of residual records (arrays of shape (nobs, k)), got "
+                        f"{type(recs).__name__}")
+    out = []
+    for i, r in enumerate(recs):
+        v = as_signal(r, f"{name}[{i}]", allow_constant=True).values
+        if k is not None and v.shape[1] != k:
+            raise ValueError(f"{name}[{i}] has {v.shape[1]} channel(s), the other records {k}")
+        k = v.shape[1]
+        out.append(v)
+    return out
+
+
+@dataclass(frozen=True)
+class RecordEffect:
+    r"""Between-record law of every candidate model's residual summaries (fitted by :func:`record_effect`); its
+    :meth:`loglik` is the per-sample input of :func:`msprt` for records that differ from each other more than their
+    within-record noise says (trims, residual scales).
+
+    Attributes
+    ----------
+    models : tuple of str
+        Candidate model names, in column order.
+    center : ndarray, shape (M, q)
+        Mean of the record summaries of each model's residuals over its held-out records (``q = (2 + lags) k``,
+        named by ``summaries``).
+    between : ndarray, shape (M, q, q)
+        Covariance of a new record's summaries around ``center``: the between-record covariance pooled over the
+        models, times :math:`1 + 1/R_j` (the uncertainty of the centre).
+    within : ndarray, shape (M, q, q)
+        Long-run covariance per sample of the summaries' per-sample series on each model's held-out records: a
+        running summary over ``n`` samples has within-record covariance ``within / n``.
+    df : ndarray, shape (M,)
+        Degrees of freedom of the predictive multivariate t law, :math:`\sum_j (R_j - 1) - q + 1`.
+    records : tuple of int
+        Held-out records per model (:math:`R_j`).
+    min_samples : int
+        Samples in the first running summary used; the increments before it are 0.
+    summaries : tuple of str
+        Names of the ``q`` summaries: ``"mean[yi]"``, ``"log_scale[yi]"`` and ``"acf<j>[yi]"`` per channel.
+    lags : int
+        Residual autocorrelation lags among the summaries.
+    """
+
+    models: tuple
+    center: np.ndarray
+    between: np.ndarray
+    within: np.ndarray
+    df: np.ndarray
+    records: tuple
+    min_samples: int
+    summaries: tuple
+    lags: int = 0
+
+    def __repr__(self) -> str:
+        return (f"RecordEffect(models={len(self.models)}, summaries={len(self.summaries)}, records={self.records}, "
+                f"min_samples={self.min_samples})")
+
+    def loglik(self, resid: Any) -> np.ndarray:
+        r"""Per-sample increments of each model's record-level predictive log-likelihood, the input of :func:`msprt`.
+
+        Parameters
+        ----------
+        resid : sequence or mapping of M array_like, each shape (nobs, k)
+            Each candidate model's residuals on the same ``nobs`` samples of one record (in the order of
+            ``models``; a mapping is read by model name).
+
+        Returns
+        -------
+        ndarray, shape (nobs, M)
+            Row ``t``: :math:`L_j(t) - L_j(t-1)`, with :math:`L_j(t)` the log density of the running summaries of
+            model ``j``'s residuals over samples ``0..t`` under model ``j``'s predictive law (rows before
+            ``min_samples - 1`` are 0): the cumulative sum of a column is :math:`L_j(t)`.
+
+        Raises
+        ------
+        ValueError
+            Not one residual array per model, arrays of different lengths or channel counts, non-finite residuals,
+            or a channel whose residuals are zero (a log RMS of minus infinity).
+
+        Notes
+        -----
+        The running summaries :math:`f(n)` (per channel: the mean, the log RMS, the Fisher z of the
+        autocorrelations, over the first :math:`n` samples) of model :math:`j`'s residuals are given the law
+
+        .. math:: f(n) = c_j + (B_j + W_j / n)^{1/2}\, T, \qquad T \sim t_{df_j}(0, I_q)
+
+        (``center``, ``between``, ``within``, ``df``): a record effect drawn from the between-record spread plus
+        the within-record noise of a running summary, whose long-run covariance keeps autocorrelated residuals from
+        counting as independent evidence. As :math:`n` grows the within part vanishes and :math:`L_j` settles at
+        the log density of the record's summaries: the evidence saturates at what record-level summaries can
+        separate, where the per-sample Gaussian log-likelihood of :meth:`tsfdi.windows.ResidualWindows.loglik`
+        grows with every sample and makes :func:`msprt` decide early and wrongly when records of one state differ.
+        :math:`L_j(n) - L_k(n)` is the log-likelihood ratio of the summaries at each fixed :math:`n`, not a
+        martingale in :math:`n`, so the bound of :func:`msprt` is not guaranteed by Ville's inequality; its error
+        rate is checked by Monte Carlo (``tests/detection/test_sequential_mc.py``) and on CrazyPAD
+        (``benchmarks/sprt.py``).
+        """
+        M = len(self.models)
+        if isinstance(resid, Mapping):
+            missing = [m for m in self.models if m not in resid]
+            if missing:
+                raise ValueError(f"resid has no entry for the model {missing[0]!r}")
+            resid = [resid[m] for m in self.models]
+        if isinstance(resid, (str, bytes)) or not isinstance(resid, (list, tuple)) or len(resid) != M:
+            raise ValueError(f"resid must hold one residual array per model ({M}), got "
+                             f"{len(resid) if isinstance(resid, (list, tuple)) else type(resid).__name__}")
+        k = self.center.shape[1] // (2 + self.lags)
+        arrs = []
+        for j, r in enumerate(resid):
+            v = as_signal(r, f"resid[{self.models[j]!r}]", allow_constant=True).values
+            if v.shape[1] != k:
+                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[1]} channel(s), the law was fitted on {k}")
+            if arrs and v.shape[0] != arrs[0].shape[0]:
+                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[0]} samples, resid[{self.models[0]!r}] "
+                                 f"{arrs[0].shape[0]}: give every model's residuals on the same samples")
+            arrs.append(v)
+        n = arrs[0].shape[0]
+        cum = np.zeros((n, M))
+        t0 = self.min_samples - 1
+        if n > t0:
+            cnt = np.arange(1, n + 1, dtype=np.float64)[t0:, None]
+            for j, e in enumerate(arrs):
+                f = _running_summaries(e, self.lags, t0)
+                cov = self.between[j] + self.within[j] / cnt[:, :, None]
+                chol = np.linalg.cholesky(cov)
+                d = np.linalg.solve(chol, (f - self.center[j])[:, :, None])[:, :, 0]
+                q, nu = f.shape[1], self.df[j]
+                cum[t0:, j] = (special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
+                               - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
+                               - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / nu))
+                if not np.isfinite(cum[t0:, j]).all():
+                    raise ValueError(f"resid[{self.models[j]!r}]: a channel's residuals are zero over the first "
+                                     f"{int(np.argmin(np.isfinite(cum[t0:, j]))) + t0 + 1} samples (log RMS not "
+                                     "finite)")
+        return np.diff(cum, axis=0, prepend=0.0)
+
+
+def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
+                  min_samples: int | None = None) -> RecordEffect:
+    r"""Fit the between-record law of every candidate model's residual summaries, for sequential identification
+    that survives record-to-record variation (:meth:`RecordEffect.loglik` into :func:`msprt`).
+
+    Parameters
+    ----------
+    held_out : mapping
+        Model name -> list of that model's held-out residual records on its own fitting records (records the
+        model was not fitted on: ``spec.held_out_residuals(groups=...)``; the segments of one record, e.g. one
+        flight, joined into one array), each shape (nobs_r, k).
+    lags : int
+        Residual autocorrelation lags among the summaries (0: per channel the mean and the log RMS only).
+    block : int
+        Samples per batch of the long-run (within-record) covariance of the summaries' per-sample series (at
+        least 10 whole blocks per model are needed); much longer than the correlation time of the residuals.
+    min_samples : int, optional
+        Samples of the first running summary used (default ``block``).
+
+    Returns
+    -------
+    RecordEffect
+
+    Raises
+    ------
+    TypeError
+        ``held_out`` not a mapping of at least 2 models to lists of records.
+    ValueError
+        Records with different channel counts or too short; fewer than 10 blocks per model; non-finite summaries;
+        fewer degrees of freedom (records minus models) than summaries.
+
+    Notes
+    -----
+    Model :math:`j`'s residuals on a record of its own state have a record-specific mean (a trim), scale and
+    colour. The summaries :math:`f_{jr}` of its :math:`R_j` held-out records give the centre
+    :math:`c_j = \bar f_j` and the between-record covariance pooled over the models,
+    :math:`S = \sum_j \sum_r (f_{jr} - \bar f_j)(f_{jr} - \bar f_j)' / \nu` with :math:`\nu = \sum_j (R_j - 1)`
+    (a condition with 2-5 records gives no covariance of its own; pooling assumes the record-to-record spread is
+    the aircraft's, not the state's); a new record's summaries then follow the predictive multivariate t law with
+    covariance :math:`S (1 + 1/R_j)` and :math:`\nu - q + 1` degrees of freedom, to which
+    :meth:`RecordEffect.loglik` adds the within-record noise ``within / n`` of a running summary. ``within`` is the
+    batch-means long-run covariance of the per-sample series whose running means are the summaries to first order
+    (delta method): :math:`e_t`, :math:`e_t^2 / (2 \overline{e^2})` and the autocorrelation terms. The record
+    summaries include the within-record noise of the held-out records, so ``between`` is slightly conservative.
+    """
+    if not isinstance(held_out, Mapping) or len(held_out) < 2:
+        raise TypeError("held_out must be a mapping model name -> list of held-out residual records, with at least "
+                        "2 models")
+    lags = int_like(lags, "lags", minimum=0)
+    block = int_like(block, "block", minimum=1)
+    min_samples = block if min_samples is None else int_like(min_samples, "min_samples", minimum=2)
+    names = tuple(str(m) for m in held_out)
+    k = None
+    F, W, R = [], [], []
+    for name, recs in held_out.items():
+        arrs = _residual_records(recs, f"held_out[{name!r}]", k)
+        k = arrs[0].shape[1]
+        if len(arrs) < 2:
+            raise ValueError(f"held_out[{name!r}] holds {len(arrs)} record: at least 2 are needed to estimate the "
+                             "between-record spread")
+        short = [i for i, e in enumerate(arrs) if e.shape[0] < lags + 2]
+        if short:
+            raise ValueError(f"held_out[{name!r}][{short[0]}] is shorter than lags + 2 = {lags + 2} samples")
+        f = np.array([_running_summaries(e, lags, e.shape[0] - 1)[0] for e in arrs])
+        if not np.isfinite(f).all():
+            raise ValueError(f"held_out[{name!r}]: a record has a constant residual channel (its summaries are not "
+                             "finite)")
+        # per-sample series whose long-run variance gives the within-record noise of a running summary
+        parts = []
+        for e in arrs:
+            z = _sample_series(e, lags)
+            nb = z.shape[0] // block
+            if nb:
+                parts.append(z[: nb * block])
+        z = np.concatenate(parts) if parts else np.empty((0, (2 + lags) * k))
+        nb = z.shape[0] // block
+        if nb < 10:
+            raise ValueError(f"held_out[{name!r}] holds {nb} blocks of {block} samples, at least 10 are needed to "
+                             "estimate the within-record long-run variance; give longer records or a shorter block")
+        sums = z.reshape(nb, block, -1).sum(axis=1)
+        W.append(np.cov(sums.T) / block)
+        F.append(f)
+        R.append(len(arrs))
+    R = np.array(R)
+    dev = np.concatenate([f - f.mean(axis=0) for f in F])
+    q = dev.shape[1]
+    dof = int((R - 1).sum())
+    if dof <= q:
+        raise ValueError(f"held_out: {dof} degrees of freedom of the between-record spread (records minus models) "
+                         f"for {q} summaries: give more records or fewer lags")
+    S = dev.T @ dev / dof
+    between = np.array([S * (1.0 + 1.0 / r) for r in R])
+    df = np.full(len(R), float(dof - q + 1))
+    chans = [f"y{i}" for i in range(k)]
+    return RecordEffect(models=names, center=np.array([f.mean(axis=0) for f in F]), between=between,
+                        within=np.array(W), df=df, records=tuple(int(r) for r in R), min_samples=min_samples,
+                        summaries=tuple(f"{s}[{c}]" for s in ("mean", "log_scale", *(f"acf{j}" for j in
+                                                                                     range(1, lags + 1)))
+                                        for c in chans), lags=lags)
