@@ -521,9 +521,9 @@ class FPResults:
         return self._params2d / scale
 
     def _param_names(self) -> list[str]:
-        return [f"{a}:{g}" for a in self._point_names() for g in self.model.basis_names()]
+        return [f"{a}:{g}" for a in self.point_names() for g in self.model.basis_names()]
 
-    def _point_names(self) -> list[str]:
+    def point_names(self) -> list[str]:
         """The point model's parameter names (as its ``params``): ``const``, ``a1`` / ``A1.<channel>``,
         ``b1.<input>``."""
         m = self.model
@@ -649,7 +649,7 @@ class FPResults:
         the point model's ``params`` (:class:`tsfdi.AR` / ``VAR`` / ``ARX``: ``[const, a1, a2, ...]``).
 
         Outside ``k_range`` the polynomials extrapolate (allowed, not advised)."""
-        return self._labelled(self._theta2d(self._point(k)), self._point_names())
+        return self._labelled(self._theta2d(self._point(k)), self.point_names())
 
     def theta_bse(self, k: Any) -> Any:
         """Standard errors of :meth:`theta` at ``k`` (delta method: ``sqrt(g' Cov_a g)`` per point parameter ``a``,
@@ -657,8 +657,8 @@ class FPResults:
         m = self.model
         g = self._g(self._point(k))
         cov = self._cov.reshape(self.neqs, m.df_point, m.n_basis, m.df_point, m.n_basis)
-        var = np.einsum("eajaj->ae", cov * g[None, None, :, None, None] * g[None, None, None, None, :])
-        return self._labelled(np.sqrt(np.maximum(var, 0.0)), self._point_names())
+        var = np.einsum("eajal,j,l->ae", cov, g, g)
+        return self._labelled(np.sqrt(np.maximum(var, 0.0)), self.point_names())
 
     def sigma(self, k: Any) -> np.ndarray:
         """Residual covariance at operating point ``k``, (s, s).

@@ -1,0 +1,259 @@
+"""Functionally pooled models (issue 32): FP-AR / FP-VAR / FP-ARX against the explicit pooled regression
+``phi[t] (x) G(k_i)`` solved by statsmodels' OLS / WLS, theta(k) and its delta-method errors, residuals at k, the
+three data kinds, save / load, operating-point estimation, order selection and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import statsmodels.api as sm
+from conftest import KINDS, as_kind, to_numpy
+from scipy import signal as sps
+
+from tsfdi.models import AR, ARX, VAR, FPAR, FPARX, FPVAR, FPResults, OperatingPointEstimate, fp_basis, load
+from tsfdi.models import select_fp_order
+
+KS = np.array([0.0, 0.2, 0.45, 0.7, 1.0, 0.45])
+
+
+def ar2(k: float) -> np.ndarray:
+    """True AR(2) coefficients (papers' sign) at k: a polynomial surface of degree 2."""
+    return np.array([-1.0 + 0.3 * k - 0.6 * k * k, 0.5 + 0.2 * k])
+
+
+def simulate_ar(k: float, n: int, rng, scale: float = 1.0) -> np.ndarray:
+    e = rng.standard_normal(n + 200) * scale
+    return sps.lfilter([1.0], np.r_[1.0, ar2(k)], e)[200:]
+
+
+def records(n: int = 300, seed: int = 0, ks=KS) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return [simulate_ar(k, n, rng) for k in ks]
+
+
+def explicit(ys, us, ks, degree, lags, trend="n", nb=0, nk=0, kmin=None, kmax=None):
+    """The FP regressor phi[t] (x) G(k_i) and target of all records, built from the point family's design."""
+    lo = np.min(ks) if kmin is None else kmin
+    hi = np.max(ks) if kmax is None else kmax
+    G = fp_basis(np.asarray(ks, float), degree, [[lo, hi]])
+    X, Y = [], []
+    for i, y in enumerate(ys):
+        if us is None:
+            spec = (AR if np.ndim(y) == 1 else VAR)(y, lags, trend)
+        else:
+            spec = ARX(y, us[i], lags, nb, nk, trend)
+        Xi, Yi = spec.design_all()
+        X.append((Xi[:, :, None] * G[i][None, None, :]).reshape(Xi.shape[0], -1))
+        Y.append(Yi)
+    return np.vstack(X), np.vstack(Y), G
+
+
+def test_fpar_is_the_pooled_regression_of_statsmodels():
+    ys = records()
+    res = FPAR(ys, KS, 2, degree=2, trend="c").fit()
+    X, Y, _ = explicit(ys, None, KS, 2, 2, "c")
+    ols = sm.OLS(Y[:, 0], X).fit()
+    np.testing.assert_allclose(res.params, ols.params, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(res.bse, ols.bse, rtol=1e-9)
+    assert res.nobs == X.shape[0] and res.df_model == X.shape[1]
+    np.testing.assert_allclose(res.sigma_pooled[0, 0], ols.ssr / ols.nobs, rtol=1e-10)
+    assert res.llf == pytest.approx(ols.llf, rel=1e-10)      # Gaussian, sigma2 = RSS / nobs: statsmodels' llf
+
+
+def test_fpar_weighted_is_statsmodels_wls_with_the_first_stage_variances():
+    rng = np.random.default_rng(3)
+    ys = [simulate_ar(k, 300, rng, scale=1 + 2 * k) for k in KS]
+    res = FPAR(ys, KS, 2, degree=1, weights="point").fit()
+    X, Y, G = explicit(ys, None, KS, 1, 2)
+    first = sm.OLS(Y[:, 0], X).fit()
+    n = [len(y) - 2 for y in ys]
+    edges = np.r_[0, np.cumsum(n)]
+    s2 = np.array([np.mean(first.resid[a:b] ** 2) for a, b in zip(edges[:-1], edges[1:])])
+    w = np.repeat(1 / s2, n)
+    wls = sm.WLS(Y[:, 0], X, weights=w).fit()
+    np.testing.assert_allclose(res.params, wls.params, rtol=1e-9)
+    np.testing.assert_allclose(res.bse, wls.bse, rtol=1e-8)
+    np.testing.assert_allclose(res.weights[:, 0], 1 / s2, rtol=1e-9)
+    # the noise level grows with k: sigma(k) follows it, positive, between the records' own
+    assert res.sigma(0.0)[0, 0] < res.sigma(0.5)[0, 0] < res.sigma(1.0)[0, 0]
+    assert res.sigma(1.0)[0, 0] == pytest.approx(9.0, rel=0.35)    # log-variance linear in k: (1 + 2k)^2 roughly
+
+
+def test_fpvar_and_fparx_equal_the_explicit_regression():
+    rng = np.random.default_rng(4)
+    ys, us = [], []
+    for k in KS:
+        u = rng.standard_normal((400, 1))
+        e = rng.standard_normal((400, 2))
+        y = np.zeros((400, 2))
+        for t in range(1, 400):
+            y[t] = ((0.5 - 0.3 * k) * y[t - 1] + np.array([0.4 * k, 0.0]) * y[t - 1, ::-1] + e[t]
+                    + np.array([1.0, 0.5 * k]) * u[t - 1, 0])
+        ys.append(y)
+        us.append(u)
+    res = FPVAR(ys, KS, 2, degree=1, trend="c").fit()
+    X, Y, _ = explicit(ys, None, KS, 1, 2, "c")
+    for j in range(2):
+        ols = sm.OLS(Y[:, j], X).fit()
+        np.testing.assert_allclose(res.params[:, j], ols.params, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(res.bse[:, j], ols.bse, rtol=1e-8)
+    yx = [y[:, 0] for y in ys]
+    resx = FPARX(yx, us, KS, 2, 2, 1, degree=2).fit()
+    X, Y, _ = explicit(yx, us, KS, 2, 2, nb=2, nk=1)
+    ols = sm.OLS(Y[:, 0], X).fit()
+    np.testing.assert_allclose(resx.params, ols.params, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(resx.bse, ols.bse, rtol=1e-8)
+
+
+def test_theta_residuals_and_delta_method():
+    ys = records(seed=5)
+    res = FPAR(ys, KS, 2, degree=2).fit()
+    g = fp_basis([0.3], 2, [[0, 1]])[0]
+    P = res.params.reshape(2, 3)
+    np.testing.assert_allclose(res.theta(0.3), P @ g, rtol=1e-12)
+    # delta method against the explicit covariance of statsmodels
+    X, Y, _ = explicit(ys, None, KS, 2, 2)
+    cov = sm.OLS(Y[:, 0], X).fit().cov_params()
+    L = np.kron(np.eye(2), g[None, :])
+    np.testing.assert_allclose(res.theta_bse(0.3), np.sqrt(np.diag(L @ cov @ L.T)), rtol=1e-8)
+    # residuals at k are the point AR's with theta(k)
+    y = simulate_ar(0.3, 100, np.random.default_rng(1))
+    e = res.residuals(y, 0.3)
+    ref = np.convolve(y, np.r_[1.0, res.theta(0.3)], "valid")
+    np.testing.assert_allclose(e, ref, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_data_kinds_and_channel_names_are_kept(kind):
+    rng = np.random.default_rng(6)
+    raw = [np.column_stack([simulate_ar(k, 200, rng), rng.standard_normal(200)]) for k in KS]
+    ys = [as_kind(r, kind, channels=["roll", "pitch"]) for r in raw]
+    k = pd.Series(KS, name="depth") if kind != "numpy" else KS
+    res = FPVAR(ys, k, 1, degree=1).fit()
+    new = as_kind(raw[0][:, ::-1], kind, channels=["pitch", "roll"]) if kind != "numpy" else raw[0]
+    e = res.residuals(new, 0.0)
+    if kind == "numpy":
+        assert isinstance(res.params, np.ndarray) and res.params.shape == (2 * 2, 2)
+        assert isinstance(e, np.ndarray) and e.shape == (199, 2)
+    else:
+        assert list(res.params.columns) == ["roll", "pitch"]
+        assert list(res.params.index) == ["A1.roll:P0", "A1.roll:P1", "A1.pitch:P0", "A1.pitch:P1"]
+        assert list(res.theta(0.5).index) == ["A1.roll", "A1.pitch"]
+        assert list(to_numpy(e.coords["channel"]) if kind == "xarray" else e.columns) == ["roll", "pitch"]
+        # the reordered channels are matched by name: same residuals as the numpy record
+        np.testing.assert_allclose(to_numpy(e), FPVAR(raw, KS, 1, degree=1).fit().residuals(raw[0], 0.0),
+                                   rtol=1e-12, atol=1e-12)
+        assert res.model.k_names == (["depth"])
+    assert "FPVAR results" in str(res.summary())
+
+
+@pytest.mark.parametrize("family", ["ar", "var", "arx", "weighted"])
+def test_save_load_round_trip(tmp_path, family):
+    rng = np.random.default_rng(7)
+    ys = records(120, seed=7)
+    idx = pd.date_range("2024", periods=120, freq="10ms")
+    if family == "ar":
+        res = FPAR([pd.Series(y, index=idx, name="gyro") for y in ys], pd.DataFrame({"depth": KS}), 2, 2).fit()
+    elif family == "weighted":
+        res = FPAR(ys, KS, 2, 1, "c", weights="point", basis="chebyshev").fit()
+    elif family == "var":
+        res = FPVAR([np.column_stack([y, rng.standard_normal(120)]) for y in ys], KS, 1, 1).fit()
+    else:
+        res = FPARX(ys, [rng.standard_normal(120) for _ in ys], KS, 2, 1, 0, 1).fit()
+    back = load(res.save(tmp_path / "m"))
+    assert isinstance(back, FPResults) and type(back.model) is type(res.model)
+    np.testing.assert_array_equal(back.params2d, res.params2d)
+    np.testing.assert_allclose(back.bse, res.bse, rtol=1e-12)
+    assert back.model.k_names == res.model.k_names and back.model.basis == res.model.basis
+    np.testing.assert_array_equal(back.model.k, res.model.k)
+    assert back.bic == pytest.approx(res.bic, rel=1e-12)
+    if family == "weighted":
+        np.testing.assert_array_equal(back.weights, res.weights)
+
+
+def test_immutable():
+    res = FPAR(records(), KS, 2, 1).fit()
+    with pytest.raises(AttributeError):
+        res.weights = None
+
+
+def test_estimate_k_finds_the_operating_point_and_plots():
+    rng = np.random.default_rng(8)
+    ks = np.linspace(0, 1, 7)
+    res = FPAR([simulate_ar(k, 1500, rng) for k in ks], ks, 2, 2).fit()
+    est = res.estimate_k(simulate_ar(0.62, 2000, rng))
+    assert isinstance(est, OperatingPointEstimate)
+    assert abs(est.k_hat[0] - 0.62) < 4 * est.bse[0] and est.bse[0] < 0.1
+    assert est.conf_int[0, 0] < est.k_hat[0] < est.conf_int[0, 1]
+    assert est.grid.shape == est.loglik.shape == (1, 201)
+    assert est.llf - 0.01 < est.loglik.max() <= est.llf + 1e-9      # the curve peaks at k_hat (between grid points)
+    with pytest.raises(ValueError):
+        est.k_hat[0] = 0.0
+    fig = est.plot()
+    assert fig.axes and "k0" in fig.axes[0].get_xlabel()
+    assert "Operating-point estimate" in str(est.summary())
+
+
+def test_estimate_k_two_parameters():
+    rng = np.random.default_rng(9)
+    pts = np.array([(a, b) for a in (0, 0.5, 1) for b in (0, 0.5, 1)])
+
+    def coefs(a, b):
+        return np.array([-1.0 + 0.3 * a, 0.5 + 0.25 * b])
+
+    ys = [sps.lfilter([1.0], np.r_[1.0, coefs(*p)], rng.standard_normal(1200))[200:] for p in pts]
+    res = FPAR(ys, pts, 2, 1).fit()
+    assert res.model.n_basis == 4 and res.model.basis_names() == ["P0,0", "P0,1", "P1,0", "P1,1"]
+    y = sps.lfilter([1.0], np.r_[1.0, coefs(0.3, 0.7)], rng.standard_normal(3200))[200:]
+    est = res.estimate_k(y)
+    assert np.all(np.abs(est.k_hat - [0.3, 0.7]) < 4 * est.bse)
+    assert est.grid.shape == (2, 201)
+
+
+def test_select_fp_order_finds_the_true_order_and_degree():
+    ys = records(800, seed=10, ks=np.linspace(0, 1, 7))
+    sel = select_fp_order(ys, np.linspace(0, 1, 7), 4, 3)
+    assert sel.selected == (2, 2)
+    assert sel.table.shape[0] == 4 * 4
+    res = sel.fit()
+    assert res.model.na == 2 and res.model.degree == (2,) and res.model.hold_back == 4
+    # the selection's BIC is the fit's on the same common sample
+    assert res.bic == pytest.approx(sel.table.loc[(2, 2), "bic"], rel=1e-9)
+
+
+def test_bad_input_names_the_argument():
+    ys = records(100)
+    with pytest.raises(ValueError, match="list of records"):
+        FPAR(ys[0], [0.0], 2)
+    with pytest.raises(ValueError, match="one operating point per record"):
+        FPAR(ys, KS[:-1], 2)
+    with pytest.raises(ValueError, match="k contains NaN"):
+        FPAR(ys, np.r_[KS[:-1], np.nan], 2)
+    with pytest.raises(TypeError, match="k must be real"):
+        FPAR(ys, ["a"] * len(ys), 2)
+    with pytest.raises(ValueError, match="distinct operating points"):
+        FPAR(ys, KS, 2, degree=5)
+    with pytest.raises(ValueError, match="takes one value only"):
+        FPAR(ys, np.zeros(len(ys)), 2, degree=0)
+    with pytest.raises(ValueError, match="k_range"):
+        FPAR(ys, KS, 2, k_range=[0.1, 1.0])
+    with pytest.raises(ValueError, match="basis"):
+        FPAR(ys, KS, 2, basis="fourier")
+    with pytest.raises(ValueError, match="weights"):
+        FPAR(ys, KS, 2, weights="gls")
+    with pytest.raises(ValueError, match=r"y\[2\]"):
+        FPAR(ys[:2] + [np.r_[ys[2][:-1], np.nan]] + ys[3:], KS, 2)
+    res = FPAR(ys, KS, 2, 1).fit()
+    with pytest.raises(ValueError, match="k must be one operating point"):
+        res.theta([0.1, 0.2])
+    with pytest.raises(ValueError, match="k must be finite"):
+        res.residuals(ys[0], np.nan)
+    with pytest.raises(ValueError, match="bounds"):
+        res.estimate_k(ys[0], bounds=[1.0, 0.0])
+    with pytest.raises(ValueError, match="u is given"):
+        res.estimate_k(ys[0], u=ys[1])
+    with pytest.raises(ValueError, match="alpha"):
+        res.estimate_k(ys[0], alpha=1.5)
+    with pytest.raises(ValueError, match="model"):
+        select_fp_order(ys, KS, 2, 1, model="arma")
