@@ -1,0 +1,70 @@
+"""benchmarks/sensor_validation_sim.py (issue 35, part 1): its data path on one short simulated flight.
+
+The benchmark adds no library code; these checks pin what its numbers rest on: the 500 Hz sensor averaged onto the
+100 Hz model grid as the sensor itself averages, the fault's first grid sample (MT is counted from it), the
+configurations' noise, and lags that never look ahead.
+"""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tsfdi.datasets import simulate_hexacopter
+
+
+def load_benchmark():
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "sensor_validation_sim.py"
+    spec = importlib.util.spec_from_file_location("sensor_validation_sim_bench", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def bench():
+    mod = load_benchmark()
+    mod.DURATION, mod.FAULT_S = 4.0, 2.0
+    record = simulate_hexacopter(duration=mod.DURATION, fs=1000, turbulence="light", seed=3).isel(record=0)
+    return mod, mod.Flight(record, 3)
+
+
+def test_grid_is_the_boxcar_of_the_500hz_samples(bench):
+    mod, flight = bench
+    raw = flight.log["gyro"]["q"].to_numpy()
+    grid = flight.frame["gyro.q"].to_numpy()
+    # grid sample j (t = (j + 1) / 100 s) averages the five 500 Hz samples stamped in (t - 0.01, t]
+    np.testing.assert_allclose(grid[:len(raw) // 5], raw[:len(raw) // 5 * 5].reshape(-1, 5).mean(axis=1))
+    held = flight.frame["gps.vn"].to_numpy()
+    gps = flight.log["gps"]["vn"]
+    j = 150                                       # t = 1.51 s: the last GPS sample stamped at or before it
+    assert held[j] == gps[gps.index <= flight.t[j] + 1e-9].iloc[-1]
+
+
+def test_fault_onset_on_the_grid(bench):
+    mod, flight = bench
+    clean = flight.sensor("gyro", "q")
+    faulty = flight.sensor("gyro", "q", fault=("bias", 0.2), sensor_range=1.0)
+    changed = np.flatnonzero(faulty != clean)
+    assert changed[0] == flight.onset             # MT counts from the first grid sample that holds the fault
+    assert flight.t[flight.onset] == pytest.approx(mod.FAULT_S + 0.01)
+    np.testing.assert_allclose((faulty - clean)[flight.onset + 1:], 0.2)
+
+
+def test_noise_configuration(bench):
+    mod, flight = bench
+    a = flight.sensor("gyro", "q", 10.0, 1e-3)
+    b = flight.sensor("gyro", "q", 10.0, 1e-3)
+    np.testing.assert_array_equal(a, b)          # seeded per flight and configuration
+    added = a - flight.sensor("gyro", "q")
+    # sqrt(k^2 - 1) sigma0 white noise at 500 Hz, averaged over 5 samples on the grid
+    assert np.std(added) == pytest.approx(np.sqrt(99.0) * 1e-3 / np.sqrt(5.0), rel=0.1)
+
+
+def test_lagged_never_looks_ahead():
+    mod = load_benchmark()
+    x = np.arange(6.0)[:, None]
+    out = mod.lagged(x, (0, 2))
+    np.testing.assert_array_equal(out[:, 0], x[:, 0])
+    np.testing.assert_array_equal(out[:, 1], [0, 0, 0, 1, 2, 3])
