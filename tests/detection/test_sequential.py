@@ -13,7 +13,7 @@ from conftest import as_kind
 from scipy import integrate, stats
 
 from tsfdi.detection.sequential import (SPRT, SequentialDecision, SequentialIdentification, msprt, msprt_scale,
-                                        wald_bounds)
+                                        record_effect, wald_bounds)
 
 
 def loop_sprt(z, lower, upper, restart=False):
@@ -235,3 +235,95 @@ def test_plot_oc_asn():
 def test_input_checks(call, exc, match):
     with pytest.raises(exc, match=match):
         call()
+
+
+# ------------------------------------------------------------------ record effect
+def record_law_data(seed=3, M=3, k=2, R=6, n=400):
+    rng = np.random.default_rng(seed)
+    held = {f"m{j}": [rng.normal(0.2 * j, 1.0 + 0.1 * j, (n, k)) + rng.normal(0, 0.1, k) for _ in range(R)]
+            for j in range(M)}
+    return rng, held
+
+
+def test_record_effect_loglik_telescopes_to_the_summaries_predictive_density():
+    rng, held = record_law_data()
+    law = record_effect(held, block=20)
+    resid = [rng.normal(0.1, 1.1, (300, 2)) for _ in range(3)]
+    ll = law.loglik(resid)
+    assert ll.shape == (300, 3)
+    assert np.all(ll[: law.min_samples - 1] == 0.0) and np.all(ll[law.min_samples - 1] != 0.0)
+    for j, e in enumerate(resid):
+        for n in (law.min_samples, 150, 300):
+            f = np.r_[e[:n].mean(axis=0), 0.5 * np.log(np.mean(e[:n] ** 2, axis=0))]
+            ref = stats.multivariate_t(law.center[j], law.between[j] + law.within[j] / n, df=law.df[j]).logpdf(f)
+            assert ll[:n, j].sum() == pytest.approx(ref, rel=1e-9, abs=1e-9)
+    # the mapping form reads the residuals by model name
+    assert np.array_equal(law.loglik(dict(zip(["m2", "m0", "m1"], [resid[2], resid[0], resid[1]]))), ll)
+
+
+def test_record_effect_law_estimates():
+    _, held = record_law_data()
+    law = record_effect(held, block=20)
+    f = {m: np.array([np.r_[e.mean(axis=0), 0.5 * np.log(np.mean(e ** 2, axis=0))] for e in recs])
+         for m, recs in held.items()}
+    dev = np.vstack([v - v.mean(axis=0) for v in f.values()])
+    S = dev.T @ dev / (3 * 5)
+    assert np.allclose(law.center, [v.mean(axis=0) for v in f.values()])
+    assert np.allclose(law.between[0], S * (1 + 1 / 6))
+    assert np.allclose(law.df, 15 - 4 + 1)
+    assert law.records == (6, 6, 6) and law.models == ("m0", "m1", "m2")
+    assert law.summaries == ("mean[y0]", "mean[y1]", "log_scale[y0]", "log_scale[y1]")
+    # white residuals: the long-run covariance of the running mean is the residual covariance
+    assert np.allclose(np.diag(law.within[0])[:2], 1.0, atol=0.25)
+    assert "RecordEffect(models=3" in repr(law)
+
+
+def test_record_effect_evidence_saturates_where_the_gaussian_grows():
+    # a record of state 0 whose trim sits between two states' centres: the Gaussian log-likelihood ratio grows
+    # with every sample, the record-effect one settles at the summaries' density ratio
+    rng = np.random.default_rng(0)
+    held = {"a": [rng.normal(u, 1.0, (500, 1)) for u in rng.normal(0.0, 0.3, 8)],
+            "b": [rng.normal(u, 1.0, (500, 1)) for u in rng.normal(0.0, 0.3, 8)]}
+    law = record_effect(held, block=25)
+    e = rng.normal(0.4, 1.0, (20000, 1))
+    s = np.cumsum(law.loglik([e, e - 0.3]), axis=0)
+    d = s[:, 0] - s[:, 1]
+    assert abs(d[-1] - d[len(d) // 2]) < 0.1 * abs(d[-1]) + 0.5
+    g = -0.5 * np.cumsum(e[:, 0] ** 2 - (e[:, 0] - 0.3) ** 2)
+    assert abs(g[-1]) > 1.8 * abs(g[len(g) // 2]) > 100
+
+
+def test_record_effect_input_checks():
+    _, held = record_law_data()
+    with pytest.raises(TypeError, match="held_out"):
+        record_effect([held["m0"], held["m1"]])
+    with pytest.raises(TypeError, match="held_out"):
+        record_effect({"m0": held["m0"]})
+    with pytest.raises(TypeError, match=r"held_out\['m0'\]"):
+        record_effect({"m0": held["m0"][0], "m1": held["m1"]})
+    with pytest.raises(ValueError, match=r"held_out\['m1'\] holds 1 record"):
+        record_effect({"m0": held["m0"], "m1": held["m1"][:1]})
+    with pytest.raises(ValueError, match=r"held_out\['m1'\]\[0\] has 3 channel"):
+        record_effect({"m0": held["m0"], "m1": [np.ones((400, 3))] + held["m1"][1:]})
+    with pytest.raises(ValueError, match="blocks of 300 samples"):
+        record_effect(held, block=300)
+    with pytest.raises(ValueError, match="degrees of freedom"):
+        record_effect({m: v[:2] for m, v in held.items()}, block=20)
+    with pytest.raises(ValueError, match="not finite"):
+        record_effect({"m0": held["m0"], "m1": [np.zeros((400, 2))] + held["m1"][1:]}, block=20)
+    with pytest.raises(ValueError, match="lags"):
+        record_effect(held, lags=-1)
+    law = record_effect(held, block=20)
+    e = np.ones((100, 2))
+    with pytest.raises(ValueError, match="one residual array per model"):
+        law.loglik([e, e])
+    with pytest.raises(ValueError, match=r"no entry for the model 'm2'"):
+        law.loglik({"m0": e, "m1": e})
+    with pytest.raises(ValueError, match=r"resid\['m1'\] has 90 samples"):
+        law.loglik([e, e[:90], e])
+    with pytest.raises(ValueError, match=r"resid\['m2'\] has 1 channel"):
+        law.loglik([e, e, e[:, :1]])
+    with pytest.raises(ValueError, match=r"resid\['m0'\]"):
+        law.loglik([np.full((100, 2), np.nan), e, e])
+    with pytest.raises(ValueError, match=r"resid\['m0'\]: a channel's residuals are zero"):
+        law.loglik([np.zeros((100, 2)), e, e])

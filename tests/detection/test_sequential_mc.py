@@ -17,7 +17,7 @@ import pytest
 from scipy import signal, stats
 
 import tsfdi
-from tsfdi.detection.sequential import SPRT, msprt, msprt_scale
+from tsfdi.detection.sequential import SPRT, msprt, msprt_scale, record_effect
 
 pytestmark = pytest.mark.slow
 
@@ -172,3 +172,45 @@ def test_msprt_scale_restores_the_bound_on_autocorrelated_residuals():
             wrong_cal += out.label != i
     assert band_high(wrong_raw, 3 * reps, alpha)
     assert not band_high(wrong_cal, 3 * reps, alpha)
+
+
+def hierarchical_records(rng: np.random.Generator, mu: np.ndarray, lam: np.ndarray, per_state: int, n: int,
+                         b_mu: float = 0.3, b_lam: float = 0.15, phi: float = 0.5) -> list:
+    """``per_state`` records of every state ``i``: the residuals of every model ``c`` on the record,
+    ``(mu_i - mu_c + u) + exp(lam_i - lam_c + v) eps`` with a record effect ``u ~ N(0, b_mu^2)``,
+    ``v ~ N(0, b_lam^2)`` per channel and unit-variance AR(1) noise ``eps`` (coefficient ``phi``)."""
+    M, k = mu.shape
+    out = []
+    for i in range(M):
+        for _ in range(per_state):
+            u, v = b_mu * rng.standard_normal(k), b_lam * rng.standard_normal(k)
+            eps = signal.lfilter([1.0], [1.0, -phi], rng.standard_normal((n + 100, k)), axis=0)[100:]
+            eps *= np.sqrt(1 - phi ** 2)
+            out.append((i, [(mu[i] - mu[c] + u) + np.exp(lam[i] - lam[c] + v) * eps for c in range(M)]))
+    return out
+
+
+def test_record_effect_keeps_the_msprt_bound_under_record_to_record_variation():
+    # 4 states whose records differ from each other (trim, scale) more than their within-record noise says: the
+    # Gaussian per-sample log-likelihoods (each model's variance from its own fitting records) decide early and
+    # wrongly far more often than alpha; the record-effect likelihood fitted on 8 records per state keeps
+    # P(wrong decision) <= alpha (count within the 99.9 % binomial band of alpha over all records)
+    rng = np.random.default_rng(20261128)
+    M, k, n, alpha, reps = 4, 2, 1000, 0.05, 250
+    mu, lam = rng.normal(0.0, 1.0, (M, k)), rng.normal(0.0, 0.2, (M, k))
+    fit = hierarchical_records(rng, mu, lam, 8, n)
+    law = record_effect({f"s{c}": [r[c] for i, r in fit if i == c] for c in range(M)}, block=50)
+    var = [np.mean([np.mean(r[c] ** 2, axis=0) for i, r in fit if i == c], axis=0) for c in range(M)]
+    test = hierarchical_records(rng, mu, lam, reps, n)
+    wrong_re = wrong_g = decided_re = 0
+    for i, r in test:
+        d = msprt(law.loglik(r), alpha=alpha)
+        decided_re += d.decided
+        wrong_re += d.decided and d.label != i
+        gauss = np.column_stack([-0.5 * (np.log(var[c]).sum() + (r[c] ** 2 / var[c]).sum(axis=1)) for c in range(M)])
+        g = msprt(gauss, alpha=alpha)
+        wrong_g += g.decided and g.label != i
+    total = M * reps
+    assert wrong_g > 3 * alpha * total, wrong_g                      # the problem: the Gaussian rule errs
+    assert decided_re > 0.3 * total, decided_re                      # the record-effect rule decides
+    assert not band_high(wrong_re, total, alpha), (wrong_re, decided_re)

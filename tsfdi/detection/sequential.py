@@ -1037,8 +1037,8 @@ def _running_summaries(e: np.ndarray, lags: int, first: int) -> np.ndarray:
 
 
 def _sample_series(e: np.ndarray, lags: int) -> np.ndarray:
-    """Per-sample series whose long-run variance over ``n`` samples, divided by ``n``, is that of the running
-    summaries of :func:`_running_summaries` (delta method), on samples ``lags..n-1``."""
+    """Per-sample series whose long-run covariance over ``n`` samples, divided by ``n``, is that of the running
+    summaries of :func:`_running_summaries` (delta method), on samples ``lags..n-1``, centred on the record."""
     c = e - e.mean(axis=0)
     v = np.mean(c * c, axis=0)
     sq = np.mean(e * e, axis=0)
@@ -1048,7 +1048,8 @@ def _sample_series(e: np.ndarray, lags: int) -> np.ndarray:
         r = np.sum(c[j:] * c[:-j], axis=0) / (n * v)
         x = (c[j:] * c[:-j] - r * c[j:] * c[j:]) / v / (1.0 - r * r)
         out.append(x[lags - j:])
-    return np.hstack(out)
+    z = np.hstack(out)
+    return z - z.mean(axis=0)           # about the record's own summaries: the record effect is not within noise
 
 
 def _residual_records(recs: Any, name: str, k: int | None) -> list:
