@@ -284,3 +284,34 @@ def test_records_names_and_origin(tmp_path):
     # records not read from files: their ids, record 0 included
     rec = Records.from_data([np.arange(5.0)[:, None], np.arange(5.0)[::-1, None]], states=["a", "b"])
     assert rec.names() == ["0", "1"] and rec.origin(0) == "record 0"
+
+
+def test_constant_fitting_segment_named(synthetic):
+    """A channel constant over a record's fitting segment is refused naming the record, its state and the channel
+    (the models' own message named the segment's position in the pooled list, "y[0]", and for the VAR alone
+    placeholder channels); a constant channel that no requested model reads is no error."""
+    recs, states, ft = synthetic
+    recs = [r.copy() for r in recs]
+    recs[5][1500:, 1] = 0.25                    # record 5 (state f1): y1 stuck after the failure
+    kw = dict(states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, max_lags=4, var_max_lags=4)
+    for models in (["var"], ["y1"], None):
+        with pytest.raises(ValueError, match=r"record 5 of state 'f1' is constant in channel\(s\) \['y1'\]"):
+            tsfdi.fit_baselines(recs, models=models, **kw)
+    assert tsfdi.fit_baselines(recs, models=["y0"], **kw).models["y0"]["f1"].lags >= 1
+
+
+def test_records_validity_of_a_record_array():
+    """Records.from_data of a (record, time, channel) array: a record holding NaN or an infinity is not valid, one
+    whose values are finite but whose sum overflows is (the check sums each record once, then rechecks a record
+    whose sum is not finite value by value)."""
+    xr = pytest.importorskip("xarray")
+    v = np.random.default_rng(0).standard_normal((5, 50, 2))
+    v[1, 3, 0] = np.nan
+    v[2, 7, 1] = np.inf
+    v[3, 4, 0], v[3, 9, 1] = np.inf, -np.inf    # sum NaN
+    v[4, :2, 0] = 1e308                         # finite values, sum overflows
+    da = xr.DataArray(v, dims=("record", "time", "channel"),
+                      coords={"time": np.arange(50) / 10, "channel": ["a", "b"], "state": ("record", ["h"] * 5)})
+    rec = Records.from_data(da)
+    assert rec.valid.tolist() == [True, False, False, False, True]
+    np.testing.assert_array_equal(np.stack(rec.values), v)

@@ -8,6 +8,7 @@ of the same channels (an xarray object or a sequence of signals).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -113,8 +114,14 @@ class Records:
             fs_ = _time_rate(da["time"].values, name) if fs is None else float_like(fs, "fs", minimum=0.0,
                                                                                      strict_min=True)
             st, tb, ft, ids, lost = _labels(da, states, failure_times, turbulence, name)
-            vals = [np.asarray(v, dtype=np.float64) for v in da.values]
-            valid = ~lost & np.array([np.all(np.isfinite(v)) for v in vals])
+            arr = np.asarray(da.values, dtype=np.float64)
+            # one pass over all records: a record's sum is finite when its values are (a finite sum that overflows
+            # is rechecked value by value)
+            with np.errstate(over="ignore", invalid="ignore"):
+                finite = np.isfinite(arr.sum(axis=(1, 2)))
+            finite[~finite] = [np.isfinite(arr[i]).all() for i in np.flatnonzero(~finite)]
+            vals = list(arr)
+            valid = ~lost & finite
             chans = tuple(str(c) for c in da[da.dims[2]].values)
             return cls(vals, st, tb, ft, ids, valid, chans, fs_)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
@@ -159,8 +166,6 @@ class Records:
         Records
             With the labels and identifiers of those records (``source`` None).
         """
-        import dataclasses
-
         if self.source is None and chunk is None:
             pos = np.arange(len(self.values))[where]
             return dataclasses.replace(self, values=[self.values[i] for i in pos], state=self.state[pos],
@@ -791,12 +796,24 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
             raise ValueError(f"record(s) {empty} of state {state!r} end before the fitting segment starts ({settle} s "
                              "after the failure): give a smaller settle")
         segments[state] = segs
+        # the segments as the signals DataFrames / Series of them would give (pandas kind, RangeIndex, channel
+        # names), validated once as arrays: building and reading the pandas objects cost more than the order search
+        sigs = [dataclasses.replace(as_signal(g, f"record {rec.ids[i]}", vector=True, allow_constant=True),
+                                    kind="pandas", index=pd.RangeIndex(g.shape[0]), channels=list(rec.channels))
+                for i, g in zip(idx, segs)]
+        flat = [[c for c, f in zip(rec.channels, g.min(axis=0) == g.max(axis=0)) if f] for g in segs]
         for m in names:
+            for i, f in zip(idx, flat):
+                const = f if m == "var" else [c for c in f if c == m]
+                if const:
+                    raise ValueError(f"record {rec.ids[i]} of state {state!r} is constant in channel(s) {const} over "
+                                     "its fitting segment: a model cannot be identified from it")
             if m == "var":
-                sel = select_order([pd.DataFrame(g, columns=list(rec.channels)) for g in segs], var_max_lags, "var")
+                sel = select_order(sigs, var_max_lags, "var")
             else:
                 j = rec.channels.index(m)
-                sel = select_order([pd.Series(g[:, j], name=m) for g in segs], max_lags, "ar")
+                sel = select_order([dataclasses.replace(g, values=np.ascontiguousarray(g.values[:, [j]]), vector=False,
+                                                        channels=[m], name=m) for g in sigs], max_lags, "ar")
             sels[(m, state)] = sel
             p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
                 min(order, sel.max_lags)
