@@ -82,7 +82,7 @@ Findings (one run, evaluation seed 271057500, 233 s; docs/guide/sensor_validatio
   (paper 004, section VIII). Batch ARX: FA 0.70 %, UD 12; EMRAN: UD 74 (an RBF network predicts these mostly linear
   relations worse: 0.021 against 0.007 rad/s RMS on calibration flights).
 * Accelerometer ``az``: best UD 18 of 108 (the 5 % faults), MT 1.5 s: its thrust model errs by 0.13 m/s^2 RMS,
-  the size of a 5 % fault (rotor thrust follows the gusts' inflow, which nothing logged measures).
+  three quarters of a 5 % fault, 0.17 m/s^2 (rotor thrust follows the gusts' inflow, which nothing logged measures).
 * EMRAN throughput against the numpy loop: 159 times with two inputs (kept).
 """
 
