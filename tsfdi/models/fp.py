@@ -34,6 +34,7 @@ from numpy.polynomial import chebyshev, legendre
 from scipy import optimize, stats
 from scipy.linalg import lapack
 
+from tsfdi._data import as_signal
 from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning
 from tsfdi.models.ar import AR
@@ -751,8 +752,11 @@ class FPResults:
         out: the log-likelihood is ``-n/2 (s ln 2 pi + ln det(E(k)'E(k) / n) + s)``. It is maximised over a grid
         of the bounds (``grid`` points per parameter, at most 41 per parameter for several), then refined by a
         bounded search; the standard error is the inverse of the observed information (the curvature of the
-        log-likelihood at ``k_hat``, central differences), and the interval ``k_hat -+ z_{1-alpha/2} se``. The
-        FP coefficients are taken as known (their own uncertainty is not propagated).
+        log-likelihood at ``k_hat``, central differences) plus the part carried by the FP coefficients' own
+        estimation error (:attr:`OperatingPointEstimate.cov_fp`, delta method: ``B Cov(theta(k_hat)) B'`` with
+        ``B = (D'ID)^{-1} D'I`` the sensitivity of ``k_hat`` to the point parameters, ``D = d theta / dk`` and ``I``
+        the record's information ``Sigma^{-1} (x) X'X``), and the interval is ``k_hat -+ z_{1-alpha/2} se``. Without
+        that second part a long record would hold the fitted model's error as a bias the interval ignores.
 
         Parameters
         ----------
@@ -783,7 +787,7 @@ class FPResults:
                 raise ValueError(f"bounds must be ({d}, 2) intervals (low, high), got {bounds!r}") from None
             if not np.isfinite(bnd).all() or not (bnd[:, 1] > bnd[:, 0]).all():
                 raise ValueError(f"bounds must be finite intervals with low < high, got {bnd.tolist()}")
-        W, n = self._record_products(y, u)
+        W, n, XX = self._record_products(y, u)
         s = self.neqs
 
         def negllf(kv: np.ndarray) -> float:
@@ -826,10 +830,11 @@ class FPResults:
         at_bound = bool(((k_hat - bnd[:, 0]) < 2 * h).any() or ((bnd[:, 1] - k_hat) < 2 * h).any())
         evals = np.linalg.eigvalsh(H) if np.isfinite(H).all() else np.array([-1.0])
         if (evals > 0).all():
-            cov = np.linalg.inv(H)
+            cov_fp = self._k_cov_from_fp(k_hat, W, n, XX, h)
+            cov = np.linalg.inv(H) + cov_fp
             se = np.sqrt(np.diag(cov))
         else:
-            cov = np.full((d, d), np.inf)
+            cov = cov_fp = np.full((d, d), np.inf)
             se = np.full(d, np.inf)
             warnings.warn("estimate_k: the log-likelihood is not curved downwards at k_hat (flat, or the "
                           "maximum lies on a bound): no interval from the curvature", IllConditionedWarning,
@@ -844,37 +849,81 @@ class FPResults:
                 kk = k_hat.copy()
                 kk[a] = v
                 curve[a, i] = -negllf(kk)
-        for arr in (k_hat, se, ci, cov, curve_k, curve, bnd):
+        for arr in (k_hat, se, ci, cov, cov_fp, curve_k, curve, bnd):
             arr.setflags(write=False)
-        return OperatingPointEstimate(k_hat=k_hat, bse=se, conf_int=ci, cov=cov, alpha=alpha, llf=-f0, nobs=int(n),
+        return OperatingPointEstimate(k_hat=k_hat, bse=se, conf_int=ci, cov=cov, cov_fp=cov_fp, alpha=alpha, llf=-f0, nobs=int(n),
                                       names=list(m.k_names), bounds=bnd, grid=curve_k, loglik=curve,
                                       at_bound=at_bound)
 
-    def _record_products(self, y: Any, u: Any) -> tuple[np.ndarray, int]:
+    def _record_products(self, y: Any, u: Any) -> tuple[np.ndarray, int, np.ndarray]:
         """``W[j, l] = Z_j' Z_l`` (shape (p+1, s, p+1, s)) of ``Z_0 = y[t]`` and ``Z_j = -phi_t' theta_j`` (the part
-        of the prediction carried by basis function ``j``) of a new record, in the data's units, and its rows.
-
-        Each ``Z`` is a residual series of the point model's ``residuals`` (which validates the record and matches
-        its channels): with zero coefficients it is ``y[t]``, with ``theta_j`` it is ``y[t] - phi_t' theta_j``."""
+        of the prediction carried by basis function ``j``) of a new record in the data's units, its rows, and the
+        Gram matrix ``X'X`` of its point regressor. The record is validated and its channels matched by name as
+        the point model's ``residuals`` does."""
         m = self.model
         pt = m.point
         if pt.nb and u is None:
             raise ValueError("u is required: an FP-ARX estimates k from an output and its input")
         if not pt.nb and u is not None:
             raise ValueError("u is given but the model has no input")
+        sig = as_signal(y, "y", vector=self._vector_output, min_nobs=pt.max_lag + 2, allow_constant=True)
+        sig = sig.match_channels(pt.data.channels, "y", named=pt.data.named)
+        uv = None
+        if pt.nb:
+            usig = as_signal(u, "u", min_nobs=pt.max_lag + 2, allow_constant=True)
+            usig = usig.match_channels(pt.u_data.channels, "u", named=pt.u_data.named,
+                                       reference="the model's inputs are")
+            if usig.nobs != sig.nobs:
+                raise ValueError(f"u has {usig.nobs} samples but y has {sig.nobs}: they must match")
+            uv = usig.values
+        X, Y = lagged_design(sig.values, pt.na, pt.max_lag, const=bool(pt.k_const), u=uv, nb=pt.nb, nk=pt.nk)
         P = self._params2d.reshape(m.df_point, m.n_basis, -1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            Z = np.concatenate([Y[:, None, :], -np.einsum("ta,ajc->tjc", X, P)], axis=1)   # (n, p+1, s)
+            n = Z.shape[0]
+            Zf = Z.reshape(n, -1)
+            W = (Zf.T @ Zf).reshape(m.n_basis + 1, self.neqs, m.n_basis + 1, self.neqs)
+            XX = X.T @ X
+        if not (np.isfinite(W).all() and np.isfinite(XX).all()):
+            raise ValueError(f"y: the residuals through the {type(m).__name__} leave the floating-point range (y "
+                             f"peaks at {np.abs(sig.values).max():.3g}); rescale y to the units of the model's data")
+        return W, n, XX
 
-        def resid(coef: np.ndarray) -> np.ndarray:
-            res = pt.results_class(pt, coef)
-            e = res.residuals(y, u) if pt.nb else res.residuals(y)
-            return np.asarray(e, dtype=float).reshape(-1, self.neqs)
+    @property
+    def _vector_output(self) -> bool:
+        return self.model._vector
 
-        Y = resid(np.zeros((m.df_point, self.neqs)))
-        Z = np.stack([Y] + [resid(P[:, j]) - Y for j in range(m.n_basis)], axis=1)   # (n, p+1, s)
-        n = Z.shape[0]
-        Zf = Z.reshape(n, -1)
-        W = (Zf.T @ Zf).reshape(m.n_basis + 1, self.neqs, m.n_basis + 1, self.neqs)
-        return W, n
+    def _k_cov_from_fp(self, k_hat: np.ndarray, W: np.ndarray, n: int, XX: np.ndarray, h: np.ndarray) -> np.ndarray:
+        """Covariance of ``k_hat`` carried by the FP coefficients' estimation error (delta method, see
+        :meth:`estimate_k`), (d, d)."""
+        m = self.model
+        d, s, df = k_hat.size, self.neqs, m.df_point
+        g = self._g(k_hat)
+        c = np.r_[1.0, g]
+        S = np.einsum("j,l,jalb->ab", c, c, W) / n
+        # D: d theta / dk, (df * s, d) in vec (column-major: equation outer) order
+        D = np.empty((df * s, d))
+        for a in range(d):
+            e = np.eye(d)[a] * h[a]
+            D[:, a] = ((self._theta2d(k_hat + e) - self._theta2d(k_hat - e)) / (2 * h[a])).T.ravel()
+        info = np.kron(np.linalg.inv(S), XX)
+        DI = D.T @ info
+        B = np.linalg.solve(DI @ D, DI)                                     # (d, df * s)
+        # Cov(theta(k_hat)) across equations: per-equation blocks, cross blocks from the residual correlation
+        L = np.kron(np.eye(df), g[None, :])                                 # theta(k) = L theta_fp
+        blocks = np.einsum("ab,ebc,dc->ead", L, self._cov, L)               # (s, df, df)
+        if self.weights is None and s > 1:
+            sp = self.sigma_pooled
+            sd = np.sqrt(np.diag(sp))
+            corr = sp / np.outer(sd, sd)
+        else:
+            corr = np.eye(s)
+        C = np.empty((s * df, s * df))
+        for e in range(s):
+            for f in range(s):
+                base = np.sqrt(np.abs(blocks[e] * blocks[f])) * np.sign(blocks[e])
+                C[e * df:(e + 1) * df, f * df:(f + 1) * df] = blocks[e] if e == f else corr[e, f] * base
+        return B @ C @ B.T
 
     # --- output
     def summary(self, alpha: float = 0.05) -> Summary:
@@ -933,7 +982,9 @@ class OperatingPointEstimate:
     conf_int : ndarray (d, 2)
         ``k_hat -+ z_{1-alpha/2} bse``.
     cov : ndarray (d, d)
-        Inverse observed information.
+        Covariance of ``k_hat``: the inverse observed information plus :attr:`cov_fp`.
+    cov_fp : ndarray (d, d)
+        The part of ``cov`` carried by the FP coefficients' estimation error (delta method).
     alpha : float
     llf : float
         Maximised (profiled) log-likelihood.
@@ -954,6 +1005,7 @@ class OperatingPointEstimate:
     bse: np.ndarray
     conf_int: np.ndarray
     cov: np.ndarray
+    cov_fp: np.ndarray
     alpha: float
     llf: float
     nobs: int
@@ -978,7 +1030,7 @@ class OperatingPointEstimate:
         return Summary("Operating-point estimate", [("Observations", self.nobs), ("Log-likelihood", self.llf),
                                                     ("At a bound", self.at_bound)], [("Estimate", table)],
                        ["Maximum likelihood over the FP model (noise covariance profiled out); interval from the "
-                        "observed information; FP coefficients taken as known."])
+                        "observed information plus the FP coefficients' estimation error (delta method)."])
 
     def plot(self, ax: Any = None) -> Any:
         """The log-likelihood curve with ``k_hat`` and its interval (:func:`tsfdi.plotting.fp.plot_k_estimate`)."""
