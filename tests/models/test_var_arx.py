@@ -189,3 +189,19 @@ def test_arx_simulate(kind):
         res.simulate(u[:, 0])
     with pytest.raises(ValueError, match="sigma2 must be >= 0"):
         res.simulate(u, sigma2=-1.0)
+
+
+@pytest.mark.parametrize("trend", ["n", "c"])
+def test_ar_blocks_are_the_lag_rows_of_params(trend):
+    """The AR coefficient matrices (read by one reshape of the parameter rows when the model has no input) are the
+    lag blocks of params2d, transposed, in lag order, for AR, VAR and ARX (row lists)."""
+    rng = np.random.default_rng(3)
+    y, u = rng.standard_normal((400, 3)), rng.standard_normal(400)
+    c = int(trend == "c")
+    for res in (tsfdi.VAR(y, 4, trend=trend).fit(), tsfdi.AR(y[:, 0], 3, trend=trend).fit()):
+        s = res.neqs
+        ref = np.stack([res.params2d[c + i * s:c + (i + 1) * s].T for i in range(res.lags)])
+        A = res._ar_matrices()
+        assert A.shape == (res.lags, s, s) and np.array_equal(A, ref) and A.flags.writeable
+    arx = tsfdi.ARX(y[:, 0], u, na=2, nb=2, trend=trend).fit()
+    np.testing.assert_array_equal(arx._ar_matrices()[:, 0, 0], arx.params2d[[c, c + 2], 0])

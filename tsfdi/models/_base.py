@@ -909,8 +909,12 @@ class LinearTimeSeriesResults:
 
     @cached_property
     def _ar_blocks(self) -> np.ndarray:
-        rows, _ = self.model._rows()
-        A = np.stack([self._params2d[r].T for r in rows]) if rows else np.empty((0, self.neqs, self.neqs))
+        m, s = self.model, self.neqs
+        if m.nb == 0:       # the lag blocks follow each other: one reshape, no row lists
+            A = self._params2d[m.k_const:].reshape(m.na, s, s).transpose(0, 2, 1).copy()
+        else:
+            rows, _ = m._rows()
+            A = np.stack([self._params2d[r].T for r in rows]) if rows else np.empty((0, s, s))
         A.setflags(write=False)
         return A
 
