@@ -1,9 +1,11 @@
-"""Sliding-window fault detection and identification of one stream (Dutta et al., paper 003, Fig. 3).
+"""Sliding-window (Dutta et al., paper 003, Fig. 3) or sequential fault detection and identification of one stream.
 
 :class:`Monitor` tests every window with the healthy model, waits for the post-failure steady state (rolling
 variances, Fig. 7 discussion) and then identifies every window with the fault models (without fault models it
 detects only); the windows are tested by the windowed engine (:class:`tsfdi.windows.ResidualWindows`) and labelled
-by its decision rule (:func:`tsfdi.windows.decide`).
+by its decision rule (:func:`tsfdi.windows.decide`). With ``rule="sprt"`` it decides sample by sample instead: a
+restarted SPRT of the healthy residuals detects and a restarted multi-hypothesis SPRT of the fault models identifies
+(:mod:`tsfdi.detection.sequential`), each event at its deciding sample.
 """
 
 from __future__ import annotations
@@ -14,15 +16,17 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 import pandas as pd
 
 from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
-from tsfdi._validation import boolean, float_like, option
+from tsfdi._validation import boolean, float_like, option, probability
 from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.sequential import SPRT
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import ARXResults
-from tsfdi.windows import RULES, ResidualWindows
+from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows
 
 __all__ = ["Monitor", "MonitorResult", "MonitorEvent", "rolling_variance"]
 
@@ -79,6 +83,9 @@ class MonitorResult:
         Sampling frequency in Hz: times are in seconds with it, in samples without.
     steady_thresholds : ndarray, shape (k,), or None
         The steady-state variance thresholds the monitor used (``None``: no steady-state check).
+    identification_time : float or None
+        Time of the first ``"identification"`` event whose status is ``"identified"`` (with ``rule="sprt"``: the
+        sequential decision, at its deciding sample).
     """
 
     events: list
@@ -89,6 +96,7 @@ class MonitorResult:
     models: tuple = ()
     fs: float | None = None
     steady_thresholds: np.ndarray | None = None
+    identification_time: float | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The events as a ``DataFrame`` (one row per event)."""
@@ -109,6 +117,53 @@ class MonitorResult:
         return (f"MonitorResult({what}, windows={len(self.windows)}, fault windows={faults}, events="
                 f"{len(self.events)}, detection_time={self.detection_time}, steady_time={self.steady_time}, "
                 f"label={self.label!r})")
+
+
+@numba.njit(cache=True, nogil=True)
+def _restart_sprt(z, s, start, lower, upper):  # pragma: no cover - compiled
+    """Wald's SPRT with restart from the statistic ``s`` whose cycle started at ``start`` (relative to ``z[0]``):
+    per sample the statistic before any restart, whether it alarms (reaches ``upper``) and where its cycle began; a
+    cycle ends, and the next starts at 0, at each crossing of ``lower`` (H0 accepted) or ``upper`` (alarm)."""
+    n = z.shape[0]
+    peak = np.empty(n)
+    alarm = np.zeros(n, dtype=np.bool_)
+    cycle = np.empty(n, dtype=np.int64)
+    for t in range(n):
+        s += z[t]
+        peak[t] = s
+        cycle[t] = start
+        if s >= upper:
+            alarm[t] = True
+            s = 0.0
+            start = t + 1
+        elif s <= lower:
+            s = 0.0
+            start = t + 1
+    return peak, alarm, cycle, s, start
+
+
+@numba.njit(cache=True, nogil=True)
+def _pairwise_cusum_run(loglik, w, scale, bound):  # pragma: no cover - compiled
+    """The restarted MSPRT of :func:`tsfdi.detection.sequential.msprt` continued from the pairwise CUSUMs ``w``
+    (updated in place): ``W[j, k] = max(0, W[j, k] + scale (l_j - l_k))``; the first sample where some
+    ``min_k W[j, k]`` reaches ``bound`` and the model with the largest, else ``(-1, -1)``."""
+    n, m = loglik.shape
+    dom = np.empty(m)
+    for t in range(n):
+        for j in range(m):
+            lo = np.inf
+            for k in range(m):
+                if k != j:
+                    v = w[j, k] + scale * (loglik[t, j] - loglik[t, k])
+                    v = v if v > 0.0 else 0.0
+                    w[j, k] = v
+                    if v < lo:
+                        lo = v
+            dom[j] = lo
+        best = np.argmax(dom)
+        if dom[best] >= bound:
+            return t, best
+    return -1, -1
 
 
 def _is_span(value: Any) -> bool:
@@ -177,8 +232,16 @@ class Monitor:
     steady_window : int or time span, optional
         Length of the rolling-variance window (default ``"10s"``, the paper's); it sets both the variance checked
         and, by default, the thresholds.
-    rule : {"paper", "likelihood", "pvalue"}
-        Decision rule (see :data:`tsfdi.windows.RULES`).
+    rule : {"paper", "likelihood", "pvalue", "sprt"}
+        Decision rule (see :data:`tsfdi.windows.RULES`), or ``"sprt"``: the sequential monitor (see Notes), with no
+        window and no residual test (``window`` and ``test`` must be left out).
+    sprt_alpha : float
+        ``rule="sprt"``: the error probability of the identification's bound :math:`\ln((M - 1)/\alpha)`
+        (:func:`~tsfdi.detection.sequential.msprt`) and of the default ``detection_test``
+        (``SPRT("variance", ratio=2.0, alpha=sprt_alpha, beta=sprt_alpha, restart=True)``).
+    sprt_scale : float
+        ``rule="sprt"``: the scale of the fault models' log-likelihoods (1 for exact models;
+        :func:`~tsfdi.detection.sequential.msprt_scale` on held-out records for estimated ones).
 
     Attributes
     ----------
@@ -189,6 +252,34 @@ class Monitor:
 
     Notes
     -----
+    ``rule="sprt"`` (sequential monitoring, Kopsaftopoulos & Fassois 2015): every sample's healthy residual feeds
+    ``detection_test``, an :class:`~tsfdi.SPRT` with ``restart=True`` (variance or mean alternative, scaled by its
+    ``scale_`` when calibrated): its statistic starts a new cycle at 0 whenever it crosses the lower bound (H0
+    accepted) or the upper bound (an alarm); the first alarm is the ``"detection"`` event, at the deciding sample,
+    its ``window`` the cycle that raised it. The steady-state check runs at the end of every ``step`` as in the
+    windowed monitor; from the start of the variance window that establishes the steady state, the fault models'
+    per-sample Gaussian log-likelihoods (:meth:`~tsfdi.windows.ResidualWindows.loglik`) feed the restarted
+    multi-hypothesis rule (the pairwise CUSUMs of :func:`~tsfdi.detection.sequential.msprt` with
+    ``restart=True``); the first model to dominate every other by the bound is the one ``"identification"``
+    event (status ``"identified"``, at its deciding sample, or at the steady event when the samples before it
+    already decide), after which the phase is ``"identified"``. :attr:`MonitorResult.windows` has one row per
+    complete ``step``: ``detect_statistic`` is the largest detection statistic over the step over the upper bound
+    (``fault``: it reached the bound, an alarm, within the step; every alarm counts, before and after the
+    detection), ``detect_pvalue`` is NaN. :meth:`update` continues both statistics exactly across blocks (the same
+    events and rows as :meth:`run` on the concatenated stream) and keeps ``steady_window`` plus the models' order
+    samples: its memory does not grow with the stream (only the rows and events do).
+
+    False alarms of the sequential detection on healthy data (independent residuals of the assumed law): the
+    alarms form a renewal process of cycles, so the long-run rate is :math:`p / E_0[N]` per sample, :math:`p` the
+    probability that a cycle ends at the upper bound and :math:`E_0[N]` the mean cycle length. Wald's bound holds
+    exactly, :math:`p \le e^{-A} = \alpha / (1 - \beta)`; neglecting the overshoot, :math:`p \approx \alpha` and
+    :math:`E_0[N] \approx` :meth:`SPRT.asn(1.0) <tsfdi.SPRT.asn>`, hence about :math:`3600 f_s \alpha /
+    \mathrm{ASN}_0` false alarms per hour, an overestimate (the overshoot of the chi-square log-likelihood ratio
+    lowers :math:`p`: about half that rate for ``ratio=2``, see the guide). The detection delay after a change to
+    the alternative is Wald's :math:`\mathrm{ASN}_1` plus the time to climb from where the statistic was at the
+    change (about 1.45 ASN_1 for ``ratio=2``); both are computed with the overshoot by the Markov-chain
+    approximation in the tests (``tests/test_monitoring_sprt.py``).
+
     :meth:`run` filters the record once through each model and computes every window's statistic from prefix
     sums (:class:`~tsfdi.windows.ResidualWindows`); :meth:`update` feeds a stream chunk by chunk and gives the same
     events as :meth:`run` on the concatenated stream.
@@ -204,9 +295,12 @@ class Monitor:
     Identification* (paper 003), Fig. 3, Fig. 7 and eqs. 8-14.
     """
 
-    def __init__(self, baseline: Any, models: Mapping | None = None, *, window: Any, step: Any = None,
+    def __init__(self, baseline: Any, models: Mapping | None = None, *, window: Any = None, step: Any = None,
                  fs: float | None = None, test: Any = None, detection_test: Any = None, steady_thresholds: Any = None,
-                 steady_window: Any = None, rule: str = "paper") -> None:
+                 steady_window: Any = None, rule: str = "paper", sprt_alpha: float = 0.01,
+                 sprt_scale: float = 1.0) -> None:
+        self.rule = option(rule, "rule", RULES + SEQUENTIAL_RULES)
+        self.sequential = self.rule in SEQUENTIAL_RULES
         self._fs = None if fs is None else float_like(fs, "fs", minimum=0.0, strict_min=True)
         models = {} if models is None else models
         if not isinstance(models, Mapping):
@@ -229,8 +323,15 @@ class Monitor:
         self._model_channels = list(data.channels) if isinstance(data, Signal) else [
             f"y{i}" for i in range(self.nchan)]
         # lengths in samples now, or time spans kept until fs is read from the data
-        self._lengths = {"window": (window, 3), "step": (step, 1),
-                         "steady_window": ("10s" if steady_window is None else steady_window, 2)}
+        if self.sequential and window is not None:
+            raise ValueError(f"window does not apply to rule='sprt' (the statistic is sequential: sample by sample, "
+                             f"no window), got window={window!r}; leave it out")
+        if not self.sequential and window is None:
+            raise TypeError("window is required (the length of the tested windows) unless rule='sprt'")
+        self.window = None
+        self._lengths = {"step": (step, 1), "steady_window": ("10s" if steady_window is None else steady_window, 2)}
+        if not self.sequential:
+            self._lengths = {"window": (window, 3), **self._lengths}
         for name, (value, minimum) in self._lengths.items():
             if value is None and name == "step":
                 continue
@@ -238,21 +339,12 @@ class Monitor:
                 _check_span(value, name)
             else:
                 window_samples(value, name, self._fs, minimum=minimum)
-        test = LjungBox(lags=25, alpha=1e-3) if test is None else test
-        if isinstance(test, Mapping):
-            test = dict(test)
-            missing = [n for n in self.models if n not in test]
-            if missing or not all(isinstance(t, ResidualTest) for t in test.values()):
-                raise ValueError(f"test as a mapping must hold a residual test for every model {list(self.models)}")
-            if detection_test is None:
-                raise TypeError("detection_test is required when test is a mapping (one test per fault model)")
-        elif not isinstance(test, ResidualTest):
-            raise TypeError(f"test must be a residual test (LjungBox, FTest), got {type(test).__name__}")
-        detection_test = test if detection_test is None else detection_test
-        if not isinstance(detection_test, ResidualTest):
-            raise TypeError(f"detection_test must be a residual test, got {type(detection_test).__name__}")
-        self.test, self.detection_test = test, detection_test
-        self.rule = option(rule, "rule", RULES)
+        self.sprt_alpha = probability(sprt_alpha, "sprt_alpha")
+        self.sprt_scale = float_like(sprt_scale, "sprt_scale", minimum=0.0, strict_min=True)
+        if self.sequential:
+            self._sequential_tests(test, detection_test)
+        else:
+            self._window_tests(test, detection_test)
         self._steady_given = steady_thresholds is not None
         self._steady_cache: dict = {}           # steady_window in samples -> the thresholds of the fault models
         if steady_thresholds is None:
@@ -270,6 +362,43 @@ class Monitor:
             self.steady_thresholds = thr
         self.reset()
 
+    def _window_tests(self, test: Any, detection_test: Any) -> None:
+        """The residual tests of the windowed rules."""
+        test = LjungBox(lags=25, alpha=1e-3) if test is None else test
+        if isinstance(test, Mapping):
+            test = dict(test)
+            missing = [n for n in self.models if n not in test]
+            if missing or not all(isinstance(t, ResidualTest) for t in test.values()):
+                raise ValueError(f"test as a mapping must hold a residual test for every model {list(self.models)}")
+            if detection_test is None:
+                raise TypeError("detection_test is required when test is a mapping (one test per fault model)")
+        elif not isinstance(test, ResidualTest):
+            raise TypeError(f"test must be a residual test (LjungBox, FTest), got {type(test).__name__}")
+        detection_test = test if detection_test is None else detection_test
+        if not isinstance(detection_test, ResidualTest):
+            raise TypeError(f"detection_test must be a residual test, got {type(detection_test).__name__}")
+        self.test, self.detection_test = test, detection_test
+
+    def _sequential_tests(self, test: Any, detection_test: Any) -> None:
+        """The SPRT of the sequential rule (default: variance ratio 2, error rates ``sprt_alpha``)."""
+        if test is not None:
+            raise ValueError("test does not apply to rule='sprt' (the fault models are told apart by their "
+                             "residuals' log-likelihoods, not by a residual test); leave it out")
+        if len(self.models) == 1:
+            raise ValueError("rule='sprt' chooses among the fault models and needs at least two (or none, to "
+                             f"detect only), got {list(self.models)}")
+        if detection_test is None:
+            detection_test = SPRT("variance", ratio=2.0, alpha=self.sprt_alpha, beta=self.sprt_alpha, restart=True)
+        if not isinstance(detection_test, SPRT) or detection_test.alternative == "model" or not detection_test.restart:
+            raise TypeError("detection_test with rule='sprt' must be an SPRT of the healthy residuals with "
+                            "alternative 'variance' or 'mean' and restart=True (the monitoring form), e.g. "
+                            f"SPRT('variance', ratio=2.0, restart=True); got {detection_test!r}")
+        self.test, self.detection_test = None, detection_test
+        sigma = self.baseline.sigma if hasattr(self.baseline, "sigma") else self.baseline.sigma2
+        self._sigma = np.asarray(sigma, dtype=np.float64).reshape(self.nchan, self.nchan)
+        self._order = int(self.baseline.lags)
+        self._fault_order = max((int(r.lags) for r in self.models.values()), default=0)
+
     def __repr__(self) -> str:
         what = f"models={list(self.models)}" if self.models else "models=None (detection only)"
 
@@ -277,6 +406,9 @@ class Monitor:
             value = getattr(self, name)
             return value if value is not None else repr(self._lengths[name][0] or "1s")
 
+        if self.sequential:
+            return (f"Monitor({what}, rule='sprt', detection_test={self.detection_test!r}, sprt_alpha="
+                    f"{self.sprt_alpha:g}, step={length('step')}, fs={self.fs})")
         return (f"Monitor({what}, window={length('window')}, step={length('step')}, fs={self.fs}, "
                 f"rule={self.rule!r})")
 
@@ -339,6 +471,14 @@ class Monitor:
         self._steady_pos: int | None = None
         self._rows: list = []
         self._events: list = []
+        # the sequential rule's state: O(k (V + p) + M^2), whatever the length of the stream
+        self._s = 0.0              # detection SPRT statistic after the last processed sample
+        self._cycle = 0            # stream position where its current cycle started (its last restart)
+        self._w = np.zeros((len(self.models), len(self.models)))    # pairwise CUSUMs of the identification
+        self._ident_pos: int | None = None      # next stream position the identification accumulates
+        self._row_peak = -np.inf   # largest statistic over the current step (before restarts)
+        self._row_alarm = False
+        self._row_ident: tuple = ()             # (label, status) of an identification within the current step
 
     # ------------------------------------------------------------------------------------------------------------
     def _values(self, samples: Any) -> np.ndarray:
@@ -428,6 +568,90 @@ class Monitor:
         self._events.extend(new_events)
         return new_events
 
+    # ------------------------------------------------------------------------------------------------------------
+    def _update_sequential(self, x: np.ndarray) -> list:
+        """:meth:`update` of the sequential rule: every new sample through the detection SPRT, the rows of the
+        completed steps (with the steady-state check at their ends) and, once steady, the identification MSPRT."""
+        first = self._offset + self._buffer.shape[0]          # stream position of x[0]
+        self._buffer = np.concatenate([self._buffer, x])
+        end = self._offset + self._buffer.shape[0]
+        n = end - first
+        peak, alarm, cycle = np.full(n, -np.inf), np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64)
+        a = max(first, self._order)                            # first new sample with a healthy residual
+        if end > a:
+            seg = self._buffer[a - self._order - self._offset:]
+            e = np.asarray(self.baseline.residuals(self._record(seg)), dtype=np.float64).reshape(-1, self.nchan)
+            z = self.detection_test.loglik_ratio(e, self._sigma)
+            test = self.detection_test
+            p, al, cy, self._s, start = _restart_sprt(z, self._s, self._cycle - a, test.lower, test.upper)
+            peak[a - first:], alarm[a - first:], cycle[a - first:] = p, al, cy + a
+            self._cycle = int(start) + a
+        events: list = []
+        S, pos = self.step, first
+        while pos < end:
+            b = min((pos // S + 1) * S, end)
+            i, j = pos - first, b - first
+            self._row_peak = max(self._row_peak, float(peak[i:j].max()))
+            if alarm[i:j].any():
+                self._row_alarm = True
+                if self._phase == "healthy":
+                    t = first + i + int(np.argmax(alarm[i:j]))
+                    self._phase, self._detect_pos = "transient", t + 1
+                    events.append(MonitorEvent(self._t(t), "detection", None, "fault",
+                                               window=(self._t(int(cycle[t - first])), self._t(t))))
+            if self._phase == "steady" and self.models:
+                self._identify(b, pos, events)
+            if b % S == 0:
+                self._sequential_row(b, events)
+            pos = b
+        keep = max(self._offset, end - self.steady_window - max(self._order, self._fault_order))
+        self._buffer = self._buffer[keep - self._offset:]
+        self._offset = keep
+        self._events.extend(events)
+        return events
+
+    def _identify(self, upto: int, known: int, events: list) -> None:
+        """Accumulate the identification MSPRT over the stream positions up to ``upto`` (exclusive); a decision is
+        an event at its deciding sample, or at ``known`` when it is told later (the samples before the steady
+        event, accumulated when it is established)."""
+        lo = self._ident_pos
+        if upto <= lo:
+            return
+        pm = self._fault_order
+        seg = self._buffer[lo - pm - self._offset: upto - self._offset]
+        ll = ResidualWindows(self.models).fit(self._record(seg)).loglik(common=pm)
+        bound = float(np.log(len(self.models) - 1) - np.log(self.sprt_alpha))
+        t, j = _pairwise_cusum_run(np.ascontiguousarray(ll), self._w, self.sprt_scale, bound)
+        if t < 0:
+            self._ident_pos = upto
+            return
+        label = list(self.models)[j]
+        self._phase, self._ident_pos = "identified", upto
+        self._row_ident = (label, "identified")
+        events.append(MonitorEvent(self._t(max(lo + int(t), known)), "identification", label, "identified",
+                                   (label,), (self._t(self._steady_pos), self._t(lo + int(t)))))
+
+    def _sequential_row(self, b: int, events: list) -> None:
+        """Close the step ending at stream position ``b``: the steady-state check there, and its row."""
+        lo = b - self.steady_window
+        var = self._buffer[lo - self._offset: b - self._offset].var(axis=0) if lo >= 0 else np.full(self.nchan,
+                                                                                                      np.nan)
+        if self._phase == "transient" and self.steady_thresholds is not None and lo >= 0 and \
+                lo >= self._detect_pos and np.all(var <= self.steady_thresholds):
+            self._phase, self._steady_pos, self._ident_pos = "steady", lo, lo
+            events.append(MonitorEvent(self._t(b), "steady", None, "steady", window=(self._t(lo), self._t(b))))
+            if self.models:
+                self._identify(b, b, events)
+        label, st = self._row_ident or (None, "")
+        peak = self._row_peak / self.detection_test.upper if np.isfinite(self._row_peak) else np.nan
+        row = {"start": self._t(b - self.step), "end": self._t(b), "detect_statistic": peak,
+               "detect_pvalue": np.nan, "fault": self._row_alarm}
+        for c, name in enumerate(self._channels):
+            row[f"variance_{name}"] = float(var[c])
+        row.update({"phase": self._phase, "status": st, "label": label, "accepted": label or ""})
+        self._rows.append(row)
+        self._row_peak, self._row_alarm, self._row_ident = -np.inf, False, ()
+
     def update(self, samples: Any) -> list:
         """Feed the next samples of a stream; returns the events of the windows they complete.
 
@@ -448,6 +672,8 @@ class Monitor:
             the first block carries no time index.
         """
         x = self._values(samples)
+        if self.sequential:
+            return self._update_sequential(x)
         self._buffer = np.concatenate([self._buffer, x])
         end = self._offset + self._buffer.shape[0]
         W, S = self.window, self.step
@@ -482,7 +708,10 @@ class Monitor:
         self.reset()
         self.update(signal)
         nobs = self._offset + self._buffer.shape[0]
-        if nobs < self.window:
+        if self.sequential and nobs <= max(self._order, self._fault_order):
+            raise ValueError(f"signal has {nobs} samples: the sequential rule needs more than the models' largest "
+                             f"order ({max(self._order, self._fault_order)}) to have a residual to test")
+        if not self.sequential and nobs < self.window:
             secs = (lambda n: f" ({n / self.fs:g} s)") if self.fs else (lambda n: "")
             raise ValueError(f"window ({self.window} samples{secs(self.window)}) is longer than the signal ({nobs} "
                              f"samples{secs(nobs)}): no window to test; give a shorter window or a longer signal")
@@ -548,9 +777,11 @@ class Monitor:
         label = ident.value_counts().idxmax() if len(ident) else None
         det = next((e.time for e in self._events if e.kind == "detection"), None)
         st = next((e.time for e in self._events if e.kind == "steady"), None)
+        ident_t = next((e.time for e in self._events if e.kind == "identification" and e.status == "identified"),
+                       None)
         return MonitorResult(events=list(self._events), windows=frame, detection_time=det, steady_time=st,
                              label=label, models=tuple(self.models), fs=self.fs,
-                             steady_thresholds=self.steady_thresholds)
+                             steady_thresholds=self.steady_thresholds, identification_time=ident_t)
 
 
 def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = False) -> pd.DataFrame:
