@@ -173,8 +173,12 @@ def crazypad(conditions) -> list:
           "samples), first summary after one block; between-flight covariance pooled over the conditions from the "
           "held-out residuals of each condition model's own fitting logs (the held-out flight never among them); "
           "all fixed a priori, not tuned")
-    scale = crazypad_scale(cp, full, flights, choice, conds)
-    print(f"scale correction on the held-out residuals of every condition's own logs: {scale:.3g}")
+    try:
+        scale = crazypad_scale(cp, full, flights, choice, conds)
+        print(f"scale correction on the held-out residuals of every condition's own logs: {scale:.3g}")
+    except ValueError as err:                   # some pair does not separate on its held-out logs
+        scale = None
+        print(f"no scale correction (information run left out): {err}")
     own_held = {c: per_flight(full[c].held, flights[c]) for c in conds}
     lls, rec = [], []
     for cond in conds:
@@ -194,8 +198,9 @@ def crazypad(conditions) -> list:
     verdicts = []
     # the record-effect run is the result; the Gaussian per-sample log-likelihoods, scale-corrected and not, are
     # printed beside it for information only
-    for what, items, c in (("record effect", rec, 1.0), ("Gaussian, scale-corrected (information only)", lls, scale),
-                           ("Gaussian, uncorrected, scale 1 (information only)", lls, 1.0)):
+    runs = [("record effect", rec, 1.0), ("Gaussian, scale-corrected (information only)", lls, scale),
+            ("Gaussian, uncorrected, scale 1 (information only)", lls, 1.0)]
+    for what, items, c in [r for r in runs if r[2] is not None]:
         rows = []
         for cond, f, ll in items:
             seq = msprt(ll, alpha=CRAZY_ALPHA, scale=c)

@@ -12,6 +12,7 @@ import pytest
 from conftest import as_kind
 from scipy import integrate, stats
 
+from tsfdi.detection import sequential
 from tsfdi.detection.sequential import (SPRT, SequentialDecision, SequentialIdentification, msprt, msprt_scale,
                                         record_effect, wald_bounds)
 
@@ -327,3 +328,18 @@ def test_record_effect_input_checks():
         law.loglik([np.full((100, 2), np.nan), e, e])
     with pytest.raises(ValueError, match=r"resid\['m0'\]: a channel's residuals are zero"):
         law.loglik([np.zeros((100, 2)), e, e])
+
+
+def test_record_effect_singular_between_covariance_and_chunks(monkeypatch):
+    # summaries that do not vary over the records: no between-record law (a ValueError, not a LinAlgError)
+    rng = np.random.default_rng(1)
+    same = rng.standard_normal((400, 1))
+    with pytest.raises(ValueError, match="singular"):
+        record_effect({"a": [same] * 4, "b": [same + 1] * 4}, block=20)
+    # the covariances are made in bounded chunks: the same result with tiny chunks
+    _, held = record_law_data()
+    law = record_effect(held, block=20)
+    resid = [rng.normal(0.0, 1.0, (300, 2)) for _ in range(3)]
+    ref = law.loglik(resid)
+    monkeypatch.setattr(sequential, "MAX_VALUES", 8 * 16 * 7)
+    assert np.allclose(law.loglik(resid), ref, rtol=1e-12, atol=1e-12)

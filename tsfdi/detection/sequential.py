@@ -1175,15 +1175,18 @@ class RecordEffect:
         t0 = self.min_samples - 1
         if n > t0:
             cnt = np.arange(1, n + 1, dtype=np.float64)[t0:, None]
+            q = self.center.shape[1]
+            rows = max(1, MAX_VALUES // (8 * q * q))     # the (rows, q, q) covariances of one chunk stay bounded
             for j, e in enumerate(arrs):
-                f = _running_summaries(e, self.lags, t0)
-                cov = self.between[j] + self.within[j] / cnt[:, :, None]
-                chol = np.linalg.cholesky(cov)
-                d = np.linalg.solve(chol, (f - self.center[j])[:, :, None])[:, :, 0]
-                q, nu = f.shape[1], self.df[j]
-                cum[t0:, j] = (special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
-                               - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
-                               - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / nu))
+                f = _running_summaries(e, self.lags, t0) - self.center[j]
+                nu = self.df[j]
+                const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
+                for a in range(0, f.shape[0], rows):
+                    b = min(a + rows, f.shape[0])
+                    chol = np.linalg.cholesky(self.between[j] + self.within[j] / cnt[a:b, :, None])
+                    d = np.linalg.solve(chol, f[a:b, :, None])[:, :, 0]
+                    cum[t0 + a:t0 + b, j] = (const - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
+                                             - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / nu))
                 if not np.isfinite(cum[t0:, j]).all():
                     raise ValueError(f"resid[{self.models[j]!r}]: a channel's residuals are zero over the first "
                                      f"{int(np.argmin(np.isfinite(cum[t0:, j]))) + t0 + 1} samples (log RMS not "
@@ -1282,6 +1285,9 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
         raise ValueError(f"held_out: {dof} degrees of freedom of the between-record spread (records minus models) "
                          f"for {q} summaries: give more records or fewer lags")
     S = dev.T @ dev / dof
+    if np.linalg.eigvalsh(S)[0] <= 1e-12 * max(float(np.trace(S)), np.finfo(float).tiny):
+        raise ValueError("held_out: the between-record covariance of the summaries is singular (summaries that do "
+                         "not vary, or vary together exactly, over the records): give more or more varied records")
     between = np.array([S * (1.0 + 1.0 / r) for r in R])
     df = np.full(len(R), float(dof - q + 1))
     chans = [f"y{i}" for i in range(k)]
