@@ -16,6 +16,9 @@ matching). The outcome is an :class:`Isolation`:
 window and :meth:`ResidualSet.isolate_samples` at every sample (tests with per-sample alarms), the last two as an
 :class:`IsolationSeries`.
 
+A sensor whose output freezes shows in its parity residuals only as far as the quantity moves; its own output
+shows it directly: :func:`frozen_output` flags the samples where a sensor's output has stayed put over a window.
+
 Paper 002's worked example (:func:`airspeed_parity`): three estimates of the airspeed -- the pitot tube, the GPS
 ground speed corrected for the wind (:func:`airspeed_from_gps`, eqs. 4-6), and the airspeed expected from the
 thrust -- give three residuals, each the difference of two estimates and sensitive to those two (Table 2).
@@ -39,7 +42,7 @@ from tsfdi.detection.glrt import GLRT
 from tsfdi.summary import Summary
 
 __all__ = ["STATUS", "Isolation", "IsolationSeries", "ResidualSet", "airspeed_from_gps", "airspeed_parity",
-           "climb_rate_from_accel", "climb_rate_from_baro"]
+           "climb_rate_from_accel", "climb_rate_from_baro", "frozen_output"]
 
 #: The outcomes of an isolation, in this order of precedence.
 STATUS = ("isolated", "several", "not isolable", "none")
@@ -671,3 +674,70 @@ def climb_rate_from_accel(accel: Any, attitude: Any, time_constant: Any, *, fs: 
     omega = 1.0 / tau
     b, a = bilinear([1.0, 0.0], [1.0, 2.0 * omega, omega * omega], rate)
     return sa.wrap(lfilter(b, a, -(down + gravity)), 0, name="climb_rate", vector=False)
+
+
+# ---------------------------------------------------------------------------------------------- frozen output
+def frozen_output(signal: Any, window: Any, *, tolerance: float = 0.0, fs: float | None = None) -> Any:
+    r"""Flag the samples where a sensor's output has not moved over the last ``window`` samples.
+
+    A per-sensor self-check for a frozen (stuck) output: the raw samples of a healthy sensor move by at least
+    their noise from one sample to the next, a frozen sensor repeats one value. The check looks at the sensor's
+    own output only, so its alarm names the sensor directly, whatever its parity residuals do (a sensor frozen
+    while the quantity it measures holds still reads nearly the truth, and only its noise vanishes).
+
+    Parameters
+    ----------
+    signal : array_like, Series or DataArray, shape (nobs,)
+        The raw output of one sensor channel at its own rate (before any filtering or resampling: a
+        zero-order hold onto a faster grid repeats samples).
+    window : int or time span
+        :math:`n`, samples of the check (an int, at least 2), or a time span such as ``"0.2s"`` (with the time
+        index of ``signal`` or ``fs``).
+    tolerance : float, default 0
+        Largest spread :math:`\max - \min` of the window's samples that counts as frozen, in the units of
+        ``signal``. 0: the window holds one repeated value.
+    fs : float, optional
+        Sampling frequency (Hz) when ``window`` is a time span and ``signal`` has no time index.
+
+    Returns
+    -------
+    The kind of ``signal``, bool, shape (nobs,)
+        True at sample :math:`k` when the samples :math:`k - n + 1, \dots, k` all lie within ``tolerance`` of
+        each other; False at the first :math:`n - 1` samples (no complete window yet). Index kept.
+
+    Raises
+    ------
+    ValueError
+        A window shorter than 2 samples or longer than ``signal``, a negative ``tolerance``, non-finite values,
+        a time span without a sampling frequency.
+
+    Notes
+    -----
+    False-alarm bound. Let the output be :math:`y_i = Q(s_i + e_i)` with :math:`s_i` any signal, :math:`e_i`
+    independent noise whose density is at most :math:`f_{max}` (:math:`1 / (\sigma\sqrt{2\pi})` for Gaussian
+    noise of standard deviation :math:`\sigma`) and :math:`Q` a rounding to a resolution :math:`\Delta`
+    (:math:`\Delta = 0` for none). Given the first sample of a window, each of the :math:`n - 1` others must fall
+    in an interval of width :math:`2(\text{tolerance} + \Delta)` about it, so a healthy sensor raises the flag
+    at a given sample with probability at most
+
+    .. math:: P_F \le \left(2 f_{max} (\text{tolerance} + \Delta)\right)^{n - 1}.
+
+    For example an accelerometer with :math:`\sigma` = 0.011 m/s^2 and :math:`\Delta` = 0.0048 m/s^2
+    (16 g over 16 bits): 0.35 per sample, :math:`10^{-22}` for :math:`n = 50`. A frozen output raises the flag at
+    the :math:`n`-th sample of its repeated value (with ``tolerance`` 0).
+
+    To join the parity decision of a :class:`ResidualSet` whose table has the sensor as a column, count the
+    flag as an alarm of every residual of that column (``fired | np.outer(flag, table[sensor])`` on the samples
+    of the residuals): its fired pattern is then the sensor's column, the frozen sensor is isolated.
+    """
+    sig = as_signal(signal, "signal", vector=False, allow_constant=True)
+    rate = sampling_frequency(sig, fs, "signal")
+    n = window_samples(window, "window", rate, minimum=2)
+    if n > sig.nobs:
+        raise ValueError(f"window must be <= the length of signal ({sig.nobs} samples), got {n}")
+    tolerance = float_like(tolerance, "tolerance", minimum=0.0)
+    rolling = pd.Series(sig.values[:, 0]).rolling(n)
+    spread = (rolling.max() - rolling.min()).to_numpy()
+    flag = np.zeros(sig.nobs, dtype=bool)
+    flag[n - 1:] = spread[n - 1:] <= tolerance
+    return sig.wrap(flag, 0, vector=False)
