@@ -739,20 +739,52 @@ def _monitor_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--models", nargs="+", default=None, metavar="NAME=PATH",
                    help="fault models identifying the windows after a detection, as NAME=PATH or PATH (name = "
                         "file stem); default none: detection only")
-    _window_args(p, "window length", required=True)
+    _window_args(p, "window length (required, except with --rule sprt)")
     p.add_argument("--steady-window", type=opt.span, default="10s",
                    help="rolling-variance window of the steady-state check (paper 003): identification starts once "
                         "the variance of every channel over this window is below its threshold, the largest over "
                         "the records the --models were fitted on; an integer counts samples, a time span such as "
                         "'10s' is converted with the sampling frequency")
     _test_args(p, lags=25)
-    p.add_argument("--rule", choices=("paper", "likelihood", "pvalue"), default="paper",
-                   help="decision rule turning the fault models' acceptances into a label")
+    p.add_argument("--rule", choices=("paper", "likelihood", "pvalue", "sprt"), default="paper",
+                   help="decision rule turning the fault models' acceptances into a label; 'sprt': sequential "
+                        "monitoring, sample by sample (no window, no residual test): a restarted SPRT of the "
+                        "baseline's residual variance detects, then the restarted multi-hypothesis SPRT of the "
+                        "--models' log-likelihoods identifies, each event at its deciding sample")
+    p.add_argument("--sprt-alpha", type=opt.probability, default=0.01,
+                   help="--rule sprt: error probabilities of the detection SPRT (alpha = beta) and of the "
+                        "identification's bound")
+    p.add_argument("--sprt-ratio", type=opt.positive, default=2.0,
+                   help="--rule sprt: the residual variance ratio (to the baseline's) the detection SPRT tests for")
     p.add_argument("--out", default=None, help="write the events to this CSV file")
 
 
-@command("monitor", "slide windows over a signal: detection with a healthy baseline, then identification with "
-                    "fault models; prints and writes the events", _monitor_args)
+def _monitor_sequential(args: argparse.Namespace, data: _Data, models: dict) -> tuple:
+    """``monitor --rule sprt``: no window, no residual test; the detection SPRT of ``--sprt-ratio`` and
+    ``--sprt-alpha``: the records long enough to have a residual, the step in samples, the SPRT and Monitor's
+    keywords."""
+    from tsfdi._data import window_samples
+    from tsfdi.detection.sequential import SPRT
+
+    if args.window is not None:
+        raise ValueError("--window does not apply to --rule sprt (the statistic is sequential, sample by sample); "
+                         "leave it out")
+    if args.threshold != "theoretical":
+        raise ValueError("--threshold calibrated does not apply to --rule sprt (no residual test); leave it out")
+    if args.sprt_ratio == 1.0:
+        raise ValueError("--sprt-ratio must differ from 1 (the fault's variance would be the baseline's)")
+    S = window_samples(args.step, "--step", data.rec.fs, minimum=1)
+    order = max(int(m.lags) for m in models.values())
+    data = _drop_short(data, order + 1, f"the models' largest order ({order}) with --rule sprt")
+    print(f"sequential (SPRT, variance ratio {args.sprt_ratio:g}, alpha {args.sprt_alpha:g}), rows every "
+          f"{data.span(S)}, at {data.rec.fs:g} Hz")
+    detection = SPRT("variance", ratio=args.sprt_ratio, alpha=args.sprt_alpha, beta=args.sprt_alpha, restart=True)
+    return data, S, detection, {"sprt_alpha": args.sprt_alpha}
+
+
+@command("monitor", "slide windows over a signal (or decide sample by sample, --rule sprt): detection with a "
+                    "healthy baseline, then identification with fault models; prints and writes the events",
+         _monitor_args)
 def _monitor(args: argparse.Namespace) -> int:
     from tsfdi._data import window_samples
     from tsfdi.monitoring import Monitor
@@ -763,19 +795,26 @@ def _monitor(args: argparse.Namespace) -> int:
     data = _read(args, _channels(baseline))
     given = {f"--baseline {args.baseline}": baseline, **{f"--models {n}": m for n, m in models.items()}}
     _check_channels(data, given)
-    W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
-    data = _drop_short(data, W, f"--window {args.window}")
     V = window_samples(args.steady_window, "--steady-window", data.rec.fs, minimum=2)
-    tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
-                          **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
-    if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
-        detection_test = tests.pop("")
-        test = tests or None
+    if args.rule == "sprt":
+        data, S, detection_test, sprt = _monitor_sequential(args, data, {"baseline": baseline, **models})
+        W = test = None
     else:
-        test, detection_test = tests, None
+        if args.window is None:
+            raise ValueError("--window is required (except with --rule sprt)")
+        W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
+        data = _drop_short(data, W, f"--window {args.window}")
+        tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
+                              **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
+        if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
+            detection_test = tests.pop("")
+            test = tests or None
+        else:
+            test, detection_test = tests, None
+        sprt = {}
     try:
         monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.rec.fs, test=test,
-                          detection_test=detection_test, steady_window=V, rule=args.rule)
+                          detection_test=detection_test, steady_window=V, rule=args.rule, **sprt)
     except (ValueError, TypeError) as exc:      # the steady-state thresholds come from the --models' records
         if str(exc).startswith("steady_window"):
             raise _reword(exc, data, (("steady_window", "--steady-window"), (" or steady_thresholds", ""))) from None
@@ -788,7 +827,8 @@ def _monitor(args: argparse.Namespace) -> int:
             events[c] = t0 + events[c]
         print(f"{data.rec.origin(i)}: detection at "
               f"{'-' if result.detection_time is None else f'{t0 + result.detection_time:g} s'}, label "
-              f"{result.label or '-'}")
+              f"{result.label or '-'}" + ("" if result.identification_time is None else
+                                          f" (decided at {t0 + result.identification_time:g} s)"))
         rows.append(events)
     table = _table(rows, data)
     _show(table)
