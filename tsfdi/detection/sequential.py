@@ -1285,7 +1285,8 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
         raise ValueError(f"held_out: {dof} degrees of freedom of the between-record spread (records minus models) "
                          f"for {q} summaries: give more records or fewer lags")
     S = dev.T @ dev / dof
-    if np.linalg.eigvalsh(S)[0] <= 1e-12 * max(float(np.trace(S)), np.finfo(float).tiny):
+    sd = np.sqrt(np.diag(S))
+    if not (sd > 0).all() or np.linalg.eigvalsh(S / np.outer(sd, sd))[0] <= 1e-10:     # on the correlation scale
         raise ValueError("held_out: the between-record covariance of the summaries is singular (summaries that do "
                          "not vary, or vary together exactly, over the records): give more or more varied records")
     between = np.array([S * (1.0 + 1.0 / r) for r in R])
