@@ -11,6 +11,9 @@ asked for, so that each decision comes with its error probabilities and an expec
   log-likelihood ratio for models estimated from real records (:meth:`SPRT.calibrate`).
 * :func:`msprt`: Armitage's multi-hypothesis rule on the per-sample log-likelihoods of ``M`` candidate models,
   with the scale correction :func:`msprt_scale`.
+* :func:`record_effect`: for records of one state that differ from each other more than their within-record noise
+  says, a record-level predictive likelihood (:meth:`RecordEffect.loglik`) whose evidence saturates, as input of
+  :func:`msprt`.
 
 References
 ----------
