@@ -5,9 +5,9 @@ Prints the medians of
 * ``VAR(records, 20, trend).fit()`` on 10 records of the shipped data (roll, pitch, yaw rate; 6,000 samples each),
   ``trend="c"`` and ``"n"``, and ``fit_baselines`` on the shipped data (the defaults, and 10 fitting records per
   state with VAR(20) on whole records, where the fit dominates): this tree against an earlier commit (``--against``,
-  default :data:`AGAINST`, the commit before the Gram-matrix fit), each measurement a fresh interpreter with that
-  commit's ``tsfdi`` or this one first on ``PYTHONPATH`` (the mechanism of ``previous_commit.py``), the two
-  alternating;
+  default :data:`AGAINST`, the commit before the Gram-matrix fit: the issue's reference) and against the previous
+  commit (``--previous``, default :data:`PREVIOUS`), each measurement a fresh interpreter with that commit's
+  ``tsfdi`` or this one first on ``PYTHONPATH`` (the mechanism of ``previous_commit.py``), the two alternating;
 * ``VAR(y, 20, trend).fit()`` against statsmodels ``VAR(y).fit(20, trend=...)`` on the same data (one record, and
   the 10 records end to end as one signal: statsmodels fits one record), in this process, with the coefficients
   and the residual covariance checked equal (relative 1e-8) and the standard errors to 1e-5 (statsmodels inverts
@@ -15,7 +15,7 @@ Prints the medians of
 
 Time is CPU time of the process by default (``--clock cpu``; ``wall`` for wall-clock time): the machine is shared.
 
-Run: python benchmarks/fit_speed.py [--against REF] [--rounds 3] [--clock cpu|wall]
+Run: python benchmarks/fit_speed.py [--against REF] [--previous REF] [--rounds 3] [--clock cpu|wall]
 """
 
 from __future__ import annotations
@@ -37,6 +37,8 @@ from previous_commit import CLOCKS, compare, median_time  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 #: the commit before fit() went through the Gram matrix (issue 36)
 AGAINST = "cf49e9f"
+#: the commit before session 30's fit_baselines / results changes (issue 36)
+PREVIOUS = "026d541"
 CHANNELS = ("roll", "pitch", "r")
 #: workloads of benchmarks/previous_commit.py timed here: name -> (description, timed units per run)
 WORKLOADS = {
@@ -97,9 +99,11 @@ def _once(fn, now) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", default=AGAINST, help="earlier commit to compare with (default %(default)s)")
+    parser.add_argument("--previous", default=PREVIOUS, help="previous commit (default %(default)s)")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--clock", choices=("cpu", "wall"), default="cpu")
     args = parser.parse_args()
+    compare(WORKLOADS, against=args.previous, rounds=args.rounds, clock=args.clock)
     ratios = {name: prev / cur for name, (prev, cur) in
               compare(WORKLOADS, against=args.against, rounds=args.rounds, clock=args.clock).items()}
     against_statsmodels(args.clock)
