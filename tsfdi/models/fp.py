@@ -792,7 +792,7 @@ class FPResults:
 
         def negllf(kv: np.ndarray) -> float:
             c = np.r_[1.0, self._g(np.asarray(kv, dtype=float))]
-            S = np.einsum("j,l,jalb->ab", c, c, W) / n
+            S = np.tensordot(np.tensordot(c, W, axes=(0, 0)), c, axes=(1, 0)) / n     # sum_jl c_j c_l W[j, :, l, :]
             sign, ld = np.linalg.slogdet(S)
             if sign <= 0:
                 return np.inf
@@ -900,7 +900,7 @@ class FPResults:
         d, s, df = k_hat.size, self.neqs, m.df_point
         g = self._g(k_hat)
         c = np.r_[1.0, g]
-        S = np.einsum("j,l,jalb->ab", c, c, W) / n
+        S = np.tensordot(np.tensordot(c, W, axes=(0, 0)), c, axes=(1, 0)) / n
         # D: d theta / dk, (df * s, d) in vec (column-major: equation outer) order
         D = np.empty((df * s, d))
         for a in range(d):
@@ -911,7 +911,7 @@ class FPResults:
         B = np.linalg.solve(DI @ D, DI)                                     # (d, df * s)
         # Cov(theta(k_hat)) across equations: per-equation blocks, cross blocks from the residual correlation
         L = np.kron(np.eye(df), g[None, :])                                 # theta(k) = L theta_fp
-        blocks = np.einsum("ab,ebc,dc->ead", L, self._cov, L)               # (s, df, df)
+        blocks = L @ self._cov @ L.T                                        # (s, df, df)
         if self.weights is None and s > 1:
             sp = self.sigma_pooled
             sd = np.sqrt(np.diag(sp))
