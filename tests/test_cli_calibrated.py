@@ -150,6 +150,35 @@ def test_calibrated_errors(files, tmp_path, capsys):
     assert f"--threshold calibrated, --baseline {tmp_path / 'short.npz'}: " in err
     assert "holds 20 independent" in err and "at least 30 are needed" in err
     assert "1 record(s), 4000 samples" in err
+    # --min-records: only with --threshold calibrated, at least 2
+    common = ["detect", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--window", "2s"]
+    assert main(common + ["--min-records", "3"]) == 2
+    assert "--min-records is for --threshold calibrated" in capsys.readouterr().err
+    assert main(common + ["--threshold", "calibrated", "--min-records", "1"]) == 2
+    assert "--min-records must be at least 2, got 1" in capsys.readouterr().err
+
+
+def test_min_records_reaches_the_threshold(files, tmp_path, capsys):
+    """--min-records is the calibrated threshold's min_records: a baseline of 2 records is refused at alpha 0.01
+    (the predictive law needs 3) and accepted with --min-records 2, with the library's threshold."""
+    d, paths, x = files
+    rng = np.random.default_rng(11)
+    for i in range(2):
+        _csv(record("healthy", 4000, rng), tmp_path / f"two{i}.csv")
+    assert main(["fit", str(tmp_path / "two0.csv"), str(tmp_path / "two1.csv"), "--out", str(tmp_path / "two.npz"),
+                 "--max-lags", "4"]) == 0
+    capsys.readouterr()
+    common = ["detect", str(d / "current.csv"), "--baseline", str(tmp_path / "two.npz"), "--window", "2s",
+              "--step", "1s", "--alpha", "0.01", "--threshold", "calibrated", "--min-windows", "5"]
+    assert main(common) == 2
+    assert "at least 3 are needed" in capsys.readouterr().err
+    assert main(common + ["--min-records", "2", "--out", str(tmp_path / "two.csv")]) == 0
+    res = tsfdi.load(tmp_path / "two.npz")
+    test = tsfdi.LjungBox(lags=20, alpha=0.01, threshold=tsfdi.ScaledChi2Threshold(0.01, min_windows=5,
+                                                                                   min_records=2))
+    test = test.calibrated_for({"b": res}, window=WINDOW)["b"]
+    out = pd.read_csv(tmp_path / "two.csv")
+    np.testing.assert_allclose(out["threshold_a"], test.threshold_[0], rtol=1e-12)
 
 
 def test_calibrated_for_is_one_calibration_per_model(files, tmp_path):

@@ -281,8 +281,9 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
     from tsfdi.detection import ScaledChi2Threshold
 
     if args.threshold == "theoretical":
-        if args.min_windows is not None:
-            raise ValueError("--min-windows is for --threshold calibrated")
+        for flag, value in (("--min-windows", args.min_windows), ("--min-records", args.min_records)):
+            if value is not None:
+                raise ValueError(f"{flag} is for --threshold calibrated")
         return _test(args)
     min_windows = 30 if args.min_windows is None else args.min_windows
     if min_windows < 5:
@@ -292,7 +293,10 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
                          "length")
     flags = {f"models[{name!r}]": flag for name, (flag, _) in models.items()}
     try:
-        return _test(args, ScaledChi2Threshold(args.alpha, min_windows=min_windows)).calibrated_for(
+        if args.min_records is not None and args.min_records < 2:
+            raise ValueError(f"--min-records must be at least 2, got {args.min_records}")
+        threshold = ScaledChi2Threshold(args.alpha, min_windows=min_windows, min_records=args.min_records)
+        return _test(args, threshold).calibrated_for(
             {name: res for name, (_, res) in models.items()}, window=window)
     except ValueError as exc:
         which, _, rest = str(exc).partition(": ")
@@ -317,6 +321,10 @@ def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
     p.add_argument("--min-windows", type=opt.count, default=None,
                    help="--threshold calibrated: fewest non-overlapping windows of held-out residuals the threshold "
                         "may rest on (default 30, at least 5); with few, its bound over the records is wider")
+    p.add_argument("--min-records", type=opt.count, default=None,
+                   help="--threshold calibrated: fewest held-out records the threshold may rest on (default: what "
+                        "--alpha needs for a new record's spread to be predicted, 3 at 0.01, 4 at 0.001; at least "
+                        "2); with fewer the threshold widens, as the spread of few records is uncertain")
 
 
 def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool = False) -> None:
