@@ -172,6 +172,34 @@ def test_save_load_round_trip(tmp_path, family):
         np.testing.assert_array_equal(back.weights, res.weights)
 
 
+def test_fpvar_weighted_is_statsmodels_wls_per_equation():
+    rng = np.random.default_rng(11)
+    ys = [np.column_stack([simulate_ar(k, 300, rng, scale=1 + k), rng.standard_normal(300) * (2 - k)]) for k in KS]
+    res = FPVAR(ys, KS, 1, degree=1, weights="point").fit()
+    X, Y, _ = explicit(ys, None, KS, 1, 1)
+    n = [len(y) - 1 for y in ys]
+    edges = np.r_[0, np.cumsum(n)]
+    for j in range(2):
+        first = sm.OLS(Y[:, j], X).fit()
+        s2 = np.array([np.mean(first.resid[a:b] ** 2) for a, b in zip(edges[:-1], edges[1:])])
+        wls = sm.WLS(Y[:, j], X, weights=np.repeat(1 / s2, n)).fit()
+        np.testing.assert_allclose(res.params[:, j], wls.params, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(res.bse[:, j], wls.bse, rtol=1e-8)
+    sig = res.sigma(0.5)
+    assert sig.shape == (2, 2) and np.all(np.linalg.eigvalsh(sig) > 0)
+    assert res.sigma(1.0)[0, 0] > res.sigma(0.0)[0, 0] and res.sigma(1.0)[1, 1] < res.sigma(0.0)[1, 1]
+
+
+def test_parameter_surface_plot():
+    from tsfdi.plotting.fp import plot_fp_surface
+
+    res = FPAR([pd.Series(y, name="gyro") for y in records()], KS, 2, 2).fit()
+    fig = plot_fp_surface(res)
+    ax = fig.axes[0]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["a1", "a2"]
+    np.testing.assert_allclose(ax.lines[0].get_ydata()[0], res.theta(0.0)["a1"])
+
+
 def test_immutable():
     res = FPAR(records(), KS, 2, 1).fit()
     with pytest.raises(AttributeError):
@@ -257,3 +285,18 @@ def test_bad_input_names_the_argument():
         res.estimate_k(ys[0], alpha=1.5)
     with pytest.raises(ValueError, match="model"):
         select_fp_order(ys, KS, 2, 1, model="arma")
+    with pytest.raises(ValueError, match="k_range"):
+        fp_basis([0.5], 1, [[1.0, 1.0]])
+    with pytest.raises(ValueError, match="NaN"):
+        fp_basis([np.nan], 1, [[0.0, 1.0]])
+    rng = np.random.default_rng(0)
+    vres = FPVAR([pd.DataFrame(rng.standard_normal((50, 2)), columns=["p", "q"]) for _ in KS], KS, 1, 1).fit()
+    with pytest.raises(ValueError, match="missing channel"):
+        vres.estimate_k(pd.DataFrame(rng.standard_normal((50, 2)), columns=["p", "r"]))
+    with pytest.raises(ValueError, match="y"):
+        vres.estimate_k(pd.DataFrame(np.full((50, 2), np.nan), columns=["p", "q"]))
+    xres = FPARX(ys, [rng.standard_normal(100) for _ in ys], KS, 1, 1, 0, 1).fit()
+    with pytest.raises(ValueError, match="u is required"):
+        xres.residuals(ys[0], 0.5)
+    with pytest.raises(ValueError, match="u is required"):
+        xres.estimate_k(ys[0])

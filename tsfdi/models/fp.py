@@ -94,13 +94,20 @@ def fp_basis(k: Any, degree: Any, k_range: Any, basis: str = "legendre") -> np.n
         last parameter running fastest.
     """
     basis = option(basis, "basis", tuple(_VANDER))
-    k = np.asarray(k, dtype=float)
+    try:
+        k = np.asarray(k, dtype=float)
+        rng = np.asarray(k_range, dtype=float).reshape(-1, 2)
+    except (TypeError, ValueError):
+        raise TypeError("k and k_range must be real arrays (k_range of shape (d, 2))") from None
     k = k[:, None] if k.ndim == 1 else k
-    rng = np.asarray(k_range, dtype=float).reshape(-1, 2)
     d = rng.shape[0]
     deg = _degrees(degree, d)
     if k.ndim != 2 or k.shape[1] != d:
         raise ValueError(f"k must have {d} operating parameter(s) per point, got shape {k.shape}")
+    if not np.isfinite(rng).all() or not (rng[:, 1] > rng[:, 0]).all():
+        raise ValueError(f"k_range must hold finite intervals (low, high) with low < high, got {rng.tolist()}")
+    if not np.isfinite(k).all():
+        raise ValueError("k contains NaN/inf")
     x = 2.0 * (k - rng[:, 0]) / (rng[:, 1] - rng[:, 0]) - 1.0
     G = np.ones((k.shape[0], 1))
     for j in range(d):
@@ -934,7 +941,8 @@ class FPResults:
                   ("Order", f"{m._lag_name}={m.na}" + (f", nb={m.nb}, nk={m.nk}" if m.nb else "")),
                   ("Trend", m.trend), ("Operating parameters", ", ".join(
                       f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(m.k_names, m.k_range))),
-                  ("Basis", f"{m.basis}, degree {m.degree} ({m.n_basis} functions)"), ("Weights", m.weights),
+                  ("Basis", f"{m.basis}, degree {', '.join(map(str, m.degree))} ({m.n_basis} functions)"),
+                  ("Weights", m.weights),
                   ("Records", len(m.records)), ("Operating points", len(np.unique(m.k, axis=0))),
                   ("Observations", self.nobs), ("Parameters", self.df_model), ("Log-likelihood", self.llf),
                   ("AIC", self.aic), ("BIC", self.bic)]
