@@ -15,13 +15,14 @@ Run: ``python benchmarks/fp_models.py [--data PATH] [--lags N] [--degree D]`` (B
    ``benchmarks/crazypad.py`` (gyro rates and attitude commands; take-off / landing margin from the normal flights'
    altitude; functions imported from it). Every airborne segment is one record. Leave one depth out: an FP-VAR
    (trend "c") fitted on the segments of the other 15 depths, ``estimate_k`` on each segment of the held-out depth,
-   bounded to the fitted range (so the two end depths are extrapolation-free but clipped). Order and basis degree
+   bounded to the fitted range (so the two end depths, outside the range of their fold, can at best reach the nearest
+   fitted depth). Order and basis degree
    chosen once by ``select_fp_order`` (BIC, max lags ``crazypad.MAX_LAGS`` = 20, max degree 4) on all depths, the
    one choice that sees every depth (stated, not hidden): the BIC minimum over degrees >= 1, since degree 0 (a
    model that does not depend on the depth, which BIC prefers here: the depth's effect does not pay for a second
-   copy of every coefficient) estimates nothing; ``--lags`` / ``--degree`` override it. Printed: per depth the estimates, and
-   the RMSE of k_hat, the share of 95 % intervals that hold the true depth, per segment and per log (the mean of
-   its segments' estimates).
+   copy of every coefficient) estimates nothing; ``--lags`` / ``--degree`` override it. Printed: per depth the
+   estimates, and the RMSE of k_hat, the share of 95 % intervals that hold the true depth, per segment and per log
+   (the mean of its segments' estimates).
 """
 
 from __future__ import annotations
@@ -96,7 +97,8 @@ def cost() -> None:
           "equation)")
     print(f"  FPVAR spec + fit                     {t_fp_spec * 1e3:8.1f} ms")
     print(f"  16 point VAR fits (one per point)    {t_point * 1e3:8.1f} ms  -> FP / point = {t_fp_spec / t_point:.2f}")
-    print(f"  one pooled VAR on all 32 records     {t_pooled * 1e3:8.1f} ms  -> FP / pooled = {t_fp_spec / t_pooled:.2f}")
+    print(f"  one pooled VAR on all 32 records     {t_pooled * 1e3:8.1f} ms  -> FP / pooled = "
+          f"{t_fp_spec / t_pooled:.2f}")
     print(f"  residuals of 2000 samples: FP at k {t_res_fp * 1e3:6.2f} ms, point VAR {t_res_pt * 1e3:6.2f} ms "
           f"-> ratio {t_res_fp / t_res_pt:.2f}")
     print(f"  estimate_k on 2000 samples           {t_est * 1e3:8.1f} ms  (true k 0.37: k_hat {est.k_hat[0]:.4f}, "
@@ -128,7 +130,8 @@ def crazypad(lags=None, degree=None) -> None:
                 data.append((depth, cond, f"{f.drone}/{f.log}", x))
     depths = np.array([d for d, *_ in data])
     recs = [x for *_, x in data]
-    print(f"  margin {tuple(float(m) for m in margin)} s (normal flights' altitude), channels {', '.join(cp.BASE)}; {len(series)} depths, "
+    print(f"  margin {tuple(float(m) for m in margin)} s (normal flights' altitude), channels {', '.join(cp.BASE)}; "
+          f"{len(series)} depths, "
           f"{len({(c, lg) for _, c, lg, _ in data})} logs, {len(recs)} segments of {min(len(r) for r in recs)}-"
           f"{max(len(r) for r in recs)} samples at {cp.FS:g} Hz")
     if lags is None or degree is None:

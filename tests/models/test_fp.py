@@ -118,6 +118,8 @@ def test_theta_residuals_and_delta_method():
     L = np.kron(np.eye(2), g[None, :])
     np.testing.assert_allclose(res.theta_bse(0.3), np.sqrt(np.diag(L @ cov @ L.T)), rtol=1e-8)
     # residuals at k are the point AR's with theta(k)
+    # in-sample residuals: record i through theta(k_i)
+    np.testing.assert_allclose(res.resid[1], res.residuals(ys[1], KS[1]), rtol=1e-10, atol=1e-12)
     y = simulate_ar(0.3, 100, np.random.default_rng(1))
     e = res.residuals(y, 0.3)
     ref = np.convolve(y, np.r_[1.0, res.theta(0.3)], "valid")
@@ -248,6 +250,48 @@ def test_select_fp_order_finds_the_true_order_and_degree():
     assert res.model.na == 2 and res.model.degree == (2,) and res.model.hold_back == 4
     # the selection's BIC is the fit's on the same common sample
     assert res.bic == pytest.approx(sel.table.loc[(2, 2), "bic"], rel=1e-9)
+
+
+def test_select_fp_order_var_and_arx_refit_their_choice():
+    rng = np.random.default_rng(12)
+    ks = np.linspace(0, 1, 5)
+    ys = [np.column_stack([simulate_ar(k, 300, rng), rng.standard_normal(300)]) for k in ks]
+    sel = select_fp_order(ys, ks, 3, 2, "var")
+    res = sel.fit()
+    assert isinstance(res.model, FPVAR)
+    assert res.bic == pytest.approx(sel.table.loc[sel.selected, "bic"], rel=1e-9)
+    us = [rng.standard_normal(300) for _ in ks]
+    yx = [sps.lfilter([0, 1.0], [1, -0.5 + 0.3 * k], u) + 0.1 * rng.standard_normal(300) for k, u in zip(ks, us)]
+    selx = select_fp_order(yx, ks, 3, 2, "arx", u=us)
+    resx = selx.fit()
+    assert isinstance(resx.model, FPARX) and resx.model.nb == resx.model.na == selx.selected[0]
+    assert resx.bic == pytest.approx(selx.table.loc[selx.selected, "bic"], rel=1e-9)
+    assert selx.selected[1] >= 1
+
+
+def test_damaged_fp_archive_is_refused(tmp_path):
+    import hashlib
+    import io
+    import json
+    import zipfile
+
+    res = FPAR(records(100), KS, 2, 1).fit()
+    path = res.save(tmp_path / "m.npz")
+    with zipfile.ZipFile(path) as zf:
+        fields = {i.filename: zf.read(i) for i in zf.infolist()}
+    def npy(arr) -> bytes:
+        buf = io.BytesIO()
+        np.lib.format.write_array(buf, np.asarray(arr))
+        return buf.getvalue()
+
+    fields["k.npy"] = npy(np.zeros((3, 1)))          # operating points of 3 records for 6, checksums recomputed
+    sums = {name[:-4]: hashlib.sha256(data).hexdigest() for name, data in fields.items() if name != "checksums.npy"}
+    fields["checksums.npy"] = npy(np.array(json.dumps({"sha256": sums})))
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in fields.items():
+            zf.writestr(name, data)
+    with pytest.raises(ValueError, match="damaged: the data .* do not fit the FPAR options .*one operating point"):
+        load(path)
 
 
 def test_bad_input_names_the_argument():

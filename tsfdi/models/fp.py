@@ -300,7 +300,8 @@ class _FPModel:
         return out
 
     def _fp_design(self, G: np.ndarray, w: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """The explicit FP regressor ``phi[t] (x) G(k_i)`` and target of all records (rows weighted by ``sqrt(w_i)``)."""
+        """The explicit FP regressor ``phi[t] (x) G(k_i)`` and target of all records (rows weighted by
+        ``sqrt(w_i)``)."""
         xs, ys = [], []
         for i in range(len(self.records)):
             X, Y = self._design(i)
@@ -488,6 +489,8 @@ class FPResults:
         Standard errors ``sqrt(diag(s_j^2 (X'WX)^{-1}))`` (``W`` the record weights, identity when pooled,
         ``s_j^2 = RSS_j / (nobs - df_eq)`` in the weighted metric), ``params / bse`` and the two-sided normal
         p-values.
+    resid : list
+        In-sample residuals, one series per record (data kind of the records).
     sigma_points : ndarray, shape (records, s, s)
         Maximum-likelihood residual covariance of every record through ``theta(k_i)``.
     nobs, df_model, llf, aic, bic : int / float
@@ -580,6 +583,14 @@ class FPResults:
     @property
     def df_resid(self) -> int:
         return self.nobs - self.model.df_eq
+
+    @property
+    def resid(self) -> list:
+        """In-sample residuals of every record through ``theta(k_i)``, one series per record in the record's data
+        kind (index from position ``hold_back``)."""
+        m = self.model
+        sc = m.point.y_scale
+        return [rec.wrap(e * sc, m.hold_back) for rec, e in zip(m.records, self._resid_fit)]
 
     @property
     def sigma_points(self) -> np.ndarray:
@@ -858,7 +869,8 @@ class FPResults:
                 curve[a, i] = -negllf(kk)
         for arr in (k_hat, se, ci, cov, cov_fp, curve_k, curve, bnd):
             arr.setflags(write=False)
-        return OperatingPointEstimate(k_hat=k_hat, bse=se, conf_int=ci, cov=cov, cov_fp=cov_fp, alpha=alpha, llf=-f0, nobs=int(n),
+        return OperatingPointEstimate(k_hat=k_hat, bse=se, conf_int=ci, cov=cov, cov_fp=cov_fp, alpha=alpha,
+                                      llf=-f0, nobs=int(n),
                                       names=list(m.k_names), bounds=bnd, grid=curve_k, loglik=curve,
                                       at_bound=at_bound)
 
