@@ -239,6 +239,16 @@ def test_estimate_k_two_parameters():
     est = res.estimate_k(y)
     assert np.all(np.abs(est.k_hat - [0.3, 0.7]) < 4 * est.bse)
     assert est.grid.shape == (2, 201)
+    # profiles: the other parameter maximised at every grid value, so each curve peaks at the maximum
+    assert np.all(est.loglik.max(axis=1) <= est.llf + 1e-6) and np.all(est.loglik.max(axis=1) > est.llf - 0.05)
+    i = int(np.argmin(np.abs(est.grid[0] - 0.9)))
+    k = np.array([est.grid[0, i], est.k_hat[1]])
+    e = res.residuals(y, k)                  # the profiled Gaussian log-likelihood at k, from the residuals
+    slice_value = -0.5 * e.size * (np.log(2 * np.pi) + np.log(np.mean(e ** 2)) + 1)
+    assert est.loglik[0, i] >= slice_value - 1e-6
+    e = res.residuals(y, est.k_hat)
+    assert est.llf == pytest.approx(-0.5 * e.size * (np.log(2 * np.pi) + np.log(np.mean(e ** 2)) + 1), abs=1e-6)
+    assert len(est.plot().axes) == 2
 
 
 def test_select_fp_order_finds_the_true_order_and_degree():

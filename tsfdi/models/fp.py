@@ -769,7 +769,8 @@ class FPResults:
         ``((p + 1) s)^2`` matrix of the record. The noise covariance of the new record is unknown and profiled
         out: the log-likelihood is ``-n/2 (s ln 2 pi + ln det(E(k)'E(k) / n) + s)``. It is maximised over a grid
         of the bounds (``grid`` points per parameter, at most 41 per parameter for several), then refined by a
-        bounded search; the standard error is the inverse of the observed information (the curvature of the
+        bounded search, and the profile log-likelihood of every parameter is traced on ``grid`` points; the
+        standard error is the inverse of the observed information (the curvature of the
         log-likelihood at ``k_hat``, central differences) plus the part carried by the FP coefficients' own
         estimation error (:attr:`OperatingPointEstimate.cov_fp`, delta method: ``B Cov(theta(k_hat)) B'`` with
         ``B = (D'ID)^{-1} D'I`` the sensitivity of ``k_hat`` to the point parameters, ``D = d theta / dk`` and ``I``
@@ -859,13 +860,24 @@ class FPResults:
                           stacklevel=2)
         q = stats.norm.isf(alpha / 2)
         ci = np.stack([k_hat - q * se, k_hat + q * se], axis=1)
-        # the log-likelihood along each parameter through k_hat
+        # the profile log-likelihood of each parameter: the others maximised (bounded) at every grid value,
+        # each search started from the previous grid value's optimum
         curve_k = np.stack([np.linspace(lo_, hi_, grid) for lo_, hi_ in bnd])
         curve = np.empty_like(curve_k)
         for a in range(d):
+            others = [b for b in range(d) if b != a]
+            start = k_hat[others]
             for i, v in enumerate(curve_k[a]):
                 kk = k_hat.copy()
                 kk[a] = v
+                if others:
+                    def profile(x, kk=kk):
+                        kk[others] = x
+                        return negllf(kk)
+
+                    r = optimize.minimize(profile, start, method="L-BFGS-B", bounds=[tuple(bnd[b]) for b in others])
+                    start = np.asarray(r.x, dtype=float)
+                    kk[others] = start
                 curve[a, i] = -negllf(kk)
         for arr in (k_hat, se, ci, cov, cov_fp, curve_k, curve, bnd):
             arr.setflags(write=False)
@@ -1015,8 +1027,8 @@ class OperatingPointEstimate:
     bounds : ndarray (d, 2)
         Search interval.
     grid, loglik : ndarray (d, m)
-        The log-likelihood along each parameter through ``k_hat`` (the others held at ``k_hat``): for one
-        parameter, the likelihood curve.
+        The profile log-likelihood of each parameter on a grid of its bounds (the others maximised within theirs;
+        for one parameter, the likelihood curve).
     at_bound : bool
         ``k_hat`` within two difference steps of a bound (the interval is then one-sided in truth).
     """
