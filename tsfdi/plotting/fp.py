@@ -10,7 +10,8 @@ __all__ = ["plot_k_estimate", "plot_fp_surface"]
 
 
 def plot_k_estimate(estimate: Any, ax: Any = None) -> Any:
-    """The log-likelihood of the operating point along each parameter, with ``k_hat`` and its interval.
+    """The profile log-likelihood of each operating parameter, with ``k_hat``, its interval (from the curvature)
+    and the level ``-chi2_1(1 - alpha) / 2`` below the maximum whose crossings bound the likelihood-ratio interval.
 
     Parameters
     ----------
@@ -23,8 +24,10 @@ def plot_k_estimate(estimate: Any, ax: Any = None) -> Any:
     matplotlib.figure.Figure
     """
     import matplotlib.pyplot as plt
+    from scipy import stats
 
     d = len(estimate.names)
+    level = -0.5 * stats.chi2.ppf(1 - estimate.alpha, 1)
     if ax is None:
         fig, axes = plt.subplots(1, d, figsize=(5.5 * d, 3.6), squeeze=False)
         axes = list(axes[0])
@@ -40,6 +43,8 @@ def plot_k_estimate(estimate: Any, ax: Any = None) -> Any:
         if np.isfinite(lo) and np.isfinite(hi):
             a.axvspan(max(lo, grid[0]), min(hi, grid[-1]), color="C3", alpha=0.15,
                       label=f"{1 - estimate.alpha:.0%} interval [{lo:.4g}, {hi:.4g}]")
+        a.axhline(level, color="0.5", ls=":", lw=1,
+                  label=f"profile-likelihood {1 - estimate.alpha:.0%} level ({level:.2f})")
         finite = ll[np.isfinite(ll)] - estimate.llf
         if finite.size:
             a.set_ylim(max(finite.min(), -50.0) - 1.0, 1.0)
