@@ -102,3 +102,45 @@ def test_pvalue_agrees_with_the_threshold(fleet):
     assert np.all(pv[3] < 1e-6) and np.all(np.diff(pv, axis=0) <= 0)
     d = tsfdi.detect(fit[0][:200], tsfdi.VAR(fit[:10], 2).fit(), test)
     assert d.details["calibration_records"] == 10 and len(d.details["record_law"]) == 3
+
+
+def test_overlapping_windows_give_the_spread_of_disjoint_ones():
+    # white noise: the Ljung-Box Q of every sliding window (overlapping) of 100 records of 10 windows each; the
+    # variance of a record's overlapping windows about their own mean misses the variance of that mean (a mean of 10
+    # independent windows), so the fitted law was ~7 % too light (df too large, a liberal threshold on new records)
+    rng = np.random.default_rng(31)
+    n, recs = 198, [rng.standard_normal((10 * 198, 1)) for _ in range(100)]
+    lb = tsfdi.LjungBox(lags=20, alpha=1e-2)
+    stat = np.concatenate([lb.window_statistic(r, n, 1)[:, 0] for r in recs])
+    groups = np.repeat(np.arange(len(recs)), 10 * n - n + 1)
+    law = ScaledChi2Threshold(1e-2).calibrate(stat, independent=[10] * len(recs), groups=groups)
+    disjoint = np.concatenate([lb.window_statistic(r, n, n)[:, 0] for r in recs])
+    cv2 = disjoint.var(ddof=1) / disjoint.mean() ** 2          # 2 / nu of the disjoint windows, the truth
+    assert abs(np.mean(2.0 / law.df_) / cv2 - 1.0) < 0.03, (np.mean(2.0 / law.df_), cv2)
+
+
+def fleet_rates(seed: int, fleets: int, records: int, alpha: float, family: str, new: int = 20) -> np.ndarray:
+    """The decision's rate on ``new`` new records of each of ``fleets`` small simulated fleets (seeds ``seed``,
+    ``seed + 1``, ...), the baseline fitted on ``records`` records of the fleet."""
+    rates = []
+    for f in range(fleets):
+        rng = np.random.default_rng(seed + f)
+        fit, fresh = FC.fleet_records(rng, records), FC.fleet_records(rng, new)
+        spec = tsfdi.VAR(fit, 2)
+        base = spec.fit()
+        test = FC.make_test(family, alpha, "predictive").calibrate(spec.held_out_residuals(), window=FC.WINDOW)
+        rates.append(FC.decision_rate(test, [np.asarray(base.residuals(x)) for x in fresh]))
+    return np.array(rates)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("family", ["LB", "F"])
+def test_rate_averaged_over_many_small_fleets(family):
+    # 60 fleets (seeds 8000-8059, used for nothing else), 10 fitting records, 20 new records each (200 windows):
+    # the rate of one fleet varies from fleet to fleet far beyond the binomial (its calibration records are a sample
+    # of the fleet), so alpha must lie in the 99.9 % interval of the mean rate over the independent fleets
+    rates = fleet_rates(8000, 60, 10, 1e-2, family)
+    half = stats.t.isf(5e-4, rates.size - 1) * rates.std(ddof=1) / np.sqrt(rates.size)
+    assert abs(rates.mean() - 1e-2) <= half, (rates.mean(), half)
+    lo, hi = band(200 * rates.size, 1e-2)
+    assert rates.mean() <= 2 * hi, (rates.mean(), hi)     # and never far above the pooled binomial band

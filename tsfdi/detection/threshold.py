@@ -488,7 +488,7 @@ class ScaledChi2Threshold:
         if not np.all(m > 0):
             raise ValueError("statistic is 0 on every window of some healthy record: no null law can be fitted")
         self.pooled_ = False
-        self.scale_, self.df_ = self._laws(s1, s2, cnt)
+        self.scale_, self.df_ = self._laws(s1, s2, cnt, per)
         # each record's anchor: the log of its own false_alarm quantile; the anchors' between-record variance tau2,
         # net of their own sampling variance (~ 2 / nu_j per independent window)
         pf = self.false_alarm
@@ -519,11 +519,18 @@ class ScaledChi2Threshold:
         self._pvalue_grid = (np.log(grid[keep]), np.log(tail[keep]) + math.log(pf) - math.log(at))
         return self
 
-    def _laws(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _laws(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray,
+              per: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Scale and degrees of freedom of ``c chi2(nu)`` by the method of moments from sums of the windows, their
-        squares and their counts (one law per entry)."""
+        squares and their counts (one law per entry). With ``per`` (independent windows per entry) the variance of
+        overlapping windows about their own mean is corrected for that mean's variance, that of a mean of ``per``
+        independent windows: ``ss / cnt * per / (per - 1)`` (``ss / (cnt - 1)`` for disjoint windows)."""
         m = s1 / cnt
-        v = (s2 - cnt * m * m) / np.maximum(cnt - 1.0, 1.0)
+        if per is None:
+            v = (s2 - cnt * m * m) / np.maximum(cnt - 1.0, 1.0)
+        else:
+            p = np.maximum(per, 2.0)
+            v = (s2 - cnt * m * m) / cnt * (p / (p - 1.0))
         if not (np.all(m > 0) and np.all(v > 0)):
             raise ValueError("statistic does not vary on some healthy record: no null law can be fitted")
         if self.df is None:
