@@ -13,7 +13,7 @@ import importlib
 
 from tsfdi.baselines import Baselines, Records, fit_baselines
 from tsfdi.coverage import Coverage
-from tsfdi.detection import (GLRT, SPRT, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
+from tsfdi.detection import (GLRT, SPRT, AnyOf, Decision, EmpiricalThreshold, FTest, LjungBox, MeanTest, MovingSquaredError,
                              ParameterGLRT, ResidualTest, ScaledChi2Threshold, SequentialDecision,
                              SequentialIdentification, ZScore, msprt)
 from tsfdi.evaluation import Evaluation, detection_metrics, evaluate, first_alarm, score_records
@@ -36,7 +36,7 @@ __all__ = [
     "EMRANResults",
     "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # residual tests and decisions
-    "ResidualTest", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "ParameterGLRT", "MovingSquaredError",
+    "ResidualTest", "AnyOf", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "ParameterGLRT", "MovingSquaredError",
     "EmpiricalThreshold",
     "ScaledChi2Threshold",
     "ZScore",

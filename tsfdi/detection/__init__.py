@@ -1,6 +1,7 @@
 """Residual hypothesis tests and the Decision object."""
 
 from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.glrt import GLRT, GLRTScan, GLRTStream, ParameterGLRT, glrt_direct
 from tsfdi.detection.mean import MeanTest
@@ -12,7 +13,7 @@ from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows, autocovariance, ljungbox_windows
 from tsfdi.detection.zscore import ZScore
 
-__all__ = ["Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest",
+__all__ = ["AnyOf", "Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest",
            "LjungBoxWindows", "MovingSquaredError", "MovingSquaredErrorStream", "ParameterGLRT", "RecordEffect", "ResidualTest",
            "SPRT", "ScaledChi2Threshold", "SequentialDecision", "SequentialIdentification", "ZScore",
            "autocovariance", "glrt_direct", "ljungbox_windows", "msprt", "msprt_scale", "record_effect", "wald_bounds"]
