@@ -49,7 +49,7 @@ training flights; its detection delay on the drift scenarios is printed beside t
 The figure (``docs/figures/parity_isolation.png``, ``--figure PATH``) shows one development flight with a frozen
 GPS: the residuals, every GLRT's alarms and self-check flags, and the isolation decision.
 
-Run: ``python benchmarks/parity_isolation.py`` (about 8 min on one core).
+Run: ``python benchmarks/parity_isolation.py`` (about 5 min on one core).
 """
 
 from __future__ import annotations
