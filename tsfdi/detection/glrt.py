@@ -274,6 +274,9 @@ class GLRT(ResidualTest):
     alpha : float
         False-alarm probability of the theoretical threshold: alpha is the false-alarm probability per sample,
         not per window.
+        For a multi-channel decision (it rejects when any channel alarms) ``alpha`` is per channel and per sample:
+        this test has no ``correction=``, so ``k`` channels give up to ``1 - (1 - alpha)^k`` per sample; give it
+        ``alpha / k`` for a decision at ``alpha``.
 
         The false-alarm probability of the GLRT (``alpha`` here, ``false_alarm`` of an
         :class:`~tsfdi.EmpiricalThreshold`) is per sample, as in Hansen et al. (Fig. 2): on a healthy record

@@ -22,6 +22,9 @@ class MeanTest(ReferenceVarianceTest):
     ----------
     alpha : float
         Type I risk per tested window (per channel), in (0, 1).
+        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is per channel unless
+        ``correction=`` is given: ``correction="sidak"`` or ``"bonferroni"`` makes the decision's false-alarm rate
+        at most ``alpha``; without it, ``k`` channels give up to ``1 - (1 - alpha)^k``.
     correction : {None, "bonferroni", "sidak"}
         For vector residuals, test each of the ``k`` channels at ``alpha / k`` (Bonferroni) or
         :math:`1 - (1 - \alpha)^{1/k}` (Sidak), so that "some channel rejects" has size at most ``alpha``.

@@ -23,6 +23,9 @@ class FTest(ReferenceVarianceTest):
     alpha : float
         Type I (false alarm) risk, in (0, 1): the type I risk per tested window (per channel). Over many
         windows of a healthy record about ``alpha`` of them reject in each channel.
+        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is per channel unless
+        ``correction=`` is given: ``correction="sidak"`` or ``"bonferroni"`` makes the decision's false-alarm rate
+        at most ``alpha``; without it, ``k`` channels give up to ``1 - (1 - alpha)^k``.
     alternative : {"greater", "two-sided"}
         ``"greater"`` (the paper): H1 is a variance *increase*, reject when
         :math:`F > f_{1-\alpha}(N_u, N_0 - d)`. ``"two-sided"``: reject when

@@ -88,6 +88,9 @@ class LjungBox(CalibratedTest):
     alpha : float
         Type I (false alarm) risk in (0, 1): the type I risk per tested window (per channel). Over many
         windows of a healthy record about ``alpha`` of them reject in each channel.
+        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is per channel unless
+        ``correction=`` is given: ``correction="sidak"`` or ``"bonferroni"`` makes the decision's false-alarm rate
+        at most ``alpha``; without it, ``k`` channels give up to ``1 - (1 - alpha)^k``.
     model_df : int
         Degrees of freedom subtracted from ``lags`` (scalar) or ``s**2 * lags`` (multivariate). Use 0 (the
         default, the papers' use) for residuals of a baseline model driven by *new* data; use the number of

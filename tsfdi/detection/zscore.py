@@ -68,6 +68,9 @@ class ZScore(ResidualTest):
     samples before it. ``alpha`` of the decision is the nominal per-sample two-sided Gaussian rate: alpha is the
     false-alarm probability per sample, not per window. Over ``N`` samples the false-alarm probability of the
     record is about ``N * alpha`` for iid Gaussian residuals.
+    For a multi-channel decision (it rejects when any channel alarms) ``alpha`` is per channel and per sample: this
+    test has no ``correction=``, so ``k`` channels give up to ``1 - (1 - alpha)^k`` per sample; give it ``alpha /
+    k`` for a decision at ``alpha``.
 
     The Z-score does not depend on the scale of the residual: each channel is divided by a power of two before the
     recursion (exact), so values near 1e300 or 1e-300 give the scores of values near 1 (the running variance of
