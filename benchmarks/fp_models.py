@@ -22,7 +22,8 @@ Run: ``python benchmarks/fp_models.py [--data PATH] [--lags N] [--degree D]`` (B
    model that does not depend on the depth, which BIC prefers here: the depth's effect does not pay for a second
    copy of every coefficient) estimates nothing; ``--lags`` / ``--degree`` override it. Printed: per depth the
    estimates, and the RMSE of k_hat, the share of 95 % intervals that hold the true depth, per segment and per log
-   (the mean of its segments' estimates).
+   (the mean of its segments' estimates), the coverage of the likelihood-ratio interval read off the profile curve,
+   for pooled and for per-point weighted least squares.
 """
 
 from __future__ import annotations
@@ -147,33 +148,40 @@ def crazypad(lags=None, degree=None) -> None:
         lags = choice[0] if lags is None else lags
         degree = choice[1] if degree is None else degree
     print(f"  FP-VAR(lags {lags}, Legendre degree {degree}, trend c, pooled LS)")
-    rows = []
-    t0 = time.perf_counter()
-    for depth, cond in series:
-        fit_idx = [i for i, d in enumerate(depths) if d != depth]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            res = FPVAR([recs[i] for i in fit_idx], depths[fit_idx], lags, degree, "c").fit()
-            for i in np.flatnonzero(depths == depth):
-                est = res.estimate_k(recs[i])
-                rows.append((depth, data[i][2], est.k_hat[0], est.bse[0], est.covers(depth), est.at_bound))
-    fold_s = time.perf_counter() - t0
-    t = pd.DataFrame(rows, columns=["depth", "log", "k_hat", "se", "covers", "at_bound"])
-    print(f"  {len(series)} folds in {fold_s:.1f} s")
-    print("  depth  segments  mean k_hat  median se  covered  at a bound")
-    for depth, g in t.groupby("depth"):
-        print(f"  {depth:5.1f}  {len(g):8d}  {g.k_hat.mean():10.2f}  {g.se.median():9.2f}  {g.covers.mean():7.0%}  "
-              f"{g.at_bound.mean():10.0%}")
-    err = t.k_hat - t.depth
-    inner = t[(t.depth > depths.min()) & (t.depth < depths.max())]
-    logs = t.groupby(["depth", "log"]).k_hat.mean().reset_index()
-    print(f"  per segment: RMSE {np.sqrt(np.mean(err ** 2)):.2f} mm, mean error {err.mean():+.2f} mm, 95 % interval "
-          f"coverage {t.covers.mean():.0%} ({int(t.covers.sum())}/{len(t)})")
-    print(f"  interior depths only (the ends are outside the fitted range of their fold): RMSE "
-          f"{np.sqrt(np.mean((inner.k_hat - inner.depth) ** 2)):.2f} mm, coverage {inner.covers.mean():.0%} "
-          f"({int(inner.covers.sum())}/{len(inner)})")
-    print(f"  per log (mean of its segments): RMSE {np.sqrt(np.mean((logs.k_hat - logs.depth) ** 2)):.2f} mm over "
-          f"{len(logs)} logs; predicting the mean depth: RMSE {np.sqrt(np.mean((depths - depths.mean()) ** 2)):.2f} mm")
+    level = 0.5 * 3.841459                    # chi2_1(0.95) / 2: the likelihood-ratio (profile) interval
+    for weights in ("pooled", "point"):
+        rows = []
+        t0 = time.perf_counter()
+        for depth, cond in series:
+            fit_idx = [i for i, d in enumerate(depths) if d != depth]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                res = FPVAR([recs[i] for i in fit_idx], depths[fit_idx], lags, degree, "c", weights=weights).fit()
+                for i in np.flatnonzero(depths == depth):
+                    est = res.estimate_k(recs[i])
+                    inside = est.grid[0][est.loglik[0] >= est.llf - level]
+                    rows.append((depth, data[i][2], est.k_hat[0], est.bse[0], est.covers(depth),
+                                 inside.min() <= depth <= inside.max(), est.at_bound))
+        fold_s = time.perf_counter() - t0
+        t = pd.DataFrame(rows, columns=["depth", "log", "k_hat", "se", "covers", "lr_covers", "at_bound"])
+        print(f"  -- weights={weights!r}: {len(series)} folds in {fold_s:.1f} s")
+        if weights == "pooled":
+            print("  depth  segments  mean k_hat  median se  covered  at a bound")
+            for depth, g in t.groupby("depth"):
+                print(f"  {depth:5.1f}  {len(g):8d}  {g.k_hat.mean():10.2f}  {g.se.median():9.2f}  "
+                      f"{g.covers.mean():7.0%}  {g.at_bound.mean():10.0%}")
+        err = t.k_hat - t.depth
+        inner = t[(t.depth > depths.min()) & (t.depth < depths.max())]
+        logs = t.groupby(["depth", "log"]).k_hat.mean().reset_index()
+        print(f"  per segment: RMSE {np.sqrt(np.mean(err ** 2)):.2f} mm, mean error {err.mean():+.2f} mm, 95 % "
+              f"interval coverage {t.covers.mean():.0%} ({int(t.covers.sum())}/{len(t)}), likelihood-ratio "
+              f"interval {t.lr_covers.mean():.0%}, median se {t.se.median():.2f} mm")
+        print(f"  interior depths only (the ends are outside the fitted range of their fold): RMSE "
+              f"{np.sqrt(np.mean((inner.k_hat - inner.depth) ** 2)):.2f} mm, coverage {inner.covers.mean():.0%} "
+              f"({int(inner.covers.sum())}/{len(inner)})")
+        print(f"  per log (mean of its segments): RMSE {np.sqrt(np.mean((logs.k_hat - logs.depth) ** 2)):.2f} mm "
+              f"over {len(logs)} logs; predicting the mean depth: RMSE "
+              f"{np.sqrt(np.mean((depths - depths.mean()) ** 2)):.2f} mm")
 
 
 def main() -> None:
