@@ -14,12 +14,15 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 import pandas as pd
+from scipy import optimize, special, stats
 
 from tsfdi._data import as_signal, check_paired, refuse_masked, sampling_frequency
 from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
+from tsfdi.detection.sequential import SPRT
 from tsfdi.exceptions import ConvergenceWarning
 from tsfdi.models.lstsq import check_size
 from tsfdi.models.recursive import RecursiveARX
@@ -30,6 +33,11 @@ _SECONDS_PER_HOUR = 3600.0
 _HUGE = 1e300            # a threshold no statistic reaches (calibration runs never alarm, so never freeze)
 _MIN_EMPIRICAL = 5.0     # expected episodes at the target rate needed for the empirical estimate
 _MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
+_MIN_SPRT_RECORDS = 3   # armed (run, pair) records the SPRT calibration needs for a spread between records
+_SPRT_BLOCK = 32         # samples per batch of the long-run variance in the SPRT scale of one record
+_SPRT_CONFIDENCE = 0.95  # the stated false-alarm band: its 5 % and 95 % bootstrap quantiles over records
+_SPRT_BOOTSTRAP = 200    # bootstrap draws of the healthy records
+_MIN_SPRT_CYCLES = 50    # restart cycles of the SPRT walk the calibration needs
 _TAIL_EPISODES = 20      # episodes above the base level of the tail fit
 _MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit accepts
 #: the RecursiveARX options OnlineDetector passes on (it sets the others: gate, threshold, freeze_on_alarm, ...)
@@ -162,6 +170,8 @@ class OnlineCalibration:
     expected_episodes: float
     healthy_episodes: int
     tail: dict
+    rate_band: tuple | None = None
+    sprt_scale: float | None = None
 
 
 def _episode_starts(alarm: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
@@ -245,6 +255,61 @@ def _moving_average(x: np.ndarray, window: int) -> np.ndarray:
     nb = cb[window:] - cb[:-window]
     out[window - 1:] = np.where(nb == 0, s / window, np.nan)
     return out
+
+
+@numba.njit(cache=True)
+def _restart_walk(z, s0, lower, upper):  # pragma: no cover - compiled
+    """Restarted SPRT walk over ``z`` from ``s0``: ``S += z``; an alarm where ``S >= upper`` and a restart at 0
+    after it or where ``S <= lower``. NaN samples leave ``S`` and the path NaN. Returns the path (the value
+    before a restart), the alarms, the state after the block and the number of lower crossings."""
+    n = z.shape[0]
+    path = np.full(n, np.nan)
+    alarm = np.zeros(n, dtype=np.bool_)
+    s = s0
+    cycles = 0
+    for i in range(n):
+        if not np.isfinite(z[i]):
+            continue
+        s += z[i]
+        path[i] = s
+        if s >= upper:
+            alarm[i] = True
+            s = 0.0
+        elif s <= lower:
+            s = 0.0
+            cycles += 1
+    return path, alarm, s, cycles
+
+
+def _wald_exponent(z: np.ndarray, where: str) -> float:
+    r"""Wald's exponent :math:`h > 0` of a walk of increments ``z`` drifting down: the root of
+    :math:`\hat K(h) + \tfrac{h^2}{2}(\hat v_{lr} - \hat v) = 0` (empirical cumulant generating function of one
+    increment, plus the excess of the long-run variance over batches of ``_SPRT_BLOCK`` samples: the
+    autocorrelation to second order); :math:`E[e^{h S_n}] \approx 1`."""
+    n = z.size // _SPRT_BLOCK
+    if n < 10:
+        raise ValueError(f"{where}: {z.size} armed samples, at least {10 * _SPRT_BLOCK} are needed to estimate the "
+                         "SPRT's scale on it: give longer healthy runs")
+    m = float(z.mean())
+    if not m < 0:
+        raise ValueError(f"{where}: the SPRT's log-likelihood ratio grows on average ({m:.4g} per sample) on a "
+                         "healthy run: the prediction errors are not the healthy law it assumes")
+    sums = z[: n * _SPRT_BLOCK].reshape(n, _SPRT_BLOCK).sum(axis=1)
+    extra = 0.5 * (float(((sums - m * _SPRT_BLOCK) ** 2).sum() / (n - 1) / _SPRT_BLOCK) - float(z.var()))
+    log_n = np.log(z.size)
+
+    def f(h: float) -> float:
+        return float(special.logsumexp(h * z) - log_n + h * h * extra)
+
+    hi = 1.0
+    while f(hi) <= 0:
+        hi *= 2.0
+    lo = hi
+    while f(lo) >= 0:
+        lo /= 2.0
+        if lo < 1e-9:
+            raise ValueError(f"{where}: no positive root of the SPRT walk's cumulant equation")
+    return float(optimize.brentq(f, lo, hi, rtol=1e-10))
 
 
 class OnlineDetector:
@@ -352,9 +417,10 @@ class OnlineDetector:
     """
 
     def __init__(self, pairs: Any, *, na: int = 2, nb: int = 2, nk: int = 0, forgetting_factor: float = 0.995,
-                 threshold: float = 4.5, glrt: Any = "default", freeze_on_alarm: bool = True,
+                 threshold: float | None = None, glrt: Any = "default", freeze_on_alarm: bool = True,
                  nonfinite: str = "skip", n_inputs: int = 1, statistic: str = "zscore", window: int = 20,
-                 direction: str = "both", arm_after: int = 0, eps: float = 1e-2, **rls_options: Any) -> None:
+                 direction: str = "both", arm_after: int = 0, eps: float = 1e-2, sprt: Any = "default",
+                 **rls_options: Any) -> None:
         if isinstance(pairs, (int, np.integer)) and not isinstance(pairs, bool):
             n = int_like(pairs, "pairs", minimum=1)
             names = tuple(f"pair{i}" for i in range(n))
@@ -370,9 +436,21 @@ class OnlineDetector:
                        if key == "gate" else "is not an option of OnlineDetector")
                 raise TypeError(f"{key} {why}; the RecursiveARX options it passes on are {', '.join(_RLS_OPTIONS)}")
         self.pairs = names
-        self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
         self.nonfinite = option(nonfinite, "nonfinite", ("skip", "raise"))
-        self.statistic = option(statistic, "statistic", ("zscore", "mean"))
+        self.statistic = option(statistic, "statistic", ("zscore", "mean", "sprt"))
+        if isinstance(sprt, str) and sprt == "default":
+            sprt = SPRT("variance", ratio=4.0, alpha=1e-4, beta=0.01, restart=True)
+        if self.statistic != "sprt":
+            sprt = None
+        elif not isinstance(sprt, SPRT):
+            raise TypeError(f"sprt must be a tsfdi.SPRT (statistic='sprt'), got {type(sprt).__name__}")
+        elif sprt.alternative == "model" or not sprt.restart:
+            raise ValueError(f"sprt must be a monitoring SPRT of the prediction errors: alternative 'variance' or "
+                             f"'mean' with restart=True, got {sprt!r}")
+        self.sprt = sprt
+        if threshold is None:
+            threshold = sprt.upper if sprt is not None else 4.5
+        self.threshold = float_like(threshold, "threshold", minimum=0.0, strict_min=True)
         self.window = int_like(window, "window", minimum=1)
         check_size(len(names) * (self.window - 1), f"window={self.window} for {len(names)} pair(s): the errors "
                    f"in the moving window ({len(names):,} x {self.window - 1:,})")
@@ -385,12 +463,16 @@ class OnlineDetector:
             glrt = GLRT(window=20, alpha=1e-6) if self.statistic == "zscore" else None
         if glrt is not None and not isinstance(glrt, GLRT):
             raise TypeError(f"glrt must be a tsfdi.detection.GLRT or None, got {type(glrt).__name__}")
+        if glrt is not None and self.statistic == "sprt":
+            raise ValueError("glrt must be None with statistic='sprt': the SPRT is the sequential test of the "
+                             "prediction errors (a GLRT beside it would double the false alarms calibrate sets)")
         self.glrt = glrt
         # the constructor's options, for the alarm-free copies run by calibrate()
         self._options = dict(na=na, nb=nb, nk=nk, forgetting_factor=forgetting_factor, threshold=self.threshold,
                              glrt=glrt, freeze_on_alarm=self.freeze_on_alarm, nonfinite=self.nonfinite,
                              n_inputs=self.n_inputs, statistic=self.statistic, window=self.window,
-                             direction=self.direction, arm_after=self.arm_after, eps=self.eps, **rls_options)
+                             direction=self.direction, arm_after=self.arm_after, eps=self.eps, sprt=sprt,
+                             **rls_options)
         self.calibration_: OnlineCalibration | None = None
         zs = self.statistic == "zscore"
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
@@ -413,6 +495,8 @@ class OnlineDetector:
         self._source = [""] * k
         self._time: list = [None] * k
         self._tail = np.full((k, max(self.window - 1, 0)), np.nan)
+        self._walks: list = [None] * k   # statistic="sprt": [sd, mean at arming, walk value] per armed pair
+        self._cycles = np.zeros(k, dtype=np.int64)
         self._stat_alarmed = np.zeros(k, dtype=bool)
         self._last_alarm = np.zeros(k, dtype=bool)
         self._nobs = 0
@@ -488,6 +572,52 @@ class OnlineDetector:
         _, z, _, vstable, var, mean = self._join(parts)
         return e, z, stat, alarm, vstable, var, mean
 
+    def _sprt_walk(self, c: int, e: np.ndarray, vstable: np.ndarray, var: np.ndarray, mean: np.ndarray,
+                   start: int, commit: bool) -> tuple:
+        """Restarted SPRT of the errors ``e`` of pair ``c`` continuing its walk (the state kept when ``commit``):
+        armed from the sample after the error variance became stable and positive, on the errors minus the
+        Welford mean at arming, scaled by the Welford standard deviation at arming."""
+        n = e.shape[0]
+        walk = self._walks[c]
+        lo = 0
+        if walk is None:
+            vs = np.flatnonzero(vstable & np.isfinite(var) & (var > 0))
+            if not vs.size:
+                return np.full(n, np.nan), np.zeros(n, dtype=bool), None, 0
+            lo = int(vs[0]) + 1
+            walk = [float(np.sqrt(var[vs[0]])), float(mean[vs[0]]), 0.0]
+        z = np.full(n, np.nan)
+        w = (e[lo:] - walk[1]) / walk[0]
+        ok = np.isfinite(w)
+        if ok.any():
+            z[lo:][ok] = self.sprt.loglik_ratio(w[ok], 1.0)
+        path, alarm, s, cycles = _restart_walk(z, walk[2], self.sprt.lower, self.threshold)
+        alarm &= (start + np.arange(n)) >= self.arm_after
+        if commit:
+            if self._walks[c] is None:
+                self._armed_at[c] = start + lo
+            self._walks[c] = [walk[0], walk[1], float(s)]
+            self._cycles[c] += cycles
+        return path, alarm, walk, cycles
+
+    def _run_sprt(self, c: int, m: RecursiveARX, yc: np.ndarray, uc: np.ndarray, start: int):
+        """Run pair ``c`` with the restarted SPRT, freezing its model at the first alarm (as sample by sample)."""
+        snap = m.get_state() if self.freeze_on_alarm and not self._stat_alarmed[c] else None
+        parts = [m.run(yc, uc)]
+        e, _, _, vstable, var, mean = self._join(parts)
+        _, alarm, _, _ = self._sprt_walk(c, e, vstable, var, mean, start, commit=False)
+        if snap is not None and alarm.any():
+            i = int(np.flatnonzero(alarm)[0])
+            m.set_state(snap)
+            parts = [m.run(yc[:i], uc[:i])] if i > 0 else []
+            m.freeze()
+            parts.append(m.run(yc[i:], uc[i:]))
+        e, z, _, vstable, var, mean = self._join(parts)
+        stat, alarm, _, _ = self._sprt_walk(c, e, vstable, var, mean, start, commit=True)
+        if alarm.any():
+            self._stat_alarmed[c] = True
+        return e, z, stat, alarm, vstable, var, mean
+
     def run(self, y: Any, u: Any) -> OnlineDetection:
         """Process a block of samples of every pair (continuing from the current state).
 
@@ -525,8 +655,9 @@ class OnlineDetector:
                     f"{m.min_variance_samples} errors): give more data or raise variance_tol" if m.model_stable else
                     f"its parameter step never stayed below eps={self.eps:g} of the parameters {run}: check that y "
                     "follows u, give more data or raise eps")
+            source = {"zscore": "Z-score", "sprt": "SPRT"}.get(self.statistic, "GLRT")
             warnings.warn(f"OnlineDetector pair {self.pairs[c]!r} has not armed by the end of the data at {when}, so "
-                          f"it could raise no {'Z-score' if self.statistic == 'zscore' else 'GLRT'} alarm: {gate}",
+                          f"it could raise no {source} alarm: {gate}",
                           ConvergenceWarning, stacklevel=2)
         return out
 
@@ -549,6 +680,8 @@ class OnlineDetector:
             if self.statistic == "zscore":
                 e, z, zal, vstable, var, mean = self._join([m.run(yc, uc)])
                 stat = z
+            elif self.statistic == "sprt":
+                e, z, stat, zal, vstable, var, mean = self._run_sprt(c, m, yc, uc, start)
             else:
                 e, z, stat, zal, vstable, var, mean = self._run_mean(c, m, yc, uc, start)
             Z[:, c] = z
@@ -579,7 +712,7 @@ class OnlineDetector:
                         G[idx, c] = g
                         gal[idx] = g > stream.threshold
                 gal &= pos >= self.arm_after
-            elif self._armed_at[c] < 0:
+            elif self._armed_at[c] < 0 and self.statistic != "sprt":
                 vs = np.flatnonzero(vstable)
                 if vs.size:
                     self._armed_at[c] = start + int(vs[0]) + 1
@@ -756,6 +889,8 @@ class OnlineDetector:
         ys, us = self._runs(y_runs, "y_runs"), self._runs(u_runs, "u_runs")
         if len(ys) != len(us):
             raise ValueError(f"y_runs and u_runs must hold the same number of runs, got {len(ys)} and {len(us)}")
+        if self.statistic == "sprt":
+            return self._calibrate_sprt(ys, us, rate, fs)
         sep = np.array([np.nan])
         s_parts: list = []
         g_parts: list = []
@@ -874,6 +1009,108 @@ class OnlineDetector:
             estimator=next(iter(fitted.values()))[1], source_rates={name: rho for name in sources},
             expected_episodes=k_target, healthy_episodes=episodes(thresholds),
             tail={name: v[2] for name, v in fitted.items() if v[2]})
+        self.reset()
+        return self
+
+    def _calibrate_sprt(self, ys: list, us: list, rate: float, fs: float | None) -> OnlineDetector:
+        """:meth:`calibrate` of ``statistic="sprt"`` (see its Notes)."""
+        records, hours, armed_hours = [], 0.0, 0.0
+        for i, (y, u) in enumerate(zip(ys, us)):
+            free = self._alarm_free_copy()
+            try:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always", ConvergenceWarning)
+                    out = free.run(y, u)
+            except (ValueError, TypeError) as err:
+                raise type(err)(f"healthy run {i}: {err}") from err
+            for w in caught:
+                warnings.warn(f"healthy run {i}: {w.message}", w.category, stacklevel=3)
+            f = fs if fs is not None else out.fs
+            if f is None:
+                raise ValueError(f"fs (sampling frequency in Hz) is needed: healthy run {i} carries no time index")
+            n = out.alarm.shape[0]
+            hours += n / f / _SECONDS_PER_HOUR
+            resid = np.asarray(out.resid, dtype=float).reshape(n, -1)
+            for c, walk in enumerate(free._walks):
+                if walk is None:
+                    continue
+                start = max(int(free._armed_at[c]), self.arm_after)
+                w = (resid[start:, c] - walk[1]) / walk[0]
+                w = w[np.isfinite(w)]
+                records.append((i, self.pairs[c], w))
+                armed_hours += w.size / f / _SECONDS_PER_HOUR
+        if len(records) < _MIN_SPRT_RECORDS:
+            raise ValueError(f"statistic='sprt' is calibrated from at least {_MIN_SPRT_RECORDS} armed (run, pair) "
+                             f"records, the healthy runs give {len(records)}: give more healthy runs (or longer ones, "
+                             f"so that the pairs arm)")
+        base = copy.copy(self.sprt)
+        base.scale_ = 1.0
+        log_scale = np.empty(len(records))
+        for j, (i, pair, w) in enumerate(records):
+            log_scale[j] = np.log(_wald_exponent(base.loglik_ratio(w, 1.0), f"healthy run {i}, pair {pair!r}"))
+        n_rec = len(records)
+        zs = [base.loglik_ratio(w, 1.0) for _, _, w in records]
+        h = _wald_exponent(np.concatenate(zs), "the healthy runs")
+        sprt = copy.copy(base)
+        sprt.scale_ = h                              # the scaled walk has Wald's exponent 1
+        lower = sprt.lower
+        maxima, cycles, samples = [], 0, 0
+        for z in zs:
+            path, _, _, c = _restart_walk(h * z, 0.0, lower, _HUGE)
+            ok = np.isfinite(path)
+            ends = np.flatnonzero(ok & (path <= lower))
+            if ends.size:
+                starts = np.concatenate([[0], ends[:-1] + 1])
+                maxima.append(np.maximum.reduceat(np.where(ok, path, -np.inf)[: ends[-1] + 1], starts))
+            cycles += c
+            samples += int(ok.sum())
+        if cycles < _MIN_SPRT_CYCLES:
+            raise ValueError(f"the SPRT walk returned to its lower bound {cycles} times on the healthy runs, at "
+                             f"least {_MIN_SPRT_CYCLES} are needed: give longer healthy runs (or check that they are "
+                             "healthy)")
+        maxima = np.concatenate(maxima)
+        per_hour = cycles / armed_hours            # restart cycles per armed hour of one pair
+        k = len(self.pairs)
+
+        def wald(a: float) -> float:                 # P(a cycle ends above a), Wald's approximation (no overshoot)
+            return (1.0 - np.exp(lower)) / (np.exp(a) - np.exp(lower))
+
+        # the overshoot: the cycles' maxima above the level a0 that ~20 of them exceed, against Wald's law
+        a0 = float(np.sort(maxima)[-min(_TAIL_EPISODES, maxima.size)])
+        if a0 > 0:
+            overshoot = min(1.0, float(np.mean(maxima >= a0)) / wald(a0))
+        else:
+            overshoot = 1.0
+        p = rate / (k * per_hour * overshoot)
+        if not p < 1.0:
+            raise ValueError(f"false_alarms_per_hour={rate:g} is more than the SPRT's restart cycles allow "
+                             f"({k * per_hour:.4g} cycles per hour): require fewer false alarms")
+        # the uncertainty of few records: the exponent re-estimated on records drawn with replacement
+        gen = np.random.default_rng(0)
+        boot = []
+        for _ in range(_SPRT_BOOTSTRAP):
+            pick = gen.integers(0, n_rec, n_rec)
+            try:
+                boot.append(_wald_exponent(np.concatenate([zs[j] for j in pick]), "") / h)
+            except ValueError:
+                continue
+        q = np.quantile(boot, [_SPRT_CONFIDENCE, 1.0 - _SPRT_CONFIDENCE]) if boot else np.array([np.nan, np.nan])
+
+        def rate_at(g: float) -> float:              # a new walk of exponent g relative to the calibrated one
+            return float(k * per_hour * overshoot * (1.0 - np.exp(g * lower)) / (np.exp(g * a) - np.exp(g * lower)))
+
+        g = min(1.0, float(q[1])) if np.isfinite(q[1]) else 1.0
+        a = float(np.log((1.0 - np.exp(g * lower)) / p + np.exp(g * lower)) / g)
+
+        self.threshold = a
+        self._options["threshold"] = a
+        self.sprt = sprt
+        self._options["sprt"] = sprt
+        self.calibration_ = OnlineCalibration(
+            false_alarms_per_hour=rate, healthy_hours=hours, runs=len(ys), threshold=a, glrt_threshold=None,
+            estimator="sprt renewal", source_rates={"sprt": rate}, expected_episodes=rate * hours,
+            healthy_episodes=0, tail={},
+            rate_band=(rate_at(max(1.0, float(q[0]))), rate_at(1.0), rate_at(g)), sprt_scale=h)
         self.reset()
         return self
 

@@ -1,0 +1,128 @@
+"""OnlineDetector(statistic="sprt"): Wald's restarted SPRT on the pairs' prediction errors as a stream statistic,
+and its thresholds from a few short healthy logs (issue 34)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+from scipy.signal import lfilter
+from test_online import two_pairs
+
+from tsfdi.detection.glrt import GLRT
+from tsfdi.detection.sequential import SPRT
+from tsfdi.online import OnlineDetector
+
+FS = 50.0
+
+
+def short_log(rng, seconds=30.0):
+    """Two healthy ARX pairs, ``seconds`` at 50 Hz (the shape of a short autopilot log)."""
+    n = int(seconds * FS)
+    u = rng.standard_normal((n, 2))
+    e = 0.1 * rng.standard_normal((n, 2))
+    ya = lfilter([1.0], [1.0, -0.7], u[:, 0] + e[:, 0])
+    yb = lfilter([1.0], [1.0, -0.5], 0.8 * u[:, 1] + e[:, 1])
+    return np.column_stack([ya, yb]), u
+
+
+def sprt_detector(**kw):
+    return OnlineDetector(["a", "b"], na=1, nb=1, statistic="sprt", **kw)
+
+
+def test_sprt_statistic_detects_a_bias_and_restarts():
+    y, u = two_pairs(bias=0.3)
+    det = sprt_detector()
+    assert det.threshold == pytest.approx(np.log(0.99 / 1e-4))          # the default SPRT's upper bound
+    assert det.glrt is None and det.sprt.restart
+    out = det.run(y, u)
+    fa = out.first_alarms
+    assert fa.loc["a", "position"] == -1 and fa.loc["a", "armed_at"] > 0
+    assert 3000 <= fa.loc["b", "position"] <= 3010 and fa.loc["b", "source"] == "sprt"
+    s = np.asarray(out.statistic)
+    armed = int(fa.loc["a", "armed_at"])
+    assert np.isnan(s[:armed, 0]).all() and np.isfinite(s[armed:, 0]).all()
+    # the walk restarts at its lower bound: on the healthy pair it never passes the threshold and keeps coming back
+    assert np.nanmax(s[:, 0]) < det.threshold and (s[armed:, 0] <= det.sprt.lower).sum() > 100
+
+
+def test_sprt_statistic_streaming_equals_block():
+    y, u = two_pairs(n=3400, bias=0.3)
+    ref = sprt_detector().run(y, u)
+    assert ref.first_alarm is not None
+    det = sprt_detector()
+    alarms = np.array([det.update(y[i], u[i]) for i in range(len(y))])
+    np.testing.assert_array_equal(alarms, ref.alarm)
+    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
+    det = sprt_detector()
+    parts = [det.run(y[i:i + 777], u[i:i + 777]) for i in range(0, len(y), 777)]
+    np.testing.assert_array_equal(np.vstack([p.alarm for p in parts]), ref.alarm)
+    np.testing.assert_allclose(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic))
+
+
+def test_sprt_statistic_freezes_the_model_at_the_first_alarm():
+    y, u = two_pairs(bias=0.3)
+    det = sprt_detector()
+    out = det.run(y, u)
+    k = int(out.first_alarms.loc["b", "position"])
+    assert det.models[1].frozen and not det.models[0].frozen
+    free = sprt_detector(freeze_on_alarm=False)
+    free.run(y[:k], u[:k])
+    np.testing.assert_allclose(det.models[1].theta_, free.models[1].theta_, rtol=1e-12)   # alarmed sample not learned
+
+
+def test_sprt_options_are_checked():
+    with pytest.raises(ValueError, match="glrt must be None with statistic='sprt'"):
+        sprt_detector(glrt=GLRT(window=20, alpha=1e-6))
+    with pytest.raises(ValueError, match="restart=True"):
+        sprt_detector(sprt=SPRT("variance", ratio=4.0))
+    with pytest.raises(ValueError, match="restart=True"):
+        sprt_detector(sprt=SPRT("model", restart=True))
+    with pytest.raises(TypeError, match="sprt must be a tsfdi.SPRT"):
+        sprt_detector(sprt="wald")
+    with pytest.raises(ValueError, match="statistic"):
+        OnlineDetector(2, statistic="cusum")
+    assert OnlineDetector(2).sprt is None and OnlineDetector(2).threshold == 4.5
+
+
+def test_short_healthy_logs_calibrate_the_sprt():
+    """The issue's refusal: 0.031 h of healthy data could not set a threshold for 60 false alarms per hour."""
+    rng = np.random.default_rng(5)
+    logs = [short_log(rng, 37.0) for _ in range(3)]
+    ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
+    with pytest.raises(ValueError, match="healthy hours are needed"):
+        OnlineDetector(["a", "b"], na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
+    det = sprt_detector().calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
+    cal = det.calibration_
+    assert cal.healthy_hours == pytest.approx(3 * 37.0 / 3600) and cal.estimator == "sprt renewal"
+    assert det.threshold == cal.threshold > 0 and det.sprt.scale_ == cal.sprt_scale
+    low, central, high = cal.rate_band
+    assert low <= central <= high == pytest.approx(60.0)
+    with pytest.raises(ValueError, match="at least 3 armed"):
+        OnlineDetector(["a"], na=1, nb=1, statistic="sprt").calibrate(
+            [y[:, :1] for y in ys[:2]], [u[:, :1] for u in us[:2]], false_alarms_per_hour=60, fs=FS)
+    with pytest.raises(ValueError, match="armed samples, at least"):
+        sprt_detector().calibrate([y[:400] for y in ys], [u[:400] for u in us], false_alarms_per_hour=60, fs=FS)
+
+
+@pytest.mark.slow
+def test_a_stream_calibrated_on_three_30s_logs_keeps_its_rate_on_ten_others():
+    """Monte Carlo (fixed seed): 25 times, three 30 s healthy logs set the thresholds for 60 false alarms per hour
+    (a stated upper bound: the 95 % bootstrap level over the records); ten new logs each run through the default
+    detector (freezing at its first alarm). A log of T = 30 s alarms with probability at most 1 - exp(-60 T / 3600):
+    the number of logs with an alarm stays inside the binomial band of that bound, above the band's lower end at
+    a quarter of the rate (the bound is not vacuous)."""
+    rng = np.random.default_rng(2024)
+    reps, logs = 25, 10
+    alarmed = 0
+    for _ in range(reps):
+        cal = [short_log(rng) for _ in range(3)]
+        det = sprt_detector().calibrate([c[0] for c in cal], [c[1] for c in cal], false_alarms_per_hour=60,
+                                        fs=FS)
+        for _ in range(logs):
+            y, u = short_log(rng)
+            det.reset()
+            alarmed += det.run(y, u).first_alarm is not None
+    n = reps * logs
+    p_stated = 1.0 - np.exp(-60.0 * 30.0 / 3600.0)
+    p_quarter = 1.0 - np.exp(-15.0 * 30.0 / 3600.0)
+    assert stats.binom.ppf(0.001, n, p_quarter) <= alarmed <= stats.binom.ppf(0.999, n, p_stated)
