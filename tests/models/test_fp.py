@@ -202,6 +202,21 @@ def test_parameter_surface_plot():
     np.testing.assert_allclose(ax.lines[0].get_ydata()[0], res.theta(0.0)["a1"])
 
 
+def test_units_far_from_one_are_fitted_exactly_rescaled():
+    """Data of magnitude 1e8 are fitted in power-of-two units (as the point models): lag coefficients and their
+    errors unchanged, the intercept and sigma scaled, the same operating-point estimate."""
+    ys = records(300, seed=13)
+    c = 2.0 ** 27
+    a = FPVAR([np.column_stack([y, y[::-1]]) for y in ys], KS, 2, 1, "c").fit()
+    b = FPVAR([np.column_stack([y, y[::-1]]) * c for y in ys], KS, 2, 1, "c").fit()
+    np.testing.assert_allclose(b.params[2:], a.params[2:], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(b.params[:2], a.params[:2] * c, rtol=1e-9, atol=1e-12 * c)
+    np.testing.assert_allclose(b.bse[2:], a.bse[2:], rtol=1e-9)
+    np.testing.assert_allclose(b.sigma(0.5), a.sigma(0.5) * c * c, rtol=1e-9)
+    y = np.column_stack([ys[2], ys[2][::-1]])
+    assert b.estimate_k(y * c).k_hat[0] == pytest.approx(a.estimate_k(y).k_hat[0], abs=1e-6)
+
+
 def test_immutable():
     res = FPAR(records(), KS, 2, 1).fit()
     with pytest.raises(AttributeError):
