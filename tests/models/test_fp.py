@@ -217,6 +217,18 @@ def test_units_far_from_one_are_fitted_exactly_rescaled():
     assert b.estimate_k(y * c).k_hat[0] == pytest.approx(a.estimate_k(y).k_hat[0], abs=1e-6)
 
 
+def test_collinear_regressors_fall_back_to_the_svd_with_a_warning():
+    """Exactly collinear channels: the Cholesky factor is refused and the explicit FP regressor goes to the SVD
+    solver of the point models (:func:`tsfdi.models.lstsq.lstsq`), which warns that the estimates are not
+    reliable; the coefficients stay finite."""
+    from tsfdi.exceptions import IllConditionedWarning
+
+    ys = [np.column_stack([y, 2 * y]) for y in records(200, seed=14)]      # exactly collinear channels
+    with pytest.warns(IllConditionedWarning, match="ill-conditioned"):
+        res = FPVAR(ys, KS, 1, 1).fit()
+    assert np.isfinite(res.params2d).all()
+
+
 def test_immutable():
     res = FPAR(records(), KS, 2, 1).fit()
     with pytest.raises(AttributeError):
