@@ -29,6 +29,7 @@ from scipy.linalg import solve_triangular
 from tsfdi._data import as_signal
 from tsfdi._validation import boolean, int_like, option
 from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows
@@ -182,6 +183,13 @@ def _sample_loglik(res: Any, e: np.ndarray) -> np.ndarray:
     z = e @ solve_triangular(chol, np.eye(k), lower=True, check_finite=False).T
     logdet = 2.0 * np.log(np.diag(chol)).sum()
     return -0.5 * (logdet + np.einsum("ij,ij->i", z, z) + k * np.log(2 * np.pi))
+
+
+def _prefix_sums(test: Any) -> bool:
+    """Whether the engine computes ``test`` on all windows at once (:meth:`~tsfdi.CalibratedTest.window_statistic`
+    from prefix sums): a per-channel Ljung-Box, a mean-shift or a one-sided F test."""
+    return ((isinstance(test, LjungBox) and test.multivariate is None) or isinstance(test, MeanTest)
+            or (isinstance(test, FTest) and test.alternative == "greater"))
 
 
 class ResidualWindows:
@@ -387,13 +395,7 @@ class ResidualWindows:
                     self._prefix[name] = np.concatenate([[0.0], np.cumsum(ll)]) if np.isfinite(ll).all() else None
                 pre = self._prefix[name]
             t = test[name] if isinstance(test, Mapping) else test
-            lbw = None
-            if (isinstance(t, LjungBox) and t.multivariate is None and n > t.lags
-                    and type(t).window_statistic is LjungBox.window_statistic):   # not a subclass' own
-                key = (name, t.lags, t.demean)
-                if key not in self._lag_products:
-                    self._lag_products[key] = LjungBoxWindows(self._resid[name], t.lags, demean=t.demean)
-                lbw = self._lag_products[key]
+            lbw = tuple(self._lag_windows(name, part, n) for part in (t.tests if isinstance(t, AnyOf) else (t,)))
             parts.append(self._model(res, self._resid[name], pre, t, starts, n, step, name, p, pmax, window, lbw))
             nres.append(n)
         stat, pv, thr, rej_c, ll = (np.stack([pt[i] for pt in parts], axis=1) for i in range(5))
@@ -404,25 +406,47 @@ class ResidualWindows:
                                 step=step, nobs=tuple(nres), statistic=stat, threshold=thr, pvalue=pv,
                                 channel_reject=rej_c, reject=rej_c.any(axis=2), loglik=ll, decisions=dec)
 
+    def _lag_windows(self, name: str, test: Any, n: int) -> LjungBoxWindows | None:
+        """The lag products of model ``name``'s residuals for a per-channel Ljung-Box ``test`` (its own
+        ``window_statistic``, not a subclass'), kept across window lengths; ``None`` for another test."""
+        if not (isinstance(test, LjungBox) and test.multivariate is None and n > test.lags
+                and type(test).window_statistic is LjungBox.window_statistic):
+            return None
+        key = (name, test.lags, test.demean)
+        if key not in self._lag_products:
+            self._lag_products[key] = LjungBoxWindows(self._resid[name], test.lags, demean=test.demean)
+        return self._lag_products[key]
+
     @staticmethod
     def _model(res: Any, e: np.ndarray, prefix: Any, test: Any, starts: np.ndarray, n: int, step: int,
-               name: str, p: int, pmax: int, window: int, lbw: LjungBoxWindows | None = None) -> tuple:
+               name: str, p: int, pmax: int, window: int, lbw: tuple = (None,)) -> tuple:
         """One fitted model with its record residuals ``e`` on every window: statistic, p-value, threshold, channel
         rejection (n_windows, k), the likelihood score (n_windows,; NaN when ``prefix`` is False, -inf when it is
         None: a model without a proper Gaussian law; else the prefix sums of the per-sample log-likelihood)
-        and the window decisions (or None). ``lbw``: the lag products of ``e`` for a per-channel Ljung-Box test
-        (kept by :meth:`statistics` across window lengths)."""
+        and the window decisions (or None). ``lbw``: per part of the test (one for a single test, one per part of an
+        :class:`~tsfdi.AnyOf`), the lag products of ``e`` for a per-channel Ljung-Box test (kept by
+        :meth:`statistics` across window lengths) or ``None``."""
         nwin, k = starts.size, e.shape[1]
         ref = test.reference(res)
-        if isinstance(test, LjungBox) and test.multivariate is None and n <= test.lags:
-            raise ValueError(f"window must exceed lags + the model order ({test.lags} + {p}) for model {name!r}, "
-                             f"got {window}")
+        tests = test.tests if isinstance(test, AnyOf) else (test,)
+        refs = ref["references"] if isinstance(test, AnyOf) else (ref,)
+        for t in tests:
+            if isinstance(t, LjungBox) and t.multivariate is None and n <= t.lags:
+                raise ValueError(f"window must exceed lags + the model order ({t.lags} + {p}) for model {name!r}, "
+                                 f"got {window}")
         ds = None
-        if (isinstance(test, LjungBox) and test.multivariate is None) or isinstance(test, MeanTest) or (
-                isinstance(test, FTest) and test.alternative == "greater"):
-            stat = lbw.statistic(n, step) if lbw is not None else test.window_statistic(e, n, step, **ref)
-            thr, pv = test.threshold_pvalue(stat, n, **ref)
-            rej_c = stat > thr
+        if all(_prefix_sums(t) for t in tests):
+            if isinstance(test, AnyOf) and test.correction == "minp" and not test.calibrated:
+                raise ValueError("AnyOf(correction='minp') is not calibrated: call calibrate(healthy residuals, "
+                                 "window=...) first")
+            # every part from prefix sums: its statistic, threshold and p-value of all windows at once
+            got = [(s, *t.threshold_pvalue(s, n, **r)) for t, r, lb in zip(tests, refs, lbw)
+                   for s in [lb.statistic(n, step) if lb is not None else t.window_statistic(e, n, step, **r)]]
+            if isinstance(test, AnyOf):          # the rule of AnyOf.test on every window
+                stat, thr, pv, rej_c = test.combine([g[2] for g in got], [g[0] > g[1] for g in got])
+            else:
+                stat, thr, pv = got[0]
+                rej_c = stat > thr
         else:
             ds = [test.test(e[s:s + n], **ref) for s in starts]
             stat = np.array([d.statistic for d in ds]).reshape(nwin, -1)

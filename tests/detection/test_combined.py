@@ -100,3 +100,25 @@ def test_bad_parts_are_refused(fleet):
     with pytest.raises(ValueError, match="different channels"):
         AnyOf([LjungBox(10, multivariate="hosking"), MeanTest()]).test(np.random.default_rng(0).standard_normal((99, 2)),
                                                                     reference_variance=1.0)
+
+
+@pytest.mark.parametrize("correction, calibrated", [("sidak", False), ("bonferroni", False), ("sidak", True),
+                                                    ("minp", True)])
+def test_windowed_engine_computes_anyof_from_prefix_sums(fleet, correction, calibrated):
+    """The windowed engine computes every part from prefix sums (no per-window decisions), with the statistic,
+    threshold, p-value and rejection of AnyOf.test on every window."""
+    spec, res, held, rng = fleet
+    test = AnyOf(parts(), correction=correction)
+    if calibrated:
+        test.calibrate(held, window=200)
+    x = rng.standard_normal((1400, 2))
+    x[700:] *= 1.8
+    ws = tsfdi.ResidualWindows({"a": res}).fit(x).statistics(test, window=200, step=9)
+    assert ws.decisions is None                                 # not the per-window .test fallback
+    e = np.asarray(res.residuals(x))
+    ds = [test.test(e[s:s + 199], **test.reference(res)) for s in ws.starts]
+    np.testing.assert_allclose(ws.statistic[:, 0], [d.statistic for d in ds], rtol=1e-9)
+    np.testing.assert_allclose(ws.pvalue[:, 0], [d.pvalue for d in ds], rtol=1e-9)
+    np.testing.assert_allclose(ws.threshold[:, 0], [d.threshold for d in ds], rtol=1e-12)
+    assert np.array_equal(ws.channel_reject[:, 0], [d.channel_reject for d in ds])
+    assert 0 < ws.reject.mean() < 1

@@ -203,6 +203,50 @@ class AnyOf(ResidualTest):
             p = pv if p is None else np.minimum(p, pv)
         return -2.0 * np.log(np.maximum(p, _P_FLOOR))
 
+    def combine(self, pvalues: Any, rejects: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        r"""The combined statistic, threshold, p-value and channel rejection from the parts' p-values and channel
+        rejections (the rule of :meth:`test`, see Notes of the class), for one window or many at once.
+
+        Parameters
+        ----------
+        pvalues, rejects : sequence of array_like, each of shape (..., k)
+            One per part, in the order of :attr:`tests`: the part's p-values and channel rejections (channels on the
+            last axis; e.g. every window of a record, as the windowed engine computes them).
+
+        Returns
+        -------
+        statistic : ndarray, shape (..., k)
+            :math:`-2 \ln \min_i p_i`.
+        threshold : ndarray, shape (k,)
+        pvalue : ndarray, shape (..., k)
+        reject : ndarray of bool, shape (..., k)
+        """
+        if len(pvalues) != len(self.tests) or len(rejects) != len(self.tests):
+            raise ValueError(f"pvalues and rejects must hold one array per part ({len(self.tests)}), got "
+                             f"{len(pvalues)} and {len(rejects)}")
+        ps = [np.asarray(p, dtype=np.float64) for p in pvalues]
+        if len({p.shape for p in ps}) > 1:
+            raise ValueError(f"the parts' decisions have different channels ({[p.shape for p in ps]}): a joint "
+                             "(multivariate) test cannot be combined channel by channel with per-channel tests")
+        pmin = np.minimum.reduce(ps)
+        stat = -2.0 * np.log(np.maximum(pmin, _P_FLOOR))
+        m = len(ps)
+        k = pmin.shape[-1]
+        if self.correction == "minp":
+            thr = self.threshold_
+            if thr.shape[0] != k:
+                raise ValueError(f"resid has {k} channel(s) but the test was calibrated on {thr.shape[0]}")
+            flat = stat.reshape(-1, k)
+            pv = np.column_stack([est.pvalue(flat[:, c]) for c, est in enumerate(self.thresholds_)]).reshape(
+                stat.shape)
+            rej = stat > thr
+        else:
+            a = self.tests[0]._channel_alpha(self.share, k, getattr(self.tests[0], "correction", None))
+            thr = np.full(k, -2.0 * math.log(a))
+            pv = -np.expm1(m * np.log1p(-pmin)) if self.correction == "sidak" else np.minimum(1.0, m * pmin)
+            rej = np.logical_or.reduce([np.asarray(r, dtype=bool) for r in rejects])
+        return stat, thr, pv, rej
+
     def test(self, resid: Any, references: Any = None, **reference: Any) -> Decision:
         """The combined :class:`~tsfdi.Decision` of a residual window (see Notes of the class).
 
@@ -220,26 +264,9 @@ class AnyOf(ResidualTest):
             raise ValueError("AnyOf(correction='minp') is not calibrated: call calibrate(healthy residuals, "
                              "window=...) first")
         parts = [t.test(resid, **ref) for t, ref in zip(self.tests, refs)]
-        ks = {d.pvalue.shape for d in parts}
-        if len(ks) > 1:
-            raise ValueError(f"the parts' decisions have different channels ({[d.pvalue.shape for d in parts]}): a "
-                             "joint (multivariate) test cannot be combined channel by channel with per-channel tests")
-        pmin = np.minimum.reduce([np.asarray(d.pvalue, dtype=np.float64) for d in parts])
-        stat = -2.0 * np.log(np.maximum(pmin, _P_FLOOR))
-        m = len(parts)
-        k = pmin.shape[0]
+        stat, thr, pv, rej = self.combine([d.pvalue for d in parts], [d.channel_reject for d in parts])
+        k = stat.shape[0]
         corr = getattr(self.tests[0], "correction", None)
-        if self.correction == "minp":
-            thr = self.threshold_
-            if thr.shape[0] != k:
-                raise ValueError(f"resid has {k} channel(s) but the test was calibrated on {thr.shape[0]}")
-            pv = np.array([est.pvalue(np.array([s]))[0] for est, s in zip(self.thresholds_, stat)])
-            rej = stat > thr
-        else:
-            a = self.tests[0]._channel_alpha(self.share, k, corr)
-            thr = np.full(k, -2.0 * math.log(a))
-            pv = -np.expm1(m * np.log1p(-pmin)) if self.correction == "sidak" else np.minimum(1.0, m * pmin)
-            rej = np.logical_or.reduce([np.asarray(d.channel_reject, dtype=bool) for d in parts])
         fam = self.family_alpha(self.tests[0]._channel_alpha(self.alpha, k, corr), k)
         details = {"parts": tuple(parts), "correction": self.correction, "part_alpha": self.share,
                    "family_alpha": fam[0], "family_alpha_bound": fam[1],
