@@ -279,6 +279,23 @@ def test_record_effect_law_estimates():
     assert "RecordEffect(models=3" in repr(law)
 
 
+def test_record_effect_model_with_one_record():
+    # a model (e.g. a condition on one airframe) with a single held-out record: its centre is that record's
+    # summaries, its predictive covariance twice the spread pooled over the other models, which alone give the
+    # degrees of freedom
+    _, held = record_law_data()
+    one = {**held, "m3": held["m2"][:1]}
+    law = record_effect(one, block=20)
+    ref = record_effect(held, block=20)
+    e = held["m2"][0]
+    assert law.records == (6, 6, 6, 1) and law.models[-1] == "m3"
+    assert np.allclose(law.center[3], np.r_[e.mean(axis=0), 0.5 * np.log(np.mean(e ** 2, axis=0))])
+    S = ref.between[0] / (1 + 1 / 6)
+    assert np.allclose(law.between[3], 2.0 * S) and np.allclose(law.between[0], ref.between[0])
+    assert np.allclose(law.df, ref.df[0])
+    assert np.isfinite(law.loglik([e] * 4)).all()
+
+
 def test_record_effect_evidence_saturates_where_the_gaussian_grows():
     # a record of state 0 whose trim sits between two states' centres: the Gaussian log-likelihood ratio grows
     # with every sample, the record-effect one settles at the summaries' density ratio
@@ -302,8 +319,6 @@ def test_record_effect_input_checks():
         record_effect({"m0": held["m0"]})
     with pytest.raises(TypeError, match=r"held_out\['m0'\]"):
         record_effect({"m0": held["m0"][0], "m1": held["m1"]})
-    with pytest.raises(ValueError, match=r"held_out\['m1'\] holds 1 record"):
-        record_effect({"m0": held["m0"], "m1": held["m1"][:1]})
     with pytest.raises(ValueError, match=r"held_out\['m1'\]\[0\] has 3 channel"):
         record_effect({"m0": held["m0"], "m1": [np.ones((400, 3))] + held["m1"][1:]})
     with pytest.raises(ValueError, match="blocks of 300 samples"):

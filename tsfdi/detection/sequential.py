@@ -1207,7 +1207,10 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
     held_out : mapping
         Model name -> list of that model's held-out residual records on its own fitting records (records the
         model was not fitted on: ``spec.held_out_residuals(groups=...)``; the segments of one record, e.g. one
-        flight, joined into one array), each shape (nobs_r, k).
+        flight, joined into one array), each shape (nobs_r, k); one record is enough for a model when the others
+        give the pooled spread its degrees of freedom. A model name may stand for a model in one operating
+        condition (e.g. ``"normal@E8"``: the normal model's residuals on the flights of airframe E8), so that each
+        condition has its own centre while the spread is pooled.
     lags : int
         Residual autocorrelation lags among the summaries (0: per channel the mean and the log RMS only).
     block : int
@@ -1234,8 +1237,9 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
     colour. The summaries :math:`f_{jr}` of its :math:`R_j` held-out records give the centre
     :math:`c_j = \bar f_j` and the between-record covariance pooled over the models,
     :math:`S = \sum_j \sum_r (f_{jr} - \bar f_j)(f_{jr} - \bar f_j)' / \nu` with :math:`\nu = \sum_j (R_j - 1)`
-    (a condition with 2-5 records gives no covariance of its own; pooling assumes the record-to-record spread is
-    the aircraft's, not the state's); a new record's summaries then follow the predictive multivariate t law with
+    (a condition with 1-5 records gives no covariance of its own; pooling assumes the record-to-record spread is
+    the aircraft's, not the state's; a model with a single record has that record as its centre and adds no degree
+    of freedom); a new record's summaries then follow the predictive multivariate t law with
     covariance :math:`S (1 + 1/R_j)` and :math:`\nu - q + 1` degrees of freedom, to which
     :meth:`RecordEffect.loglik` adds the within-record noise ``within / n`` of a running summary. ``within`` is the
     batch-means long-run covariance of the per-sample series whose running means are the summaries to first order
@@ -1254,9 +1258,6 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
     for name, recs in held_out.items():
         arrs = _residual_records(recs, f"held_out[{name!r}]", k)
         k = arrs[0].shape[1]
-        if len(arrs) < 2:
-            raise ValueError(f"held_out[{name!r}] holds {len(arrs)} record: at least 2 are needed to estimate the "
-                             "between-record spread")
         short = [i for i, e in enumerate(arrs) if e.shape[0] < lags + 2]
         if short:
             raise ValueError(f"held_out[{name!r}][{short[0]}] is shorter than lags + 2 = {lags + 2} samples")
