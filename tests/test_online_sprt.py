@@ -10,6 +10,7 @@ from test_online import two_pairs
 
 from tsfdi.detection.glrt import GLRT
 from tsfdi.detection.sequential import SPRT
+from tsfdi.exceptions import ConvergenceWarning
 from tsfdi.online import OnlineDetector
 
 FS = 50.0
@@ -93,15 +94,16 @@ def test_short_healthy_logs_calibrate_the_sprt():
         OnlineDetector(["a", "b"], na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
     det = sprt_detector().calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
     cal = det.calibration_
-    assert cal.healthy_hours == pytest.approx(3 * 37.0 / 3600) and cal.estimator == "sprt renewal"
+    assert cal.healthy_hours == pytest.approx(3 * 37.0 / 3600) and cal.estimator == "sprt cycle maxima"
     assert det.threshold == cal.threshold > 0 and det.sprt.scale_ == cal.sprt_scale
     low, central, high = cal.rate_band
-    assert low <= central <= high == pytest.approx(60.0)
+    assert low <= central <= 60.0 and central <= high
+    assert cal.tail["sprt"]["n_u"] == 20 and cal.healthy_episodes <= 3
     with pytest.raises(ValueError, match="at least 3 armed"):
         OnlineDetector(["a"], na=1, nb=1, statistic="sprt").calibrate(
             [y[:, :1] for y in ys[:2]], [u[:, :1] for u in us[:2]], false_alarms_per_hour=60, fs=FS)
-    with pytest.raises(ValueError, match="armed samples, at least"):
-        sprt_detector().calibrate([y[:400] for y in ys], [u[:400] for u in us], false_alarms_per_hour=60, fs=FS)
+    with pytest.raises(ValueError, match="returned to its lower bound"), pytest.warns(ConvergenceWarning):
+        sprt_detector().calibrate([y[:330] for y in ys], [u[:330] for u in us], false_alarms_per_hour=60, fs=FS)
 
 
 @pytest.mark.slow

@@ -281,6 +281,15 @@ def _restart_walk(z, s0, lower, upper):  # pragma: no cover - compiled
     return path, alarm, s, cycles
 
 
+def _cycle_maxima(z: np.ndarray, lower: float) -> np.ndarray:
+    """Maxima of the complete cycles of the walk of ``z`` restarted at ``lower`` (no upper bound)."""
+    path = _restart_walk(z, 0.0, lower, _HUGE)[0]
+    ends = np.flatnonzero(path <= lower)
+    if not ends.size:
+        return np.empty(0)
+    return np.maximum.reduceat(path[: ends[-1] + 1], np.concatenate([[0], ends[:-1] + 1]))
+
+
 def _wald_exponent(z: np.ndarray, where: str) -> float:
     r"""Wald's exponent :math:`h > 0` of a walk of increments ``z`` drifting down: the root of
     :math:`\hat K(h) + \tfrac{h^2}{2}(\hat v_{lr} - \hat v) = 0` (empirical cumulant generating function of one
@@ -1014,7 +1023,7 @@ class OnlineDetector:
 
     def _calibrate_sprt(self, ys: list, us: list, rate: float, fs: float | None) -> OnlineDetector:
         """:meth:`calibrate` of ``statistic="sprt"`` (see its Notes)."""
-        records, hours, armed_hours = [], 0.0, 0.0
+        records, hours = [], 0.0
         for i, (y, u) in enumerate(zip(ys, us)):
             free = self._alarm_free_copy()
             try:
@@ -1037,80 +1046,66 @@ class OnlineDetector:
                 start = max(int(free._armed_at[c]), self.arm_after)
                 w = (resid[start:, c] - walk[1]) / walk[0]
                 w = w[np.isfinite(w)]
-                records.append((i, self.pairs[c], w))
-                armed_hours += w.size / f / _SECONDS_PER_HOUR
+                records.append((i, self.pairs[c], w, f))
         if len(records) < _MIN_SPRT_RECORDS:
             raise ValueError(f"statistic='sprt' is calibrated from at least {_MIN_SPRT_RECORDS} armed (run, pair) "
                              f"records, the healthy runs give {len(records)}: give more healthy runs (or longer ones, "
                              f"so that the pairs arm)")
         base = copy.copy(self.sprt)
         base.scale_ = 1.0
-        log_scale = np.empty(len(records))
-        for j, (i, pair, w) in enumerate(records):
-            log_scale[j] = np.log(_wald_exponent(base.loglik_ratio(w, 1.0), f"healthy run {i}, pair {pair!r}"))
-        n_rec = len(records)
-        zs = [base.loglik_ratio(w, 1.0) for _, _, w in records]
+        zs = [base.loglik_ratio(w, 1.0) for _, _, w, _ in records]
+        rates = [f for *_, f in records]
         h = _wald_exponent(np.concatenate(zs), "the healthy runs")
         sprt = copy.copy(base)
         sprt.scale_ = h                              # the scaled walk has Wald's exponent 1
         lower = sprt.lower
-        maxima, cycles, samples = [], 0, 0
-        for z in zs:
-            path, _, _, c = _restart_walk(h * z, 0.0, lower, _HUGE)
-            ok = np.isfinite(path)
-            ends = np.flatnonzero(ok & (path <= lower))
-            if ends.size:
-                starts = np.concatenate([[0], ends[:-1] + 1])
-                maxima.append(np.maximum.reduceat(np.where(ok, path, -np.inf)[: ends[-1] + 1], starts))
-            cycles += c
-            samples += int(ok.sum())
+        k = len(self.pairs)
+        walks = [(_cycle_maxima(h * z, lower), z.size / f_rec / _SECONDS_PER_HOUR) for z, f_rec in zip(zs, rates)]
+        cycles = sum(m.size for m, _ in walks)
         if cycles < _MIN_SPRT_CYCLES:
             raise ValueError(f"the SPRT walk returned to its lower bound {cycles} times on the healthy runs, at "
                              f"least {_MIN_SPRT_CYCLES} are needed: give longer healthy runs (or check that they are "
                              "healthy)")
-        maxima = np.concatenate(maxima)
-        per_hour = cycles / armed_hours            # restart cycles per armed hour of one pair
-        k = len(self.pairs)
 
-        def wald(a: float) -> float:                 # P(a cycle ends above a), Wald's approximation (no overshoot)
-            return (1.0 - np.exp(lower)) / (np.exp(a) - np.exp(lower))
+        def fit(picked: list) -> tuple:
+            """Exponential tail of the cycle maxima: base level u, cycles above it per pair-hour, mean excess."""
+            m = np.sort(np.concatenate([walks[j][0] for j in picked]))
+            pair_hours = sum(walks[j][1] for j in picked)
+            n_u = min(_TAIL_EPISODES, m.size - 1)
+            u = float(m[-n_u - 1])
+            return u, n_u / pair_hours, float(np.mean(m[-n_u:] - u)), n_u, pair_hours
 
-        # the overshoot: the cycles' maxima above the level a0 that ~20 of them exceed, against Wald's law
-        a0 = float(np.sort(maxima)[-min(_TAIL_EPISODES, maxima.size)])
-        if a0 > 0:
-            overshoot = min(1.0, float(np.mean(maxima >= a0)) / wald(a0))
-        else:
-            overshoot = 1.0
-        p = rate / (k * per_hour * overshoot)
-        if not p < 1.0:
-            raise ValueError(f"false_alarms_per_hour={rate:g} is more than the SPRT's restart cycles allow "
-                             f"({k * per_hour:.4g} cycles per hour): require fewer false alarms")
-        # the uncertainty of few records: the exponent re-estimated on records drawn with replacement
+        def level(tail: tuple) -> float:
+            """Threshold whose expected alarms at ``rate`` (all pairs) are matched (mean-unbiased, as ``mean``)."""
+            u, per_hour, beta, n_u, pair_hours = tail
+            expected = rate / k * pair_hours
+            return u + beta * n_u * (((n_u + 1.0) / expected) ** (1.0 / n_u) - 1.0)
+
+        def rate_at(a: float, tail: tuple) -> float:
+            u, per_hour, beta, _, _ = tail
+            return float(k * per_hour * np.exp(-(a - u) / beta))
+
+        # the uncertainty of few records: the tail re-fitted on records drawn with replacement
         gen = np.random.default_rng(0)
-        boot = []
-        for _ in range(_SPRT_BOOTSTRAP):
-            pick = gen.integers(0, n_rec, n_rec)
-            try:
-                boot.append(_wald_exponent(np.concatenate([zs[j] for j in pick]), "") / h)
-            except ValueError:
-                continue
-        q = np.quantile(boot, [_SPRT_CONFIDENCE, 1.0 - _SPRT_CONFIDENCE]) if boot else np.array([np.nan, np.nan])
-
-        def rate_at(g: float) -> float:              # a new walk of exponent g relative to the calibrated one
-            return float(k * per_hour * overshoot * (1.0 - np.exp(g * lower)) / (np.exp(g * a) - np.exp(g * lower)))
-
-        g = min(1.0, float(q[1])) if np.isfinite(q[1]) else 1.0
-        a = float(np.log((1.0 - np.exp(g * lower)) / p + np.exp(g * lower)) / g)
-
+        n_rec = len(zs)
+        tails = [fit(list(gen.integers(0, n_rec, n_rec))) for _ in range(_SPRT_BOOTSTRAP)]
+        levels = np.array([level(t) for t in tails])
+        whole = fit(list(range(n_rec)))
+        a = max(float(np.quantile(levels, _SPRT_CONFIDENCE)), level(whole))
+        if not a > 0:
+            raise ValueError(f"false_alarms_per_hour={rate:g} needs an SPRT threshold of {a:.4g}, not positive: "
+                             "require fewer false alarms")
+        band = np.quantile([rate_at(a, t) for t in tails], [1.0 - _SPRT_CONFIDENCE, 0.5, _SPRT_CONFIDENCE])
         self.threshold = a
         self._options["threshold"] = a
         self.sprt = sprt
         self._options["sprt"] = sprt
         self.calibration_ = OnlineCalibration(
             false_alarms_per_hour=rate, healthy_hours=hours, runs=len(ys), threshold=a, glrt_threshold=None,
-            estimator="sprt renewal", source_rates={"sprt": rate}, expected_episodes=rate * hours,
-            healthy_episodes=0, tail={},
-            rate_band=(rate_at(max(1.0, float(q[0]))), rate_at(1.0), rate_at(g)), sprt_scale=h)
+            estimator="sprt cycle maxima", source_rates={"sprt": rate}, expected_episodes=rate * hours,
+            healthy_episodes=int(sum((m >= a).sum() for m, _ in walks)),
+            tail={"sprt": {"u": whole[0], "n_u": whole[3], "beta": whole[2]}},
+            rate_band=tuple(float(b) for b in band), sprt_scale=h)
         self.reset()
         return self
 
