@@ -16,8 +16,9 @@ Flights and seeds
 -----------------
 Every flight: 60 s, severe Dryden turbulence (the simulator's default), commanded speed drawn in 2-10 m/s per
 flight, 1 kHz truth, one sensor log (its own noise and turn-on biases). The seeds of the development flights come
-from ``DEV_SEED``: ``N_FIT`` training flights (the models are trained on them; the sensor range is measured on
-them) and ``N_CAL`` calibration flights (every choice and every threshold is made on them). The evaluation flights
+from ``DEV_SEED``: ``N_FIT`` = 6 training flights (the models are trained on them; the sensor range is measured on
+them) and ``N_CAL`` = 12 calibration flights (every choice and every threshold is made on them; 6 until the
+halted variant, whose thresholds rest on the largest fault-free statistic). The evaluation flights
 come from :func:`tsfdi.study.evaluation_seed`, drawn at run time and printed, stored nowhere: no choice has seen
 them. The models run at ``FS`` = 100 Hz: the 500 Hz gyroscope and accelerometer are averaged over each 10 ms (the
 boxcar of the sensors themselves), the slower topics held (zero-order hold of the last sample).
@@ -30,7 +31,10 @@ and 20 % of the sensor range, the range (max - min) of the sensor over the train
 of sensor range; 30 deg/s", the span of its manoeuvres). Configuration 1 is the log as simulated; configurations 2
 and 3 add white noise so that the sensor's noise standard deviation is two and ten times the measured one (the log
 minus the true boxcar mean, on the training flights; the datasheet value beside it), seeded per flight. The
-detector is armed ``ARM_S`` = 5 s after the start of a flight; FA counts the armed samples before the fault.
+detector is armed ``ARM_S`` = 10 s after the start of a flight, the memory of the 0.999 forgetting model: on the
+development flights the largest fault-free statistic of a model continuing from the training flights' state fell in
+the first 5-7 s of half of the flights (the model re-adapting to the flight's speed); FA counts the armed samples
+before the fault.
 
 Inputs (never the validated sensor)
 -----------------------------------
@@ -57,7 +61,11 @@ Models and choices
   threshold ``2 sqrt(n / 5)`` for ``n`` inputs, as the ALFA benchmark), then per flight one of: continuing its EKF,
   paper 004's eq. 5 with learning rate 1e-3, frozen.
 * ``RecursiveARX``: no output lag, one coefficient per input, a constant, ``P0 = 100``, trained online on the
-  training flights, then continuing with forgetting 0.999, 0.9999 or 1.
+  training flights, then continuing with forgetting 0.999, 0.9999 or 1, or with forgetting 0.999 *halted on a
+  pre-alarm* (:func:`halted_run`): frozen while the eq. 6 statistic exceeds ``PRE_ALARM`` = 4 times its mean on
+  the fault-free calibration flights (same window and configuration, without halting), for ``HOLD_S`` = 4 s at
+  most, then adapting for 4 s before it may halt again. With 0.999 alone the model learns a 5 % ramp while it
+  rises (paper 004, section VIII: a high learning rate learns slow drifts); halted, the ramp stays in the error.
 * ``ARX``: the same regression by least squares on the training flights, fixed.
 
 Residual evaluation: ``tsfdi.detection.moving.MovingSquaredError`` (eq. 6, weight 1), without padding and with
@@ -113,20 +121,22 @@ from tsfdi.study import evaluation_seed  # noqa: E402
 HERE = Path(__file__).resolve().parent
 FIGURE = HERE.parent / "docs" / "figures" / "sensor_validation_sim.png"
 DEV_SEED = 35
-N_FIT, N_CAL, N_EVAL = 6, 6, 6
+N_FIT, N_CAL, N_EVAL = 6, 12, 6
 DURATION, FS, IMU_RATE = 60.0, 100.0, 500.0
 SPEED = (2.0, 10.0)
-FAULT_S, ARM_S = 45.0, 5.0
+FAULT_S, ARM_S = 45.0, 10.0
 FAULTS = [("hard", 0.20), ("hard", 0.05), ("soft", 0.20), ("soft", 0.05), ("bias", 0.20), ("bias", 0.05)]
 CONFIGS = {1: 1.0, 2: 2.0, 3: 10.0}          # sensor-noise std in units of the measured one
 WINDOWS = (10, 25, 50, 100)                 # samples of eq. 6 at 100 Hz
 MARGINS = (1.0, 1.25, 1.5, 2.0, 3.0)
 LAGS = {"0-0.2 s (6 lags)": (0, 1, 2, 5, 10, 20), "0-0.3 s (9 lags)": (0, 1, 2, 3, 5, 8, 12, 20, 30)}
 EPOCHS = 3
+PRE_ALARM, HOLD_S = 4.0, 4.0                # pre-alarm level (x the mean healthy statistic), longest halt (s)
 EMRAN_OPTIONS = dict(error_threshold=0.3, rms_threshold=0.15, measurement_noise=1.0)
 MODELS = ["EMRAN", "RecursiveARX", "ARX"]
 VARIANTS = {"EMRAN": {"EKF": None, "eq. 5, rate 1e-3": 1e-3, "frozen": 0.0},
-            "RecursiveARX": {"forgetting 0.999": 0.999, "forgetting 0.9999": 0.9999, "forgetting 1": 1.0},
+            "RecursiveARX": {"forgetting 0.999": (0.999, False), "forgetting 0.9999": (0.9999, False),
+                             "forgetting 1": (1.0, False), "forgetting 0.999, halted on pre-alarm": (0.999, True)},
             "ARX": {"fixed": None}}
 MOTORS = [f"motors.motor_command{i}" for i in range(1, 7)]
 #: validated sensor -> (500 Hz topic, column, {input set: columns})
@@ -233,7 +243,7 @@ class Setup:
         y = [(v - self.my) / self.sy for v in y_fit]
         n = X[0].shape[1]
         self.models = {"ARX": batch_arx(X, y), "RecursiveARX": {}}
-        for lam in VARIANTS["RecursiveARX"].values():
+        for lam in sorted({lam for lam, _ in VARIANTS["RecursiveARX"].values()}):
             m = RecursiveARX(0, 1, 0, lam, P0=1e2, n_inputs=n, trend="c")
             for x, v in zip(X, y):
                 m.run(v, x)
@@ -266,8 +276,9 @@ class Setup:
         cols, lags, mx, sx = feat
         return (lagged(flight.frame[cols].to_numpy(), lags) - mx) / sx
 
-    def errors(self, model, variant, flight, v):
-        """A-priori prediction errors (sensor units) on one flight whose sensor reads ``v``."""
+    def errors(self, model, variant, flight, v, halt=None):
+        """A-priori prediction errors (sensor units) on one flight whose sensor reads ``v``; ``halt`` = (pre-alarm
+        level in squared sensor units, window, padding) for a RecursiveARX halted on pre-alarm."""
         x, y = self.x(flight, self.emran_feat if model == "EMRAN" else self.linear), (v - self.my) / self.sy
         if model == "EMRAN":
             net = copy.deepcopy(self.models["EMRAN"])
@@ -276,24 +287,65 @@ class Setup:
             elif variant is not None:
                 net.learning_rate = variant
             e = net.run(x, y).resid
+        elif model == "RecursiveARX" and variant[1]:
+            level, window, padding = halt
+            e = halted_run(self.models["RecursiveARX"][variant[0]], y, x, level / self.sy ** 2, window, padding)
         elif model == "RecursiveARX":
-            e = copy.deepcopy(self.models["RecursiveARX"][variant]).run(y, x).resid
+            e = copy.deepcopy(self.models["RecursiveARX"][variant[0]]).run(y, x).resid
         else:
             e = self.models["ARX"].residuals(y, x)
         return np.asarray(e) * self.sy
 
 
+def halted_run(model, y, x, level, window, padding):
+    """A-priori errors of a copy of ``model`` on ``y, x`` with adaptation halted on a pre-alarm.
+
+    From the first armed sample where the eq. 6 statistic (``window``, ``padding``) of the errors exceeds ``level``
+    the model is frozen (:meth:`~tsfdi.models.RecursiveARX.freeze`); it adapts again (``unfreeze``) when the
+    statistic is back at or below ``level``, or after ``HOLD_S`` at the latest, then for ``HOLD_S`` without a new
+    halt (a healthy stretch the frozen model misses cannot keep it frozen for ever). A slow fault the forgetting
+    model would learn during its ramp raises the statistic while the model is halted (paper 004, section VIII:
+    "a high learning rate results in learning of slow-drift faults"; paper 002: adaptation halted on alarm).
+    Causal: the decision at sample ``k`` uses errors up to ``k``, the model halts from ``k + 1`` on.
+    """
+    m, n, arm, hold = copy.deepcopy(model), len(y), int(ARM_S * FS), int(HOLD_S * FS)
+    stat = MovingSquaredError(window, padding=padding).statistic
+    e, pos, frozen, until, quiet = np.empty(n), 0, False, 0, 0
+    while pos < n:
+        e[pos:] = np.asarray(copy.deepcopy(m).run(y[pos:], x[pos:]).resid)   # what follows if nothing changes
+        lo = max(0, pos - window + 1)
+        r, k = np.asarray(stat(e[lo:n]))[pos - lo:], np.arange(pos, n)
+        hit = np.flatnonzero((~(r > level)) | (k >= until) if frozen else (r > level) & (k >= max(arm, quiet)))
+        if not len(hit):
+            break
+        k = pos + int(hit[0])
+        m.run(y[pos:k + 1], x[pos:k + 1])
+        if frozen:
+            m.unfreeze()
+            quiet = k + 1 + hold if k >= until else 0
+        else:
+            m.freeze()
+            until = k + 1 + hold
+        frozen, pos = not frozen, k + 1
+    return e
+
+
 class Scenarios:
     """One model's prediction errors on flights, fault-free and with every fault, in one noise configuration."""
 
-    def __init__(self, st, model, variant, frames, k, sigma0):
+    def __init__(self, st, model, variant, frames, k, sigma0, halt=None):
         self.arm, self.start = int(ARM_S * FS), frames[0].onset
         self.healthy, self.faulty = [], {fault: [] for fault in FAULTS}
         for f in frames:
-            self.healthy.append(st.errors(model, variant, f, f.sensor(st.topic, st.column, k, sigma0)))
+            self.healthy.append(st.errors(model, variant, f, f.sensor(st.topic, st.column, k, sigma0), halt))
             for fault in FAULTS:
                 v = f.sensor(st.topic, st.column, k, sigma0, fault, st.sensor_range)
-                self.faulty[fault].append(st.errors(model, variant, f, v))
+                self.faulty[fault].append(st.errors(model, variant, f, v, halt))
+
+    def level(self, window, padding):
+        """Pre-alarm level: ``PRE_ALARM`` times the mean armed statistic of the fault-free flights."""
+        det = MovingSquaredError(window, padding=padding)
+        return PRE_ALARM * float(np.mean([np.nanmean(np.asarray(det.statistic(e))[self.arm:]) for e in self.healthy]))
 
     def peaks(self, window, padding):
         """Largest armed statistic of each fault-free flight."""
@@ -348,24 +400,37 @@ def run_target(target, fit, cal, ev):
         print(f"  {key[0]:<16} {key[1]:<18} {rms:10.5f} {st.emran_screen[key]:10.5f}"
               + (f"  <- chosen for {', '.join(marks)}" if marks else ""))
     print("choices on the calibration flights (configuration 1, padding = window; fewest UD, then shortest MT):")
+    plain = {}
+
+    def scenarios(model, v, frames, k, w):
+        """Scenarios of a model variant; a halted RecursiveARX takes its pre-alarm level from the calibration
+        flights' fault-free statistic of the same model without halting (this configuration, window ``w``)."""
+        if not (model == "RecursiveARX" and v[1]):
+            return Scenarios(st, model, v, frames, k, sigma0)
+        if (v[0], k) not in plain:
+            plain[(v[0], k)] = Scenarios(st, model, (v[0], False), cal, k, sigma0)
+        return Scenarios(st, model, v, frames, k, sigma0, (plain[(v[0], k)].level(w, w), w, w))
+
     chosen = {}
     for model in MODELS:
         best = None
         for vname, v in VARIANTS[model].items():
-            sc = Scenarios(st, model, v, cal, 1.0, sigma0)
+            sc = None
             for w in WINDOWS:
+                if sc is None or (model == "RecursiveARX" and v[1]):
+                    sc = scenarios(model, v, cal, 1.0, w)
                 key = total(sc.metrics(w, w, sc.threshold(w, w)[0]))
                 if best is None or key < best[0]:
                     best = (key, vname, v, w)
         (ud, mt), vname, v, w = best
         chosen[model] = (vname, v, w)
-        print(f"  {model:<13} {vname:<19} window {w:>3} ({w / FS:.2f} s)  calibration: UD {ud} of {6 * len(cal)}, "
+        print(f"  {model:<13} {vname:<39} window {w:>3} ({w / FS:.2f} s)  calibration: UD {ud} of {6 * len(cal)}, "
               f"mean MT {mt:.2f} s")
     results, thresholds, figdata = {}, {}, {}
     for name, (_, v, w) in chosen.items():
         for cfg, k in CONFIGS.items():
-            calsc = Scenarios(st, name, v, cal, k, sigma0)
-            test = Scenarios(st, name, v, ev, k, sigma0)
+            calsc = scenarios(name, v, cal, k, w)
+            test = scenarios(name, v, ev, k, w)
             for padding in (0, w):
                 thr, margin = calsc.threshold(w, padding)
                 thresholds[(padding > 0, cfg, name)] = (thr, margin)

@@ -5,6 +5,7 @@ The benchmark adds no library code; these checks pin what its numbers rest on: t
 configurations' noise, and lags that never look ahead.
 """
 
+import copy
 import importlib.util
 from pathlib import Path
 
@@ -68,3 +69,39 @@ def test_lagged_never_looks_ahead():
     out = mod.lagged(x, (0, 2))
     np.testing.assert_array_equal(out[:, 0], x[:, 0])
     np.testing.assert_array_equal(out[:, 1], [0, 0, 0, 1, 2, 3])
+
+
+def test_halted_run_keeps_a_slow_ramp_the_forgetting_model_learns():
+    mod = load_benchmark()
+    from tsfdi.models import RecursiveARX
+
+    rng = np.random.default_rng(0)
+    n, onset = 6000, 4500                         # 60 s at 100 Hz, a 4 s ramp of 5 noise deviations from 45 s
+    x = rng.standard_normal((n, 1))
+    ramp = 0.05 * np.clip((np.arange(n) - onset) / 400.0, 0.0, 1.0)
+    y = 2.0 * x[:, 0] + 0.01 * rng.standard_normal(n) + ramp
+    model = RecursiveARX(0, 1, 0, 0.999, P0=1e2, n_inputs=1, trend="c")
+    model.run(2.0 * x[:3000, 0] + 0.01 * rng.standard_normal(3000), x[:3000])
+    plain = np.asarray(copy.deepcopy(model).run(y, x).resid)
+    halted = mod.halted_run(model, y, x, level=4e-4, window=25, padding=25)
+    np.testing.assert_allclose(halted[:onset], plain[:onset])     # nothing crosses the level before the fault
+    assert abs(plain[-100:].mean()) < 0.025                        # the forgetting model learns the offset
+    assert halted[onset + 400:onset + 700].mean() > 0.04           # halted, the error holds the whole ramp
+    assert not model.frozen and model.nobs == 3000                 # the model given is left as it was
+
+
+def test_halted_run_releases_after_hold():
+    mod = load_benchmark()
+    from tsfdi.models import RecursiveARX
+
+    rng = np.random.default_rng(1)
+    n = 6000
+    x = rng.standard_normal((n, 1))
+    y = 2.0 * x[:, 0] + 0.01 * rng.standard_normal(n)
+    y[2000:] += 0.05                              # a lasting change the frozen model alone would never follow
+    model = RecursiveARX(0, 1, 0, 0.999, P0=1e2, n_inputs=1, trend="c")
+    model.run(y[:1], x[:1])
+    e = mod.halted_run(model, y, x, level=4e-4, window=25, padding=25)
+    hold = int(mod.HOLD_S * mod.FS)
+    assert abs(e[2000 + hold + 5]) > 0.04         # frozen for HOLD_S ...
+    assert abs(e[-500:].mean()) < 0.01            # ... then it adapts (no halt for ever)
