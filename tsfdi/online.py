@@ -3,8 +3,10 @@
 :class:`OnlineDetector` runs several (output, input) signal pairs at once, each through a recursive ARX model
 with the stability gate, Welford running variance and Z-score alarms of paper 001 and a streaming GLRT on the
 same prediction errors (paper 002), and reports the first alarm of every pair and of the whole system with time
-stamps. :meth:`OnlineDetector.calibrate` sets the thresholds from healthy runs for a required number of false
-alarms per flight hour (paper 002's rule: the threshold from the statistic's distribution in normal operation).
+stamps; ``statistic="sprt"`` runs Wald's restarted SPRT (:class:`tsfdi.SPRT`) on them instead.
+:meth:`OnlineDetector.calibrate` sets the thresholds from healthy runs for a required number of false alarms per
+flight hour (paper 002's rule: the threshold from the statistic's distribution in normal operation; for the SPRT
+from the restart cycles of a few short healthy logs, with the uncertainty of few logs).
 """
 
 from __future__ import annotations
@@ -147,17 +149,24 @@ class OnlineCalibration:
     glrt_threshold : float or None
         The calibrated GLRT threshold (None without GLRT).
     estimator : str
-        ``"empirical"`` (counted episodes; with a GLRT, those of the combined alarm) or ``"exponential tail"``
-        (extrapolated from the episode peaks, each source on its own).
+        ``"empirical"`` (counted episodes; with a GLRT, those of the combined alarm), ``"exponential tail"``
+        (extrapolated from the episode peaks, each source on its own) or ``"sprt cycle maxima"``
+        (``statistic="sprt"``, see :meth:`OnlineDetector.calibrate`).
     source_rates : dict
         Rate per hour at which each source ("zscore" / "mean", "glrt") is set on its own (one common rate).
     expected_episodes : float
         :math:`K = \\rho H`, the episodes the target rate means on the healthy runs.
     healthy_episodes : int
-        Alarm episodes the calibrated detector would raise on the healthy runs (without freezing).
+        Alarm episodes the calibrated detector would raise on the healthy runs (without freezing; for
+        ``statistic="sprt"`` the restart cycles reaching the threshold).
     tail : dict
         Per source fitted with the exponential tail: base level ``u``, episodes above it ``n_u`` and mean
-        excess ``beta``.
+        excess ``beta`` (``statistic="sprt"``: of the restart cycles' maxima of all records).
+    rate_band : tuple of float or None
+        ``statistic="sprt"``: false alarms per hour at the calibrated threshold, 5 %, 50 % and 95 % quantiles of
+        the record-level bootstrap (None for the other statistics).
+    sprt_scale : float or None
+        ``statistic="sprt"``: Wald's exponent of the pooled healthy walk, set as the SPRT's ``scale_``.
     """
 
     false_alarms_per_hour: float
@@ -332,7 +341,13 @@ class OnlineDetector:
     - ``statistic="mean"``: the moving average of the last ``window`` prediction errors, compared with
       ``threshold`` in the units of ``y`` (a finite-moving-average change detector). ``direction`` makes it
       one-sided: "down" alarms when the average falls below ``-threshold`` (e.g. a loss of thrust in the
-      longitudinal specific force), "up" above ``+threshold``, "both" on the absolute value.
+      longitudinal specific force), "up" above ``+threshold``, "both" on the absolute value;
+    - ``statistic="sprt"``: Wald's SPRT (:class:`tsfdi.SPRT`, the ``sprt`` test, restarted as a CUSUM) of the
+      errors standardised by the Welford mean and standard deviation at arming: the walk
+      :math:`S_k = S_{k-1} + z_k` (:math:`z_k` the test's per-sample log-likelihood ratio times its ``scale_``)
+      restarts at 0 at its lower bound and after every alarm; an alarm where :math:`S_k \ge` ``threshold`` (by
+      default the test's upper bound :math:`\ln((1-\beta)/\alpha)`). The recommended statistic for autopilot logs
+      (see the guide): :meth:`calibrate` sets it from a few short healthy logs.
 
     Optionally a streaming :class:`tsfdi.detection.GLRT` runs on the same errors once the variance is stable
     and positive (its ``scale`` is the Welford standard deviation at arming, its input the error minus the
@@ -353,8 +368,9 @@ class OnlineDetector:
     na, nb, nk : int
         ARX orders (see :class:`tsfdi.RecursiveARX`), defaults 2, 2, 0.
     forgetting_factor : float, default 0.995
-    threshold : float, default 4.5
-        Alarm threshold of ``statistic`` (standard deviations for "zscore", units of ``y`` for "mean").
+    threshold : float, optional
+        Alarm threshold of ``statistic``: standard deviations for "zscore" (default 4.5), units of ``y`` for "mean"
+        (default 4.5), the SPRT walk's level for "sprt" (default the upper bound of ``sprt``).
     glrt : GLRT or None, default ``GLRT(window=20, alpha=1e-6)`` for "zscore", None for "mean"
         The GLRT whose window and threshold are used for every pair (its ``scale`` is replaced per pair);
         ``None`` disables the GLRT.
@@ -367,7 +383,7 @@ class OnlineDetector:
     n_inputs : int, default 1
         Inputs per pair; ``u`` then has ``n_pairs * n_inputs`` columns, pair by pair (the inputs of pair 0
         first).
-    statistic : {"zscore", "mean"}, default "zscore"
+    statistic : {"zscore", "mean", "sprt"}, default "zscore"
     window : int, default 20
         Length of the moving average (``statistic="mean"``); the errors it holds, ``n_pairs * (window - 1)``
         values, are checked against the 2 GiB limit (2**28 values) before anything is allocated.
@@ -379,6 +395,10 @@ class OnlineDetector:
         Model-stability bound of the arming gate: the largest parameter step relative to the largest parameter,
         both weighted by the scale of their regressor (see Notes); a fraction, so the same for any units of ``y``
         and ``u``.
+    sprt : SPRT, default ``SPRT("variance", ratio=4, alpha=1e-4, beta=0.01, restart=True)``
+        The sequential test of ``statistic="sprt"`` (ignored otherwise): ``alternative`` "variance" (the error
+        variance grows by ``ratio``: any change that makes the errors larger, either sign) or "mean" (a shift of
+        ``shift`` standard deviations, one-sided), with ``restart=True``. With it ``glrt`` must be None.
     **rls_options
         Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``theta0``, ``stable_samples``
         (consecutive samples the model and the variance gates must hold), ``variance_tol``,
@@ -663,7 +683,8 @@ class OnlineDetector:
                     f"variance_tol={m.variance_tol:g} {run}, after at least min_variance_samples="
                     f"{m.min_variance_samples} errors): give more data or raise variance_tol" if m.model_stable else
                     f"its parameter step never stayed below eps={self.eps:g} of the parameters {run}: check that y "
-                    "follows u, give more data or raise eps")
+                    "follows u (on an autopilot log: the body rate of an axis against the actuator control of that "
+                    "axis, nk=1), give more data or raise eps")
             source = {"zscore": "Z-score", "sprt": "SPRT"}.get(self.statistic, "GLRT")
             warnings.warn(f"OnlineDetector pair {self.pairs[c]!r} has not armed by the end of the data at {when}, so "
                           f"it could raise no {source} alarm: {gate}",
@@ -868,6 +889,25 @@ class OnlineDetector:
           variables). A lighter tail (log-survival concave, e.g. Gaussian errors) makes the threshold err
           high (fewer false alarms than required), a heavier one (e.g. runs whose error scale differs) low.
         - :math:`K < 1` (fewer than :math:`1/\rho` healthy hours): ``ValueError``.
+
+        **statistic="sprt"**: a few short logs suffice (the restart cycles of the walk are many even where alarms
+        are rare). The standardised errors of every armed (run, pair) record are one record; at least three are
+        needed. (1) The per-sample log-likelihood ratios :math:`z` of all records give Wald's exponent
+        :math:`h > 0` of the pooled walk, the root of :math:`\hat K(h) + \tfrac{h^2}{2}(\hat v_{lr} - \hat v) = 0`
+        (empirical cumulant generating function of :math:`z`, long-run variance over batches of 32 samples, as in
+        :meth:`tsfdi.SPRT.calibrate`); ``sprt.scale_ = h``, so that the scaled walk satisfies
+        :math:`E[e^{S_n}] \approx 1`. (2) The scaled walk is run restarted at its lower bound only; each complete
+        cycle has a maximum :math:`M_i`, and an alarm at level :math:`a` is a cycle with :math:`M_i \ge a`. The
+        rate of alarms per pair-hour is the cycle rate times :math:`P(M > a)`, whose tail is fitted as in the
+        exponential tail above: the :math:`n_u = 20` highest maxima over the level :math:`u` of the 21st, mean
+        excess :math:`\hat\beta` (:math:`\hat\beta = 1` for Wald's identity without overshoot; bursts of a
+        non-stationary error give more), :math:`a = u + \hat\beta\, n_u[((n_u+1)/K)^{1/n_u} - 1]` with
+        :math:`K = \rho H_p / k` (:math:`H_p` the armed pair-hours, :math:`k` pairs: ``false_alarms_per_hour`` is
+        for all pairs together). (3) The uncertainty of few logs: the tail is re-fitted on 200 sets of records
+        drawn with replacement (a record-level bootstrap, fixed seed); the threshold is the 95 % quantile of their
+        levels (at least the level of all records), so ``false_alarms_per_hour`` is a 95 % upper bound for a log
+        like the healthy ones, and ``calibration_.rate_band`` gives the 5 %, 50 % and 95 % bootstrap rates at
+        the chosen threshold. The rate is per armed hour of the pairs' walks (armed time only).
 
         With the GLRT on, an alarm of either source is an alarm of the pair. Both sources are set at the level
         of one common rate of their own, :math:`\rho_s \in [\rho/2, \rho]` (at :math:`\rho/2` the union bound
