@@ -184,8 +184,10 @@ def _file_design(ds):
 def test_shipped_records_regenerate_bit_for_bit(shipped, tmp_path):
     idx = [0, 70, 150, 235]  # healthy light, rotor1 moderate, rotor2 severe, rotor6 severe
     sub = shipped.isel(record=idx)
+    # failure_level 1.0 (the default) is the abrupt loss the shipped records were simulated with
     ds = simulate_hexacopter(turbulence=sub.turbulence.values.tolist(), failed_rotor=sub.failed_rotor.values,
-                             failure_time=10.0, seed=sub.seed.values, duration=60.0, **_file_design(shipped))
+                             failure_time=10.0, failure_level=[1.0] * 4, seed=sub.seed.values, duration=60.0,
+                             **_file_design(shipped))
     out, enc = encode_for_file(ds)
     out.to_netcdf(tmp_path / "x.nc", engine="h5netcdf", encoding=enc)
     with xr.open_dataset(tmp_path / "x.nc", engine="h5netcdf") as back:
@@ -234,7 +236,10 @@ def test_make_dataset_seeds_are_per_record():
     ({"failure_time": 5.0, "failed_rotor": 1}, "failure_time"),
     ({"turbulence": "hurricane"}, "turbulence"), ({"dt": 0.0}, "dt"), ({"dt": -0.001}, "dt"),
     ({"duration": -1.0}, "duration"), ({"fs": 300.0}, "fs"), ({"seed": -3}, "seed"),
-    ({"failed_rotor": [1, 2], "seed": [1, 2, 3]}, "length")])
+    ({"failed_rotor": [1, 2], "seed": [1, 2, 3]}, "length"),
+    ({"failure_level": 0.0, "failed_rotor": 1, "failure_time": 1.0}, "failure_level"),
+    ({"failure_level": 1.5, "failed_rotor": 1, "failure_time": 1.0}, "failure_level"),
+    ({"failure_level": [0.5, 0.5], "failed_rotor": 1, "failure_time": 1.0, "seed": [1, 2, 3]}, "length")])
 def test_bad_input(kwargs, name):
     kw = {"duration": 2.0, **kwargs}
     with pytest.raises(ValueError, match=name):
@@ -660,3 +665,46 @@ def test_no_record_lost_in_the_paper_design():
     ds = make_hexacopter_dataset(2, seed=3031, duration=60.0)
     assert not ds["lost_control"].values.any()
     assert np.max(np.abs(ds["roll"].values)) < 0.8 and np.max(np.abs(ds["pitch"].values)) < 0.8
+
+
+@pytest.mark.parametrize("params", [HexacopterParameters(), BIDIRECTIONAL_HEXACOPTER])
+def test_partial_loss_scales_the_loads(params):
+    """A rotor at effectiveness e adds e times the forces and moments (dx[6:12]) it adds at full effectiveness
+    (the other five and the body unchanged), and its wake is driven by e times its thrust; e = 1 is bit for bit the
+    healthy derivative (blade-element and lumped rotors)."""
+    from tsfdi.datasets import _hexacopter_core as core
+    P = params.to_array()
+    x = _rotor_state(params)
+    g = np.array([0.5, -0.3, 0.8, 0.1, -0.05, 0.02])
+    full = core.derivative(x, x[12:18], g, P, np.ones(6))
+    np.testing.assert_array_equal(full, core.derivative(x, x[12:18], g, P, np.ones(6, dtype=np.int64)))
+    for k in (0, 1, 5):
+        eff = np.ones(6)
+        eff[k] = 0.0
+        dead = core.derivative(x, x[12:18], g, P, eff)
+        for e in (0.3, 0.75):
+            eff[k] = e
+            part = core.derivative(x, x[12:18], g, P, eff)
+            np.testing.assert_allclose(part[6:12] - dead[6:12], e * (full[6:12] - dead[6:12]), rtol=1e-9,
+                                       atol=1e-12)
+            if params.blade_element:
+                # d vi / dt = (T - 2 rho pi R^2 V_m vi) / m_a: the thrust term scales with e
+                np.testing.assert_allclose(part[18 + k] - dead[18 + k], e * (full[18 + k] - dead[18 + k]),
+                                           rtol=1e-9)
+
+
+def test_partial_loss_records_lie_between_healthy_and_abrupt_loss():
+    """failure_level is stored per record (NaN for healthy records); the yaw-rate disturbance after a partial loss
+    of rotor 2 grows with the level, from the healthy record's to the abrupt loss's; before the failure the records
+    are identical; level 1.0 is the default abrupt loss bit for bit."""
+    kw = dict(duration=4.0, turbulence="light", failure_time=1.0, seed=3, fs=1000.0)  # no decimation filter
+    ds = simulate_hexacopter(failed_rotor=[0, 2, 2, 2], failure_level=[0.5, 0.2, 0.5, 1.0], **kw)
+    np.testing.assert_array_equal(ds.failure_level.values[1:], [0.2, 0.5, 1.0])
+    assert np.isnan(ds.failure_level.values[0]) and ds.failure_level.attrs["units"] == "1"
+    r = ds["r"].values
+    np.testing.assert_array_equal(r[1:, :1000], np.broadcast_to(r[0, :1000], (3, 1000)))
+    dev = np.abs(r[:, 1500:] - r[0, 1500:]).mean(axis=1)
+    assert 0 < dev[1] < dev[2] < dev[3], dev
+    default = simulate_hexacopter(failed_rotor=2, **kw)
+    for v in ("roll", "pitch", "r", "rotor_speed5"):
+        np.testing.assert_array_equal(default[v].values[0], ds[v].values[3], err_msg=v)

@@ -66,11 +66,13 @@ def _ned_velocity(x):
 
 
 @njit(cache=True)
-def _bet(P, om, vhx, vhy, vhz, vi, load):
+def _bet(P, om, vhx, vhy, vhz, vi, e, load):
     """Blade-element loads of one fixed-pitch rotor (closed form, uniform inflow) and its inflow rate.
 
     ``om`` rotor speed relative to the air (rad/s, >= 0), ``(vhx, vhy, vhz)`` hub velocity relative to the air
-    in body axes, ``vi`` induced velocity (m/s, down through the disc). ``load`` out: thrust T (N, along -z),
+    in body axes, ``vi`` induced velocity (m/s, down through the disc), ``e`` the rotor's effectiveness (1:
+    healthy; every load is multiplied by it and the wake is driven by the reduced thrust; a factor 1.0 leaves the
+    loads bit for bit). ``load`` out: thrust T (N, along -z),
     torque Q (N m, absorbed), in-plane force per unit in-plane hub velocity (H = -h (vhx, vhy)), rolling
     moment per unit in-plane hub velocity (m_R, times the spin sign), pitching moment per unit in-plane hub
     velocity (m_P), d vi / dt.
@@ -87,16 +89,16 @@ def _bet(P, om, vhx, vhy, vhz, vi, load):
     vt = om * R                   # tip speed
     vh2 = vhx * vhx + vhy * vhy
     vn = vi - vhz                 # flow down through the disc
-    T = k * 0.5 * a * (th0 * (vt * vt / 3.0 + vh2 / 2.0) + thtw * (vt * vt + vh2) / 4.0 - vn * vt / 2.0)
-    Q = k * R * (0.5 * a * vn * (th0 * vt / 3.0 + thtw * vt / 4.0 - vn / 2.0) + cd0 * (vt * vt + vh2) / 8.0)
-    h = k * (0.25 * a * vn * (th0 / 2.0 + thtw / 3.0) + cd0 * vt / 4.0)
-    mr = k * R * 0.5 * a * (th0 * vt / 3.0 + thtw * vt / 4.0 - vn / 4.0)
+    T = e * (k * 0.5 * a * (th0 * (vt * vt / 3.0 + vh2 / 2.0) + thtw * (vt * vt + vh2) / 4.0 - vn * vt / 2.0))
+    Q = e * (k * R * (0.5 * a * vn * (th0 * vt / 3.0 + thtw * vt / 4.0 - vn / 2.0) + cd0 * (vt * vt + vh2) / 8.0))
+    h = e * (k * (0.25 * a * vn * (th0 / 2.0 + thtw / 3.0) + cd0 * vt / 4.0))
+    mr = e * (k * R * 0.5 * a * (th0 * vt / 3.0 + thtw * vt / 4.0 - vn / 4.0))
     vm = math.sqrt(vh2 + vn * vn)
     vpos = vn if vn > 0.0 else 0.0
     # longitudinal inflow gradient kx = 15 pi / 32 tan(chi / 2) (Pitt & Peters), tan(chi / 2) = V_h / (V + V_n)
     mp = 0.0
     if vm + vpos > 0.0:
-        mp = k * R * a * vi * vt * (15.0 * math.pi / 32.0) / (16.0 * (vm + vpos))
+        mp = e * (k * R * a * vi * vt * (15.0 * math.pi / 32.0) / (16.0 * (vm + vpos)))
     load[0] = T
     load[1] = Q
     load[2] = h
@@ -115,9 +117,9 @@ def _inflow_rate(P, T, vm, vi):
 
 
 @njit(cache=True)
-def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
+def _bet_rotors(x, P, eff, ur, vr, wr, pr, qr, rr, dx):
     """Forces and moments of the six blade-element rotors about the centre of gravity (body axes); writes the
-    inflow rates ``dx[18:24]``."""
+    inflow rates ``dx[18:24]``. ``eff``: effectiveness of each rotor (1 healthy, 0 failed)."""
     arm = P[5]
     hr = P[6]
     ch = P[11]
@@ -148,15 +150,16 @@ def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
         vhy = vr + rr * xi - pr * zi
         vhz = wr + pr * yi - qr * xi
         vi = x[18 + i]
-        if alive[i] == 0:
+        e = eff[i]
+        if e == 0.0:
             # a failed rotor makes no load; its wake decays (Pitt-Peters with T = 0)
             dx[18 + i] = _inflow_rate(P, 0.0, math.sqrt(vhx * vhx + vhy * vhy + (vi - vhz) ** 2), vi)
             continue
-        _bet(P, om, vhx, vhy, vhz, vi, load)
+        _bet(P, om, vhx, vhy, vhz, vi, e, load)
         dx[18 + i] = load[5]
         T = load[0]
         # in-plane force: blade-element H-force plus the optional lumped rotor drag (blade flexibility)
-        hh = load[2] + ch * om
+        hh = load[2] + e * ch * om
         fx = -hh * vhx
         fy = -hh * vhy
         fz = -T
@@ -168,7 +171,7 @@ def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
         Mz += xi * fy - yi * fx
         # hub moments: rolling moment of the advancing blade (towards the retreating side: spin-dependent)
         # and pitching moment of the longitudinal inflow gradient plus the optional lumped flapping term
-        mp = load[4] + kf * om
+        mp = load[4] + e * kf * om
         Mx += spin * load[3] * vhx - mp * vhy
         My += spin * load[3] * vhy + mp * vhx
         Mz += -spin * load[1]
@@ -176,9 +179,10 @@ def _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx):
 
 
 @njit(cache=True)
-def _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr):
+def _lumped_rotors(x, P, eff, ur, vr, wr, pr, qr, rr):
     """Forces and moments of the six lumped-coefficient rotors (``blade_element=False``: thrust and torque
-    coefficients, inflow, rotor drag and flapping terms) about the centre of gravity (body axes)."""
+    coefficients, inflow, rotor drag and flapping terms) about the centre of gravity (body axes); every load of
+    rotor ``i`` times its effectiveness ``eff[i]`` (1 healthy, 0 failed)."""
     arm = P[5]
     hr = P[6]
     kT = P[7]
@@ -204,7 +208,8 @@ def _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr):
         om = x[12 + i]
         if om < 0.0 and not rev:
             om = 0.0
-        if alive[i] == 0:
+        e = eff[i]
+        if e == 0.0:
             continue
         # rotor speed relative to the air: the motor holds om relative to the airframe, which turns at
         # r - r_g relative to the air (rotor 1 clockwise seen from above, directions alternating)
@@ -217,11 +222,11 @@ def _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr):
         vhx = ur + qr * zi - rr * yi
         vhy = vr + rr * xi - pr * zi
         vhz = wr + pr * yi - qr * xi
-        T = kT * om * aom + cw * aom * vhz
+        T = e * kT * om * aom + e * cw * aom * vhz
         if T < 0.0 and not rev:
             T = 0.0
-        fx = -ch * aom * vhx
-        fy = -ch * aom * vhy
+        fx = -(e * ch) * aom * vhx
+        fy = -(e * ch) * aom * vhy
         fz = -T
         Fx += fx
         Fy += fy
@@ -231,15 +236,15 @@ def _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr):
         My += zi * fx - xi * fz
         Mz += xi * fy - yi * fx
         # blade-flapping moment: disc tilts away from the relative wind
-        Mx += -kf * aom * vhy
-        My += kf * aom * vhx
+        Mx += -(e * kf) * aom * vhy
+        My += e * kf * aom * vhx
         # reaction torque, opposite to the rotor's spin (yaw damping -2 k_Q om r through om)
-        Mz += -spin * kQ * om * aom
+        Mz += -spin * (e * kQ) * om * aom
     return Fx, Fy, Fz, Mx, My, Mz
 
 
 @njit(cache=True)
-def _deriv(x, wcmd, g, P, alive, dx, sf):
+def _deriv(x, wcmd, g, P, eff, dx, sf):
     # parameters
     m = P[0]
     grav = P[1]
@@ -269,9 +274,9 @@ def _deriv(x, wcmd, g, P, alive, dx, sf):
     qr = q - g[4]
     rr = r - g[5]
     if P[21] > 0.0:
-        Fx, Fy, Fz, Mx, My, Mz = _bet_rotors(x, P, alive, ur, vr, wr, pr, qr, rr, dx)
+        Fx, Fy, Fz, Mx, My, Mz = _bet_rotors(x, P, eff, ur, vr, wr, pr, qr, rr, dx)
     else:
-        Fx, Fy, Fz, Mx, My, Mz = _lumped_rotors(x, P, alive, ur, vr, wr, pr, qr, rr)
+        Fx, Fy, Fz, Mx, My, Mz = _lumped_rotors(x, P, eff, ur, vr, wr, pr, qr, rr)
         for i in range(6):
             dx[18 + i] = 0.0        # no inflow states
     # fuselage drag and weathervane yaw moment
@@ -461,17 +466,18 @@ def _controller(x, integ, ref, G, P, S, ctrl, wcmd):
 
 
 @njit(cache=True)
-def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, n_steps, dt, out, limits):
+def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, fail_level, n_steps, dt, out, limits):
     """Integrate one record with RK4 at step ``dt``; write ``N_OUT`` channels per step into ``out``: the 12
     rigid-body states, the 7 controller outputs, the specific force (from the first RK4 stage, the state and
     commands of the step), the 6 rotor speeds and the 6 motor commands.
 
-    ``fail_rotor`` is 0-based (-1: none). Returns the step at which control was lost (-1: never).
+    ``fail_rotor`` is 0-based (-1: none); from ``fail_step`` on it keeps ``1 - fail_level`` of its loads
+    (``fail_level`` 1.0: the rotor makes none, an abrupt loss). Returns the step at which control was lost (-1: never).
     ``limits``: [max |roll|, max |pitch| (rad), max altitude error (m)]; ground contact (z > 0) is a loss too.
     """
     x = x0.copy()
     integ = integ0.copy()
-    alive = np.ones(6, dtype=np.int64)
+    eff = np.ones(6)
     k1 = np.empty(N_X)
     k2 = np.empty(N_X)
     k3 = np.empty(N_X)
@@ -484,7 +490,7 @@ def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, n_ste
     lost = -1
     for k in range(n_steps):
         if k == fail_step and fail_rotor >= 0:
-            alive[fail_rotor] = 0
+            eff[fail_rotor] = 1.0 - fail_level
         if lost >= 0:
             for j in range(N_OUT):
                 out[k, j] = np.nan
@@ -496,7 +502,7 @@ def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, n_ste
             out[k, 12 + j] = ctrl[j]
         for j in range(6):
             g[j] = gust[k, j]
-        _deriv(x, wcmd, g, P, alive, k1, sf)
+        _deriv(x, wcmd, g, P, eff, k1, sf)
         for j in range(3):
             out[k, 19 + j] = sf[j]
         for j in range(6):
@@ -504,13 +510,13 @@ def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, n_ste
             out[k, 28 + j] = wcmd[j]
         for j in range(N_X):
             xt[j] = x[j] + 0.5 * dt * k1[j]
-        _deriv(xt, wcmd, g, P, alive, k2, sf)
+        _deriv(xt, wcmd, g, P, eff, k2, sf)
         for j in range(N_X):
             xt[j] = x[j] + 0.5 * dt * k2[j]
-        _deriv(xt, wcmd, g, P, alive, k3, sf)
+        _deriv(xt, wcmd, g, P, eff, k3, sf)
         for j in range(N_X):
             xt[j] = x[j] + dt * k3[j]
-        _deriv(xt, wcmd, g, P, alive, k4, sf)
+        _deriv(xt, wcmd, g, P, eff, k4, sf)
         for j in range(N_X):
             x[j] = x[j] + dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
         for j in range(6):
@@ -528,19 +534,20 @@ def simulate_record(x0, integ0, ref, gust, P, G, S, fail_rotor, fail_step, n_ste
 
 
 @njit(cache=True, parallel=True)
-def simulate_batch(x0, integ0, ref, gusts, P, G, S, fail_rotor, fail_step, n_steps, dt, out, limits, lost):
+def simulate_batch(x0, integ0, ref, gusts, P, G, S, fail_rotor, fail_step, fail_level, n_steps, dt, out, limits,
+                   lost):
     """Records in parallel; ``P`` holds one parameter vector per record (rows), ``G`` and the schedule ``S``
     are shared."""
     for i in prange(x0.shape[0]):
         lost[i] = simulate_record(x0[i], integ0[i], ref[i], gusts[i], P[i], G, S, fail_rotor[i], fail_step[i],
-                                  n_steps, dt, out[i], limits)
+                                  fail_level[i], n_steps, dt, out[i], limits)
 
 
 @njit(cache=True)
-def derivative(x, wcmd, g, P, alive):
+def derivative(x, wcmd, g, P, eff):
     dx = np.empty(N_X)
     sf = np.empty(3)
-    _deriv(x, wcmd, g, P, alive, dx, sf)
+    _deriv(x, wcmd, g, P, eff, dx, sf)
     return dx
 
 

@@ -82,7 +82,8 @@ motor then stays in that range (tested at 1 kHz in
 ``test_one_way_rotors_never_reverse_and_commands_saturate``). The body adds drag :math:`-\\rho C_D A |\\mathbf
 v_r| \\mathbf v_r/2` and a weathervane yaw moment :math:`k_n |v_{r,h}| v_{r,y}`. A failed rotor's thrust, torque,
 H-force and hub moments are zero from the failure time on (its wake decays; the motor keeps following its
-command, as after the loss of a propeller); ``test_failed_rotor_makes_no_load``.
+command, as after the loss of a propeller); ``test_failed_rotor_makes_no_load``. A partial loss of effectiveness
+(``failure_level`` < 1) multiplies them by ``1 - failure_level`` instead (``test_partial_loss_scales_the_loads``).
 
 **Controller** (spirit of the paper's Fig. 2, no adaptation after a failure): a PI velocity loop in the
 north-east frame (integrators in world axes, the tilt command limited in magnitude and rotated into the
@@ -287,7 +288,7 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
     if not isinstance(params, HexacopterParameters):
         raise TypeError("params must be a HexacopterParameters")
     P = params.to_array()
-    alive = np.ones(6, dtype=np.int64)
+    alive = np.ones(6)
     g0 = np.zeros(6)
     az = np.arange(6) * np.pi / 3
 
@@ -326,7 +327,7 @@ def trim(speed: float = 5.0, *, params: HexacopterParameters | None = None,
 def _trim_asymmetric(speed: float, altitude: float, params: HexacopterParameters, om_h: float) -> dict:
     """:func:`trim` of an aircraft without lateral symmetry: roll, pitch and the four controls of the mixer."""
     P = params.to_array()
-    alive = np.ones(6, dtype=np.int64)
+    alive = np.ones(6)
     g0 = np.zeros(6)
     az = np.arange(6) * np.pi / 3
     yaw_sign = np.array([-1.0, 1.0, -1.0, 1.0, -1.0, 1.0])  # the controller's mixer (rotor 1 clockwise)
@@ -369,7 +370,7 @@ def _steady_inflow(x: np.ndarray, P: np.ndarray) -> np.ndarray:
     if P[21] <= 0.0:
         return x
     x = x.copy()
-    alive = np.ones(6, dtype=np.int64)
+    alive = np.ones(6)
     g0 = np.zeros(6)
     x[18:24] = 5.0
     for _ in range(60):
@@ -421,7 +422,7 @@ def gain_schedule(params: HexacopterParameters | None = None) -> np.ndarray:
         out.flags.writeable = False
         return out
     P = params.to_array()
-    alive = np.ones(6, dtype=np.int64)
+    alive = np.ones(6)
     g0 = np.zeros(6)
     az = np.arange(6) * np.pi / 3
     yaw_sign = np.array([-1.0, 1.0, -1.0, 1.0, -1.0, 1.0])
@@ -476,7 +477,7 @@ PAPER_INTENSITY_SCALE = 0.16
 
 
 def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
-                        turbulence="severe", failed_rotor=0, failure_time=10.0, seed=0,
+                        turbulence="severe", failed_rotor=0, failure_time=10.0, failure_level=1.0, seed=0,
                         dt: float = 0.001, fs: float = 100.0, altitude: float = 5.0, span: float = 0.6096,
                         scale_length: float | None = PAPER_SCALE_LENGTH,
                         intensity_scale: float = PAPER_INTENSITY_SCALE,
@@ -503,6 +504,12 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
         1..6 for the rotor that fails abruptly at ``failure_time``, 0 (or None) for a healthy record.
     failure_time : float or sequence
         Failure instant in seconds (0 <= failure_time < duration); ignored for healthy records.
+    failure_level : float or sequence
+        Fraction (0 < level <= 1) of the failed rotor's effectiveness lost at ``failure_time``: from then on its
+        thrust, torque, H-force and hub moments are ``1 - level`` times those of a healthy rotor at the same speed
+        and inflow, and its wake is driven by the reduced thrust (a partial loss of rotor effectiveness, e.g. a
+        damaged propeller). 1.0 (default): the abrupt loss of the whole rotor, bit for bit the records simulated
+        before this option existed. Ignored for healthy records (coordinate NaN there).
     seed : int or sequence of int
         Per-record seed of the turbulence noise (``numpy.random.default_rng(seed)``); a record depends
         only on its own seed and configuration, so any subset can be regenerated alone, bit for bit.
@@ -535,19 +542,19 @@ def simulate_hexacopter(records=None, *, duration: float = 60.0, speed=5.0,
         One variable per channel (see :data:`CHANNELS`: the states, the controls of eq. 2, the specific force
         ``ax, ay, az``, the rotor speeds and the motor commands), dims ``(record, time)``, units in ``attrs``;
         per-record coordinates ``state``, ``turbulence``, ``speed``, ``seed``, ``failure_time``,
-        ``failed_rotor`` and the variable ``lost_control`` (True where roll or pitch exceeded 1.2 rad, the
+        ``failure_level``, ``failed_rotor`` and the variable ``lost_control`` (True where roll or pitch exceeded 1.2 rad, the
         altitude error 20 m or the aircraft reached the ground; the record is NaN from then on); with a
         ``fleet`` also the coordinates of :data:`FLEET_COORDS` and the attribute ``fleet``.
     """
     plan = _plan(records, duration=duration, speed=speed, turbulence=turbulence, failed_rotor=failed_rotor,
-                 failure_time=failure_time, seed=seed, dt=dt, fs=fs, altitude=altitude, span=span,
+                 failure_time=failure_time, failure_level=failure_level, seed=seed, dt=dt, fs=fs, altitude=altitude, span=span,
                  scale_length=scale_length, intensity_scale=intensity_scale, params=params, gains=gains, fleet=fleet,
                  batch=batch)
     data, lost_step = _integrate(plan, 0, plan["records"])
     return _dataset(plan, {name: data[:, :, j] for j, name in enumerate(CHANNELS)}, lost_step)
 
 
-def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, seed, dt, fs, altitude, span,
+def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, failure_level, seed, dt, fs, altitude, span,
           scale_length, intensity_scale, params, gains, fleet, batch, chunk=None) -> dict:
     """The arguments of :func:`simulate_hexacopter` checked, and one entry per record (turbulence, failed rotor,
     failure time, seed and, with a fleet, the drawn aircraft); ``chunk``: the records simulated at once (default
@@ -587,11 +594,12 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
 
     lists = {k: as_list(v) for k, v in
              {"turbulence": turbulence, "failed_rotor": failed_rotor, "failure_time": failure_time,
-              "seed": seed}.items()}
+              "failure_level": failure_level, "seed": seed}.items()}
     lengths = {len(v) for v in lists.values() if v is not None}
     if records is None:
         if len(lengths) > 1:
-            raise ValueError(f"turbulence, failed_rotor, failure_time and seed have different lengths {lengths}")
+            raise ValueError(f"turbulence, failed_rotor, failure_time, failure_level and seed have different lengths "
+                             f"{lengths}")
         records = lengths.pop() if lengths else 1
     records = int_like(records, "records", minimum=1)
     for k, v in lists.items():
@@ -609,6 +617,10 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
         if r and t >= duration:
             raise ValueError(f"failure_time must be before the end of the record (duration={duration}), got {t}")
         ftimes.append(t if r else np.nan)
+    levels = []
+    for r, lv in zip(rotors, per("failure_level", failure_level)):
+        lv = float_like(lv, "failure_level", minimum=0.0, maximum=1.0, strict_min=True)
+        levels.append(lv if r else np.nan)
     seeds = [int_like(s, "seed", minimum=0) for s in per("seed", seed)]
 
     at_once = records if chunk is None else min(chunk, records)
@@ -626,7 +638,8 @@ def _plan(records, *, duration, speed, turbulence, failed_rotor, failure_time, s
     else:
         speeds = [speed] * records
     return dict(records=records, speed=speed, speeds=speeds, dt=dt, fs=fs, batch=batch, params=params, gains=gains,
-                fleet=fleet, q=q, n=n, nout=n // q, turb=turb, rotors=rotors, ftimes=ftimes, seeds=seeds, drawn=drawn,
+                fleet=fleet, q=q, n=n, nout=n // q, turb=turb, rotors=rotors, ftimes=ftimes, levels=levels,
+                seeds=seeds, drawn=drawn,
                 altitude=altitude, span=span, scale_length=scale_length, intensity_scale=intensity_scale)
 
 
@@ -673,9 +686,11 @@ def _integrate(plan: dict, first: int, stop: int) -> tuple[np.ndarray, np.ndarra
         ref = np.array([[speeds[i], 0.0, zref, 0.0] for i in idx])
         fr = np.array([rotors[i] - 1 for i in idx], dtype=np.int64)
         fstep = np.array([int(round(ftimes[i] / dt)) if rotors[i] else -1 for i in idx], dtype=np.int64)
+        flevel = np.array([plan["levels"][i] if rotors[i] else 1.0 for i in idx])
         out = np.empty((nb, n, _core.N_OUT))
         lost = np.empty(nb, dtype=np.int64)
-        _core.simulate_batch(x0, i0, ref, gusts, P[start:start + nb], G, S, fr, fstep, n, dt, out, limits, lost)
+        _core.simulate_batch(x0, i0, ref, gusts, P[start:start + nb], G, S, fr, fstep, flevel, n, dt, out, limits,
+                             lost)
         del gusts
         if q > 1:
             good = np.nan_to_num(out)
@@ -705,6 +720,8 @@ def _dataset(plan: dict, values: dict, lost_step) -> Any:
                                                                              "long_name": "commanded speed north"}),
               "seed": ("record", np.array(plan["seeds"], dtype=np.int64)),
               "failure_time": ("record", np.array(plan["ftimes"]), {"units": "s"}),
+              "failure_level": ("record", np.array(plan["levels"], dtype=float),
+                                {"units": "1", "long_name": "fraction of the failed rotor's effectiveness lost"}),
               "failed_rotor": ("record", np.array(rotors, dtype=np.int64))}
     if fleet is not None:
         for name, (unit, desc) in FLEET_COORDS.items():
@@ -857,7 +874,7 @@ def _chunked_dataset(design: dict, chunks: int) -> Any:
     for first in range(0, plan["records"], chunks):
         stop = min(first + chunks, plan["records"])
         # each chunk carries the entries of its own records only
-        sub = {**plan, **{k: plan[k][first:stop] for k in ("turb", "rotors", "ftimes", "seeds", "speeds")},
+        sub = {**plan, **{k: plan[k][first:stop] for k in ("turb", "rotors", "ftimes", "levels", "seeds", "speeds")},
                "drawn": None if plan["drawn"] is None else plan["drawn"][first:stop]}
         part = dask.delayed(_integrate, nout=2)(sub, 0, stop - first)
         outputs.append(da.from_delayed(part[0], (stop - first, nout, nchan), dtype=np.float64))
