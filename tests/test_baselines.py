@@ -315,3 +315,42 @@ def test_records_validity_of_a_record_array():
     rec = Records.from_data(da)
     assert rec.valid.tolist() == [True, False, False, False, True]
     np.testing.assert_array_equal(np.stack(rec.values), v)
+
+
+def test_combined_test_in_calibrated_tests_and_evaluate(synthetic):
+    """AnyOf is calibrated per state by Baselines.calibrated_tests (cached by its options, its parts' included,
+    even those its repr does not show) and evaluated with theoretical and calibrated thresholds: the calibration table
+    holds the combined statistic and every part, and the expected false-alarm rate of Sidak-corrected parts is
+    alpha (the decision's rate), not 1 - (1 - alpha)^k."""
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=FS, settle=5.0, duration=None, order=2,
+                            max_lags=4, var_max_lags=4, steady_window="5s", fit_records=3, models=["var"],
+                            calibrate=True)
+
+    def anyof(demean=True, correction="sidak"):
+        return tsfdi.AnyOf([LjungBox(10, alpha=0.01, correction="sidak", demean=demean, threshold="empirical"),
+                            FTest(alpha=0.01, correction="sidak", threshold="empirical")], correction=correction)
+
+    cal = b.calibrated_tests("var", anyof(), "2s")
+    assert set(cal) == {"healthy", "f1", "f2"} and all(t.calibrated for t in cal.values())
+    assert b.calibrated_tests("var", anyof(), 200) is cal                      # an equal test: cached
+    other = b.calibrated_tests("var", anyof(demean=False), "2s")                 # a part's option differs
+    assert other is not cal and not other["f1"].tests[0].demean
+    assert b.calibrated_tests("var", anyof(correction="minp"), "2s") is not cal
+    kw = dict(states=states, failure_times=ft, fs=FS, models=("var",), windows=("2s",), settle=5.0, progress=False)
+    ev = tsfdi.evaluate(recs, b, tests={"any": anyof(), "minp": anyof(correction="minp")}, **kw)
+    c = ev.calibration.set_index(["method", "part", "state", "channel"]).sort_index()
+    share = 1 - (1 - 0.01) ** (1 / 2)
+    np.testing.assert_allclose(c.loc[("any", "0: LjungBox", "f2"), "empirical"], cal["f2"].tests[0].threshold_)
+    np.testing.assert_allclose(c.loc[("any", "0: LjungBox", "f2"), "distribution"],
+                               stats.chi2.isf(1 - (1 - share) ** (1 / 2), 10))
+    np.testing.assert_allclose(c.loc[("any", "", "f2"), "distribution"], -2 * np.log(1 - (1 - 0.01) ** (1 / 4)))
+    minp = b.calibrated_tests("var", anyof(correction="minp"), "2s")
+    np.testing.assert_allclose(c.loc[("minp", "", "f1"), "empirical"], minp["f1"].threshold_)
+    det = ev.detection_rates()
+    assert det.loc[("var", "any", 2.0), "expected_false_alarm"] == pytest.approx(1.0)
+    assert ev.alphas[("var", "any")] == pytest.approx(1 - 0.99 ** 0.5)
+    ev_t = tsfdi.evaluate(recs, b, tests={"any": tsfdi.AnyOf([LjungBox(10, alpha=0.01), FTest(alpha=0.01)])}, **kw)
+    assert ev_t.thresholds == "theoretical" and "empirical" not in ev_t.calibration
+    # no correction over the channels: each channel at alpha, the decision at 1 - (1 - alpha)^2
+    assert ev_t.detection_rates().loc[("var", "any", 2.0), "expected_false_alarm"] == pytest.approx(100 * (1 - 0.99 ** 2))

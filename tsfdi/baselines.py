@@ -457,10 +457,7 @@ class Baselines:
             raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
         W = window_samples(window, "window", self.fs, minimum=2)
         step = window_samples(step, "step", self.fs)
-        # the test's options (not its fitted state nor its private memos) identify its calibration
-        options = tuple(sorted((k, repr(vars(v)) if hasattr(v, "__dict__") else repr(v))
-                               for k, v in vars(test).items() if not (k.endswith("_") or k.startswith("_"))))
-        key = (model, type(test).__name__, options, W, step)
+        key = (model, _options(test), W, step)
         if key in self._calibrated:
             return self._calibrated[key]
         if not self.heldout:
@@ -621,6 +618,21 @@ def _check_test(test: Any) -> ResidualTest:
     if not isinstance(test, ResidualTest):
         raise TypeError(f"test must be a residual test (LjungBox, FTest, ...), got {type(test).__name__}")
     return test
+
+
+def _options(value: Any) -> Any:
+    """A hashable key of a test's options, by value: its type and its options, recursively (the parts of a combined
+    test, a threshold estimator), not its fitted state (names ending in ``_``), private memos nor object addresses."""
+    if isinstance(value, (list, tuple)):
+        return tuple(_options(v) for v in value)
+    if isinstance(value, dict):
+        return tuple(sorted((str(k), _options(v)) for k, v in value.items()))
+    if isinstance(value, np.ndarray):
+        return (value.dtype.str, value.shape, value.tobytes())
+    if hasattr(value, "__dict__"):
+        return (type(value).__qualname__, tuple(sorted((k, _options(v)) for k, v in vars(value).items()
+                                                       if not (k.endswith("_") or k.startswith("_")))))
+    return repr(value)
 
 
 def _resid_list(res: Any) -> list:

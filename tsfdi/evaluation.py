@@ -41,6 +41,7 @@ from tsfdi._data import as_signal, refuse_masked, window_samples
 from tsfdi._validation import boolean, float_like, option
 from tsfdi.baselines import Baselines, Records
 from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.summary import Summary
 from tsfdi.detection.sequential import msprt, msprt_scale
@@ -81,7 +82,8 @@ class Evaluation:
     faults : tuple of str
     rules : tuple of str
     alphas : dict
-        ``(model, method)`` -> alpha of the test (per window and channel).
+        ``(model, method)`` -> the risk of each channel of the test's decision (per window; the test's ``alpha``, or
+        its share with ``correction=``: :meth:`~tsfdi.ResidualTest.channel_alpha`).
     lags : dict
         window length (s) -> Ljung-Box lags.
     records : pandas.DataFrame
@@ -91,7 +93,8 @@ class Evaluation:
     thresholds : {"theoretical", "empirical"}
         How the test thresholds were set (``"empirical"`` when any test was calibrated).
     calibration : pandas.DataFrame
-        Per turbulence level (baselines), model, method, window length, state and channel: the null
+        Per turbulence level (baselines), model, method, ``part`` (``""``: the test's statistic; for an
+        :class:`~tsfdi.AnyOf` also each part, ``"0: LjungBox"``, ...), window length, state and channel: the null
         distribution's critical value (``distribution``) and, for a test with ``threshold="empirical"``, the calibrated
         one (``empirical``), its calibration sample size and estimate (``"empirical"`` quantile or ``"gpd"``
         tail).
@@ -496,8 +499,9 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         raise ValueError(f"windows: a {longest}-sample window is longer than the record(s) {short[:5]}"
                          f"{' ...' if len(short) > 5 else ''}; give shorter windows")
 
-    alphas = {key: t.alpha for key, t in tests.items()}
-    lag_of = {round(W / rec.fs, 9): t.lags for W in wins for t in tests.values() if isinstance(t, LjungBox)}
+    alphas = {(m, meth): t.channel_alpha(len(first.model_channels(m))) for (m, meth), t in tests.items()}
+    lag_of = {round(W / rec.fs, 9): p.lags for W in wins for t in tests.values()
+              for p in (t.tests if isinstance(t, AnyOf) else (t,)) if isinstance(p, LjungBox)}
     # what every record needs, calibrated once here (an empirical test, per state) and sent once to the workers
     levels = {None: first} if by_level is None else by_level
     plan = {"models": {lvl: {m: (b.state_models(m), b.model_channels(m)) for m in models}
@@ -557,15 +561,22 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                 cal = b.calibrated_tests(m, t, W) if t.empirical else {}
                 for state in (healthy,) + faults:
                     res = b.models[m][state]
-                    dist = t.null_threshold(len(chans), W - int(res.lags), **t.reference(res))
-                    for c, ch in enumerate(chans):
-                        row = {"turbulence": lvl, "model": m, "method": meth, "window": round(W / rec.fs, 9),
-                               "state": state, "channel": ch, "distribution": float(dist[c])}
-                        if state in cal:
-                            row["empirical"] = float(cal[state].threshold_[c])
-                            row["calibration_size"] = int(cal[state].calibration_[c].size)
-                            row["estimate"] = cal[state].thresholds_[c].method_
-                        cal_rows.append(row)
+                    # the test's own statistic, and that of each part of a combined test
+                    units = [("", t, cal.get(state))]
+                    if isinstance(t, AnyOf):
+                        units += [(f"{i}: {type(p).__name__}", p, cal[state].tests[i] if state in cal else None)
+                                  for i, p in enumerate(t.tests)]
+                    for part, u, cu in units:
+                        dist = u.null_threshold(len(chans), W - int(res.lags), **u.reference(res))
+                        for c, ch in enumerate(chans):
+                            row = {"turbulence": lvl, "model": m, "method": meth, "part": part,
+                                   "window": round(W / rec.fs, 9), "state": state, "channel": ch,
+                                   "distribution": float(dist[c])}
+                            if cu is not None and hasattr(cu, "threshold_"):
+                                row["empirical"] = float(cu.threshold_[c])
+                                row["calibration_size"] = int(cu.thresholds_[c].nobs_)
+                                row["estimate"] = cu.thresholds_[c].method_
+                            cal_rows.append(row)
     return Evaluation(identification_counts=ident, detection_counts=det, detection_delays=delays, faults=faults,
                       rules=rules, alphas=alphas, lags=lag_of, records=recs,
                       nchan={m: len(first.model_channels(m)) for m in models},

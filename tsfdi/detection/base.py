@@ -124,6 +124,11 @@ class ResidualTest:
             return -np.expm1(np.log1p(-alpha) / k)
         return alpha
 
+    def channel_alpha(self, k: int) -> float:
+        """The risk at which each of ``k`` channels is tested: ``alpha``, or its ``correction`` share
+        (:meth:`family_alpha` of it is the rate of the decision "some channel rejects")."""
+        return float(self._channel_alpha(self.alpha, k, getattr(self, "correction", None)))
+
     @staticmethod
     def family_alpha(channel_alpha: float, k: int) -> tuple[float, float]:
         r"""Size of the signal-level decision "some channel rejects" of ``k`` channels tested at

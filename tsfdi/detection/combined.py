@@ -132,6 +132,21 @@ class AnyOf(ResidualTest):
             return hasattr(self, "threshold_")
         return all(t.calibrated for t in self.tests if t.empirical) and any(t.empirical for t in self.tests)
 
+    def channel_alpha(self, k: int) -> float:
+        """The risk of each of ``k`` channels of the combined decision (a part rejecting at that channel): ``alpha``
+        or its share by the parts' ``correction`` over channels."""
+        return float(self._channel_alpha(self.alpha, k, getattr(self.tests[0], "correction", None)))
+
+    def null_threshold(self, k: int, nobs: int | None = None, **reference: Any) -> np.ndarray:
+        r"""Critical value of the combined statistic :math:`-2 \ln \min_i p_i` per channel, shape (k,):
+        :math:`-2 \ln a` with ``a`` each part's risk at a channel (:attr:`share` of the channel's risk);
+        ``"minp"``: the Sidak share's, exact for independent parts (what :meth:`calibrate` replaces)."""
+        k = int(k)
+        if self.correction != "minp":
+            return np.full(k, -2.0 * math.log(self.tests[0].channel_alpha(k)))     # the parts are at their share
+        share = -math.expm1(math.log1p(-self.alpha) / len(self.tests))
+        return np.full(k, -2.0 * math.log(self._channel_alpha(share, k, getattr(self.tests[0], "correction", None))))
+
     def reference(self, results: Any) -> dict:
         """Keyword arguments of :meth:`test` from a fitted baseline: each part's (``references``)."""
         return {"references": tuple(t.reference(results) for t in self.tests)}
@@ -177,7 +192,7 @@ class AnyOf(ResidualTest):
             per.append(sig.nobs // n)
         stat = np.concatenate(stats_)
         k = stat.shape[1]
-        a = self.tests[0]._channel_alpha(self.alpha, k, getattr(self.tests[0], "correction", None))
+        a = self.channel_alpha(k)
         ths = []
         for c in range(k):
             est = ScaledChi2Threshold(a, min_windows=getattr(self.tests[0].threshold, "min_windows", 30))
@@ -241,8 +256,7 @@ class AnyOf(ResidualTest):
                 stat.shape)
             rej = stat > thr
         else:
-            a = self.tests[0]._channel_alpha(self.share, k, getattr(self.tests[0], "correction", None))
-            thr = np.full(k, -2.0 * math.log(a))
+            thr = self.null_threshold(k)
             pv = -np.expm1(m * np.log1p(-pmin)) if self.correction == "sidak" else np.minimum(1.0, m * pmin)
             rej = np.logical_or.reduce([np.asarray(r, dtype=bool) for r in rejects])
         return stat, thr, pv, rej
@@ -266,8 +280,7 @@ class AnyOf(ResidualTest):
         parts = [t.test(resid, **ref) for t, ref in zip(self.tests, refs)]
         stat, thr, pv, rej = self.combine([d.pvalue for d in parts], [d.channel_reject for d in parts])
         k = stat.shape[0]
-        corr = getattr(self.tests[0], "correction", None)
-        fam = self.family_alpha(self.tests[0]._channel_alpha(self.alpha, k, corr), k)
+        fam = self.family_alpha(self.channel_alpha(k), k)
         details = {"parts": tuple(parts), "correction": self.correction, "part_alpha": self.share,
                    "family_alpha": fam[0], "family_alpha_bound": fam[1],
                    "threshold_method": "calibrated" if self.empirical else "theoretical"}
