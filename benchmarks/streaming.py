@@ -19,14 +19,22 @@ thresholds from the development healthy logs by ``calibrate(..., false_alarms_pe
 
 Protocol. Development logs (healthy and failure, seeds from ``--dev-seed``, default 1) choose the settings: the
 ARX orders and the requested false-alarm rate, from a small grid, by (all development failures found within
-0.5 s and no development false alarm, then the lowest requested rate, then the smallest mean delay). The chosen detector,
-calibrated on the development healthy logs only, then runs once on fresh evaluation logs whose seed is drawn at
+0.5 s and no development false alarm, then the lowest requested rate, then the smallest mean delay). The chosen
+detector, calibrated on the development healthy logs only, then runs once on fresh evaluation logs whose seed is
+drawn at
 run time from the operating system's entropy (``numpy.random.SeedSequence()``) and is neither printed nor
 stored. Scores, per evaluation log: a failure log is *found* when its first alarm is at or after the failure
 (delay = alarm - failure time), *missed* when there is none, *false* when the first alarm comes before the
 failure; on a healthy log every alarm episode is a false alarm (counted with ``freeze_on_alarm=False`` so that
 every episode of the whole log counts, per hour of log); the pre-failure part of failure logs adds its hours and
 early alarms.
+
+Findings (one run with the defaults, pasted in docs/guide/online.md): the development grid chose na=1, nb=2 at
+0.1 false alarms per hour (threshold 18.2, Wald scale 0.90); on 60 healthy and 60 failure evaluation logs every
+rotor failure was found within 0.027 s (mean 0.014 s: the loss of a whole rotor breaks the rate / control
+relation at the next sample), none missed or early, and no false alarm in 2.30 healthy hours; the latest pair
+armed 10.0 s after the start. Not measured: partial losses of effectiveness (not simulated) and take-off (the
+records start in trimmed flight).
 """
 
 from __future__ import annotations
@@ -85,14 +93,24 @@ def seconds(f: pd.DataFrame) -> np.ndarray:
     return idx.total_seconds().to_numpy() if isinstance(idx, pd.TimedeltaIndex) else np.asarray(idx, dtype=float)
 
 
+def detector(na: int, nb: int, **options) -> OnlineDetector:
+    return OnlineDetector(list(PAIRS), na=na, nb=nb, **{**SETTINGS, **options})
+
+
 def calibrated(healthy: list, na: int, nb: int, rate: float) -> OnlineDetector:
-    det = OnlineDetector(list(PAIRS), na=na, nb=nb, **SETTINGS)
+    det = detector(na, nb)
     ys, us = zip(*(split(f) for f, *_ in healthy))
     return det.calibrate(list(ys), list(us), false_alarms_per_hour=rate)
 
 
-def score(det: OnlineDetector, logs: list) -> pd.DataFrame:
-    """One row per log: kind, turbulence, rotor, failure time, first alarm (s), delay, outcome, hours, episodes."""
+def unfrozen(det: OnlineDetector, na: int, nb: int) -> OnlineDetector:
+    """``det`` (calibrated) without freezing at an alarm: every alarm episode of a healthy stretch counts."""
+    return detector(na, nb, threshold=det.threshold, sprt=det.sprt, freeze_on_alarm=False)
+
+
+def score(det: OnlineDetector, free: OnlineDetector, logs: list) -> pd.DataFrame:
+    """One row per log: kind, turbulence, rotor, failure time, first alarm (s), delay, outcome, hours, episodes
+    (``free``: the same detector without freezing, whose alarm episodes on the healthy stretch are counted)."""
     rows = []
     for f, ft, rotor, turb in logs:
         y, u = split(f)
@@ -104,10 +122,10 @@ def score(det: OnlineDetector, logs: list) -> pd.DataFrame:
         first = None if out.first_alarm is None else float(t[out.first_alarm])      # simulation time, s
         armed = out.first_alarms["armed_at"].to_numpy()
         # false-alarm episodes of the healthy stretch (the whole healthy log, the pre-failure part of a failure log)
-        free = OnlineDetector(list(PAIRS), **{**det._options, "freeze_on_alarm": False})
         end = len(t) if ft is None else int(np.searchsorted(t, ft))                # samples before the failure
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            free.reset()
             healthy_part = free.run(y.iloc[:end], u.iloc[:end]) if end > 0 else None
         episodes = 0 if healthy_part is None else int(healthy_part.alarm_start.sum())
         hours = end / det_fs(f) / 3600.0
@@ -136,8 +154,10 @@ def summary(tab: pd.DataFrame) -> pd.DataFrame:
     found = fail[fail.outcome == "found"]
     hours = tab.healthy_hours.sum()
     return pd.DataFrame({
-        "failure logs": [len(fail)], "found": [len(found)], f"within {DEADLINE} s": [int((found.delay_s <= DEADLINE).sum())],
-        "missed": [int((fail.outcome == "missed").sum())], "early (false)": [int((fail.outcome == "false alarm").sum())],
+        "failure logs": [len(fail)], "found": [len(found)],
+        f"within {DEADLINE} s": [int((found.delay_s <= DEADLINE).sum())],
+        "missed": [int((fail.outcome == "missed").sum())],
+        "early (false)": [int((fail.outcome == "false alarm").sum())],
         "mean delay s": [found.delay_s.mean()], "max delay s": [found.delay_s.max()],
         "healthy logs": [int((tab.kind == "healthy").sum())], "healthy h": [hours],
         "false episodes": [int(tab.false_episodes.sum())], "false / h": [tab.false_episodes.sum() / hours],
@@ -164,7 +184,7 @@ def main(argv=None) -> None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 det = calibrated(dev_healthy, na, nb, rate)
-            s = summary(score(det, dev_healthy + dev_fail)).iloc[0]
+            s = summary(score(det, unfrozen(det, na, nb), dev_healthy + dev_fail)).iloc[0]
             ok = s[f"within {DEADLINE} s"] == s["failure logs"] and s["false episodes"] == 0
             grid.append({"na": na, "nb": nb, "requested / h": rate, "threshold": det.threshold,
                          "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
@@ -188,7 +208,7 @@ def main(argv=None) -> None:
     t1 = time.time()
     logs = (make_logs(fresh, args.eval, failures=False, duration=args.duration, fs=args.fs)
             + make_logs(fresh, args.eval, failures=True, duration=args.duration, fs=args.fs))
-    tab = score(det, logs)
+    tab = score(det, unfrozen(det, na, nb), logs)
     print(f"evaluation: {args.eval} healthy + {args.eval} failure logs (fresh seed), {time.time() - t1:.0f} s")
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(summary(tab).to_string(index=False))
