@@ -381,3 +381,62 @@ def test_bad_input_names_the_argument():
         xres.residuals(ys[0], 0.5)
     with pytest.raises(ValueError, match="u is required"):
         xres.estimate_k(ys[0])
+
+
+def test_at_is_the_point_results_at_k():
+    """at(k) is the point family's results with theta(k) and sigma(k): its residuals are residuals(y, k) for AR,
+    VAR and ARX, its sigma / sigma2 is sigma(k) (pooled and point-weighted), nobs is the FP model's."""
+    from tsfdi.models import ARResults, ARXResults, VARResults
+
+    rng = np.random.default_rng(9)
+    ys = [simulate_ar(k, 300, rng, scale=1 + 2 * k) for k in KS]
+    y = simulate_ar(0.3, 200, np.random.default_rng(2))
+    for weights in ("pooled", "point"):
+        res = FPAR(ys, KS, 2, degree=2, weights=weights).fit()
+        pt = res.at(0.3)
+        assert isinstance(pt, ARResults)
+        np.testing.assert_array_equal(pt.params, res.theta(0.3))
+        np.testing.assert_array_equal(pt.residuals(y), res.residuals(y, 0.3))
+        assert pt.sigma2 == pytest.approx(res.sigma(0.3)[0, 0], rel=1e-12)
+        assert pt.nobs == res.nobs
+    assert res.at(1.0).sigma2 > 2 * res.at(0.0).sigma2          # the point-weighted sigma(k) follows k
+    vs = [np.column_stack([y_, np.roll(y_, 1) + rng.standard_normal(300)]) for y_ in ys]
+    rv = FPVAR(vs, KS, 2, degree=1, weights="point").fit()
+    pv = rv.at(0.6)
+    assert isinstance(pv, VARResults)
+    np.testing.assert_allclose(pv.sigma, rv.sigma(0.6), rtol=1e-12)
+    np.testing.assert_array_equal(pv.residuals(vs[0]), rv.residuals(vs[0], 0.6))
+    us = [rng.standard_normal(300) for _ in KS]
+    rx = FPARX(ys, us, KS, 2, 2, 1, degree=1).fit()
+    px = rx.at(0.2)
+    assert isinstance(px, ARXResults)
+    np.testing.assert_array_equal(px.residuals(ys[0], us[0]), rx.residuals(ys[0], 0.2, us[0]))
+    with pytest.raises(ValueError, match="k"):
+        res.at([0.1, 0.2])
+
+
+def test_identify_and_detect_take_fp_models_at_k():
+    """One FP model per class (healthy, fault) serves every operating point: identify / identify_windows / detect
+    with at(k) pick the record's class at operating points between the fitted ones, with the F test's reference
+    variance sigma(k)."""
+    import tsfdi
+
+    def fault(k):
+        return np.array([-0.4 + 0.3 * k, 0.3])
+
+    rng = np.random.default_rng(11)
+    h = [simulate_ar(k, 2000, rng) for k in KS]
+    f = [sps.lfilter([1.0], np.r_[1.0, fault(k)], rng.standard_normal(2200))[200:] for k in KS]
+    healthy = FPAR(h, KS, 2, degree=2).fit()
+    faulty = FPAR(f, KS, 2, degree=2).fit()
+    test = tsfdi.FTest(alpha=0.01)
+    for k in (0.1, 0.6, 0.85):
+        yh = simulate_ar(k, 2000, rng)
+        yf = sps.lfilter([1.0], np.r_[1.0, fault(k)], rng.standard_normal(2200))[200:]
+        models = {"healthy": healthy.at(k), "fault": faulty.at(k)}
+        assert tsfdi.identify(yh, models, test).label == "healthy"
+        assert tsfdi.identify(yf, models, test).label == "fault"
+        assert not tsfdi.detect(yh, healthy.at(k), test).reject
+        assert tsfdi.detect(yf, healthy.at(k), test).reject
+        win = tsfdi.identify_windows(yf, models, tsfdi.LjungBox(lags=10, alpha=0.01), window=500, step=500)
+        assert (np.asarray(win.labels) == "fault").mean() >= 0.75

@@ -732,11 +732,37 @@ class FPResults:
         return -2 * self.llf + self._n_free * np.log(self.nobs)
 
     # --- new data
-    def _point_results(self, k: np.ndarray):
-        """The point model's results (:class:`tsfdi.ARResults` / ``VARResults`` / ``ARXResults``) with
-        ``theta(k)``: what filters a new signal."""
+    def at(self, k: Any) -> Any:
+        """The point results at operating point ``k``: :class:`tsfdi.ARResults` / ``VARResults`` / ``ARXResults``
+        with the parameters :meth:`theta` ``(k)`` and the residual covariance :meth:`sigma` ``(k)``.
+
+        Every engine that takes point results takes it unchanged (:func:`tsfdi.detect`, :func:`tsfdi.identify`,
+        :func:`tsfdi.identify_windows`, :class:`tsfdi.Monitor`, :func:`tsfdi.evaluate`): global detection and
+        identification with ``k`` logged or estimated (:meth:`estimate_k`). Its ``residuals`` are
+        :meth:`residuals` at ``k``; ``sigma`` (VAR) / ``sigma2`` (AR, ARX) is ``sigma(k)``, and ``nobs``,
+        ``df_resid``, ``llf``, ``bse`` and the criteria follow from it with the FP model's regression rows ``nobs``
+        (so a test's reference variance and its degrees of freedom are the FP model's). The model behind it is the
+        point family on all the FP records, so ``resid`` (the in-sample residuals of every record through
+        ``theta(k)``) does not match ``sigma(k)`` away from the records at ``k``, and ``save`` stores those records
+        with ``theta(k)``: a loaded copy recomputes its residual covariance from them, not ``sigma(k)``.
+
+        Parameters
+        ----------
+        k : float or array_like (d,)
+            The operating point (inside ``k_range``; beyond it the polynomials extrapolate).
+
+        Returns
+        -------
+        ARResults, VARResults or ARXResults
+        """
+        kk = self._point(k)
         pt = self.model.point
-        return pt.results_class(pt, self._theta2d(k))
+        res = pt.results_class(pt, self._theta2d(kk))
+        sc = pt.y_scale
+        sse = self.sigma(kk) * self.nobs / np.outer(sc, sc)          # the point results' E'E, in its fit units
+        sse.setflags(write=False)
+        res.__dict__["_sse"] = sse                                    # (its cached residual cross products)
+        return res
 
     def residuals(self, y: Any, k: Any, u: Any = None) -> Any:
         """One-step prediction errors of a new signal through the model at operating point ``k``
@@ -751,7 +777,7 @@ class FPResults:
         u : optional
             The inputs (FP-ARX only, required there).
         """
-        res = self._point_results(self._point(k))
+        res = self.at(k)
         if self.model.nb:
             if u is None:
                 raise ValueError("u is required: an FP-ARX filters a new output with its input")
