@@ -78,6 +78,35 @@ def test_detect_other_methods_calibrated(files, capsys, method, test):
     np.testing.assert_array_equal(t["fault"], ws.reject[:, 0])
 
 
+@pytest.mark.parametrize("threshold", ["theoretical", "calibrated"])
+def test_detect_combined_method(files, capsys, threshold):
+    """--method whiteness+variance+mean: the library's AnyOf of the three tests sharing --alpha by Sidak (each
+    model's copy calibrated as AnyOf.calibrated_for does with --threshold calibrated)."""
+    d, paths, x = files
+    out = d / f"any_{threshold}.csv"
+    assert main(["detect", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--window", "2s", "--step",
+                 "1s", "--alpha", "0.01", "--method", "whiteness+variance+mean", "--threshold", threshold,
+                 "--out", str(out)]) == 0
+    capsys.readouterr()
+    t = pd.read_csv(out)
+    baseline = tsfdi.load(paths["healthy"])
+    kw = {} if threshold == "theoretical" else {"threshold": "calibrated"}
+    ref = tsfdi.AnyOf([tsfdi.LjungBox(20, alpha=0.01, **kw), tsfdi.FTest(alpha=0.01, **kw),
+                       tsfdi.MeanTest(alpha=0.01, **kw)])
+    if threshold == "calibrated":
+        ref.calibrate(baseline.model.held_out_residuals(), window=WINDOW)
+    ws = tsfdi.ResidualWindows({"baseline": baseline}).fit(x).statistics(ref, window=WINDOW, step=100)
+    for j, c in enumerate(("a", "b")):
+        np.testing.assert_allclose(t[f"statistic_{c}"], ws.statistic[:, 0, j], rtol=1e-9)
+        np.testing.assert_allclose(t[f"pvalue_{c}"], ws.pvalue[:, 0, j], rtol=1e-9)
+    np.testing.assert_array_equal(t["fault"], ws.reject[:, 0])
+    assert t["fault"][t["start"] >= 70.0].all()
+    for bad, message in (("whiteness+bogus", "'bogus' is none of them"), ("mean+mean", "each test once")):
+        assert main(["detect", str(d / "current.csv"), "--baseline", str(paths["healthy"]), "--window", "2s",
+                     "--method", bad]) == 2
+        assert message in capsys.readouterr().err
+
+
 def test_min_windows(files, tmp_path, capsys):
     """--min-windows lowers the support a calibration needs (the library's ScaledChi2Threshold(min_windows=))."""
     d, paths, x = files

@@ -266,12 +266,13 @@ def _check_channels(data: _Data, models: dict) -> None:
 
 
 def _test(args: argparse.Namespace, threshold: Any = "theoretical") -> Any:
-    from tsfdi.detection import FTest, LjungBox, MeanTest
+    """The test of ``--method``: one, or (several joined by '+') their :class:`tsfdi.AnyOf`, sharing ``--alpha`` by
+    Sidak."""
+    from tsfdi.detection import AnyOf, FTest, LjungBox, MeanTest
 
-    if args.method == "whiteness":
-        return LjungBox(lags=args.lags, alpha=args.alpha, threshold=threshold)
-    test = FTest if args.method == "variance" else MeanTest
-    return test(alpha=args.alpha, threshold=threshold)
+    tests = [LjungBox(lags=args.lags, alpha=args.alpha, threshold=threshold) if m == "whiteness" else
+             (FTest if m == "variance" else MeanTest)(alpha=args.alpha, threshold=threshold) for m in args.method]
+    return tests[0] if len(tests) == 1 else AnyOf(tests)
 
 
 def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
@@ -304,10 +305,12 @@ def _tests(args: argparse.Namespace, models: dict, window: int | None) -> Any:
 
 
 def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
-    p.add_argument("--method", choices=("whiteness", "variance", "mean"), default="whiteness",
+    p.add_argument("--method", type=opt.method, default="whiteness", metavar="{whiteness,variance,mean}[+...]",
                    help="residual test: Ljung-Box whiteness test, F test of the residual variance, or test of a "
                         "shift of the residual mean (a new trim: what a closed loop leaves of a compensated "
-                        "fault; use it with --threshold calibrated)")
+                        "fault; use it with --threshold calibrated); several joined by '+' (e.g. "
+                        "whiteness+variance+mean) flag a window when one of them rejects, each at its Sidak share "
+                        "of --alpha (tsfdi.AnyOf)")
     p.add_argument("--alpha", type=opt.probability, default=1e-3,
                    help="type I risk per channel and tested window; the test classes of tsfdi default to 0.05 for "
                         "one test, the command tests many windows (at 0.05, one false alarm in 20 windows)")
@@ -337,7 +340,8 @@ def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool
 def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
     """Fewest samples a tested window needs (the models' largest order plus the test's ``min_resid``), and why."""
     order = max(int(m.lags) for m in models.values())
-    test = {"whiteness": f"--lags {args.lags}", "variance": "the F test", "mean": "the mean test"}[args.method]
+    test = " + ".join({"whiteness": f"--lags {args.lags}", "variance": "the F test", "mean": "the mean test"}[m]
+                      for m in args.method)
     return order + _test(args).min_resid, f"the models' largest order ({order}) with {test}"
 
 

@@ -16,7 +16,11 @@ import warnings
 import pandas as pd
 
 __all__ = ["HelpFormatter", "finite", "integer", "positive", "probability", "count", "seed", "two_or_more", "span",
-           "spans", "instant", "duration", "time_from_start", "csv_list", "record_numbers", "where", "order"]
+           "spans", "instant", "duration", "time_from_start", "csv_list", "record_numbers", "where", "order", "METHODS",
+           "method"]
+
+#: The residual tests of ``--method``: Ljung-Box whiteness, the F test of the variance, the mean-shift test.
+METHODS = ("whiteness", "variance", "mean")
 
 
 class HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
@@ -169,3 +173,16 @@ def order(text: str) -> int | str:
         return count(word)
     except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(f"must be an integer >= 1, 'bic' or 'rss_sss', got {text!r}") from None
+
+
+def method(text: str) -> tuple[str, ...]:
+    """``--method``: one residual test of :data:`METHODS`, or several joined by ``+`` (``whiteness+variance+mean``:
+    a window is flagged when one of them rejects, :class:`tsfdi.AnyOf`), each named once, in the order given."""
+    names = [t.strip().lower() for t in text.split("+")]
+    bad = [t for t in names if t not in METHODS]
+    if bad:
+        raise argparse.ArgumentTypeError(f"must be one of {', '.join(METHODS)}, or several joined by '+' such as "
+                                         f"'whiteness+variance+mean'; {bad[0]!r} is none of them, got {text!r}")
+    if len(set(names)) < len(names):
+        raise argparse.ArgumentTypeError(f"must name each test once, got {text!r}")
+    return tuple(names)

@@ -208,6 +208,8 @@ class AnyOf(ResidualTest):
         self.threshold_ = np.array([t.threshold_ for t in ths])
         return self
 
+    calibrated_for = CalibratedTest.calibrated_for
+
     def _minp_statistic(self, resid: Any, n: int, step: int, refs: list) -> np.ndarray:
         """``-2 ln min_i p_i`` of every window (calibrated parts), shape (windows, k)."""
         p = None
