@@ -38,6 +38,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
@@ -66,6 +67,8 @@ CRAZY_ALPHA = 1e-2
 RECORD_LAGS = 0             # record-effect summaries: mean and log RMS per channel (no autocorrelations)
 RECORD_BLOCK_S = 0.5       # block of the within-flight long-run covariance, and the first summary
 TARGET_CRAZY = 90.0
+SCALE_STEP = 0.8           # CrazyPAD leave-one-flight-out scale (information): the grid 1, 0.8, 0.8^2, ...
+SCALE_GRID = tuple(SCALE_STEP ** i for i in range(31))
 TARGET_COST = 1.20
 
 
@@ -179,8 +182,13 @@ def crazypad(conditions) -> list:
     except ValueError as err:                   # some pair does not separate on its held-out logs
         scale = None
         print(f"no scale correction (information run left out): {err}")
+    print("airframe-aware (the result): the airframe of every log is known (the drone flew it); the candidates "
+          "for a flight of drone X are the conditions with another flight of X, each with its own centre for X "
+          "(condition@X: the condition model's held-out residual summaries on X's flights), the between-flight "
+          "covariance pooled over every condition@airframe (the two airframes no longer inflate it); the condition "
+          "VARs stay pooled over the airframes (2-3 logs per condition and airframe); fixed a priori, not tuned")
     own_held = {c: per_flight(full[c].held, flights[c]) for c in conds}
-    lls, rec = [], []
+    lls, rec, air, crit = [], [], [], []
     for cond in conds:
         for f in flights[cond]:
             others = [g for g in flights[cond] if g.log != f.log]
@@ -188,28 +196,83 @@ def crazypad(conditions) -> list:
             models = {**{c: m.results for c, m in full.items()}, cond: own.results}
             rw = tsfdi.ResidualWindows({c: models[c] for c in conds})
             xs = f.arrays(choice.channels)
-            lls.append((cond, f, np.vstack([rw.fit(x).loglik() for x in xs])))
-            law = record_effect({c: per_flight(own.held, others) if c == cond else own_held[c] for c in conds},
-                                lags=RECORD_LAGS, block=block)
+            lls.append((cond, f, np.vstack([rw.fit(x).loglik() for x in xs]), conds))
+            held = {c: per_flight(own.held, others) if c == cond else own_held[c] for c in conds}
             pmax = max(int(m.lags) for m in models.values())
-            resid = [np.vstack([np.asarray(models[c].residuals(x))[pmax - int(models[c].lags):] for x in xs])
-                     for c in conds]
-            rec.append((cond, f, law.loglik(resid)))
+            resid = {c: np.vstack([np.asarray(models[c].residuals(x))[pmax - int(models[c].lags):] for x in xs])
+                     for c in conds}
+            law = record_effect(held, lags=RECORD_LAGS, block=block)
+            rec.append((cond, f, law.loglik([resid[c] for c in conds]), conds))
+            # per airframe: condition@drone, from the fitting flights of that drone (the held-out one never among
+            # them); the law is fitted on every airframe (pooled spread), the flight's own airframe's rows kept
+            fitting = {c: others if c == cond else flights[c] for c in conds}
+            groups = {}
+            for c in conds:
+                for g, r in zip(fitting[c], held[c]):
+                    groups.setdefault((c, g.drone), []).append((g, r))
+            ll_a, names = airframe_loglik(groups, f.drone, resid, block)
+            air.append((cond, f, ll_a, names))
+            crit.append(critical_scale(ll_a, names.index(cond)) if cond in names else np.inf)
+    # leave-one-flight-out (jackknife) scale: each flight's critical scale is computed on its own held-out run
+    # above; a flight is decided at the smallest critical scale of the *other* flights, so a flight can be wrong
+    # only if its own critical scale is below every other's: at most one wrong flight of the benchmark, and
+    # P(wrong) <= 1 / (flights) for a new flight exchangeable with them
+    crit = np.asarray(crit)
+    scales = [float(np.min(np.delete(crit, i))) for i in range(len(crit))]
+    cal = [(cond, f, ll * c, names) for (cond, f, ll, names), c in zip(air, scales)]
     verdicts = []
-    # the record-effect run is the result; the Gaussian per-sample log-likelihoods, scale-corrected and not, are
-    # printed beside it for information only
-    runs = [("record effect", rec, 1.0), ("Gaussian, scale-corrected (information only)", lls, scale),
+    # the airframe-aware record-effect run is the result; for information: the same with the leave-one-flight-out
+    # scale, the record effect with the airframes pooled (the previous result), and the Gaussian per-sample
+    # log-likelihoods, scale-corrected and not
+    low = np.argsort(crit, kind="stable")[:3]
+    print(f"leave-one-flight-out scale (information): each flight's critical scale is the largest of {SCALE_STEP:g}^i "
+          f"(i = 0..{len(SCALE_GRID) - 1}) at and below which msprt decides no wrong candidate on its held-out run; a "
+          "flight is decided at the smallest critical scale of the other flights (at most one wrong flight by "
+          f"construction): scales {min(scales):.3g}-{max(scales):.3g}; the smallest critical scales: "
+          + ", ".join(f"{cp.SHORT[air[i][0]]} {air[i][1].log} {crit[i]:.3g}" for i in low)
+          + f"; {int((crit >= 1.0).sum())} of {len(crit)} flights at 1")
+    runs = [("record effect, airframe-aware", air, 1.0),
+            ("record effect, airframe-aware, leave-one-flight-out scale (information only)", cal, 1.0),
+            ("record effect, airframes pooled (information only)", rec, 1.0),
+            ("Gaussian, scale-corrected (information only)", lls, scale),
             ("Gaussian, uncorrected, scale 1 (information only)", lls, 1.0)]
     for what, items, c in [r for r in runs if r[2] is not None]:
         rows = []
-        for cond, f, ll in items:
+        for cond, f, ll, names in items:
             seq = msprt(ll, alpha=CRAZY_ALPHA, scale=c)
             rows.append({"condition": cond, "drone": f.drone, "log": f.log, "samples": ll.shape[0],
-                         "label": conds[seq.label] if seq.label >= 0 else "undecided",
-                         "time": seq.decision_time / cp.FS if seq.label >= 0 else np.nan})
+                         "candidates": len(names), "label": names[seq.label] if seq.label >= 0 else "undecided",
+                         "time": seq.decision_time / cp.FS if seq.label >= 0 else np.nan,
+                         "end": names[int(np.argmax(ll.sum(axis=0)))]})
         v = crazypad_report(cp, pd.DataFrame(rows), what)
-        verdicts += v if items is rec else []
+        verdicts += v if items is air else []
     return verdicts
+
+
+def airframe_loglik(groups: dict, drone: str, resid: dict, block: int) -> tuple:
+    """Record-effect log-likelihoods of the candidates ``condition@drone`` for a flight of ``drone``: the law fitted
+    on every ``(condition, airframe)`` group of held-out records (the between-flight spread pooled over all of
+    them), its rows of ``drone`` kept; ``resid``: condition -> the condition model's residuals on the flight."""
+    law = record_effect({f"{c}@{d}": [r for _, r in v] for (c, d), v in groups.items()}, lags=RECORD_LAGS,
+                        block=block)
+    idx = [i for i, (_, d) in enumerate(groups) if d == drone]
+    names = tuple(list(groups)[i][0] for i in idx)
+    sub = dataclasses.replace(law, models=tuple(law.models[i] for i in idx), center=law.center[idx],
+                              between=law.between[idx], within=law.within[idx], df=law.df[idx],
+                              records=tuple(law.records[i] for i in idx))
+    return sub.loglik([resid[c] for c in names]), names
+
+
+def critical_scale(ll: np.ndarray, true: int) -> float:
+    """The largest scale of ``SCALE_GRID`` at and below which ``msprt`` (alpha ``CRAZY_ALPHA``) never decides a
+    wrong candidate on ``ll`` (true column ``true``); the grid's smallest when every scale errs."""
+    ok = SCALE_GRID[-1]
+    for c in SCALE_GRID[::-1]:                 # from the smallest scale up; stop at the first wrong decision
+        seq = msprt(ll, alpha=CRAZY_ALPHA, scale=c)
+        if seq.label >= 0 and seq.label != true:
+            break
+        ok = c
+    return ok
 
 
 def per_flight(held, flights) -> list:
@@ -235,7 +298,8 @@ def crazypad_report(cp, df: pd.DataFrame, what: str) -> list:
     decided = df[df.outcome != "undecided"]
     err = float((decided.outcome == "wrong").mean()) if len(decided) else float("nan")
     mean_c = float(per["correct"].mean())
-    print(f"realised error rate of the decided flights {err:.3f} ({int((decided.outcome == 'wrong').sum())} of "
+    print(f"mean correct over the {len(per)} conditions {per['correct'].mean():.1f} %; realised error rate of the "
+          f"decided flights {err:.3f} ({int((decided.outcome == 'wrong').sum())} of "
           f"{len(decided)}) against the bound's alpha {CRAZY_ALPHA:g}; mean time to decide "
           f"{decided.time.mean():.2f} s")
     n_wrong = int((decided.outcome == "wrong").sum())
@@ -243,6 +307,15 @@ def crazypad_report(cp, df: pd.DataFrame, what: str) -> list:
     top = int(stats.binom.ppf(0.99, len(df), CRAZY_ALPHA))
     print(f"wrong flights {n_wrong} of {len(df)}: at most {top} expected at alpha {CRAZY_ALPHA:g} (99 % binomial "
           "quantile)")
+    by_drone = df.groupby("drone").agg(flights=("log", "size"), candidates=("candidates", "median"),
+                                       correct=("outcome", lambda o: int((o == "correct").sum())),
+                                       wrong=("outcome", lambda o: int((o == "wrong").sum())))
+    print("per airframe (flights, median number of candidates, correct and wrong flights): "
+          + "; ".join(f"{d} {r.flights} flights, {r.candidates:g} candidates, {r.correct} correct, {r.wrong} wrong"
+                      for d, r in by_drone.iterrows()))
+    end = (df.end == df.condition).groupby(df.condition, sort=False).mean()
+    print(f"for information (no error rate): the most likely candidate at the end of the flight is the true one on "
+          f"{100 * end.mean():.1f} % of the flights on average over the conditions")
     return [f"  {'PASS' if mean_c >= TARGET_CRAZY else 'FAIL'}  CrazyPAD mean correct over the {len(per)} conditions "
             f"{mean_c:.1f} % vs >= {TARGET_CRAZY:g} % ({what})",
             f"  {'PASS' if n_wrong <= top else 'FAIL'}  CrazyPAD wrong decisions {n_wrong} of {len(df)} flights "
