@@ -99,6 +99,10 @@ def test_short_healthy_logs_calibrate_the_sprt():
     low, central, high = cal.rate_band
     assert low <= central <= 60.0 and central <= high
     assert cal.tail["sprt"]["n_u"] == 20 and cal.healthy_episodes <= 3
+    with pytest.raises(ValueError, match="fs .* is needed: healthy run 0"):
+        sprt_detector().calibrate(ys, us, false_alarms_per_hour=60)
+    with pytest.raises(ValueError, match="not positive: require fewer false alarms"):
+        sprt_detector().calibrate(ys, us, false_alarms_per_hour=1e7, fs=FS)
     with pytest.raises(ValueError, match="at least 3 armed"):
         OnlineDetector(["a"], na=1, nb=1, statistic="sprt").calibrate(
             [y[:, :1] for y in ys[:2]], [u[:, :1] for u in us[:2]], false_alarms_per_hour=60, fs=FS)

@@ -1107,11 +1107,13 @@ class OnlineDetector:
                              f"least {_MIN_SPRT_CYCLES} are needed: give longer healthy runs (or check that they are "
                              "healthy)")
 
-        def fit(picked: list) -> tuple:
+        def fit(picked: list) -> tuple | None:
             """Exponential tail of the cycle maxima: base level u, cycles above it per pair-hour, mean excess."""
             m = np.sort(np.concatenate([walks[j][0] for j in picked]))
             pair_hours = sum(walks[j][1] for j in picked)
             n_u = min(_TAIL_EPISODES, m.size - 1)
+            if n_u < _MIN_TAIL_EPISODES:
+                return None
             u = float(m[-n_u - 1])
             return u, n_u / pair_hours, float(np.mean(m[-n_u:] - u)), n_u, pair_hours
 
@@ -1128,7 +1130,7 @@ class OnlineDetector:
         # the uncertainty of few records: the tail re-fitted on records drawn with replacement
         gen = np.random.default_rng(0)
         n_rec = len(zs)
-        tails = [fit(list(gen.integers(0, n_rec, n_rec))) for _ in range(_SPRT_BOOTSTRAP)]
+        tails = [t for t in (fit(list(gen.integers(0, n_rec, n_rec))) for _ in range(_SPRT_BOOTSTRAP)) if t]
         levels = np.array([level(t) for t in tails])
         whole = fit(list(range(n_rec)))
         a = max(float(np.quantile(levels, _SPRT_CONFIDENCE)), level(whole))
