@@ -31,9 +31,9 @@ early alarms.
 
 Findings (one run with the defaults, pasted in docs/guide/online.md): the development grid chose na=1, nb=2 at
 0.1 false alarms per hour (threshold 18.2, Wald scale 0.90); on 60 healthy and 60 failure evaluation logs every
-rotor failure was found within 0.027 s (mean 0.014 s: the loss of a whole rotor breaks the rate / control
-relation at the next sample), none missed or early, and no false alarm in 2.30 healthy hours; the latest pair
-armed 10.0 s after the start. Not measured: partial losses of effectiveness (not simulated) and take-off (the
+rotor failure was found within 0.024 s (mean 0.014 s: the loss of a whole rotor breaks the rate / control
+relation at the next sample), none missed or early, and no false alarm in 2.27 healthy hours; the latest pair
+armed 10.1 s after the start. Not measured: partial losses of effectiveness (not simulated) and take-off (the
 records start in trimmed flight).
 """
 
