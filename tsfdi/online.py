@@ -61,7 +61,7 @@ class OnlineDetection:
         Per-sample alarm of each pair (detection statistic or GLRT).
     first_alarms : pandas.DataFrame
         One row per pair: ``position`` (sample number since the detector started, -1 if none), ``time``
-        (index label, None if none), ``source`` ("zscore", "mean", "glrt", or two joined by "+"), ``armed_at``
+        (index label, None if none), ``source`` ("zscore", "mean", "sprt", "glrt", or two joined by "+"), ``armed_at``
         (position where the GLRT was armed / the variance became stable, -1 if not yet).
     first_alarm : int or None
         Earliest alarm position over all pairs (since the detector started).
@@ -71,8 +71,9 @@ class OnlineDetection:
         The pair that raised it first (ties: the first pair in order).
     statistic : ndarray, DataFrame or DataArray, shape (nobs, n_pairs)
         The detection statistic compared with ``threshold``: the Z-score (``statistic="zscore"``; the alarm is
-        on its absolute value) or the direction-signed moving average of the prediction errors
-        (``statistic="mean"``), NaN where undefined.
+        on its absolute value), the direction-signed moving average of the prediction errors
+        (``statistic="mean"``) or the SPRT walk :math:`S_k` before its restart (``statistic="sprt"``), NaN where
+        undefined.
     alarm_start : ndarray of bool, shape (nobs, n_pairs)
         First sample of every alarm *episode* (a maximal stretch of consecutive alarmed samples of a pair, one
         alarm to the operator); an episode continuing from the previous block of the stream is not restarted.
