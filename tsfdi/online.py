@@ -35,7 +35,7 @@ _SECONDS_PER_HOUR = 3600.0
 _HUGE = 1e300            # a threshold no statistic reaches (calibration runs never alarm, so never freeze)
 _MIN_EMPIRICAL = 5.0     # expected episodes at the target rate needed for the empirical estimate
 _MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
-_MIN_SPRT_RECORDS = 3   # armed (run, pair) records the SPRT calibration needs for a spread between records
+_MIN_SPRT_RECORDS = 3    # armed (run, pair) records the SPRT calibration needs (its bootstrap draws records)
 _SPRT_BLOCK = 32         # samples per batch of the long-run variance in the SPRT scale of one record
 _SPRT_CONFIDENCE = 0.95  # the stated false-alarm band: its 5 % and 95 % bootstrap quantiles over records
 _SPRT_BOOTSTRAP = 200    # bootstrap draws of the healthy records
@@ -323,6 +323,9 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     hi = 1.0
     while f(hi) <= 0:
         hi *= 2.0
+        if hi > 1e6:
+            raise ValueError(f"{where}: the SPRT's log-likelihood ratio never rises on the healthy runs (no positive "
+                             "root of its walk's cumulant equation): give longer healthy runs")
     lo = hi
     while f(lo) >= 0:
         lo /= 2.0
