@@ -1,0 +1,35 @@
+"""benchmarks/streaming.py (issue 34): its logs and its scoring, on a few short simulated logs."""
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+
+def _streaming_benchmark():
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "streaming.py"
+    spec = importlib.util.spec_from_file_location("streaming_bench", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.slow
+def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
+    B = _streaming_benchmark()
+    gen = np.random.default_rng(7)
+    healthy = B.make_logs(gen, 4, failures=False, duration=40.0, fs=50.0)
+    failures = B.make_logs(gen, 3, failures=True, duration=40.0, fs=50.0)
+    f, ft, rotor, turb = failures[0]
+    assert list(f.columns) == ["gyro.p", "gyro.q", "gyro.r", "commands.roll_control", "commands.pitch_control",
+                               "commands.yaw_control"]
+    assert 15.0 <= ft <= 30.0 and 1 <= rotor <= 6 and turb in B.TURBULENCE
+    det = B.calibrated(healthy[:3], 1, 2, 1.0)
+    assert det.calibration_.runs == 3 and det.statistic == "sprt" and det.models[0].nk == 1
+    tab = B.score(det, B.unfrozen(det, 1, 2), healthy[3:] + failures)
+    fail = tab[tab.kind == "failure"]
+    assert (fail.outcome == "found").all() and (fail.delay_s <= B.DEADLINE).all(), fail
+    assert tab.false_episodes.sum() == 0
+    s = B.summary(tab).iloc[0]
+    assert s["found"] == 3 and s["healthy h"] == pytest.approx(tab.healthy_hours.sum(), abs=1e-4)
