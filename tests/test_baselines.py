@@ -353,4 +353,5 @@ def test_combined_test_in_calibrated_tests_and_evaluate(synthetic):
     ev_t = tsfdi.evaluate(recs, b, tests={"any": tsfdi.AnyOf([LjungBox(10, alpha=0.01), FTest(alpha=0.01)])}, **kw)
     assert ev_t.thresholds == "theoretical" and "empirical" not in ev_t.calibration
     # no correction over the channels: each channel at alpha, the decision at 1 - (1 - alpha)^2
-    assert ev_t.detection_rates().loc[("var", "any", 2.0), "expected_false_alarm"] == pytest.approx(100 * (1 - 0.99 ** 2))
+    expected = ev_t.detection_rates().loc[("var", "any", 2.0), "expected_false_alarm"]
+    assert expected == pytest.approx(100 * (1 - 0.99 ** 2))

@@ -259,7 +259,8 @@ class AnyOf(ResidualTest):
             rej = stat > thr
         else:
             thr = self.null_threshold(k)
-            pv = -np.expm1(m * np.log1p(-pmin)) if self.correction == "sidak" else np.minimum(1.0, m * pmin)
+            with np.errstate(divide="ignore"):          # a p-value of 1: log1p(-1) = -inf, the adjusted p 1
+                pv = -np.expm1(m * np.log1p(-pmin)) if self.correction == "sidak" else np.minimum(1.0, m * pmin)
             rej = np.logical_or.reduce([np.asarray(r, dtype=bool) for r in rejects])
         return stat, thr, pv, rej
 
