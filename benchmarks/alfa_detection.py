@@ -175,10 +175,12 @@ R. *The autopilot-log recipe of docs/guide/online.md* (issue 34), measured, not 
    about every 0.4 s, so the one-sample-ahead errors are bursts, and the stuck surfaces barely change the
    rate / tracking-error relation until the next turn, see ``departure_s``), so the recipe is not a candidate
    here and the ALFA targets of issue 34 (precision and recall >= 0.95, mean detection <= 2.0 s held out) are
-   not reached by any configuration: C's held-out figures are the best of this script. Detecting every
-   stuck-surface flight no earlier than its own tracking error departs from its pre-onset range
-   (``departure_s``: 4-28 s or never for the ailerons) bounds the mean detection time above 2 s whatever the
-   engine and rudder flights give.
+   not reached by any configuration: C's held-out figures are the best of this script. An estimate of why the
+   mean detection time stays above 2 s: with the stuck surfaces detected when their own tracking error departs
+   from its pre-onset range (``departure_s``: 4-28 s or never for the ailerons, 1.3 and 9.3 s for the
+   elevators, 9.8 s for the rudder + aileron flight) and the engine and rudder flights at about 1 s, the mean
+   over the 35 flights recall >= 0.95 needs is about 2.7 s; only a signal that shows a stuck aileron before its
+   tracking error does (C's roll-gain channel once, 1.85 s) could lower it.
 """
 
 import os
