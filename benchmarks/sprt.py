@@ -181,7 +181,7 @@ def crazypad(conditions) -> list:
     flights = {c: cp.load_condition(c, choice.margin) for c in conds}
     full = {c: cp.fit_model(fl, choice.channels) for c, fl in flights.items()}
     block = cp.samples(RECORD_BLOCK_S)
-    print(f"record-effect likelihood (the result): summaries per channel mean and log RMS of each model's residuals "
+    print(f"record-effect likelihood: summaries per channel mean and log RMS of each model's residuals "
           f"(lags {RECORD_LAGS}), long-run within-flight covariance over blocks of {RECORD_BLOCK_S:g} s ({block} "
           "samples), first summary after one block; between-flight covariance pooled over the conditions from the "
           "held-out residuals of each condition model's own fitting logs (the held-out flight never among them); "
