@@ -23,7 +23,7 @@ import pandas as pd
 from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, option, probability
 from tsfdi.detection.base import ResidualTest
-from tsfdi.detection.sequential import SPRT
+from tsfdi.detection.sequential import SPRT, msprt
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import ARXResults
 from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows
@@ -140,30 +140,6 @@ def _restart_sprt(z, s, start, lower, upper):  # pragma: no cover - compiled
             s = 0.0
             start = t + 1
     return peak, alarm, cycle, s, start
-
-
-@numba.njit(cache=True, nogil=True)
-def _pairwise_cusum_run(loglik, w, scale, bound):  # pragma: no cover - compiled
-    """The restarted MSPRT of :func:`tsfdi.detection.sequential.msprt` continued from the pairwise CUSUMs ``w``
-    (updated in place): ``W[j, k] = max(0, W[j, k] + scale (l_j - l_k))``; the first sample where some
-    ``min_k W[j, k]`` reaches ``bound`` and the model with the largest, else ``(-1, -1)``."""
-    n, m = loglik.shape
-    dom = np.empty(m)
-    for t in range(n):
-        for j in range(m):
-            lo = np.inf
-            for k in range(m):
-                if k != j:
-                    v = w[j, k] + scale * (loglik[t, j] - loglik[t, k])
-                    v = v if v > 0.0 else 0.0
-                    w[j, k] = v
-                    if v < lo:
-                        lo = v
-            dom[j] = lo
-        best = np.argmax(dom)
-        if dom[best] >= bound:
-            return t, best
-    return -1, -1
 
 
 def _is_span(value: Any) -> bool:
@@ -620,12 +596,13 @@ class Monitor:
         pm = self._fault_order
         seg = self._buffer[lo - pm - self._offset: upto - self._offset]
         ll = ResidualWindows(self.models).fit(self._record(seg)).loglik(common=pm)
-        bound = float(np.log(len(self.models) - 1) - np.log(self.sprt_alpha))
-        t, j = _pairwise_cusum_run(np.ascontiguousarray(ll), self._w, self.sprt_scale, bound)
-        if t < 0:
+        res = msprt(ll, alpha=self.sprt_alpha, restart=True, scale=self.sprt_scale, models=list(self.models),
+                    state=self._w)
+        self._w = res.state
+        if not res.decided:
             self._ident_pos = upto
             return
-        label = list(self.models)[j]
+        t, label = res.decision_time - 1, res.name
         self._phase, self._ident_pos = "identified", upto
         self._row_ident = (label, "identified")
         events.append(MonitorEvent(self._t(max(lo + int(t), known)), "identification", label, "identified",

@@ -358,3 +358,31 @@ def test_record_effect_singular_between_covariance_and_chunks(monkeypatch):
     ref = law.loglik(resid)
     monkeypatch.setattr(sequential, "MAX_VALUES", 8 * 16 * 7)
     assert np.allclose(law.loglik(resid), ref, rtol=1e-12, atol=1e-12)
+
+
+def test_msprt_state_continues_a_stream_in_chunks():
+    """msprt(..., restart=True, state=previous.state) on the next chunk continues the pairwise CUSUMs: chunks give the
+    whole record's statistics and decision (what the sequential Monitor relies on); the plain form's state is the
+    pairwise differences of the cumulative sums; a bad state is refused by name."""
+    rng = np.random.default_rng(12)
+    ll = rng.standard_normal((900, 3)) * 0.3
+    ll[400:, 2] += 0.2                                   # model 2 takes over after a change
+    whole = msprt(ll, alpha=0.01, restart=True)
+    assert whole.decided and whole.label == 2
+    state, seen = None, 0
+    for a, b in ((0, 137), (137, 390), (390, 900)):
+        part = msprt(ll[a:b], alpha=0.01, restart=True, state=state)
+        np.testing.assert_allclose(part.statistic, whole.statistic[a:b], rtol=0, atol=1e-12)
+        if part.decided:
+            assert seen + part.decision_time == whole.decision_time and part.label == whole.label
+            break
+        state, seen = part.state, b
+    else:
+        raise AssertionError("the chunks never decided")
+    plain = msprt(ll, alpha=0.01)
+    s = ll.sum(axis=0)
+    np.testing.assert_allclose(plain.state, s[:, None] - s[None, :], atol=1e-9)
+    with pytest.raises(ValueError, match="state is for restart=True"):
+        msprt(ll, state=np.zeros((3, 3)))
+    with pytest.raises(ValueError, match=r"state must be the finite non-negative \(3, 3\)"):
+        msprt(ll, restart=True, state=-np.ones((3, 3)))

@@ -110,11 +110,11 @@ def _sprt_paths(z, s0, lower, upper, restart):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _pairwise_cusum(loglik, scale, bound):  # pragma: no cover - compiled
-    """Dominance paths of the restarted MSPRT: ``W[j, k] = max(0, W[j, k] + scale (l_j - l_k))`` and
-    ``d_j = min_{k != j} W[j, k]``; the first sample where some ``d_j >= bound``."""
+def _pairwise_cusum(loglik, w, scale, bound):  # pragma: no cover - compiled
+    """Dominance paths of the restarted MSPRT from the pairwise statistics ``w`` (updated in place):
+    ``W[j, k] = max(0, W[j, k] + scale (l_j - l_k))`` and ``d_j = min_{k != j} W[j, k]``; the first sample where
+    some ``d_j >= bound``."""
     n, m = loglik.shape
-    w = np.zeros((m, m))
     dom = np.empty((n, m))
     first = -1
     for t in range(n):
@@ -268,6 +268,9 @@ class SequentialIdentification:
         Whether the pairwise statistics were restarted (CUSUM form).
     time : ndarray or None
         Seconds since sample ``start`` per accumulated sample, when known.
+    state : ndarray, shape (M, M) or None
+        The pairwise statistics at the end of the record, :math:`W_{jk}` (restarted) or :math:`S_j - S_k`: what
+        ``msprt(next_samples, restart=True, state=...)`` continues from.
     """
 
     label: int
@@ -281,11 +284,16 @@ class SequentialIdentification:
     scale: float = 1.0
     restart: bool = False
     time: np.ndarray | None = None
+    state: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         s = np.array(self.statistic, dtype=np.float64, ndmin=2)
         s.flags.writeable = False
         object.__setattr__(self, "statistic", s)
+        if self.state is not None:
+            w = np.array(self.state, dtype=np.float64)
+            w.flags.writeable = False
+            object.__setattr__(self, "state", w)
 
     @property
     def decided(self) -> bool:
@@ -879,7 +887,7 @@ def _grow(f, x: float) -> float:
 
 # ---------------------------------------------------------------------------------------------------- MSPRT
 def msprt(loglik: Any, *, alpha: float = 0.01, start: int = 0, restart: bool = False, scale: float = 1.0,
-          models: Any = None, fs: float | None = None) -> SequentialIdentification:
+          models: Any = None, fs: float | None = None, state: Any = None) -> SequentialIdentification:
     r"""Multi-hypothesis sequential identification (Armitage 1950; Baum & Veeravalli 1994).
 
     Parameters
@@ -900,6 +908,10 @@ def msprt(loglik: Any, *, alpha: float = 0.01, start: int = 0, restart: bool = F
         Model names (default: the columns of ``loglik``, else ``m0, m1, ...``).
     fs : float, optional
         Sampling frequency in Hz for ``decision_seconds`` when ``loglik`` carries no time index.
+    state : array_like, shape (M, M), optional
+        With ``restart=True``: the pairwise statistics :math:`W_{jk}` to continue from (the ``state`` of the result
+        of the previous samples, non-negative), so that a stream fed in chunks gives the decision of the whole
+        record; default zeros.
 
     Returns
     -------
@@ -938,10 +950,18 @@ def msprt(loglik: Any, *, alpha: float = 0.01, start: int = 0, restart: bool = F
             raise ValueError(f"models must hold one name per column of loglik ({M}), got {models!r}")
         names = tuple(str(m) for m in models)
     rate = sampling_frequency(sig, fs, "loglik")
+    if state is not None:
+        if not restart:
+            raise ValueError("state is for restart=True (the pairwise CUSUMs of a stream)")
+        state = np.array(state, dtype=np.float64)
+        if state.shape != (M, M) or not np.all(np.isfinite(state)) or (state < 0).any():
+            raise ValueError(f"state must be the finite non-negative ({M}, {M}) pairwise statistics of a previous "
+                             f"msprt result, got shape {state.shape}")
     bound = float(np.log(M - 1) - np.log(alpha))
     ll = sig.values[start:]
     if restart:
-        dom, first = _pairwise_cusum(np.ascontiguousarray(ll), scale, bound)
+        w = np.zeros((M, M)) if state is None else state
+        dom, first = _pairwise_cusum(np.ascontiguousarray(ll), w, scale, bound)
         label = int(np.argmax(dom[first])) if first >= 0 else -1
     else:
         s = np.cumsum(ll, axis=0)
@@ -956,11 +976,13 @@ def msprt(loglik: Any, *, alpha: float = 0.01, start: int = 0, restart: bool = F
         dom = s - best[:, None]
         top = s >= best[:, None]
         dom[top] = margin[np.nonzero(top)[0]]
+        w = s[-1][:, None] - s[-1][None, :]
     n = first + 1 if first >= 0 else -1
     dt = None if rate is None else 1.0 / rate
     return SequentialIdentification(label=label, decision_time=n, decision_seconds=_seconds(n, dt), statistic=dom,
                                     bound=bound, alpha=alpha, models=names, start=start, scale=scale,
-                                    restart=restart, time=None if dt is None else np.arange(ll.shape[0]) * dt)
+                                    restart=restart, time=None if dt is None else np.arange(ll.shape[0]) * dt,
+                                    state=w)
 
 
 def msprt_scale(loglik: Any, labels: Any, *, block: int = 64) -> float:
