@@ -440,3 +440,15 @@ def test_identify_and_detect_take_fp_models_at_k():
         assert tsfdi.detect(yf, healthy.at(k), test).reject
         win = tsfdi.identify_windows(yf, models, tsfdi.LjungBox(lags=10, alpha=0.01), window=500, step=500)
         assert (np.asarray(win.labels) == "fault").mean() >= 0.75
+
+
+def test_results_take_residual_products_and_check_them():
+    """LinearTimeSeriesResults(model, params, residual_products=E'E): sigma reads it (what FPResults.at passes)
+    instead of the model's own residuals; a wrong shape or a non-finite entry is refused by name."""
+    y = np.random.default_rng(4).standard_normal((500, 2))
+    res = VAR(y, 1).fit()
+    other = type(res)(res.model, res.params, residual_products=4.0 * res.nobs * np.eye(2))
+    np.testing.assert_allclose(other.sigma, 4.0 * np.eye(2) * res.nobs / res.df_resid)
+    for bad in (np.eye(3), np.full((2, 2), np.nan)):
+        with pytest.raises(ValueError, match=r"residual_products must be a finite \(2, 2\) matrix"):
+            type(res)(res.model, res.params, residual_products=bad)

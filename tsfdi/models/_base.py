@@ -627,11 +627,23 @@ class LinearTimeSeriesResults:
     _bse_note: ClassVar[str] = ("std err from Sigma = E'E / (nobs - df_eq) per equation (statsmodels VAR); z and "
                                 "P>|z| from the normal distribution")
 
-    def __init__(self, model: LinearTimeSeriesModel, params: np.ndarray) -> None:
+    def __init__(self, model: LinearTimeSeriesModel, params: np.ndarray, *,
+                 residual_products: np.ndarray | None = None) -> None:
+        """``residual_products``: the residual cross products ``E'E`` (in the fit units of ``model``) that ``sigma``,
+        ``llf``, ``bse`` and the criteria read, when they are not those of ``params`` on the model's own records
+        (a functionally pooled model at an operating point, :meth:`tsfdi.FPResults.at`); default computed from
+        the residuals."""
         params = np.array(params, dtype=float)
         params.setflags(write=False)
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "_params2d", params.reshape(params.shape[0], -1))
+        if residual_products is not None:
+            sse = np.array(residual_products, dtype=float)
+            k = self._params2d.shape[1]
+            if sse.shape != (k, k) or not np.all(np.isfinite(sse)):
+                raise ValueError(f"residual_products must be a finite ({k}, {k}) matrix, got shape {sse.shape}")
+            sse.setflags(write=False)
+            self.__dict__["_sse"] = sse                     # the cached_property's value
 
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")

@@ -757,12 +757,9 @@ class FPResults:
         """
         kk = self._point(k)
         pt = self.model.point
-        res = pt.results_class(pt, self._theta2d(kk))
         sc = pt.y_scale
         sse = self.sigma(kk) * self.nobs / np.outer(sc, sc)          # the point results' E'E, in its fit units
-        sse.setflags(write=False)
-        res.__dict__["_sse"] = sse                                    # (its cached residual cross products)
-        return res
+        return pt.results_class(pt, self._theta2d(kk), residual_products=sse)
 
     def residuals(self, y: Any, k: Any, u: Any = None) -> Any:
         """One-step prediction errors of a new signal through the model at operating point ``k``
