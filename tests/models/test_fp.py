@@ -448,7 +448,7 @@ def test_results_take_residual_products_and_check_them():
     y = np.random.default_rng(4).standard_normal((500, 2))
     res = VAR(y, 1).fit()
     other = type(res)(res.model, res.params, residual_products=4.0 * res.nobs * np.eye(2))
-    np.testing.assert_allclose(other.sigma, 4.0 * np.eye(2) * res.nobs / res.df_resid)
+    np.testing.assert_allclose(other.sigma, 4.0 * np.eye(2))             # sigma = E'E / nobs (ML)
     for bad in (np.eye(3), np.full((2, 2), np.nan)):
         with pytest.raises(ValueError, match=r"residual_products must be a finite \(2, 2\) matrix"):
             type(res)(res.model, res.params, residual_products=bad)
