@@ -20,11 +20,11 @@ def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
     B = _streaming_benchmark()
     gen = np.random.default_rng(7)
     healthy = B.make_logs(gen, 4, failures=False, duration=40.0, fs=50.0)
-    failures = B.make_logs(gen, 3, failures=True, duration=40.0, fs=50.0)
-    f, ft, rotor, turb = failures[0]
+    failures = B.make_logs(gen, 3, failures=True, duration=40.0, fs=50.0, loss=(0.5, 1.0))
+    f, ft, rotor, turb, loss = failures[0]
     assert list(f.columns) == ["gyro.p", "gyro.q", "gyro.r", "commands.roll_control", "commands.pitch_control",
                                "commands.yaw_control"]
-    assert 15.0 <= ft <= 30.0 and 1 <= rotor <= 6 and turb in B.TURBULENCE
+    assert 15.0 <= ft <= 30.0 and 1 <= rotor <= 6 and turb in B.TURBULENCE and 0.5 <= loss <= 1.0
     det = B.calibrated(healthy[:3], 1, 2, 1.0)
     assert det.calibration_.runs == 3 and det.statistic == "sprt" and det.models[0].nk == 1
     tab = B.score(det, B.unfrozen(det, 1, 2), healthy[3:] + failures)
