@@ -7,24 +7,50 @@
    judged. Over ``--fleets`` fleets: the realised rate of the decision averaged over fleets, its spread, and how
    many fleets fall in the two-sided 99.9 % binomial band of one fleet's 600 windows; "old" is the per-record
    mixture with a 90 % bootstrap bound (``record_effect="bootstrap"``), "new" the predictive record-level law.
-2. The realistic hexacopter (``tsfdi.datasets.simulate_hexacopter``) with a fleet spread (payload 30 %, airframe):
-   healthy records only, a VAR fitted on some aircraft, calibrated on its held-out residuals, the others judged.
+2. CrazyPAD (``../shared/data/crazypad``, the functions of ``benchmarks/crazypad.py``: margin, channels and VAR
+   order chosen on the fitting flights, each log's two airborne segments fitted and held out together), normal
+   flights of both airframes (E8, E9). The tests, each Sidak-corrected over the channels so that alpha is the
+   decision's rate, calibrated with the predictive record-level law (the default) on the baseline's held-out
+   residuals (``min_windows=5`` as in crazypad.py): ``LB-S`` (Ljung-Box, 10 lags per s), ``F-S``, ``M-S`` and
+   ``LB+F+M`` (``tsfdi.AnyOf`` of the three). Realised rate of the decision on the disjoint 1 s and 2 s windows of
+   the judged flights, with the two-sided 99.9 % binomial band of alpha:
+   a. leave one flight out over all normal flights (8 folds);
+   b. leave one flight out within an airframe (same-airframe flights), and ``tsfdi.coverage.coverage`` on every
+      judged segment: its false-warning rate;
+   c. fit on one airframe, judge the other: rates, and per judged flight whether ``LB+F+M`` (2 s, alpha 0.01)
+      breaks the band of its own windows and whether ``coverage`` fires on it;
+   d. detection kept: ``LB+F+M`` on cut_propeller_M3_4mm_4mm_39mm, the VAR of all normal flights, 2 s windows
+      (target >= 95 %).
+3. The realistic hexacopter (``tsfdi.datasets.simulate_hexacopter``, 30 s in severe turbulence, the first 5 s
+   dropped; channels roll, pitch, yaw rate) with a fleet spread: ``FleetSpread(payload=0.3)`` (payload 0-30 % of
+   the gross weight) and the default airframe spreads (mass, centre of gravity, motor constant, inertia); healthy
+   records only. A VAR (BIC order) fitted on 10 aircraft, the tests calibrated on its held-out residuals, 40 other
+   aircraft judged (2 s windows, disjoint): in band?
 
-Run: ``python benchmarks/fleet_calibration.py [--fleets 40]``.
+Run: ``python benchmarks/fleet_calibration.py [--fleets 40] [--data PATH] [--no-crazypad] [--no-hexacopter]``
+(BLAS pinned to one thread; prints its run time).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
+from pathlib import Path
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 import tsfdi  # noqa: E402
+from tsfdi.coverage import coverage  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import crazypad as cp  # noqa: E402
 
 A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
 A2 = -0.2 * np.eye(3)
@@ -90,8 +116,6 @@ def band(n: int, alpha: float) -> tuple:
 
 
 def fleet_table(fleets: int, seed: int = 2031) -> None:
-    import pandas as pd
-
     t0 = time.perf_counter()
     rows = [(f, *r) for f in range(fleets) for r in one_fleet(seed + f)]
     df = pd.DataFrame(rows, columns=["fleet", "records", "alpha", "test", "calibration", "rate", "threshold"])
@@ -111,12 +135,196 @@ def fleet_table(fleets: int, seed: int = 2031) -> None:
     print(pd.DataFrame(out).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
 
 
+# ------------------------------------------------------------------ 2. CrazyPAD, real flights
+CP_ALPHAS, CP_WINDOWS_S = (1e-2, 1e-3), (1.0, 2.0)
+CP_TESTS = ("LB-S", "F-S", "M-S", "LB+F+M")
+CUT4 = "cut_propeller_M3_4mm_4mm_39mm"
+
+
+def cp_model(fit_logs: tuple) -> tuple:
+    """The choices (``cp.choose``) and the VAR of the normal flights ``fit_logs``, with its held-out residuals."""
+    ch = cp.choose(fit_logs)
+    flights = [f for f in cp.load_condition(cp.NORMAL, ch.margin) if f.log in fit_logs]
+    return ch, cp.fit_model(flights, ch.channels, ch.order)
+
+
+def cp_judge(ch, model, flights, key: dict, refused: dict) -> list:
+    """Rows (``key``, flight, window, alpha, test, flagged, n) of the disjoint windows of ``flights`` through
+    ``model`` with the tests of ``CP_TESTS`` calibrated on its held-out residuals; a calibration the library refuses
+    (too few records for the alpha) is counted in ``refused`` (window, alpha -> the first line of its reason)."""
+    rows = []
+    for wsec in CP_WINDOWS_S:
+        window = cp.samples(wsec)
+        for alpha in CP_ALPHAS:
+            try:
+                tests = {fam: {"m": t} for fam, t in cp.tests_for(model, CP_TESTS, alpha, window, True).items()}
+            except ValueError as err:
+                refused.setdefault((wsec, alpha), str(err).split(": a new record")[0])
+                continue
+            for f in flights:
+                n, flagged = dict.fromkeys(CP_TESTS, 0), dict.fromkeys(CP_TESTS, 0)
+                for x in f.arrays(ch.channels):
+                    fl = cp.flags({"m": model}, tests, x, window, window)
+                    for fam in CP_TESTS:
+                        flagged[fam] += int(fl[fam][1].sum())
+                        n[fam] += int(fl[fam][1].shape[0])
+                rows += [{**key, "flight": f.log, "drone": f.drone, "window_s": wsec, "alpha": alpha, "test": fam,
+                          "flagged": flagged[fam], "n": n[fam]} for fam in CP_TESTS]
+    return rows
+
+
+def cp_warned(ch, model, flights) -> dict:
+    """flight -> coverage warnings (alpha 0.01) of its segments against the model's fitting records."""
+    return {f.log: [not coverage(model.results, x, held_out=model.held).covered for x in f.arrays(ch.channels)]
+            for f in flights}
+
+
+def rate_table(df: pd.DataFrame, by: list) -> pd.DataFrame:
+    """Flagged / windows per group, the rate and the two-sided 99.9 % band of alpha for that many windows."""
+    out = []
+    for key, g in df.groupby(by + ["window_s", "alpha", "test"], sort=False):
+        n, x = int(g.n.sum()), int(g.flagged.sum())
+        a = key[-2]
+        lo, hi = band(n, a)
+        out.append({**dict(zip(by + ["window_s", "alpha", "test"], key)), "flagged": f"{x}/{n}",
+                    "rate %": 100 * x / n, "band %": f"{100 * lo:.3g}-{100 * hi:.3g}",
+                    "in band": "yes" if lo <= x / n <= hi else ("ABOVE" if x / n > hi else "below")})
+    return pd.DataFrame(out)
+
+
+def show(tab: pd.DataFrame) -> None:
+    print(tab.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+
+
+def crazypad_rows(root=None) -> None:
+    t0 = time.perf_counter()
+    cp.setup(root)
+    logs = cp.normal_logs()
+    drones = sorted({log.split("_")[0] for log in logs})
+    print(f"\nCrazyPAD ({cp.ROOT}), normal flights {', '.join(logs)}; tests {', '.join(CP_TESTS)} (Sidak over the "
+          "channels; LB+F+M = AnyOf of the three, each at its Sidak share), predictive record-level calibration "
+          f"(min_windows={cp.MIN_WINDOWS}); disjoint windows; band: two-sided 99.9 % binomial of alpha")
+    # a. leave one flight out over both airframes
+    rows, warn_a, refused = [], [], {}
+    for k, out in enumerate(logs):
+        ch, model = cp_model(tuple(log for log in logs if log != out))
+        flight = [f for f in cp.load_condition(cp.NORMAL, ch.margin) if f.log == out]
+        rows += cp_judge(ch, model, flight, {"fold": k}, refused)
+        warn_a += cp_warned(ch, model, flight)[out]
+    a = pd.DataFrame(rows)
+    print(f"\na. leave one flight out, both airframes ({len(logs)} folds; every baseline holds both airframes)")
+    show(rate_table(a, []))
+    print("   per airframe of the held-out flight (2 s windows, LB+F+M):")
+    show(rate_table(a[(a.window_s == 2.0) & (a.test == "LB+F+M")], ["drone"]))
+    print(f"   coverage warnings on the held-out segments: {sum(warn_a)}/{len(warn_a)}")
+    for (wsec, alpha), why in refused.items():
+        print(f"   refused: {wsec:g} s, alpha {alpha:g}: {why}")
+    # b. leave one flight out within an airframe
+    rows, warn_b, refusals = [], {}, set()
+    for d in drones:
+        own = tuple(log for log in logs if log.startswith(d))
+        for out in own:
+            ch, model = cp_model(tuple(log for log in own if log != out))
+            flight = [f for f in cp.load_condition(cp.NORMAL, ch.margin) if f.log == out]
+            refused = {}
+            rows += cp_judge(ch, model, flight, {"baseline": f"{d} ({len(own) - 1} flights)"}, refused)
+            for (wsec, alpha), why in refused.items():
+                refusals.add(f"{d} ({len(own) - 1} flights), {wsec:g} s, alpha {alpha:g}: {why}")
+            warn_b[out] = cp_warned(ch, model, flight)[out]
+    print("\nb. leave one flight out within an airframe (same-airframe flights)")
+    show(rate_table(pd.DataFrame(rows), ["baseline"]))
+    for r in sorted(refusals):
+        print(f"   refused (every fold): {r}")
+    segs = [w for v in warn_b.values() for w in v]
+    print(f"   coverage (alpha 0.01) false warnings on same-airframe flights: {sum(segs)}/{len(segs)} segments, "
+          f"{sum(any(v) for v in warn_b.values())}/{len(warn_b)} flights ("
+          + ", ".join(f"{log}: {v}" for log, v in warn_b.items()) + ")")
+    # c. fit on one airframe, judge the other
+    print("\nc. fit on one airframe, judge the other")
+    for d in drones:
+        fit_logs = tuple(log for log in logs if log.startswith(d))
+        ch, model = cp_model(fit_logs)
+        others = [f for f in cp.load_condition(cp.NORMAL, ch.margin) if f.drone != d]
+        refused = {}
+        c = pd.DataFrame(cp_judge(ch, model, others, {"fit": d}, refused))
+        print(f"   fit on {d} ({len(fit_logs)} flights, {len(model.held)} segments), judge the other airframe's "
+              f"{len(others)} flights:")
+        show(rate_table(c, ["fit"]))
+        for (wsec, alpha), why in refused.items():
+            print(f"   refused: {wsec:g} s, alpha {alpha:g}: {why}")
+        warned = cp_warned(ch, model, others)
+        g = c[(c.window_s == 2.0) & (c.alpha == 1e-2) & (c.test == "LB+F+M")]
+        print("   per judged flight (LB+F+M, 2 s, alpha 0.01): flagged/windows, above the flight's 99.9 % band?, "
+              "coverage warned (per segment)")
+        for r in g.itertuples():
+            hi = band(r.n, 1e-2)[1]
+            print(f"     {r.flight}: {r.flagged}/{r.n}  {'ABOVE' if r.flagged / r.n > hi else 'in band'}  "
+                  f"coverage {warned[r.flight]}")
+    # d. detection kept
+    ch = cp.choose(logs)
+    det, ncal = cp.detection(ch, conditions=(CUT4,), windows=(2.0,))
+    print(f"\nd. detection, VAR of all {len(logs)} normal flights ({ch.line()}), {CUT4}, 2 s windows "
+          f"(independent calibration windows {ncal[2.0]}):")
+    print("\n".join(v for v in cp.detection_verdicts(det) if "LB+F+M" in v))
+    print(f"CrazyPAD rows: {time.perf_counter() - t0:.0f} s")
+
+
+# ------------------------------------------------------------------ 3. hexacopter fleet
+HEX_FIT, HEX_NEW, HEX_WINDOW = 10, 40, 200
+
+
+def hexacopter_rows() -> None:
+    from tsfdi.datasets import simulate_hexacopter
+    from tsfdi.datasets.hexacopter import FleetSpread, hexacopter_signals
+
+    t0 = time.perf_counter()
+    seeds = list(range(3100, 3100 + HEX_FIT + HEX_NEW))
+    ds = simulate_hexacopter(len(seeds), duration=30.0, failed_rotor=0, seed=seeds, fleet=FleetSpread(payload=0.3))
+    if bool(np.any(ds["lost_control"].values)):
+        raise RuntimeError("a hexacopter record lost control")
+    sig = hexacopter_signals(ds).isel(time=slice(500, None))
+    recs = [sig.isel(record=i).values for i in range(len(seeds))]
+    fit, new = recs[:HEX_FIT], recs[HEX_FIT:]
+    order = int(tsfdi.select_order(fit, 20, "var", trend="c").selected)
+    spec = tsfdi.VAR(fit, order, trend="c")
+    res, held = spec.fit(), spec.held_out_residuals()
+    n = HEX_WINDOW - order
+    rows = []
+    for a in ALPHAS:
+        lb = tsfdi.LjungBox(lags=20, alpha=a, correction="sidak", threshold="calibrated")
+        f = tsfdi.FTest(alpha=a, correction="sidak", threshold="calibrated")
+        m = tsfdi.MeanTest(alpha=a, correction="sidak", threshold="calibrated")
+        tests = {"LB-S": lb, "F-S": f, "M-S": m, "LB+F+M": tsfdi.AnyOf([lb, f, m])}
+        for name, t in tests.items():
+            t.calibrate(held, window=HEX_WINDOW)
+            ws = [tsfdi.ResidualWindows({"m": res}).fit(x).statistics(t, window=HEX_WINDOW, step=HEX_WINDOW,
+                                                                      loglik=False) for x in new]
+            rows.append({"test": name, "window_s": HEX_WINDOW / 100, "alpha": a,
+                         "flagged": int(sum(w.reject.sum() for w in ws)), "n": int(sum(w.reject.shape[0] for w in ws))})
+    payload = ds["payload"].values
+    print(f"\nhexacopter fleet: FleetSpread(payload=0.3) and the default airframe spreads, severe turbulence, 30 s "
+          f"(first 5 s dropped); VAR({order}) on {HEX_FIT} aircraft (payload {payload[:HEX_FIT].min():.2f}-"
+          f"{payload[:HEX_FIT].max():.2f}), {HEX_NEW} others judged (payload {payload[HEX_FIT:].min():.2f}-"
+          f"{payload[HEX_FIT:].max():.2f}), {n} residuals per window; predictive calibration; Sidak over "
+          f"{sig.sizes['channel']} channels ({time.perf_counter() - t0:.0f} s)")
+    show(rate_table(pd.DataFrame(rows), []))
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fleets", type=int, default=40)
+    p.add_argument("--data", default=None, help="CrazyPAD folder (default ../shared/data/crazypad)")
+    p.add_argument("--no-crazypad", action="store_true")
     p.add_argument("--no-hexacopter", action="store_true")
     args = p.parse_args(argv)
-    fleet_table(args.fleets)
+    t0 = time.perf_counter()
+    if args.fleets:
+        fleet_table(args.fleets)
+    if not args.no_crazypad:
+        crazypad_rows(args.data)
+    if not args.no_hexacopter:
+        hexacopter_rows()
+    print(f"\nrun time {time.perf_counter() - t0:.0f} s")
 
 
 if __name__ == "__main__":
