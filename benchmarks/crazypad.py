@@ -314,7 +314,7 @@ def fit_model(flights, channels, order=None) -> Model:
 def make_test(family: str, alpha: float, lags: int, calibrated: bool):
     thr = tsfdi.ScaledChi2Threshold(alpha, min_windows=MIN_WINDOWS, min_records=MIN_RECORDS) if calibrated \
         else "theoretical"
-    sidak = "sidak" if family.endswith("-S") else None
+    sidak = "sidak" if family.endswith("-S") else "none"
     if family.startswith("M"):
         return tsfdi.MeanTest(alpha=alpha, correction=sidak, threshold=thr)
     if family.startswith("LB"):

@@ -72,7 +72,8 @@ PREVIOUS = "f9e25de"
 #: the client keeps its last messages to the scheduler (each chunk's graph) for debugging: this many (default 1000)
 LOG = "distributed.admin.low-level-log-length"
 LEVELS = ("moderate", "severe")
-TESTS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3), "variance": tsfdi.FTest(alpha=1e-3)}
+TESTS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none"),
+         "variance": tsfdi.FTest(alpha=1e-3, correction="none")}
 OPTIONS = dict(models=("var",), tests=TESTS, windows=("5s", "10s", "20s"), settle=5.0, progress=False)
 
 
@@ -323,7 +324,7 @@ def main() -> None:
               "the records into the driver")
         print(f"  {'call':<26} {'records':>8} {'traced peak':>12} {'held after':>11} {'RSS rise':>9} "
               f"{'per-record table':>17}")
-        monitor = base.monitor("var", window="10s", test=tsfdi.LjungBox(lags=20, alpha=1e-3))
+        monitor = base.monitor("var", window="10s", test=tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none"))
 
         def evaluate(d):
             return tsfdi.evaluate(d, base, **OPTIONS)

@@ -210,7 +210,7 @@ def test_empirical_thresholds_leave_one_out(synthetic):
     np.testing.assert_allclose(b.heldout[("var", "f1")][1], np.asarray(ref), rtol=1e-10)
     y0 = tsfdi.AR([segs[1][:, 0], segs[2][:, 0]], 2, hold_back=4).fit().residuals(segs[0][:, 0])
     np.testing.assert_allclose(b.heldout[("y0", "f1")][0][:, 0], np.asarray(y0), rtol=1e-10)
-    lb = LjungBox(lags=20, alpha=0.01, threshold="empirical")
+    lb = LjungBox(lags=20, alpha=0.01, correction="none", threshold="empirical")
     cal = b.calibrated_tests("var", lb, "5s")
     assert set(cal) == {"healthy", "f1", "f2"} and all(t.empirical for t in cal.values())
     assert not lb.calibrated and all(t is not lb for t in cal.values())          # the given test is not modified
@@ -218,13 +218,16 @@ def test_empirical_thresholds_leave_one_out(synthetic):
     np.testing.assert_allclose(cal["f2"].threshold_, np.quantile(st, 0.99, axis=0))
     # cached: the same test (an equal one too), window and step, whether the window is a time span or samples
     assert b.calibrated_tests("var", lb, "5s") is cal
-    assert b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01, threshold="empirical"), 500) is cal
+    equal = LjungBox(lags=20, alpha=0.01, correction="none", threshold="empirical")
+    assert b.calibrated_tests("var", equal, 500) is cal
     assert b.calibrated_tests("var", lb, "5s", step=2) is not cal
     # a test with other options is calibrated anew, even where its repr does not show them
-    other = b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01, threshold="empirical", demean=False), "5s")
+    other = b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01, correction="none", threshold="empirical",
+                                               demean=False), "5s")
     assert other is not cal and not other[b.healthy].demean
     ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, models=("var",),
-                        tests={"whiteness": lb, "variance": FTest(alpha=0.01, threshold="empirical")},
+                        tests={"whiteness": lb,
+                               "variance": FTest(alpha=0.01, correction="none", threshold="empirical")},
                         windows=("5s",), settle=5.0, progress=False)
     assert ev.thresholds == "empirical"
     assert not set(ev.records.loc[ev.records["evaluated"], "record"]) & set(b.fit_records)
@@ -257,7 +260,7 @@ def test_empirical_thresholds_leave_one_out(synthetic):
         tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=FS, windows=("5s",), progress=False,
                        tests=LjungBox(lags=20, threshold="gpd"))
     with pytest.raises(ValueError, match="at least 200000 are needed"):
-        b.calibrated_tests("var", LjungBox(lags=20, alpha=1e-6, threshold="empirical"), "5s")
+        b.calibrated_tests("var", LjungBox(lags=20, alpha=1e-6, correction="none", threshold="empirical"), "5s")
     with pytest.raises(ValueError, match="empirical"):
         b.calibrated_tests("var", LjungBox(lags=20, alpha=0.01), "5s")
     with pytest.raises(TypeError, match="calibrate"):
@@ -350,7 +353,8 @@ def test_combined_test_in_calibrated_tests_and_evaluate(synthetic):
     det = ev.detection_rates()
     assert det.loc[("var", "any", 2.0), "expected_false_alarm"] == pytest.approx(1.0)
     assert ev.alphas[("var", "any")] == pytest.approx(1 - 0.99 ** 0.5)
-    ev_t = tsfdi.evaluate(recs, b, tests={"any": tsfdi.AnyOf([LjungBox(10, alpha=0.01), FTest(alpha=0.01)])}, **kw)
+    ev_t = tsfdi.evaluate(recs, b, tests={"any": tsfdi.AnyOf([LjungBox(10, alpha=0.01, correction="none"),
+                                                              FTest(alpha=0.01, correction="none")])}, **kw)
     assert ev_t.thresholds == "theoretical" and "empirical" not in ev_t.calibration
     # no correction over the channels: each channel at alpha, the decision at 1 - (1 - alpha)^2
     expected = ev_t.detection_rates().loc[("var", "any", 2.0), "expected_false_alarm"]

@@ -20,7 +20,8 @@ from tsfdi.windows import ResidualWindows, decide
 def test_evaluate_synthetic(synthetic, fitted):
     recs, states, ft = synthetic
     ev = tsfdi.evaluate(recs, fitted, states=states, failure_times=ft, fs=FS, models=("var", "y0"),
-                        tests={"whiteness": LjungBox(lags=20, alpha=1e-3), "variance": FTest(alpha=1e-3)},
+                        tests={"whiteness": LjungBox(lags=20, alpha=1e-3, correction="none"),
+                               "variance": FTest(alpha=1e-3, correction="none")},
                         windows=("5s", "20s"), settle=5.0, rules=("paper", "likelihood", "pvalue"), progress=False)
     assert ev.thresholds == "theoretical"
     assert ev.alphas == {(m, meth): 1e-3 for m in ("var", "y0") for meth in ("whiteness", "variance")}

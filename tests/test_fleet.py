@@ -26,7 +26,8 @@ from tsfdi.datasets.hexacopter import FleetSpread
 from tsfdi.fleet import is_chunked, map_records, record_chunks
 
 DESIGN = dict(duration=20.0, failure_time=2.0, turbulence=("light", "severe"))
-TESTS = {"whiteness": LjungBox(lags=10, alpha=1e-3), "empirical": LjungBox(lags=10, alpha=0.05, threshold="empirical")}
+TESTS = {"whiteness": LjungBox(lags=10, alpha=1e-3), "empirical": LjungBox(lags=10, alpha=0.05, correction="none",
+                                                                                 threshold="empirical")}
 OPTIONS = dict(models=("var", "roll"), tests=TESTS, windows=("5s", "10s"), settle=5.0,
                rules=("paper", "likelihood", "pvalue"), progress=False)
 

@@ -312,8 +312,9 @@ def _test_args(p: argparse.ArgumentParser, lags: int = 20) -> None:
                         "whiteness+variance+mean) flag a window when one of them rejects, each at its Sidak share "
                         "of --alpha (tsfdi.AnyOf)")
     p.add_argument("--alpha", type=opt.probability, default=1e-3,
-                   help="type I risk per channel and tested window; the test classes of tsfdi default to 0.05 for "
-                        "one test, the command tests many windows (at 0.05, one false alarm in 20 windows)")
+                   help="false-alarm rate of a tested window's decision (the channels share it by Sidak, as the "
+                        "test classes do by default); the test classes of tsfdi default to 0.05 for one test, the "
+                        "command tests many windows (at 0.05, one false alarm in 20 windows)")
     p.add_argument("--lags", type=opt.count, default=lags,
                    help="Ljung-Box lags (20 as LjungBox(); 25 for monitor, as in paper 003)")
     p.add_argument("--threshold", choices=("theoretical", "calibrated"), default="theoretical",

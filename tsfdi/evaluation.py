@@ -342,7 +342,7 @@ class Evaluation:
 def _named_tests(tests: Any, models: list) -> dict:
     """``(model, label) -> ResidualTest`` from a test, or a mapping label -> test or label -> {model -> test}."""
     if tests is None:
-        tests = {"whiteness": LjungBox(lags=20, alpha=1e-3)}
+        tests = {"whiteness": LjungBox(lags=20, alpha=1e-3, correction="none")}
     elif isinstance(tests, ResidualTest):
         tests = {type(tests).__name__: tests}
     if not isinstance(tests, Mapping) or not tests:
@@ -384,7 +384,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         The residual tests, each applied to every model: one test, or a mapping label -> test, or label ->
         {model -> test} (e.g. the paper's Table 3 alphas per model, :func:`tsfdi.study.paper_tests`). The label
         is the ``method`` of the result tables (a single test is labelled by its class name). Default
-        ``{"whiteness": LjungBox(lags=20, alpha=1e-3)}``. Each channel is tested at the test's ``alpha`` (type I
+        ``{"whiteness": LjungBox(lags=20, alpha=1e-3, correction="none")}`` (the paper's per-channel alpha). Each
+        channel is tested at its share of the test's ``alpha`` (``correction``; ``"none"``: at ``alpha``, the type I
         risk per window and channel) and a model is accepted only if every channel accepts (paper's rule for
         vector residuals). A test built with ``threshold="empirical"`` is calibrated for every model (healthy and
         each fault) on that model's own leave-one-record-out fitting residuals

@@ -51,7 +51,7 @@ from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the paper's whiteness test of the VAR (Ljung-Box, 20 lags, alpha 1e-3 per channel, Table 3)
-WHITENESS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3)}
+WHITENESS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none")}
 FIGS = ROOT / "docs" / "figures" / "study"
 
 
@@ -156,9 +156,11 @@ def paper_like_for_like(dev, evl) -> tuple[pd.DataFrame, dict, dict]:
     names = [*SIGNAL_CHANNELS, "var"]
     b = tsfdi.fit_baselines(hexacopter_signals(dev), fit_records="first", fit_turbulence="severe", duration=20.0,
                             settle=10.0, order="bic", models=names, max_lags=30, var_max_lags=30)
-    tests = {"variance": {m: tsfdi.FTest(alpha=PAPER_ALPHA[("variance", "yaw" if m.startswith("yaw") else m)])
+    tests = {"variance": {m: tsfdi.FTest(alpha=PAPER_ALPHA[("variance", "yaw" if m.startswith("yaw") else m)],
+                                      correction="none")
                           for m in names},
-             "whiteness": {m: tsfdi.LjungBox(lags=50 if m == "var" else 30, alpha=1e-3) for m in names}}
+             "whiteness": {m: tsfdi.LjungBox(lags=50 if m == "var" else 30, alpha=1e-3, correction="none")
+                           for m in names}}
     evs = {rec: tsfdi.evaluate(hexacopter_signals(data), b, models=names, tests=tests, windows=("20s",),
                                rules=("paper",), progress=False) for rec, data in (("development", dev),
                                                                                    ("evaluation", evl))}
@@ -184,7 +186,7 @@ def calibrated_one_set(dev, evl) -> tuple[pd.DataFrame, list[str], dict, dict]:
     per threshold kind (for the fleet)."""
     parts, lines, orders, fitted = [], [], {}, {}
     for thr in ("theoretical", "calibrated"):
-        tests = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, threshold=thr)}
+        tests = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none", threshold=thr)}
         bases, ev = hexacopter_study(dev, models=["var"], pool="all", order="bic", rules=("paper", "likelihood"),
                                      tests=tests, progress=False)
         fitted[thr] = (bases, tests)
@@ -293,7 +295,7 @@ def alpha_table(bases, data) -> pd.DataFrame:
     sig = hexacopter_signals(data)
     rows = []
     for a in (1e-4, 1e-3, 1e-2, 5e-2):
-        ev = tsfdi.evaluate(sig, bases, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
+        ev = tsfdi.evaluate(sig, bases, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a, correction="none")},
                             rules=["paper"], progress=False)
         for w, r in ev.detection_rates().loc[("var", "whiteness")].iterrows():
             n, x = int(r["disjoint_windows"]), int(r["disjoint_alarms"])
@@ -342,7 +344,7 @@ def white_noise_null(bases, data, alphas=(1e-3, 1e-2, 5e-2), draws=None, seed=20
              for lvl, b in bases.items() for i, st in evaluated(sig, lvl, b) if st == b.healthy]
         for a in alphas:
             crit = float(stats.chi2.ppf(1.0 - a, lags))
-            test = LjungBox(lags=lags, alpha=a, threshold="empirical").calibrate(
+            test = LjungBox(lags=lags, alpha=a, correction="none", threshold="empirical").calibrate(
                 statistic=np.repeat(null[:, None], len(first.channels), axis=1))
             alarms = [(s > test.threshold_).any(axis=1) for s in q]
             al = np.concatenate(alarms)
@@ -415,7 +417,7 @@ LOO_ALPHAS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-8, 1e-10, 1e-12)
 def select_alphas(bases_e) -> dict:
     """Per turbulence level, the VAR + whiteness alpha chosen on the development fitting records (leave one record
     out, :meth:`tsfdi.Baselines.select_alpha`, 20 s windows): level -> its table (``attrs["selected"]``)."""
-    return {lvl: b.select_alpha("var", tsfdi.LjungBox(lags=20), "20s", LOO_ALPHAS) for lvl, b in bases_e.items()}
+    return {lvl: b.select_alpha("var", tsfdi.LjungBox(lags=20, correction="none"), "20s", LOO_ALPHAS) for lvl, b in bases_e.items()}
 
 
 def loo_alpha(bases_e, data, selected: dict) -> tuple[pd.DataFrame, list[str]]:
@@ -426,7 +428,7 @@ def loo_alpha(bases_e, data, selected: dict) -> tuple[pd.DataFrame, list[str]]:
     for lvl, b in bases_e.items():
         tab = selected[lvl]
         a = tab.attrs["selected"]
-        ev = tsfdi.evaluate(sig, bases_e, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a)},
+        ev = tsfdi.evaluate(sig, bases_e, models=["var"], tests={"whiteness": tsfdi.LjungBox(lags=20, alpha=a, correction="none")},
                             turbulence=lvl, rules=["paper"], progress=False)
         idents.append(ev.identification_counts)
         dets.append(ev.detection_counts)

@@ -90,7 +90,7 @@ def test_small_baseline_correct_model_monte_carlo():
 def test_decision_reports_empirical_threshold_and_pvalue():
     rng = np.random.default_rng(0)
     stat = rng.chisquare(5, size=(3000, 2))
-    lb = LjungBox(5, 0.01, threshold="empirical").calibrate(statistic=stat)
+    lb = LjungBox(5, 0.01, correction="none", threshold="empirical").calibrate(statistic=stat)
     np.testing.assert_allclose(lb.threshold_, np.quantile(stat, 0.99, axis=0))
     x = rng.standard_normal((300, 2))
     d = lb.test(x)
@@ -133,18 +133,20 @@ def test_data_kinds(kind):
     recs = [rng.standard_normal((500, 2)) for _ in range(5)]
     wrap = {"numpy": lambda a: a, "pandas": lambda a: pd.DataFrame(a, columns=["p", "q"]),
             "xarray": lambda a: xr.DataArray(a, dims=("time", "channel"))}[kind]
-    lb = LjungBox(4, 0.05, threshold="empirical").calibrate([wrap(r) for r in recs], window=50, step=2)
-    ref = LjungBox(4, 0.05, threshold="empirical").calibrate(recs, window=50, step=2)
+    lb = LjungBox(4, 0.05, correction="none", threshold="empirical").calibrate([wrap(r) for r in recs], window=50,
+                                                                            step=2)
+    ref = LjungBox(4, 0.05, correction="none", threshold="empirical").calibrate(recs, window=50, step=2)
     np.testing.assert_allclose(lb.threshold_, ref.threshold_)
     d = lb.test(wrap(recs[0][:50]))
     np.testing.assert_allclose(d.statistic, ref.test(recs[0][:50]).statistic)
-    f = FTest(0.05, threshold="empirical").calibrate([wrap(r) for r in recs], window=50, step=2,
+    f = FTest(0.05, correction="none", threshold="empirical").calibrate([wrap(r) for r in recs], window=50, step=2,
                                                      reference_variance=[1.0, 1.0])
-    fr = FTest(0.05, threshold="empirical").calibrate(recs, window=50, step=2, reference_variance=1.0)
+    fr = FTest(0.05, correction="none", threshold="empirical").calibrate(recs, window=50, step=2,
+                                                                         reference_variance=1.0)
     np.testing.assert_allclose(f.threshold_, fr.threshold_)
     # calibrating from precomputed statistics of any kind
     st = ljungbox_windows(recs[0], 4, 50, 1)
-    a = LjungBox(4, 0.05, threshold="empirical").calibrate(statistic=wrap(st)).threshold_
+    a = LjungBox(4, 0.05, correction="none", threshold="empirical").calibrate(statistic=wrap(st)).threshold_
     np.testing.assert_allclose(a, np.quantile(st, 0.95, axis=0))
 
 
@@ -179,7 +181,7 @@ def test_ftest_public_rules_equal_test(demean):
     rng = np.random.default_rng(6)
     x = rng.standard_normal((400, 2)) * [1.0, 1.3]
     ref = {"reference_variance": np.array([1.0, 1.1]), "reference_df": np.array([500.0, 480.0])}
-    for corr in (None, "bonferroni"):
+    for corr in ("none", "bonferroni"):
         ft = FTest(0.05, demean=demean, correction=corr)
         d = ft.test(x[100:300], **ref)
         stat = ft.window_statistic(x, 200, 100, **ref)
@@ -318,7 +320,8 @@ def test_calibration_errors_name_the_channel_and_the_fix():
     assert "channel 0" not in str(err.value)
     with pytest.raises(ValueError, match=r"^LjungBox.calibrate, channel 'roll': statistic comes from 3 records, at "
                                          r"least 4 are needed for false_alarm=0.001"):
-        LjungBox(5, 1e-3, threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20)).calibrate(recs, window=101)
+        LjungBox(5, 1e-3, correction="none", threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20)).calibrate(
+            recs, window=101)
     assert LjungBox(5, 1e-3, threshold=tsfdi.ScaledChi2Threshold(1e-3, min_windows=20, min_records=3)).calibrate(
         recs, window=101).calibrated
     with pytest.raises(ValueError, match=r"^LjungBox.calibrate, channel 'roll': statistic is too small to calibrate"):

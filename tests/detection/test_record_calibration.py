@@ -85,8 +85,9 @@ def test_too_few_records_are_refused_with_what_is_needed(fleet):
     held = tsfdi.VAR(fit[:3], 2).held_out_residuals()
     with pytest.raises(ValueError, match=r"channel 'y0': statistic comes from 3 records, at least 4 are needed for "
                                          r"false_alarm=0\.001.*more healthy records.*min_records"):
-        tsfdi.LjungBox(lags=20, alpha=1e-3).calibrate(held, window=FC.WINDOW)
-    ok = tsfdi.LjungBox(lags=20, alpha=1e-3, threshold=ScaledChi2Threshold(1e-3, min_records=3))
+        tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none").calibrate(held, window=FC.WINDOW)
+    ok = tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none",
+                        threshold=ScaledChi2Threshold(1e-3, min_records=3))
     assert ok.calibrate(held, window=FC.WINDOW).thresholds_[0].records_ == 3
     with pytest.raises(ValueError, match="record_effect must be one of 'predictive', 'bootstrap'"):
         ScaledChi2Threshold(1e-3, record_effect="plugin")
@@ -95,7 +96,7 @@ def test_too_few_records_are_refused_with_what_is_needed(fleet):
 def test_pvalue_agrees_with_the_threshold(fleet):
     fit, _ = fleet
     held = tsfdi.VAR(fit[:10], 2).held_out_residuals()
-    test = tsfdi.LjungBox(lags=20, alpha=1e-2).calibrate(held, window=FC.WINDOW)
+    test = tsfdi.LjungBox(lags=20, alpha=1e-2, correction="none").calibrate(held, window=FC.WINDOW)
     thr = test.threshold_
     _, pv = test.threshold_pvalue(np.vstack([thr * 0.999, thr, thr * 1.001, thr * 100]), 198)
     assert np.all(pv[0] > 1e-2) and np.allclose(pv[1], 1e-2) and np.all(pv[2] < 1e-2)

@@ -23,7 +23,7 @@ def _sm_q(x, lags, model_df=0):
 def test_equals_statsmodels(n, lags):
     rng = np.random.default_rng(n)
     x = sps.lfilter([1], [1, -0.3], rng.standard_normal((n, 2)), axis=0) + 0.5
-    d = tsfdi.LjungBox(lags, 0.05).test(x)
+    d = tsfdi.LjungBox(lags, 0.05, correction="none").test(x)
     for c in range(2):
         q, p = _sm_q(x[:, c], lags)
         np.testing.assert_allclose(d.statistic[c], q, rtol=1e-10, atol=1e-10)
@@ -109,7 +109,7 @@ def test_false_alarm_rate_iid_vector_and_bonferroni():
     rng = np.random.default_rng(22)
     reps, alpha = 2000, 0.05
     e = rng.standard_normal((reps, 400, 3))
-    per = np.array([tsfdi.LjungBox(10, alpha).test(x).channel_reject for x in e])
+    per = np.array([tsfdi.LjungBox(10, alpha, correction="none").test(x).channel_reject for x in e])
     lo, hi = stats.binom.interval(0.999, reps * 3, alpha)
     assert lo / (reps * 3) <= per.mean() <= hi / (reps * 3)
     fam = np.mean([tsfdi.LjungBox(10, alpha, correction="bonferroni").test(x).reject for x in e])
@@ -233,7 +233,7 @@ def test_public_rules_equal_test(kind):
     """threshold_pvalue / null_threshold / decision applied to a window's Q give exactly what test() gives."""
     rng = np.random.default_rng(25)
     x = sps.lfilter([1], [1, -0.15], rng.standard_normal((700, 3)), axis=0)
-    for corr in (None, "bonferroni"):
+    for corr in ("none", "bonferroni"):
         lb = tsfdi.LjungBox(8, 0.05, model_df=1, correction=corr)
         d = lb.test(as_kind(x[100:400], kind))
         q = lb.window_statistic(as_kind(x, kind), 300, 100)          # window 1 is x[100:400]
@@ -354,3 +354,15 @@ def test_residual_windows_share_lag_products_across_lengths(monkeypatch):
                                           ljungbox_windows(m.residuals(x), 10, window - m.lags, 50))
     rw.statistics(tsfdi.LjungBox(15, 1e-3), window=600, step=50)
     assert made == [10, 10, 15, 15]
+
+
+@pytest.mark.parametrize("cls", [tsfdi.LjungBox, tsfdi.FTest, tsfdi.MeanTest])
+def test_alpha_is_the_decisions_rate_by_default(cls):
+    """Issue 31: alpha is the false-alarm rate of the multi-channel decision by default (Sidak over the channels);
+    per-channel alpha is the explicit correction="none", and None (which reads as "the default") is refused."""
+    t = cls(alpha=0.01)
+    assert t.correction == "sidak" and t.channel_alpha(3) == pytest.approx(1 - 0.99 ** (1 / 3))
+    assert t.family_alpha(t.channel_alpha(3), 3)[0] == pytest.approx(0.01)
+    assert cls(alpha=0.01, correction="none").channel_alpha(3) == 0.01
+    with pytest.raises(ValueError, match="correction must be 'sidak'.*'none'.*got None"):
+        cls(alpha=0.01, correction=None)

@@ -80,9 +80,10 @@ class ResidualTest:
     as keyword arguments, and :meth:`reference` extracts those from any results object exposing the
     documented attributes (``sigma2`` or ``sigma``, ``nobs``, ``df_resid``), duck-typed.
 
-    ``alpha`` is a type I risk, but of what depends on the test: per tested window (per channel) for the windowed
-    tests (:class:`~tsfdi.LjungBox`, :class:`~tsfdi.FTest`), per sample for the sequential ones
-    (:class:`~tsfdi.GLRT`, :class:`~tsfdi.ZScore`); each test's docstring says which.
+    ``alpha`` is a type I risk, but of what depends on the test: per tested window for the windowed tests
+    (:class:`~tsfdi.LjungBox`, :class:`~tsfdi.FTest`, :class:`~tsfdi.MeanTest`; of the decision over the channels
+    unless ``correction="none"``), per sample and channel for the sequential ones (:class:`~tsfdi.GLRT`,
+    :class:`~tsfdi.ZScore`); each test's docstring says which.
     """
 
     name = "residual test"
@@ -102,10 +103,11 @@ class ResidualTest:
         return probability(alpha, "alpha")
 
     @staticmethod
-    def _check_correction(correction: Any) -> str | None:
+    def _check_correction(correction: Any) -> str:
         if correction is None:
-            return None
-        return option(correction, "correction", ("bonferroni", "sidak"))
+            raise ValueError("correction must be 'sidak' (the default: alpha is the decision's false-alarm rate over "
+                             "the channels), 'bonferroni' or 'none' (alpha per channel, paper 003's use), got None")
+        return option(correction, "correction", ("sidak", "bonferroni", "none"))
 
     @staticmethod
     def _resid(resid: Any, min_nobs: int, what: str = "") -> Signal:
@@ -117,7 +119,8 @@ class ResidualTest:
 
     @staticmethod
     def _channel_alpha(alpha: float, k: int, correction: str | None) -> float:
-        """Per-channel risk: ``alpha`` (None), ``alpha / k`` (Bonferroni) or ``1 - (1 - alpha)^(1/k)`` (Sidak)."""
+        """Per-channel risk: ``alpha`` (``"none"``, or a test without ``correction``), ``alpha / k`` (Bonferroni) or
+        ``1 - (1 - alpha)^(1/k)`` (Sidak)."""
         if correction == "bonferroni":
             return alpha / k
         if correction == "sidak":
@@ -233,8 +236,8 @@ class CalibratedTest(ResidualTest):
         distribution -- for the Ljung-Box test :math:`\chi^2_{1-\alpha}(r - \text{model\_df})` and
         :math:`P(\chi^2(r - \text{model\_df}) > Q)` (Dutta et al., paper 003, eqs. 13-14); for the F test
         :math:`f_{1-\alpha}(N_u, N_0 - d)` and :math:`P(\mathcal F(N_u, N_0 - d) > F)` (eqs. 9-10, one-sided;
-        the two-sided rule is in :meth:`decision`). ``alpha`` is the type I risk per tested window and channel
-        (``alpha / k`` with ``correction="bonferroni"``).
+        the two-sided rule is in :meth:`decision`), at each channel's share of ``alpha`` (``correction``: Sidak
+        :math:`1 - (1 - \alpha)^{1/k}` by default, ``alpha / k`` with ``"bonferroni"``, ``alpha`` with ``"none"``).
 
         ``threshold="empirical"``: the calibrated ``threshold_`` and the empirical p-value
         :math:`p = (1 + \#\{s_i \ge s\}) / (n + 1)` of the calibration sample (:meth:`calibrate`; Hansen et
@@ -382,8 +385,8 @@ class CalibratedTest(ResidualTest):
         Windows ``step`` apart overlap when ``step < window``: they are dependent, which leaves the moments and
         quantiles consistent but does not add information, so the support checks count the non-overlapping
         windows (``floor(len / window)`` per record). The signal-level decision "some channel rejects" has size
-        ``Decision.details["family_alpha"]`` (:meth:`family_alpha`); ``correction="bonferroni"`` or ``"sidak"``
-        make it at most ``alpha``.
+        ``Decision.details["family_alpha"]`` (:meth:`family_alpha`); ``correction="sidak"`` (the default) or
+        ``"bonferroni"`` make it at most ``alpha``, ``"none"`` up to ``1 - (1 - alpha)^k``.
         """
         if getattr(self, "alternative", "greater") != "greater":
             raise ValueError("calibrate needs alternative='greater': the calibrated threshold is one upper quantile")

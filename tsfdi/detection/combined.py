@@ -48,9 +48,9 @@ class AnyOf(ResidualTest):
 
     Notes
     -----
-    ``alpha`` is the false-alarm rate of the decision in the sense of the parts: a multi-channel decision is
-    tested per channel, each channel at ``alpha``, unless the parts have ``correction=`` (then the decision over the
-    channels, any channel of any part rejecting, is at ``alpha``); :attr:`alpha` is shared over the parts either way.
+    ``alpha`` is the false-alarm rate of the decision in the sense of the parts: with the parts' default
+    ``correction="sidak"`` the decision over the channels (any channel of any part rejecting) is at ``alpha``; with
+    ``correction="none"`` each channel is at ``alpha``; :attr:`alpha` is shared over the parts either way.
 
     Channel ``c`` of the combined :class:`~tsfdi.Decision` has the statistic :math:`-2 \ln \min_i p_{i,c}` (the
     smallest p-value of the parts at that channel), the p-value :math:`1 - (1 - \min_i p_{i,c})^m` (Sidak),

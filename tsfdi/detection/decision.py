@@ -9,8 +9,9 @@ for the whole signal.
 Combining channels (Dutta et al., Vector residual based FDI): the signal is accepted (healthy, or "this
 model fits") only when **every** channel accepts; it is rejected when any channel rejects. With ``alpha`` used
 per channel the family-wise false-alarm rate of ``k`` independent channels is ``1 - (1 - alpha)**k`` (at most
-``k * alpha``). The tests offer ``correction="bonferroni"``, which tests every channel at ``alpha / k`` so that the
-signal-level false-alarm rate is at most ``alpha``; the default (``None``) is the paper's use.
+``k * alpha``). The windowed tests therefore share ``alpha`` by default (``correction="sidak"``: every channel at
+``1 - (1 - alpha)**(1/k)``; ``"bonferroni"``: ``alpha / k``), so that the signal-level false-alarm rate is at most
+``alpha``; ``correction="none"`` tests every channel at ``alpha``, the paper's use.
 """
 
 from __future__ import annotations
@@ -123,13 +124,17 @@ class Decision:
 
     @property
     def signal_pvalue(self) -> float:
-        """p-value of the signal-level decision: the smallest channel p-value (Bonferroni-adjusted,
-        ``min(1, k * p)``, when the test used ``correction="bonferroni"``); ``nan`` if the test has none."""
+        """p-value of the signal-level decision: the smallest channel p-value, adjusted by the test's correction over
+        the ``k`` channels (Sidak ``1 - (1 - p)^k``, Bonferroni ``min(1, k * p)``), so that it is below ``alpha``
+        when the signal rejects; ``nan`` if the test has none."""
         if np.all(np.isnan(self.pvalue)):
             return float("nan")
         p = float(np.nanmin(self.pvalue))
+        k = len(self.channels) or self.pvalue.shape[0]
         if self.details.get("correction") == "bonferroni":
-            p = min(1.0, p * len(self.channels))
+            p = min(1.0, p * k)
+        elif self.details.get("correction") == "sidak":
+            p = float(-np.expm1(k * np.log1p(-p))) if p < 1.0 else 1.0
         return p
 
     @property

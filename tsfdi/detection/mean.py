@@ -21,13 +21,15 @@ class MeanTest(ReferenceVarianceTest):
     Parameters
     ----------
     alpha : float
-        Type I risk per tested window (per channel), in (0, 1).
-        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is per channel unless
-        ``correction=`` is given: ``correction="sidak"`` or ``"bonferroni"`` makes the decision's false-alarm rate
-        at most ``alpha``; without it, ``k`` channels give up to ``1 - (1 - alpha)^k``.
-    correction : {None, "bonferroni", "sidak"}
-        For vector residuals, test each of the ``k`` channels at ``alpha / k`` (Bonferroni) or
-        :math:`1 - (1 - \alpha)^{1/k}` (Sidak), so that "some channel rejects" has size at most ``alpha``.
+        Type I risk per tested window, in (0, 1).
+        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is the decision's false-alarm
+        rate unless ``correction="none"``: by default (``"sidak"``) each of ``k`` channels is tested at
+        ``1 - (1 - alpha)^(1/k)``; ``correction="none"`` tests each at ``alpha`` (paper 003), up to
+        ``1 - (1 - alpha)^k`` for the decision.
+    correction : {"sidak", "bonferroni", "none"}
+        For vector residuals, test each of the ``k`` channels at :math:`1 - (1 - \alpha)^{1/k}` (``"sidak"``,
+        default) or ``alpha / k`` (``"bonferroni"``), so that "some channel rejects" has size at most ``alpha``;
+        ``"none"``: ``alpha`` per channel.
     threshold : {"theoretical", "calibrated", "empirical"} or an estimator
         ``"theoretical"``: the :math:`\chi^2(1)` quantile below (iid Gaussian residuals, exact baseline
         variance). ``"calibrated"`` / ``"empirical"``: set by :meth:`calibrate` from held-out residuals of
@@ -67,7 +69,7 @@ class MeanTest(ReferenceVarianceTest):
     null_hypothesis = "residual mean is zero over the window (healthy / model fits)"
     alternative_hypothesis = "residual mean is not zero over the window (fault / model does not fit)"
 
-    def __init__(self, alpha: float = 0.05, *, correction: str | None = None, threshold: Any = "theoretical") -> None:
+    def __init__(self, alpha: float = 0.05, *, correction: str = "sidak", threshold: Any = "theoretical") -> None:
         self.alpha = self._check_alpha(alpha)
         self.correction = self._check_correction(correction)
         self.threshold = self._threshold_option(threshold)

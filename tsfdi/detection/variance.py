@@ -21,11 +21,12 @@ class FTest(ReferenceVarianceTest):
     Parameters
     ----------
     alpha : float
-        Type I (false alarm) risk, in (0, 1): the type I risk per tested window (per channel). Over many
-        windows of a healthy record about ``alpha`` of them reject in each channel.
-        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is per channel unless
-        ``correction=`` is given: ``correction="sidak"`` or ``"bonferroni"`` makes the decision's false-alarm rate
-        at most ``alpha``; without it, ``k`` channels give up to ``1 - (1 - alpha)^k``.
+        Type I (false alarm) risk, in (0, 1), per tested window. Over many windows of a healthy record about
+        ``alpha`` of them reject.
+        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is the decision's false-alarm
+        rate unless ``correction="none"``: by default (``"sidak"``) each of ``k`` channels is tested at
+        ``1 - (1 - alpha)^(1/k)``; ``correction="none"`` tests each at ``alpha`` (paper 003), up to
+        ``1 - (1 - alpha)^k`` for the decision.
     alternative : {"greater", "two-sided"}
         ``"greater"`` (the paper): H1 is a variance *increase*, reject when
         :math:`F > f_{1-\alpha}(N_u, N_0 - d)`. ``"two-sided"``: reject when
@@ -34,9 +35,10 @@ class FTest(ReferenceVarianceTest):
         Subtract the mean of the current residual before estimating its variance; :math:`N_u` then becomes
         :math:`N_u - 1` (the paper's adjustment). The baseline's mean is accounted for by its ``d``
         (a fitted constant is one of the model's parameters), so its degrees of freedom are unchanged.
-    correction : {None, "bonferroni"}
-        For vector residuals, test each of the ``k`` channels at ``alpha / k`` so that the signal-level
-        false-alarm rate is at most ``alpha``. ``None`` (the paper) uses ``alpha`` per channel.
+    correction : {"sidak", "bonferroni", "none"}
+        For vector residuals, test each of the ``k`` channels at :math:`1 - (1 - \alpha)^{1/k}` (``"sidak"``,
+        default) or ``alpha / k`` (``"bonferroni"``) so that the signal-level false-alarm rate is at most
+        ``alpha``; ``"none"`` (the paper) uses ``alpha`` per channel.
     threshold : {"theoretical", "empirical"} or EmpiricalThreshold
         ``"theoretical"`` (the paper): the F quantile of eq. 10. ``"empirical"`` (``alternative="greater"`` only): the
         :math:`1-\alpha` quantile of the variance ratio on healthy (in-state) residual windows, estimated by
@@ -86,7 +88,7 @@ class FTest(ReferenceVarianceTest):
     name = "F test (residual variance)"
 
     def __init__(self, alpha: float = 0.05, *, alternative: str = "greater", demean: bool = False,
-                 correction: str | None = None, threshold: Any = "theoretical") -> None:
+                 correction: str = "sidak", threshold: Any = "theoretical") -> None:
         self.alpha = self._check_alpha(alpha)
         self.alternative = option(alternative, "alternative", ("greater", "two-sided"))
         if not isinstance(demean, (bool, np.bool_)):
@@ -168,7 +170,8 @@ class FTest(ReferenceVarianceTest):
         -------
         ndarray, shape (k,)
             :math:`f_{1-\alpha}(N_u, N_0 - d)`, the :math:`1 - \alpha` quantile of the F law of the variance
-            ratio (eq. 9); ``alpha`` is the type I risk per tested window (per channel). H0 is accepted when
+            ratio (eq. 9); :math:`\alpha` is each channel's risk per tested window (``alpha`` shared by the
+            ``k`` channels by ``correction``). H0 is accepted when
             :math:`F \le f_{1-\alpha}(N_u, N_0 - d)` (eq. 10). One-sided (``alternative="greater"``); the
             two-sided limits are in :meth:`decision`.
         """

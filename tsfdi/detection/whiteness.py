@@ -86,11 +86,12 @@ class LjungBox(CalibratedTest):
     lags : int
         Maximum lag :math:`r` of the normalised autocorrelations tested.
     alpha : float
-        Type I (false alarm) risk in (0, 1): the type I risk per tested window (per channel). Over many
-        windows of a healthy record about ``alpha`` of them reject in each channel.
-        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is per channel unless
-        ``correction=`` is given: ``correction="sidak"`` or ``"bonferroni"`` makes the decision's false-alarm rate
-        at most ``alpha``; without it, ``k`` channels give up to ``1 - (1 - alpha)^k``.
+        Type I (false alarm) risk in (0, 1), per tested window. Over many windows of a healthy record about
+        ``alpha`` of them reject.
+        For a multi-channel decision (it rejects when any channel rejects) ``alpha`` is the decision's false-alarm
+        rate unless ``correction="none"``: by default (``"sidak"``) each of ``k`` channels is tested at
+        ``1 - (1 - alpha)^(1/k)``; ``correction="none"`` tests each at ``alpha`` (paper 003), up to
+        ``1 - (1 - alpha)^k`` for the decision.
     model_df : int
         Degrees of freedom subtracted from ``lags`` (scalar) or ``s**2 * lags`` (multivariate). Use 0 (the
         default, the papers' use) for residuals of a baseline model driven by *new* data; use the number of
@@ -101,8 +102,10 @@ class LjungBox(CalibratedTest):
         multivariate portmanteau statistic over all auto- and cross-correlations (component ``"joint"``).
     demean : bool
         Subtract the sample mean before computing autocorrelations (as statsmodels ``acf`` does).
-    correction : {None, "bonferroni"}
-        Per-channel alpha ``alpha / k`` for vector residuals so the signal-level risk is at most ``alpha``.
+    correction : {"sidak", "bonferroni", "none"}
+        How ``alpha`` is shared by the ``k`` channels of vector residuals (per-channel tests): ``"sidak"``
+        (default) :math:`1 - (1 - \alpha)^{1/k}` each, ``"bonferroni"`` ``alpha / k`` each, so that the
+        signal-level risk is at most ``alpha``; ``"none"``: ``alpha`` per channel (paper 003).
     threshold : {"theoretical", "empirical"} or EmpiricalThreshold
         ``"theoretical"`` (the paper): the chi-square critical value
         :math:`\chi^2_{1-\alpha}(r - \text{model\_df})` and its p-value. ``"empirical"`` (or an
@@ -168,7 +171,7 @@ class LjungBox(CalibratedTest):
     alternative_hypothesis = "residuals are autocorrelated (fault / model does not fit)"
 
     def __init__(self, lags: int = 20, alpha: float = 0.05, model_df: int = 0, *, multivariate: str | None = None,
-                 demean: bool = True, correction: str | None = None, threshold: Any = "theoretical") -> None:
+                 demean: bool = True, correction: str = "sidak", threshold: Any = "theoretical") -> None:
         self.lags = int_like(lags, "lags", minimum=1)
         self.alpha = self._check_alpha(alpha)
         self.model_df = int_like(model_df, "model_df", minimum=0)
@@ -279,8 +282,8 @@ class LjungBox(CalibratedTest):
         -------
         ndarray, shape (k,)
             :math:`\chi^2_{1-\alpha}(r - \text{model\_df})`, the :math:`1 - \alpha` quantile of the
-            chi-square law of :math:`Q` (eq. 13) with :math:`r` = ``lags``; ``alpha`` is the type I risk per
-            tested window (per channel).
+            chi-square law of :math:`Q` (eq. 13) with :math:`r` = ``lags``; :math:`\alpha` is each channel's risk
+            per tested window (``alpha`` shared by the ``k`` channels by ``correction``).
 
         Notes
         -----
