@@ -436,6 +436,24 @@ def fmt(m):
     return f"{mt} {m['UD']:>2} {m['FA']:5.2f}"
 
 
+def print_summary(results, n_faults):
+    """Paper 004's Table 2 layout: per model and configuration, MT over the detected faults, UD of ``n_faults`` and
+    the mean FA, without and with padding, beside the paper's (also benchmarks/sensor_validation_sim.py)."""
+    print(f"\nSummary per configuration (Table 2 style: MT over detected faults, UD of {n_faults} faults, FA %)")
+    print(f"{'':<13} {'cfg':>3}  {'no padding':^18}  {'with padding':^18}   paper no pad / pad")
+    for name in MODELS:
+        for cfg in CONFIGS:
+            cells = []
+            for padding in (False, True):
+                rs = results[(padding, cfg, name)]
+                ud, mt = total(rs)
+                fa = float(np.mean([r["FA"] for r in rs.values()]))
+                cells.append(f"{mt if np.isfinite(mt) else np.nan:5.2f} {ud:>3} {fa:5.2f}")
+            (pm0, pu0, pf0), (pm1, pu1, pf1) = PAPER_TABLE2[cfg]
+            print(f"{name:<13} {cfg:>3}  {cells[0]:^18}  {cells[1]:^18}   {pm0:.2f} {pu0} {pf0:.2f} / "
+                  f"{pm1:.2f} {pu1} {pf1:.2f}")
+
+
 def protocol(title, inputs, paper_emran, fit, calibration, held, sigma0, sensor_range):
     """Choices on the calibration flights, thresholds, results on the held-out flights; printed."""
     print(f"\n######## {title}")
@@ -470,19 +488,7 @@ def protocol(title, inputs, paper_emran, fit, calibration, held, sigma0, sensor_
             f"cfg {c} " + "/".join(f"{thresholds[(padding, c, n)]:.3g}" for n in MODELS) for c in CONFIGS)
             + "  (EMRAN/RecursiveARX/ARX)")
 
-    print(f"\nSummary per configuration (Table 2 style: MT over detected faults, UD of {6 * len(held)} faults, FA %)")
-    print(f"{'':<13} {'cfg':>3}  {'no padding':^18}  {'with padding':^18}   paper no pad / pad")
-    for name in MODELS:
-        for cfg in CONFIGS:
-            cells = []
-            for padding in (False, True):
-                rs = results[(padding, cfg, name)]
-                ud, mt = total(rs)
-                fa = float(np.mean([r["FA"] for r in rs.values()]))
-                cells.append(f"{mt if np.isfinite(mt) else np.nan:5.2f} {ud:>3} {fa:5.2f}")
-            (pm0, pu0, pf0), (pm1, pu1, pf1) = PAPER_TABLE2[cfg]
-            print(f"{name:<13} {cfg:>3}  {cells[0]:^18}  {cells[1]:^18}   {pm0:.2f} {pu0} {pf0:.2f} / "
-                  f"{pm1:.2f} {pu1} {pf1:.2f}")
+    print_summary(results, 6 * len(held))
 
     print("\nIssue 20 targets (best model, with padding, all 18 scenarios): FA 0 %, UD 0, MT <= 1.3 s")
     for name in MODELS:

@@ -123,6 +123,11 @@ from tsfdi.datasets.sensors import SensorSuite, sensor_log  # noqa: E402
 from tsfdi.detection.moving import MovingSquaredError  # noqa: E402
 from tsfdi.evaluation import sensor_validation_metrics  # noqa: E402
 from tsfdi.models import ARX, EMRAN, RecursiveARX  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import alfa_sensor_validation as alfa  # noqa: E402  (the faults, configurations, paper tables and report of paper 004)
+from alfa_sensor_validation import (CONFIGS, FAULTS, MODELS, PAPER_TABLE3, fmt, print_summary,  # noqa: E402
+                                    total)
 from tsfdi.study import evaluation_seed  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -132,15 +137,12 @@ N_FIT, N_CAL, N_EVAL = 6, 12, 6
 DURATION, FS, IMU_RATE = 60.0, 100.0, 500.0
 SPEED = (2.0, 10.0)
 FAULT_S, ARM_S = 45.0, 10.0
-FAULTS = [("hard", 0.20), ("hard", 0.05), ("soft", 0.20), ("soft", 0.05), ("bias", 0.20), ("bias", 0.05)]
-CONFIGS = {1: 1.0, 2: 2.0, 3: 10.0}          # sensor-noise std in units of the measured one
 WINDOWS = (10, 25, 50, 100)                 # samples of eq. 6 at 100 Hz
 MARGINS = (1.0, 1.25, 1.5, 2.0, 3.0)
 LAGS = {"0-0.2 s (6 lags)": (0, 1, 2, 5, 10, 20), "0-0.3 s (9 lags)": (0, 1, 2, 3, 5, 8, 12, 20, 30)}
 EPOCHS = 3
 PRE_ALARM, HOLD_S = 4.0, 4.0                # pre-alarm level (x the mean healthy statistic), longest halt (s)
 EMRAN_OPTIONS = dict(error_threshold=0.3, rms_threshold=0.15, measurement_noise=1.0)
-MODELS = ["EMRAN", "RecursiveARX", "ARX"]
 VARIANTS = {"EMRAN": {"EKF": None, "eq. 5, rate 1e-3": 1e-3, "frozen": 0.0},
             "RecursiveARX": {"forgetting 0.999": (0.999, False), "forgetting 0.9999": (0.9999, False),
                              "forgetting 1": (1.0, False), "forgetting 0.999, halted on pre-alarm": (0.999, True)},
@@ -157,11 +159,6 @@ TARGETS = {
         "thrust + GPS": ["thrust", "gps.vd", "accel.ax"],
         "motors + GPS": MOTORS + ["gps.vd", "accel.ax"]}),
 }
-#: paper 004, Table 3 (with padding) and Table 2 ((MT, UD, FA) without / with padding) per configuration
-PAPER_TABLE3 = {1: [1.17, 1.42, 1.52, 1.70, 1.00, 1.00], 2: [1.20, 1.42, 1.58, 1.71, 1.00, 1.00],
-                3: [1.36, 1.58, 2.06, 2.18, 1.00, 1.00]}
-PAPER_TABLE2 = {1: ((0.72, 2, 0.10), (1.30, 0, 0.0)), 2: ((0.77, 2, 0.09), (1.32, 0, 0.0)),
-                3: ((0.79, 2, 0.14), (1.53, 0, 0.0))}
 
 
 # ------------------------------------------------------------------------------------------------------ data
@@ -377,17 +374,6 @@ class Scenarios:
         return out
 
 
-def total(metrics):
-    """(undetected faults, mean MT over the detected ones) of a metrics dict."""
-    mts = [m["MT"] for m in metrics.values() if np.isfinite(m["MT"])]
-    return sum(m["UD"] for m in metrics.values()), float(np.mean(mts)) if mts else np.inf
-
-
-def fmt(m):
-    mt = "  -  " if np.isnan(m["MT"]) else f"{m['MT']:5.2f}"
-    return f"{mt} {m['UD']:>2} {m['FA']:5.2f}"
-
-
 # ---------------------------------------------------------------------------------------------------- report
 def run_target(target, fit, cal, ev):
     print(f"\n######## {target}")
@@ -458,19 +444,7 @@ def run_target(target, fit, cal, ev):
         print(f"thresholds {'with' if padding else 'without'} padding (({unit})^2, margin): " + "; ".join(
             f"cfg {c} " + "/".join(f"{thresholds[(padding, c, n)][0]:.3g} x{thresholds[(padding, c, n)][1]:g}"
                                    for n in MODELS) for c in CONFIGS) + "  (EMRAN/RecursiveARX/ARX)")
-    print(f"\nSummary per configuration (Table 2 style: MT over detected faults, UD of {6 * len(ev)} faults, FA %)")
-    print(f"{'':<13} {'cfg':>3}  {'no padding':^18}  {'with padding':^18}   paper no pad / pad")
-    for name in MODELS:
-        for cfg in CONFIGS:
-            cells = []
-            for padding in (False, True):
-                rs = results[(padding, cfg, name)]
-                ud, mt = total(rs)
-                fa = float(np.mean([r["FA"] for r in rs.values()]))
-                cells.append(f"{mt if np.isfinite(mt) else np.nan:5.2f} {ud:>3} {fa:5.2f}")
-            (pm0, pu0, pf0), (pm1, pu1, pf1) = PAPER_TABLE2[cfg]
-            print(f"{name:<13} {cfg:>3}  {cells[0]:^18}  {cells[1]:^18}   {pm0:.2f} {pu0} {pf0:.2f} / "
-                  f"{pm1:.2f} {pu1} {pf1:.2f}")
+    print_summary(results, 6 * len(ev))
     return st, results, (best, figdata[best])
 
 
@@ -487,9 +461,6 @@ def acceptance(results, n_eval):
 
 def alfa_row():
     """The best model of alfa_sensor_validation.py's protocol 2 on held-out ALFA flights (its output kept quiet)."""
-    sys.path.insert(0, str(HERE))
-    import alfa_sensor_validation as alfa
-
     fit, calibration, held, _ = alfa.setup()
     allq = pd.concat(fit)["q"]
     sensor_range = float(allq.max() - allq.min())
