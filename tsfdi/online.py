@@ -948,19 +948,7 @@ class OnlineDetector:
         s_parts: list = []
         g_parts: list = []
         hours = 0.0
-        for i, (y, u) in enumerate(zip(ys, us)):
-            try:
-                with warnings.catch_warnings(record=True) as caught:
-                    warnings.simplefilter("always", ConvergenceWarning)
-                    out = self._alarm_free_copy().run(y, u)
-            except (ValueError, TypeError) as err:
-                raise type(err)(f"healthy run {i}: {err}") from err
-            for w in caught:
-                warnings.warn(f"healthy run {i}: {w.message}", w.category, stacklevel=2)
-            f = fs if fs is not None else out.fs
-            if f is None:
-                raise ValueError(f"fs (sampling frequency in Hz) is needed: healthy run {i} carries no time index")
-            n = out.alarm.shape[0]
+        for i, _, out, n, f in self._healthy_runs(ys, us, fs, stacklevel=3):
             hours += n / f / _SECONDS_PER_HOUR
             live = (np.arange(n) >= self.arm_after)[:, None]
             stat = np.asarray(out.statistic, dtype=float).reshape(n, -1)
@@ -1065,9 +1053,10 @@ class OnlineDetector:
         self.reset()
         return self
 
-    def _calibrate_sprt(self, ys: list, us: list, rate: float, fs: float | None) -> OnlineDetector:
-        """:meth:`calibrate` of ``statistic="sprt"`` (see its Notes)."""
-        records, hours = [], 0.0
+    def _healthy_runs(self, ys: list, us: list, fs: float | None, *, stacklevel: int):
+        """Each healthy run through a copy of the detector that never freezes: ``(i, copy, detection, samples,
+        sampling frequency)``; its errors and warnings name the run (warnings at ``stacklevel`` from here: the user's
+        call), and a run without a time index needs ``fs``."""
         for i, (y, u) in enumerate(zip(ys, us)):
             free = self._alarm_free_copy()
             try:
@@ -1077,11 +1066,17 @@ class OnlineDetector:
             except (ValueError, TypeError) as err:
                 raise type(err)(f"healthy run {i}: {err}") from err
             for w in caught:
-                warnings.warn(f"healthy run {i}: {w.message}", w.category, stacklevel=3)
+                warnings.warn(f"healthy run {i}: {w.message}", w.category, stacklevel=stacklevel)
             f = fs if fs is not None else out.fs
             if f is None:
                 raise ValueError(f"fs (sampling frequency in Hz) is needed: healthy run {i} carries no time index")
             n = out.alarm.shape[0]
+            yield i, free, out, n, f
+
+    def _calibrate_sprt(self, ys: list, us: list, rate: float, fs: float | None) -> OnlineDetector:
+        """:meth:`calibrate` of ``statistic="sprt"`` (see its Notes)."""
+        records, hours = [], 0.0
+        for i, free, out, n, f in self._healthy_runs(ys, us, fs, stacklevel=4):
             hours += n / f / _SECONDS_PER_HOUR
             resid = np.asarray(out.resid, dtype=float).reshape(n, -1)
             for c, walk in enumerate(free._walks):
