@@ -606,8 +606,9 @@ def choices_table(seed: int, paper_orders: dict, cal_orders: dict, selected: dic
         ("improved decision rule at 5 s", f"{chosen[None][0]} ({chosen[None][1]} method)", dev,
          "best lowest-rotor correct rate of the VAR at 5 s"),
         ("window lengths", "5, 10, 20 s, 1 s apart", "paper 003 (20 s), issue 6's targets (5 s)", ""),
-        ("calibrated thresholds", "scaled chi-square per record, 90 % bootstrap bound (`ScaledChi2Threshold`) or "
-         "empirical quantile, leave one record out", fit, "'Calibrated thresholds'"),
+        ("calibrated thresholds", "scaled chi-square per record, a new record's threshold under the t predictive "
+         "law of the records' spread (`ScaledChi2Threshold`, record_effect='predictive') or empirical quantile, "
+         "leave one record out", fit, "'Calibrated thresholds'"),
         ("steady-state variance thresholds", "largest 10 s rolling variance from 10 s after the failure", fit, ""),
         ("aircraft comparison", "default against `BIDIRECTIONAL_HEXACOPTER`", f"evaluation seed {seed}",
          "for information only: nothing is chosen from it"),
@@ -767,7 +768,8 @@ development records of each state and level, pooled (30 per state); the VAR orde
 (VAR({'/'.join(sorted({str(v) for v in cal_orders.values()}))}), the search bound being 20); Ljung-Box with 20
 lags at alpha = 1e-3 per channel. "calibrated": every model's thresholds are fitted to its own held-out fitting
 records (each record through the model fitted on the other 29, `held_out_residuals`; a scaled chi-square law per
-record, mixed, with a 90 % bootstrap bound over records: `tsfdi.ScaledChi2Threshold`); "theoretical": chi2(20).
+record, and a new record's threshold under the t predictive law of the records' spread:
+`tsfdi.ScaledChi2Threshold`); "theoretical": chi2(20).
 The alpha is the paper's; the 20 lags and the 10 fitting records per state and level were compared on the
 development records (sections below); the order and the thresholds come from the fitting records. Correct unique
 identification (percent of windows), development and evaluation records:
