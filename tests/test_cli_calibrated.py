@@ -270,3 +270,27 @@ def test_px4_rows_where(shared_px4, tmp_path, capsys):
     records = int(fitted["all"].split(" record(s)")[0].split()[-1])
     rows = [int(fitted[k].split("(")[-1].split(" samples")[0]) for k in ("all", "margin")]
     assert rows[0] - rows[1] == records * 2 * 50               # 1 s at 50 Hz off both ends of every record
+
+
+def test_detect_warns_when_the_baseline_does_not_cover_a_record(tmp_path, capsys):
+    """A baseline fitted on several records (>= tsfdi.coverage.MIN_RECORDS): detect warns, naming the file and the
+    baseline, about a record outside their spread (here three times the noise), and is silent about one like them;
+    a baseline of one record cannot say and says nothing."""
+    rng = np.random.default_rng(21)
+    fits = []
+    for i in range(5):
+        _csv(record("healthy", 3000, rng), tmp_path / f"h{i}.csv")
+        fits.append(str(tmp_path / f"h{i}.csv"))
+    assert main(["fit", *fits, "--out", str(tmp_path / "base.npz"), "--max-lags", "4"]) == 0
+    _csv(record("healthy", 3000, rng), tmp_path / "like.csv")
+    _csv(3.0 * record("healthy", 3000, rng), tmp_path / "noisy.csv")
+    capsys.readouterr()
+    assert main(["detect", str(tmp_path / "like.csv"), str(tmp_path / "noisy.csv"), "--baseline",
+                 str(tmp_path / "base.npz")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning:") == 1 and "noisy.csv" in err and "like.csv" not in err
+    assert f"against --baseline {tmp_path / 'base.npz'}" in err and "outside the spread" in err
+    assert main(["fit", fits[0], "--out", str(tmp_path / "one.npz"), "--max-lags", "4"]) == 0
+    capsys.readouterr()
+    assert main(["detect", str(tmp_path / "noisy.csv"), "--baseline", str(tmp_path / "one.npz")]) == 0
+    assert "outside the spread" not in capsys.readouterr().err

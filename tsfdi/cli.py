@@ -623,6 +623,7 @@ def _detect(args: argparse.Namespace) -> int:
     baseline = _load("--baseline", args.baseline, args.baseline)
     data = _read(args, _channels(baseline))
     _check_channels(data, {f"--baseline {args.baseline}": baseline})
+    _warn_uncovered(args.baseline, baseline, data)
     rows = []
     if args.window is None:
         test = _tests(args, {}, None)
@@ -648,6 +649,27 @@ def _detect(args: argparse.Namespace) -> int:
     print(f"fault in {n} of {len(table)} {'window' if args.window is not None else 'record'}(s)")
     _write("--out", table, args.out)
     return 0
+
+
+def _warn_uncovered(path: str, baseline: Any, data: _Data) -> None:
+    """A warning per record of ``data`` that the records ``baseline`` was fitted on do not cover
+    (:func:`tsfdi.coverage.coverage` at its default rate), when they are enough to say (an AR / VAR fitted on at least
+    :data:`~tsfdi.coverage.MIN_RECORDS` records): its decisions are then out of the baseline's domain."""
+    from tsfdi.coverage import MIN_RECORDS, coverage, warn_if_not_covered
+    from tsfdi.exceptions import CoverageWarning
+    from tsfdi.models import ARResults, VARResults
+
+    if not isinstance(baseline, (ARResults, VARResults)) or len(baseline.model.records) < MIN_RECORDS:
+        return
+    held = baseline.model.held_out_residuals()
+    for i, frame in enumerate(data.frames):
+        where = f"{data.rec.origin(i)} against --baseline {path}"
+        try:
+            cov = coverage(baseline, frame, held_out=held)
+        except ValueError as exc:         # e.g. a record too short for its summaries: the test itself may still run
+            warnings.warn(f"{where}: coverage not checked: {exc}", CoverageWarning, stacklevel=2)
+            continue
+        warn_if_not_covered(cov, where)
 
 
 def _detect_rows(data: _Data, frame: pd.DataFrame, starts: Any, W: int, channels: Any, stat: Any, thr: Any,
