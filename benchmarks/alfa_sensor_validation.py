@@ -436,6 +436,19 @@ def fmt(m):
     return f"{mt} {m['UD']:>2} {m['FA']:5.2f}"
 
 
+def print_scenarios(results, flights, n_flights):
+    """Paper 004's Table 3 layout: per configuration and fault, MT / UD / FA of every model with padding, the
+    paper's MT beside (also benchmarks/sensor_validation_sim.py)."""
+    print(f"\n{flights} flights, with padding (padding = window): MT (s) / UD (of {n_flights}) / FA (%) per "
+          "scenario; paper 004 Table 3 MT beside")
+    print(f"{'cfg':>3} {'fault':<9}" + "".join(f" {n:^16}" for n in MODELS) + "  paper MT")
+    for cfg in CONFIGS:
+        for j, fault in enumerate(FAULTS):
+            line = f"{cfg:>3} {fault[0] + f' {fault[1]:.0%}':<9}"
+            line += "".join(f" {fmt(results[(True, cfg, n)][fault]):>16}" for n in MODELS)
+            print(line + f"  {PAPER_TABLE3[cfg][j]:8.2f}")
+
+
 def print_summary(results, n_faults):
     """Paper 004's Table 2 layout: per model and configuration, MT over the detected faults, UD of ``n_faults`` and
     the mean FA, without and with padding, beside the paper's (also benchmarks/sensor_validation_sim.py)."""
@@ -475,14 +488,7 @@ def protocol(title, inputs, paper_emran, fit, calibration, held, sigma0, sensor_
                 thresholds[(padding > 0, cfg, name)] = thr
                 results[(padding > 0, cfg, name)] = test.metrics(w, padding, thr)
 
-    print(f"\nHeld-out flights, with padding (padding = window): MT (s) / UD (of {len(held)}) / FA (%) per scenario; "
-          "paper 004 Table 3 MT beside")
-    print(f"{'cfg':>3} {'fault':<9}" + "".join(f" {n:^16}" for n in MODELS) + "  paper MT")
-    for cfg in CONFIGS:
-        for j, fault in enumerate(FAULTS):
-            line = f"{cfg:>3} {fault[0] + f' {fault[1]:.0%}':<9}"
-            line += "".join(f" {fmt(results[(True, cfg, n)][fault]):>16}" for n in MODELS)
-            print(line + f"  {PAPER_TABLE3[cfg][j]:8.2f}")
+    print_scenarios(results, "Held-out", len(held))
     for padding in (False, True):
         print(f"thresholds {'with' if padding else 'without'} padding (rad^2/s^2): " + ", ".join(
             f"cfg {c} " + "/".join(f"{thresholds[(padding, c, n)]:.3g}" for n in MODELS) for c in CONFIGS)

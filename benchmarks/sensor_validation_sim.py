@@ -126,7 +126,7 @@ from tsfdi.models import ARX, EMRAN, RecursiveARX  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import alfa_sensor_validation as alfa  # noqa: E402  (the faults, configurations, paper tables and report of paper 004)
-from alfa_sensor_validation import (CONFIGS, FAULTS, MODELS, PAPER_TABLE3, fmt, print_summary,  # noqa: E402
+from alfa_sensor_validation import (CONFIGS, FAULTS, MODELS, print_scenarios, print_summary,  # noqa: E402
                                     total)
 from tsfdi.study import evaluation_seed  # noqa: E402
 
@@ -432,14 +432,7 @@ def run_target(target, fit, cal, ev):
                 figdata[name] = (calsc, w, thresholds[(False, 1, name)][0], thresholds[(True, 1, name)][0])
     best = min(MODELS, key=lambda n: total(results[(True, 1, n)]))
 
-    print(f"\nEvaluation flights, with padding (padding = window): MT (s) / UD (of {len(ev)}) / FA (%) per scenario; "
-          "paper 004 Table 3 MT beside")
-    print(f"{'cfg':>3} {'fault':<9}" + "".join(f" {n:^16}" for n in MODELS) + "  paper MT")
-    for cfg in CONFIGS:
-        for j, fault in enumerate(FAULTS):
-            line = f"{cfg:>3} {fault[0] + f' {fault[1]:.0%}':<9}"
-            line += "".join(f" {fmt(results[(True, cfg, n)][fault]):>16}" for n in MODELS)
-            print(line + f"  {PAPER_TABLE3[cfg][j]:8.2f}")
+    print_scenarios(results, "Evaluation", len(ev))
     for padding in (False, True):
         print(f"thresholds {'with' if padding else 'without'} padding (({unit})^2, margin): " + "; ".join(
             f"cfg {c} " + "/".join(f"{thresholds[(padding, c, n)][0]:.3g} x{thresholds[(padding, c, n)][1]:g}"
