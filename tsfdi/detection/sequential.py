@@ -77,6 +77,17 @@ def wald_bounds(alpha: float, beta: float) -> tuple[float, float]:
     return float(np.log(beta) - np.log1p(-alpha)), float(np.log1p(-beta) - np.log(alpha))
 
 
+def _freeze_arrays(result: Any, **ndmin: int) -> None:
+    """Replace each named array field of a frozen result (``None`` left alone) by a read-only float copy of at least
+    ``ndmin`` dimensions, so the result cannot be changed through it."""
+    for name, nd in ndmin.items():
+        value = getattr(result, name)
+        if value is not None:
+            a = np.array(value, dtype=np.float64, ndmin=nd)
+            a.flags.writeable = False
+            object.__setattr__(result, name, a)
+
+
 # ---------------------------------------------------------------------------------------------------- kernels
 @numba.njit(cache=True, nogil=True)
 def _sprt_paths(z, s0, lower, upper, restart):  # pragma: no cover - compiled
@@ -196,13 +207,7 @@ class SequentialDecision:
     details: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        s = np.array(self.statistic, dtype=np.float64, ndmin=1)
-        s.flags.writeable = False
-        object.__setattr__(self, "statistic", s)
-        if self.time is not None:
-            t = np.array(self.time, dtype=np.float64)
-            t.flags.writeable = False
-            object.__setattr__(self, "time", t)
+        _freeze_arrays(self, statistic=1, time=1)
 
     @property
     def test(self) -> str:
@@ -287,13 +292,7 @@ class SequentialIdentification:
     state: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        s = np.array(self.statistic, dtype=np.float64, ndmin=2)
-        s.flags.writeable = False
-        object.__setattr__(self, "statistic", s)
-        if self.state is not None:
-            w = np.array(self.state, dtype=np.float64)
-            w.flags.writeable = False
-            object.__setattr__(self, "state", w)
+        _freeze_arrays(self, statistic=2, time=1, state=2)
 
     @property
     def decided(self) -> bool:
