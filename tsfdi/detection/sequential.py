@@ -40,6 +40,7 @@ from scipy import linalg, optimize, special, stats
 
 from tsfdi._data import as_signal, sampling_frequency
 from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_like, option, probability
+from tsfdi.detection.base import per_channel
 from tsfdi.summary import Summary
 
 __all__ = ["SPRT", "RecordEffect", "SequentialDecision", "SequentialIdentification", "msprt", "msprt_scale",
@@ -353,14 +354,8 @@ def _covariance(sigma: Any, k: int, name: str) -> tuple[np.ndarray, np.ndarray |
                         f"{type(sigma).__name__}") from None
     if s.ndim == 2 and s.shape == (1, 1):
         s = s.reshape(1)
-    if s.ndim == 0:
-        s = np.full(k, float(s))
-    if s.ndim == 1:
-        if s.shape != (k,):
-            raise ValueError(f"{name} must have one variance per channel ({k}), got shape {s.shape}")
-        if not ((s > 0) & (s < np.inf)).all():
-            raise ValueError(f"{name} must be finite and > 0, got {s}")
-        return s, None
+    if s.ndim <= 1:
+        return per_channel(s, name, k), None
     if s.shape != (k, k):
         raise ValueError(f"{name} must be a ({k}, {k}) covariance matrix for {k} channel(s), got shape {s.shape}")
     if not np.isfinite(s).all() or not np.allclose(s, s.T, rtol=1e-10, atol=0.0):
