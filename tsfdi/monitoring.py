@@ -16,14 +16,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import numba
 import numpy as np
 import pandas as pd
 
 from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, option, probability
 from tsfdi.detection.base import ResidualTest
-from tsfdi.detection.sequential import SPRT, msprt
+from tsfdi.detection.sequential import SPRT, msprt, renewal_walk
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import ARXResults
 from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows
@@ -117,29 +116,6 @@ class MonitorResult:
         return (f"MonitorResult({what}, windows={len(self.windows)}, fault windows={faults}, events="
                 f"{len(self.events)}, detection_time={self.detection_time}, steady_time={self.steady_time}, "
                 f"label={self.label!r})")
-
-
-@numba.njit(cache=True, nogil=True)
-def _restart_sprt(z, s, start, lower, upper):  # pragma: no cover - compiled
-    """Wald's SPRT with restart from the statistic ``s`` whose cycle started at ``start`` (relative to ``z[0]``):
-    per sample the statistic before any restart, whether it alarms (reaches ``upper``) and where its cycle began; a
-    cycle ends, and the next starts at 0, at each crossing of ``lower`` (H0 accepted) or ``upper`` (alarm)."""
-    n = z.shape[0]
-    peak = np.empty(n)
-    alarm = np.zeros(n, dtype=np.bool_)
-    cycle = np.empty(n, dtype=np.int64)
-    for t in range(n):
-        s += z[t]
-        peak[t] = s
-        cycle[t] = start
-        if s >= upper:
-            alarm[t] = True
-            s = 0.0
-            start = t + 1
-        elif s <= lower:
-            s = 0.0
-            start = t + 1
-    return peak, alarm, cycle, s, start
 
 
 def _is_span(value: Any) -> bool:
@@ -559,7 +535,8 @@ class Monitor:
             e = np.asarray(self.baseline.residuals(self._record(seg)), dtype=np.float64).reshape(-1, self.nchan)
             z = self.detection_test.loglik_ratio(e, self._sigma)
             test = self.detection_test
-            p, al, cy, self._s, start = _restart_sprt(z, self._s, self._cycle - a, test.lower, test.upper)
+            p, al, cy, _, self._s, start = renewal_walk(z, test.lower, test.upper, state=self._s,
+                                                        start=self._cycle - a)
             peak[a - first:], alarm[a - first:], cycle[a - first:] = p, al, cy + a
             self._cycle = int(start) + a
         events: list = []

@@ -16,7 +16,6 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
-import numba
 import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
@@ -24,7 +23,7 @@ from scipy import optimize, special, stats
 from tsfdi._data import as_signal, check_paired, refuse_masked, sampling_frequency
 from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
-from tsfdi.detection.sequential import SPRT
+from tsfdi.detection.sequential import SPRT, renewal_walk
 from tsfdi.exceptions import ConvergenceWarning
 from tsfdi.models.lstsq import check_size
 from tsfdi.models.recursive import RecursiveARX
@@ -267,33 +266,9 @@ def _moving_average(x: np.ndarray, window: int) -> np.ndarray:
     return out
 
 
-@numba.njit(cache=True)
-def _restart_walk(z, s0, lower, upper):  # pragma: no cover - compiled
-    """Restarted SPRT walk over ``z`` from ``s0``: ``S += z``; an alarm where ``S >= upper`` and a restart at 0
-    after it or where ``S <= lower``. NaN samples leave ``S`` and the path NaN. Returns the path (the value
-    before a restart), the alarms, the state after the block and the number of lower crossings."""
-    n = z.shape[0]
-    path = np.full(n, np.nan)
-    alarm = np.zeros(n, dtype=np.bool_)
-    s = s0
-    cycles = 0
-    for i in range(n):
-        if not np.isfinite(z[i]):
-            continue
-        s += z[i]
-        path[i] = s
-        if s >= upper:
-            alarm[i] = True
-            s = 0.0
-        elif s <= lower:
-            s = 0.0
-            cycles += 1
-    return path, alarm, s, cycles
-
-
 def _cycle_maxima(z: np.ndarray, lower: float) -> np.ndarray:
     """Maxima of the complete cycles of the walk of ``z`` restarted at ``lower`` (no upper bound)."""
-    path = _restart_walk(z, 0.0, lower, _HUGE)[0]
+    path = renewal_walk(z, lower, _HUGE)[0]
     ends = np.flatnonzero(path <= lower)
     if not ends.size:
         return np.empty(0)
@@ -624,7 +599,7 @@ class OnlineDetector:
         ok = np.isfinite(w)
         if ok.any():
             z[lo:][ok] = self.sprt.loglik_ratio(w[ok], 1.0)
-        path, alarm, s, cycles = _restart_walk(z, walk[2], self.sprt.lower, self.threshold)
+        path, alarm, _, cycles, s, _ = renewal_walk(z, self.sprt.lower, self.threshold, state=walk[2])
         alarm &= (start + np.arange(n)) >= self.arm_after
         if commit:
             if self._walks[c] is None:

@@ -386,3 +386,35 @@ def test_msprt_state_continues_a_stream_in_chunks():
         msprt(ll, state=np.zeros((3, 3)))
     with pytest.raises(ValueError, match=r"state must be the finite non-negative \(3, 3\)"):
         msprt(ll, restart=True, state=-np.ones((3, 3)))
+
+
+def test_renewal_walk_restarts_at_both_bounds_and_continues_in_chunks():
+    """renewal_walk: the statistic restarts at 0 at each crossing of either bound, alarms where it reaches the upper
+    one, skips non-finite samples, and a stream fed in chunks (state, start carried) walks as the whole record."""
+    rng = np.random.default_rng(14)
+    z = rng.normal(0.05, 1.0, 600)
+    z[[17, 300]] = np.nan
+    path, alarm, cycle, lowers, s, start = sequential.renewal_walk(z, -2.0, 3.0)
+    ref_s, ref_start, ref_low, ref_alarm = 0.0, 0, 0, []
+    for t, v in enumerate(z):                       # the rule, sample by sample
+        assert cycle[t] == ref_start
+        if not np.isfinite(v):
+            assert np.isnan(path[t])
+            continue
+        ref_s += v
+        assert path[t] == pytest.approx(ref_s)
+        if ref_s >= 3.0:
+            ref_alarm.append(t)
+            ref_s, ref_start = 0.0, t + 1
+        elif ref_s <= -2.0:
+            ref_s, ref_start, ref_low = 0.0, t + 1, ref_low + 1
+    assert list(np.flatnonzero(alarm)) == ref_alarm and ref_alarm and lowers == ref_low
+    assert (s, start) == (pytest.approx(ref_s), ref_start)
+    state, begin, got = 0.0, 0, []
+    for a, b in ((0, 250), (250, 251), (251, 600)):
+        p, al, cy, _, state, begin = sequential.renewal_walk(z[a:b], -2.0, 3.0, state=state, start=begin)
+        got.append((p, al, cy + a))
+        begin -= b - a
+    np.testing.assert_array_equal(np.concatenate([g[0] for g in got]), path)
+    np.testing.assert_array_equal(np.concatenate([g[1] for g in got]), alarm)
+    np.testing.assert_array_equal(np.concatenate([g[2] for g in got]), cycle)

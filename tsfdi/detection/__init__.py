@@ -7,7 +7,7 @@ from tsfdi.detection.glrt import GLRT, GLRTScan, GLRTStream, ParameterGLRT, glrt
 from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.moving import MovingSquaredError, MovingSquaredErrorStream
 from tsfdi.detection.sequential import (SPRT, RecordEffect, SequentialDecision, SequentialIdentification, msprt,
-                                       msprt_scale, record_effect, wald_bounds)
+                                       msprt_scale, record_effect, renewal_walk, wald_bounds)
 from tsfdi.detection.threshold import EmpiricalThreshold, ScaledChi2Threshold
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows, autocovariance, ljungbox_windows
@@ -16,4 +16,4 @@ from tsfdi.detection.zscore import ZScore
 __all__ = ["AnyOf", "Decision", "EmpiricalThreshold", "FTest", "GLRT", "GLRTScan", "GLRTStream", "LjungBox", "MeanTest",
            "LjungBoxWindows", "MovingSquaredError", "MovingSquaredErrorStream", "ParameterGLRT", "RecordEffect", "ResidualTest",
            "SPRT", "ScaledChi2Threshold", "SequentialDecision", "SequentialIdentification", "ZScore",
-           "autocovariance", "glrt_direct", "ljungbox_windows", "msprt", "msprt_scale", "record_effect", "wald_bounds"]
+           "autocovariance", "glrt_direct", "ljungbox_windows", "msprt", "msprt_scale", "record_effect", "renewal_walk", "wald_bounds"]

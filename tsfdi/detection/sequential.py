@@ -44,7 +44,7 @@ from tsfdi.detection.base import per_channel
 from tsfdi.summary import Summary
 
 __all__ = ["SPRT", "RecordEffect", "SequentialDecision", "SequentialIdentification", "msprt", "msprt_scale",
-           "record_effect", "wald_bounds"]
+           "record_effect", "renewal_walk", "wald_bounds"]
 
 _LOG2PI = float(np.log(2.0 * np.pi))
 
@@ -119,6 +119,57 @@ def _sprt_paths(z, s0, lower, upper, restart):  # pragma: no cover - compiled
                 s = 0.0
             path[i, t] = s
     return path, first, side, restarts
+
+
+@numba.njit(cache=True, nogil=True)
+def _renewal_kernel(z, s, start, lower, upper):  # pragma: no cover - compiled
+    n = z.shape[0]
+    path = np.full(n, np.nan)
+    alarm = np.zeros(n, dtype=np.bool_)
+    cycle = np.empty(n, dtype=np.int64)
+    lowers = 0
+    for t in range(n):
+        cycle[t] = start
+        if not np.isfinite(z[t]):
+            continue
+        s += z[t]
+        path[t] = s
+        if s >= upper:
+            alarm[t] = True
+            s = 0.0
+            start = t + 1
+        elif s <= lower:
+            s = 0.0
+            start = t + 1
+            lowers += 1
+    return path, alarm, cycle, lowers, s, start
+
+
+def renewal_walk(z: Any, lower: float, upper: float, *, state: float = 0.0, start: int = 0) -> tuple:
+    """Wald's SPRT run for monitoring: the statistic restarts at 0 at every crossing of either bound (``lower``:
+    H0 accepted; ``upper``: an alarm), so alarms form renewal cycles (the sequential ``Monitor``, the online
+    detector's ``statistic="sprt"``).
+
+    Parameters
+    ----------
+    z : ndarray, shape (n,)
+        Per-sample log-likelihood ratios; a non-finite sample is skipped (the statistic and its path left as they
+        are, NaN in the path).
+    lower, upper : float
+        The bounds (:func:`wald_bounds`; ``upper`` may be an alarm threshold of its own).
+    state, start : float, int
+        The statistic carried from earlier samples and where its cycle began, relative to ``z[0]`` (negative for a
+        cycle begun before): what the previous call returned, so a stream fed in chunks walks as the whole record.
+
+    Returns
+    -------
+    tuple
+        ``(path, alarm, cycle, lower_crossings, state, start)``: the statistic at each sample before any restart,
+        where it reaches ``upper``, where each sample's cycle began, the number of lower crossings, and the state
+        and cycle start after the block (relative to ``z[0]``).
+    """
+    return _renewal_kernel(np.ascontiguousarray(z, dtype=np.float64), float(state), int(start), float(lower),
+                           float(upper))
 
 
 @numba.njit(cache=True, nogil=True)
