@@ -279,6 +279,38 @@ def test_record_effect_law_estimates():
     assert "RecordEffect(models=3" in repr(law)
 
 
+def test_record_effect_keeps_the_named_summaries_only():
+    # raw signals as every model's "residuals": the trim of channel 1 and the scale of channel 0 carry the state,
+    # the other summaries are left out (their degrees of freedom kept for the spread); the law and its loglik are
+    # those of the kept summaries, in the order given
+    rng, held = record_law_data()
+    keep = ["mean[y1]", "log_scale[y0]"]
+    law = record_effect(held, block=20, summaries=keep)
+    ref = record_effect(held, block=20)
+    idx = [ref.summaries.index(s) for s in keep]
+    assert law.summaries == tuple(keep) and law.nchan == 2
+    assert np.allclose(law.center, ref.center[:, idx])
+    dev = np.vstack([np.array([np.r_[e.mean(axis=0), 0.5 * np.log(np.mean(e ** 2, axis=0))] for e in recs])[:, idx]
+                     for recs in held.values()])
+    dev = np.vstack([d - d.mean(axis=0) for d in np.split(dev, 3)])
+    assert np.allclose(law.between[0], dev.T @ dev / 15 * (1 + 1 / 6))
+    assert np.allclose(law.within, ref.within[:, idx][:, :, idx]) and np.allclose(law.df, 15 - 2 + 1)
+    resid = [rng.normal(0.1, 1.1, (300, 2)) for _ in range(3)]
+    ll = law.loglik(resid)
+    for j, e in enumerate(resid):
+        f = np.r_[e.mean(axis=0), 0.5 * np.log(np.mean(e ** 2, axis=0))][idx]
+        d = stats.multivariate_t(law.center[j], law.between[j] + law.within[j] / 300, df=law.df[j]).logpdf(f)
+        assert ll[:, j].sum() == pytest.approx(d, rel=1e-9)
+    # one summary: still a (1, 1) covariance
+    assert record_effect(held, block=20, summaries=["mean[y0]"]).within.shape == (3, 1, 1)
+    with pytest.raises(ValueError, match=r"summaries: 'mean\[y2\]' is not one of the 4 summaries"):
+        record_effect(held, block=20, summaries=["mean[y2]"])
+    with pytest.raises(ValueError, match="a name given twice"):
+        record_effect(held, block=20, summaries=["mean[y0]", "mean[y0]"])
+    with pytest.raises(TypeError, match="summaries"):
+        record_effect(held, block=20, summaries="mean[y0]")
+
+
 def test_record_effect_model_with_one_record():
     # a model (e.g. a condition on one airframe) with a single held-out record: its centre is that record's
     # summaries, its predictive covariance twice the spread pooled over the other models, which alone give the

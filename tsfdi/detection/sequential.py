@@ -1147,8 +1147,8 @@ class RecordEffect:
     models : tuple of str
         Candidate model names, in column order.
     center : ndarray, shape (M, q)
-        Mean of the record summaries of each model's residuals over its held-out records (``q = (2 + lags) k``,
-        named by ``summaries``).
+        Mean of the record summaries of each model's residuals over its held-out records (named by ``summaries``;
+        ``q = (2 + lags) k`` when every summary is kept).
     between : ndarray, shape (M, q, q)
         Covariance of a new record's summaries around ``center``: the between-record covariance pooled over the
         models, times :math:`1 + 1/R_j` (the uncertainty of the centre).
@@ -1162,9 +1162,12 @@ class RecordEffect:
     min_samples : int
         Samples in the first running summary used; the increments before it are 0.
     summaries : tuple of str
-        Names of the ``q`` summaries: ``"mean[yi]"``, ``"log_scale[yi]"`` and ``"acf<j>[yi]"`` per channel.
+        Names of the ``q`` summaries kept (all by default): ``"mean[yi]"``, ``"log_scale[yi]"`` and
+        ``"acf<j>[yi]"`` per channel ``i``.
     lags : int
         Residual autocorrelation lags among the summaries.
+    nchan : int, optional
+        Channels of the residual records (default: every summary kept, ``q / (2 + lags)``).
     """
 
     models: tuple
@@ -1176,6 +1179,7 @@ class RecordEffect:
     min_samples: int
     summaries: tuple
     lags: int = 0
+    nchan: int | None = None
 
     def __repr__(self) -> str:
         return (f"RecordEffect(models={len(self.models)}, summaries={len(self.summaries)}, records={self.records}, "
@@ -1230,7 +1234,8 @@ class RecordEffect:
         if isinstance(resid, (str, bytes)) or not isinstance(resid, (list, tuple)) or len(resid) != M:
             raise ValueError(f"resid must hold one residual array per model ({M}), got "
                              f"{len(resid) if isinstance(resid, (list, tuple)) else type(resid).__name__}")
-        k = self.center.shape[1] // (2 + self.lags)
+        k = self.center.shape[1] // (2 + self.lags) if self.nchan is None else self.nchan
+        keep = [_summary_names(k, self.lags).index(s) for s in self.summaries]
         arrs = []
         for j, r in enumerate(resid):
             v = as_signal(r, f"resid[{self.models[j]!r}]", allow_constant=True).values
@@ -1248,7 +1253,7 @@ class RecordEffect:
             q = self.center.shape[1]
             rows = max(1, MAX_VALUES // (8 * q * q))     # the (rows, q, q) covariances of one chunk stay bounded
             for j, e in enumerate(arrs):
-                f = _running_summaries(e, self.lags, t0) - self.center[j]
+                f = _running_summaries(e, self.lags, t0)[:, keep] - self.center[j]
                 nu = self.df[j]
                 const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
                 for a in range(0, f.shape[0], rows):
@@ -1264,8 +1269,13 @@ class RecordEffect:
         return np.diff(cum, axis=0, prepend=0.0)
 
 
-def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
-                  min_samples: int | None = None) -> RecordEffect:
+def _summary_names(k: int, lags: int) -> list:
+    """Names of the running summaries of :func:`_running_summaries`, in its column order."""
+    return [f"{s}[y{c}]" for s in ("mean", "log_scale", *(f"acf{j}" for j in range(1, lags + 1))) for c in range(k)]
+
+
+def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples: int | None = None,
+                  summaries: Any = None) -> RecordEffect:
     r"""Fit the between-record law of every candidate model's residual summaries, for sequential identification
     that survives record-to-record variation (:meth:`RecordEffect.loglik` into :func:`msprt`).
 
@@ -1285,6 +1295,12 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
         least 10 whole blocks per model are needed); much longer than the correlation time of the residuals.
     min_samples : int, optional
         Samples of the first running summary used (default ``block``).
+    summaries : sequence of str, optional
+        The summaries kept, by name (``"mean[y0]"``, ``"log_scale[y2]"``, ``"acf1[y1]"``, ...; channel ``yi`` is
+        column ``i`` of the records), in the order given; default all. Keep the ones that carry the state: e.g. of
+        raw signals (the same array given as every model's "residuals") the mean of a command (its trim) and the
+        log RMS of a band-passed gyro rate (a vibration band power), so that the degrees of freedom of the
+        between-record spread are not spent on summaries that do not vary between the states.
 
     Returns
     -------
@@ -1296,7 +1312,8 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
         ``held_out`` not a mapping of at least 2 models to lists of records.
     ValueError
         Records with different channel counts or too short; fewer than 10 blocks per model; non-finite summaries;
-        fewer degrees of freedom (records minus models) than summaries.
+        fewer degrees of freedom (records minus models) than summaries; a name in ``summaries`` not among the
+        record's summaries, or twice.
 
     Notes
     -----
@@ -1319,6 +1336,9 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
     lags = int_like(lags, "lags", minimum=0)
     block = int_like(block, "block", minimum=1)
     min_samples = block if min_samples is None else int_like(min_samples, "min_samples", minimum=2)
+    if summaries is not None and (isinstance(summaries, (str, bytes)) or not isinstance(summaries, (list, tuple))
+                                  or not summaries):
+        raise TypeError(f"summaries must be a non-empty list of summary names, got {summaries!r}")
     names = tuple(str(m) for m in held_out)
     k = None
     F, W, R = [], [], []
@@ -1328,7 +1348,16 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
         short = [i for i, e in enumerate(arrs) if e.shape[0] < lags + 2]
         if short:
             raise ValueError(f"held_out[{name!r}][{short[0]}] is shorter than lags + 2 = {lags + 2} samples")
-        f = np.array([_running_summaries(e, lags, e.shape[0] - 1)[0] for e in arrs])
+        if not F:                       # the first model's records fix the channels, hence the summaries' names
+            every = _summary_names(k, lags)
+            chosen = every if summaries is None else [str(s) for s in summaries]
+            unknown = [s for s in chosen if s not in every]
+            if unknown or len(set(chosen)) != len(chosen):
+                raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of "
+                                 f"the {len(every)} summaries of {k}-channel records with lags={lags}: "
+                                 f"{', '.join(every)}")
+            keep = [every.index(s) for s in chosen]
+        f = np.array([_running_summaries(e, lags, e.shape[0] - 1)[0] for e in arrs])[:, keep]
         if not np.isfinite(f).all():
             raise ValueError(f"held_out[{name!r}]: a record has a constant residual channel (its summaries are not "
                              "finite)")
@@ -1344,8 +1373,8 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
         if nb < 10:
             raise ValueError(f"held_out[{name!r}] holds {nb} blocks of {block} samples, at least 10 are needed to "
                              "estimate the within-record long-run variance; give longer records or a shorter block")
-        sums = z.reshape(nb, block, -1).sum(axis=1)
-        W.append(np.cov(sums.T) / block)
+        sums = z.reshape(nb, block, -1).sum(axis=1)[:, keep]
+        W.append(np.atleast_2d(np.cov(sums.T)) / block)
         F.append(f)
         R.append(len(arrs))
     R = np.array(R)
@@ -1354,7 +1383,7 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
     dof = int((R - 1).sum())
     if dof <= q:
         raise ValueError(f"held_out: {dof} degrees of freedom of the between-record spread (records minus models) "
-                         f"for {q} summaries: give more records or fewer lags")
+                         f"for {q} summaries: give more records, fewer lags or fewer summaries")
     S = dev.T @ dev / dof
     sd = np.sqrt(np.diag(S))
     if not (sd > 0).all() or np.linalg.eigvalsh(S / np.outer(sd, sd))[0] <= 1e-10:     # on the correlation scale
@@ -1362,9 +1391,6 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64,
                          "not vary, or vary together exactly, over the records): give more or more varied records")
     between = np.array([S * (1.0 + 1.0 / r) for r in R])
     df = np.full(len(R), float(dof - q + 1))
-    chans = [f"y{i}" for i in range(k)]
     return RecordEffect(models=names, center=np.array([f.mean(axis=0) for f in F]), between=between,
                         within=np.array(W), df=df, records=tuple(int(r) for r in R), min_samples=min_samples,
-                        summaries=tuple(f"{s}[{c}]" for s in ("mean", "log_scale", *(f"acf{j}" for j in
-                                                                                     range(1, lags + 1)))
-                                        for c in chans), lags=lags)
+                        summaries=tuple(chosen), lags=lags, nchan=k)
