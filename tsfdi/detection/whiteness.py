@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -412,11 +411,9 @@ class LjungBoxWindows:
 
     Notes
     -----
-    The lag products are summed in one pass per grid of samples on which the windows start and end (the greatest
-    common divisor of ``window`` and ``step``), and only the sums at the grid's samples are kept (``2 * lags``
-    values per channel and grid sample): the record's grid is kept when those sums number at most ``2**20`` over
-    all channels (8 MB), and serves every later call whose windows lie on it (5 / 10 / 20 s windows 1 s apart share
-    one); above, :meth:`statistic` recomputes them for each call, a block of windows at a time, in bounded memory.
+    The prefix sums of the lag products (``N * lags`` values per channel) are kept when the record holds at most
+    ``2**20`` of them over all channels (8 MB), in one array; a longer record keeps only the O(N) sums and
+    :meth:`statistic` recomputes the lag products for each call, a block of windows at a time, in bounded memory.
     The statistics are those of :func:`ljungbox_windows` (see its Notes).
 
     Examples
@@ -439,7 +436,10 @@ class LjungBoxWindows:
         # channels on axis 0: the record, its rescaled and centred copy with its prefix sums, the last change
         self._x = np.ascontiguousarray(x.T)
         self._sums = _record_sums(self._x, np.ldexp(1.0, -e), self.demean)
-        self._grid = None                     # (g, lag sums at every g-th sample) of the whole record, once kept
+        self._lagprod = None
+        if self.nobs * self.lags * x.shape[1] <= _KEEP_LAGPROD:
+            self._lagprod = _lag_prefix(self._sums[0], 0, self.nobs, self.lags,
+                                        np.empty((x.shape[1], self.nobs + 1, self.lags)))
 
     def statistic(self, window: int, step: int = 1) -> np.ndarray:
         """``Q`` of every window of ``window`` samples, ``step`` apart: shape (n_windows, k), as
@@ -451,26 +451,21 @@ class LjungBoxWindows:
         if window <= self.lags:
             raise ValueError(f"window must be > lags ({self.lags}), got {window}")
         starts = np.arange(0, self.nobs - window + 1, step, dtype=np.int64)
-        k, lags = self._x.shape[0], self.lags
-        g = math.gcd(window, step)            # every window starts and ends on this grid of samples
-        if self._grid is not None and g % self._grid[0] == 0:      # a finer grid kept by an earlier call serves
-            return _windows_q(self._x, *self._sums, *self._grid[1:], 0, self._grid[0], lags, window, starts,
-                              self.demean)
-        if 2 * k * lags * (self.nobs // g + 1) <= _KEEP_LAGPROD:
-            self._grid = (g, *_lag_grid(self._sums[0], 0, self.nobs, lags, g))
-            return _windows_q(self._x, *self._sums, *self._grid[1:], 0, g, lags, window, starts, self.demean)
-        # a block of windows at a time: the lag sums of the samples they cover, from the block's first one
-        per = max(1, (_KEEP_LAGPROD // (2 * k * lags) * g - window) // step)
+        if self._lagprod is not None:
+            return _windows_q(self._x, *self._sums, self._lagprod, 0, self.lags, window, starts, self.demean)
+        # a block of windows at a time: the lag products of the samples they cover, from the block's first one
+        k = self._x.shape[0]
+        per = max(1, (_KEEP_LAGPROD // (self.lags * k) - window) // step)
         q = np.empty((starts.size, k))
         for w0 in range(0, starts.size, per):
             st = starts[w0:w0 + per]
             r0, r1 = int(st[0]), int(st[-1]) + window
-            grid = _lag_grid(self._sums[0], r0, r1, lags, g)
-            q[w0:w0 + per] = _windows_q(self._x, *self._sums, *grid, r0, g, lags, window, st, self.demean)
+            pre = _lag_prefix(self._sums[0], r0, r1, self.lags, np.empty((k, r1 - r0 + 1, self.lags)))
+            q[w0:w0 + per] = _windows_q(self._x, *self._sums, pre, r0, self.lags, window, st, self.demean)
         return q
 
 
-#: Most lag sums (over all channels) a LjungBoxWindows keeps; above, they are recomputed per call in blocks.
+#: Most lag products (over all channels) a LjungBoxWindows keeps; above, they are recomputed per call in blocks.
 _KEEP_LAGPROD = 2 ** 20
 
 
@@ -538,52 +533,45 @@ def _record_sums(x, factor, demean):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _lag_grid(v, r0, r1, lags, g):  # pragma: no cover - compiled
-    """The sums of the lag products of ``v[:, r0:r1]`` that windows starting and ending on a grid of ``g`` samples
-    need, with ``P[i, l - 1] = sum_{r0 <= t < r0 + i} v[t + l] v[t]``: ``pa[c, j] = P[j g]`` (every lag) and
-    ``pb[c, j, l - 1] = P[j g - l, l - 1]`` (zero where ``j g < l``), ``j = 0 .. (r1 - r0) // g``; the lag-``l`` sum
-    of the window ``[r0 + ja g, r0 + jb g)`` is ``pb[c, jb, l - 1] - pa[c, ja, l - 1]``.
+def _lag_prefix(v, r0, r1, lags, p):  # pragma: no cover - compiled
+    """Prefix sums of the lag products of ``v[:, r0:r1]`` into ``p`` (channels, ``r1 - r0 + 1`` rows, ``lags``
+    columns): row ``i``, column ``l - 1`` holds ``sum_{r0 <= t < r0 + i} v[t + l] v[t]`` (for ``r0 + i + l <= r1``;
+    the rows beyond are not used). Returns ``p``.
 
-    One pass, with the lags as the inner loop: the ``lags`` running sums are independent, so the loop compiles to
-    packed adds instead of one serial (latency-bound) recursion per lag, each sum adds the same products in the same
-    order, and only the grid's rows are written (a few kB instead of ``8 N lags`` bytes per channel).
+    The lags are the inner loop: the ``lags`` running sums are independent, so the loop compiles to packed adds
+    instead of one serial (latency-bound) recursion per lag, and each sum adds the same products in the same order.
     """
-    k = v.shape[0]
     m = r1 - r0
-    rows = m // g + 1
-    pa = np.zeros((k, rows, lags))
-    pb = np.zeros((k, rows, lags))
-    full = max(0, m - lags)              # samples whose every lag stays inside [r0, r1)
-    acc = np.empty(lags)                 # the running sums P[i]
+    full = max(0, m - lags)              # rows whose every lag stays inside [r0, r1)
+    acc = np.empty(lags)                 # the running sums of row i
     for c in range(v.shape[0]):
         x = v[c]
+        pc = p[c]
         acc[:] = 0.0
-        for i in range(m):
+        pc[0, :] = 0.0
+        for i in range(full):
             t = r0 + i
             vt = x[t]
-            if i < full:
-                seg = x[t + 1:t + 1 + lags]
-                for j in range(lags):
-                    acc[j] += seg[j] * vt
-            else:
-                for j in range(min(lags, r1 - 1 - t)):      # lags with t + l < r1
-                    acc[j] += x[t + 1 + j] * vt
-            row = i + 1                  # acc is now P[row]
-            if row % g == 0:
-                pa[c, row // g, :] = acc
-            lag = g - row % g            # the lags l with row + l on the grid: pb[c, (row + l) // g, l - 1]
-            while lag <= lags and row + lag <= m:
-                pb[c, (row + lag) // g, lag - 1] = acc[lag - 1]
-                lag += g
-    return pa, pb
+            seg = x[t + 1:t + 1 + lags]
+            row = pc[i + 1]
+            for j in range(lags):
+                acc[j] += seg[j] * vt
+                row[j] = acc[j]
+        for i in range(full, m):
+            t = r0 + i
+            vt = x[t]
+            for j in range(min(lags, r1 - 1 - t)):      # lags with t + l < r1
+                acc[j] += x[t + 1 + j] * vt
+            pc[i + 1, :] = acc
+    return p
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _windows_q(x, v, s1, s2, last, pa, pb, r0, g, lags, window, starts, demean):  # pragma: no cover - compiled
+def _windows_q(x, v, s1, s2, last, p, r0, lags, window, starts, demean):  # pragma: no cover - compiled
     """Q of every window (rows) and channel (columns) from prefix sums of ``v = x * factor - centre`` (``x``
     rescaled by a power of two, and centred on the record's mean with ``demean``; channels on axis 0 of every
-    array): ``s1``, ``s2`` of values and squares (from sample 0) and ``pa``, ``pb`` of the lag products on the grid of
-    ``g`` samples from sample ``r0`` (:func:`_lag_grid`; every window starts and ends on it). ``x`` itself (a rescaled record could underflow in a window far quieter than the rest)
+    array): ``s1``, ``s2`` of values and squares (from sample 0) and ``p`` of the lag products (:func:`_lag_prefix`,
+    from sample ``r0``). ``x`` itself (a rescaled record could underflow in a window far quieter than the rest)
     serves the exact test for constant windows (``last``: the last sample up to each one that differs from its
     predecessor) and the direct evaluation of windows the prefix sums cannot resolve."""
     nw = starts.shape[0]
@@ -591,7 +579,7 @@ def _windows_q(x, v, s1, s2, last, pa, pb, r0, g, lags, window, starts, demean):
     n = float(window)
     q = np.empty((nw, k))
     for c in range(k):
-        c1, c2, ca, cb = s1[c], s2[c], pa[c], pb[c]
+        c1, c2, pc = s1[c], s2[c], p[c]
         for w in range(nw):
             a = starts[w]
             b = a + window
@@ -604,9 +592,8 @@ def _windows_q(x, v, s1, s2, last, pa, pb, r0, g, lags, window, starts, demean):
                 q[w, c] = _direct_q(x[c], a, window, lags, demean)
                 continue
             acc = 0.0
-            ra, rb = ca[(a - r0) // g], cb[(b - r0) // g]
             for lag in range(1, lags + 1):
-                lagsum = rb[lag - 1] - ra[lag - 1]
+                lagsum = pc[b - lag - r0, lag - 1] - pc[a - r0, lag - 1]
                 head = c1[b] - c1[a + lag]
                 tail = c1[b - lag] - c1[a]
                 cov = lagsum - m * (head + tail) + (n - lag) * m * m
