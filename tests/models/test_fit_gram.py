@@ -104,3 +104,27 @@ def test_ill_conditioned_fit_takes_the_svd_fallback(make, monkeypatch):
         assert calls == [(sum(model.nobs_records), model.df_eq)]
         np.testing.assert_array_equal(res.params2d, ref.params2d)
         assert_same(res, ref, rtol=1e-12)
+
+
+@pytest.mark.parametrize("lags", [1, 2, 5, 13])
+@pytest.mark.parametrize("const", [False, True])
+def test_lag_kernels_equal_explicit_products(lags, const):
+    """The block kernels (only the block pairs of lags 0..p multiplied; records written into one zeroed block
+    buffer; triangular products for the residuals) give the explicit Gram matrix, lag products and X'(Y - X B)."""
+    from tsfdi.models import lstsq
+
+    rng = np.random.default_rng(lags)
+    for s, lengths in [(1, [40]), (3, [57, 23, 41]), (2, [lags + 2, 64])]:
+        records = [rng.standard_normal((n, s)) + 0.3 for n in lengths]
+        parts = [lstsq.lagged_design(r, lags, lags, const=const) for r in records]
+        X, Y = np.vstack([p[0] for p in parts]), np.vstack([p[1] for p in parts])
+        Z = np.hstack([X, Y])
+        np.testing.assert_allclose(lstsq.lag_gram(records, lags, const=const), Z.T @ Z, rtol=1e-12, atol=1e-11)
+        coef = rng.standard_normal((X.shape[1], s))
+        np.testing.assert_allclose(lstsq.lag_residual_products(records, coef, const=const), X.T @ (Y - X @ coef),
+                                   rtol=1e-12, atol=1e-10)
+        e = lstsq.lag_residuals(records[0], coef, const=const)
+        np.testing.assert_allclose(e[lags:], parts[0][1] - parts[0][0] @ coef, rtol=1e-12, atol=1e-12)
+        x, y = records[0], records[0][::-1].copy()
+        ref = np.stack([sum(np.outer(x[u], y[u - k]) for u in range(k, len(x))) for k in range(lags + 1)])
+        np.testing.assert_allclose(lstsq.lag_products(y, lags, x), ref, rtol=1e-12, atol=1e-12)

@@ -21,7 +21,7 @@ import warnings
 import numba
 import numpy as np
 from scipy import linalg
-from scipy.linalg import lapack
+from scipy.linalg import blas, lapack
 
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
@@ -108,27 +108,23 @@ def lstsq(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return coef
 
 
-def _end_to_end(records: list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
-    """The records one after the other with ``lags`` zero samples between two, and where each starts: no
-    product of samples at most ``lags`` apart pairs two records."""
-    if len(records) == 1:
-        return records[0], [0]
-    s = records[0].shape[1]
-    gap = np.zeros((lags, s))
-    parts, starts, pos = [], [], 0
+def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
+    """The records one after the other with ``lags`` zero samples between two (no product of samples at most
+    ``lags`` apart pairs two records), zero-padded to a multiple of ``lags + 1`` samples and cut in blocks of
+    ``lags + 1`` samples (the layout of :func:`_blocks`), and where each record starts: the one layout
+    :func:`lag_gram` and :func:`lag_residual_products` both read, built once by a fit that calls both (written
+    straight into one zeroed buffer)."""
+    records = y if isinstance(y, list) else [y]
+    s, B = records[0].shape[1], lags + 1
+    n = sum(r.shape[0] for r in records) + lags * (len(records) - 1)
+    rows = -(-n // B)
+    buf = np.zeros((rows * B, s))
+    starts, pos = [], 0
     for r in records:
-        parts += [r, gap]
+        buf[pos:pos + r.shape[0]] = r
         starts.append(pos)
         pos += r.shape[0] + lags
-    return np.concatenate(parts[:-1]), starts
-
-
-def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
-    """The records end to end (:func:`_end_to_end`) cut in blocks of ``lags + 1`` samples (:func:`_blocks`), and
-    where each record starts: the one layout :func:`lag_gram` and :func:`lag_residual_products` both read, built
-    once by a fit that calls both."""
-    cat, starts = _end_to_end(y if isinstance(y, list) else [y], lags)
-    return _blocks(cat, lags + 1), starts
+    return buf.reshape(rows, B * s), starts
 
 
 def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
@@ -169,14 +165,14 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
     M = (lag_blocks(records, lags) if blocks is None else blocks)[0]
     C = _block_products(M, M, lags, s)
     out = np.empty((int(const) + (lags + 1) * s,) * 2)
-    # the column sums through a contiguous copy: numpy reduces axis 0 of an (n, s) array slowly for small s
-    S0 = [r[lags:, 0].sum()[None] if s == 1 else np.ascontiguousarray(r[lags:].T).sum(axis=1) for r in records]
-    S0 = S0[0] if len(S0) == 1 else sum(S0)
     if len(records) == 1:                   # views, no copies: short inputs pay for every call here
         heads, tails = records[0][None, :lags], records[0][None, records[0].shape[0] - lags:]
     else:
         heads = np.stack([r[:lags] for r in records])
         tails = np.stack([r[r.shape[0] - lags:] for r in records])
+    # sum_t y[t] over the regression rows: every sample (the column sums of the blocks, one matrix-vector
+    # product; the gaps and the padding are zero) less each record's first ``lags``
+    S0 = (np.ones(M.shape[0]) @ M).reshape(lags + 1, s).sum(axis=0) - heads.sum(axis=(0, 1))
     rows = sum(r.shape[0] for r in records) - lags * len(records)
     _assemble_gram(C, heads, tails, S0, int(rows), bool(const), out)
     return out
@@ -263,11 +259,32 @@ def lag_products(y: np.ndarray, lags: int, x: np.ndarray | None = None) -> np.nd
     return _block_products(M if x is None else _blocks(x, B), M, lags, s)
 
 
-def _block_products(Mx: np.ndarray, M: np.ndarray, p: int, s: int) -> np.ndarray:
+def _block_products(Mx: np.ndarray, M: np.ndarray, p: int, s: int, *, lag0: bool = True) -> np.ndarray:
     """``C[k] = sum_u x[u] y[u-k]'``, ``k = 0..p``, from the blocks ``Mx`` and ``M`` of ``x`` and ``y``
     (:func:`_blocks`, ``B = p + 1``): the two block products and the sums along their block diagonals
-    (:func:`lag_products`)."""
-    return _diagonal_sums(Mx.T @ M, Mx[1:].T @ M[:-1] if M.shape[0] > 1 else None, p, s)
+    (:func:`lag_products`). Only the block pairs whose lag is in ``0..p`` are multiplied (two row bands of each
+    product, :func:`_band_product`: about two thirds of the full products), and ``P = M'M`` by numpy's symmetric
+    product when ``Mx`` is ``M``. ``lag0=False``: ``C[0]`` is not computed (left zero)."""
+    B = p + 1
+    if Mx is M and lag0:
+        P = M.T @ M                         # one symmetric rank-k update (numpy calls syrk for X'X)
+    else:
+        P = _band_product(Mx, M, 0 if lag0 else 1, p, s, B)
+    Q = _band_product(Mx[1:], M[:-1], -p, -1, s, B) if M.shape[0] > 1 else None
+    return _diagonal_sums(P, Q, p, s)
+
+
+def _band_product(X: np.ndarray, Y: np.ndarray, lo: int, hi: int, s: int, B: int) -> np.ndarray:
+    """``X'Y`` (both ``(rows, B s)``) computed only where the block row ``a`` and block column ``b`` have
+    ``lo <= a - b <= hi``, in two bands of block rows (each multiplied against the block columns it needs); the
+    other entries are zero."""
+    out = np.zeros((B * s, B * s))
+    h = (B + 1) // 2
+    for a0, a1 in ((0, h), (h, B)):
+        b0, b1 = max(0, a0 - hi), min(B, a1 - lo)
+        if a1 > a0 and b1 > b0:
+            out[a0 * s:a1 * s, b0 * s:b1 * s] = X[:, a0 * s:a1 * s].T @ Y[:, b0 * s:b1 * s]
+    return out
 
 
 def _residual_blocks(M: np.ndarray, coef: np.ndarray, const: bool) -> np.ndarray:
@@ -282,9 +299,11 @@ def _residual_blocks(M: np.ndarray, coef: np.ndarray, const: bool) -> np.ndarray
     lag = a[None, :] - a[:, None]                                         # [b, a] = a - b
     T0 = np.where((lag >= 0)[:, :, None, None], W[np.clip(lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
     T1 = np.where((lag < 0)[:, :, None, None], W[np.clip(B + lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
-    E = M @ T0.reshape(B * s, B * s)
+    # T0 is upper triangular with a unit diagonal (W_0 = I), T1 strictly lower triangular: two triangular
+    # products (BLAS trmm, half the work of a general product) on the transposed, Fortran-ordered view of M
+    E = blas.dtrmm(1.0, T0.reshape(B * s, B * s), M.T, side=0, lower=0, trans_a=1, diag=1).T
     if M.shape[0] > 1:
-        E[1:] += M[:-1] @ T1.reshape(B * s, B * s)
+        E[1:] += blas.dtrmm(1.0, T1.reshape(B * s, B * s), M[:-1].T, side=0, lower=1, trans_a=1).T
     if c:
         E -= np.tile(coef[0], B)
     return E
@@ -341,7 +360,7 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
         e[end:st + p] = 0.0                         # the gap before the record and its first p samples
         end = st + r.shape[0]
     e[end:] = 0.0                                   # the zero padding of the last block
-    D = _block_products(E, M, p, s)                 # D[k][j, a]: e[t, j] y[t-k, a]
+    D = _block_products(E, M, p, s, lag0=False)     # D[k][j, a]: e[t, j] y[t-k, a], k >= 1
     out = np.empty((c + p * s, s))
     out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
     if c:
