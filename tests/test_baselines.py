@@ -318,6 +318,29 @@ def test_records_validity_of_a_record_array():
     rec = Records.from_data(da)
     assert rec.valid.tolist() == [True, False, False, False, True]
     np.testing.assert_array_equal(np.stack(rec.values), v)
+    unread = Records.from_data(da, check_finite=False)         # the caller checks the records it uses
+    assert unread.valid.all()
+    np.testing.assert_array_equal(np.stack(unread.values), v)
+
+
+def test_fit_baselines_skips_non_finite_records_of_an_array(synthetic):
+    """fit_baselines reads only the records it considers for fitting (Records.from_data(check_finite=False)): a
+    record holding NaN is still skipped ("first" / an int per cell, "all") or refused (named fitting records), as
+    when every record was checked first."""
+    xr = pytest.importorskip("xarray")
+    recs, states, ft = synthetic
+    v = np.stack(recs)
+    v[0, 50, 1] = np.nan                        # the first healthy record
+    v[6, 3000, 0] = np.inf                      # the second record of f1
+    da = xr.DataArray(v, dims=("record", "time", "channel"),
+                      coords={"time": np.arange(v.shape[1]) / FS, "channel": ["y0", "y1"],
+                              "state": ("record", states), "failure_time": ("record", ft)})
+    kw = dict(settle=5.0, duration=None, max_lags=4, var_max_lags=4, models=["var"])
+    assert tsfdi.fit_baselines(da, **kw).fit_records == (1, 5, 10)
+    assert tsfdi.fit_baselines(da, fit_records=2, **kw).fit_records == (1, 2, 5, 7, 10, 11)
+    assert 0 not in tsfdi.fit_baselines(da, fit_records="all", **kw).fit_records
+    with pytest.raises(ValueError, match="lost control or hold NaN"):
+        tsfdi.fit_baselines(da, fit_records=[0, 5, 10], **kw)
 
 
 def test_combined_test_in_calibrated_tests_and_evaluate(synthetic):

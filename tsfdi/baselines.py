@@ -76,10 +76,15 @@ class Records:
 
     @classmethod
     def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
-                  fs: float | None = None, name: str = "data") -> Records:
+                  fs: float | None = None, name: str = "data", check_finite: bool = True) -> Records:
         """Build from a hexacopter ``Dataset``, a ``(record, time, channel)`` DataArray or a sequence of
         signals (numpy / pandas / xarray, each ``(nobs, k)``) with ``states`` (and optional ``failure_times``,
         ``turbulence``) given per record.
+
+        ``check_finite=False`` leaves the records of a ``Dataset`` or ``DataArray`` in memory unread: :attr:`valid`
+        then reflects ``lost_control`` only, and the caller checks the values of the records it uses (one pass over
+        all the data otherwise; :func:`fit_baselines` reads only its fitting records). A sequence of signals is
+        always checked (each signal is validated).
 
         Named records (``DataFrame``, ``DataArray`` with a channel coordinate) are put in the channel order of the
         first by name; a missing or an extra channel raises a ``ValueError`` naming the record and the channel.
@@ -115,13 +120,15 @@ class Records:
                                                                                      strict_min=True)
             st, tb, ft, ids, lost = _labels(da, states, failure_times, turbulence, name)
             arr = np.asarray(da.values, dtype=np.float64)
-            # one pass over all records: a record's sum is finite when its values are (a finite sum that overflows
-            # is rechecked value by value)
-            with np.errstate(over="ignore", invalid="ignore"):
-                finite = np.isfinite(arr.sum(axis=(1, 2)))
-            finite[~finite] = [np.isfinite(arr[i]).all() for i in np.flatnonzero(~finite)]
+            valid = ~lost
+            if boolean(check_finite, "check_finite"):
+                # one pass over all records: a record's sum is finite when its values are (a finite sum that
+                # overflows is rechecked value by value)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    finite = np.isfinite(arr.sum(axis=(1, 2)))
+                finite[~finite] = [np.isfinite(arr[i]).all() for i in np.flatnonzero(~finite)]
+                valid &= finite
             vals = list(arr)
-            valid = ~lost & finite
             chans = tuple(str(c) for c in da[da.dims[2]].values)
             return cls(vals, st, tb, ft, ids, valid, chans, fs_)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
@@ -279,10 +286,11 @@ def _failure_times(value: Any, n: int) -> np.ndarray:
 
 
 def _finite(rec: Records) -> Any:
-    """``finite(i)``: whether record ``i`` holds only finite values. Records in memory are checked already
-    (:attr:`Records.valid`); records backed by dask are read a chunk at a time when first asked about."""
+    """``finite(i)``: whether record ``i`` holds only finite values. Records in memory are checked when asked about
+    (they may come from ``Records.from_data(..., check_finite=False)``); records backed by dask are read a chunk at
+    a time when first asked about."""
     if rec.source is None:
-        return lambda i: True
+        return lambda i: bool(np.isfinite(rec.values[i]).all())
     from tsfdi.fleet import record_chunks
 
     chunks = record_chunks(rec.source)
@@ -745,7 +753,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         data = [data[s] for s in names]
         states, failure_times, turbulence = names, None, None
         fit_records, settle, duration = "all", 0.0, None
-    rec = Records.from_data(data, states=states, failure_times=failure_times, turbulence=turbulence, fs=fs)
+    # the values of the records considered for fitting are checked as they are considered (finite), not all
+    rec = Records.from_data(data, states=states, failure_times=failure_times, turbulence=turbulence, fs=fs,
+                            check_finite=False)
     V = window_samples(steady_window, "steady_window", rec.fs, minimum=2)
     uniq = list(dict.fromkeys(rec.state.tolist()))
     if healthy not in uniq:
