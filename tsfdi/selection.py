@@ -203,16 +203,7 @@ class OrderSelection:
     def fit(self, order: int | None = None):
         """Fit the model of ``order`` (default :attr:`selected`) on the common sample of the selection."""
         order = self.selected if order is None else int_like(order, "order", minimum=1, maximum=self.max_lags)
-        spec = self.spec
-        y = list(spec.records) if spec.multi else spec.data
-        if isinstance(spec, ARX):
-            u = list(spec.u_records) if spec.multi else spec.u_data
-            model = ARX(y, u, na=order, nb=order, nk=spec.nk, trend=spec.trend, hold_back=spec.hold_back)
-        elif isinstance(spec, VAR):
-            model = VAR(y, order, trend=spec.trend, hold_back=spec.hold_back, criterion=spec.criterion)
-        else:
-            model = AR(y, order, trend=spec.trend, hold_back=spec.hold_back)
-        return model.fit()
+        return self.spec.at_order(order).fit()
 
     def summary(self) -> Summary:
         """The criteria per order with the selected orders marked: a :class:`tsfdi.summary.Summary` (text when

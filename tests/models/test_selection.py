@@ -60,6 +60,33 @@ def test_arx_selection_equals_fits():
         np.testing.assert_allclose(sel.table.loc[p, "bic"], res.bic, rtol=1e-9)
 
 
+def test_at_order_equals_the_spec_of_that_order():
+    """spec.at_order(p) (what OrderSelection.fit fits; the Gram matrix read from the larger spec's) is the spec its
+    constructor gives with the same hold_back: same options, Gram matrix, fit (1e-10) and the order checked."""
+    y, u = arx_data(n=800)
+    rng = np.random.default_rng(3)
+    big = [rng.standard_normal((300, 2)) * 1e9, rng.standard_normal((250, 2)) * 1e9]   # fitted in rescaled units
+    cases = [(tsfdi.AR(y, 12, trend="c"), lambda p: tsfdi.AR(y, p, trend="c", hold_back=12)),
+             (tsfdi.VAR(big, 7, trend="c", criterion="trace"),
+              lambda p: tsfdi.VAR(big, p, trend="c", hold_back=7, criterion="trace")),
+             (tsfdi.ARX(y, u, na=5, nb=4, nk=2, hold_back=9),
+              lambda p: tsfdi.ARX(y, u, na=p, nb=p, nk=2, hold_back=9))]
+    for spec, make in cases:
+        top = min(spec.na, spec.nb) if spec.nb else spec.na
+        for p in (1, 3, top):
+            sub, ref = spec.at_order(p), make(p)
+            for name in ("na", "nb", "nk", "max_lag", "hold_back", "trend", "criterion", "df_eq"):
+                assert getattr(sub, name) == getattr(ref, name), name
+            np.testing.assert_allclose(sub.gram(), ref.gram(), rtol=1e-12, atol=1e-12 * np.abs(ref.gram()).max())
+            a, b = sub.fit(), ref.fit()
+            np.testing.assert_allclose(a.params2d, b.params2d, rtol=1e-10, atol=1e-10 * np.abs(b.params2d).max())
+            np.testing.assert_allclose(a.bic, b.bic, rtol=1e-12)
+        with pytest.raises(ValueError, match="order"):
+            spec.at_order(top + 1)
+    with pytest.raises(ValueError, match="read-only"):
+        spec.gram()[0, 0] = 1.0
+
+
 @pytest.mark.parametrize("seed", range(5))
 def test_papers_bic_selects_the_true_ar6_order(seed):
     y = simulate_ar(TRUE_A6, 2000, np.random.default_rng(seed))

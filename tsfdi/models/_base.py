@@ -8,6 +8,7 @@ defined by its model (data + options) and its parameters.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import warnings
 from functools import cached_property, partial
@@ -213,6 +214,37 @@ class LinearTimeSeriesModel:
             for g in range(1, max(self.na, self.nb) + 1):
                 col += ([1.0 / self.y_scale] if g <= self.na else []) + ([1.0 / self.u_scale] if g <= self.nb else [])
             self._col_scale = np.concatenate(col)
+        self._gram = None           # gram(), once computed (read-only)
+
+    def at_order(self, order: int) -> LinearTimeSeriesModel:
+        """This spec at order ``order`` on the same sample: the same records, options and :attr:`hold_back`, with
+        ``lags`` (ARX: ``na`` and ``nb``) set to ``order``; the records are not validated again and the Gram matrix
+        (:meth:`gram`) is this spec's restricted to the columns kept (the regressor is grouped by lag). This is how
+        :meth:`tsfdi.OrderSelection.fit` fits an order of the selection.
+
+        Parameters
+        ----------
+        order : int
+            ``1 .. lags`` (ARX: ``1 .. min(na, nb)``).
+
+        Returns
+        -------
+        model
+            A spec of the same family, equal to the one its constructor gives with ``hold_back=self.hold_back``.
+        """
+        top = self.na if not self.nb else min(self.na, self.nb)
+        order = int_like(order, "order", minimum=1, maximum=top)
+        out = copy.copy(self)
+        out.na, out.nb = order, order if self.nb else 0
+        out.max_lag = max(out.na, out.nk + out.nb - 1 if out.nb else 0)
+        k = out.df_eq
+        if self._rescaled:
+            out._col_scale = self._col_scale[:k]
+        gram = self.gram()
+        keep = np.r_[0:k, gram.shape[0] - self.neqs:gram.shape[0]]   # the lags kept, then the targets
+        out._gram = gram[np.ix_(keep, keep)]
+        out._gram.setflags(write=False)
+        return out
 
     @property
     def data(self) -> Signal:
@@ -315,10 +347,16 @@ class LinearTimeSeriesModel:
 
         An AR / VAR reads it from the lag products of the samples (:func:`~tsfdi.models.lstsq.lag_gram`, no
         regressor built), an ARX from its explicit regressor. Rows start at :attr:`hold_back` in every record.
+        Computed once and kept by the spec (read-only), for :meth:`fit` and :meth:`at_order`.
         """
-        if self.nb == 0:
-            return lag_gram(self._lag_records(), self.na, const=bool(self.k_const))
-        return sum(Z.T @ Z for Z in (np.hstack(self._record_design(i)) for i in range(len(self.records))))
+        if self._gram is None:
+            if self.nb == 0:
+                gram = lag_gram(self._lag_records(), self.na, const=bool(self.k_const))
+            else:
+                gram = sum(Z.T @ Z for Z in (np.hstack(self._record_design(i)) for i in range(len(self.records))))
+            gram.setflags(write=False)
+            self._gram = gram
+        return self._gram
 
     def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
         """Fit criteria of fits on this spec's estimation sample, in the data's units
@@ -380,12 +418,17 @@ class LinearTimeSeriesModel:
             X = Y = None
             recs = self._lag_records()
             blocks = lag_blocks(recs, self.na)        # read by the Gram matrix and the refinement step
-            gram = lag_gram(recs, self.na, const=bool(self.k_const), blocks=blocks)
-            R, xty = gram_factor(gram, k), gram[:k, k:]
+            if self._gram is None:
+                self._gram = lag_gram(recs, self.na, const=bool(self.k_const), blocks=blocks)
+                self._gram.setflags(write=False)
+            R, xty = gram_factor(self._gram, k), self._gram[:k, k:]
         else:
             X, Y = self.design_all(scaled=True)
-            R = gram_factor(X.T @ X, k)
-            xty = None if R is None else X.T @ Y
+            if self._gram is None:
+                R = gram_factor(X.T @ X, k)
+                xty = None if R is None else X.T @ Y
+            else:
+                R, xty = gram_factor(self._gram, k), self._gram[:k, k:]
         if R is None:                       # the normal equations would lose digits: SVD of the regressor
             if X is None:
                 X, Y = self.design_all(scaled=True)
