@@ -33,6 +33,7 @@ import zlib
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 import pandas as pd
 
@@ -502,13 +503,41 @@ def _rolling_variance(x: np.ndarray, window: int, step: int) -> np.ndarray:
     n_all = x.shape[0]
     if window > n_all:
         raise ValueError(f"window must be <= the signal length {n_all}, got {window}")
-    x = x - x.mean(axis=0)
-    zero = np.zeros((1, x.shape[1]))
-    s1 = np.concatenate([zero, np.cumsum(x, axis=0)])
-    s2 = np.concatenate([zero, np.cumsum(x * x, axis=0)])
+    # the channels as contiguous rows: numpy reduces axis 0 of an (n, k) array slowly for small k
+    xt = np.ascontiguousarray(np.asarray(x, dtype=np.float64).T)
+    xt = xt - xt.mean(axis=1, keepdims=True)
     starts = np.arange(0, n_all - window + 1, min(step, n_all))
-    m = (s1[starts + window] - s1[starts]) / window
-    return np.maximum((s2[starts + window] - s2[starts]) / window - m * m, 0.0)
+    out = np.empty((starts.size, xt.shape[0]))
+    _window_variances(xt, starts, window, out)
+    return out
+
+
+@numba.njit(cache=True)
+def _window_variances(xt, starts, window, out):  # pragma: no cover - compiled
+    """``out[w, c]``: variance of ``xt[c, starts[w]:starts[w] + window]`` from the running sums of ``x`` and ``x**2``
+    (the prefix sums of ``numpy.cumsum``, in its order, read only at the window edges), clipped at 0."""
+    k, n = xt.shape
+    for c in range(k):
+        s1 = 0.0
+        s2 = 0.0
+        w_lo = 0                    # next window whose start edge is due
+        w_hi = 0                    # next window whose end edge is due
+        a1 = np.empty(starts.size)
+        a2 = np.empty(starts.size)
+        for t in range(n + 1):
+            while w_lo < starts.size and starts[w_lo] == t:
+                a1[w_lo] = s1
+                a2[w_lo] = s2
+                w_lo += 1
+            while w_hi < starts.size and starts[w_hi] + window == t:
+                m = (s1 - a1[w_hi]) / window
+                v = (s2 - a2[w_hi]) / window - m * m
+                out[w_hi, c] = v if v > 0.0 else 0.0
+                w_hi += 1
+            if t < n:
+                v = xt[c, t]
+                s1 += v
+                s2 += v * v
 
 
 def read_csv(path: Any, name: str = "path", **kwargs: Any) -> pd.DataFrame:

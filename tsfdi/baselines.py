@@ -823,7 +823,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         sigs = [dataclasses.replace(as_signal(g, f"record {rec.ids[i]}", vector=True, allow_constant=True),
                                     kind="pandas", index=pd.RangeIndex(g.shape[0]), channels=list(rec.channels))
                 for i, g in zip(idx, segs)]
-        flat = [[c for c, f in zip(rec.channels, g.min(axis=0) == g.max(axis=0)) if f] for g in segs]
+        # (each segment's channels as contiguous rows: numpy reduces axis 0 of an (n, k) array slowly for small k)
+        flat = [[c for c, f in zip(rec.channels, gt.min(axis=1) == gt.max(axis=1)) if f]
+                for gt in (np.ascontiguousarray(g.T) for g in segs)]
         for m in names:
             for i, f in zip(idx, flat):
                 const = f if m == "var" else [c for c in f if c == m]
