@@ -13,7 +13,7 @@ from conftest import as_kind
 from scipy import integrate, stats
 
 from tsfdi.detection import sequential
-from tsfdi.detection.sequential import (SPRT, SequentialDecision, SequentialIdentification, msprt, msprt_scale,
+from tsfdi.detection.sequential import (SPRT, aligned_record_effect, SequentialDecision, SequentialIdentification, msprt, msprt_scale,
                                         record_effect, wald_bounds)
 
 
@@ -450,3 +450,63 @@ def test_renewal_walk_restarts_at_both_bounds_and_continues_in_chunks():
     np.testing.assert_array_equal(np.concatenate([g[0] for g in got]), path)
     np.testing.assert_array_equal(np.concatenate([g[1] for g in got]), alarm)
     np.testing.assert_array_equal(np.concatenate([g[2] for g in got]), cycle)
+
+
+# ------------------------------------------------------------------ time-aligned record effect
+def aligned_data(seed=5, M=3, k=2, R=5, n=200):
+    rng = np.random.default_rng(seed)
+    prog = np.sin(np.linspace(0, 3, n))[:, None]             # the programme every record follows
+    held = {f"m{j}": [prog + rng.normal(0.3 * j, 1.0, (n, k)) + rng.normal(0, 0.2, k) for _ in range(R)]
+            for j in range(M)}
+    return rng, prog, held
+
+
+def running(e, n):
+    return np.r_[e[:n].mean(axis=0), 0.5 * np.log(np.mean(e[:n] ** 2, axis=0))]
+
+
+def test_aligned_record_effect_loglik_is_the_predictive_density_at_each_sample():
+    rng, prog, held = aligned_data()
+    law = aligned_record_effect(held, min_samples=10, summaries=["mean[y0]", "mean[y1]", "log_scale[y1]"])
+    assert law.center.shape == (3, 200, 3) and law.between.shape == (200, 3, 3) and law.df == 12 - 3 + 1
+    assert law.records == (5, 5, 5) and "AlignedRecordEffect(models=3" in repr(law)
+    new = [prog[:150] + rng.normal(0.3, 1.0, (150, 2)) for _ in range(3)]      # a record so far: 150 of 200
+    ll = law.loglik(new)
+    assert ll.shape == (150, 3) and np.all(ll[:9] == 0.0)
+    idx = [0, 1, 3]
+    for n in (10, 60, 150):
+        f = {m: np.array([running(e, n)[idx] for e in recs]) for m, recs in held.items()}
+        dev = np.vstack([v - v.mean(axis=0) for v in f.values()])
+        S = dev.T @ dev / 12
+        for j, m in enumerate(held):
+            ref = stats.multivariate_t(f[m].mean(axis=0), S * (1 + 1 / 5), df=10).logpdf(running(new[j], n)[idx])
+            assert ll[:n, j].sum() == pytest.approx(ref, rel=1e-9)
+    assert np.array_equal(law.loglik({"m2": new[2], "m0": new[0], "m1": new[1]}), ll)
+    with pytest.raises(ValueError):                          # the law's arrays are read-only
+        law.center[0, 0, 0] = 1.0
+
+
+def test_aligned_record_effect_input_checks():
+    _, _, held = aligned_data()
+    with pytest.raises(TypeError, match="held_out"):
+        aligned_record_effect({"m0": held["m0"]})
+    with pytest.raises(ValueError, match=r"held_out\['m1'\]\[2\] has 150 samples, the first record 200"):
+        aligned_record_effect({**held, "m1": held["m1"][:2] + [held["m1"][2][:150]]})
+    with pytest.raises(ValueError, match="degrees of freedom"):
+        aligned_record_effect({m: v[:2] for m, v in held.items()})
+    with pytest.raises(ValueError, match=r"summaries: 'acf1\[y0\]' is not one of"):
+        aligned_record_effect(held, summaries=["acf1[y0]"])
+    with pytest.raises(ValueError, match="min_samples"):
+        aligned_record_effect(held, min_samples=1)
+    with pytest.raises(ValueError, match="singular"):
+        aligned_record_effect({"a": [np.ones((50, 1))] * 4, "b": [np.ones((50, 1))] * 4}, min_samples=5)
+    law = aligned_record_effect(held)
+    e = np.ones((100, 2))
+    with pytest.raises(ValueError, match="one array per model"):
+        law.loglik([e, e])
+    with pytest.raises(ValueError, match=r"resid\['m0'\] has 201 samples, the law covers the first 200"):
+        law.loglik([np.ones((201, 2))] * 3)
+    with pytest.raises(ValueError, match=r"resid\['m1'\] has 90 samples"):
+        law.loglik([e, e[:90], e])
+    with pytest.raises(ValueError, match=r"resid\['m0'\]: a channel is zero over the first"):
+        law.loglik([np.zeros((100, 2)), e, e])

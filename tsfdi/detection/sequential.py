@@ -13,7 +13,8 @@ asked for, so that each decision comes with its error probabilities and an expec
   with the scale correction :func:`msprt_scale`.
 * :func:`record_effect`: for records of one state that differ from each other more than their within-record noise
   says, a record-level predictive likelihood (:meth:`RecordEffect.loglik`) whose evidence saturates, as input of
-  :func:`msprt`.
+  :func:`msprt`; :func:`aligned_record_effect` the same for records that follow one programme (the same manoeuvres
+  at the same sample), its law taken at every sample from the held-out records' running summaries at that sample.
 
 References
 ----------
@@ -43,8 +44,8 @@ from tsfdi._validation import MAX_VALUES, boolean, check_rng, float_like, int_li
 from tsfdi.detection.base import per_channel
 from tsfdi.summary import Summary
 
-__all__ = ["SPRT", "RecordEffect", "SequentialDecision", "SequentialIdentification", "msprt", "msprt_scale",
-           "record_effect", "renewal_walk", "wald_bounds"]
+__all__ = ["SPRT", "AlignedRecordEffect", "RecordEffect", "SequentialDecision", "SequentialIdentification",
+           "aligned_record_effect", "msprt", "msprt_scale", "record_effect", "renewal_walk", "wald_bounds"]
 
 _LOG2PI = float(np.log(2.0 * np.pi))
 
@@ -1394,3 +1395,231 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples:
     return RecordEffect(models=names, center=np.array([f.mean(axis=0) for f in F]), between=between,
                         within=np.array(W), df=df, records=tuple(int(r) for r in R), min_samples=min_samples,
                         summaries=tuple(chosen), lags=lags, nchan=k)
+
+
+@dataclass(frozen=True)
+class AlignedRecordEffect:
+    r"""Time-aligned between-record law of every candidate model's running residual summaries (fitted by
+    :func:`aligned_record_effect`); its :meth:`loglik` is the per-sample input of :func:`msprt`.
+
+    Attributes
+    ----------
+    models : tuple of str
+        Candidate model names, in column order.
+    center : ndarray, shape (M, n, q)
+        At each sample ``t``, the mean over each model's held-out records of their running summaries over samples
+        ``0..t`` (NaN before ``min_samples - 1``).
+    between : ndarray, shape (n, q, q)
+        At each sample, the covariance of the records' running summaries about their model's centre, pooled over
+        the models (NaN before ``min_samples - 1``); model ``j`` predicts with ``between (1 + 1/R_j)``.
+    df : float
+        Degrees of freedom of the predictive multivariate t law, :math:`\sum_j (R_j - 1) - q + 1`.
+    records : tuple of int
+        Held-out records per model (:math:`R_j`).
+    min_samples : int
+        Samples in the first running summary used; the increments before it are 0.
+    summaries : tuple of str
+        Names of the ``q`` summaries (as :class:`RecordEffect`'s).
+    lags : int
+        Residual autocorrelation lags of the summaries named ``acf<j>``.
+    nchan : int
+        Channels of the records.
+    """
+
+    models: tuple
+    center: np.ndarray
+    between: np.ndarray
+    df: float
+    records: tuple
+    min_samples: int
+    summaries: tuple
+    lags: int
+    nchan: int
+
+    def __post_init__(self) -> None:
+        _freeze_arrays(self, center=3, between=3)
+
+    def __repr__(self) -> str:
+        return (f"AlignedRecordEffect(models={len(self.models)}, summaries={len(self.summaries)}, "
+                f"samples={self.center.shape[1]}, records={self.records}, min_samples={self.min_samples})")
+
+    def loglik(self, resid: Any) -> np.ndarray:
+        r"""Per-sample increments of each model's time-aligned record-level predictive log-likelihood, the input of
+        :func:`msprt`.
+
+        Parameters
+        ----------
+        resid : sequence or mapping of M array_like, each shape (nobs, k)
+            Each candidate model's residuals (or, for a law of raw signals, the same signals for every model) on
+            the first ``nobs`` samples of one record aligned like the fitting records, ``nobs`` at most the
+            samples of the law (a record so far, in a stream).
+
+        Returns
+        -------
+        ndarray, shape (nobs, M)
+            Row ``t``: :math:`L_j(t) - L_j(t-1)`, with :math:`L_j(t)` the log density of model ``j``'s running
+            summaries over samples ``0..t`` under model ``j``'s predictive law at ``t`` (rows before
+            ``min_samples - 1`` are 0).
+
+        Raises
+        ------
+        ValueError
+            Not one array per model, arrays of different lengths or channel counts, longer than the law, non-finite
+            values, or a channel that is zero over the first samples (a log RMS of minus infinity).
+        """
+        M = len(self.models)
+        if isinstance(resid, Mapping):
+            missing = [m for m in self.models if m not in resid]
+            if missing:
+                raise ValueError(f"resid has no entry for the model {missing[0]!r}")
+            resid = [resid[m] for m in self.models]
+        if isinstance(resid, (str, bytes)) or not isinstance(resid, (list, tuple)) or len(resid) != M:
+            raise ValueError(f"resid must hold one array per model ({M}), got "
+                             f"{len(resid) if isinstance(resid, (list, tuple)) else type(resid).__name__}")
+        every = _summary_names(self.nchan, self.lags)
+        keep = [every.index(s) for s in self.summaries]
+        n_law = self.center.shape[1]
+        arrs = []
+        for j, r in enumerate(resid):
+            v = as_signal(r, f"resid[{self.models[j]!r}]", allow_constant=True).values
+            if v.shape[1] != self.nchan:
+                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[1]} channel(s), the law was fitted on "
+                                 f"{self.nchan}")
+            if arrs and v.shape[0] != arrs[0].shape[0]:
+                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[0]} samples, resid[{self.models[0]!r}] "
+                                 f"{arrs[0].shape[0]}: give every model's residuals on the same samples")
+            if v.shape[0] > n_law:
+                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[0]} samples, the law covers the first "
+                                 f"{n_law} (the length of its records)")
+            arrs.append(v)
+        n = arrs[0].shape[0]
+        q = len(keep)
+        cum = np.zeros((n, M))
+        t0 = self.min_samples - 1
+        if n > t0:
+            nu = self.df
+            const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
+            S = self.between[t0:n]
+            for j, e in enumerate(arrs):
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    f = _running_summaries(e, self.lags, t0)[:, keep] - self.center[j, t0:n]
+                if not np.isfinite(f).all():
+                    raise ValueError(f"resid[{self.models[j]!r}]: a channel is zero over the first "
+                                     f"{int(np.argmin(np.isfinite(f).all(axis=1))) + t0 + 1} samples (log RMS not "
+                                     "finite)")
+                chol = np.linalg.cholesky(S * (1.0 + 1.0 / self.records[j]))
+                d = np.linalg.solve(chol, f[:, :, None])[:, :, 0]
+                cum[t0:, j] = (const - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
+                               - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / nu))
+        return np.diff(cum, axis=0, prepend=0.0)
+
+
+def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
+                          summaries: Any = None) -> AlignedRecordEffect:
+    r"""Fit the time-aligned between-record law of every candidate model's running summaries, for sequential
+    identification of records that follow one programme (:meth:`AlignedRecordEffect.loglik` into :func:`msprt`).
+
+    Parameters
+    ----------
+    held_out : mapping
+        Model name -> list of that model's records, each shape (n, k), all of the same length ``n`` and aligned on
+        the programme (sample ``t`` of every record at the same point of it: e.g. flights of one manoeuvre
+        programme from the same trimmed take-off, each segment cut to a common length): a model's held-out
+        residuals on its own records, or raw signals (the same records given as every model's input to
+        ``loglik``). A model name may stand for a state in one operating condition (``"normal@E8"``); a model with
+        one record has it as its centre and adds no degree of freedom.
+    lags : int
+        Autocorrelation lags among the summaries (as :func:`record_effect`).
+    min_samples : int
+        Samples of the first running summary used (at least 2).
+    summaries : sequence of str, optional
+        The summaries kept, by name (``"mean[y0]"``, ``"log_scale[y2]"``, ...), in the order given; default all.
+
+    Returns
+    -------
+    AlignedRecordEffect
+
+    Raises
+    ------
+    TypeError
+        ``held_out`` not a mapping of at least 2 models to lists of records; ``summaries`` not a list of names.
+    ValueError
+        Records of different lengths or channel counts, shorter than ``min_samples``; non-finite summaries;
+        fewer degrees of freedom (records minus models) than summaries; a summary name unknown or given twice; a
+        between-record covariance singular at some sample; more values than the library allocates at once.
+
+    Notes
+    -----
+    At every sample :math:`t` the running summaries :math:`f_{jr}(t)` (over samples :math:`0..t`) of model
+    :math:`j`'s records give the centre :math:`c_j(t) = \bar f_j(t)` and the covariance about it pooled over the
+    models, :math:`S(t) = \sum_j \sum_r (f_{jr}(t) - c_j(t))(f_{jr}(t) - c_j(t))' / \nu`, :math:`\nu =
+    \sum_j (R_j - 1)`; a new record's running summaries at :math:`t` then follow the predictive multivariate t law
+    with centre :math:`c_j(t)`, covariance :math:`S(t)(1 + 1/R_j)` and :math:`\nu - q + 1` degrees of freedom.
+    Unlike :func:`record_effect` (one centre, plus a within-record noise ``within / n`` from a long-run variance),
+    nothing is modelled within a record: the programme's share of a running summary (a manoeuvre moves a running
+    mean the same way on every record), the record-to-record spread and the within-record noise of a summary over
+    :math:`t + 1` samples are all in :math:`c_j(t)` and :math:`S(t)` by construction, from the records themselves.
+    It needs records aligned on a common programme and as long as the records to be decided. As for
+    :func:`record_effect`, :math:`L_j(t) - L_k(t)` is the log-likelihood ratio of the summaries at each fixed
+    :math:`t`, not a martingale in :math:`t`: the bound of :func:`msprt` is not guaranteed when it is applied at
+    every sample (``benchmarks/sprt.py``: 3 wrong flights of 37 on CrazyPAD at alpha = 0.01, where 2 are allowed).
+    """
+    if not isinstance(held_out, Mapping) or len(held_out) < 2:
+        raise TypeError("held_out must be a mapping model name -> list of records, with at least 2 models")
+    if summaries is not None and (isinstance(summaries, (str, bytes)) or not isinstance(summaries, (list, tuple))
+                                  or not summaries):
+        raise TypeError(f"summaries must be a non-empty list of summary names, got {summaries!r}")
+    lags = int_like(lags, "lags", minimum=0)
+    min_samples = int_like(min_samples, "min_samples", minimum=2)
+    names = tuple(str(m) for m in held_out)
+    k = n = None
+    F, R = [], []
+    for name, recs in held_out.items():
+        arrs = _residual_records(recs, f"held_out[{name!r}]", k)
+        if n is None:
+            k, n = arrs[0].shape[1], arrs[0].shape[0]
+            every = _summary_names(k, lags)
+            chosen = every if summaries is None else [str(s) for s in summaries]
+            unknown = [s for s in chosen if s not in every]
+            if unknown or len(set(chosen)) != len(chosen):
+                raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of "
+                                 f"the {len(every)} summaries of {k}-channel records with lags={lags}: "
+                                 f"{', '.join(every)}")
+            keep = [every.index(s) for s in chosen]
+            if n < max(min_samples, lags + 2):
+                raise ValueError(f"held_out[{name!r}][0] has {n} samples, fewer than min_samples = {min_samples} "
+                                 f"(or lags + 2)")
+            if 8.0 * n * len(keep) * (len(keep) + sum(len(v) for v in held_out.values())) > 8.0 * MAX_VALUES:
+                raise ValueError(f"held_out: {n} samples x {len(keep)} summaries per record need more values than "
+                                 f"the library allocates at once ({MAX_VALUES})")
+        uneven = [i for i, e in enumerate(arrs) if e.shape[0] != n]
+        if uneven:
+            raise ValueError(f"held_out[{name!r}][{uneven[0]}] has {arrs[uneven[0]].shape[0]} samples, the first "
+                             f"record {n}: the records must be aligned and of one length (cut them to a common one)")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.array([_running_summaries(e, lags, min_samples - 1)[:, keep] for e in arrs])
+        if not np.isfinite(f).all():
+            raise ValueError(f"held_out[{name!r}]: a record has a channel that is zero or constant over its first "
+                             f"{min_samples} samples or more (its summaries are not finite)")
+        F.append(f)
+        R.append(len(arrs))
+    R = np.array(R)
+    q = len(keep)
+    dof = int((R - 1).sum())
+    if dof <= q:
+        raise ValueError(f"held_out: {dof} degrees of freedom of the between-record spread (records minus models) "
+                         f"for {q} summaries: give more records, fewer lags or fewer summaries")
+    dev = np.concatenate([f - f.mean(axis=0) for f in F])
+    S = np.einsum("rtq,rtp->tqp", dev, dev) / dof
+    sd = np.sqrt(np.diagonal(S, axis1=1, axis2=2))
+    if not (sd > 0).all() or (np.linalg.eigvalsh(S / (sd[:, :, None] * sd[:, None, :]))[:, 0] <= 1e-10).any():
+        raise ValueError("held_out: the between-record covariance of the running summaries is singular at some "
+                         "sample (summaries that do not vary, or vary together exactly, over the records): give "
+                         "more or more varied records, or a larger min_samples")
+    pad = np.full((min_samples - 1,), np.nan)
+    center = np.array([np.concatenate([np.broadcast_to(pad[:, None], (min_samples - 1, q)), f.mean(axis=0)])
+                       for f in F])
+    between = np.concatenate([np.full((min_samples - 1, q, q), np.nan), S])
+    return AlignedRecordEffect(models=names, center=center, between=between, df=float(dof - q + 1),
+                               records=tuple(int(r) for r in R), min_samples=min_samples, summaries=tuple(chosen),
+                               lags=lags, nchan=k)
