@@ -13,32 +13,28 @@ Run: ``python benchmarks/sprt.py [--section hexacopter,crazypad,cost] [--records
    ``--records-per-case`` per state and level, through the frozen development models. Target: at that correct
    rate, mean decision time <= 10 s (half the 20 s window), counted from the start of identification (``settle`` =
    10 s after the failure, as the windows).
-2. CrazyPAD (``../shared/data/crazypad``; the functions of ``benchmarks/crazypad.py``, imported): the 9 conditions
-   of its ``KNOWN`` (``--conditions '*'``: every condition of the copy, the withheld ones check the result), leave one
-   flight out as its section 3 (the held-out flight's own condition model refitted on the condition's other logs,
-   every other condition model on all its logs); the sequential rule on each airborne segment of the held-out
-   flight from its first sample, the two segments of a flight run one after the other (one flight, one decision).
-   The result: ``msprt`` on the airframe-aware record-effect likelihood (``tsfdi.detection.sequential.
-   record_effect``): the airframe of every log is known (the drone flew it), so the candidates for a flight of drone
-   X are ``condition@X`` for every condition with another flight of X; per candidate, the running mean and log RMS
-   per channel of its condition model's residuals on the flight under the predictive law of those summaries on X's
-   flights (centre: the summaries of the condition model's held-out residuals on its own fitting logs of X; a
-   flight effect drawn from the between-flight covariance pooled over every condition@airframe, so the E8 / E9
-   difference of the normal flights no longer inflates it; ``held_out_residuals(groups=logs)``, the held-out flight
-   never among them; plus the within-flight noise of a running summary, long-run covariance over 0.5 s blocks).
-   The condition VARs stay pooled over the airframes (2-3 logs per condition and airframe are too few for a VAR
-   and its held-out residuals). Airframe split, summaries (no autocorrelations), block and alpha 1e-2 fixed a
-   priori, not tuned; the summaries are unchanged on purpose: the commands' trims are already separate summaries
-   (the residual mean of a VAR with an intercept is linear in a flight's trim offsets) from the gyro residual
-   scales, and a propeller band is out of reach at 101 Hz (the rotors turn at hundreds of Hz). For information:
-   the same with a leave-one-flight-out scale (each flight's critical scale: the largest of ``SCALE_GRID`` at and
-   below which it is decided without error; a flight decided at the smallest critical scale of the others, so at
-   most one flight can be wrong), the record effect with the airframes pooled (the previous result), ``msprt`` on
-   the Gaussian per-sample log-likelihoods with the scale correction of ``msprt_scale`` on the same held-out
-   residuals and without it, and for each run the share of flights whose most likely candidate at the end is the
-   true one (no error rate). Targets: mean over the conditions >= 90 % of the flights correct; wrong decisions
-   consistent with the bound (P(wrong) <= alpha per flight: at most the 99 % binomial quantile of alpha over the
-   flights); printed with the mean time to decide.
+2. CrazyPAD (``../shared/data/crazypad``; the loading, margin and corrupt-log rule of ``benchmarks/crazypad.py``,
+   imported): the 9 conditions of its ``KNOWN``, 37 flights (a flight is one log, its two airborne segments one
+   after the other, each cut to the shortest segment of its rank so that every flight's samples are aligned on the
+   programme it flies), leave one flight out. The rule: ``msprt`` (alpha 1e-2, Armitage's bound; undecided counts as
+   not correct) on a time-aligned record-level predictive likelihood of raw-signal summaries. The airframe of every
+   log is known (the drone flew it), so the candidates for a flight of drone X are ``condition@X`` for every
+   condition with a fitting flight of X. At every sample ``t`` (from 0.5 s on) the flight's running summaries over
+   samples ``0..t`` (the means of the attitude and thrust commands: the trims a defect's moment or an added weight
+   moves; the log RMS of the gyro rates, raw or band-passed 5-20 Hz and above 20 Hz by causal Butterworth filters;
+   the same of the vertical specific force) have, under candidate ``g``, the multivariate t law of centre the mean
+   of ``g``'s fitting flights' running summaries at ``t`` and covariance the between-flight covariance of the
+   running summaries at ``t``, pooled over every condition@airframe, times ``1 + 1/R_g`` (``R - G - q + 1`` degrees
+   of freedom): the flight-to-flight spread, the within-flight noise of a running summary at ``t`` and the
+   programme's manoeuvres are in the law by construction, with no model fitted. The summaries (``DESIGNS``: 4
+   designs of 4-12 summaries, fixed before any run) are chosen inside each fold by leave one flight out among its
+   36 fitting flights only (the design whose inner wrong decisions stay within the 99 % binomial quantile of alpha,
+   with the highest inner mean correct over the conditions): nested, no design compared on an evaluated flight's
+   outcome; the whole section was run once. Targets: mean over the conditions >= 90 % of the flights correct; wrong
+   decisions consistent with the bound (P(wrong) <= alpha per flight: at most the 99 % binomial quantile of alpha
+   over the flights); printed with the mean time to decide. With ``--conditions NAMES`` (``'*'``: every condition of
+   the copy) the withheld conditions check it: the design chosen by leave one flight out over the 37 flights of the
+   9 conditions, then leave one flight out over every flight of the chosen conditions, every condition a candidate.
 3. Cost: ``evaluate`` on the shipped data (VAR, whiteness, 20 s windows) with and without the ``"sprt"`` rule,
    interleaved rounds in one process, median CPU times; target ratio <= 1.20.
 """
@@ -56,12 +52,12 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from scipy import stats  # noqa: E402
+from scipy import signal, stats  # noqa: E402
 
 import tsfdi  # noqa: E402
 from tsfdi.datasets import load_hexacopter  # noqa: E402
 from tsfdi.datasets.hexacopter import hexacopter_signals  # noqa: E402
-from tsfdi.detection.sequential import msprt, record_effect  # noqa: E402
+from tsfdi.detection.sequential import aligned_record_effect, msprt  # noqa: E402
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 from tsfdi.study import evaluation_seed  # noqa: E402
 
@@ -74,11 +70,32 @@ WINDOWS = ("5s", "10s", "20s")
 TESTS = {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3, correction="none")}   # paper 003: per channel
 TARGET_TIME_S = 10.0
 CRAZY_ALPHA = 1e-2
-RECORD_LAGS = 0             # record-effect summaries: mean and log RMS per channel (no autocorrelations)
-RECORD_BLOCK_S = 0.5       # block of the within-flight long-run covariance, and the first summary
 TARGET_CRAZY = 90.0
-SCALE_STEP = 0.8           # CrazyPAD leave-one-flight-out scale (information): the grid 1, 0.8, 0.8^2, ...
-SCALE_GRID = tuple(SCALE_STEP ** i for i in range(31))
+FIRST_S = 0.5              # CrazyPAD: the first running summary used (s)
+BAND_ORDER = 4             # Butterworth order of the band-passed series
+RATES = ("roll", "pitch", "yaw")
+#: per-sample series of a CrazyPAD flight: column of the log, band (Hz; None: the raw signal; (lo, None): high-pass)
+FEATURES = {**{f"cmd_{a}": (f"controller.cmd_{a}", None) for a in ("roll", "pitch", "yaw", "thrust")},
+            **{f"r_{a}": (f"controller.r_{a}", None) for a in RATES},
+            **{f"r_{a} 5-20 Hz": (f"controller.r_{a}", (5.0, 20.0)) for a in RATES},
+            **{f"r_{a} > 20 Hz": (f"controller.r_{a}", (20.0, None)) for a in RATES},
+            "accelz 5-20 Hz": ("controller.accelz", (5.0, 20.0)), "accelz > 20 Hz": ("controller.accelz", (20.0, None))}
+TRIMS = tuple(("mean", f"cmd_{a}") for a in ("roll", "pitch", "yaw", "thrust"))
+#: the designs compared inside each fold (fixed before any run): the commands' trims (a defect the loop compensates
+#: moves them; an added weight raises the thrust), the rates' scales, their vibration band powers (5-20 Hz, above
+#: 20 Hz up to the 50 Hz Nyquist: the rotors turn at hundreds of Hz, their vibration reaches the 100 Hz log only
+#: aliased and attenuated by the gyro's low-pass filter), and the vertical specific force's
+DESIGNS = {"trims": TRIMS,
+           "trims + rate scales": TRIMS + tuple(("log_scale", f"r_{a}") for a in RATES),
+           "trims + rate bands": TRIMS + tuple(("log_scale", f"r_{a} {b}") for b in ("5-20 Hz", "> 20 Hz")
+                                                for a in RATES),
+           "trims + rate bands + accelz bands": TRIMS + tuple(("log_scale", f"r_{a} {b}") for b in ("5-20 Hz",
+                                                                                                   "> 20 Hz")
+                                                               for a in RATES)
+           + (("log_scale", "accelz 5-20 Hz"), ("log_scale", "accelz > 20 Hz"))}
+SUMMARY_NAMES = {(kind, feat): f"{kind}[y{i}]" for i, feat in enumerate(FEATURES) for kind in ("mean", "log_scale")}
+CP_FS = [None]             # sampling rate of the CrazyPAD copy (set by crazypad())
+CONDITION_ORDER = []       # conditions in report order (set by crazypad())
 TARGET_COST = 1.20
 
 
@@ -169,184 +186,183 @@ def hexacopter(records_per_case: int) -> list:
 
 
 # ------------------------------------------------------------------ 2. CrazyPAD
+def feature_series(cp, flight, lengths) -> np.ndarray:
+    """The per-sample series of ``FEATURES`` of one flight: its segments, each cut to the common length of that
+    segment (``lengths``), one after the other; band-passed rates by a causal Butterworth filter (order
+    ``BAND_ORDER``) run per segment from its first sample's steady state, so a decision at a sample uses no later
+    sample."""
+    out = []
+    for seg, n in zip(flight.segments, lengths):
+        cols = []
+        for name, (col, band) in FEATURES.items():
+            x = seg[col].to_numpy(dtype=np.float64)[:n]
+            if band is not None:
+                lo, hi = band
+                sos = signal.butter(BAND_ORDER, [lo, hi] if hi is not None else lo,
+                                    "bandpass" if hi is not None else "highpass", fs=cp.FS, output="sos")
+                x = signal.sosfilt(sos, x, zi=signal.sosfilt_zi(sos) * x[0])[0]
+            cols.append(x)
+        out.append(np.column_stack(cols))
+    return np.vstack(out)
+
+
+def decide_flight(X: dict, info: list, i: int, fitting: list, design, first: int) -> dict:
+    """The sequential decision on flight ``i`` (``X[i]``: its feature series; ``info[i]``: condition, drone, log) by
+    the time-aligned record law (``aligned_record_effect``) fitted on the flights ``fitting`` (indexes; ``i`` never
+    among them), every ``condition@airframe`` of them a model (the between-flight spread pooled over all); the
+    candidates are ``condition@drone`` for every condition with a fitting flight of the flight's drone (the
+    airframe of every log is known)."""
+    cond, drone, _ = info[i]
+    held = {}
+    for r in sorted(fitting, key=lambda r: (CONDITION_ORDER.index(info[r][0]), info[r][1])):
+        held.setdefault(f"{info[r][0]}@{info[r][1]}", []).append(X[r])
+    law = aligned_record_effect(held, min_samples=first + 1, summaries=[SUMMARY_NAMES[d] for d in design])
+    idx = [j for j, m in enumerate(law.models) if m.endswith(f"@{drone}")]
+    law = dataclasses.replace(law, models=tuple(law.models[j] for j in idx), center=law.center[idx],
+                              records=tuple(law.records[j] for j in idx))
+    ll = law.loglik([X[i]] * len(idx))
+    seq = msprt(ll, alpha=CRAZY_ALPHA)
+    names = [m.rsplit("@", 1)[0] for m in law.models]
+    label = names[seq.label] if seq.label >= 0 else "undecided"
+    return {"condition": cond, "drone": drone, "log": info[i][2], "candidates": len(idx), "label": label,
+            "outcome": "correct" if label == cond else ("undecided" if label == "undecided" else "wrong"),
+            "time": seq.decision_time / CP_FS[0] if seq.label >= 0 else np.nan,
+            "end": names[int(np.argmax(ll.sum(axis=0)))]}
+
+
+def score(rows: list) -> tuple:
+    """(mean over the conditions of the percent of flights correct, wrong flights, flights) of decisions."""
+    df = pd.DataFrame(rows)
+    return float((df.outcome == "correct").groupby(df.condition).mean().mean() * 100), int(
+        (df.outcome == "wrong").sum()), len(df)
+
+
+def choose_design(F: dict, info: list, fitting: list, first: int) -> tuple:
+    """The design of ``DESIGNS`` chosen by leave one flight out inside ``fitting`` (no other flight used): among
+    the designs whose wrong decisions stay within the 99 % binomial quantile of alpha over the fitting flights, the
+    highest mean correct over the conditions (ties: the earlier, smaller design); if none, the fewest wrong."""
+    res = {}
+    for name, design in DESIGNS.items():
+        rows = [decide_flight(F, info, j, [r for r in fitting if r != j], design, first) for j in fitting]
+        res[name] = score(rows)
+    top = int(stats.binom.ppf(0.99, len(fitting), CRAZY_ALPHA))
+    ok = [n for n, (c, w, _) in res.items() if w <= top]
+    best = max(ok, key=lambda n: res[n][0]) if ok else min(res, key=lambda n: (res[n][1], -res[n][0]))
+    return best, res
+
+
 def crazypad(conditions) -> list:
     import crazypad as cp
 
-    cp.setup(None, conditions, None)
+    cp.setup(None, None, None)
     choice = cp.choose(cp.normal_logs())
     conds = cp.identified_conditions(choice.margin)
-    print(f"CrazyPAD on {cp.ROOT}, fs = {cp.FS:.2f} Hz; choices on the normal flights (crazypad.choose): "
+    CP_FS[0] = cp.FS
+    CONDITION_ORDER[:] = conds
+    print(f"CrazyPAD on {cp.ROOT}, fs = {cp.FS:.2f} Hz; margin on the normal flights (crazypad.choose): "
           f"{choice.line()}")
     print(f"conditions ({len(conds)}): " + ", ".join(cp.SHORT[c] for c in conds) + f"; alpha {CRAZY_ALPHA:g} (fixed)")
-    flights = {c: cp.load_condition(c, choice.margin) for c in conds}
-    full = {c: cp.fit_model(fl, choice.channels) for c, fl in flights.items()}
-    block = cp.samples(RECORD_BLOCK_S)
-    print(f"record-effect likelihood: summaries per channel mean and log RMS of each model's residuals "
-          f"(lags {RECORD_LAGS}), long-run within-flight covariance over blocks of {RECORD_BLOCK_S:g} s ({block} "
-          "samples), first summary after one block; between-flight covariance pooled over the conditions from the "
-          "held-out residuals of each condition model's own fitting logs (the held-out flight never among them); "
-          "all fixed a priori, not tuned")
-    try:
-        scale = crazypad_scale(cp, full, flights, choice, conds)
-        print(f"scale correction on the held-out residuals of every condition's own logs: {scale:.3g}")
-    except ValueError as err:                   # some pair does not separate on its held-out logs
-        scale = None
-        print(f"no scale correction (information run left out): {err}")
-    print("airframe-aware (the result): the airframe of every log is known (the drone flew it); the candidates "
-          "for a flight of drone X are the conditions with another flight of X, each with its own centre for X "
-          "(condition@X: the condition model's held-out residual summaries on X's flights), the between-flight "
-          "covariance pooled over every condition@airframe (the two airframes no longer inflate it); the condition "
-          "VARs stay pooled over the airframes (2-3 logs per condition and airframe); fixed a priori, not tuned")
-    own_held = {c: per_flight(full[c].held, flights[c]) for c in conds}
-    lls, rec, air, crit = [], [], [], []
-    for cond in conds:
-        for f in flights[cond]:
-            others = [g for g in flights[cond] if g.log != f.log]
-            own = cp.fit_model(others, choice.channels)
-            models = {**{c: m.results for c, m in full.items()}, cond: own.results}
-            rw = tsfdi.ResidualWindows({c: models[c] for c in conds})
-            xs = f.arrays(choice.channels)
-            lls.append((cond, f, np.vstack([rw.fit(x).loglik() for x in xs]), conds))
-            held = {c: per_flight(own.held, others) if c == cond else own_held[c] for c in conds}
-            pmax = max(int(m.lags) for m in models.values())
-            resid = {c: np.vstack([np.asarray(models[c].residuals(x))[pmax - int(models[c].lags):] for x in xs])
-                     for c in conds}
-            law = record_effect(held, lags=RECORD_LAGS, block=block)
-            rec.append((cond, f, law.loglik([resid[c] for c in conds]), conds))
-            # per airframe: condition@drone, from the fitting flights of that drone (the held-out one never among
-            # them); the law is fitted on every airframe (pooled spread), the flight's own airframe's rows kept
-            fitting = {c: others if c == cond else flights[c] for c in conds}
-            groups = {}
-            for c in conds:
-                for g, r in zip(fitting[c], held[c]):
-                    groups.setdefault((c, g.drone), []).append((g, r))
-            ll_a, names = airframe_loglik(groups, f.drone, resid, block)
-            air.append((cond, f, ll_a, names))
-            crit.append(critical_scale(ll_a, names.index(cond)) if cond in names else np.inf)
-    # leave-one-flight-out (jackknife) scale: each flight's critical scale is computed on its own held-out run
-    # above; a flight is decided at the smallest critical scale of the *other* flights, so a flight can be wrong
-    # only if its own critical scale is below every other's: at most one wrong flight of the benchmark, and
-    # P(wrong) <= 1 / (flights) for a new flight exchangeable with them
-    crit = np.asarray(crit)
-    scales = [float(np.min(np.delete(crit, i))) for i in range(len(crit))]
-    cal = [(cond, f, ll * c, names) for (cond, f, ll, names), c in zip(air, scales)]
-    verdicts = []
-    # the airframe-aware record-effect run is the result; for information: the same with the leave-one-flight-out
-    # scale, the record effect with the airframes pooled (the previous result), and the Gaussian per-sample
-    # log-likelihoods, scale-corrected and not
-    low = np.argsort(crit, kind="stable")[:3]
-    print(f"leave-one-flight-out scale (information): each flight's critical scale is the largest of {SCALE_STEP:g}^i "
-          f"(i = 0..{len(SCALE_GRID) - 1}) at and below which msprt decides no wrong candidate on its held-out run; a "
-          "flight is decided at the smallest critical scale of the other flights (at most one wrong flight by "
-          f"construction): scales {min(scales):.3g}-{max(scales):.3g}; the smallest critical scales: "
-          + ", ".join(f"{cp.SHORT[air[i][0]]} {air[i][1].log} {crit[i]:.3g}" for i in low)
-          + f"; {int((crit >= 1.0).sum())} of {len(crit)} flights at 1")
-    runs = [("record effect, airframe-aware", air, 1.0),
-            ("record effect, airframe-aware, leave-one-flight-out scale (information only)", cal, 1.0),
-            ("record effect, airframes pooled (information only)", rec, 1.0),
-            ("Gaussian, scale-corrected (information only)", lls, scale),
-            ("Gaussian, uncorrected, scale 1 (information only)", lls, 1.0)]
-    for what, items, c in [r for r in runs if r[2] is not None]:
-        rows = []
-        for cond, f, ll, names in items:
-            seq = msprt(ll, alpha=CRAZY_ALPHA, scale=c)
-            rows.append({"condition": cond, "drone": f.drone, "log": f.log, "samples": ll.shape[0],
-                         "candidates": len(names), "label": names[seq.label] if seq.label >= 0 else "undecided",
-                         "time": seq.decision_time / cp.FS if seq.label >= 0 else np.nan,
-                         "end": names[int(np.argmax(ll.sum(axis=0)))]})
-        v = crazypad_report(cp, pd.DataFrame(rows), what)
-        verdicts += v if items is air else []
+    flights = [f for c in conds for f in cp.load_condition(c, choice.margin)]
+    lengths = [min(len(f.segments[s]) for f in flights) for s in range(2)]
+    if any(len(f.segments) != 2 for f in flights):
+        raise ValueError("every CrazyPAD log is expected to hold two airborne segments")
+    print(f"{len(flights)} flights; each segment cut to the shortest of its rank over the flights ({lengths[0]} and "
+          f"{lengths[1]} samples; the longest were {max(len(f.segments[0]) for f in flights)} and "
+          f"{max(len(f.segments[1]) for f in flights)}), so every flight's samples are aligned on the programme")
+    F = {i: feature_series(cp, f, lengths) for i, f in enumerate(flights)}
+    info = [(f.condition, f.drone, f.log) for f in flights]
+    first = cp.samples(FIRST_S)
+    print("time-aligned record-level law (fixed a priori): at every sample, each candidate condition@drone predicts "
+          "the flight's running summaries by the mean of its fitting flights' running summaries at that sample, with "
+          "the between-flight covariance at that sample pooled over every condition@airframe (multivariate t); "
+          f"first summary after {FIRST_S:g} s; msprt, alpha {CRAZY_ALPHA:g}, Armitage bound; undecided = not "
+          "correct")
+    print("designs (fixed a priori; one is chosen inside each fold by leave one flight out among its fitting flights "
+          "only):")
+    for name, design in DESIGNS.items():
+        print(f"  {name}: " + ", ".join(f"{k} {v}" for k, v in design))
+    t0 = time.perf_counter()
+    rows, chosen = [], []
+    for i in range(len(flights)):
+        fitting = [r for r in range(len(flights)) if r != i]
+        name, _ = choose_design(F, info, fitting, first)
+        chosen.append(name)
+        rows.append({**decide_flight(F, info, i, fitting, DESIGNS[name], first), "design": name})
+    df = pd.DataFrame(rows)
+    print(f"nested leave one flight out in {time.perf_counter() - t0:.0f} s; design chosen per fold: "
+          + ", ".join(f"{k} {v}" for k, v in pd.Series(chosen).value_counts().items()))
+    verdicts = crazypad_report(cp, df, "time-aligned record effect, design chosen inside each fold")
+    if conditions is not None:
+        verdicts += withheld_check(cp, conditions, choice, F, info, flights, first)
     return verdicts
 
 
-def airframe_loglik(groups: dict, drone: str, resid: dict, block: int) -> tuple:
-    """Record-effect log-likelihoods of the candidates ``condition@drone`` for a flight of ``drone``: the law fitted
-    on every ``(condition, airframe)`` group of held-out records (the between-flight spread pooled over all of
-    them), its rows of ``drone`` kept; ``resid``: condition -> the condition model's residuals on the flight."""
-    law = record_effect({f"{c}@{d}": [r for _, r in v] for (c, d), v in groups.items()}, lags=RECORD_LAGS,
-                        block=block)
-    idx = [i for i, (_, d) in enumerate(groups) if d == drone]
-    names = tuple(list(groups)[i][0] for i in idx)
-    sub = dataclasses.replace(law, models=tuple(law.models[i] for i in idx), center=law.center[idx],
-                              between=law.between[idx], within=law.within[idx], df=law.df[idx],
-                              records=tuple(law.records[i] for i in idx))
-    return sub.loglik([resid[c] for c in names]), names
+def withheld_check(cp, conditions, choice, F9, info9, flights9, first) -> list:
+    """The check: the design chosen by leave one flight out over every flight of the 9 conditions (the withheld
+    conditions never used), then leave one flight out over every flight of ``conditions`` (e.g. ``'*'``), every
+    condition with a flight of the drone a candidate."""
+    design, res = choose_design(F9, info9, list(range(len(flights9))), first)
+    print(f"\nwithheld-conditions check: design chosen by leave one flight out over the {len(flights9)} flights of "
+          f"the {len(set(c for c, _, _ in info9))} conditions: {design} (inner scores: "
+          + "; ".join(f"{n} {c:.1f} % correct, {w} wrong" for n, (c, w, _) in res.items()) + ")")
+    cp.setup(None, conditions, None)
+    conds = cp.identified_conditions(choice.margin)
+    CONDITION_ORDER[:] = conds
+    flights = [f for c in conds for f in cp.load_condition(c, choice.margin)]
+    short = [f for f in flights if len(f.segments) != 2]
+    flights = [f for f in flights if len(f.segments) == 2]
+    lengths = [min(len(f.segments[s]) for f in flights) for s in range(2)]
+    print(f"{len(conds)} conditions, {len(flights)} flights ({len(short)} left out: not two airborne segments); "
+          f"segments cut to {lengths[0]} and {lengths[1]} samples")
+    F = {i: feature_series(cp, f, lengths) for i, f in enumerate(flights)}
+    info = [(f.condition, f.drone, f.log) for f in flights]
+    rows = [{**decide_flight(F, info, i, [r for r in range(len(flights)) if r != i], DESIGNS[design], first),
+             "design": design} for i in range(len(flights))]
+    df = pd.DataFrame(rows)
+    orig = set(c for c, _, _ in info9)
+    v = crazypad_report(cp, df[~df.condition.isin(orig)].copy(), "withheld conditions only (candidates: all "
+                        f"{len(conds)} conditions)", verdict=False)
+    v += crazypad_report(cp, df.copy(), f"all {len(conds)} conditions", verdict=False)
+    return v
 
 
-def critical_scale(ll: np.ndarray, true: int) -> float:
-    """The largest scale of ``SCALE_GRID`` at and below which ``msprt`` (alpha ``CRAZY_ALPHA``) never decides a
-    wrong candidate on ``ll`` (true column ``true``); 0 when even the smallest errs (no evidence is then used)."""
-    ok = 0.0
-    for c in SCALE_GRID[::-1]:                 # from the smallest scale up; stop at the first wrong decision
-        seq = msprt(ll, alpha=CRAZY_ALPHA, scale=c)
-        if seq.label >= 0 and seq.label != true:
-            break
-        ok = c
-    return ok
-
-
-def per_flight(held, flights) -> list:
-    """Held-out residuals (one array per segment, in the order of the flights' segments) joined per flight."""
-    it = iter(held)
-    return [np.vstack([next(it) for _ in f.segments]) for f in flights]
-
-
-def crazypad_report(cp, df: pd.DataFrame, what: str) -> list:
-    df["outcome"] = np.where(df.label == df.condition, "correct", np.where(df.label == "undecided", "undecided",
-                                                                           "wrong"))
+def crazypad_report(cp, df: pd.DataFrame, what: str, verdict: bool = True) -> list:
     per = df.groupby("condition", sort=False).agg(
-        flights=("log", "size"), correct=("outcome", lambda o: 100 * (o == "correct").mean()),
+        flights=("log", "size"), candidates=("candidates", "median"),
+        correct=("outcome", lambda o: 100 * (o == "correct").mean()),
         wrong=("outcome", lambda o: 100 * (o == "wrong").mean()),
         undecided=("outcome", lambda o: 100 * (o == "undecided").mean()),
-        time_mean=("time", "mean"), time_max=("time", "max"), flight_s=("samples", lambda n: n.mean() / cp.FS))
-    per.index = per.index.map(cp.SHORT)
+        time_mean=("time", "mean"), time_max=("time", "max"))
+    per.index = per.index.map(lambda c: cp.SHORT.get(c, c))
     print(f"\n{what}: per held-out flight, sequential decision (percent of the condition's flights; times in s from "
           "the flight's first airborne sample, its two segments one after the other):")
-    print(per.round(2).to_string())
-    print("confusion (rows true, columns decided, flights):")
-    print(pd.crosstab(df.condition.map(cp.SHORT), df.label.map(lambda v: cp.SHORT.get(v, v))).to_string())
+    print(per.round(2).to_string() if len(per) <= 12 else per.round(1).to_string(max_rows=80))
+    if len(per) <= 12:
+        print("confusion (rows true, columns decided, flights):")
+        print(pd.crosstab(df.condition.map(cp.SHORT), df.label.map(lambda v: cp.SHORT.get(v, v))).to_string())
     decided = df[df.outcome != "undecided"]
-    err = float((decided.outcome == "wrong").mean()) if len(decided) else float("nan")
-    mean_c = float(per["correct"].mean())
-    print(f"mean correct over the {len(per)} conditions {per['correct'].mean():.1f} %; realised error rate of the "
-          f"decided flights {err:.3f} ({int((decided.outcome == 'wrong').sum())} of "
-          f"{len(decided)}) against the bound's alpha {CRAZY_ALPHA:g}; mean time to decide "
-          f"{decided.time.mean():.2f} s")
     n_wrong = int((decided.outcome == "wrong").sum())
-    # consistent with the bound: no more wrong flights than the upper end of the 99 % binomial band of alpha
+    err = n_wrong / len(decided) if len(decided) else float("nan")
+    mean_c = float(per["correct"].mean())
     top = int(stats.binom.ppf(0.99, len(df), CRAZY_ALPHA))
-    print(f"wrong flights {n_wrong} of {len(df)}: at most {top} expected at alpha {CRAZY_ALPHA:g} (99 % binomial "
-          "quantile)")
-    by_drone = df.groupby("drone").agg(flights=("log", "size"), candidates=("candidates", "median"),
-                                       correct=("outcome", lambda o: int((o == "correct").sum())),
-                                       wrong=("outcome", lambda o: int((o == "wrong").sum())))
-    print("per airframe (flights, median number of candidates, correct and wrong flights): "
-          + "; ".join(f"{d} {r.flights} flights, {r.candidates:g} candidates, {r.correct} correct, {r.wrong} wrong"
-                      for d, r in by_drone.iterrows()))
+    pooled = 100 * float((df.outcome == "correct").mean())
+    print(f"mean correct over the {len(per)} conditions {mean_c:.1f} % (flights pooled {pooled:.1f} %); wrong flights {n_wrong} of {len(df)} (at most {top} expected at alpha "
+          f"{CRAZY_ALPHA:g}: 99 % binomial quantile); realised error rate of the decided {err:.3f}; undecided "
+          f"{int((df.outcome == 'undecided').sum())}; mean time to decide {decided.time.mean():.2f} s (median "
+          f"{decided.time.median():.2f} s)")
+    if n_wrong:
+        print("wrong flights: " + ", ".join(f"{cp.SHORT.get(r.condition, r.condition)} {r.log} -> "
+                                            f"{cp.SHORT.get(r.label, r.label)} at {r.time:.2f} s"
+                                            for r in decided[decided.outcome == "wrong"].itertuples()))
     end = (df.end == df.condition).groupby(df.condition, sort=False).mean()
     print(f"for information (no error rate): the most likely candidate at the end of the flight is the true one on "
           f"{100 * end.mean():.1f} % of the flights on average over the conditions")
     return [f"  {'PASS' if mean_c >= TARGET_CRAZY else 'FAIL'}  CrazyPAD mean correct over the {len(per)} conditions "
             f"{mean_c:.1f} % vs >= {TARGET_CRAZY:g} % ({what})",
             f"  {'PASS' if n_wrong <= top else 'FAIL'}  CrazyPAD wrong decisions {n_wrong} of {len(df)} flights "
-            f"(realised error rate of the decided {err:.3f}) vs <= {top} at alpha {CRAZY_ALPHA:g} ({what})"]
-
-
-def crazypad_scale(cp, full, flights, choice, conds) -> float:
-    """The scale correction of ``msprt_scale`` on the conditions' own logs: the condition model's held-out
-    residuals (both segments of a log held out together), every other model's residuals on that log."""
-    from tsfdi.detection.sequential import msprt_scale
-
-    items = []
-    for j, c in enumerate(conds):
-        held = iter(full[c].held)
-        for f in flights[c]:
-            for x in f.arrays(choice.channels):
-                given = {k: next(held) if k == c else np.asarray(full[k].results.residuals(x))
-                         for k in conds}
-                rw = tsfdi.ResidualWindows({k: full[k].results for k in conds})
-                items.append((rw.fit_residuals(given, x.shape[0]).loglik(), j))
-    return float(msprt_scale([ll for ll, _ in items], [j for _, j in items]))
+            f"vs <= {top} at alpha {CRAZY_ALPHA:g} ({what})"] if verdict else [
+            f"  info  CrazyPAD {what}: mean correct {mean_c:.1f} %, wrong {n_wrong} of {len(df)} (<= {top} at alpha "
+            f"{CRAZY_ALPHA:g}), mean time to decide {decided.time.mean():.2f} s"]
 
 
 # ------------------------------------------------------------------ 3. cost
