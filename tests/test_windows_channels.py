@@ -38,3 +38,12 @@ def test_missing_extra_channel_and_mixed_orders_are_refused(named):
     # positional arrays still work, in the models' order
     ws = tsfdi.ResidualWindows(models).fit(x.to_numpy()).statistics(tsfdi.FTest(), window=200, step=100)
     assert ws.channel_reject[:, :, 1].all()
+
+
+def test_per_channel_and_joint_tests_of_one_engine_are_refused_by_name(named):
+    # a mapping that tests one model per channel (3 statistics per window) and the other jointly (1) cannot share
+    # the arrays of WindowStatistics: a ValueError naming the model, not numpy's stacking error
+    models, _, x = named
+    tests = {"a": tsfdi.LjungBox(lags=5), "b": tsfdi.LjungBox(lags=5, multivariate="hosking")}
+    with pytest.raises(ValueError, match="3 and 1 statistics per window \\(model 'b'\\)"):
+        tsfdi.ResidualWindows(models).fit(x).statistics(tests, window=200, step=100)

@@ -655,7 +655,13 @@ def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = ()
         code = code * 2 + col
     for col in codes:
         code = code * r + col
-    values, n = np.unique(code, return_counts=True)
+    size = 2 ** k * r ** len(codes)
+    if size <= 4 * code.size + 64:                      # few possible rows: counted without sorting the windows
+        n = np.bincount(code, minlength=size)
+        values = np.flatnonzero(n)
+        n = n[values]
+    else:
+        values, n = np.unique(code, return_counts=True)
     for v, c in zip(values.tolist(), n.tolist()):
         picks = []
         for _ in codes:

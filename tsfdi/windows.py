@@ -383,9 +383,9 @@ class ResidualWindows:
                             f"not one for {bad}")
         step = min(step, nobs)                  # a step beyond the record: one window
         starts = np.arange(0, nobs - window + 1, step)
-        nwin = starts.size
-        parts, nres = [], []
-        for name, res in self.models.items():
+        nwin, nmod = starts.size, len(self.models)
+        out, decs, nres = (), [], []
+        for j, (name, res) in enumerate(self.models.items()):
             p = self.orders[name]
             n = window - p
             pre = False
@@ -396,12 +396,22 @@ class ResidualWindows:
                 pre = self._prefix[name]
             t = test[name] if isinstance(test, Mapping) else test
             lbw = tuple(self._lag_windows(name, part, n) for part in (t.tests if isinstance(t, AnyOf) else (t,)))
-            parts.append(self._model(res, self._resid[name], pre, t, starts, n, step, name, p, pmax, window, lbw))
+            part = self._model(res, self._resid[name], pre, t, starts, n, step, name, p, pmax, window, lbw)
+            cols = part[3].shape[1]
+            if not out:                         # statistic, p-value, threshold, channel rejection; the score
+                out = (*(np.empty((nwin, nmod, cols)) for _ in range(3)), np.empty((nwin, nmod, cols), bool),
+                       np.empty((nwin, nmod)))
+            elif cols != out[3].shape[2]:
+                raise ValueError(f"the tests of the models give {out[3].shape[2]} and {cols} statistics per window "
+                                 f"(model {name!r}): test every model per channel, or every one jointly")
+            for arr, value in zip(out, part):
+                arr[:, j] = value
+            decs.append(part[5])
             nres.append(n)
-        stat, pv, thr, rej_c, ll = (np.stack([pt[i] for pt in parts], axis=1) for i in range(5))
+        stat, pv, thr, rej_c, ll = out
         dec = None
-        if all(pt[5] is not None for pt in parts):
-            dec = tuple(tuple(pt[5][i] for pt in parts) for i in range(nwin))
+        if all(d is not None for d in decs):
+            dec = tuple(tuple(d[i] for d in decs) for i in range(nwin))
         return WindowStatistics(models=tuple(self.models), channels=self.channels_, starts=starts, window=window,
                                 step=step, nobs=tuple(nres), statistic=stat, threshold=thr, pvalue=pv,
                                 channel_reject=rej_c, reject=rej_c.any(axis=2), loglik=ll, decisions=dec)
@@ -453,7 +463,6 @@ class ResidualWindows:
             pv = np.array([d.pvalue for d in ds]).reshape(nwin, -1)
             thr = np.array([d.threshold for d in ds], dtype=float).reshape(nwin, -1)
             rej_c = np.array([d.channel_reject for d in ds]).reshape(nwin, -1)
-        thr = np.broadcast_to(np.asarray(thr, dtype=float), rej_c.shape)
         if prefix is False:
             return stat, pv, thr, rej_c, np.full(nwin, np.nan), ds
         if prefix is None:            # no proper Gaussian law (singular Sigma): never the most likely
