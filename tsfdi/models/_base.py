@@ -991,13 +991,14 @@ class LinearTimeSeriesResults:
         The model is stable when all roots lie outside the unit circle (statsmodels' convention).
         Sorted by modulus.
         """
-        A = self._ar_matrices()
+        A = self._ar_blocks
         na, s = A.shape[0], self.neqs
         if na == 0:
             return np.empty(0, dtype=complex)
-        comp = np.zeros((na * s, na * s))
-        comp[:s] = -np.concatenate(list(A), axis=1)
-        comp[s:, :-s] = np.eye((na - 1) * s)
+        n = na * s
+        comp = np.zeros((n, n))
+        comp[:s] = -A.transpose(1, 0, 2).reshape(s, n)       # [A_1 ... A_na]
+        comp.ravel()[s * n::n + 1] = 1.0                      # the identity below the first block row
         eig = np.linalg.eigvals(comp)
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):   # a zero eigenvalue: a root at inf
             r = 1.0 / eig
