@@ -500,6 +500,12 @@ def test_aligned_record_effect_input_checks():
         aligned_record_effect(held, min_samples=1)
     with pytest.raises(ValueError, match="singular"):
         aligned_record_effect({"a": [np.ones((50, 1))] * 4, "b": [np.ones((50, 1))] * 4}, min_samples=5)
+    with pytest.raises(TypeError, match=r"held_out\['m1'\] must be a non-empty list"):
+        aligned_record_effect({**held, "m1": 3})
+    with pytest.raises(ValueError, match=r"held_out\['m0'\]: a record has a channel that is zero"):
+        aligned_record_effect({**held, "m0": [np.zeros((200, 2))] + held["m0"][1:]}, min_samples=5)
+    with pytest.raises(ValueError, match="fewer than min_samples = 300"):
+        aligned_record_effect(held, min_samples=300)
     law = aligned_record_effect(held)
     e = np.ones((100, 2))
     with pytest.raises(ValueError, match="one array per model"):
@@ -510,3 +516,12 @@ def test_aligned_record_effect_input_checks():
         law.loglik([e, e[:90], e])
     with pytest.raises(ValueError, match=r"resid\['m0'\]: a channel is zero over the first"):
         law.loglik([np.zeros((100, 2)), e, e])
+
+
+def test_aligned_record_effect_allocation_is_bounded(monkeypatch):
+    # the (n, q, q) spread and the (R, n, q) running summaries are refused beyond MAX_VALUES, naming held_out
+    _, _, held = aligned_data()
+    monkeypatch.setattr(sequential, "MAX_VALUES", 200 * 4 * 10)
+    with pytest.raises(ValueError, match="held_out: 15 records of 200 samples and 4 summaries need more values"):
+        aligned_record_effect(held)
+    assert aligned_record_effect(held, summaries=["mean[y0]"]).between.shape == (200, 1, 1)

@@ -1573,34 +1573,36 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     min_samples = int_like(min_samples, "min_samples", minimum=2)
     names = tuple(str(m) for m in held_out)
     k = n = None
-    F, R = [], []
-    for name, recs in held_out.items():
-        arrs = _residual_records(recs, f"held_out[{name!r}]", k)
-        if n is None:
-            k, n = arrs[0].shape[1], arrs[0].shape[0]
-            every = _summary_names(k, lags)
-            chosen = every if summaries is None else [str(s) for s in summaries]
-            unknown = [s for s in chosen if s not in every]
-            if unknown or len(set(chosen)) != len(chosen):
-                raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of "
-                                 f"the {len(every)} summaries of {k}-channel records with lags={lags}: "
-                                 f"{', '.join(every)}")
-            keep = [every.index(s) for s in chosen]
-            if n < max(min_samples, lags + 2):
-                raise ValueError(f"held_out[{name!r}][0] has {n} samples, fewer than min_samples = {min_samples} "
-                                 f"(or lags + 2)")
-            if 8.0 * n * len(keep) * (len(keep) + sum(len(v) for v in held_out.values())) > 8.0 * MAX_VALUES:
-                raise ValueError(f"held_out: {n} samples x {len(keep)} summaries per record need more values than "
-                                 f"the library allocates at once ({MAX_VALUES})")
+    recs = {}
+    for name, v in held_out.items():
+        arrs = _residual_records(v, f"held_out[{name!r}]", k)
+        k, n = arrs[0].shape[1], arrs[0].shape[0] if n is None else n
         uneven = [i for i, e in enumerate(arrs) if e.shape[0] != n]
         if uneven:
             raise ValueError(f"held_out[{name!r}][{uneven[0]}] has {arrs[uneven[0]].shape[0]} samples, the first "
                              f"record {n}: the records must be aligned and of one length (cut them to a common one)")
+        recs[name] = arrs
+    every = _summary_names(k, lags)
+    chosen = every if summaries is None else [str(s) for s in summaries]
+    unknown = [s for s in chosen if s not in every]
+    if unknown or len(set(chosen)) != len(chosen):
+        raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of the "
+                         f"{len(every)} summaries of {k}-channel records with lags={lags}: {', '.join(every)}")
+    keep = [every.index(s) for s in chosen]
+    if n < max(min_samples, lags + 2):
+        raise ValueError(f"held_out: the records have {n} samples, fewer than min_samples = {min_samples} (or lags "
+                         f"+ 2 = {lags + 2})")
+    total = sum(len(v) for v in recs.values())
+    if n * (len(every) + len(keep) * (len(keep) + total)) > MAX_VALUES:
+        raise ValueError(f"held_out: {total} records of {n} samples and {len(keep)} summaries need more values than "
+                         f"the library allocates at once ({MAX_VALUES}): give shorter records or fewer summaries")
+    F, R = [], []
+    for name, arrs in recs.items():
         with np.errstate(divide="ignore", invalid="ignore"):
             f = np.array([_running_summaries(e, lags, min_samples - 1)[:, keep] for e in arrs])
         if not np.isfinite(f).all():
-            raise ValueError(f"held_out[{name!r}]: a record has a channel that is zero or constant over its first "
-                             f"{min_samples} samples or more (its summaries are not finite)")
+            raise ValueError(f"held_out[{name!r}]: a record has a channel that is zero over its first "
+                             f"{min_samples} samples or more (its log RMS is not finite)")
         F.append(f)
         R.append(len(arrs))
     R = np.array(R)
