@@ -294,11 +294,12 @@ def _residual_blocks(M: np.ndarray, coef: np.ndarray, const: bool) -> np.ndarray
     s = coef.shape[1]
     p = (coef.shape[0] - c) // s
     B = p + 1
-    W = np.concatenate([np.eye(s)[None], coef[c:].reshape(p, s, s)])   # W[k][i, j]: input i, equation j
-    a = np.arange(B)
-    lag = a[None, :] - a[:, None]                                         # [b, a] = a - b
-    T0 = np.where((lag >= 0)[:, :, None, None], W[np.clip(lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
-    T1 = np.where((lag < 0)[:, :, None, None], W[np.clip(B + lag, 0, p)], 0.0).transpose(0, 2, 1, 3)
+    # W[k][i, j] (input i, equation j) padded so that block [b, a] of T0 is W[a - b] (zero for a < b) and of T1
+    # W[B + a - b] (zero for a >= b): both read at a - b + B - 1
+    zero = np.zeros((B, s, s))
+    lag = np.arange(B - 1, 2 * B - 1)[None, :] - np.arange(B)[:, None]       # [b, a] = a - b + B - 1
+    T0 = np.concatenate([zero[1:], np.eye(s)[None], coef[c:].reshape(p, s, s)])[lag].transpose(0, 2, 1, 3)
+    T1 = np.concatenate([coef[c:].reshape(p, s, s), zero])[lag].transpose(0, 2, 1, 3)
     # T0 is upper triangular with a unit diagonal (W_0 = I), T1 strictly lower triangular: two triangular
     # products (BLAS trmm, half the work of a general product) on the transposed, Fortran-ordered view of M
     E = blas.dtrmm(1.0, T0.reshape(B * s, B * s), M.T, side=0, lower=0, trans_a=1, diag=1).T
@@ -458,9 +459,8 @@ def _cholesky(gram: np.ndarray) -> np.ndarray | None:
     if info != 0:
         return None
     d = R.diagonal()
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = d * d / gram.diagonal()
-    if np.isfinite(R).all() and rel.min() > GRAM_RELATIVE_FLOOR:
+    # R[i, i]**2 / G[i, i] > floor without the division (G[i, i] > 0 where potrf succeeds; NaN compares False)
+    if np.isfinite(R).all() and (d * d > GRAM_RELATIVE_FLOOR * gram.diagonal()).all():
         return R
     return None
 
