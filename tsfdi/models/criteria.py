@@ -7,6 +7,8 @@ formulas.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["information_criteria", "EXACT_FIT_RTOL", "COLLINEAR_RTOL"]
@@ -92,8 +94,9 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     sigma = sse / nobs
     var = sigma.diagonal(axis1=-2, axis2=-1)               # (q, s)
     if s == 1:
-        exact = var[:, 0] < floor[0]
-        logdet = np.log(np.maximum(var[:, 0], floor[0]))
+        v0, f0 = var[:, 0], float(floor[0])
+        exact = v0 < f0
+        logdet = np.log(np.maximum(v0, f0))
     else:   # the smallest eigenvalue is >= det / tr^(s-1), and >= det / tr^s times the largest: only the fits
         # that fail these bounds (against the largest floor) are decomposed, in units of the floor
         with np.errstate(divide="ignore", invalid="ignore"):   # a singular Sigma: -inf, replaced below
@@ -111,7 +114,7 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     if own:
         top = 1.0
         resid_ss = var[:, 0] if s == 1 else var.sum(axis=-1)    # tr Sigma
-        sss_w = float(sss.sum())
+        sss_w = float(sss[0]) if sss.size == 1 else float(sss.sum())
         trace = np.maximum(var, floor).sum(axis=-1) if any_exact else resid_ss
     else:   # tr Sigma and tr Y'Y in data units, as top^2 * (sum of (scale / top)^2-weighted terms)
         logdet = logdet + 2 * np.log(scale).sum()
@@ -120,14 +123,15 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
         resid_ss = np.sum(var * w, axis=-1)
         sss_w = float(np.sum(sss * w))
         trace = np.sum(np.maximum(var, floor) * w, axis=-1) if any_exact else resid_ss
-    llf = -0.5 * nobs * (s * np.log(2 * np.pi) + logdet + s)
+    # (scalar logarithms by math: numpy's scalar calls cost more than the arrays here)
+    llf = -0.5 * nobs * (s * math.log(2 * math.pi) + logdet + s)
     k = df_model + s * (s + 1) / 2
-    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * np.log(top) + 1)
+    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * math.log(top) + 1)
     return {
         "llf": llf,
         "aic": -2 * llf + 2 * k,
-        "bic": fit_term + k * np.log(nobs),
-        "hqic": -2 * llf + 2 * k * np.log(np.log(nobs)),
+        "bic": fit_term + k * math.log(nobs),
+        "hqic": -2 * llf + 2 * k * math.log(math.log(nobs)),
         "rss_sss": 100.0 * nobs * resid_ss / sss_w if sss_w > 0 else np.zeros(len(sse)),
         "spp": nobs * s / df_model,
         "sigma2": resid_ss * top * top / s,
