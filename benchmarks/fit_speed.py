@@ -37,8 +37,8 @@ from previous_commit import CLOCKS, compare, median_time  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 #: the commit before fit() went through the Gram matrix (issue 36)
 AGAINST = "cf49e9f"
-#: the commit before session 30's fit_baselines / results changes (issue 36)
-PREVIOUS = "026d541"
+#: the commit before session 31's fit / fit_baselines / select_order changes (issue 36)
+PREVIOUS = "1aa5ada"
 CHANNELS = ("roll", "pitch", "r")
 #: workloads of benchmarks/previous_commit.py timed here: name -> (description, timed units per run)
 WORKLOADS = {
