@@ -243,3 +243,29 @@ def test_aligned_record_effect_decides_records_that_follow_a_programme():
             decided_fixed += msprt(fixed.loglik([x] * M), alpha=alpha).decided
     assert decided > 1.5 * decided_fixed, (decided, decided_fixed)
     assert not band_high(wrong, M * reps, alpha), (wrong, decided)
+
+
+def test_aligned_record_effect_keeps_the_bound_when_its_assumptions_hold():
+    # CrazyPAD's shape (7 candidates, 3 records each, 4 summaries) with the law's assumptions true: a Gaussian
+    # record effect with one spread for every state, AR(0.9) noise. msprt looks at every sample, yet P(wrong) stays
+    # within alpha (the bound is not guaranteed for a running predictive law; this checks it where it should hold)
+    rng = np.random.default_rng(1)
+    M, R, n, q, alpha = 7, 3, 1000, 4, 0.01
+    mu = rng.normal(0.0, 1.0, (M, q))
+
+    def rec(j):
+        eps = signal.lfilter([1.0], [1.0, -0.9], rng.standard_normal((n + 50, q)), axis=0)[50:] * np.sqrt(1 - 0.81)
+        return mu[j] + 0.3 * rng.standard_normal(q) + eps
+
+    wrong = decided = total = 0
+    for _ in range(60):
+        law = aligned_record_effect({f"s{j}": [rec(j) for _ in range(R)] for j in range(M)}, min_samples=50,
+                                    summaries=[f"mean[y{i}]" for i in range(q)])
+        for j in range(M):
+            x = rec(j)
+            d = msprt(law.loglik([x] * M), alpha=alpha)
+            total += 1
+            decided += d.decided
+            wrong += d.decided and d.label != j
+    assert decided > 0.3 * total, decided
+    assert not band_high(wrong, total, alpha), (wrong, decided, total)
