@@ -157,6 +157,8 @@ class CalibratedTest(ResidualTest):
     threshold: Any = None
     #: known degrees of freedom of the statistic's null law, fixed in the calibrated law (None: fitted)
     null_df: float | None = None
+    #: how the records of a calibration differ (ScaledChi2Threshold ``shape``): ``"pooled"`` when only in scale
+    null_shape: str = "record"
     alpha: float
     #: Name of the distributional threshold option, the same for every test.
     _theoretical = "theoretical"
@@ -457,6 +459,8 @@ class CalibratedTest(ResidualTest):
             est.false_alarm = a
             if isinstance(est, ScaledChi2Threshold) and est.df is None:
                 est.df = self.null_df                  # the statistic's known degrees of freedom, if any
+            if isinstance(est, ScaledChi2Threshold) and est.shape is None:
+                est.shape = self.null_shape
             for attr in [v for v in vars(est) if v.endswith("_")]:
                 est.__dict__.pop(attr, None)
             try:

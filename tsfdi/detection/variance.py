@@ -86,6 +86,8 @@ class FTest(ReferenceVarianceTest):
     """
 
     name = "F test (residual variance)"
+    #: records differ by their noise level: a change of scale of the variance ratio (one shape for every record)
+    null_shape = "pooled"
 
     def __init__(self, alpha: float = 0.05, *, alternative: str = "greater", demean: bool = False,
                  correction: str = "sidak", threshold: Any = "theoretical") -> None:
