@@ -321,6 +321,8 @@ def test_records_validity_of_a_record_array():
     unread = Records.from_data(da, check_finite=False)         # the caller checks the records it uses
     assert unread.valid.all()
     np.testing.assert_array_equal(np.stack(unread.values), v)
+    with pytest.raises(TypeError, match="check_finite"):
+        Records.from_data(list(v), states=["h"] * 5, check_finite="no")
 
 
 def test_fit_baselines_skips_non_finite_records_of_an_array(synthetic):

@@ -21,3 +21,17 @@ def test_rolling_variance_equals_numpy_per_window(n, k, window, step):
     assert (out >= 0).all()
     np.testing.assert_allclose(rolling_variance(x[:, 0], window, step), ref[:, :1], rtol=1e-9,
                                atol=1e-11 * ref.max())
+
+
+def test_rolling_variance_overflow_is_not_silent():
+    """Squares that overflow (finite values near 1e200) give the NaN windows numpy's prefix sums gave, never a
+    silent variance of 0."""
+    x = np.array([1e200, -1e200, 1e200, 3.0, 1.0, 2.0])[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        c = x - x.mean(axis=0)
+        s1, s2 = np.r_[[[0.0]], np.cumsum(c, axis=0)], np.r_[[[0.0]], np.cumsum(c * c, axis=0)]
+        m = (s1[2:] - s1[:-2]) / 2
+        ref = np.maximum((s2[2:] - s2[:-2]) / 2 - m * m, 0.0)
+        out = rolling_variance(x, 2)
+    assert np.isnan(ref[:3, 0]).all()
+    np.testing.assert_array_equal(out, ref)

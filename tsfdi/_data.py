@@ -532,7 +532,7 @@ def _window_variances(xt, starts, window, out):  # pragma: no cover - compiled
             while w_hi < starts.size and starts[w_hi] + window == t:
                 m = (s1 - a1[w_hi]) / window
                 v = (s2 - a2[w_hi]) / window - m * m
-                out[w_hi, c] = v if v > 0.0 else 0.0
+                out[w_hi, c] = 0.0 if v < 0.0 else v     # (NaN kept, as numpy.maximum)
                 w_hi += 1
             if t < n:
                 v = xt[c, t]

@@ -94,6 +94,7 @@ class Records:
         A ``Dataset`` or ``DataArray`` backed by dask and chunked along ``record`` (:func:`tsfdi.fleet.is_chunked`)
         is not read: the labels come from its coordinates, the channels and ``fs`` from its first record, and the
         data stays in :attr:`source`."""
+        check_finite = boolean(check_finite, "check_finite")
         if isinstance(data, Records):
             return data
         import xarray as xr
@@ -121,7 +122,7 @@ class Records:
             st, tb, ft, ids, lost = _labels(da, states, failure_times, turbulence, name)
             arr = np.asarray(da.values, dtype=np.float64)
             valid = ~lost
-            if boolean(check_finite, "check_finite"):
+            if check_finite:
                 # one pass over all records: a record's sum is finite when its values are (a finite sum that
                 # overflows is rechecked value by value)
                 with np.errstate(over="ignore", invalid="ignore"):
