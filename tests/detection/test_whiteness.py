@@ -294,14 +294,18 @@ def test_lag_products_shared_across_window_lengths(monkeypatch):
 
     rng = np.random.default_rng(7)
     x = sps.lfilter([1], [1, -0.5], rng.standard_normal((5000, 3)), axis=0) + 2.0
+    # the kept lag sums of one grid (the gcd of window and step) serve the windows on it and on coarser grids, a
+    # finer grid replaces them: bit for bit the sums of the windows' own grid
     lbw = LjungBoxWindows(x, 20)
-    for window, step in [(480, 100), (980, 100), (1980, 100), (25, 1), (5000, 7)]:
+    for window, step in [(60, 40), (480, 100), (500, 100), (130, 15), (37, 3), (25, 1), (480, 100), (5000, 7),
+                         (980, 100), (1980, 100)]:
         np.testing.assert_array_equal(lbw.statistic(window, step), ljungbox_windows(x, 20, window, step))
+    lbw = LjungBoxWindows(x, 20)
     monkeypatch.setattr(whiteness, "_KEEP_LAGPROD", 3000)
     blocked = LjungBoxWindows(x, 20)
-    assert blocked._lagprod is None
-    for window, step in [(480, 100), (130, 1), (5000, 1)]:
+    for window, step in [(480, 100), (130, 1), (5000, 1), (60, 40)]:
         np.testing.assert_allclose(blocked.statistic(window, step), lbw.statistic(window, step), rtol=1e-12)
+    assert blocked._grid is None                        # above the bound: nothing kept between calls
     with pytest.raises(ValueError, match="window"):
         lbw.statistic(20, 1)
     with pytest.raises(ValueError, match="window"):

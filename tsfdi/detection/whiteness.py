@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -411,9 +412,11 @@ class LjungBoxWindows:
 
     Notes
     -----
-    The prefix sums of the lag products (``N * lags`` values per channel) are kept when the record holds at most
-    ``2**20`` of them over all channels (8 MB), in one array; a longer record keeps only the O(N) sums and
-    :meth:`statistic` recomputes the lag products for each call, a block of windows at a time, in bounded memory.
+    The lag products are summed in one pass per grid of samples on which the windows start and end (the greatest
+    common divisor of ``window`` and ``step``), and only the sums at the grid's samples are kept (``2 * lags``
+    values per channel and grid sample): the record's grid is kept when those sums number at most ``2**20`` over
+    all channels (8 MB), and serves every later call whose windows lie on it (5 / 10 / 20 s windows 1 s apart share
+    one); above, :meth:`statistic` recomputes them for each call, a block of windows at a time, in bounded memory.
     The statistics are those of :func:`ljungbox_windows` (see its Notes).
 
     Examples
@@ -436,10 +439,7 @@ class LjungBoxWindows:
         # channels on axis 0: the record, its rescaled and centred copy with its prefix sums, the last change
         self._x = np.ascontiguousarray(x.T)
         self._sums = _record_sums(self._x, np.ldexp(1.0, -e), self.demean)
-        self._lagprod = None
-        if self.nobs * self.lags * x.shape[1] <= _KEEP_LAGPROD:
-            self._lagprod = _lag_prefix(self._sums[0], 0, self.nobs, self.lags,
-                                        np.empty((x.shape[1], self.nobs + 1, self.lags)))
+        self._grid = None                     # (g, lag sums at every g-th sample) of the whole record, once kept
 
     def statistic(self, window: int, step: int = 1) -> np.ndarray:
         """``Q`` of every window of ``window`` samples, ``step`` apart: shape (n_windows, k), as
@@ -451,22 +451,50 @@ class LjungBoxWindows:
         if window <= self.lags:
             raise ValueError(f"window must be > lags ({self.lags}), got {window}")
         starts = np.arange(0, self.nobs - window + 1, step, dtype=np.int64)
-        if self._lagprod is not None:
-            return _windows_q(self._x, *self._sums, self._lagprod, 0, self.lags, window, starts, self.demean)
-        # a block of windows at a time: the lag products of the samples they cover, from the block's first one
-        k = self._x.shape[0]
-        per = max(1, (_KEEP_LAGPROD // (self.lags * k) - window) // step)
+        k, lags = self._x.shape[0], self.lags
+        g = math.gcd(window, step)            # every window starts and ends on this grid of samples
+        if g < _GRID_MIN:                     # a fine grid costs more bookkeeping than it saves: every sample's sums
+            g = 1
+        if self._grid is not None and g % self._grid[0] == 0:      # a finer grid kept by an earlier call serves
+            return _windows_q(self._x, *self._sums, *self._grid[1:], _rows(starts, 0, window, self._grid[0]), lags,
+                              window, starts, self.demean)
+        kept = (1 + (g > 1)) * k * lags           # sums kept per grid sample (pa, and pb for g > 1)
+        if kept * (self.nobs // g + 1) <= _KEEP_LAGPROD:
+            self._grid = (g, *_lag_sums(self._sums[0], 0, self.nobs, lags, g))
+            return _windows_q(self._x, *self._sums, *self._grid[1:], _rows(starts, 0, window, g), lags, window,
+                              starts, self.demean)
+        # a block of windows at a time: the lag sums of the samples they cover, from the block's first one
+        per = max(1, (_KEEP_LAGPROD // kept * g - window) // step)
         q = np.empty((starts.size, k))
         for w0 in range(0, starts.size, per):
             st = starts[w0:w0 + per]
             r0, r1 = int(st[0]), int(st[-1]) + window
-            pre = _lag_prefix(self._sums[0], r0, r1, self.lags, np.empty((k, r1 - r0 + 1, self.lags)))
-            q[w0:w0 + per] = _windows_q(self._x, *self._sums, pre, r0, self.lags, window, st, self.demean)
+            grid = _lag_sums(self._sums[0], r0, r1, lags, g)
+            q[w0:w0 + per] = _windows_q(self._x, *self._sums, *grid, _rows(st, r0, window, g), lags, window, st,
+                                        self.demean)
         return q
 
 
-#: Most lag products (over all channels) a LjungBoxWindows keeps; above, they are recomputed per call in blocks.
+def _rows(starts: np.ndarray, r0: int, window: int, g: int) -> np.ndarray:
+    """The grid rows of the window starts from sample ``r0``, then the window's length in rows (:func:`_windows_q`)."""
+    return np.append((starts - r0) // g, window // g)
+
+
+def _lag_sums(v: np.ndarray, r0: int, r1: int, lags: int, g: int) -> tuple:
+    """``pa``, ``pb`` of :func:`_lag_grid` over samples ``[r0, r1)`` on a grid of ``g`` (:func:`_lag_prefix` for
+    ``g = 1``)."""
+    k, rows = v.shape[0], (r1 - r0) // g + 1
+    pa = np.empty((k, rows, lags))
+    if g == 1:
+        return _lag_prefix(v, r0, r1, lags, pa), np.empty((k, 0, lags))
+    return _lag_grid(v, r0, r1, lags, g, pa, np.empty((k, rows, lags)))
+
+
+#: Most lag sums (over all channels) a LjungBoxWindows keeps; above, they are recomputed per call in blocks.
 _KEEP_LAGPROD = 2 ** 20
+#: Finest grid whose lag sums LjungBoxWindows keeps alone (a window length and step with a smaller common divisor
+#: use every sample's sums, on a grid of 1)
+_GRID_MIN = 5
 
 
 #: A window whose centred energy is below this fraction of the prefix sum of squares at its end is computed directly.
@@ -533,10 +561,57 @@ def _record_sums(x, factor, demean):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def _lag_grid(v, r0, r1, lags, g, pa, pb):  # pragma: no cover - compiled
+    """The sums of the lag products of ``v[:, r0:r1]`` that windows starting and ending on a grid of ``g > 1``
+    samples need, with ``P[i, l - 1] = sum_{r0 <= t < r0 + i} v[t + l] v[t]``, into ``pa`` and ``pb`` (channels,
+    ``(r1 - r0) // g + 1`` rows, ``lags`` columns): ``pa[c, j] = P[j g]`` and ``pb[c, j, l - 1] = P[j g - l, l - 1]``
+    (where ``j g >= l``; other entries are not written). The lag-``l`` sum of the window ``[r0 + ja g, r0 + jb g)``
+    is ``pb[c, jb, l - 1] - pa[c, ja, l - 1]``. Returns ``pa, pb``.
+
+    One pass, with the lags as the inner loop: the ``lags`` running sums are independent, so the loop compiles to
+    packed adds instead of one serial (latency-bound) recursion per lag, each sum adds the same products in the same
+    order as :func:`_lag_prefix`, and only the grid's rows are written: a few kB instead of the ``8 N lags`` bytes
+    per channel of every sample's sums, which evicted the rest of the work from the cache.
+    """
+    m = r1 - r0
+    rows = pb.shape[1]
+    full = max(0, m - lags)              # samples whose every lag stays inside [r0, r1)
+    acc = np.empty(lags)                 # the running sums P[i]
+    for c in range(v.shape[0]):
+        x = v[c]
+        acc[:] = 0.0
+        j, phase = 0, 0                  # row i = j g + phase (no division in the loop)
+        for i in range(m + 1):           # acc = P[i]: keep what the grid needs, then add the products of r0 + i
+            if phase == 0:
+                pa[c, j, :] = acc
+            lag, n = g - phase, j + 1    # the lags l with i + l on the grid, (j + 1 + n') g: l = g - phase + n' g
+            while lag <= lags and n < rows:
+                pb[c, n, lag - 1] = acc[lag - 1]
+                lag += g
+                n += 1
+            if i == m:
+                break
+            t = r0 + i
+            vt = x[t]
+            if i < full:
+                seg = x[t + 1:t + 1 + lags]
+                for lag in range(lags):
+                    acc[lag] += seg[lag] * vt
+            else:
+                for lag in range(min(lags, r1 - 1 - t)):      # lags with t + l < r1
+                    acc[lag] += x[t + 1 + lag] * vt
+            phase += 1
+            if phase == g:
+                j, phase = j + 1, 0
+    return pa, pb
+
+
+@numba.njit(cache=True, nogil=True)
 def _lag_prefix(v, r0, r1, lags, p):  # pragma: no cover - compiled
     """Prefix sums of the lag products of ``v[:, r0:r1]`` into ``p`` (channels, ``r1 - r0 + 1`` rows, ``lags``
     columns): row ``i``, column ``l - 1`` holds ``sum_{r0 <= t < r0 + i} v[t + l] v[t]`` (for ``r0 + i + l <= r1``;
-    the rows beyond are not used). Returns ``p``.
+    the rows beyond are not used): :func:`_lag_grid` for ``g = 1``, with the rows written as they are summed, which
+    the compiled loop does at half the cost of the grid's bookkeeping. Returns ``p``.
 
     The lags are the inner loop: the ``lags`` running sums are independent, so the loop compiles to packed adds
     instead of one serial (latency-bound) recursion per lag, and each sum adds the same products in the same order.
@@ -567,19 +642,22 @@ def _lag_prefix(v, r0, r1, lags, p):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _windows_q(x, v, s1, s2, last, p, r0, lags, window, starts, demean):  # pragma: no cover - compiled
+def _windows_q(x, v, s1, s2, last, pa, pb, grid, lags, window, starts, demean):  # pragma: no cover - compiled
     """Q of every window (rows) and channel (columns) from prefix sums of ``v = x * factor - centre`` (``x``
     rescaled by a power of two, and centred on the record's mean with ``demean``; channels on axis 0 of every
-    array): ``s1``, ``s2`` of values and squares (from sample 0) and ``p`` of the lag products (:func:`_lag_prefix`,
-    from sample ``r0``). ``x`` itself (a rescaled record could underflow in a window far quieter than the rest)
-    serves the exact test for constant windows (``last``: the last sample up to each one that differs from its
-    predecessor) and the direct evaluation of windows the prefix sums cannot resolve."""
+    array): ``s1``, ``s2`` of values and squares (from sample 0) and ``pa``, ``pb`` of the lag products on the grid of
+    ``g`` samples from sample ``r0`` (:func:`_lag_grid`; every window starts and ends on it; ``grid`` holds each
+    start's row ``(start - r0) / g`` and the window's rows ``window / g``, divided by numpy). ``x`` itself (a
+    rescaled record could underflow in a window far quieter than the rest) serves the exact test for constant
+    windows (``last``: the last sample up to each one that differs from its predecessor) and the direct evaluation of
+    windows the prefix sums cannot resolve."""
     nw = starts.shape[0]
     k = x.shape[0]
     n = float(window)
     q = np.empty((nw, k))
     for c in range(k):
-        c1, c2, pc = s1[c], s2[c], p[c]
+        c1, c2, ca = s1[c], s2[c], pa[c]
+        ends, back = (pa[c], 1) if pb.shape[1] == 0 else (pb[c], 0)   # P[b - l, l - 1]: ends[jb - back l, l - 1]
         for w in range(nw):
             a = starts[w]
             b = a + window
@@ -592,8 +670,10 @@ def _windows_q(x, v, s1, s2, last, p, r0, lags, window, starts, demean):  # prag
                 q[w, c] = _direct_q(x[c], a, window, lags, demean)
                 continue
             acc = 0.0
+            ja = grid[w]
+            jb = ja + grid[nw]
             for lag in range(1, lags + 1):
-                lagsum = pc[b - lag - r0, lag - 1] - pc[a - r0, lag - 1]
+                lagsum = ends[jb - back * lag, lag - 1] - ca[ja, lag - 1]
                 head = c1[b] - c1[a + lag]
                 tail = c1[b - lag] - c1[a]
                 cov = lagsum - m * (head + tail) + (n - lag) * m * m
