@@ -413,10 +413,11 @@ class LjungBoxWindows:
     Notes
     -----
     The lag products are summed in one pass per grid of samples on which the windows start and end (the greatest
-    common divisor of ``window`` and ``step``), and only the sums at the grid's samples are kept (``2 * lags``
-    values per channel and grid sample): the record's grid is kept when those sums number at most ``2**20`` over
-    all channels (8 MB), and serves every later call whose windows lie on it (5 / 10 / 20 s windows 1 s apart share
-    one); above, :meth:`statistic` recomputes them for each call, a block of windows at a time, in bounded memory.
+    common divisor of ``window`` and ``step``; below 5 samples, every sample), and only the sums at the grid's
+    samples are kept (``2 * lags`` values per channel and grid sample, ``lags`` on the grid of every sample): the
+    record's grid is kept when those sums number at most ``2**20`` over all channels (8 MB), and serves every later
+    call whose windows lie on it (5 / 10 / 20 s windows 1 s apart share one); above, :meth:`statistic` recomputes
+    them for each call, a block of windows at a time, in bounded memory.
     The statistics are those of :func:`ljungbox_windows` (see its Notes).
 
     Examples
