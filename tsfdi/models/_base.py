@@ -241,8 +241,9 @@ class LinearTimeSeriesModel:
         if self._rescaled:
             out._col_scale = self._col_scale[:k]
         gram = self.gram()
-        keep = np.r_[0:k, gram.shape[0] - self.neqs:gram.shape[0]]   # the lags kept, then the targets
-        out._gram = gram[np.ix_(keep, keep)]
+        n = gram.shape[0]
+        keep = np.concatenate((np.arange(k), np.arange(n - self.neqs, n)))   # the lags kept, then the targets
+        out._gram = gram.take(keep, axis=0).take(keep, axis=1)
         out._gram.setflags(write=False)
         return out
 
