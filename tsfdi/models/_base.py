@@ -24,7 +24,7 @@ from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import EXACT_FIT_RTOL, information_criteria
-from tsfdi.models.lstsq import (MAX_VALUES, check_size, gram_factor, gram_solve, lag_blocks, lag_gram,
+from tsfdi.models.lstsq import (MAX_VALUES, check_size, gram_factor, gram_solve, lag_gram,
                                 lag_residual_products, lagged_design, lstsq)
 from tsfdi.summary import Summary
 
@@ -418,9 +418,8 @@ class LinearTimeSeriesModel:
         if self.nb == 0:                     # AR / VAR: the Gram matrix from lag products, no regressor built
             X = Y = None
             recs = self._lag_records()
-            blocks = lag_blocks(recs, self.na)        # read by the Gram matrix and the refinement step
             if self._gram is None:
-                self._gram = lag_gram(recs, self.na, const=bool(self.k_const), blocks=blocks)
+                self._gram = lag_gram(recs, self.na, const=bool(self.k_const))
                 self._gram.setflags(write=False)
             R, xty = gram_factor(self._gram, k), self._gram[:k, k:]
         else:
@@ -437,7 +436,7 @@ class LinearTimeSeriesModel:
         else:   # Cholesky solve and one step of refinement on the explicit residual (corrected semi-normal eqs.)
             coef = lapack.dpotrs(R, xty, lower=0)[0]        # scipy.linalg.cho_solve without its wrapper
             resid_products = (X.T @ (Y - X @ coef) if X is not None else
-                              lag_residual_products(recs, coef, const=bool(self.k_const), blocks=blocks))   # X'(Y - X coef)
+                              lag_residual_products(recs, coef, const=bool(self.k_const)))   # X'(Y - X coef)
             coef += lapack.dpotrs(R, resid_products, lower=0)[0]
         res = self.results_class(self, self._from_fit_units(coef))
         res._warn_unstable()

@@ -111,9 +111,8 @@ def lstsq(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
 def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
     """The records one after the other with ``lags`` zero samples between two (no product of samples at most
     ``lags`` apart pairs two records), zero-padded to a multiple of ``lags + 1`` samples and cut in blocks of
-    ``lags + 1`` samples (the layout of :func:`_blocks`), and where each record starts: the one layout
-    :func:`lag_gram` and :func:`lag_residual_products` both read, built once by a fit that calls both (written
-    straight into one zeroed buffer)."""
+    ``lags + 1`` samples (the layout of :func:`_blocks`), and where each record starts: the layout
+    :func:`lag_residual_products` reads (written straight into one zeroed buffer)."""
     records = y if isinstance(y, list) else [y]
     s, B = records[0].shape[1], lags + 1
     n = sum(r.shape[0] for r in records) + lags * (len(records) - 1)
@@ -127,8 +126,7 @@ def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray,
     return buf.reshape(rows, B * s), starts
 
 
-def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
-             blocks: tuple[np.ndarray, list[int]] | None = None) -> np.ndarray:
+def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.ndarray:
     r"""Gram matrix of ``[const, -y[t-1], ..., -y[t-lags], y[t]]`` over ``t = lags .. n-1`` in O(n * lags).
 
     The lag-product blocks are Toeplitz up to end effects. With ``L[i, j] = sum_{t=p}^{n-1} y[t-i] y[t-j]'``
@@ -138,10 +136,12 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
 
     .. math::  L[i+1, j+1] = L[i, j] + y[p-1-i]\, y[p-1-j]' - y[n-1-i]\, y[n-1-j]' .
 
-    The cost is the ``p + 1`` lag products over the signal plus ``O(p^2 s^2)`` for the recursion (a
-    compiled kernel), instead of ``O(n p^2 s^2)`` for ``X'X``. For a list of records (the sum of their Gram
-    matrices) the lag products come from the records end to end with ``p`` zero samples between two (one pair
-    of BLAS calls for all), and the end corrections are summed over the records.
+    The cost is the ``p + 1`` lag products over the signal plus ``O(p^2 s^2)`` for the recursion (compiled
+    kernels), instead of ``O(n p^2 s^2)`` for ``X'X``. For a list of records (the sum of their Gram
+    matrices) the lag products come from the records end to end with ``p`` zero samples between two, and the
+    end corrections are summed over the records. The lag products are dot products of contiguous channel rows
+    summed in SIMD order (:func:`_direct_lag_products`): faster than the block products of :func:`lag_products`
+    at every size measured (2,000 x 1 to 60,000 x 3), equal to them to rounding (~1e-15 relative).
 
     Parameters
     ----------
@@ -151,8 +151,6 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
         Largest lag ``p`` (``n > p``).
     const : bool
         Prepend the intercept column.
-    blocks : tuple, optional
-        :func:`lag_blocks` of ``y`` and ``lags``, when the caller has them already.
 
     Returns
     -------
@@ -162,76 +160,107 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool,
     """
     records = y if isinstance(y, list) else [y]
     s = records[0].shape[1]
-    M = (lag_blocks(records, lags) if blocks is None else blocks)[0]
-    C = _block_products(M, M, lags, s)
-    out = np.empty((int(const) + (lags + 1) * s,) * 2)
     if len(records) == 1:                   # views, no copies: short inputs pay for every call here
-        heads, tails = records[0][None, :lags], records[0][None, records[0].shape[0] - lags:]
-    else:
+        r = records[0]
+        x = r.reshape(1, -1) if s == 1 and r.flags.c_contiguous else np.ascontiguousarray(r.T)
+        heads, tails = r[None, :lags], r[None, r.shape[0] - lags:]
+    else:                                   # channels as rows, the records end to end, ``lags`` zeros between two
+        x = np.zeros((s, sum(r.shape[0] for r in records) + lags * (len(records) - 1)))
+        pos = 0
+        for r in records:
+            x[:, pos:pos + r.shape[0]] = r.T
+            pos += r.shape[0] + lags
         heads = np.stack([r[:lags] for r in records])
         tails = np.stack([r[r.shape[0] - lags:] for r in records])
-    # sum_t y[t] over the regression rows: every sample (the column sums of the blocks, one matrix-vector
-    # product; the gaps and the padding are zero) less each record's first ``lags``
-    S0 = (np.ones(M.shape[0]) @ M).reshape(lags + 1, s).sum(axis=0) - heads.sum(axis=(0, 1))
+    C = np.empty((lags + 1, s, s))
+    S0 = np.empty(s)
+    _direct_lag_products(x, lags, C, S0)
+    S0 -= heads.sum(axis=(0, 1))            # sum_t y[t] over the regression rows: less each record's first ``lags``
+    out = np.empty((int(const) + (lags + 1) * s,) * 2)
     rows = sum(r.shape[0] for r in records) - lags * len(records)
-    _assemble_gram(C, heads, tails, S0, int(rows), bool(const), out)
+    flat = (len(records), lags * s)         # latest sample first
+    _assemble_gram(C, heads[:, ::-1].reshape(flat), tails[:, ::-1].reshape(flat), S0, int(rows), bool(const), out)
     return out
 
 
-@numba.njit(cache=True)
-def _assemble_gram(C, heads, tails, S0, rows, const, out):  # pragma: no cover - compiled
-    """Fill ``out`` from the full lag products ``C`` (summed over the records) and the first / last ``p``
-    samples of every record (``heads``, ``tails``: shape (records, p, s)); see :func:`lag_gram`.
-
-    In lag space (lag 0 = ``y[t]``) the block ``L[0, k] = C[k] - sum_{u=k}^{p-1} y[u] y[u-k]'`` and
-    ``L[i+1, j+1] = L[i, j] + y[p-1-i] y[p-1-j]' - y[n-1-i] y[n-1-j]'`` (shift the window by one sample), each
-    correction summed over the records. Lag ``i >= 1`` goes to block ``i - 1`` with a minus sign, lag 0 to the
-    last block; the intercept row holds ``sum_t y[t-i]`` by the same recursion (``rows`` regression rows).
-    """
-    nrec, p, s = heads.shape
-    c = 1 if const else 0
-    L = np.empty((p + 1, p + 1, s, s))
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _direct_lag_products(x, p, C, S):  # pragma: no cover - compiled
+    """``C[k, a, b] = sum_u x[a, u] x[b, u - k]`` for ``k = 0..p`` and ``S[a] = sum_u x[a, u]`` of the channel rows
+    ``x`` (shape (s, n), contiguous): dot products of contiguous rows, their sums reassociated so that they run in
+    SIMD lanes (the operands are finite: the models check their data), ~1e-16 relative from the sums in order."""
+    s, n = x.shape
+    for a in range(s):
+        acc = 0.0
+        for u in range(n):
+            acc += x[a, u]
+        S[a] = acc
     for k in range(p + 1):
         for a in range(s):
             for b in range(s):
-                acc = C[k, a, b]
-                for r in range(nrec):
-                    for u in range(k, p):
-                        acc -= heads[r, u, a] * heads[r, u - k, b]
-                L[0, k, a, b] = acc
-    for i in range(p):
-        for j in range(i, p):
-            for a in range(s):
-                for b in range(s):
-                    acc = L[i, j, a, b]
-                    for r in range(nrec):
-                        acc += heads[r, p - 1 - i, a] * heads[r, p - 1 - j, b]
-                        acc -= tails[r, p - 1 - i, a] * tails[r, p - 1 - j, b]
-                    L[i + 1, j + 1, a, b] = acc
-    for i in range(p + 1):
-        bi = p if i == 0 else i - 1
-        si = 1.0 if i == 0 else -1.0
-        for j in range(i, p + 1):
-            bj = p if j == 0 else j - 1
-            sg = si * (1.0 if j == 0 else -1.0)
-            for a in range(s):
-                for b in range(s):
-                    v = sg * L[i, j, a, b]
-                    out[c + bi * s + a, c + bj * s + b] = v
-                    out[c + bj * s + b, c + bi * s + a] = v
+                acc = 0.0
+                for u in range(n - k):
+                    acc += x[a, u + k] * x[b, u]
+                C[k, a, b] = acc
+
+
+@numba.njit(cache=True)
+def _assemble_gram(C, hr, tr, S0, rows, const, out):  # pragma: no cover - compiled
+    """Fill ``out`` from the full lag products ``C`` (summed over the records) and the first / last ``p`` samples of
+    every record, latest first (``hr[r, i s + a] = heads[r, p - 1 - i, a]``, ``tr`` the same of the tails; shape
+    (records, p s)); see :func:`lag_gram`.
+
+    In lag space (lag 0 = ``y[t]``), flattened to ``G[i s + a, j s + b] = L[i, j][a, b]``, the first block row is
+    ``L[0, k] = C[k] - sum_{u=k}^{p-1} y[u] y[u-k]'`` and ``L[i+1, j+1] = L[i, j] + y[p-1-i] y[p-1-j]' -
+    y[n-1-i] y[n-1-j]'`` (shift the window by one sample), each correction summed over the records: the
+    recursion is ``G[I + s, J + s] = G[I, J] + D[I, J]`` on flat indices (the upper triangle only; two loops, no
+    per-channel loops that cost more than the work for one channel). Lag ``i >= 1`` goes to block ``i - 1``
+    with a minus sign, lag 0 to the last block; the intercept row holds ``sum_t y[t-i]`` by the same recursion
+    (``rows`` regression rows).
+    """
+    nrec, m = hr.shape
+    s = S0.shape[0]
+    p = m // s
+    n = m + s
+    c = 1 if const else 0
+    G = np.empty((n, n))
+    for a in range(s):                      # first block row: C[k] less the heads' own lag products
+        for J in range(a, n):
+            k, b = J // s, J % s
+            acc = C[k, a, b]
+            for r in range(nrec):
+                for i in range(p - k):
+                    acc -= hr[r, i * s + a] * hr[r, i * s + J]
+            G[a, J] = acc
+    for I in range(m):
+        for J in range(I, m):
+            acc = G[I, J]
+            for r in range(nrec):
+                acc += hr[r, I] * hr[r, J] - tr[r, I] * tr[r, J]
+            G[I + s, J + s] = acc
+    pos = np.empty(n, dtype=np.int64)       # lag-space index -> column of out, and its sign
+    sign = np.empty(n)
+    for I in range(n):
+        i = I // s
+        pos[I] = c + (p if i == 0 else i - 1) * s + I % s
+        sign[I] = 1.0 if i == 0 else -1.0
+    for I in range(n):
+        for J in range(I, n):
+            v = sign[I] * sign[J] * G[I, J]
+            out[pos[I], pos[J]] = v
+            out[pos[J], pos[I]] = v
     if const:
         out[0, 0] = rows
         S = S0.copy()                       # S_i = sum_{t=p}^{n-1} y[t-i], summed over the records
         for i in range(p + 1):
-            bi = p if i == 0 else i - 1
             si = 1.0 if i == 0 else -1.0
             for a in range(s):
-                out[0, 1 + bi * s + a] = si * S[a]
-                out[1 + bi * s + a, 0] = si * S[a]
+                v = si * S[a]
+                out[0, pos[i * s + a]] = v
+                out[pos[i * s + a], 0] = v
             if i < p:
                 for a in range(s):
                     for r in range(nrec):
-                        S[a] += heads[r, p - 1 - i, a] - tails[r, p - 1 - i, a]
+                        S[a] += hr[r, i * s + a] - tr[r, i * s + a]
 
 
 def _blocks(y: np.ndarray, B: int) -> np.ndarray:
@@ -336,8 +365,7 @@ def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray
     return e
 
 
-def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *, const: bool,
-                          blocks: tuple[np.ndarray, list[int]] | None = None) -> np.ndarray:
+def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *, const: bool) -> np.ndarray:
     """``X'(Y - X coef)`` of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` over ``t = p .. n-1``, summed
     over the records, without the regressor.
 
@@ -346,14 +374,13 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
     products with the samples, ``D[k] = sum_t e[t] y[t-k]'``, by the block products of :func:`lag_products`:
     four BLAS-3 calls in all. The block of lag ``k`` is ``-D[k]'``, the intercept row ``sum_t e[t]``. This is the
     right-hand side of a refinement step of the normal equations: accurate to rounding of ``|X| |e|``, where
-    ``X'Y - X'X coef`` from the Gram matrix loses the digits of ``|X| |Y|``. ``blocks``: :func:`lag_blocks` of
-    ``y`` when the caller has them already.
+    ``X'Y - X'X coef`` from the Gram matrix loses the digits of ``|X| |Y|``.
     """
     records = y if isinstance(y, list) else [y]
     s = records[0].shape[1]
     c = int(const)
     p = (coef.shape[0] - c) // s
-    M, starts = lag_blocks(records, p) if blocks is None else blocks
+    M, starts = lag_blocks(records, p)
     E = _residual_blocks(M, coef, const)
     e = E.reshape(-1, s)
     end = 0
