@@ -105,3 +105,46 @@ def test_halted_run_releases_after_hold():
     hold = int(mod.HOLD_S * mod.FS)
     assert abs(e[2000 + hold + 5]) > 0.04         # frozen for HOLD_S ...
     assert abs(e[-500:].mean()) < 0.01            # ... then it adapts (no halt for ever)
+
+
+def test_inputs_filter_bank_is_causal_and_starts_at_rest(bench):
+    mod, flight = bench
+    cols = ["commands.pitch_control", "commands.pitch_command"]
+    spec = ((0, 1), (0.1, 3.0))
+    out = mod.inputs(flight, cols, spec)
+    x = flight.frame[cols].to_numpy()
+    assert out.shape == (len(x), 2 * 2 + 2 * 2)
+    np.testing.assert_array_equal(out[:, :4], mod.lagged(x, (0, 1)))
+    # started at rest on the first sample: a constant input passes unchanged
+    frame = flight.frame
+    flight.frame = frame.assign(**{c: 5.0 for c in cols})
+    try:
+        np.testing.assert_allclose(mod.inputs(flight, cols, spec)[:, 4:], 5.0)
+        # causal: a step at sample 100 leaves every earlier filtered sample as it was, and a first-order low-pass
+        # at 3 Hz has covered 1 - exp(-2 pi 3 t) of the step after t = 0.2 s (bilinear transform: within 2 %)
+        flight.frame = frame.assign(**{c: np.where(np.arange(len(frame)) >= 100, 1.0, 0.0) for c in cols})
+        step = mod.inputs(flight, cols, spec)
+    finally:
+        flight.frame = frame
+    np.testing.assert_array_equal(step[:100, 4:], 0.0)
+    assert step[100 + 20, 6] == pytest.approx(1.0 - np.exp(-2.0 * np.pi * 3.0 * 0.2), abs=0.02)
+
+
+def test_widened_copy_starts_from_the_trained_estimate_and_adapts_faster():
+    mod = load_benchmark()
+    from tsfdi.models import RecursiveARX
+
+    rng = np.random.default_rng(2)
+    x = rng.standard_normal((6000, 1))
+    model = RecursiveARX(0, 1, 0, 0.9999, P0=1e2, n_inputs=1, trend="c")
+    model.run(2.0 * x[:, 0] + 0.01 * rng.standard_normal(6000), x)
+    before = model.get_state()
+    xs = rng.standard_normal((1000, 1))
+    y = 2.0 * xs[:, 0] + 0.01 * rng.standard_normal(1000) + 0.05    # a new flight: another operating point
+    plain = np.asarray(mod.widened(model, 1.0).run(y, xs).resid)
+    np.testing.assert_array_equal(plain, np.asarray(copy.deepcopy(model).run(y, xs).resid))
+    wide = np.asarray(mod.widened(model, 100.0).run(y, xs).resid)
+    assert wide[0] == pytest.approx(plain[0], rel=1e-12)         # same estimate at the start
+    assert abs(wide[500:].mean()) < 0.2 * abs(plain[500:].mean())  # the offset learnt within seconds
+    np.testing.assert_array_equal(model.get_state().P, before.P)   # the trained model is left as it was
+    assert model.nobs == 6000
