@@ -14,6 +14,7 @@ import warnings
 from functools import cached_property, partial
 from typing import Any, ClassVar
 
+import numba
 import numpy as np
 import pandas as pd
 from scipy import linalg, stats
@@ -108,6 +109,27 @@ class HeldOutResiduals(list):
 
     def __repr__(self) -> str:
         return f"HeldOutResiduals({len(self)} series, lags={self.lags})"
+
+
+@numba.njit(cache=True)
+def _scalar_stable(a):  # pragma: no cover - compiled
+    """Whether every root of ``1 + a[0] z + ... + a[p-1] z^p`` lies strictly outside the unit circle (``False`` for
+    non-finite coefficients), by the Schur-Cohn step-down recursion: the roots of ``z^p + a[0] z^(p-1) + ... +
+    a[p-1]`` (their inverses) lie inside the circle if and only if every reflection coefficient ``k_m`` (the last
+    coefficient of the degree-``m`` polynomial, which steps down to ``(c_i - k_m c_(m-i)) / (1 - k_m^2)``) has
+    ``|k_m| < 1``. O(p^2), no eigenvalues; agrees with :attr:`LinearTimeSeriesResults.roots` except for roots
+    within rounding of the circle."""
+    c = a.copy()
+    tmp = np.empty_like(c)
+    for m in range(c.shape[0], 0, -1):
+        k = c[m - 1]
+        if not abs(k) < 1.0:
+            return False
+        d = 1.0 - k * k
+        for i in range(m - 1):
+            tmp[i] = (c[i] - k * c[m - 2 - i]) / d
+        c[:m - 1] = tmp[:m - 1]
+    return True
 
 
 def _is_record_list(y: Any) -> bool:
@@ -1010,7 +1032,11 @@ class LinearTimeSeriesResults:
         return bool(np.all(np.abs(self.roots) > 1.0))
 
     def _warn_unstable(self) -> None:
-        if self.model.na and not self.is_stable:
+        """Warn when the fit is unstable. A scalar output is decided by the step-down recursion
+        (:func:`_scalar_stable`, O(na^2)); the eigenvalues of :attr:`roots` only when it says unstable (for the
+        message) and for vector models."""
+        A = self._ar_blocks
+        if self.model.na and (A.shape[1] > 1 or not _scalar_stable(A[:, 0, 0])) and not self.is_stable:
             warnings.warn(f"the fitted {type(self.model).__name__} is unstable (smallest root modulus "
                           f"{np.abs(self.roots).min():.4f} <= 1)", UnstableModelWarning, stacklevel=4)
 
