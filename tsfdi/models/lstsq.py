@@ -159,28 +159,46 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
         sign of the regressor.
     """
     records = y if isinstance(y, list) else [y]
-    s = records[0].shape[1]
-    if len(records) == 1:                   # views, no copies: short inputs pay for every call here
-        r = records[0]
+    r = records[0]
+    s = r.shape[1]
+    if len(records) == 1:                   # a view when it can be: short inputs pay for every call here
         x = r.reshape(1, -1) if s == 1 and r.flags.c_contiguous else np.ascontiguousarray(r.T)
-        heads, tails = r[None, :lags], r[None, r.shape[0] - lags:]
+        starts, ends = np.zeros(1, dtype=np.int64), np.full(1, r.shape[0], dtype=np.int64)
     else:                                   # channels as rows, the records end to end, ``lags`` zeros between two
         x = np.zeros((s, sum(r.shape[0] for r in records) + lags * (len(records) - 1)))
+        starts, ends = np.empty(len(records), dtype=np.int64), np.empty(len(records), dtype=np.int64)
         pos = 0
-        for r in records:
+        for i, r in enumerate(records):
             x[:, pos:pos + r.shape[0]] = r.T
+            starts[i], ends[i] = pos, pos + r.shape[0]
             pos += r.shape[0] + lags
-        heads = np.stack([r[:lags] for r in records])
-        tails = np.stack([r[r.shape[0] - lags:] for r in records])
-    C = np.empty((lags + 1, s, s))
-    S0 = np.empty(s)
-    _direct_lag_products(x, lags, C, S0)
-    S0 -= heads.sum(axis=(0, 1))            # sum_t y[t] over the regression rows: less each record's first ``lags``
     out = np.empty((int(const) + (lags + 1) * s,) * 2)
-    rows = sum(r.shape[0] for r in records) - lags * len(records)
-    flat = (len(records), lags * s)         # latest sample first
-    _assemble_gram(C, heads[:, ::-1].reshape(flat), tails[:, ::-1].reshape(flat), S0, int(rows), bool(const), out)
+    _lag_gram_kernel(x, starts, ends, lags, bool(const), out)
     return out
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _lag_gram_kernel(x, starts, ends, p, const, out):  # pragma: no cover - compiled
+    """:func:`lag_gram` of the records ``x[:, starts[r]:ends[r]]`` (channel rows, :func:`lag_gram`'s layout): the
+    full lag products and sums (:func:`_direct_lag_products`), each record's first / last ``p`` samples latest
+    first (``hr[r, i s + a] = x[a, starts[r] + p - 1 - i]``, ``tr`` the same at the end) and the assembly
+    (:func:`_assemble_gram`), in one call."""
+    s = x.shape[0]
+    nrec = starts.shape[0]
+    C = np.empty((p + 1, s, s))
+    S0 = np.empty(s)
+    _direct_lag_products(x, p, C, S0)
+    hr = np.empty((nrec, p * s))
+    tr = np.empty((nrec, p * s))
+    rows = 0
+    for r in range(nrec):
+        rows += ends[r] - starts[r] - p
+        for i in range(p):
+            for a in range(s):
+                hr[r, i * s + a] = x[a, starts[r] + p - 1 - i]
+                tr[r, i * s + a] = x[a, ends[r] - 1 - i]
+                S0[a] -= hr[r, i * s + a]      # sum_t y[t] over the regression rows: less each record's first p
+    _assemble_gram(C, hr, tr, S0, rows, const, out)
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
