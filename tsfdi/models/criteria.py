@@ -123,17 +123,18 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
         resid_ss = np.sum(var * w, axis=-1)
         sss_w = float(np.sum(sss * w))
         trace = np.sum(np.maximum(var, floor) * w, axis=-1) if any_exact else resid_ss
-    # (scalar logarithms by math: numpy's scalar calls cost more than the arrays here)
-    llf = -0.5 * nobs * (s * math.log(2 * math.pi) + logdet + s)
+    # (scalar logarithms and factors by math / floats, one array operation per term: numpy's scalar calls and the
+    # operations on these short arrays cost more than the arithmetic)
+    m2llf = nobs * logdet + nobs * (s * math.log(2 * math.pi) + s)          # -2 llf
     k = df_model + s * (s + 1) / 2
-    fit_term = -2 * llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * math.log(top) + 1)
+    fit_term = m2llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * math.log(top) + 1)
     return {
-        "llf": llf,
-        "aic": -2 * llf + 2 * k,
+        "llf": -0.5 * m2llf,
+        "aic": m2llf + 2 * k,
         "bic": fit_term + k * math.log(nobs),
-        "hqic": -2 * llf + 2 * k * math.log(math.log(nobs)),
-        "rss_sss": 100.0 * nobs * resid_ss / sss_w if sss_w > 0 else np.zeros(len(sse)),
-        "spp": nobs * s / df_model,
-        "sigma2": resid_ss * top * top / s,
+        "hqic": m2llf + k * (2 * math.log(math.log(nobs))),
+        "rss_sss": resid_ss * (100.0 * nobs / sss_w) if sss_w > 0 else np.zeros(len(sse)),
+        "spp": (nobs * s) / df_model,
+        "sigma2": resid_ss * (top * top / s),
         "exact": exact,
     }
