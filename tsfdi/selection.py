@@ -125,15 +125,15 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
 
     if family == "arx":
         Z = design()
-        R = triangular_factor(Z.T @ Z, lambda: Z, s)
-        group = 1 + spec.n_inputs
+        gram, group = Z.T @ Z, 1 + spec.n_inputs
+        R = triangular_factor(gram, lambda: Z, s)
     else:   # lag products; the Gram matrix of several records is the sum of theirs
-        R = triangular_factor(spec.gram(), design, s)
-        group = s
+        gram, group = spec.gram(), s
+        R = triangular_factor(gram, design, s)
     orders = np.arange(1, max_lags + 1)
     widths = spec.k_const + orders * group
     sse = nested_fits(R, s, widths)
-    sss = np.sum(R[:, -s:] ** 2, axis=0)   # = diag(Y'Y): columns of R have the norms of the columns of Z
+    sss = gram.diagonal()[-s:]             # diag(Y'Y) (the squared column norms of R's last columns, to rounding)
     values = spec.criteria(sse, sss, widths * s)
     if values["exact"].any():
         said = "".join(f"; {c}" for c in spec.collinear_channels())

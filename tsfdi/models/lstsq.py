@@ -504,8 +504,11 @@ def _cholesky(gram: np.ndarray) -> np.ndarray | None:
     if info != 0:
         return None
     d = R.diagonal()
-    # R[i, i]**2 / G[i, i] > floor without the division (G[i, i] > 0 where potrf succeeds; NaN compares False)
-    if np.isfinite(R).all() and (d * d > GRAM_RELATIVE_FLOOR * gram.diagonal()).all():
+    # R[i, i]**2 / G[i, i] > floor without the division (G[i, i] > 0 where potrf succeeds; NaN compares False).
+    # No separate finiteness check: potrf stops at a NaN or non-positive pivot, an infinite off-diagonal entry of
+    # G makes a later pivot -inf or NaN, an infinite diagonal entry fails this test (inf > inf is False), and
+    # |R[i, j]| <= sqrt(G[j, j]) keeps every other entry finite
+    if (d * d > GRAM_RELATIVE_FLOOR * gram.diagonal()).all():
         return R
     return None
 
