@@ -128,3 +128,19 @@ def test_lag_kernels_equal_explicit_products(lags, const):
         x, y = records[0], records[0][::-1].copy()
         ref = np.stack([sum(np.outer(x[u], y[u - k]) for u in range(k, len(x))) for k in range(lags + 1)])
         np.testing.assert_allclose(lstsq.lag_products(y, lags, x), ref, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("where", ["diag", "offdiag", "nan", "nan_diag"])
+def test_gram_factor_refuses_non_finite_gram(where):
+    """No factor of a Gram matrix with an inf / NaN entry (the Cholesky check has no separate finiteness scan:
+    potrf's pivots and the energy test refuse every such case)."""
+    from tsfdi.models.lstsq import gram_factor
+
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((50, 6))
+    G = X.T @ X
+    G[3, 3] = np.inf if where == "diag" else np.nan if where == "nan_diag" else G[3, 3]
+    if where in ("offdiag", "nan"):
+        G[1, 4] = G[4, 1] = np.inf if where == "offdiag" else np.nan
+    assert gram_factor(G, 6) is None
+    assert gram_factor(X.T @ X, 6) is not None
