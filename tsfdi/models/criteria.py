@@ -99,11 +99,12 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
         logdet = np.log(np.maximum(v0, f0))
     else:   # the smallest eigenvalue is >= det / tr^(s-1), and >= det / tr^s times the largest: only the fits
         # that fail these bounds (against the largest floor) are decomposed, in units of the floor
+        tr = var.sum(axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):   # a singular Sigma: -inf, replaced below
             sign, logdet = np.linalg.slogdet(sigma)
-            log_tr = np.log(var.sum(axis=-1))
+            log_tr = np.log(tr)
             exact = ~((sign > 0) & (logdet - (s - 1) * log_tr > np.log(floor.max()))
-                      & (logdet - s * log_tr > np.log(COLLINEAR_RTOL)))
+                      & (logdet - s * log_tr > math.log(COLLINEAR_RTOL)))
         if exact.any():
             root = np.sqrt(floor)
             lam = np.linalg.eigvalsh(sigma[exact] / root[:, None] / root[None, :])
@@ -113,7 +114,7 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     any_exact = exact.any()
     if own:
         top = 1.0
-        resid_ss = var[:, 0] if s == 1 else var.sum(axis=-1)    # tr Sigma
+        resid_ss = var[:, 0] if s == 1 else tr                  # tr Sigma
         sss_w = float(sss[0]) if sss.size == 1 else float(sss.sum())
         trace = np.maximum(var, floor).sum(axis=-1) if any_exact else resid_ss
     else:   # tr Sigma and tr Y'Y in data units, as top^2 * (sum of (scale / top)^2-weighted terms)
