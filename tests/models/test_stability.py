@@ -47,7 +47,6 @@ def polynomials(draw):
         else:
             inv.append(rho * rng.choice([-1.0, 1.0]))
     a = np.poly(inv).real[1:]                      # z^p + a[0] z^(p-1) + ... : the inverse roots
-    rng.shuffle(inv)                               # (order irrelevant; keeps the draw's randomness used)
     return a
 
 
