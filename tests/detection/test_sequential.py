@@ -508,9 +508,9 @@ def test_aligned_record_effect_input_checks():
         aligned_record_effect(held, min_samples=300)
     law = aligned_record_effect(held)
     e = np.ones((100, 2))
-    with pytest.raises(ValueError, match="one array per model"):
+    with pytest.raises(ValueError, match="one residual array per model"):
         law.loglik([e, e])
-    with pytest.raises(ValueError, match=r"resid\['m0'\] has 201 samples, the law covers the first 200"):
+    with pytest.raises(ValueError, match=r"resid has 201 samples, the law covers the first 200"):
         law.loglik([np.ones((201, 2))] * 3)
     with pytest.raises(ValueError, match=r"resid\['m1'\] has 90 samples"):
         law.loglik([e, e[:90], e])

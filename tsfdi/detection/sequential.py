@@ -1227,25 +1227,9 @@ class RecordEffect:
         (``benchmarks/sprt.py``).
         """
         M = len(self.models)
-        if isinstance(resid, Mapping):
-            missing = [m for m in self.models if m not in resid]
-            if missing:
-                raise ValueError(f"resid has no entry for the model {missing[0]!r}")
-            resid = [resid[m] for m in self.models]
-        if isinstance(resid, (str, bytes)) or not isinstance(resid, (list, tuple)) or len(resid) != M:
-            raise ValueError(f"resid must hold one residual array per model ({M}), got "
-                             f"{len(resid) if isinstance(resid, (list, tuple)) else type(resid).__name__}")
         k = self.center.shape[1] // (2 + self.lags) if self.nchan is None else self.nchan
         keep = [_summary_names(k, self.lags).index(s) for s in self.summaries]
-        arrs = []
-        for j, r in enumerate(resid):
-            v = as_signal(r, f"resid[{self.models[j]!r}]", allow_constant=True).values
-            if v.shape[1] != k:
-                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[1]} channel(s), the law was fitted on {k}")
-            if arrs and v.shape[0] != arrs[0].shape[0]:
-                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[0]} samples, resid[{self.models[0]!r}] "
-                                 f"{arrs[0].shape[0]}: give every model's residuals on the same samples")
-            arrs.append(v)
+        arrs = _per_model_residuals(resid, self.models, k)
         n = arrs[0].shape[0]
         cum = np.zeros((n, M))
         t0 = self.min_samples - 1
@@ -1269,6 +1253,30 @@ class RecordEffect:
                                      "finite)")
         return np.diff(cum, axis=0, prepend=0.0)
 
+
+
+def _per_model_residuals(resid, models, nchan: int) -> list[np.ndarray]:
+    """``resid`` (one residual array per model, a list in ``models``' order or a mapping by name) as a list of
+    ``(n, nchan)`` float arrays on the same samples; a ``ValueError`` naming the entry otherwise."""
+    M = len(models)
+    if isinstance(resid, Mapping):
+        missing = [m for m in models if m not in resid]
+        if missing:
+            raise ValueError(f"resid has no entry for the model {missing[0]!r}")
+        resid = [resid[m] for m in models]
+    if isinstance(resid, (str, bytes)) or not isinstance(resid, (list, tuple)) or len(resid) != M:
+        raise ValueError(f"resid must hold one residual array per model ({M}), got "
+                         f"{len(resid) if isinstance(resid, (list, tuple)) else type(resid).__name__}")
+    arrs = []
+    for j, r in enumerate(resid):
+        v = as_signal(r, f"resid[{models[j]!r}]", allow_constant=True).values
+        if v.shape[1] != nchan:
+            raise ValueError(f"resid[{models[j]!r}] has {v.shape[1]} channel(s), the law was fitted on {nchan}")
+        if arrs and v.shape[0] != arrs[0].shape[0]:
+            raise ValueError(f"resid[{models[j]!r}] has {v.shape[0]} samples, resid[{models[0]!r}] "
+                             f"{arrs[0].shape[0]}: give every model's residuals on the same samples")
+        arrs.append(v)
+    return arrs
 
 def _summary_names(k: int, lags: int) -> list:
     """Names of the running summaries of :func:`_running_summaries`, in its column order."""
@@ -1468,31 +1476,13 @@ class AlignedRecordEffect:
             values, or a channel that is zero over the first samples (a log RMS of minus infinity).
         """
         M = len(self.models)
-        if isinstance(resid, Mapping):
-            missing = [m for m in self.models if m not in resid]
-            if missing:
-                raise ValueError(f"resid has no entry for the model {missing[0]!r}")
-            resid = [resid[m] for m in self.models]
-        if isinstance(resid, (str, bytes)) or not isinstance(resid, (list, tuple)) or len(resid) != M:
-            raise ValueError(f"resid must hold one array per model ({M}), got "
-                             f"{len(resid) if isinstance(resid, (list, tuple)) else type(resid).__name__}")
         every = _summary_names(self.nchan, self.lags)
         keep = [every.index(s) for s in self.summaries]
         n_law = self.center.shape[1]
-        arrs = []
-        for j, r in enumerate(resid):
-            v = as_signal(r, f"resid[{self.models[j]!r}]", allow_constant=True).values
-            if v.shape[1] != self.nchan:
-                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[1]} channel(s), the law was fitted on "
-                                 f"{self.nchan}")
-            if arrs and v.shape[0] != arrs[0].shape[0]:
-                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[0]} samples, resid[{self.models[0]!r}] "
-                                 f"{arrs[0].shape[0]}: give every model's residuals on the same samples")
-            if v.shape[0] > n_law:
-                raise ValueError(f"resid[{self.models[j]!r}] has {v.shape[0]} samples, the law covers the first "
-                                 f"{n_law} (the length of its records)")
-            arrs.append(v)
+        arrs = _per_model_residuals(resid, self.models, self.nchan)
         n = arrs[0].shape[0]
+        if n > n_law:
+            raise ValueError(f"resid has {n} samples, the law covers the first {n_law} (the length of its records)")
         q = len(keep)
         cum = np.zeros((n, M))
         t0 = self.min_samples - 1
