@@ -466,7 +466,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     page = (root / "docs" / "guide" / "cli.md").read_text()
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
-    assert len(commands) == 14
+    assert len(commands) == 15
     pytest.importorskip("pyulog")
     (tmp_path / "data").symlink_to(root / "data")
     monkeypatch.chdir(tmp_path)
@@ -476,6 +476,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
         assert main(argv[1:]) == 0, (line, capsys.readouterr().err)
         key = argv[1] + (" calibrated" if "--threshold calibrated" in line else "")
         key += f" {argv[2].split('/')[3]}" if argv[2].startswith("data/crazypad/") else ""      # its condition
+        key += " 4 records" if "crazyflie4.npz" in line else ""
         printed[key] = capsys.readouterr().out
     # select-order: the orders the page quotes
     assert re.search(r"Selected \(min BIC\) +7\n", printed["select-order"])
@@ -497,12 +498,16 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     assert faults and all(f == (start < 10.0) for start, f in faults)
     # calibrated thresholds on the rest of the PX4 log: 0 of the 17 one-second windows flagged
     assert printed["detect calibrated"].strip().splitlines()[-1] == "fault in 0 of 17 window(s)"
-    # CrazyPAD: a baseline from the 2 airborne records of a normal log; the other normal log clean, the 4 mm cut flagged
+    # CrazyPAD: a baseline from the 2 airborne records of a normal log predicts thresholds so wide (up to 1e+57) that
+    # the 4 mm cut is flagged in none of its windows; one from both normal logs (4 records) flags it in all 6
     assert "from 2 record(s) at 101.153 Hz" in printed["fit normal_flight"]
-    assert printed["detect calibrated normal_flight"].strip().splitlines()[-1] == "fault in 0 of 6 window(s)"
     cut = printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm"]
+    assert cut.strip().splitlines()[-1] == "fault in 0 of 6 window(s)"
+    assert "e+57" in cut
+    assert "from 4 record(s)" in printed["fit normal_flight 4 records"]
+    cut = printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm 4 records"]
     assert cut.strip().splitlines()[-1] == "fault in 6 of 6 window(s)"
     # without --min-windows 5 the page's "6 non-overlapping windows, fewer than the default 30" is the message
-    line = next(c for c in commands if "crazypad/controller/normal_flight/E8_log01" in c)
+    line = next(c for c in commands if "--baseline crazyflie.npz" in c)
     assert main(shlex.split(line.replace(" --min-windows 5", ""))[1:]) == 2
     assert "holds 6 independent (non-overlapping) windows, at least 30 are needed" in capsys.readouterr().err
