@@ -440,10 +440,8 @@ class LinearTimeSeriesModel:
         if self.nb == 0:                     # AR / VAR: the Gram matrix from lag products, no regressor built
             X = Y = None
             recs = self._lag_records()
-            if self._gram is None:
-                self._gram = lag_gram(recs, self.na, const=bool(self.k_const))
-                self._gram.setflags(write=False)
-            R, xty = gram_factor(self._gram, k), self._gram[:k, k:]
+            gram = self.gram()
+            R, xty = gram_factor(gram, k), gram[:k, k:]
         else:
             X, Y = self.design_all(scaled=True)
             if self._gram is None:
