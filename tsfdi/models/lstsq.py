@@ -158,23 +158,30 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
         Column order ``[const, lag 1 block, ..., lag p block, y[t] block]``; lag blocks carry the minus
         sign of the regressor.
     """
-    records = y if isinstance(y, list) else [y]
-    r = records[0]
-    s = r.shape[1]
-    if len(records) == 1:                   # a view when it can be: short inputs pay for every call here
-        x = r.reshape(1, -1) if s == 1 and r.flags.c_contiguous else np.ascontiguousarray(r.T)
-        starts, ends = np.zeros(1, dtype=np.int64), np.full(1, r.shape[0], dtype=np.int64)
-    else:                                   # channels as rows, the records end to end, ``lags`` zeros between two
-        x = np.zeros((s, sum(r.shape[0] for r in records) + lags * (len(records) - 1)))
-        starts, ends = np.empty(len(records), dtype=np.int64), np.empty(len(records), dtype=np.int64)
-        pos = 0
-        for i, r in enumerate(records):
-            x[:, pos:pos + r.shape[0]] = r.T
-            starts[i], ends[i] = pos, pos + r.shape[0]
-            pos += r.shape[0] + lags
-    out = np.empty((int(const) + (lags + 1) * s,) * 2)
+    x, starts, ends = _channel_rows(y if isinstance(y, list) else [y], lags)
+    out = np.empty((int(const) + (lags + 1) * x.shape[0],) * 2)
     _lag_gram_kernel(x, starts, ends, lags, bool(const), out)
     return out
+
+
+def _channel_rows(records: list[np.ndarray], lags: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The records' channels as contiguous rows, the records end to end with ``lags`` zero samples between two (no
+    product of samples at most ``lags`` apart pairs two records), and where each record starts and ends: the layout
+    of the compiled kernels of :func:`lag_gram` and :func:`lag_residual_products`. One record is a view when it
+    can be (short inputs pay for every call here)."""
+    r = records[0]
+    s = r.shape[1]
+    if len(records) == 1:
+        x = r.reshape(1, -1) if s == 1 and r.flags.c_contiguous else np.ascontiguousarray(r.T)
+        return x, np.zeros(1, dtype=np.int64), np.full(1, r.shape[0], dtype=np.int64)
+    x = np.zeros((s, sum(r.shape[0] for r in records) + lags * (len(records) - 1)))
+    starts, ends = np.empty(len(records), dtype=np.int64), np.empty(len(records), dtype=np.int64)
+    pos = 0
+    for i, r in enumerate(records):
+        x[:, pos:pos + r.shape[0]] = r.T
+        starts[i], ends[i] = pos, pos + r.shape[0]
+        pos += r.shape[0] + lags
+    return x, starts, ends
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
@@ -399,16 +406,10 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
     c = int(const)
     p = (coef.shape[0] - c) // s
     if s == 1:      # a scalar output: one compiled pass (the BLAS-3 route below pays ~20 numpy calls for ~1e5 flops)
-        x = np.zeros(sum(r.shape[0] for r in records) + p * (len(records) - 1))
-        starts, ends = np.empty(len(records), dtype=np.int64), np.empty(len(records), dtype=np.int64)
-        pos = 0
-        for i, r in enumerate(records):
-            x[pos:pos + r.shape[0]] = r[:, 0]
-            starts[i], ends[i] = pos, pos + r.shape[0]
-            pos += r.shape[0] + p
+        x, starts, ends = _channel_rows(records, p)
         out = np.empty((c + p, 1))
-        _scalar_residual_products(x, starts, ends, np.ascontiguousarray(coef[c:, 0]), coef[0, 0] if c else 0.0, c,
-                                  np.empty(x.size), out[:, 0])
+        _scalar_residual_products(x[0], starts, ends, np.ascontiguousarray(coef[c:, 0]), coef[0, 0] if c else 0.0,
+                                  c, np.empty(x.shape[1]), out[:, 0])
         return out
     M, starts = lag_blocks(records, p)
     E = _residual_blocks(M, coef, const)
