@@ -1283,6 +1283,21 @@ def _summary_names(k: int, lags: int) -> list:
     return [f"{s}[y{c}]" for s in ("mean", "log_scale", *(f"acf{j}" for j in range(1, lags + 1))) for c in range(k)]
 
 
+def _kept_summaries(summaries: Any, k: int, lags: int) -> tuple[list, list, list]:
+    """The summary names of ``k``-channel records with ``lags``, the names kept (``summaries``, default all) and
+    their columns; a ``TypeError`` / ``ValueError`` naming ``summaries`` otherwise."""
+    if summaries is not None and (isinstance(summaries, (str, bytes)) or not isinstance(summaries, (list, tuple))
+                                  or not summaries):
+        raise TypeError(f"summaries must be a non-empty list of summary names, got {summaries!r}")
+    every = _summary_names(k, lags)
+    chosen = every if summaries is None else [str(s) for s in summaries]
+    unknown = [s for s in chosen if s not in every]
+    if unknown or len(set(chosen)) != len(chosen):
+        raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of the "
+                         f"{len(every)} summaries of {k}-channel records with lags={lags}: {', '.join(every)}")
+    return every, chosen, [every.index(s) for s in chosen]
+
+
 def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples: int | None = None,
                   summaries: Any = None) -> RecordEffect:
     r"""Fit the between-record law of every candidate model's residual summaries, for sequential identification
@@ -1345,9 +1360,6 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples:
     lags = int_like(lags, "lags", minimum=0)
     block = int_like(block, "block", minimum=1)
     min_samples = block if min_samples is None else int_like(min_samples, "min_samples", minimum=2)
-    if summaries is not None and (isinstance(summaries, (str, bytes)) or not isinstance(summaries, (list, tuple))
-                                  or not summaries):
-        raise TypeError(f"summaries must be a non-empty list of summary names, got {summaries!r}")
     names = tuple(str(m) for m in held_out)
     k = None
     F, W, R = [], [], []
@@ -1358,14 +1370,7 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples:
         if short:
             raise ValueError(f"held_out[{name!r}][{short[0]}] is shorter than lags + 2 = {lags + 2} samples")
         if not F:                       # the first model's records fix the channels, hence the summaries' names
-            every = _summary_names(k, lags)
-            chosen = every if summaries is None else [str(s) for s in summaries]
-            unknown = [s for s in chosen if s not in every]
-            if unknown or len(set(chosen)) != len(chosen):
-                raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of "
-                                 f"the {len(every)} summaries of {k}-channel records with lags={lags}: "
-                                 f"{', '.join(every)}")
-            keep = [every.index(s) for s in chosen]
+            every, chosen, keep = _kept_summaries(summaries, k, lags)
         f = np.array([_running_summaries(e, lags, e.shape[0] - 1)[0] for e in arrs])[:, keep]
         if not np.isfinite(f).all():
             raise ValueError(f"held_out[{name!r}]: a record has a constant residual channel (its summaries are not "
@@ -1556,9 +1561,6 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     """
     if not isinstance(held_out, Mapping) or len(held_out) < 2:
         raise TypeError("held_out must be a mapping model name -> list of records, with at least 2 models")
-    if summaries is not None and (isinstance(summaries, (str, bytes)) or not isinstance(summaries, (list, tuple))
-                                  or not summaries):
-        raise TypeError(f"summaries must be a non-empty list of summary names, got {summaries!r}")
     lags = int_like(lags, "lags", minimum=0)
     min_samples = int_like(min_samples, "min_samples", minimum=2)
     names = tuple(str(m) for m in held_out)
@@ -1572,13 +1574,7 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
             raise ValueError(f"held_out[{name!r}][{uneven[0]}] has {arrs[uneven[0]].shape[0]} samples, the first "
                              f"record {n}: the records must be aligned and of one length (cut them to a common one)")
         recs[name] = arrs
-    every = _summary_names(k, lags)
-    chosen = every if summaries is None else [str(s) for s in summaries]
-    unknown = [s for s in chosen if s not in every]
-    if unknown or len(set(chosen)) != len(chosen):
-        raise ValueError(f"summaries: {unknown[0] if unknown else 'a name given twice'!r} is not one of the "
-                         f"{len(every)} summaries of {k}-channel records with lags={lags}: {', '.join(every)}")
-    keep = [every.index(s) for s in chosen]
+    every, chosen, keep = _kept_summaries(summaries, k, lags)
     if n < max(min_samples, lags + 2):
         raise ValueError(f"held_out: the records have {n} samples, fewer than min_samples = {min_samples} (or lags "
                          f"+ 2 = {lags + 2})")
@@ -1608,9 +1604,7 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
         raise ValueError("held_out: the between-record covariance of the running summaries is singular at some "
                          "sample (summaries that do not vary, or vary together exactly, over the records): give "
                          "more or more varied records, or a larger min_samples")
-    pad = np.full((min_samples - 1,), np.nan)
-    center = np.array([np.concatenate([np.broadcast_to(pad[:, None], (min_samples - 1, q)), f.mean(axis=0)])
-                       for f in F])
+    center = np.array([np.concatenate([np.full((min_samples - 1, q), np.nan), f.mean(axis=0)]) for f in F])
     between = np.concatenate([np.full((min_samples - 1, q, q), np.nan), S])
     return AlignedRecordEffect(models=names, center=center, between=between, df=float(dof - q + 1),
                                records=tuple(int(r) for r in R), min_samples=min_samples, summaries=tuple(chosen),
