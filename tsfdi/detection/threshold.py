@@ -412,13 +412,11 @@ class ScaledChi2Threshold:
     :math:`c_j = m_j / \nu`. A record's own :math:`\nu_j` from the ~10 independent windows of a typical record is
     so noisy (relative error ~45 %) that the anchors spread more than their stated sampling variance and the mixed
     tails are too heavy: on the ideal case where the answer is known (white-noise records whose log variance is
-    normal between records, sd 0.3, the F variance ratio against the true reference, 10 windows of 198 samples per
-    record; the expected rate over 600 fleets, with the exact Student t pivot on the true record variances as
-    control variate), per-record shapes gave 0.83 and 0.87 ``false_alarm`` at 10 and 20 records (0.47 and 0.80 at
-    1e-3), the pooled shape 0.99 and 1.02 (0.99 and 1.05 at 1e-3), as with the true degrees of freedom given (0.98
-    and 1.01). Where the between-record spread is of the order of the anchors' sampling noise (the Ljung-Box
+    normal between records, the F variance ratio against the true reference, 10 windows per record) per-record
+    shapes make the threshold conservative and the pooled shape keeps ``false_alarm``
+    (``tests/detection/test_record_calibration.py``). Where the between-record spread is of the order of the anchors' sampling noise (the Ljung-Box
     statistic on the simulated fleet, where :math:`\tau^2` is estimated as 0), plugging the estimate in made the
-    threshold liberal (about twice ``false_alarm`` at 1e-3); the posterior average over :math:`\sigma^2` keeps the
+    threshold liberal at 1e-3; the posterior average over :math:`\sigma^2` keeps the
     hidden spread and is conservative with very few records instead. Monte Carlo checks on the simulated fleet are
     in ``tests/detection/test_record_calibration.py``.
     """
