@@ -468,7 +468,8 @@ def running(e, n):
 def test_aligned_record_effect_loglik_is_the_predictive_density_at_each_sample():
     rng, prog, held = aligned_data()
     law = aligned_record_effect(held, min_samples=10, summaries=["mean[y0]", "mean[y1]", "log_scale[y1]"])
-    assert law.center.shape == (3, 200, 3) and law.between.shape == (200, 3, 3) and law.df == 12 - 3 + 1
+    assert law.center.shape == (3, 200, 3) and law.between.shape == (200, 3, 3)
+    assert np.array_equal(law.df, [10.0] * 3) and np.all(law.scale[:, 9:] == 1.0) and np.isnan(law.scale[:, :9]).all()
     assert law.records == (5, 5, 5) and "AlignedRecordEffect(models=3" in repr(law)
     new = [prog[:150] + rng.normal(0.3, 1.0, (150, 2)) for _ in range(3)]      # a record so far: 150 of 200
     ll = law.loglik(new)
@@ -517,6 +518,45 @@ def test_aligned_record_effect_input_checks():
     with pytest.raises(ValueError, match=r"resid\['m0'\]: a channel is zero over the first"):
         law.loglik([np.zeros((100, 2)), e, e])
 
+
+def test_aligned_record_effect_spread_groups_scale_the_pooled_spread_per_group():
+    # the models of a group predict with the pooled covariance times the group's mean squared standardised
+    # deviation per summary and degree of freedom, with min(nu - q + 1, q nu_g) degrees of freedom
+    rng, prog, held = aligned_data(R=4)
+    held["m2"] = [e + rng.normal(0, 1.5, 2) for e in held["m2"]]            # m2's records spread more
+    idx, summ = [0, 1, 3], ["mean[y0]", "mean[y1]", "log_scale[y1]"]
+    law = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups={"m0": "a", "m1": "a", "m2": "b"})
+    assert np.array_equal(law.df, [min(9 - 3 + 1, 3 * 6)] * 2 + [min(7, 3 * 3)])
+    new = [prog[:120] + rng.normal(0.3, 1.0, (120, 2)) for _ in range(3)]
+    ll = law.loglik(new)
+    for n in (10, 120):
+        f = {m: np.array([running(e, n)[idx] for e in recs]) for m, recs in held.items()}
+        dev = {m: v - v.mean(axis=0) for m, v in f.items()}
+        S = np.vstack(list(dev.values())).T @ np.vstack(list(dev.values())) / 9
+        m2 = {m: np.einsum("ri,ij,rj->", d, np.linalg.inv(S), d) for m, d in dev.items()}
+        lam = {"m0": (m2["m0"] + m2["m1"]) / (3 * 6), "m1": (m2["m0"] + m2["m1"]) / (3 * 6), "m2": m2["m2"] / 9}
+        assert lam["m2"] > 2 * lam["m0"]
+        for j, m in enumerate(held):
+            assert law.scale[j, n - 1] == pytest.approx(lam[m], rel=1e-9)
+            ref = stats.multivariate_t(f[m].mean(axis=0), lam[m] * S * (1 + 1 / 4), df=law.df[j]).logpdf(
+                running(new[j], n)[idx])
+            assert ll[:n, j].sum() == pytest.approx(ref, rel=1e-9)
+    one = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups=dict.fromkeys(held, "all"))
+    plain = aligned_record_effect(held, min_samples=10, summaries=summ)
+    assert np.allclose(one.scale[:, 9:], 1.0, rtol=1e-12) and np.array_equal(one.df, plain.df)
+    assert np.allclose(one.loglik(new), plain.loglik(new), rtol=1e-10, atol=1e-12)
+
+
+def test_aligned_record_effect_spread_groups_input_checks():
+    _, _, held = aligned_data()
+    with pytest.raises(TypeError, match="spread_groups must be a mapping"):
+        aligned_record_effect(held, spread_groups=["a", "a", "b"])
+    with pytest.raises(ValueError, match="spread_groups: the model 'm2' has no group"):
+        aligned_record_effect(held, spread_groups={"m0": "a", "m1": "a"})
+    with pytest.raises(ValueError, match="spread_groups: 'm9' is not a model of held_out"):
+        aligned_record_effect(held, spread_groups={"m0": "a", "m1": "a", "m2": "b", "m9": "b"})
+    with pytest.raises(ValueError, match="spread_groups: the group 'b' has no degree of freedom"):
+        aligned_record_effect({**held, "m2": held["m2"][:1]}, spread_groups={"m0": "a", "m1": "a", "m2": "b"})
 
 def test_aligned_record_effect_allocation_is_bounded(monkeypatch):
     # the (n, q, q) spread and the (R, n, q) running summaries are refused beyond MAX_VALUES, naming held_out

@@ -269,3 +269,39 @@ def test_aligned_record_effect_keeps_the_bound_when_its_assumptions_hold():
             wrong += d.decided and d.label != j
     assert decided > 0.3 * total, decided
     assert not band_high(wrong, total, alpha), (wrong, decided, total)
+
+
+def test_aligned_record_effect_spread_groups_keep_the_bound_when_the_spread_differs_by_group():
+    # two airframes: A (10 states) whose records hardly differ, B (4 states) whose records spread widely, 3 records
+    # per state, 4 summaries, AR(0.9) noise; B's records are decided among B's states. One spread pooled over both
+    # says B's records are tighter than they are and msprt errs far beyond alpha on them; the spread per group
+    # (spread_groups) keeps the bound
+    rng = np.random.default_rng(2)
+    R, n, q, alpha, reps = 3, 600, 4, 0.01, 80
+    groups = {"A": (10, 0.02), "B": (4, 0.6)}            # states, record-effect standard deviation
+    mu = {g: rng.normal(0.0, 0.6, (m, q)) for g, (m, _) in groups.items()}
+
+    def rec(g, j):
+        eps = signal.lfilter([1.0], [1.0, -0.9], rng.standard_normal((n + 50, q)), axis=0)[50:] * np.sqrt(1 - 0.81)
+        return mu[g][j] + groups[g][1] * rng.standard_normal(q) + eps
+
+    summaries = [f"mean[y{i}]" for i in range(q)]
+    wrong = {"pooled": 0, "grouped": 0}
+    decided = {"pooled": 0, "grouped": 0}
+    total = 0
+    for _ in range(reps):
+        held = {f"{j}@{g}": [rec(g, j) for _ in range(R)] for g, (m, _) in groups.items() for j in range(m)}
+        laws = {"pooled": aligned_record_effect(held, min_samples=50, summaries=summaries),
+                "grouped": aligned_record_effect(held, min_samples=50, summaries=summaries,
+                                                 spread_groups={m: m.split("@")[1] for m in held})}
+        on_b = [i for i, m in enumerate(held) if m.endswith("@B")]
+        for j in range(groups["B"][0]):
+            x = rec("B", j)
+            total += 1
+            for name, law in laws.items():
+                d = msprt(law.loglik([x] * len(held))[:, on_b], alpha=alpha)
+                decided[name] += d.decided
+                wrong[name] += d.decided and d.label != j
+    assert band_high(wrong["pooled"], total, alpha), (wrong, decided, total)          # the problem
+    assert not band_high(wrong["grouped"], total, alpha), (wrong, decided, total)
+    assert decided["grouped"] > 0.05 * total, (wrong, decided, total)

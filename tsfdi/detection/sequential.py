@@ -1424,9 +1424,14 @@ class AlignedRecordEffect:
         ``0..t`` (NaN before ``min_samples - 1``).
     between : ndarray, shape (n, q, q)
         At each sample, the covariance of the records' running summaries about their model's centre, pooled over
-        the models (NaN before ``min_samples - 1``); model ``j`` predicts with ``between (1 + 1/R_j)``.
-    df : float
-        Degrees of freedom of the predictive multivariate t law, :math:`\sum_j (R_j - 1) - q + 1`.
+        the models (NaN before ``min_samples - 1``); model ``j`` predicts with ``scale[j] between (1 + 1/R_j)``.
+    scale : ndarray, shape (M, n)
+        At each sample, the factor of ``between`` for each model: its spread group's own spread relative to the
+        pooled one (1 for every model without ``spread_groups``; NaN before ``min_samples - 1``).
+    df : ndarray, shape (M,)
+        Degrees of freedom of each model's predictive multivariate t law: :math:`\nu - q + 1` with
+        :math:`\nu = \sum_j (R_j - 1)`, or :math:`\min(\nu - q + 1, q \nu_g)` for a model of spread group
+        :math:`g` (:math:`\nu_g`: the group's records minus its models).
     records : tuple of int
         Held-out records per model (:math:`R_j`).
     min_samples : int
@@ -1442,7 +1447,8 @@ class AlignedRecordEffect:
     models: tuple
     center: np.ndarray
     between: np.ndarray
-    df: float
+    scale: np.ndarray
+    df: np.ndarray
     records: tuple
     min_samples: int
     summaries: tuple
@@ -1450,7 +1456,7 @@ class AlignedRecordEffect:
     nchan: int
 
     def __post_init__(self) -> None:
-        _freeze_arrays(self, center=3, between=3)
+        _freeze_arrays(self, center=3, between=3, scale=2, df=1)
 
     def __repr__(self) -> str:
         return (f"AlignedRecordEffect(models={len(self.models)}, summaries={len(self.summaries)}, "
@@ -1492,25 +1498,26 @@ class AlignedRecordEffect:
         cum = np.zeros((n, M))
         t0 = self.min_samples - 1
         if n > t0:
-            nu = self.df
-            const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
             S = self.between[t0:n]
             for j, e in enumerate(arrs):
+                nu = self.df[j]
+                const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
                 with np.errstate(divide="ignore", invalid="ignore"):
                     f = _running_summaries(e, self.lags, t0)[:, keep] - self.center[j, t0:n]
                 if not np.isfinite(f).all():
                     raise ValueError(f"resid[{self.models[j]!r}]: a channel is zero over the first "
                                      f"{int(np.argmin(np.isfinite(f).all(axis=1))) + t0 + 1} samples (log RMS not "
                                      "finite)")
-                chol = np.linalg.cholesky(S * (1.0 + 1.0 / self.records[j]))
+                factor = self.scale[j, t0:n] * (1.0 + 1.0 / self.records[j])
+                chol = np.linalg.cholesky(S * factor[:, None, None])
                 d = np.linalg.solve(chol, f[:, :, None])[:, :, 0]
                 cum[t0:, j] = (const - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
                                - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / nu))
         return np.diff(cum, axis=0, prepend=0.0)
 
 
-def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
-                          summaries: Any = None) -> AlignedRecordEffect:
+def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2, summaries: Any = None,
+                          spread_groups: Any = None) -> AlignedRecordEffect:
     r"""Fit the time-aligned between-record law of every candidate model's running summaries, for sequential
     identification of records that follow one programme (:meth:`AlignedRecordEffect.loglik` into :func:`msprt`).
 
@@ -1529,6 +1536,11 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
         Samples of the first running summary used (at least 2).
     summaries : sequence of str, optional
         The summaries kept, by name (``"mean[y0]"``, ``"log_scale[y2]"``, ...), in the order given; default all.
+    spread_groups : mapping, optional
+        Model name -> spread group (e.g. the airframe: ``{"normal@E8": "E8", "cut@E9": "E9", ...}``), every model
+        in one: the models of a group predict with the pooled covariance times the group's own factor at each
+        sample (its records' spread relative to the pooled one), for records whose spread differs by group, e.g.
+        between airframes. Default: one spread for every model.
 
     Returns
     -------
@@ -1541,7 +1553,9 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     ValueError
         Records of different lengths or channel counts, shorter than ``min_samples``; non-finite summaries;
         fewer degrees of freedom (records minus models) than summaries; a summary name unknown or given twice; a
-        between-record covariance singular at some sample; more values than the library allocates at once.
+        between-record covariance singular at some sample; more values than the library allocates at once;
+        ``spread_groups`` missing a model, naming one that is not in ``held_out``, or with a group of no degree of
+        freedom (one record per model).
 
     Notes
     -----
@@ -1554,16 +1568,27 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     nothing is modelled within a record: the programme's share of a running summary (a manoeuvre moves a running
     mean the same way on every record), the record-to-record spread and the within-record noise of a summary over
     :math:`t + 1` samples are all in :math:`c_j(t)` and :math:`S(t)` by construction, from the records themselves.
-    It needs records aligned on a common programme and as long as the records to be decided. As for
+    It needs records aligned on a common programme and as long as the records to be decided.
+
+    With ``spread_groups`` the shape of the spread (the summaries' correlations) stays pooled and its size is the
+    group's: at each sample the factor of group :math:`g` is :math:`\lambda_g(t) = \sum_{r \in g} d_r(t)'
+    S(t)^{-1} d_r(t) / (q \nu_g)`, with :math:`d_r(t)` a record's deviation from its model's centre and
+    :math:`\nu_g = \sum_{j \in g} (R_j - 1)`; model :math:`j` of group :math:`g` predicts with covariance
+    :math:`\lambda_g(t) S(t)(1 + 1/R_j)` and :math:`\min(\nu - q + 1, q \nu_g)` degrees of freedom (with
+    :math:`S` known up to its size, :math:`\lambda_g` is estimated from :math:`q \nu_g` squared standardised
+    deviations and the new record's standardised distance is :math:`F(q, q \nu_g)`; one group gives
+    :math:`\lambda \equiv 1` and the law without groups). As for
     :func:`record_effect`, :math:`L_j(t) - L_k(t)` is the log-likelihood ratio of the summaries at each fixed
     :math:`t`, not a martingale in :math:`t`: the bound of :func:`msprt` is not guaranteed when it is applied at
-    every sample (``benchmarks/sprt.py``: 3 wrong flights of 37 on CrazyPAD at alpha = 0.01, where 2 are allowed).
+    every sample (``tests/detection/test_sequential_mc.py`` checks it by Monte Carlo; ``benchmarks/sprt.py`` on
+    CrazyPAD).
     """
     if not isinstance(held_out, Mapping) or len(held_out) < 2:
         raise TypeError("held_out must be a mapping model name -> list of records, with at least 2 models")
     lags = int_like(lags, "lags", minimum=0)
     min_samples = int_like(min_samples, "min_samples", minimum=2)
     names = tuple(str(m) for m in held_out)
+    group = _spread_groups(spread_groups, held_out)
     k = n = None
     recs = {}
     for name, v in held_out.items():
@@ -1606,6 +1631,37 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
                          "more or more varied records, or a larger min_samples")
     center = np.array([np.concatenate([np.full((min_samples - 1, q), np.nan), f.mean(axis=0)]) for f in F])
     between = np.concatenate([np.full((min_samples - 1, q, q), np.nan), S])
-    return AlignedRecordEffect(models=names, center=center, between=between, df=float(dof - q + 1),
+    scale = np.ones((len(names), n - min_samples + 1))
+    df = np.full(len(names), float(dof - q + 1))
+    if group is not None:
+        # squared standardised deviation of every record from its model's centre at every sample
+        chol = np.linalg.cholesky(S)
+        m2 = [(np.linalg.solve(chol, (f - f.mean(axis=0))[..., None])[..., 0] ** 2).sum(axis=-1) for f in F]
+        for g in dict.fromkeys(group):
+            members = [j for j, h in enumerate(group) if h == g]
+            nu_g = int((R[members] - 1).sum())
+            if nu_g == 0:
+                raise ValueError(f"spread_groups: the group {g!r} has no degree of freedom (one record per model): "
+                                 "give it more records or join it to another group")
+            scale[members] = sum(m2[j].sum(axis=0) for j in members) / (q * nu_g)
+            df[members] = min(dof - q + 1, q * nu_g)
+    scale = np.concatenate([np.full((len(names), min_samples - 1), np.nan), scale], axis=1)
+    return AlignedRecordEffect(models=names, center=center, between=between, scale=scale, df=df,
                                records=tuple(int(r) for r in R), min_samples=min_samples, summaries=tuple(chosen),
                                lags=lags, nchan=k)
+
+
+def _spread_groups(spread_groups: Any, held_out: Mapping) -> list | None:
+    """The spread group of every model of ``held_out`` in its order (None: no groups); a ``TypeError`` /
+    ``ValueError`` naming ``spread_groups`` otherwise."""
+    if spread_groups is None:
+        return None
+    if not isinstance(spread_groups, Mapping):
+        raise TypeError(f"spread_groups must be a mapping model name -> group, got {type(spread_groups).__name__}")
+    missing = [m for m in held_out if m not in spread_groups]
+    if missing:
+        raise ValueError(f"spread_groups: the model {missing[0]!r} has no group")
+    extra = [m for m in spread_groups if m not in held_out]
+    if extra:
+        raise ValueError(f"spread_groups: {extra[0]!r} is not a model of held_out")
+    return [spread_groups[m] for m in held_out]
