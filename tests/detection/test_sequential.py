@@ -270,7 +270,8 @@ def test_record_effect_law_estimates():
     dev = np.vstack([v - v.mean(axis=0) for v in f.values()])
     S = dev.T @ dev / (3 * 5)
     assert np.allclose(law.center, [v.mean(axis=0) for v in f.values()])
-    assert np.allclose(law.between[0], S * (1 + 1 / 6))
+    # the scale of the t law: S (1 + 1/R) nu / (nu - q + 1), nu = 15, q = 4 (Hotelling's predictive law)
+    assert np.allclose(law.between[0], S * (1 + 1 / 6) * 15 / 12)
     assert np.allclose(law.df, 15 - 4 + 1)
     assert law.records == (6, 6, 6) and law.models == ("m0", "m1", "m2")
     assert law.summaries == ("mean[y0]", "mean[y1]", "log_scale[y0]", "log_scale[y1]")
@@ -293,7 +294,7 @@ def test_record_effect_keeps_the_named_summaries_only():
     dev = np.vstack([np.array([np.r_[e.mean(axis=0), 0.5 * np.log(np.mean(e ** 2, axis=0))] for e in recs])[:, idx]
                      for recs in held.values()])
     dev = np.vstack([d - d.mean(axis=0) for d in np.split(dev, 3)])
-    assert np.allclose(law.between[0], dev.T @ dev / 15 * (1 + 1 / 6))
+    assert np.allclose(law.between[0], dev.T @ dev / 15 * (1 + 1 / 6) * 15 / 14)
     assert np.allclose(law.within, ref.within[:, idx][:, :, idx]) and np.allclose(law.df, 15 - 2 + 1)
     resid = [rng.normal(0.1, 1.1, (300, 2)) for _ in range(3)]
     ll = law.loglik(resid)
@@ -480,7 +481,8 @@ def test_aligned_record_effect_loglik_is_the_predictive_density_at_each_sample()
         dev = np.vstack([v - v.mean(axis=0) for v in f.values()])
         S = dev.T @ dev / 12
         for j, m in enumerate(held):
-            ref = stats.multivariate_t(f[m].mean(axis=0), S * (1 + 1 / 5), df=10).logpdf(running(new[j], n)[idx])
+            ref = stats.multivariate_t(f[m].mean(axis=0), S * (1 + 1 / 5) * 12 / 10, df=10).logpdf(
+                running(new[j], n)[idx])
             assert ll[:n, j].sum() == pytest.approx(ref, rel=1e-9)
     assert np.array_equal(law.loglik({"m2": new[2], "m0": new[0], "m1": new[1]}), ll)
     with pytest.raises(ValueError):                          # the law's arrays are read-only
@@ -538,7 +540,7 @@ def test_aligned_record_effect_spread_groups_scale_the_pooled_spread_per_group()
         assert lam["m2"] > 2 * lam["m0"]
         for j, m in enumerate(held):
             assert law.scale[j, n - 1] == pytest.approx(lam[m], rel=1e-9)
-            ref = stats.multivariate_t(f[m].mean(axis=0), lam[m] * S * (1 + 1 / 4), df=law.df[j]).logpdf(
+            ref = stats.multivariate_t(f[m].mean(axis=0), lam[m] * S * (1 + 1 / 4) * 9 / 7, df=law.df[j]).logpdf(
                 running(new[j], n)[idx])
             assert ll[:n, j].sum() == pytest.approx(ref, rel=1e-9)
     one = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups=dict.fromkeys(held, "all"))

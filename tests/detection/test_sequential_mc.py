@@ -305,3 +305,25 @@ def test_aligned_record_effect_spread_groups_keep_the_bound_when_the_spread_diff
     assert band_high(wrong["pooled"], total, alpha), (wrong, decided, total)          # the problem
     assert not band_high(wrong["grouped"], total, alpha), (wrong, decided, total)
     assert decided["grouped"] > 0.05 * total, (wrong, decided, total)
+
+
+def test_aligned_record_effect_predictive_law_covers_new_records():
+    # 6 states, 3 records each, 6 summaries (nu = 12 degrees of freedom for the spread, 7 for the t law): a new
+    # record's summaries fall outside the law's 99 % region (its Mahalanobis distance under the law's scale matrix
+    # beyond q F(0.99; q, df)) on 1 % of records. The scale matrix must carry the uncertainty of the spread,
+    # nu / (nu - q + 1) = 1.7 here: without it ~10 % fall outside
+    rng = np.random.default_rng(7)
+    M, R, n, q, reps = 6, 3, 60, 6, 1500
+    summaries = [f"mean[y{i}]" for i in range(q)]
+    outside = 0
+    for _ in range(reps):
+        mu = rng.normal(0.0, 1.0, (M, q))
+        law = aligned_record_effect({f"s{j}": [mu[j] + rng.normal(0.0, 1.0, q) + 0.01 * rng.standard_normal((n, q))
+                                               for _ in range(R)] for j in range(M)},
+                                    min_samples=n, summaries=summaries)
+        x = mu[0] + rng.normal(0.0, 1.0, q) + 0.01 * rng.standard_normal((n, q))
+        d = x.mean(axis=0) - law.center[0, -1]
+        psi = law.between[-1] * law.scale[0, -1] * (1 + 1 / R)
+        outside += d @ np.linalg.solve(psi, d) / q > stats.f.ppf(0.99, q, law.df[0])
+    assert law.df[0] == 12 - q + 1
+    assert not band_high(outside, reps, 0.01) and outside > stats.binom.ppf(0.0005, reps, 0.01), outside

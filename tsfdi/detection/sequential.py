@@ -1151,8 +1151,9 @@ class RecordEffect:
         Mean of the record summaries of each model's residuals over its held-out records (named by ``summaries``;
         ``q = (2 + lags) k`` when every summary is kept).
     between : ndarray, shape (M, q, q)
-        Covariance of a new record's summaries around ``center``: the between-record covariance pooled over the
-        models, times :math:`1 + 1/R_j` (the uncertainty of the centre).
+        Scale matrix of the predictive t law of a new record's summaries around ``center``: the between-record
+        covariance :math:`S` pooled over the models, times :math:`1 + 1/R_j` (the uncertainty of the centre) and
+        :math:`\nu / (\nu - q + 1)` (that of :math:`S`, estimated with :math:`\nu` degrees of freedom).
     within : ndarray, shape (M, q, q)
         Long-run covariance per sample of the summaries' per-sample series on each model's held-out records: a
         running summary over ``n`` samples has within-record covariance ``within / n``.
@@ -1348,7 +1349,9 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples:
     (a condition with 1-5 records gives no covariance of its own; pooling assumes the record-to-record spread is
     the aircraft's, not the state's; a model with a single record has that record as its centre and adds no degree
     of freedom); a new record's summaries then follow the predictive multivariate t law with
-    covariance :math:`S (1 + 1/R_j)` and :math:`\nu - q + 1` degrees of freedom, to which
+    scale matrix :math:`S (1 + 1/R_j) \nu / (\nu - q + 1)` and :math:`\nu - q + 1` degrees of freedom (Hotelling:
+    :math:`d' [S (1 + 1/R_j)]^{-1} d \, (\nu - q + 1) / (q \nu)` is :math:`F(q, \nu - q + 1)` for a new record's
+    deviation :math:`d` from the centre), to which
     :meth:`RecordEffect.loglik` adds the within-record noise ``within / n`` of a running summary. ``within`` is the
     batch-means long-run covariance of the per-sample series whose running means are the summaries to first order
     (delta method): :math:`e_t`, :math:`e_t^2 / (2 \overline{e^2})` and the autocorrelation terms. The record
@@ -1403,7 +1406,7 @@ def record_effect(held_out: Any, *, lags: int = 0, block: int = 64, min_samples:
     if not (sd > 0).all() or np.linalg.eigvalsh(S / np.outer(sd, sd))[0] <= 1e-10:     # on the correlation scale
         raise ValueError("held_out: the between-record covariance of the summaries is singular (summaries that do "
                          "not vary, or vary together exactly, over the records): give more or more varied records")
-    between = np.array([S * (1.0 + 1.0 / r) for r in R])
+    between = np.array([S * ((1.0 + 1.0 / r) * dof / (dof - q + 1)) for r in R])
     df = np.full(len(R), float(dof - q + 1))
     return RecordEffect(models=names, center=np.array([f.mean(axis=0) for f in F]), between=between,
                         within=np.array(W), df=df, records=tuple(int(r) for r in R), min_samples=min_samples,
@@ -1423,8 +1426,10 @@ class AlignedRecordEffect:
         At each sample ``t``, the mean over each model's held-out records of their running summaries over samples
         ``0..t`` (NaN before ``min_samples - 1``).
     between : ndarray, shape (n, q, q)
-        At each sample, the covariance of the records' running summaries about their model's centre, pooled over
-        the models (NaN before ``min_samples - 1``); model ``j`` predicts with ``scale[j] between (1 + 1/R_j)``.
+        At each sample, the covariance :math:`S(t)` of the records' running summaries about their model's centre,
+        pooled over the models, times :math:`\nu / (\nu - q + 1)` (a spread estimated with :math:`\nu` degrees of
+        freedom; NaN before ``min_samples - 1``); model ``j`` predicts with the t law of scale matrix
+        ``scale[j] between (1 + 1/R_j)``.
     scale : ndarray, shape (M, n)
         At each sample, the factor of ``between`` for each model: its spread group's own spread relative to the
         pooled one (1 for every model without ``spread_groups``; NaN before ``min_samples - 1``).
@@ -1563,7 +1568,8 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     :math:`j`'s records give the centre :math:`c_j(t) = \bar f_j(t)` and the covariance about it pooled over the
     models, :math:`S(t) = \sum_j \sum_r (f_{jr}(t) - c_j(t))(f_{jr}(t) - c_j(t))' / \nu`, :math:`\nu =
     \sum_j (R_j - 1)`; a new record's running summaries at :math:`t` then follow the predictive multivariate t law
-    with centre :math:`c_j(t)`, covariance :math:`S(t)(1 + 1/R_j)` and :math:`\nu - q + 1` degrees of freedom.
+    with centre :math:`c_j(t)`, scale matrix :math:`S(t)(1 + 1/R_j) \nu / (\nu - q + 1)` and :math:`\nu - q + 1`
+    degrees of freedom (as :func:`record_effect`'s).
     Unlike :func:`record_effect` (one centre, plus a within-record noise ``within / n`` from a long-run variance),
     nothing is modelled within a record: the programme's share of a running summary (a manoeuvre moves a running
     mean the same way on every record), the record-to-record spread and the within-record noise of a summary over
@@ -1573,10 +1579,10 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     With ``spread_groups`` the shape of the spread (the summaries' correlations) stays pooled and its size is the
     group's: at each sample the factor of group :math:`g` is :math:`\lambda_g(t) = \sum_{r \in g} d_r(t)'
     S(t)^{-1} d_r(t) / (q \nu_g)`, with :math:`d_r(t)` a record's deviation from its model's centre and
-    :math:`\nu_g = \sum_{j \in g} (R_j - 1)`; model :math:`j` of group :math:`g` predicts with covariance
-    :math:`\lambda_g(t) S(t)(1 + 1/R_j)` and :math:`\min(\nu - q + 1, q \nu_g)` degrees of freedom (with
-    :math:`S` known up to its size, :math:`\lambda_g` is estimated from :math:`q \nu_g` squared standardised
-    deviations and the new record's standardised distance is :math:`F(q, q \nu_g)`; one group gives
+    :math:`\nu_g = \sum_{j \in g} (R_j - 1)`; model :math:`j` of group :math:`g` predicts with scale matrix
+    :math:`\lambda_g(t) S(t)(1 + 1/R_j) \nu / (\nu - q + 1)` and :math:`\min(\nu - q + 1, q \nu_g)` degrees of
+    freedom (with :math:`S` known up to its size, :math:`\lambda_g` is estimated from :math:`q \nu_g` squared
+    standardised deviations and the new record's standardised distance is :math:`F(q, q \nu_g)`; one group gives
     :math:`\lambda \equiv 1` and the law without groups). As for
     :func:`record_effect`, :math:`L_j(t) - L_k(t)` is the log-likelihood ratio of the summaries at each fixed
     :math:`t`, not a martingale in :math:`t`: the bound of :func:`msprt` is not guaranteed when it is applied at
@@ -1630,7 +1636,7 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
                          "sample (summaries that do not vary, or vary together exactly, over the records): give "
                          "more or more varied records, or a larger min_samples")
     center = np.array([np.concatenate([np.full((min_samples - 1, q), np.nan), f.mean(axis=0)]) for f in F])
-    between = np.concatenate([np.full((min_samples - 1, q, q), np.nan), S])
+    between = np.concatenate([np.full((min_samples - 1, q, q), np.nan), S * (dof / (dof - q + 1))])
     scale = np.ones((len(names), n - min_samples + 1))
     df = np.full(len(names), float(dof - q + 1))
     if group is not None:
