@@ -157,6 +157,11 @@ def _call(func: Callable, chunk: Any, where: slice, args: tuple) -> Any:
     return func(chunk, where, *args)
 
 
+def _read_call(func: Callable, lazy: Any, where: slice, args: tuple) -> Any:
+    """:func:`_call` on a chunk read here, in this task (``lazy``: the chunk's records, still backed by dask)."""
+    return _call(func, lazy.compute(scheduler="synchronous"), where, args)
+
+
 def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, desc: str = "tsfdi") -> Iterator:
     """``func(chunk, where, *args)`` for every chunk of records of ``data``, run on the current dask scheduler and
     yielded in record order.
@@ -223,7 +228,10 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
         queue: deque = deque()
         try:
             for s in chunks:
-                queue.append((s, client.compute(dask.delayed(_call)(func, data.isel(record=s), s, shared))))
+                # one task per chunk, which reads its records itself: the chunk's graph (culled to its own reads by
+                # dask.optimize) travels inside the task instead of being ~8 tasks of the cluster's graph
+                lazy = dask.optimize(data.isel(record=s))[0]
+                queue.append((s, client.submit(_read_call, func, lazy, s, shared, pure=False)))
                 if len(queue) >= ahead:
                     yield _next(queue, bar)
             while queue:
