@@ -13,8 +13,9 @@ the counter-example, where they are computed on different samples.
 Nothing is refitted order by order. The regressor ``[const, -y[t-1], ..., -y[t-max_lags], y[t]]`` is
 grouped by lag, so one upper-triangular factor ``R`` of it gives every nested fit (see
 :func:`tsfdi.models.lstsq.nested_fits`). For AR and VAR models ``R`` is the Cholesky factor of the lag-product
-Gram matrix, computed in ``O(N max_lags)`` from lag products with end corrections; when that factor loses
-digits (ill-conditioned regressor) it is recomputed by a QR decomposition of the regressor.
+Gram matrix, computed in ``O(N max_lags)`` from lag products with end corrections, and the Gram matrix, its factor
+and the nested fits come from one compiled call (the spec's ``nested_fits``); when that factor loses digits
+(ill-conditioned regressor) it is recomputed by a QR decomposition of the regressor.
 
 Everything runs in the units of the model spec (:attr:`tsfdi.AR.y_scale`: each channel divided by a power of
 two near its peak when it lies outside ``2**-20 .. 2**20``), so the selected order of ``c * y`` is that of
@@ -36,7 +37,6 @@ from tsfdi._validation import float_like, int_like, option
 from tsfdi.exceptions import ConvergenceWarning, IllConditionedWarning
 from tsfdi.models import AR, ARX, VAR
 from tsfdi.models.criteria import EXACT_FIT_RTOL
-from tsfdi.models.lstsq import nested_fits, triangular_factor
 from tsfdi.summary import Summary
 
 __all__ = ["select_order", "OrderSelection"]
@@ -119,21 +119,10 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
         else:
             spec = VAR(data, max_lags, trend=trend, criterion=criterion)
     s = spec.neqs
-
-    def design() -> np.ndarray:
-        return np.hstack(spec.design_all(scaled=True))
-
-    if family == "arx":
-        Z = design()
-        gram, group = Z.T @ Z, 1 + spec.n_inputs
-        R = triangular_factor(gram, lambda: Z, s)
-    else:   # lag products; the Gram matrix of several records is the sum of theirs
-        gram, group = spec.gram(), s
-        R = triangular_factor(gram, design, s)
     orders = np.arange(1, max_lags + 1)
-    widths = spec.k_const + orders * group
-    sse = nested_fits(R, s, widths)
-    sss = gram.diagonal()[-s:]             # diag(Y'Y) (the squared column norms of R's last columns, to rounding)
+    widths = spec.k_const + orders * (s + spec.n_inputs)     # ARX order p: na = nb = p
+    sse = spec.nested_fits(stacklevel=3)
+    sss = spec.gram().diagonal()[-s:]      # diag(Y'Y) (the squared column norms of R's last columns, to rounding)
     values = spec.criteria(sse, sss, widths * s)
     if values["exact"].any():
         said = "".join(f"; {c}" for c in spec.collinear_channels())

@@ -123,6 +123,57 @@ def test_gram_matches_explicit_cross_products():
         np.testing.assert_allclose(lstsq.lag_gram(y, 9, const=const), Z.T @ Z, rtol=1e-12, atol=1e-9)
 
 
+@pytest.mark.parametrize("const", [False, True])
+def test_lag_gram_fits_equal_the_cholesky_path(const):
+    """The fused kernel (Gram matrix, own Cholesky factor, nested fits in one call) against lag_gram + LAPACK's
+    factor (triangular_factor) + nested_fits, on the benchmark's shapes and on several records."""
+    rng = np.random.default_rng(7)
+    y6 = simulate_ar(TRUE_A6, 2000, rng)[:, None]
+    Y = var4(3)
+    cases = [(y6, 50), (Y, 20), ([y6[:600], y6[600:1300], y6[1300:]], 13), ([Y[:500], Y[500:]], 7),
+             (rng.standard_normal((40, 2)), 5), (y6[:30], 1)]
+    for y, p in cases:
+        s = (y[0] if isinstance(y, list) else y).shape[1]
+        gram, sse = lstsq.lag_gram_fits(y, p, const=const)
+        ref_gram = lstsq.lag_gram(y, p, const=const)
+        np.testing.assert_array_equal(gram, ref_gram)
+        R = lstsq.triangular_factor(ref_gram, None, s)
+        ref = lstsq.nested_fits(R, s, int(const) + np.arange(1, p + 1) * s)
+        assert sse.shape == ref.shape == (p, s, s)
+        np.testing.assert_allclose(sse, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())
+
+
+def test_cholesky_kernel_matches_potrf_and_refuses_what_it_refuses():
+    """The compiled Cholesky factor (panels of 4 rows) equals LAPACK's at every size around the panel edges, and
+    refuses the matrices that _cholesky refuses: not positive definite, a column keeping no more than
+    GRAM_RELATIVE_FLOOR of its energy, an inf / NaN entry."""
+    from scipy.linalg import lapack
+
+    rng = np.random.default_rng(11)
+    for n in range(1, 14):
+        X = rng.standard_normal((3 * n + 5, n))
+        G = X.T @ X
+        R = np.empty_like(G)
+        assert lstsq._cholesky_upper(G, lstsq.GRAM_RELATIVE_FLOOR, R)
+        np.testing.assert_allclose(np.triu(R), lapack.dpotrf(G, lower=0, clean=1)[0], rtol=1e-12, atol=1e-12)
+    X = rng.standard_normal((50, 6))
+    bad = []
+    G = X.T @ X
+    G[2, 2] = -1.0
+    bad.append(G)
+    Xc = X.copy()
+    Xc[:, 4] = Xc[:, 1] - 2 * Xc[:, 3] + 1e-6 * rng.standard_normal(50)    # keeps ~1e-13 of its energy
+    bad.append(Xc.T @ Xc)
+    for v in (np.inf, np.nan):
+        for ij in ((3, 3), (1, 4)):
+            G = X.T @ X
+            G[ij] = G[ij[::-1]] = v
+            bad.append(G)
+    for G in bad:
+        assert lstsq._cholesky(G) is None
+        assert not lstsq._cholesky_upper(G, lstsq.GRAM_RELATIVE_FLOOR, np.empty_like(G))
+
+
 @pytest.mark.filterwarnings("ignore::tsfdi.exceptions.UnstableModelWarning")  # a sinusoid is marginally stable
 def test_qr_fallback_for_ill_conditioned_regressors():
     # a nearly noise-free sinusoid: lagged copies are almost collinear (cond ~ 2e7), so the Gram matrix
@@ -138,6 +189,7 @@ def test_qr_fallback_for_ill_conditioned_regressors():
 
     R = lstsq.triangular_factor(gram, design)
     assert called, "the QR fallback was not used"
+    assert lstsq.lag_gram_fits(y[:, None], 10, const=False)[1] is None      # select_order's kernel declines too
     Rq = np.linalg.qr(design(), mode="r")
     np.testing.assert_allclose(np.abs(np.diag(R)), np.abs(np.diag(Rq)), rtol=1e-8)
     sel = tsfdi.select_order(y, 10)

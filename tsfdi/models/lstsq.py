@@ -26,7 +26,7 @@ from scipy.linalg import blas, lapack
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "lag_products", "lag_residuals", "lag_residual_products",
+__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "lag_products", "lag_residuals", "lag_residual_products", "lag_gram_fits",
            "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
@@ -162,6 +162,96 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
     out = np.empty((int(const) + (lags + 1) * x.shape[0],) * 2)
     _lag_gram_kernel(x, starts, ends, lags, bool(const), out)
     return out
+
+
+def lag_gram_fits(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`lag_gram` and the residual cross products of the nested fits of every order ``1..lags`` in one compiled
+    call, or ``None`` for those when the Cholesky factor of the Gram matrix loses digits.
+
+    The nested fits are those of :func:`nested_fits` with the factor ``R`` of :func:`triangular_factor`'s Cholesky
+    route: the factor by a Cholesky decomposition (:func:`_cholesky_upper`), accepted only when every column keeps
+    more than ``GRAM_RELATIVE_FLOOR`` of its energy after projection on the columns before it (the check of
+    :func:`triangular_factor`); the residual cross products of order ``q`` are the suffix sums of the outer
+    products of the rows of ``R[:, m:]`` from row ``c + q s`` on. ``None`` sends the caller to
+    :func:`triangular_factor`'s QR route.
+
+    Returns
+    -------
+    gram : ndarray, shape (c + (p + 1) s, c + (p + 1) s)
+        As :func:`lag_gram`.
+    sse : ndarray, shape (p, s, s), or None
+        ``sse[q - 1]``: residual cross products of the fit of order ``q``.
+    """
+    x, starts, ends = _channel_rows(y if isinstance(y, list) else [y], lags)
+    s = x.shape[0]
+    gram = np.empty((int(const) + (lags + 1) * s,) * 2)
+    sse = np.empty((lags, s, s))
+    ok = _lag_gram_fits_kernel(x, starts, ends, lags, bool(const), GRAM_RELATIVE_FLOOR, gram, sse)
+    return gram, sse if ok else None
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _lag_gram_fits_kernel(x, starts, ends, p, const, floor, gram, sse):  # pragma: no cover - compiled
+    """:func:`lag_gram_fits`: the Gram matrix into ``gram``, then its upper Cholesky factor ``R`` and the suffix sums
+    of the outer products of the rows of ``R[:, m:]`` (``m`` regressor columns) into ``sse``; ``False`` when the factor
+    fails the energy check (``sse`` left undefined)."""
+    _lag_gram_kernel(x, starts, ends, p, const, gram)
+    n = gram.shape[0]
+    s = x.shape[0]
+    m = n - s
+    R = np.empty((n, n))
+    if not _cholesky_upper(gram, floor, R):
+        return False
+    acc = np.zeros((s, s))
+    c = 1 if const else 0
+    for i in range(n - 1, c - 1, -1):       # rows of R from the last up, as numpy's cumsum of the reversed rows
+        for a in range(max(i - m, 0), s):    # R[i, m + a] is zero below the diagonal (m + a < i)
+            for b in range(max(i - m, 0), s):
+                acc[a, b] += R[i, m + a] * R[i, m + b]
+        q = (i - c) // s
+        if (i - c) % s == 0 and 1 <= q <= p:
+            sse[q - 1] = acc
+    return True
+
+
+@numba.njit(cache=True, fastmath={"contract"})
+def _cholesky_upper(G, floor, R):  # pragma: no cover - compiled
+    """Upper Cholesky factor of ``G`` into the upper triangle of ``R`` (its strict lower triangle is left holding
+    ``G``'s), and whether every pivot keeps more than ``floor`` of its column's energy (``R[i, i]**2 > floor *
+    G[i, i]``; ``False`` at the first pivot that is not positive, NaN or fails the test: an infinite or NaN entry of
+    ``G`` makes a pivot fail, as in :func:`_cholesky`).
+
+    Right-looking in panels of 4 rows: each row of a panel scaled by its pivot and taken off the panel's later rows,
+    then the rows below the panel updated by contiguous rank-4 axpys (no dot-product reductions, whose latency
+    dominates at these sizes; a quarter of the passes over the trailing rows). Equal to LAPACK's ``potrf`` to
+    rounding."""
+    n = G.shape[0]
+    R[:] = G
+    for i0 in range(0, n, 4):
+        i1 = min(i0 + 4, n)
+        for i in range(i0, i1):
+            d = R[i, i]
+            if not d > 0.0:
+                return False
+            r = np.sqrt(d)
+            if not r * r > floor * G[i, i]:
+                return False
+            R[i, i] = r
+            inv = 1.0 / r
+            Ri = R[i]
+            for j in range(i + 1, n):
+                Ri[j] *= inv
+            for k in range(i + 1, i1):
+                f, Rk = Ri[k], R[k]
+                for j in range(k, n):
+                    Rk[j] -= f * Ri[j]
+        if i1 < n:                          # a full panel: rank-4 update of the rows below
+            R0, R1, R2, R3 = R[i0], R[i0 + 1], R[i0 + 2], R[i0 + 3]
+            for k in range(i1, n):
+                f0, f1, f2, f3, Rk = R0[k], R1[k], R2[k], R3[k], R[k]
+                for j in range(k, n):
+                    Rk[j] -= f0 * R0[j] + f1 * R1[j] + f2 * R2[j] + f3 * R3[j]
+    return True
 
 
 def _channel_rows(records: list[np.ndarray], lags: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -486,14 +576,15 @@ def _add_diagonals(P, shift, p, s, out):  # pragma: no cover - compiled
                         out[lag, i, j] += P[a * s + i, b * s + j]
 
 
-def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int = 1) -> np.ndarray:
+def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int = 1, *,
+                      stacklevel: int = 3) -> np.ndarray:
     """Upper-triangular ``R`` with ``R'R = Z'Z`` from the Gram matrix, or by QR when that loses digits.
 
     The Cholesky factor of the Gram matrix squares the condition number. When a diagonal entry of ``R``
     shows that a column keeps less than ``GRAM_RELATIVE_FLOOR`` of its energy after projection on the
     columns before it (or the factorisation fails), ``R`` is recomputed from a QR decomposition of the
     explicit regressor ``design()``, which is backward stable, and a warning is given if that regressor
-    (its first ``R.shape[0] - n_targets`` columns) is ill-conditioned.
+    (its first ``R.shape[0] - n_targets`` columns) is ill-conditioned (``stacklevel`` as ``warnings.warn``'s).
     """
     if gram is not None:
         R = _cholesky(gram)
@@ -508,7 +599,7 @@ def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int 
         cond = np.linalg.cond(R[:m, :m])
         if not cond < COND_WARN:
             warnings.warn(f"the regressor of the largest order is ill-conditioned (condition number {cond:.3g}); "
-                          "criteria of the highest orders are not reliable", IllConditionedWarning, stacklevel=3)
+                          "criteria of the highest orders are not reliable", IllConditionedWarning, stacklevel=stacklevel)
     return R
 
 
