@@ -470,7 +470,7 @@ def test_aligned_record_effect_loglik_is_the_predictive_density_at_each_sample()
     rng, prog, held = aligned_data()
     law = aligned_record_effect(held, min_samples=10, summaries=["mean[y0]", "mean[y1]", "log_scale[y1]"])
     assert law.center.shape == (3, 200, 3) and law.between.shape == (200, 3, 3)
-    assert np.array_equal(law.df, [10.0] * 3) and np.all(law.scale[:, 9:] == 1.0) and np.isnan(law.scale[:, :9]).all()
+    assert np.all(law.df[:, 9:] == 10.0) and np.all(law.scale[:, 9:] == 1.0) and np.isnan(law.scale[:, :9]).all()
     assert law.records == (5, 5, 5) and "AlignedRecordEffect(models=3" in repr(law)
     new = [prog[:150] + rng.normal(0.3, 1.0, (150, 2)) for _ in range(3)]      # a record so far: 150 of 200
     ll = law.loglik(new)
@@ -522,31 +522,44 @@ def test_aligned_record_effect_input_checks():
 
 
 def test_aligned_record_effect_spread_groups_scale_the_pooled_spread_per_group():
-    # the models of a group predict with the pooled covariance times the group's mean squared standardised
-    # deviation per summary and degree of freedom, with min(nu - q + 1, q nu_g) degrees of freedom
-    rng, prog, held = aligned_data(R=4)
-    held["m2"] = [e + rng.normal(0, 1.5, 2) for e in held["m2"]]            # m2's records spread more
+    # the models of a group predict with the pooled scale matrix times the group's factor: its squared standardised
+    # deviations s_g over q nu_g degrees of freedom, shrunk towards 1 by the prior weight nu0 = 4 + 2 / tau2 that
+    # the groups' spread of factors gives; min(nu - q + 1, nu0 + q nu_g) degrees of freedom
+    rng, prog, held = aligned_data(M=4, R=4)
+    held["m3"] = [e + rng.normal(0, 1.5, 2) for e in held["m3"]]            # m3's records spread more
     idx, summ = [0, 1, 3], ["mean[y0]", "mean[y1]", "log_scale[y1]"]
-    law = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups={"m0": "a", "m1": "a", "m2": "b"})
-    assert np.array_equal(law.df, [min(9 - 3 + 1, 3 * 6)] * 2 + [min(7, 3 * 3)])
-    new = [prog[:120] + rng.normal(0.3, 1.0, (120, 2)) for _ in range(3)]
+    groups = {"m0": "a", "m1": "a", "m2": "b", "m3": "c"}
+    law = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups=groups)
+    new = [prog[:120] + rng.normal(0.3, 1.0, (120, 2)) for _ in range(4)]
     ll = law.loglik(new)
     for n in (10, 120):
         f = {m: np.array([running(e, n)[idx] for e in recs]) for m, recs in held.items()}
         dev = {m: v - v.mean(axis=0) for m, v in f.items()}
-        S = np.vstack(list(dev.values())).T @ np.vstack(list(dev.values())) / 9
+        D = np.vstack(list(dev.values()))
+        S = D.T @ D / 12
         m2 = {m: np.einsum("ri,ij,rj->", d, np.linalg.inv(S), d) for m, d in dev.items()}
-        lam = {"m0": (m2["m0"] + m2["m1"]) / (3 * 6), "m1": (m2["m0"] + m2["m1"]) / (3 * 6), "m2": m2["m2"] / 9}
-        assert lam["m2"] > 2 * lam["m0"]
+        ss = {"a": m2["m0"] + m2["m1"], "b": m2["m2"], "c": m2["m3"]}
+        nu = {"a": 6, "b": 3, "c": 3}
+        lam = {g: ss[g] / (3 * nu[g]) for g in ss}
+        tau2 = max(np.mean([(v - 1) ** 2 for v in lam.values()]) - np.mean([2 / (3 * v) for v in nu.values()]), 0)
+        assert tau2 > 0 and lam["c"] > 2 * lam["a"]
+        nu0 = 4 + 2 / tau2
         for j, m in enumerate(held):
-            assert law.scale[j, n - 1] == pytest.approx(lam[m], rel=1e-9)
-            ref = stats.multivariate_t(f[m].mean(axis=0), lam[m] * S * (1 + 1 / 4) * 9 / 7, df=law.df[j]).logpdf(
+            g = groups[m]
+            post, df = (nu0 + ss[g]) / (nu0 + 3 * nu[g]), min(12 - 3 + 1, nu0 + 3 * nu[g])
+            assert law.scale[j, n - 1] == pytest.approx(post, rel=1e-9) and law.df[j, n - 1] == pytest.approx(df)
+            ref = stats.multivariate_t(f[m].mean(axis=0), post * S * (1 + 1 / 4) * 12 / 10, df=df).logpdf(
                 running(new[j], n)[idx])
             assert ll[:n, j].sum() == pytest.approx(ref, rel=1e-9)
-    one = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups=dict.fromkeys(held, "all"))
+    # one group: the law without groups
     plain = aligned_record_effect(held, min_samples=10, summaries=summ)
-    assert np.allclose(one.scale[:, 9:], 1.0, rtol=1e-12) and np.array_equal(one.df, plain.df)
+    one = aligned_record_effect(held, min_samples=10, summaries=summ, spread_groups=dict.fromkeys(held, "all"))
+    assert np.allclose(one.scale[:, 9:], 1.0, rtol=1e-12) and np.array_equal(one.df, plain.df, equal_nan=True)
     assert np.allclose(one.loglik(new), plain.loglik(new), rtol=1e-10, atol=1e-12)
+    # a group whose models have one record each keeps the pooled spread
+    solo = aligned_record_effect({**held, "m4": held["m3"][:1]}, min_samples=10, summaries=summ,
+                                 spread_groups={**groups, "m4": "d"})
+    assert np.all(solo.scale[4, 9:] == 1.0) and np.isfinite(solo.loglik(new + new[:1])).all()
 
 
 def test_aligned_record_effect_spread_groups_input_checks():
@@ -557,8 +570,7 @@ def test_aligned_record_effect_spread_groups_input_checks():
         aligned_record_effect(held, spread_groups={"m0": "a", "m1": "a"})
     with pytest.raises(ValueError, match="spread_groups: 'm9' is not a model of held_out"):
         aligned_record_effect(held, spread_groups={"m0": "a", "m1": "a", "m2": "b", "m9": "b"})
-    with pytest.raises(ValueError, match="spread_groups: the group 'b' has no degree of freedom"):
-        aligned_record_effect({**held, "m2": held["m2"][:1]}, spread_groups={"m0": "a", "m1": "a", "m2": "b"})
+
 
 def test_aligned_record_effect_allocation_is_bounded(monkeypatch):
     # the (n, q, q) spread and the (R, n, q) running summaries are refused beyond MAX_VALUES, naming held_out

@@ -324,6 +324,6 @@ def test_aligned_record_effect_predictive_law_covers_new_records():
         x = mu[0] + rng.normal(0.0, 1.0, q) + 0.01 * rng.standard_normal((n, q))
         d = x.mean(axis=0) - law.center[0, -1]
         psi = law.between[-1] * law.scale[0, -1] * (1 + 1 / R)
-        outside += d @ np.linalg.solve(psi, d) / q > stats.f.ppf(0.99, q, law.df[0])
-    assert law.df[0] == 12 - q + 1
+        outside += d @ np.linalg.solve(psi, d) / q > stats.f.ppf(0.99, q, law.df[0, -1])
+    assert law.df[0, -1] == 12 - q + 1
     assert not band_high(outside, reps, 0.01) and outside > stats.binom.ppf(0.0005, reps, 0.01), outside

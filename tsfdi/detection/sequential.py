@@ -1432,11 +1432,10 @@ class AlignedRecordEffect:
         ``scale[j] between (1 + 1/R_j)``.
     scale : ndarray, shape (M, n)
         At each sample, the factor of ``between`` for each model: its spread group's own spread relative to the
-        pooled one (1 for every model without ``spread_groups``; NaN before ``min_samples - 1``).
-    df : ndarray, shape (M,)
-        Degrees of freedom of each model's predictive multivariate t law: :math:`\nu - q + 1` with
-        :math:`\nu = \sum_j (R_j - 1)`, or :math:`\min(\nu - q + 1, q \nu_g)` for a model of spread group
-        :math:`g` (:math:`\nu_g`: the group's records minus its models).
+        pooled one, shrunk towards 1 (1 for every model without ``spread_groups``; NaN before ``min_samples - 1``).
+    df : ndarray, shape (M, n)
+        At each sample, the degrees of freedom of each model's predictive multivariate t law: :math:`\nu - q + 1`
+        with :math:`\nu = \sum_j (R_j - 1)`, or fewer with ``spread_groups`` (NaN before ``min_samples - 1``).
     records : tuple of int
         Held-out records per model (:math:`R_j`).
     min_samples : int
@@ -1461,7 +1460,7 @@ class AlignedRecordEffect:
     nchan: int
 
     def __post_init__(self) -> None:
-        _freeze_arrays(self, center=3, between=3, scale=2, df=1)
+        _freeze_arrays(self, center=3, between=3, scale=2, df=2)
 
     def __repr__(self) -> str:
         return (f"AlignedRecordEffect(models={len(self.models)}, summaries={len(self.summaries)}, "
@@ -1505,7 +1504,7 @@ class AlignedRecordEffect:
         if n > t0:
             S = self.between[t0:n]
             for j, e in enumerate(arrs):
-                nu = self.df[j]
+                nu = self.df[j, t0:n]
                 const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
                 with np.errstate(divide="ignore", invalid="ignore"):
                     f = _running_summaries(e, self.lags, t0)[:, keep] - self.center[j, t0:n]
@@ -1542,10 +1541,12 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     summaries : sequence of str, optional
         The summaries kept, by name (``"mean[y0]"``, ``"log_scale[y2]"``, ...), in the order given; default all.
     spread_groups : mapping, optional
-        Model name -> spread group (e.g. the airframe: ``{"normal@E8": "E8", "cut@E9": "E9", ...}``), every model
-        in one: the models of a group predict with the pooled covariance times the group's own factor at each
-        sample (its records' spread relative to the pooled one), for records whose spread differs by group, e.g.
-        between airframes. Default: one spread for every model.
+        Model name -> spread group (e.g. the airframe: ``{"normal@E8": "E8", "cut@E9": "E9", ...}``, or each
+        model its own group), every model in one: the models of a group predict with the pooled covariance times
+        the group's own factor at each sample (its records' spread relative to the pooled one, shrunk towards 1 as
+        far as the groups' factors differ no more than their sampling noise says), for records whose spread
+        differs by group. A group of one-record models keeps the pooled spread. Default: one spread for every
+        model.
 
     Returns
     -------
@@ -1559,8 +1560,7 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
         Records of different lengths or channel counts, shorter than ``min_samples``; non-finite summaries;
         fewer degrees of freedom (records minus models) than summaries; a summary name unknown or given twice; a
         between-record covariance singular at some sample; more values than the library allocates at once;
-        ``spread_groups`` missing a model, naming one that is not in ``held_out``, or with a group of no degree of
-        freedom (one record per model).
+        ``spread_groups`` missing a model or naming one that is not in ``held_out``.
 
     Notes
     -----
@@ -1577,13 +1577,18 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     It needs records aligned on a common programme and as long as the records to be decided.
 
     With ``spread_groups`` the shape of the spread (the summaries' correlations) stays pooled and its size is the
-    group's: at each sample the factor of group :math:`g` is :math:`\lambda_g(t) = \sum_{r \in g} d_r(t)'
-    S(t)^{-1} d_r(t) / (q \nu_g)`, with :math:`d_r(t)` a record's deviation from its model's centre and
-    :math:`\nu_g = \sum_{j \in g} (R_j - 1)`; model :math:`j` of group :math:`g` predicts with scale matrix
-    :math:`\lambda_g(t) S(t)(1 + 1/R_j) \nu / (\nu - q + 1)` and :math:`\min(\nu - q + 1, q \nu_g)` degrees of
-    freedom (with :math:`S` known up to its size, :math:`\lambda_g` is estimated from :math:`q \nu_g` squared
-    standardised deviations and the new record's standardised distance is :math:`F(q, q \nu_g)`; one group gives
-    :math:`\lambda \equiv 1` and the law without groups). As for
+    group's. At each sample, group :math:`g`'s squared standardised deviations :math:`s_g(t) = \sum_{r \in g}
+    d_r(t)' S(t)^{-1} d_r(t)` (:math:`d_r(t)`: a record's deviation from its model's centre) over
+    :math:`q \nu_g` degrees of freedom, :math:`\nu_g = \sum_{j \in g} (R_j - 1)`, estimate its factor
+    :math:`\hat\lambda_g = s_g / (q \nu_g)` (with :math:`S` known up to its size, :math:`s_g / \lambda_g` is
+    :math:`\chi^2_{q \nu_g}`). The factors get a scaled inverse chi-square prior centred on 1 whose weight
+    :math:`\nu_0 = 4 + 2 / \tau^2` comes from the groups themselves: :math:`\tau^2` is the mean of
+    :math:`(\hat\lambda_g - 1)^2` less the mean sampling variance :math:`2 / (q \nu_g)`, at least 0 (0: one
+    spread, :math:`\nu_0 = \infty`). Model :math:`j` of group :math:`g` then predicts with scale matrix
+    :math:`\tilde\lambda_g(t) S(t)(1 + 1/R_j) \nu / (\nu - q + 1)`, :math:`\tilde\lambda_g = (\nu_0 + s_g) /
+    (\nu_0 + q \nu_g)` (the posterior's), and :math:`\min(\nu - q + 1, \nu_0 + q \nu_g)` degrees of freedom; a
+    group without degree of freedom keeps :math:`\tilde\lambda_g = 1`, and one group, or groups that differ no
+    more than their noise, give the law without groups. As for
     :func:`record_effect`, :math:`L_j(t) - L_k(t)` is the log-likelihood ratio of the summaries at each fixed
     :math:`t`, not a martingale in :math:`t`: the bound of :func:`msprt` is not guaranteed when it is applied at
     every sample (``tests/detection/test_sequential_mc.py`` checks it by Monte Carlo; ``benchmarks/sprt.py`` on
@@ -1638,23 +1643,40 @@ def aligned_record_effect(held_out: Any, *, lags: int = 0, min_samples: int = 2,
     center = np.array([np.concatenate([np.full((min_samples - 1, q), np.nan), f.mean(axis=0)]) for f in F])
     between = np.concatenate([np.full((min_samples - 1, q, q), np.nan), S * (dof / (dof - q + 1))])
     scale = np.ones((len(names), n - min_samples + 1))
-    df = np.full(len(names), float(dof - q + 1))
+    df = np.full((len(names), n - min_samples + 1), float(dof - q + 1))
     if group is not None:
-        # squared standardised deviation of every record from its model's centre at every sample
-        chol = np.linalg.cholesky(S)
-        m2 = [(np.linalg.solve(chol, (f - f.mean(axis=0))[..., None])[..., 0] ** 2).sum(axis=-1) for f in F]
-        for g in dict.fromkeys(group):
-            members = [j for j, h in enumerate(group) if h == g]
-            nu_g = int((R[members] - 1).sum())
-            if nu_g == 0:
-                raise ValueError(f"spread_groups: the group {g!r} has no degree of freedom (one record per model): "
-                                 "give it more records or join it to another group")
-            scale[members] = sum(m2[j].sum(axis=0) for j in members) / (q * nu_g)
-            df[members] = min(dof - q + 1, q * nu_g)
+        scale, df = _group_spread(F, R, S, group, dof)
     scale = np.concatenate([np.full((len(names), min_samples - 1), np.nan), scale], axis=1)
+    df = np.concatenate([np.full((len(names), min_samples - 1), np.nan), df], axis=1)
     return AlignedRecordEffect(models=names, center=center, between=between, scale=scale, df=df,
                                records=tuple(int(r) for r in R), min_samples=min_samples, summaries=tuple(chosen),
                                lags=lags, nchan=k)
+
+
+def _group_spread(F: list, R: np.ndarray, S: np.ndarray, group: list, dof: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each model's spread factor and t degrees of freedom at every sample, shape (M, n), from its spread group's
+    records (``F``: each model's running summaries, (R_j, n, q); ``S``: the pooled covariance, (n, q, q)); see
+    :func:`aligned_record_effect`'s notes."""
+    q = S.shape[-1]
+    chol = np.linalg.cholesky(S)
+    # squared standardised deviation of every record from its model's centre, summed per model: (M, n)
+    m2 = np.array([(np.linalg.solve(chol, (f - f.mean(axis=0))[..., None])[..., 0] ** 2).sum(axis=(0, 2))
+                   for f in F])
+    labels = list(dict.fromkeys(group))
+    member = np.array([[h == g for h in group] for g in labels], dtype=np.float64)       # (G, M)
+    nu_g = member @ (R - 1.0)
+    ss = member @ m2                                                                       # (G, n)
+    has = nu_g > 0
+    lam = ss[has] / (q * nu_g[has, None])
+    # between-group variance of the factors net of their sampling variance 2 / (q nu_g): the prior's weight
+    tau2 = np.maximum(((lam - 1.0) ** 2).mean(axis=0) - np.mean(2.0 / (q * nu_g[has])), 0.0)
+    with np.errstate(divide="ignore"):
+        nu0 = 4.0 + 2.0 / tau2                                                            # inf: one spread
+    w = np.where(np.isfinite(nu0), nu0, 0.0)
+    post = np.where(np.isfinite(nu0), (w + ss) / (w + q * nu_g[:, None]), 1.0)             # (G, n)
+    dfg = np.minimum(float(dof - q + 1), nu0 + q * nu_g[:, None])
+    idx = [labels.index(h) for h in group]
+    return post[idx], dfg[idx]
 
 
 def _spread_groups(spread_groups: Any, held_out: Mapping) -> list | None:
