@@ -13,7 +13,7 @@ from conftest import as_kind
 from scipy import stats
 
 import tsfdi
-from tsfdi.coverage import ALL, MIN_RECORDS, Coverage, coverage, warn_if_not_covered
+from tsfdi.coverage import ALL, MIN_RECORDS, Coverage, coverage, record_coverage, warn_if_not_covered
 from tsfdi.exceptions import CoverageWarning, TsfdiWarning
 
 A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
@@ -208,3 +208,63 @@ def test_baselines_covers(synthetic):
     first = tsfdi.fit_baselines(recs, **kw)                # one fitting record per state
     with pytest.raises(ValueError, match="at least 3 fitting records of state 'healthy', the baseline has 1"):
         first.covers(new)
+
+
+def combined(alpha: float = 0.01) -> tsfdi.AnyOf:
+    return tsfdi.AnyOf([tsfdi.LjungBox(lags=20, alpha=alpha, threshold="calibrated"),
+                        tsfdi.FTest(alpha=alpha, threshold="calibrated"),
+                        tsfdi.MeanTest(alpha=alpha, threshold="calibrated")])
+
+
+@pytest.fixture(scope="module")
+def calibrated(baseline):
+    b, _ = baseline
+    return b, combined().calibrate(b.model.held_out_residuals(), window=200)
+
+
+def test_record_coverage_table_is_the_record_law_of_every_part_and_channel(calibrated):
+    """One row per part and channel: the new record's anchor and its p-value under the part's predictive record
+    law (ScaledChi2Threshold.record_pvalue on the windows the calibration used: every window here, step 1), the
+    fitting records' anchors, the one-sided bound at the Sidak share of alpha over the 9 rows; a record of a higher
+    noise level is out on the F test, one of a lower noise level is not warned of (its false alarms are fewer)."""
+    b, test = calibrated
+    rng = np.random.default_rng(12)
+    y = fleet(rng, 1)[0]
+    e = b.residuals(y)
+    cov = record_coverage(test, e)
+    assert cov.records == 10 and cov.nobs == e.shape[0] and len(cov.table) == 9
+    assert list(cov.table.index.get_level_values("summary").unique()) == ["LjungBox", "FTest", "MeanTest"]
+    share = 1 - 0.99 ** (1 / 9)
+    for part in test.tests:
+        stat = part.window_statistic(np.asarray(e), 198, 1)
+        for c, th in enumerate(part.thresholds_):
+            row = cov.table.loc[(type(part).__name__, f"y{c}")]
+            anchor, _, p = th.record_pvalue(stat[:, c], e.shape[0] // 198)
+            assert row["value"] == pytest.approx(anchor) and row["pvalue"] == pytest.approx(p)
+            assert row["fit_mean"] == pytest.approx(th.anchors_.mean())
+            assert row["upper"] == pytest.approx(th.record_bound(share, e.shape[0] // 198))
+            assert row["lower"] == -np.inf and row["out"] == (p < share) == (anchor > row["upper"])
+    assert cov.covered
+    loud = record_coverage(test, b.residuals(fleet(rng, 1, noise=1.6)[0]))
+    assert not loud.covered and loud.out.index[0][0] == "FTest" and "FTest[" in loud.warning_message()
+    quiet = record_coverage(test, b.residuals(fleet(rng, 1, noise=0.6)[0]))
+    assert quiet.covered and (quiet.table.loc["FTest", "t"] < -3).all()
+
+
+def test_record_coverage_bad_input(calibrated):
+    b, test = calibrated
+    rng = np.random.default_rng(13)
+    e = b.residuals(fleet(rng, 1)[0])
+    with pytest.raises(ValueError, match="flight holds 500 samples, at least 3 disjoint windows"):
+        record_coverage(test, e[:500], name="flight")
+    with pytest.raises(ValueError, match="2 channel"):
+        record_coverage(test, e[:, :2])
+    with pytest.raises(ValueError, match="alpha"):
+        record_coverage(test, e, alpha=0.0)
+    with pytest.raises(TypeError, match="calibrated windowed test"):
+        record_coverage(b, e)
+    boot = tsfdi.FTest(alpha=0.01, threshold=tsfdi.ScaledChi2Threshold(0.01, record_effect="bootstrap"))
+    with pytest.raises(ValueError, match="FTest is not calibrated with the predictive record law"):
+        record_coverage(boot.calibrate(b.model.held_out_residuals(), window=200), e)
+    with pytest.raises(ValueError, match="not calibrated with the predictive record law"):
+        record_coverage(tsfdi.FTest(alpha=0.01), e)

@@ -24,7 +24,7 @@ from tsfdi._data import as_signal
 from tsfdi._validation import int_like, probability
 from tsfdi.exceptions import CoverageWarning
 
-__all__ = ["Coverage", "coverage", "warn_if_not_covered", "MIN_RECORDS", "ALL"]
+__all__ = ["Coverage", "coverage", "record_coverage", "warn_if_not_covered", "MIN_RECORDS", "ALL"]
 
 #: fitting records needed: the predictive law of a new record's summary is a t law with ``records - 1`` degrees of
 #: freedom, so two records give one degree of freedom (a Cauchy law whose intervals are too wide to warn of
@@ -206,21 +206,139 @@ def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 
         j = int(np.flatnonzero(~np.isfinite(new))[0])
         raise ValueError(f"{name}: summary {idx[j][0]}[{idx[j][1]}] is not finite (a constant or perfectly "
                          "predicted channel)")
-    m = F.shape[1]
     centre, sd = F.mean(axis=0), F.std(axis=0, ddof=1)
     scale = sd * np.sqrt(1.0 + 1.0 / n)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(scale > 0, (new - centre) / scale, np.where(new == centre, 0.0, np.inf * np.sign(new - centre)))
     p = 2.0 * stats.t.sf(np.abs(t), n - 1)
-    share = -np.expm1(np.log1p(-alpha) / m)                     # Sidak share 1 - (1 - alpha)^(1/m)
-    crit = float(stats.t.isf(share / 2.0, n - 1))
-    out = np.abs(t) > crit
+    crit = float(stats.t.isf(_share(alpha, len(new)) / 2.0, n - 1))
     table = pd.DataFrame({"value": new, "fit_mean": centre, "fit_std": sd, "fit_min": F.min(axis=0),
                           "fit_max": F.max(axis=0), "lower": centre - crit * scale, "upper": centre + crit * scale,
-                          "t": t, "pvalue": p, "out": out, "excess": np.abs(t) / crit}, index=idx)
-    pmin = float(p.min())
+                          "t": t, "pvalue": p, "excess": np.abs(t) / crit}, index=idx)
+    return _verdict(table, alpha, n, sig.nobs)
+
+
+def _share(alpha: float, m: int) -> float:
+    """Sidak share ``1 - (1 - alpha)^(1/m)`` of each of ``m`` summaries."""
+    return float(-np.expm1(np.log1p(-alpha) / m))
+
+
+def _verdict(table: pd.DataFrame, alpha: float, records: int, nobs: int) -> Coverage:
+    """The :class:`Coverage` of a summary table (its ``pvalue`` column per summary): a summary is out when its
+    p-value is below the Sidak share of ``alpha``; the family p-value is the Sidak-adjusted smallest one."""
+    m = len(table)
+    table = table.assign(out=table["pvalue"].to_numpy() < _share(alpha, m))[
+        ["value", "fit_mean", "fit_std", "fit_min", "fit_max", "lower", "upper", "t", "pvalue", "out", "excess"]]
+    pmin = float(table["pvalue"].min())
     family = float(-np.expm1(m * np.log1p(-pmin))) if pmin < 1 else 1.0
-    return Coverage(covered=not bool(out.any()), pvalue=family, alpha=alpha, table=table, records=n, nobs=sig.nobs)
+    return Coverage(covered=not bool(table["out"].any()), pvalue=family, alpha=alpha, table=table, records=records,
+                    nobs=nobs)
+
+
+def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "resid") -> Coverage:
+    r"""Whether a new record as a whole lies in the predictive record law of a calibrated test.
+
+    A calibrated test (:class:`~tsfdi.LjungBox`, :class:`~tsfdi.FTest`, :class:`~tsfdi.MeanTest` or an
+    :class:`~tsfdi.AnyOf` of them, calibrated with the predictive record-level law on held-out residuals of
+    several records) predicts the law of its statistic on a *new* record from a record effect: each fitting
+    record's anchor (the log of its own ``false_alarm`` quantile) a normal draw
+    (:class:`~tsfdi.ScaledChi2Threshold`). This check asks whether the new record's anchor, per channel and part
+    -- the very statistics that flag its windows -- is a draw of that predictive law
+    (:meth:`~tsfdi.ScaledChi2Threshold.record_pvalue`): it warns when the record, not a window, is out of the law,
+    which is when the calibrated false-alarm rate no longer applies to it. :func:`coverage` compares generic
+    summaries (trims, residual scales and autocorrelations) two-sided; this check compares what the decision rests
+    on, one-sided, so that with few fitting records it warns of more of the records whose windows the test flags
+    beyond alpha (``benchmarks/baseline_coverage.py``).
+
+    Parameters
+    ----------
+    test : calibrated test
+        Calibrated with ``record_effect="predictive"`` (the default) on held-out residuals of at least
+        :data:`MIN_RECORDS` records.
+    resid : array_like, pandas or xarray
+        The new record's residuals through the baseline model (what the test is given), ``(nobs, k)``: at least
+        three windows of the calibrated length.
+    alpha : float
+        False-warning rate of the check on a record like the fitting records, all summaries together (Sidak).
+    name : str
+        Name of ``resid`` in error messages.
+
+    Returns
+    -------
+    Coverage
+        Its table has one row per (``summary`` = the part's class name, ``channel``): ``value`` the new record's
+        anchor, ``fit_mean`` / ``fit_std`` / ``fit_min`` / ``fit_max`` the fitting records' anchors, ``upper`` the
+        predictive bound at the Sidak share (``lower`` is ``-inf``: one-sided, see Notes), ``t`` the anchor's
+        distance in predictive standard deviations, ``pvalue`` the law's upper tail, ``excess`` the anchor's
+        distance from the fitting records' mean over the bound's (above 1 when out).
+
+    Raises
+    ------
+    TypeError
+        ``test`` not a calibrated windowed test.
+    ValueError
+        The test not calibrated, or calibrated without a record law (too few records, ``record_effect="bootstrap"``
+        or a threshold other than :class:`~tsfdi.ScaledChi2Threshold`); ``resid`` with other channels or shorter
+        than three windows.
+
+    Notes
+    -----
+    The check is one-sided: a calibrated threshold promises a false-alarm rate of at most ``alpha`` on a new record,
+    and the promise fails for a record whose statistics lie above the law; a record below it (a quieter aircraft)
+    has fewer false alarms and is not warned of (its decisions are conservative, with less power). With as many
+    windows as a fitting record the per-summary statistic is the Student t pivot of normal record
+    anchors, :math:`(a_{new} - ar a) / (s \sqrt{1 + 1/J}) \sim t_{J-1}`; the anchors of a new record with fewer
+    (more) windows are noisier (less noisy) and the law accounts for it. The new record's statistic is taken on
+    windows of the calibrated length and step (the step read from the calibration's windows per independent window),
+    as the fitting records' were.
+    """
+    alpha = probability(alpha, "alpha")
+    parts = tuple(getattr(test, "tests", (test,)))
+    if not all(callable(getattr(p, "window_statistic", None)) for p in parts):
+        raise TypeError(f"test must be a calibrated windowed test (LjungBox, FTest, MeanTest or an AnyOf of them), "
+                        f"got {type(test).__name__}")
+    rows, names, index = [], [type(p).__name__ for p in parts], []
+    sig = None
+    for i, part in enumerate(parts):
+        ths = getattr(part, "thresholds_", None)
+        label = names[i] if names.count(names[i]) == 1 else f"{names[i]}{i}"
+        if not ths or not all(getattr(t, "record_law_", None) is not None for t in ths):
+            raise ValueError(f"test part {label} is not calibrated with the predictive record law: calibrate it on "
+                             f"held-out residuals of at least {MIN_RECORDS} records with threshold='calibrated' "
+                             "(record_effect='predictive', the default)")
+        window = part.calibration_window_[0] if getattr(part, "calibration_window_", None) else None
+        if window is None:
+            raise ValueError(f"test part {label} was calibrated on a statistic without its window: calibrate it on "
+                             "residual records (calibrate(resid, window=...))")
+        if sig is None:
+            sig = as_signal(resid, name, allow_constant=True)
+            if sig.nobs < 3 * window:
+                raise ValueError(f"{name} holds {sig.nobs} samples, at least 3 disjoint windows of the calibrated "
+                                 f"{window} residual samples ({3 * window}) are needed")
+        if sig.nchan != len(ths):
+            raise ValueError(f"{name} has {sig.nchan} channel(s) but the test was calibrated on {len(ths)}")
+        # the fitting records' windows were taken `step` apart: the new record's are too (its law's estimate then
+        # has the noise the record law's spread holds); the step from the windows per independent window
+        step = max(1, min(window, round(window * ths[0].independent_ / ths[0].nobs_)))
+        stat = np.asarray(part.window_statistic(sig.values, window, step), dtype=np.float64)
+        for c, th in enumerate(ths):
+            try:
+                anchor, z, p = th.record_pvalue(stat[:, c], sig.nobs // window)
+            except ValueError as err:
+                raise ValueError(f"{name}, {label} channel {sig.channels[c]!r}: {err}") from None
+            fit = th.anchors_
+            rows.append((anchor, z, p, fit, th, sig.nobs // window))
+            index.append((label, str(sig.channels[c])))
+    share = _share(alpha, len(rows))
+    anchors = np.array([r[0] for r in rows])
+    centre = np.array([r[3].mean() for r in rows])
+    upper = np.array([th.record_bound(share, windows) for *_, th, windows in rows])
+    table = pd.DataFrame({"value": anchors, "fit_mean": centre, "fit_std": [r[3].std(ddof=1) for r in rows],
+                          "fit_min": [r[3].min() for r in rows], "fit_max": [r[3].max() for r in rows],
+                          "lower": -np.inf, "upper": upper, "t": [r[1] for r in rows], "pvalue": [r[2] for r in rows],
+                          "excess": (anchors - centre) / (upper - centre)},
+                         index=pd.MultiIndex.from_tuples(index, names=["summary", "channel"]))
+    return _verdict(table, alpha, parts[0].thresholds_[0].records_, sig.nobs)
 
 
 def warn_if_not_covered(coverage: Coverage, where: str, *, stacklevel: int = 2) -> None:

@@ -197,3 +197,48 @@ def test_predictive_f_law_holds_its_rate_where_the_answer_is_known():
     pf = 1 - (1 - 1e-2) ** (1 / 3)
     rate, se = ideal_expected_rate(20, pf, 300, seed=3107)
     assert abs(rate - 1.0) < 0.08, (rate, se)
+
+
+def test_record_pvalue_is_the_t_pivot_of_the_record_anchors():
+    """A new record with as many windows as a fitting record: its anchor's p-value under the predictive record law
+    is the Student t pivot of the fitting records' anchors, (a - mean) / (s sqrt(1 + 1/J)) ~ t(J - 1), computed
+    here by hand (the between-record spread far above the anchors' sampling noise, where the posterior average
+    is the t law, upper tail); the bound at a level is the anchor whose p-value it is."""
+    rng = np.random.default_rng(5)
+    j, per, nu = 8, 40, 150.0
+    level = np.exp(0.5 * rng.standard_normal(j + 1))
+    stat = [lev * rng.chisquare(nu, per) / nu for lev in level]
+    th = ScaledChi2Threshold(0.01, shape="pooled").calibrate(np.concatenate(stat[:j]), independent=[per] * j,
+                                                             groups=np.repeat(np.arange(j), per))
+    anchors = th.anchors_
+    new = stat[j]
+    nu_hat = float(th.df_[0])
+    a = np.log(new.mean() / nu_hat * stats.chi2.isf(0.01, nu_hat))
+    t = (a - anchors.mean()) / (anchors.std(ddof=1) * np.sqrt(1 + 1 / j))
+    anchor, z, p = th.record_pvalue(new)
+    assert anchor == pytest.approx(a, rel=1e-12)
+    assert p == pytest.approx(stats.t.sf(t, j - 1), rel=1e-3)
+    assert th.record_bound(p, per) == pytest.approx(a, rel=1e-3, abs=1e-4)
+    # a record's anchor far above the law: p below any usual level; far below: p near 1 (one-sided)
+    assert th.record_pvalue(new * np.exp(3.0))[2] < 1e-4
+    assert th.record_pvalue(new * np.exp(-3.0))[2] > 1 - 1e-3
+
+
+def test_record_pvalue_refuses_what_it_cannot_judge():
+    rng = np.random.default_rng(6)
+    stat = rng.chisquare(20, 120)
+    boot = ScaledChi2Threshold(0.01, record_effect="bootstrap").calibrate(stat, independent=[40] * 3,
+                                                                          groups=np.repeat([0, 1, 2], 40))
+    with pytest.raises(ValueError, match="record law"):
+        boot.record_pvalue(stat[:10])
+    with pytest.raises(ValueError, match="record law"):
+        boot.record_bound(0.01, 10)
+    th = ScaledChi2Threshold(0.01).calibrate(stat, independent=[40] * 3, groups=np.repeat([0, 1, 2], 40))
+    with pytest.raises(ValueError, match="at least 3"):
+        th.record_pvalue(stat[:2])
+    with pytest.raises(ValueError, match="at least 3"):
+        th.record_pvalue(stat[:10], independent=2)
+    with pytest.raises(ValueError, match="non-negative"):
+        th.record_pvalue(-stat[:10])
+    with pytest.raises(ValueError, match="not calibrated"):
+        ScaledChi2Threshold(0.01).record_pvalue(stat)

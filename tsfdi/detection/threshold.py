@@ -238,6 +238,19 @@ def _record_nodes(df: float = np.inf, isf: Any = None) -> tuple[np.ndarray, np.n
     return x, weight / weight.sum()
 
 
+def _posterior_sd(sa2: float, samp: float, j: int, extra: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Standard deviations ``sqrt(max(s2 - samp, 0) + s2 / j + extra)`` of a new record's anchor about the records'
+    mean anchor on Gauss-Legendre nodes of the posterior ``s2 = sa2 (j - 1) / chi2(j - 1)``, and their weights
+    (``extra``: the sampling variance of the new record's own estimated anchor, 0 for its true anchor)."""
+    from scipy import stats
+
+    t, wt = _NODES                                        # Gauss-Legendre on ln u, u the chi2 law's probability
+    lu = 0.5 * math.log(1e-14) * (1.0 - t)
+    u, wu = np.exp(lu), 0.5 * -math.log(1e-14) * wt * np.exp(lu)
+    s2 = sa2 * (j - 1.0) / stats.chi2.ppf(u, j - 1.0)
+    return np.sqrt(np.maximum(s2 - samp, 0.0) + s2 / j + extra), wu / wu.sum()
+
+
 def _anchor_nodes(sa2: float, samp: float, j: int) -> tuple[np.ndarray, np.ndarray]:
     """Nodes and weights (as :func:`_record_nodes`) of the predictive law of a new record's true anchor about the
     records' mean anchor: normal with variance ``tau2 + s2 / j``, ``tau2 = max(s2 - samp, 0)`` the between-record
@@ -245,14 +258,9 @@ def _anchor_nodes(sa2: float, samp: float, j: int) -> tuple[np.ndarray, np.ndarr
     ``1 / s2``). With ``samp = 0`` it is the Student t of ``j - 1`` degrees of freedom scaled by
     ``sqrt(sa2 (1 + 1 / j))``; with ``samp > 0`` a between-record variance hidden in the sampling noise of the anchors
     (estimated as zero) keeps the weight its posterior gives it instead of being dropped."""
-    from scipy import special, stats
+    from scipy import special
 
-    t, wt = _NODES                                        # Gauss-Legendre on ln u, u the chi2 law's probability
-    lu = 0.5 * math.log(1e-14) * (1.0 - t)
-    u, wu = np.exp(lu), 0.5 * -math.log(1e-14) * wt * np.exp(lu)
-    s2 = sa2 * (j - 1.0) / stats.chi2.ppf(u, j - 1.0)
-    sd = np.sqrt(np.maximum(s2 - samp, 0.0) + s2 / j)
-    wu = wu / wu.sum()
+    sd, wu = _posterior_sd(sa2, samp, j)
 
     def isf(w: np.ndarray) -> np.ndarray:
         lo, hi = np.zeros(w.shape), np.full(w.shape, 40.0 * sd.max())
@@ -572,6 +580,8 @@ class ScaledChi2Threshold:
         nodes = _anchor_nodes(sa2, samp, j)
         scale = law * np.exp(loc - anchor)
         self.record_law_ = {"between_sd": math.sqrt(tau2), "scale": spread, "df": j - 1}
+        self.anchors_ = anchor
+        self._anchor_law = (loc, sa2, samp, cv2, float(np.mean(df)) if self.shape == "pooled" else None)
         icc = tau2 / (tau2 + cv2)
         self.effective_windows_ = float(np.sum(per / (1.0 + (per - 1.0) * icc)))
         self.threshold_ = _predictive_quantile(scale, df, nodes, pf)
@@ -586,6 +596,97 @@ class ScaledChi2Threshold:
         at = _predictive_tail(self.threshold_, *self._predictive_law)[0]
         self._pvalue_grid = (np.log(grid[keep]), np.log(tail[keep]) + math.log(pf) - math.log(at))
         return self
+
+    def record_pvalue(self, statistic: Any, independent: int | None = None) -> tuple[float, float, float]:
+        r"""Whether a new record as a whole lies within the predictive record law (the record-level coverage check).
+
+        The record's own law is fitted to its windows as a fitting record's is (method of moments; the pooled
+        shape with ``shape="pooled"``, the known ``df`` when given), and its anchor -- the log of its own
+        ``false_alarm`` quantile -- is compared with the predictive law of a new record's anchor that the threshold
+        rests on: normal about the records' mean anchor with variance
+        :math:`\max(\sigma^2 - v_s, 0) + \sigma^2 / J + v_{new}`, averaged over the posterior of :math:`\sigma^2`,
+        :math:`v_{new} = \overline{2 / 
+u} / n_{new}` the sampling variance of the new anchor from its ``n_new``
+        independent windows. With as many windows as a fitting record (:math:`v_{new} = v_s`) and a between-record
+        spread above the sampling noise this is the Student t pivot of normal record anchors,
+        :math:`(a - ar a) / (s \sqrt{1 + 1/J}) \sim t_{J-1}`.
+
+        The p-value is the law's *upper* tail: the threshold promises a false-alarm rate of at most
+        ``false_alarm`` on a new record, and that promise fails for a record whose anchor lies above the law; one
+        below it has fewer false alarms (and less power).
+
+        Parameters
+        ----------
+        statistic : array_like, shape (n,)
+            The statistic on the windows of the new record, one channel, taken as the fitting records' were (the
+            same step: an estimate of a record's law from overlapping windows is less noisy than one from its
+            disjoint windows, and the record law's spread holds that noise).
+        independent : int, optional
+            How many of those windows do not overlap (default: all of them), at least
+            :data:`MIN_RECORD_WINDOWS`.
+
+        Returns
+        -------
+        anchor : float
+            The new record's anchor.
+        z : float
+            Its distance from the records' mean anchor in units of the predictive law's standard deviation at the
+            posterior mean (a t-like statistic, for display).
+        pvalue : float
+            The predictive law's probability of an anchor at least as high.
+
+        Raises
+        ------
+        ValueError
+            Not calibrated with a record law (``record_law_`` is ``None``: ``record_effect="bootstrap"``, one record
+            or pooled records); fewer than :data:`MIN_RECORD_WINDOWS` independent windows; a negative or
+            non-finite statistic.
+        """
+        from scipy import special
+
+        loc, sa2, samp, cv2, nu = self._record_law("record_pvalue")
+        x = np.asarray(as_signal(statistic, "statistic", allow_constant=True).values, dtype=np.float64).ravel()
+        per = x.size if independent is None else int_like(independent, "independent", minimum=0, maximum=x.size)
+        if per < MIN_RECORD_WINDOWS:
+            raise ValueError(f"statistic holds {per} independent windows, at least {MIN_RECORD_WINDOWS} disjoint "
+                             "windows of the new record are needed to estimate its law")
+        if not (np.all(np.isfinite(x)) and x.min() >= 0):
+            raise ValueError("statistic must be finite and non-negative (a Ljung-Box Q or a variance ratio)")
+        s1, s2 = np.array([x.sum()]), np.array([np.square(x).sum()])
+        scale, df = self._laws(s1, s2, np.array([float(x.size)]), np.array([float(per)]))
+        if nu is not None:
+            scale, df = scale * df / nu, np.array([nu])
+        anchor = float(np.log(scale * special.chdtri(df, self.false_alarm))[0])
+        sd, w = _posterior_sd(sa2, samp, self.records_, cv2 / per)
+        d = anchor - loc
+        return anchor, float(d / math.sqrt(float(np.square(sd) @ w))), float(special.ndtr(-d / sd) @ w)
+
+    def record_bound(self, level: float, windows: int) -> float:
+        """The anchor of a new record of ``windows`` independent windows that the predictive law of
+        :meth:`record_pvalue` exceeds with probability ``level`` (its ``1 - level`` quantile)."""
+        from scipy import special
+
+        loc, sa2, samp, cv2, _ = self._record_law("record_bound")
+        level = probability(level, "level")
+        windows = int_like(windows, "windows", minimum=1)
+        sd, w = _posterior_sd(sa2, samp, self.records_, cv2 / windows)
+        lo, hi = -40.0 * float(sd.max()), 40.0 * float(sd.max())
+        for _ in range(100):
+            mid = 0.5 * (lo + hi)
+            if float(special.ndtr(-mid / sd) @ w) > level:
+                lo = mid
+            else:
+                hi = mid
+        return loc + 0.5 * (lo + hi)
+
+    def _record_law(self, what: str) -> tuple:
+        """The predictive record law's (mean anchor, anchors' variance, their sampling variance, mean squared
+        coefficient of variation, pooled shape or ``None``); ``ValueError`` naming ``what`` without one."""
+        self.check_fitted()
+        if self.record_law_ is None:
+            raise ValueError(f"{what} needs the predictive record law (record_effect='predictive' calibrated on "
+                             "several records, each with at least 3 independent windows)")
+        return self._anchor_law
 
     def _laws(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray,
               per: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
