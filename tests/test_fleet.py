@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 import xarray as xr
 from _synthetic_fdi import FS, SYSTEMS, record
-from distributed import Client, LocalCluster
+from distributed import Client, LocalCluster, get_task_stream
 
 import tsfdi
 from tsfdi import LjungBox
@@ -83,9 +83,15 @@ def test_local_cluster_equals_serial(fleet, baselines, serial, tmp_path):
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
             Client(cluster):
         assert_same_evaluation(serial, tsfdi.evaluate(stored, baselines, **OPTIONS))
-        assert_same_evaluation(serial, tsfdi.evaluate(stored, baselines, **OPTIONS))   # the baselines sent before
+        with get_task_stream() as stream:
+            assert_same_evaluation(serial, tsfdi.evaluate(stored, baselines, **OPTIONS))   # the baselines sent before
         lazy_baselines = _fit(stored)
         screened = monitor.screen(stored)
+    # one task per chunk of records, which reads them (issue 36: the reads and the per-record labels were ~16 tasks
+    # of the cluster's graph per chunk); the labels are read by the driver, the first record (channels, length) by
+    # a few tasks
+    tasks = [t["key"] if isinstance(t["key"], str) else t["key"][0] for t in stream.data]
+    assert sum(k.startswith("_read_call-") for k in tasks) == 5 and len(tasks) <= 5 + 8, tasks
     assert_same_baselines(baselines, lazy_baselines)
     pd.testing.assert_frame_equal(baselines.select_alpha("var", window="10s"),
                                   lazy_baselines.select_alpha("var", window="10s"), check_exact=True)

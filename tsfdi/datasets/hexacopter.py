@@ -984,11 +984,16 @@ def hexacopter_signals(data: Any, *, yaw: str = "rate") -> Any:
     else:
         names = ["roll", "pitch", "yaw"]
     vals = np.stack(arrs, axis=-1)
-    coords = {k: (("record",), np.asarray(c.values)) for k, c in data.coords.items()
-              if c.dims == ("record",) and k != "record"}
+    # the per-record labels read here, together, by dask's threads when dask backs them (a store opened in this
+    # process: xarray has read its metadata here): a fleet's labels come in one small array per label and chunk of
+    # records, hundreds of tasks that would cost a dask.distributed cluster ~1 s per call for a few kB
+    keys = [k for k, c in data.coords.items() if c.dims == ("record",) and k != "record"]
+    labels = xr.Dataset({k: data[k].variable for k in [*keys, "lost_control"] if k in data})
+    labels = labels.compute(scheduler="threads")
+    coords = {k: (("record",), np.asarray(labels[k].values)) for k in keys}
     coords["record"] = np.asarray(data["record"].values)
     coords["time"] = t
     coords["channel"] = names
     if "lost_control" in data:
-        coords["lost_control"] = (("record",), np.asarray(data["lost_control"].values, dtype=bool))
+        coords["lost_control"] = (("record",), np.asarray(labels["lost_control"].values, dtype=bool))
     return xr.DataArray(vals, dims=("record", "time", "channel"), coords=coords, name="attitude")
