@@ -1502,7 +1502,9 @@ class AlignedRecordEffect:
         cum = np.zeros((n, M))
         t0 = self.min_samples - 1
         if n > t0:
-            S = self.between[t0:n]
+            # one factor of the shared scale matrix: model j's is sqrt(scale_j (1 + 1/R_j)) times it
+            inv = np.linalg.inv(np.linalg.cholesky(self.between[t0:n]))
+            half_logdet = np.log(np.diagonal(inv, axis1=1, axis2=2)).sum(axis=1)          # of the inverse
             for j, e in enumerate(arrs):
                 nu = self.df[j, t0:n]
                 const = special.gammaln(0.5 * (nu + q)) - special.gammaln(0.5 * nu) - 0.5 * q * np.log(nu * np.pi)
@@ -1513,10 +1515,9 @@ class AlignedRecordEffect:
                                      f"{int(np.argmin(np.isfinite(f).all(axis=1))) + t0 + 1} samples (log RMS not "
                                      "finite)")
                 factor = self.scale[j, t0:n] * (1.0 + 1.0 / self.records[j])
-                chol = np.linalg.cholesky(S * factor[:, None, None])
-                d = np.linalg.solve(chol, f[:, :, None])[:, :, 0]
-                cum[t0:, j] = (const - np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1)
-                               - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / nu))
+                d = np.einsum("tij,tj->ti", inv, f)
+                cum[t0:, j] = (const + half_logdet - 0.5 * q * np.log(factor)
+                               - 0.5 * (nu + q) * np.log1p(np.einsum("ij,ij->i", d, d) / (nu * factor)))
         return np.diff(cum, axis=0, prepend=0.0)
 
 
@@ -1658,9 +1659,9 @@ def _group_spread(F: list, R: np.ndarray, S: np.ndarray, group: list, dof: int) 
     records (``F``: each model's running summaries, (R_j, n, q); ``S``: the pooled covariance, (n, q, q)); see
     :func:`aligned_record_effect`'s notes."""
     q = S.shape[-1]
-    chol = np.linalg.cholesky(S)
-    # squared standardised deviation of every record from its model's centre, summed per model: (M, n)
-    m2 = np.array([(np.linalg.solve(chol, (f - f.mean(axis=0))[..., None])[..., 0] ** 2).sum(axis=(0, 2))
+    inv = np.linalg.inv(S)
+    # squared standardised deviations of the records from their model's centre, summed per model: (M, n)
+    m2 = np.array([np.einsum("tik,rti,rtk->t", inv, f - f.mean(axis=0), f - f.mean(axis=0), optimize=True)
                    for f in F])
     labels = list(dict.fromkeys(group))
     member = np.array([[h == g for h in group] for g in labels], dtype=np.float64)       # (G, M)
