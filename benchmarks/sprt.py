@@ -23,18 +23,25 @@ Run: ``python benchmarks/sprt.py [--section hexacopter,crazypad,cost] [--records
    samples ``0..t`` (the means of the attitude and thrust commands: the trims a defect's moment or an added weight
    moves; the log RMS of the gyro rates, raw or band-passed 5-20 Hz and above 20 Hz by causal Butterworth filters;
    the same of the vertical specific force) have, under candidate ``g``, the multivariate t law of centre the mean
-   of ``g``'s fitting flights' running summaries at ``t`` and covariance the between-flight covariance of the
-   running summaries at ``t``, pooled over every condition@airframe, times ``1 + 1/R_g`` (``R - G - q + 1`` degrees
-   of freedom): the flight-to-flight spread, the within-flight noise of a running summary at ``t`` and the
-   programme's manoeuvres are in the law by construction, with no model fitted. The summaries (``DESIGNS``: 4
-   designs of 4-12 summaries, fixed before any run) are chosen inside each fold by leave one flight out among its
-   36 fitting flights only (the design whose inner wrong decisions stay within the 99 % binomial quantile of alpha,
-   with the highest inner mean correct over the conditions): nested, no design compared on an evaluated flight's
-   outcome; the whole section was run once. Targets: mean over the conditions >= 90 % of the flights correct; wrong
-   decisions consistent with the bound (P(wrong) <= alpha per flight: at most the 99 % binomial quantile of alpha
-   over the flights); printed with the mean time to decide. With ``--conditions NAMES`` (``'*'``: every condition of
-   the copy) the withheld conditions check it: the design chosen by leave one flight out over the 37 flights of the
-   9 conditions, then leave one flight out over every flight of the chosen conditions, every condition a candidate.
+   of ``g``'s fitting flights' running summaries at ``t`` and scale matrix the between-flight covariance of the
+   running summaries at ``t``, pooled over every condition@airframe, times ``(1 + 1/R_g) nu / (nu - q + 1)``
+   (``nu = R - G`` flights minus candidates; ``nu - q + 1`` degrees of freedom), or that pooled shape scaled by the
+   candidate's own spread, shrunk towards the pooled one (``spread_groups``): the flight-to-flight spread, the
+   within-flight noise of a running summary at ``t`` and the programme's manoeuvres are in the law by construction,
+   with no model fitted. Before the decisions two checks of the pooled spread are printed: each airframe's spread
+   relative to the pooled one on the fitting flights of every fold (it decided that the spread per airframe is not
+   a design: within 0.77-1.14 of the pooled), and the pooled law's prediction of each flight left out (its
+   standardised distance from its own candidate: the share beyond the law's 99 % region and the mean, against what
+   the law says; nothing chosen from it). The design (``DESIGNS``: 4 summary sets of 4-12 summaries x 2 spreads = 8
+   designs, fixed before the run) is chosen inside each fold by leave one flight out
+   among its 36 fitting flights only (the design whose inner wrong decisions stay within the 99 % binomial quantile
+   of alpha, with the highest inner mean correct over the conditions): nested, no design compared on an evaluated
+   flight's outcome; the whole section was run once. Targets: mean over the conditions >= 90 % of the flights
+   correct; wrong decisions consistent with the bound (P(wrong) <= alpha per flight: at most the 99 % binomial
+   quantile of alpha over the flights); printed with the mean time to decide. With ``--conditions NAMES``
+   (``'*'``: every condition of the copy) the withheld conditions check it: the design chosen by leave one flight
+   out over the 37 flights of the 9 conditions, then leave one flight out over every flight of the chosen
+   conditions, every condition a candidate.
 3. Cost: ``evaluate`` on the shipped data (VAR, whiteness, 20 s windows) with and without the ``"sprt"`` rule,
    interleaved rounds in one process, median CPU times; target ratio <= 1.20.
 """
@@ -81,11 +88,11 @@ FEATURES = {**{f"cmd_{a}": (f"controller.cmd_{a}", None) for a in ("roll", "pitc
             **{f"r_{a} > 20 Hz": (f"controller.r_{a}", (20.0, None)) for a in RATES},
             "accelz 5-20 Hz": ("controller.accelz", (5.0, 20.0)), "accelz > 20 Hz": ("controller.accelz", (20.0, None))}
 TRIMS = tuple(("mean", f"cmd_{a}") for a in ("roll", "pitch", "yaw", "thrust"))
-#: the designs compared inside each fold (fixed before any run): the commands' trims (a defect the loop compensates
+#: the summary sets of the designs (fixed before any run): the commands' trims (a defect the loop compensates
 #: moves them; an added weight raises the thrust), the rates' scales, their vibration band powers (5-20 Hz, above
 #: 20 Hz up to the 50 Hz Nyquist: the rotors turn at hundreds of Hz, their vibration reaches the 100 Hz log only
 #: aliased and attenuated by the gyro's low-pass filter), and the vertical specific force's
-DESIGNS = {"trims": TRIMS,
+SUMMARY_SETS = {"trims": TRIMS,
            "trims + rate scales": TRIMS + tuple(("log_scale", f"r_{a}") for a in RATES),
            "trims + rate bands": TRIMS + tuple(("log_scale", f"r_{a} {b}") for b in ("5-20 Hz", "> 20 Hz")
                                                 for a in RATES),
@@ -93,6 +100,14 @@ DESIGNS = {"trims": TRIMS,
                                                                                                    "> 20 Hz")
                                                                for a in RATES)
            + (("log_scale", "accelz 5-20 Hz"), ("log_scale", "accelz > 20 Hz"))}
+#: the between-flight spread of the law in the designs: one pooled over every condition@airframe, or that shape
+#: scaled per candidate (condition@airframe) by its own flights' spread, shrunk towards the pooled one
+#: (``spread_groups``; a candidate holds 2-3 flights). The spread per airframe is not a design: the check printed
+#: before the decisions (``spread_check``, on the fitting flights) finds each airframe's within 0.77-1.14 of the
+#: pooled one
+SPREADS = ("pooled spread", "spread per candidate")
+#: the designs compared inside each fold (fixed before any run of this version): every summary set with either spread
+DESIGNS = {f"{name} | {spread}": (summ, spread) for spread in SPREADS for name, summ in SUMMARY_SETS.items()}
 SUMMARY_NAMES = {(kind, feat): f"{kind}[y{i}]" for i, feat in enumerate(FEATURES) for kind in ("mean", "log_scale")}
 CP_FS = [None]             # sampling rate of the CrazyPAD copy (set by crazypad())
 CONDITION_ORDER = []       # conditions in report order (set by crazypad())
@@ -206,6 +221,63 @@ def feature_series(cp, flight, lengths) -> np.ndarray:
     return np.vstack(out)
 
 
+def fit_law(X: dict, info: list, fitting: list, design: tuple, first: int):
+    """The time-aligned record law (``aligned_record_effect``) of ``design`` (summaries, spread) on the flights
+    ``fitting``, every ``condition@airframe`` of them a model."""
+    summ, spread = design
+    held = {}
+    for r in sorted(fitting, key=lambda r: (CONDITION_ORDER.index(info[r][0]), info[r][1])):
+        held.setdefault(f"{info[r][0]}@{info[r][1]}", []).append(X[r])
+    groups = ({m: m.rsplit("@", 1)[1] for m in held} if spread == "spread per airframe" else
+              {m: m for m in held} if spread == "spread per candidate" else None)
+    return aligned_record_effect(held, min_samples=first + 1, summaries=[SUMMARY_NAMES[d] for d in summ],
+                                 spread_groups=groups)
+
+
+def spread_check(X: dict, info: list, first: int) -> None:
+    """The presumption that the pooled spread is too narrow for one airframe, checked on the fitting flights of
+    every fold (no decision made): each airframe's spread factor (``AlignedRecordEffect.scale``: its flights' mean
+    squared standardised deviation from their condition's centre per summary and degree of freedom, relative to
+    the pooled spread; median over the samples), range over the folds, per summary set."""
+    print("spread per airframe relative to the pooled spread, on the fitting flights of each fold (median over the "
+          "samples; min-max over the folds; 1 = as pooled):")
+    for name, summ in SUMMARY_SETS.items():
+        fac = {}
+        for i in range(len(X)):
+            law = fit_law(X, info, [r for r in range(len(X)) if r != i], (summ, "spread per airframe"), first)
+            for j, m in enumerate(law.models):
+                fac.setdefault(m.rsplit("@", 1)[1], []).append(float(np.median(law.scale[j, first:])))
+        print(f"  {name} ({len(summ)} summaries): " + ", ".join(
+            f"{d} {min(v):.2f}-{max(v):.2f}" for d, v in sorted(fac.items())))
+
+
+def predictive_check(X: dict, info: list, first: int) -> None:
+    """The pooled law's calibration for a new flight, per airframe, by leave one flight out over the flights
+    (summaries only, no decision made, nothing chosen from it): each flight's standardised distance from its own
+    candidate's centre under the law of the other flights, ``d' Psi^-1 d / q``, is ``F(q, df)`` when the law holds;
+    printed: the flights beyond the law's 99 % region and the mean of the distance (expected 1 % and
+    ``df / (df - 2)``), at 1 s and at the end of the flight."""
+    print("pooled law's prediction of a left-out flight's own candidate (leave one flight out, no decision): flights "
+          "beyond the 99 % region / mean d'Psi^-1 d / q (law: 1 % / df/(df-2)), at 1 s and at the end:")
+    at = {"1 s": int(round(CP_FS[0])) - 1, "end": len(next(iter(X.values()))) - 1}
+    every = [f"{kind}[y{i}]" for kind in ("mean", "log_scale") for i in range(len(FEATURES))]    # f's columns
+    for name, summ in SUMMARY_SETS.items():
+        out, keep = {}, [every.index(SUMMARY_NAMES[d]) for d in summ]
+        for i in range(len(X)):
+            cond, drone, _ = info[i]
+            law = fit_law(X, info, [r for r in range(len(X)) if r != i], (summ, SPREADS[0]), first)
+            j = law.models.index(f"{cond}@{drone}")
+            for label, t in at.items():
+                x = X[i][: t + 1]
+                f = np.r_[x.mean(axis=0), 0.5 * np.log(np.mean(x * x, axis=0))][keep] - law.center[j, t]
+                psi = law.between[t] * law.scale[j, t] * (1.0 + 1.0 / law.records[j])
+                d2 = float(f @ np.linalg.solve(psi, f)) / len(summ)
+                out.setdefault((label, drone), []).append((d2, stats.f.sf(d2, len(summ), law.df[j, t]), law.df[j, t]))
+        print(f"  {name}: " + "; ".join(
+            f"{label} {d} {sum(p < 0.01 for _, p, _ in v)}/{len(v)} {np.mean([x for x, _, _ in v]):.2f} "
+            f"({v[0][2] / (v[0][2] - 2):.2f})" for (label, d), v in sorted(out.items())))
+
+
 def decide_flight(X: dict, info: list, i: int, fitting: list, design, first: int) -> dict:
     """The sequential decision on flight ``i`` (``X[i]``: its feature series; ``info[i]``: condition, drone, log) by
     the time-aligned record law (``aligned_record_effect``) fitted on the flights ``fitting`` (indexes; ``i`` never
@@ -213,13 +285,10 @@ def decide_flight(X: dict, info: list, i: int, fitting: list, design, first: int
     candidates are ``condition@drone`` for every condition with a fitting flight of the flight's drone (the
     airframe of every log is known)."""
     cond, drone, _ = info[i]
-    held = {}
-    for r in sorted(fitting, key=lambda r: (CONDITION_ORDER.index(info[r][0]), info[r][1])):
-        held.setdefault(f"{info[r][0]}@{info[r][1]}", []).append(X[r])
-    law = aligned_record_effect(held, min_samples=first + 1, summaries=[SUMMARY_NAMES[d] for d in design])
+    law = fit_law(X, info, fitting, design, first)
     idx = [j for j, m in enumerate(law.models) if m.endswith(f"@{drone}")]
     law = dataclasses.replace(law, models=tuple(law.models[j] for j in idx), center=law.center[idx],
-                              records=tuple(law.records[j] for j in idx))
+                              scale=law.scale[idx], df=law.df[idx], records=tuple(law.records[j] for j in idx))
     ll = law.loglik([X[i]] * len(idx))
     seq = msprt(ll, alpha=CRAZY_ALPHA)
     names = [m.rsplit("@", 1)[0] for m in law.models]
@@ -277,10 +346,12 @@ def crazypad(conditions) -> list:
           "the between-flight covariance at that sample pooled over every condition@airframe (multivariate t); "
           f"first summary after {FIRST_S:g} s; msprt, alpha {CRAZY_ALPHA:g}, Armitage bound; undecided = not "
           "correct")
-    print("designs (fixed a priori; one is chosen inside each fold by leave one flight out among its fitting flights "
-          "only):")
-    for name, design in DESIGNS.items():
-        print(f"  {name}: " + ", ".join(f"{k} {v}" for k, v in design))
+    spread_check(F, info, first)
+    predictive_check(F, info, first)
+    print(f"designs ({len(DESIGNS)}, fixed before the run: {len(SUMMARY_SETS)} summary sets x {len(SPREADS)} "
+          "spreads; one is chosen inside each fold by leave one flight out among its fitting flights only):")
+    for name, summ in SUMMARY_SETS.items():
+        print(f"  {name}: " + ", ".join(f"{k} {v}" for k, v in summ))
     t0 = time.perf_counter()
     rows, chosen = [], []
     for i in range(len(flights)):
@@ -346,7 +417,8 @@ def crazypad_report(cp, df: pd.DataFrame, what: str, verdict: bool = True) -> li
     mean_c = float(per["correct"].mean())
     top = int(stats.binom.ppf(0.99, len(df), CRAZY_ALPHA))
     pooled = 100 * float((df.outcome == "correct").mean())
-    print(f"mean correct over the {len(per)} conditions {mean_c:.1f} % (flights pooled {pooled:.1f} %); wrong flights {n_wrong} of {len(df)} (at most {top} expected at alpha "
+    print(f"mean correct over the {len(per)} conditions {mean_c:.1f} % (flights pooled {pooled:.1f} %); wrong flights "
+          f"{n_wrong} of {len(df)} (at most {top} expected at alpha "
           f"{CRAZY_ALPHA:g}: 99 % binomial quantile); realised error rate of the decided {err:.3f}; undecided "
           f"{int((df.outcome == 'undecided').sum())}; mean time to decide {decided.time.mean():.2f} s (median "
           f"{decided.time.median():.2f} s)")
