@@ -329,3 +329,68 @@ def test_an_exact_fit_names_the_proportional_channels():
     with pytest.warns(IllConditionedWarning, match="'c' is proportional to 'a'\\)"):
         tsfdi.select_order([Y, Y * 2], 3, "var")
     assert VAR(np.column_stack([y, ar2(300, 13)]), 2).collinear_channels() == []
+
+
+def _criteria_reference(sse, sss, nobs, df_model, s, criterion, scale, peak):
+    """information_criteria as numpy formulas (the implementation before the compiled kernel)."""
+    from tsfdi.models.criteria import COLLINEAR_RTOL, EXACT_FIT_RTOL
+
+    own = scale is None
+    peak = (np.ones(s) if own else scale) if peak is None else peak
+    floor = (EXACT_FIT_RTOL * peak) ** 2 if own else (EXACT_FIT_RTOL * (peak / scale)) ** 2
+    sigma = sse / nobs
+    var = sigma.diagonal(axis1=-2, axis2=-1)
+    if s == 1:
+        exact = var[:, 0] < floor[0]
+        logdet = np.log(np.maximum(var[:, 0], floor[0]))
+    else:
+        tr = var.sum(axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sign, logdet = np.linalg.slogdet(sigma)
+            exact = ~((sign > 0) & (logdet - (s - 1) * np.log(tr) > np.log(floor.max()))
+                      & (logdet - s * np.log(tr) > np.log(COLLINEAR_RTOL)))
+        if exact.any():
+            root = np.sqrt(floor)
+            lam = np.linalg.eigvalsh(sigma[exact] / root[:, None] / root[None, :])
+            low = np.maximum(1.0, COLLINEAR_RTOL * lam.max(axis=-1, keepdims=True))
+            logdet[exact] = np.log(np.maximum(lam, low)).sum(axis=-1) + np.log(floor).sum()
+            exact[exact] = (lam < low).any(axis=-1)
+    top = 1.0 if own else scale.max()
+    w = np.ones(s) if own else (scale / top) ** 2
+    if not own:
+        logdet = logdet + 2 * np.log(scale).sum()
+    resid_ss = np.sum(var * w, axis=-1)
+    trace = np.sum(np.maximum(var, floor) * w, axis=-1) if exact.any() else resid_ss
+    m2llf = nobs * (logdet + s * np.log(2 * np.pi) + s)
+    k = df_model + s * (s + 1) / 2
+    fit = m2llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * np.log(top) + 1)
+    sss_w = np.sum(sss * w)
+    return {"llf": -m2llf / 2, "aic": m2llf + 2 * k, "bic": fit + k * np.log(nobs),
+            "hqic": m2llf + 2 * k * np.log(np.log(nobs)), "rss_sss": 100 * nobs * resid_ss / sss_w,
+            "spp": nobs * s / df_model, "sigma2": resid_ss * top ** 2 / s, "exact": exact}
+
+
+@pytest.mark.parametrize("s", [1, 2, 3])
+@pytest.mark.parametrize("criterion", ["logdet", "trace"])
+@pytest.mark.parametrize("units", ["own", "scaled"])
+def test_information_criteria_equal_the_numpy_formulas(s, criterion, units):
+    """The compiled criteria (a vector model's ln det by Cholesky) against the numpy formulas (slogdet), with
+    ordinary, exact (below the floor) and collinear fits among the rows."""
+    from tsfdi.models.criteria import information_criteria
+
+    rng = np.random.default_rng(s)
+    nobs, q = 500, 9
+    E = rng.standard_normal((q, nobs, s)) * np.linspace(2.0, 0.1, q)[:, None, None]
+    E[3] *= 1e-14                                           # an exact fit (residual RMS below the floor)
+    if s > 1:
+        E[5, :, 1] = 2.0 * E[5, :, 0] + 1e-8 * E[5, :, 1]    # collinear (above the floor, below COLLINEAR_RTOL)
+    sse = np.einsum("qta,qtb->qab", E, E)
+    sss = np.full(s, 40.0 * nobs)
+    df_model = (1 + np.arange(1, q + 1) * s) * s
+    scale, peak = (None, None) if units == "own" else (2.0 ** np.arange(-2, s - 2), 3.0 * np.arange(1, s + 1))
+    got = information_criteria(sse, sss, nobs, df_model, s, criterion, scale=scale, peak=peak)
+    ref = _criteria_reference(sse, sss, nobs, df_model, s, criterion, scale, peak)
+    np.testing.assert_array_equal(got["exact"], ref["exact"])
+    assert got["exact"][3] and (s == 1 or got["exact"][5])
+    for key in ("llf", "aic", "bic", "hqic", "rss_sss", "spp", "sigma2"):
+        np.testing.assert_allclose(got[key], ref[key], rtol=1e-12, err_msg=key)

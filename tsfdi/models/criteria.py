@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 __all__ = ["information_criteria", "EXACT_FIT_RTOL", "COLLINEAR_RTOL"]
@@ -84,58 +85,112 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     finite and reproducible, every exact order gets the same fit term, and the BIC penalty picks the smallest
     exact order. ``exact`` flags those fits; the callers warn.
     """
-    sse = np.asarray(sse, dtype=float)
-    df_model = np.asarray(df_model, dtype=float)
     s = neqs
     own = scale is None                                     # the data's own units: no weights
-    peak = (np.ones(s) if own else scale) if peak is None else peak
+    scale = np.ones(s) if own else np.asarray(scale, dtype=float)
+    peak = scale if peak is None else np.asarray(peak, dtype=float)
     floor = (EXACT_FIT_RTOL * peak) ** 2 if own else (EXACT_FIT_RTOL * (peak / scale)) ** 2   # units of the fit
-    sss = np.asarray(sss, dtype=float)
-    sigma = sse / nobs
-    var = sigma.diagonal(axis1=-2, axis2=-1)               # (q, s)
+    sse = np.ascontiguousarray(sse, dtype=float)
+    out = np.empty((7, sse.shape[0]))
+    exact = np.empty(sse.shape[0], dtype=np.bool_)
+    _criteria_kernel(sse, np.asarray(sss, dtype=float).reshape(-1), float(nobs),
+                     np.ascontiguousarray(df_model, dtype=float).reshape(-1), floor, scale, own,
+                     criterion == "logdet", out, exact)
+    return dict(zip(("llf", "aic", "bic", "hqic", "rss_sss", "spp", "sigma2"), out), exact=exact)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _criteria_kernel(sse, sss, nobs, df_model, floor, scale, own, logdet_bic, out, exact):  # pragma: no cover
+    """:func:`information_criteria` in one compiled pass over the fits (numpy's small-array calls cost far more than
+    the arithmetic): rows ``llf, aic, bic, hqic, rss_sss, spp, sigma2`` of ``out`` and ``exact``.
+
+    A vector model's ``ln det Sigma`` comes from its Cholesky factor; the fits whose factor fails or whose
+    log-determinant fails the bounds ``det / tr^(s-1) > max(floor)`` and ``det / tr^s > COLLINEAR_RTOL`` (the
+    smallest eigenvalue is at least ``det / tr^(s-1)``, and ``det / tr^s`` times the largest) are decomposed in units
+    of the floor, as the docstring of :func:`information_criteria` says."""
+    q, s = sse.shape[0], sse.shape[1]
+    var = np.empty((q, s))
+    logdet = np.empty(q)
+    for r in range(q):
+        for a in range(s):
+            var[r, a] = sse[r, a, a] / nobs
     if s == 1:
-        v0, f0 = var[:, 0], float(floor[0])
-        exact = v0 < f0
-        logdet = np.log(np.maximum(v0, f0))
-    else:   # the smallest eigenvalue is >= det / tr^(s-1), and >= det / tr^s times the largest: only the fits
-        # that fail these bounds (against the largest floor) are decomposed, in units of the floor
-        tr = var.sum(axis=-1)
-        with np.errstate(divide="ignore", invalid="ignore"):   # a singular Sigma: -inf, replaced below
-            sign, logdet = np.linalg.slogdet(sigma)
+        f0 = floor[0]
+        for r in range(q):
+            v0 = var[r, 0]
+            exact[r] = v0 < f0
+            logdet[r] = np.log(f0 if v0 < f0 else v0)
+    else:
+        log_floor_max = np.log(floor.max())
+        log_floor_sum = np.log(floor).sum()
+        root = np.sqrt(floor)
+        L = np.empty((s, s))
+        for r in range(q):
+            sigma = sse[r] / nobs
+            tr = var[r].sum()
+            ok = True                       # Cholesky factor of sigma: ln det = 2 sum ln L[i, i]
+            ld = 0.0
+            for i in range(s):
+                for j in range(i + 1):
+                    acc = sigma[i, j]
+                    for k in range(j):
+                        acc -= L[i, k] * L[j, k]
+                    if i == j:
+                        if not acc > 0.0:
+                            ok = False
+                            break
+                        L[i, i] = np.sqrt(acc)
+                        ld += np.log(acc)
+                    else:
+                        L[i, j] = acc / L[j, j]
+                if not ok:
+                    break
             log_tr = np.log(tr)
-            exact = ~((sign > 0) & (logdet - (s - 1) * log_tr > np.log(floor.max()))
-                      & (logdet - s * log_tr > math.log(COLLINEAR_RTOL)))
-        if exact.any():
-            root = np.sqrt(floor)
-            lam = np.linalg.eigvalsh(sigma[exact] / root[:, None] / root[None, :])
-            low = np.maximum(1.0, COLLINEAR_RTOL * lam.max(axis=-1, keepdims=True))
-            logdet[exact] = np.log(np.maximum(lam, low)).sum(axis=-1) + np.log(floor).sum()
-            exact[exact] = (lam < low).any(axis=-1)
+            exact[r] = not (ok and ld - (s - 1) * log_tr > log_floor_max and ld - s * log_tr > math.log(COLLINEAR_RTOL))
+            if exact[r]:
+                scaled = np.empty((s, s))
+                for i in range(s):
+                    for j in range(s):
+                        scaled[i, j] = sigma[i, j] / root[i] / root[j]
+                lam = np.linalg.eigvalsh(scaled)
+                low = max(1.0, COLLINEAR_RTOL * lam.max())
+                ld = log_floor_sum
+                exact[r] = False
+                for lv in lam:
+                    ld += np.log(lv if lv > low else low)
+                    exact[r] = exact[r] or lv < low
+            logdet[r] = ld
     any_exact = exact.any()
-    if own:
-        top = 1.0
-        resid_ss = var[:, 0] if s == 1 else tr                  # tr Sigma
-        sss_w = float(sss[0]) if sss.size == 1 else float(sss.sum())
-        trace = np.maximum(var, floor).sum(axis=-1) if any_exact else resid_ss
-    else:   # tr Sigma and tr Y'Y in data units, as top^2 * (sum of (scale / top)^2-weighted terms)
-        logdet = logdet + 2 * np.log(scale).sum()
+    top = 1.0
+    if not own:         # tr Sigma and tr Y'Y in data units, as top^2 * (sum of (scale / top)^2-weighted terms)
+        log_scale = 2 * np.log(scale).sum()
+        for r in range(q):
+            logdet[r] += log_scale
         top = scale.max()
-        w = (scale / top) ** 2
-        resid_ss = np.sum(var * w, axis=-1)
-        sss_w = float(np.sum(sss * w))
-        trace = np.sum(np.maximum(var, floor) * w, axis=-1) if any_exact else resid_ss
-    # (scalar logarithms and factors by math / floats, one array operation per term: numpy's scalar calls and the
-    # operations on these short arrays cost more than the arithmetic)
-    m2llf = nobs * logdet + nobs * (s * math.log(2 * math.pi) + s)          # -2 llf
-    k = df_model + s * (s + 1) / 2
-    fit_term = m2llf if criterion == "logdet" else nobs * (np.log(2 * np.pi * trace) + 2 * math.log(top) + 1)
-    return {
-        "llf": -0.5 * m2llf,
-        "aic": m2llf + 2 * k,
-        "bic": fit_term + k * math.log(nobs),
-        "hqic": m2llf + k * (2 * math.log(math.log(nobs))),
-        "rss_sss": resid_ss * (100.0 * nobs / sss_w) if sss_w > 0 else np.zeros(len(sse)),
-        "spp": (nobs * s) / df_model,
-        "sigma2": resid_ss * (top * top / s),
-        "exact": exact,
-    }
+    w = (scale / top) ** 2
+    sss_w = 0.0
+    for a in range(s):
+        sss_w += sss[a] if own else sss[a] * w[a]
+    const = s * math.log(2 * math.pi) + s
+    log_n = math.log(nobs)
+    hq = 2 * math.log(log_n)
+    for r in range(q):
+        resid_ss = 0.0
+        trace = 0.0
+        for a in range(s):
+            v = var[r, a]
+            resid_ss += v if own else v * w[a]
+            vf = v if v > floor[a] else floor[a]
+            trace += vf if own else vf * w[a]
+        if not any_exact:
+            trace = resid_ss
+        m2llf = nobs * logdet[r] + nobs * const                    # -2 llf
+        k = df_model[r] + s * (s + 1) / 2
+        fit_term = m2llf if logdet_bic else nobs * (np.log(2 * np.pi * trace) + 2 * math.log(top) + 1)
+        out[0, r] = -0.5 * m2llf
+        out[1, r] = m2llf + 2 * k
+        out[2, r] = fit_term + k * log_n
+        out[3, r] = m2llf + k * hq
+        out[4, r] = resid_ss * (100.0 * nobs / sss_w) if sss_w > 0 else 0.0
+        out[5, r] = (nobs * s) / df_model[r]
+        out[6, r] = resid_ss * (top * top / s)
