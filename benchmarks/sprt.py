@@ -234,21 +234,50 @@ def fit_law(X: dict, info: list, fitting: list, design: tuple, first: int):
                                  spread_groups=groups)
 
 
+def running_summaries(x: np.ndarray, keep: list, first: int) -> np.ndarray:
+    """The running summaries ``keep`` (columns of the means, then the log RMS, of ``FEATURES``) of a flight's series
+    over samples ``0..t``, for ``t >= first``; shape (n - first, len(keep))."""
+    cnt = np.arange(1, len(x) + 1, dtype=np.float64)[:, None]
+    with np.errstate(divide="ignore"):          # a filtered series starts at 0: its log RMS is finite from ``first``
+        f = np.hstack([np.cumsum(x, axis=0) / cnt, 0.5 * np.log(np.cumsum(x * x, axis=0) / cnt)])
+    return f[first:, keep]
+
+
 def spread_check(X: dict, info: list, first: int) -> None:
     """The presumption that the pooled spread is too narrow for one airframe, checked on the fitting flights of
-    every fold (no decision made): each airframe's spread factor (``AlignedRecordEffect.scale``: its flights' mean
-    squared standardised deviation from their condition's centre per summary and degree of freedom, relative to
-    the pooled spread; median over the samples), range over the folds, per summary set."""
+    every fold (no decision made): each airframe's spread factor, its flights' squared standardised deviations from
+    their condition@airframe's centre under the pooled covariance per summary and degree of freedom (1: as pooled;
+    a factor from ``q nu`` squares has sampling sd ``sqrt(2 / (q nu))``), median over the samples, range over the
+    folds, per summary set; and the factor the law with ``spread_groups`` per airframe uses (shrunk towards 1 as far
+    as the two airframes differ no more than their noise)."""
     print("spread per airframe relative to the pooled spread, on the fitting flights of each fold (median over the "
-          "samples; min-max over the folds; 1 = as pooled):")
+          "samples; min-max over the folds; 1 = as pooled): raw factor (sampling sd) / as the law per airframe "
+          "shrinks it:")
+    every = [f"{kind}[y{i}]" for kind in ("mean", "log_scale") for i in range(len(FEATURES))]
     for name, summ in SUMMARY_SETS.items():
-        fac = {}
+        keep = [every.index(SUMMARY_NAMES[d]) for d in summ]
+        q = len(keep)
+        raw, shrunk, nus = {}, {}, {}
         for i in range(len(X)):
-            law = fit_law(X, info, [r for r in range(len(X)) if r != i], (summ, "spread per airframe"), first)
+            fitting = [r for r in range(len(X)) if r != i]
+            groups = {}
+            for r in fitting:
+                groups.setdefault(info[r][:2], []).append(running_summaries(X[r], keep, first))
+            dev = {g: np.array(v) - np.mean(v, axis=0) for g, v in groups.items()}
+            nu = sum(len(v) - 1 for v in dev.values())
+            S = sum(np.einsum("rti,rtk->tik", d, d) for d in dev.values()) / nu
+            inv = np.linalg.inv(S)
+            for drone in sorted({g[1] for g in groups}):
+                d2 = sum(np.einsum("tik,rti,rtk->t", inv, d, d) for g, d in dev.items() if g[1] == drone)
+                nu_a = sum(len(d) - 1 for g, d in dev.items() if g[1] == drone)
+                raw.setdefault(drone, []).append(float(np.median(d2 / (q * nu_a))))
+                nus[drone] = nu_a
+            law = fit_law(X, info, fitting, (summ, "spread per airframe"), first)
             for j, m in enumerate(law.models):
-                fac.setdefault(m.rsplit("@", 1)[1], []).append(float(np.median(law.scale[j, first:])))
-        print(f"  {name} ({len(summ)} summaries): " + ", ".join(
-            f"{d} {min(v):.2f}-{max(v):.2f}" for d, v in sorted(fac.items())))
+                shrunk.setdefault(m.rsplit("@", 1)[1], []).append(float(np.median(law.scale[j, first:])))
+        print(f"  {name} ({q} summaries): " + ", ".join(
+            f"{d} {min(v):.2f}-{max(v):.2f} ({np.sqrt(2 / (q * nus[d])):.2f}) / {min(shrunk[d]):.2f}-"
+            f"{max(shrunk[d]):.2f}" for d, v in sorted(raw.items())))
 
 
 def predictive_check(X: dict, info: list, first: int) -> None:

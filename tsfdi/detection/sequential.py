@@ -1673,7 +1673,7 @@ def _group_spread(F: list, R: np.ndarray, S: np.ndarray, group: list, dof: int) 
     tau2 = np.maximum(((lam - 1.0) ** 2).mean(axis=0) - np.mean(2.0 / (q * nu_g[has])), 0.0)
     with np.errstate(divide="ignore"):
         nu0 = 4.0 + 2.0 / tau2                                                            # inf: one spread
-    w = np.where(np.isfinite(nu0), nu0, 0.0)
+    w = np.where(np.isfinite(nu0), nu0, 1.0)
     post = np.where(np.isfinite(nu0), (w + ss) / (w + q * nu_g[:, None]), 1.0)             # (G, n)
     dfg = np.minimum(float(dof - q + 1), nu0 + q * nu_g[:, None])
     idx = [labels.index(h) for h in group]
