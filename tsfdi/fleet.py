@@ -228,10 +228,9 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
         queue: deque = deque()
         try:
             for s in chunks:
-                # one task per chunk, which reads its records itself: the chunk's graph (culled to its own reads by
-                # dask.optimize) travels inside the task instead of being ~8 tasks of the cluster's graph
-                lazy = dask.optimize(data.isel(record=s))[0]
-                queue.append((s, client.submit(_read_call, func, lazy, s, shared, pure=False)))
+                # one task per chunk, which reads its records itself: the chunk's graph travels inside the task
+                # (culled and optimised where it is computed) instead of being ~8 tasks of the cluster's graph
+                queue.append((s, client.submit(_read_call, func, data.isel(record=s), s, shared, pure=False)))
                 if len(queue) >= ahead:
                     yield _next(queue, bar)
             while queue:
