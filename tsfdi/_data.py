@@ -39,8 +39,8 @@ import pandas as pd
 
 from tsfdi._validation import float_like, int_like
 
-__all__ = ["FS_TOLERANCE", "JITTER", "Signal", "as_signal", "check_paired", "is_xarray", "read_csv", "refuse_masked",
-           "rolling_variance", "runs", "sampling_frequency", "time_step", "window_samples"]
+__all__ = ["FS_TOLERANCE", "JITTER", "Signal", "as_signal", "channel_extremes", "check_paired", "is_xarray", "read_csv",
+           "refuse_masked", "rolling_variance", "runs", "sampling_frequency", "time_step", "window_samples"]
 
 #: a time index is uniformly sampled when every step lies within this fraction of its median step
 JITTER = 0.1
@@ -296,20 +296,39 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         raise ValueError(f"{name} has no channels")
     if arr.shape[0] < min_nobs:
         raise ValueError(f"{name} is too short: {arr.shape[0]} samples, at least {min_nobs} are needed")
-    if finite and not np.isfinite(arr).all():
+    extremes = None
+    if not allow_constant and arr.shape[0] > 1:     # each channel's extremes, kept for channel_extremes
+        cols = np.ascontiguousarray(arr.T)        # reductions along contiguous rows: ~30x faster than axis 0
+        extremes = (cols.max(axis=1), cols.min(axis=1))
+    # finite extremes with a finite spread mean finite values (a NaN propagates to both extremes, an inf shows in
+    # one); a spread that is not finite (or an overflow of it) leaves the decision to the scan of every value
+    if finite and (extremes is None or not np.isfinite(extremes[0] - extremes[1]).all()) and not np.isfinite(arr).all():
         bad = int((~np.isfinite(arr)).sum())
         first = int(np.argwhere(~np.isfinite(arr))[0, 0])
         raise ValueError(f"{name} contains {bad} NaN/inf value(s) (first at sample {first}); "
                          "remove or interpolate them first")
-    if not allow_constant and arr.shape[0] > 1:
-        cols = np.ascontiguousarray(arr.T)        # reductions along contiguous rows: ~30x faster than axis 0
-        const = cols.max(axis=1) == cols.min(axis=1)
+    if extremes is not None:
+        const = extremes[0] == extremes[1]
         if const.any():
             which = [channels[i] for i in np.flatnonzero(const)]
             raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
     time_step(index, name, numeric=_numeric_time(kind, index))
-    return Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
-                  channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)
+    sig = Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
+                 channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)
+    if extremes is not None:    # not a field: a Signal made from this one (dataclasses.replace, ...) computes its own
+        object.__setattr__(sig, "_extremes", extremes)
+    return sig
+
+
+def channel_extremes(signal: Signal) -> tuple[np.ndarray, np.ndarray]:
+    """Largest and smallest value of every channel of ``signal`` (two arrays of shape ``(nchan,)``, not to be
+    modified): the ones :func:`as_signal` computed for its checks when it made this very object, else computed
+    here."""
+    kept = signal.__dict__.get("_extremes")
+    if kept is not None:
+        return kept
+    cols = np.ascontiguousarray(signal.values.T)
+    return cols.max(axis=1), cols.min(axis=1)
 
 
 def _numeric_time(kind: str, index: pd.Index | None) -> bool:

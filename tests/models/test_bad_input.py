@@ -192,3 +192,28 @@ def test_pandas_y_and_u_with_different_indexes_are_refused():
     # arrays, or one array and one labelled signal, are paired by position
     assert tsfdi.ARX(y, Y3[:, 0], 2, 2).fit().nobs == 198
     assert tsfdi.ARX(Y1, late, 2, 2).fit().nobs == 198
+
+
+def test_non_finite_values_are_found_through_the_channel_extremes():
+    """as_signal reads finiteness from each channel's extremes (which the models reuse for their peaks): a NaN, an
+    inf of either sign in any channel is still refused with its count and first sample, and finite data whose
+    spread overflows (1e308 and -1e308 in one channel) is still accepted."""
+    import dataclasses
+
+    from tsfdi._data import as_signal, channel_extremes
+
+    Y = np.random.default_rng(0).standard_normal((200, 3))
+    for (t, j), v in {(57, 1): np.nan, (10, 2): np.inf, (3, 0): -np.inf}.items():
+        bad = Y.copy()
+        bad[t, j] = v
+        with pytest.raises(ValueError, match=rf"y contains 1 NaN/inf value\(s\) \(first at sample {t}\)"):
+            as_signal(bad, "y")
+        with pytest.raises(ValueError, match=rf"y contains 1 NaN/inf value\(s\) \(first at sample {t}\)"):
+            tsfdi.VAR(bad, 2)
+    wide = np.c_[Y[:, 0], np.r_[1e308, -1e308, Y[2:, 1]]]
+    hi, lo = channel_extremes(as_signal(wide, "y"))
+    np.testing.assert_array_equal(hi, wide.max(axis=0))
+    np.testing.assert_array_equal(lo, wide.min(axis=0))
+    # a Signal made from a checked one (another channel here) computes its own extremes
+    sub = dataclasses.replace(as_signal(Y, "y"), values=np.ascontiguousarray(Y[:, [2]]))
+    np.testing.assert_array_equal(channel_extremes(sub)[0], Y[:, [2]].max(axis=0))

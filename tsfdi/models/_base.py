@@ -20,7 +20,7 @@ import pandas as pd
 from scipy import linalg, stats
 from scipy.linalg import lapack
 
-from tsfdi._data import Signal, as_signal, check_paired, is_xarray
+from tsfdi._data import Signal, as_signal, channel_extremes, check_paired, is_xarray
 from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
@@ -41,13 +41,13 @@ DATA_RANGE = (1e-152, 1e152)
 _OWN_UNITS = (2.0**-20, 2.0**20)
 
 
-def _channel_scale(values: list[np.ndarray], name: str, channels: list) -> tuple[np.ndarray, np.ndarray, bool]:
+def _channel_scale(records: list[Signal], name: str, channels: list) -> tuple[np.ndarray, np.ndarray, bool]:
     """Largest magnitude of every channel over all records, checked against :data:`DATA_RANGE`, the unit (a
     power of two, 1 inside the ``_OWN_UNITS`` band) in which the channel is fitted, and whether all are 1."""
     peak = None
-    for v in values:
-        vt = np.ascontiguousarray(v.T)      # numpy reduces a contiguous axis far faster than axis 0 of (n, s)
-        p = np.maximum(vt.max(axis=1), -vt.min(axis=1))
+    for r in records:
+        hi, lo = channel_extremes(r)        # (as_signal's, when it checked the record for constant channels)
+        p = np.maximum(hi, -lo)
         peak = p if peak is None else np.maximum(peak, p)
     lo, hi = (peak[0], peak[0]) if peak.size == 1 else (peak.min(), peak.max())
     if lo < DATA_RANGE[0] or hi > DATA_RANGE[1]:
@@ -224,10 +224,10 @@ class LinearTimeSeriesModel:
             if rows < self.df_eq + 1:
                 raise ValueError(f"y is too short for {orders}: {rows} usable samples in all records, "
                                  f"at least {self.df_eq + 1} are needed ({self.df_eq} parameters + 1)")
-        self._y_peak, self.y_scale, own = _channel_scale([r.values for r in self.records], "y", self.data.channels)
+        self._y_peak, self.y_scale, own = _channel_scale(self.records, "y", self.data.channels)
         self.u_scale = None
         if self.u_records is not None:
-            _, self.u_scale, own_u = _channel_scale([r.values for r in self.u_records], "u", self.u_data.channels)
+            _, self.u_scale, own_u = _channel_scale(self.u_records, "u", self.u_data.channels)
             own = own and own_u
         self._rescaled = not own
         self._col_scale = None      # the fit's regressor column j is the data's times _col_scale[j]

@@ -26,8 +26,8 @@ from scipy.linalg import blas, lapack
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "lag_products", "lag_residuals", "lag_residual_products", "lag_gram_fits",
-           "triangular_factor", "nested_fits", "gram_factor",
+__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "lag_gram_fits", "lag_products", "lag_residuals",
+           "lag_residual_products", "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
 #: condition number of the regressor above which a fit warns (digits left < ~6)
