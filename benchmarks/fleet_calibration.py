@@ -7,7 +7,9 @@
    judged. Over ``--fleets`` fleets (``--seed``: the first): the realised rate of the decision averaged over fleets,
    its 99.9 % interval over the independent fleets, for the F test the same mean with the fitting records' noise
    levels as control variate (:func:`pivot_rate`), its spread, and how many fleets fall in the two-sided 99.9 %
-   binomial band of one fleet's 600 windows; "old" is the per-record
+   binomial band of one fleet's 600 windows, whether the mean over fleets lies in the all-fleets band ("mean in
+   band") and how often an *exact* law would (``yardstick_reach``: 1,500 runs of as many ideal fleets with this
+   layout and the measured row's between / within spread; the yardstick's own reach); "old" is the per-record
    mixture with a 90 % bootstrap bound (``record_effect="bootstrap"``), "new" the predictive record-level law.
 2. CrazyPAD (``../shared/data/crazypad``, the functions of ``benchmarks/crazypad.py``: margin, channels and VAR
    order chosen on the fitting flights, each log's two airborne segments fitted and held out together), normal
@@ -17,10 +19,11 @@
    ``LB+F+M`` (``tsfdi.AnyOf`` of the three). Realised rate of the decision on the disjoint 1 s and 2 s windows of
    the judged flights, with the two-sided 99.9 % binomial band of alpha:
    a. leave one flight out over all normal flights (8 folds);
-   b. leave one flight out within an airframe (same-airframe flights), and ``tsfdi.coverage.coverage`` on every
-      judged segment: its false-warning rate;
-   c. fit on one airframe, judge the other: rates, and per judged flight whether ``LB+F+M`` (2 s, alpha 0.01)
-      breaks the band of its own windows and whether ``coverage`` fires on it;
+   b. leave one flight out within an airframe (same-airframe flights), and the two coverage checks on every judged
+      segment, ``tsfdi.coverage.coverage`` (summaries) and ``tsfdi.coverage.record_coverage`` (the record law of
+      ``LB+F+M`` calibrated at 1 s windows): their false-warning rates;
+   c. fit on one airframe, judge the other: rates, and per judged flight whether ``LB+F+M`` (2 s and 1 s, alpha
+      0.01) breaks the band of its own windows and whether each check fires on it;
    d. detection kept: ``LB+F+M`` on cut_propeller_M3_4mm_4mm_39mm, the VAR of all normal flights, 2 s windows
       (target >= 95 %).
 3. The realistic hexacopter (``tsfdi.datasets.simulate_hexacopter``, 30 s in severe turbulence, the first 5 s
@@ -50,7 +53,7 @@ import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 import tsfdi  # noqa: E402
-from tsfdi.coverage import coverage  # noqa: E402
+from tsfdi.coverage import coverage, record_coverage  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import crazypad as cp  # noqa: E402
@@ -128,15 +131,63 @@ def one_fleet(seed: int, records=RECORDS, alphas=ALPHAS, effects=("bootstrap", "
             for fam in families:
                 for eff in effects:
                     test = make_test(fam, a, eff).calibrate(held, window=WINDOW)
+                    laws = [t.record_law_ for t in test.thresholds_]
+                    between = np.mean([law["between_sd"] for law in laws]) if laws[0] is not None else np.nan
+                    within = np.sqrt(np.mean([np.mean(2.0 / t.df_) for t in test.thresholds_]))
                     rows.append((j, a, fam, eff, decision_rate(test, resid), float(test.threshold_[0]),
-                                 pivot_rate(z[:j], a)))
+                                 pivot_rate(z[:j], a), between, within))
     return rows
+
+
+def exact_factor(j: int, share: float, ratio: float) -> float:
+    """``c`` of the exact law of :func:`yardstick_reach`: ``E_s[P(N(0, k^2 + ratio^2) > s k c)] = share`` with
+    ``k^2 = 1 + 1/j`` and ``s^2 ~ chi2(j - 1) / (j - 1)`` (on 4,000 quantiles of that law), by bisection."""
+    u = (np.arange(4000) + 0.5) / 4000
+    s = np.sqrt(stats.chi2.ppf(u, j - 1) / (j - 1))
+    k = np.sqrt(1.0 + 1.0 / j)
+    tot = np.sqrt(k * k + ratio * ratio)
+    lo, hi = 0.0, 1e4
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stats.norm.sf(s * k * mid / tot).mean() > share else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def yardstick_reach(j: int, alpha: float, ratio: float, fleets: int, sets: int = 1500, seed: int = 0) -> tuple:
+    """How often an *exact* law meets the yardstick "the mean rate over ``fleets`` fleets inside the all-fleets
+    99.9 % binomial band" (the share of ``sets`` independent runs that do), and its mean rate over all runs.
+
+    The ideal fleet has this benchmark's layout (``j`` fitting records, ``NEW`` new records of ``(N - 2) //
+    (WINDOW - 2)`` windows, 3 independent channels, Sidak): a record's log statistic level is normal between
+    records (sd 1), a window's log statistic that level plus normal noise of sd ``ratio`` (within over between, as
+    the calibrations of the measured row estimate it); the fitting records' levels are known exactly. The law
+    flags a window above ``mean + s sqrt(1 + 1/j) c`` of the fitting records' levels, ``c`` from
+    :func:`exact_factor`: its rate over fleets is exactly the per-channel share (the new level minus the mean is
+    independent of ``s``), so the decision's expected rate is exactly ``alpha``; what it cannot avoid is that a
+    fleet's rate depends on its few fitting records."""
+    rng = np.random.default_rng(seed)
+    windows = (N - 2) // (WINDOW - 2)
+    share = 1.0 - (1.0 - alpha) ** (1.0 / 3.0)
+    c = exact_factor(j, share, ratio)
+    x = rng.standard_normal((sets, fleets, 3, j))
+    thr = x.mean(axis=-1) + x.std(axis=-1, ddof=1) * np.sqrt(1.0 + 1.0 / j) * c
+    p = stats.norm.sf((thr[:, :, None, :] - rng.standard_normal((sets, fleets, NEW, 3))) / ratio)
+    rate = rng.binomial(windows, 1.0 - np.prod(1.0 - p, axis=-1)).sum(axis=-1) / (NEW * windows)
+    mean = rate.mean(axis=-1)
+    lo, hi = band(NEW * windows * fleets, alpha)
+    return float(np.mean((mean >= lo) & (mean <= hi))), float(mean.mean())
 
 
 def band(n: int, alpha: float) -> tuple:
     """Two-sided 99.9 % binomial band of the rate in ``n`` independent windows."""
     lo, hi = stats.binom.ppf([0.0005, 0.9995], n, alpha)
     return lo / n, hi / n
+
+
+def ratio(g: pd.DataFrame) -> float:
+    """Within- over between-record spread of a row's calibrations (medians over its fleets; at most 30: a spread
+    estimated as 0 leaves the windows' binomial noise only)."""
+    return float(min(g.within.median() / max(g.between.median(), 1e-9), 30.0))
 
 
 def fleet_table(fleets: int, seed: int = 2031, effects=("bootstrap", "predictive")) -> None:
@@ -148,7 +199,7 @@ def fleet_table(fleets: int, seed: int = 2031, effects=("bootstrap", "predictive
     t0 = time.perf_counter()
     rows = [(f, *r) for f in range(fleets) for r in one_fleet(seed + f, effects=effects)]
     df = pd.DataFrame(rows, columns=["fleet", "records", "alpha", "test", "calibration", "rate", "threshold",
-                                     "pivot_rate"])
+                                     "pivot_rate", "between", "within"])
     windows = NEW * ((N - 2) // (WINDOW - 2))
     q = stats.t.isf(5e-4, fleets - 1)
     out = []
@@ -161,6 +212,9 @@ def fleet_table(fleets: int, seed: int = 2031, effects=("bootstrap", "predictive
         cv = f"{100 * adj.mean():.3g} +- {100 * q * adj.std(ddof=1) / np.sqrt(fleets):.2g}" if fam == "F" else "-"
         out.append({"records": j, "alpha": a, "test": fam, "calibration": eff,
                     "mean rate %": 100 * y.mean(), "band (all fleets) %": f"{100 * lo_all:.3g}-{100 * hi_all:.3g}",
+                    "mean in band": "yes" if lo_all <= y.mean() <= hi_all else "no",
+                    "exact law in band %": "-" if eff != "predictive" else
+                    f"{100 * yardstick_reach(j, a, ratio(g), fleets)[0]:.0f}",
                     "99.9 % CI over fleets %": f"{100 * (y.mean() - q * y.std(ddof=1) / np.sqrt(fleets)):.3g}-"
                     f"{100 * (y.mean() + q * y.std(ddof=1) / np.sqrt(fleets)):.3g}",
                     "control-variate mean %": cv,
@@ -171,6 +225,8 @@ def fleet_table(fleets: int, seed: int = 2031, effects=("bootstrap", "predictive
     print(f"simulated fleet: {fleets} fleets (seeds {seed}-{seed + fleets - 1}), {NEW} new records x "
           f"{(N - 2) // (WINDOW - 2)} windows each, Sidak over 3 channels ({time.perf_counter() - t0:.0f} s)")
     print(pd.DataFrame(out).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    print("mean in band: the mean rate over the fleets inside the all-fleets band; exact law in band %: how often an "
+          "exact law (expected rate alpha) meets that yardstick with this many fleets (yardstick_reach, 1,500 runs)")
 
 
 # ------------------------------------------------------------------ 2. CrazyPAD, real flights
@@ -217,6 +273,14 @@ def cp_warned(ch, model, flights) -> dict:
             for f in flights}
 
 
+def cp_law_warned(ch, model, flights) -> dict:
+    """flight -> record-law warnings (``record_coverage``, alpha 0.01) of its segments: LB+F+M at alpha 0.01
+    calibrated at 1 s windows (a segment holds 4-5; at 2 s it holds 2, too few for a record's own law of LB and F)."""
+    test = cp.tests_for(model, ("LB+F+M",), 1e-2, cp.samples(1.0), True)["LB+F+M"]
+    return {f.log: [not record_coverage(test, model.results.residuals(x)).covered for x in f.arrays(ch.channels)]
+            for f in flights}
+
+
 def rate_table(df: pd.DataFrame, by: list) -> pd.DataFrame:
     """Flagged / windows per group, the rate and the two-sided 99.9 % band of alpha for that many windows."""
     out = []
@@ -258,7 +322,7 @@ def crazypad_rows(root=None) -> None:
     for (wsec, alpha), why in refused.items():
         print(f"   refused: {wsec:g} s, alpha {alpha:g}: {why}")
     # b. leave one flight out within an airframe
-    rows, warn_b, refusals = [], {}, set()
+    rows, warn_b, law_b, refusals = [], {}, {}, set()
     for d in drones:
         own = tuple(log for log in logs if log.startswith(d))
         for out in own:
@@ -269,14 +333,16 @@ def crazypad_rows(root=None) -> None:
             for (wsec, alpha), why in refused.items():
                 refusals.add(f"{d} ({len(own) - 1} flights), {wsec:g} s, alpha {alpha:g}: {why}")
             warn_b[out] = cp_warned(ch, model, flight)[out]
+            law_b[out] = cp_law_warned(ch, model, flight)[out]
     print("\nb. leave one flight out within an airframe (same-airframe flights)")
     show(rate_table(pd.DataFrame(rows), ["baseline"]))
     for r in sorted(refusals):
         print(f"   refused (every fold): {r}")
-    segs = [w for v in warn_b.values() for w in v]
-    print(f"   coverage (alpha 0.01) false warnings on same-airframe flights: {sum(segs)}/{len(segs)} segments, "
-          f"{sum(any(v) for v in warn_b.values())}/{len(warn_b)} flights ("
-          + ", ".join(f"{log}: {v}" for log, v in warn_b.items()) + ")")
+    for what, wb in (("coverage (summaries)", warn_b), ("record_coverage (record law)", law_b)):
+        segs = [w for v in wb.values() for w in v]
+        print(f"   {what}, alpha 0.01, false warnings on same-airframe flights: {sum(segs)}/{len(segs)} segments, "
+              f"{sum(any(v) for v in wb.values())}/{len(wb)} flights ("
+              + ", ".join(f"{log}: {v}" for log, v in wb.items()) + ")")
     # c. fit on one airframe, judge the other
     print("\nc. fit on one airframe, judge the other")
     for d in drones:
@@ -290,14 +356,16 @@ def crazypad_rows(root=None) -> None:
         show(rate_table(c, ["fit"]))
         for (wsec, alpha), why in refused.items():
             print(f"   refused: {wsec:g} s, alpha {alpha:g}: {why}")
-        warned = cp_warned(ch, model, others)
-        g = c[(c.window_s == 2.0) & (c.alpha == 1e-2) & (c.test == "LB+F+M")]
-        print("   per judged flight (LB+F+M, 2 s, alpha 0.01): flagged/windows, above the flight's 99.9 % band?, "
-              "coverage warned (per segment)")
-        for r in g.itertuples():
-            hi = band(r.n, 1e-2)[1]
-            print(f"     {r.flight}: {r.flagged}/{r.n}  {'ABOVE' if r.flagged / r.n > hi else 'in band'}  "
-                  f"coverage {warned[r.flight]}")
+        warned, law = cp_warned(ch, model, others), cp_law_warned(ch, model, others)
+        print("   per judged flight (LB+F+M, alpha 0.01): flagged/windows at 2 s and at 1 s, above the flight's 99.9 % "
+              "band?, coverage (summaries) and record_coverage (record law) warned (per segment)")
+        for log in dict.fromkeys(c.flight):
+            verdicts = []
+            for wsec in (2.0, 1.0):
+                r = c[(c.window_s == wsec) & (c.alpha == 1e-2) & (c.test == "LB+F+M") & (c.flight == log)].iloc[0]
+                up = r.flagged / r.n > band(r.n, 1e-2)[1]
+                verdicts.append(f"{wsec:g} s {r.flagged}/{r.n} {'ABOVE' if up else 'in band'}")
+            print(f"     {log}: {', '.join(verdicts)}  summaries {warned[log]}  record law {law[log]}")
     # d. detection kept
     ch = cp.choose(logs)
     det, ncal = cp.detection(ch, conditions=(CUT4,), windows=(2.0,))

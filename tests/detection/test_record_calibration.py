@@ -242,3 +242,15 @@ def test_record_pvalue_refuses_what_it_cannot_judge():
         th.record_pvalue(-stat[:10])
     with pytest.raises(ValueError, match="not calibrated"):
         ScaledChi2Threshold(0.01).record_pvalue(stat)
+
+
+def test_the_fleet_yardstick_is_out_of_reach_of_an_exact_law():
+    """The benchmark's exact law (benchmarks/fleet_calibration.py, yardstick_reach) has the decision's expected
+    rate alpha over fleets, yet its mean over 40 fleets lands in the all-fleets 99.9 % binomial band far less often
+    than 99.9 % with 5 fitting records: that band counts windows, not fleets, so the yardstick "mean of 40 fleets in
+    band" cannot be met reliably by any law that learns the spread from the fleet's own few records."""
+    reach, mean = FC.yardstick_reach(5, 0.01, 1 / 3, 40, sets=400, seed=1)
+    assert mean == pytest.approx(0.01, rel=0.1)           # a fleet's rate is skewed: the mean of 16,000 varies
+    assert reach < 0.5
+    reach, mean = FC.yardstick_reach(20, 1e-3, 30.0, 40, sets=400, seed=2)     # spread hidden in the windows' noise
+    assert mean == pytest.approx(1e-3, rel=0.1) and reach > 0.9
