@@ -349,10 +349,10 @@ def _assemble_gram(C, hr, tr, S0, rows, const, out):  # pragma: no cover - compi
     In lag space (lag 0 = ``y[t]``), flattened to ``G[i s + a, j s + b] = L[i, j][a, b]``, the first block row is
     ``L[0, k] = C[k] - sum_{u=k}^{p-1} y[u] y[u-k]'`` and ``L[i+1, j+1] = L[i, j] + y[p-1-i] y[p-1-j]' -
     y[n-1-i] y[n-1-j]'`` (shift the window by one sample), each correction summed over the records: the
-    recursion is ``G[I + s, J + s] = G[I, J] + D[I, J]`` on flat indices (the upper triangle only; two loops, no
-    per-channel loops that cost more than the work for one channel). Lag ``i >= 1`` goes to block ``i - 1``
-    with a minus sign, lag 0 to the last block; the intercept row holds ``sum_t y[t-i]`` by the same recursion
-    (``rows`` regression rows).
+    recursion is ``G[I + s, J + s] = G[I, J] + D[I, J]`` on flat indices, whole rows at a time from the first block
+    row and its mirror (contiguous loops; no fast-math contraction, so ``G`` is exactly symmetric). Lag ``i >= 1``
+    goes to block ``i - 1`` with a minus sign, lag 0 to the last block, row by row; the intercept row holds
+    ``sum_t y[t-i]`` by the same recursion (``rows`` regression rows).
     """
     nrec, m = hr.shape
     s = S0.shape[0]
@@ -360,7 +360,7 @@ def _assemble_gram(C, hr, tr, S0, rows, const, out):  # pragma: no cover - compi
     n = m + s
     c = 1 if const else 0
     G = np.empty((n, n))
-    for a in range(s):                      # first block row: C[k] less the heads' own lag products
+    for a in range(s):                      # first block row: C[k] less the heads' own lag products, and its mirror
         for J in range(a, n):
             k, b = J // s, J % s
             acc = C[k, a, b]
@@ -368,32 +368,33 @@ def _assemble_gram(C, hr, tr, S0, rows, const, out):  # pragma: no cover - compi
                 for i in range(p - k):
                     acc -= hr[r, i * s + a] * hr[r, i * s + J]
             G[a, J] = acc
+            G[J, a] = acc
     for I in range(m):
-        for J in range(I, m):
-            acc = G[I, J]
-            for r in range(nrec):
-                acc += hr[r, I] * hr[r, J] - tr[r, I] * tr[r, J]
-            G[I + s, J + s] = acc
-    pos = np.empty(n, dtype=np.int64)       # lag-space index -> column of out, and its sign
-    sign = np.empty(n)
-    for I in range(n):
-        i = I // s
-        pos[I] = c + (p if i == 0 else i - 1) * s + I % s
-        sign[I] = 1.0 if i == 0 else -1.0
-    for I in range(n):
-        for J in range(I, n):
-            v = sign[I] * sign[J] * G[I, J]
-            out[pos[I], pos[J]] = v
-            out[pos[J], pos[I]] = v
+        GI, GN = G[I], G[I + s]
+        for J in range(m):
+            GN[J + s] = GI[J]
+        for r in range(nrec):
+            hI, tI, hrr, trr = hr[r, I], tr[r, I], hr[r], tr[r]
+            for J in range(m):
+                GN[J + s] += hI * hrr[J] - tI * trr[J]
+    for I in range(n):                      # lag i >= 1 -> block i - 1 (minus sign), lag 0 -> the last block
+        row = out[c + I - s] if I >= s else out[c + m + I]
+        si = -1.0 if I >= s else 1.0
+        GI = G[I]
+        for J in range(s, n):
+            row[c + J - s] = -si * GI[J]
+        for b in range(s):
+            row[c + m + b] = si * GI[b]
     if const:
         out[0, 0] = rows
         S = S0.copy()                       # S_i = sum_{t=p}^{n-1} y[t-i], summed over the records
         for i in range(p + 1):
             si = 1.0 if i == 0 else -1.0
+            col = c + (p if i == 0 else i - 1) * s
             for a in range(s):
                 v = si * S[a]
-                out[0, pos[i * s + a]] = v
-                out[pos[i * s + a], 0] = v
+                out[0, col + a] = v
+                out[col + a, 0] = v
             if i < p:
                 for a in range(s):
                     for r in range(nrec):
