@@ -6,6 +6,7 @@ Every public function validates its options through these helpers so that a bad 
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Iterable
 from typing import Any
@@ -35,8 +36,10 @@ def int_like(value: Any, name: str, *, minimum: int | None = None, maximum: int 
     """
     if value is None and optional:
         return None
-    # numpy counts timedelta64 as an integer type: a time span is not a count
-    if isinstance(value, (bool, np.bool_, np.timedelta64)) or not isinstance(value, (numbers.Integral, np.integer)):
+    # numpy counts timedelta64 as an integer type: a time span is not a count (a plain int skips the abstract-class
+    # checks, which cost more than the rest of the call; bool is a subclass of int, not int)
+    if type(value) is not int and (isinstance(value, (bool, np.bool_, np.timedelta64))
+                                   or not isinstance(value, (numbers.Integral, np.integer))):
         if isinstance(value, (float, np.floating)) and float(value).is_integer():
             value = int(value)
         else:
@@ -61,7 +64,7 @@ def float_like(value: Any, name: str, *, minimum: float | None = None, maximum: 
                                                                                       np.integer)):
         raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
     value = float(value)
-    if not np.isfinite(value):
+    if not math.isfinite(value):
         raise ValueError(f"{name} must be finite, got {value}")
     if minimum is not None and (value <= minimum if strict_min else value < minimum):
         raise ValueError(f"{name} must be {'>' if strict_min else '>='} {minimum}, got {value}")
