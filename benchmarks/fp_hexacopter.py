@@ -1,40 +1,57 @@
-"""Global FP models on the realistic hexacopter (issue 32): identification across forward speeds and payloads, and
-the magnitude of a partial loss of rotor effectiveness.
+"""Global FP models on the realistic hexacopter (issue 32): rotor identification across forward speeds, payloads and
+the three turbulence levels, healthy false alarms, and the magnitude of a partial loss of rotor effectiveness.
 
-Run: ``python benchmarks/fp_hexacopter.py [--quick]`` (BLAS pinned to one thread; numba uses the cores).
+Run: ``python benchmarks/fp_hexacopter.py [--quick] [--dev]`` (BLAS pinned to one thread; numba uses the cores).
+``--dev`` evaluates on the development evaluation seed ``DEV_EVAL_SEED`` instead of a fresh one (the runs the
+choices below were made on); ``--quick`` a quarter of the records.
 
-Design (every choice below was made on the development records, seed ``DEV_SEED``, never on the evaluation ones):
+Design (every choice below was made on development records, seeds ``DEV_SEED`` and ``DEV_EVAL_SEED``, never on the
+evaluation ones):
 
 * Aircraft: the default (blade-element, one-way rotors) hexacopter, ``FleetSpread(payload=0.3)`` (the default
   airframe spreads plus a payload of 0-30 % of the gross weight), forward speed drawn in ``SPEEDS`` (m/s) per record,
-  moderate turbulence (one level, to keep the run short), 25 s records, rotor failure at 1 s, analysed from 5 s to
-  25 s (the transient left out): one 20 s window or four 5 s windows per record.
+  the turbulence levels of the realistic-aircraft design (``LEVELS``: light, moderate, severe; equal numbers of
+  records, the level not logged and not used by any model), 45 s records, rotor failure at 1 s, analysed from 5 s
+  to 45 s (the transient left out): two 20 s windows or eight 5 s windows per record.
 * Operating parameters ``k = (speed, payload)``. Held-out weight: development records are drawn only outside the
   payload band ``HELD_OUT``; the evaluation records inside it form the held-out-weight set, those outside it the
-  interpolation set (every evaluation operating point lies between fitting ones: the speeds and payloads are
-  drawn afresh).
-* Models: FP-VAR per class (healthy, rotor1, rotor2, rotor6), pooled least squares, order and basis degree by
-  ``select_fp_order`` (BIC, lags <= 10, degree <= 2) on the healthy development records. Response-only channels
-  roll, pitch, yaw rate; the controller-aware variant adds the controller outputs roll, pitch and yaw control
-  (Omega_R, Omega_P, Omega_Y of eq. 2) as channels of the same FP-VAR (the joint command-response model; tsfdi's
-  FP-ARX has one output channel). Point models: one VAR per class fitted at the nominal point (5 m/s, nominal
-  aircraft, no payload), same order.
-* Identification: the candidate (the class models at ``k``, ``FPResults.at``, or the point models) under which the
-  window's residuals have the largest Gaussian log-likelihood with the candidate's residual covariance
-  (``sigma(k)``); ``k`` logged (the record's speed and payload) or estimated on each record (its 20 s span) by each
-  candidate's own ``estimate_k`` (its maximum-likelihood operating point, bounded to the fitted range, ``grid=5``)
-  and used for every window of the record. (The F-test ranking of :func:`tsfdi.identify` was tried first, in a
-  ``--quick`` run whose evaluation seed was then discarded, and labelled most healthy windows as a fault: a fault
-  model's larger residual variance makes a healthy window's variance ratio small; the likelihood weighs both. That
-  change was made after seeing that run's evaluation windows: stated, and the reported run draws a new seed.)
-* Healthy false alarms: :func:`tsfdi.detect` with the healthy model at ``k`` and the F test calibrated
-  (``FTest.calibrate``, ``ScaledChi2Threshold(0.01, min_windows=5)``) on the residuals of the development
-  calibration records through the healthy model at their logged ``k`` (joined four records at a time: the null law
-  needs three windows per record), at ``alpha = 0.01`` per window; the 99 % binomial band of that rate for the
-  number of windows.
-* Magnitude: rotors 1 and 2 at the nominal point, FP-VAR (controller-aware channels) over the loss level, fitted
-  at ``LEVELS_FIT`` (0: healthy records), ``estimate_k`` on records at ``LEVELS_EVAL`` (not fitted); RMSE in
-  percentage points and coverage of the 95 % intervals.
+  interpolation set (speeds and payloads drawn afresh, so every evaluation point lies between fitting ones).
+* Identification (controller-aware, functionally pooled trim): what the controller does about a failed rotor is to
+  hold a large steady roll / pitch / yaw control (the compensation among the paper's eq. 2 outputs, about
+  (-170, 72, 105) for rotor 2 against (13, -32, -5) healthy), which the one-step prediction errors of an FP-VAR
+  barely see (its lags carry the level). That is where the earlier rule's rotor 2 confusion came from: on the
+  development records the FP-VAR likelihood sent the 5 s windows of rotor 2 records after the first 10 s to
+  healthy, in light turbulence most (``test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy``).
+  Per class, the window means of the three controller outputs are regressed on the FP basis of ``k``
+  (:func:`tsfdi.models.fp_basis`, Legendre, degree ``TRIM_DEGREE``), pooled least squares over all fitting windows
+  of all turbulence levels; the residual covariance ``S`` of a window is the spread of the records' mean residuals
+  (records - basis functions degrees of freedom: the unlogged airframe of a record moves its whole trim) plus the
+  spread of the windows around their record's mean. A window goes to the class whose trim surface, at that class's
+  maximum-likelihood ``k`` (a grid of ``K_GRID`` points per parameter over the fitted range), gives its mean the
+  largest Gaussian log-likelihood with ``S``: everything from the window itself (no logged ``k``, no turbulence
+  level, no other window of the record).
+* Healthy false alarms, alpha = 0.01 per window: the ``trim`` detector, the healthy trim statistic
+  ``min_k (m - M(k))' S^-1 (m - M(k))`` against the empirical 0.99 quantile (:class:`tsfdi.EmpiricalThreshold`) of
+  that statistic on windows every ``CAL_STEP`` samples of the development calibration records (healthy, all
+  levels, outside ``HELD_OUT``). For comparison ``F``: :func:`tsfdi.detect` with the healthy FP-VAR (channels roll,
+  pitch, yaw rate and the three controller outputs; order and degree by ``select_fp_order`` on the healthy
+  development records, BIC over degree >= 1) at the logged ``k`` and the F test calibrated as the shipped
+  pipeline does (``FTest.calibrate``, ``ScaledChi2Threshold(0.01, min_windows=5)``, records joined to hold three
+  windows each). The 99 % binomial band of alpha for the number of windows (windows of one record are not
+  independent: the band is narrower than the rate's real spread).
+* The claim >= 99.6 % per class needs enough windows: the rule used is the one-sided 95 % Clopper-Pearson lower
+  bound of the correct share over all evaluation windows of the class (interpolation and held-out weight
+  together; 0 errors shows >= 99.6 % from 748 windows, the run has 756 20 s windows per class). Windows of one
+  record share its aircraft, so they are not independent; the bound counts windows, as the issue's rates do.
+* Chosen on the development evaluation records (``--dev``, seed ``DEV_EVAL_SEED``, full size): ``TRIM_DEGREE = 2``
+  (the BIC over records prefers 1, which made 1 + 6 errors on the healthy 20 s / 5 s windows there, degree 2 and 3
+  none; the ``--dev`` run prints every degree's errors); the trim detector (1.06 % / 1.32 % of 756 / 3024 healthy
+  windows there, the F detector 0 %: below the band). Before that, the trim model's covariance over windows
+  rather than records was found too small on a ``--quick --dev`` run (9 records per class, degree 2: every
+  healthy window went to a fault).
+* Magnitude: rotors 1 and 2 at the nominal point, moderate turbulence, 25 s records, FP-VAR (controller-aware
+  channels) over the loss level, fitted at ``LEVELS_FIT`` (0: healthy records), ``estimate_k`` on records at
+  ``LEVELS_EVAL`` (not fitted); RMSE in percentage points and coverage of the 95 % intervals.
 """
 
 from __future__ import annotations
@@ -45,6 +62,7 @@ for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 import argparse  # noqa: E402
+import itertools  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 
@@ -54,17 +72,25 @@ from scipy import stats  # noqa: E402
 import tsfdi  # noqa: E402
 from tsfdi.datasets import simulate_hexacopter  # noqa: E402
 from tsfdi.datasets.hexacopter import FleetSpread, HexacopterParameters  # noqa: E402
-from tsfdi.models import FPVAR, VAR, select_fp_order  # noqa: E402
+from tsfdi.models import FPVAR, fp_basis, select_fp_order  # noqa: E402
 from tsfdi.study import evaluation_seed  # noqa: E402
 
 DEV_SEED = 20261128
+DEV_EVAL_SEED = 20261129
 FLEET = FleetSpread(payload=0.3)
 SPEEDS = (2.0, 10.0)
 HELD_OUT = (0.12, 0.18)
+K_RANGE = np.array([SPEEDS, (0.0, FLEET.payload)])
+K_GRID = 11
 CLASSES = {"healthy": 0, "rotor1": 1, "rotor2": 2, "rotor6": 6}
-RESPONSE = ("roll", "pitch", "r")
-CONTROL = RESPONSE + ("roll_control", "pitch_control", "yaw_control")
-DURATION, FAIL_T, START, FS = 25.0, 1.0, 500, 100
+LEVELS = ("light", "moderate", "severe")
+CONTROL = ("roll", "pitch", "r", "roll_control", "pitch_control", "yaw_control")
+TRIM = slice(3, 6)                       # the controller outputs among CONTROL
+DURATION, FAIL_T, START, FS = 45.0, 1.0, 500, 100
+WINDOWS = (2000, 500)
+MAX_TRIM_DEGREE = 3
+TRIM_DEGREE = 2
+CAL_STEP = 25                            # samples between the calibration windows of the trim detector
 LEVELS_FIT = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 LEVELS_EVAL = (0.1, 0.3, 0.5, 0.7, 0.9)
 ALPHA = 0.01
@@ -87,15 +113,65 @@ def seeds(base: int, count: int, band: str | None = None, start: int = 0) -> lis
     return out
 
 
-def simulate(sds, rotor, *, fleet=True, speed=SPEEDS, level=1.0):
-    ds = simulate_hexacopter(duration=DURATION, turbulence="moderate", failed_rotor=rotor, failure_time=FAIL_T,
+def simulate(sds, rotor, turbulence, *, duration=DURATION, fleet=True, speed=SPEEDS, level=1.0):
+    """The CONTROL channels of every record from ``START`` on, and ``k`` = (speed, payload) per record."""
+    ds = simulate_hexacopter(duration=duration, turbulence=turbulence, failed_rotor=rotor, failure_time=FAIL_T,
                              failure_level=level, seed=sds, speed=speed, fleet=FLEET if fleet else None)
     assert not ds["lost_control"].any(), "a record lost control"
-    recs = {}
-    for name, chans in (("response", RESPONSE), ("control", CONTROL)):
-        recs[name] = [np.column_stack([ds[c].values[i, START:] for c in chans]) for i in range(ds.sizes["record"])]
+    recs = [np.column_stack([ds[c].values[i, START:] for c in CONTROL]) for i in range(ds.sizes["record"])]
     k = np.column_stack([ds["speed"].values, ds["payload"].values]) if fleet else None
     return recs, k
+
+
+def simulate_levels(base: int, count: int, rotor: int, band: str | None, start: int = 0):
+    """``count`` records per turbulence level (seeds of ``base`` in ``band``): records, k and level index."""
+    sds = seeds(base, count * len(LEVELS), band, start)
+    turb = [lv for lv in LEVELS for _ in range(count)]
+    recs, k = simulate(sds, rotor, turb)
+    return recs, k, np.repeat(np.arange(len(LEVELS)), count)
+
+
+def window_means(y: np.ndarray, w: int) -> np.ndarray:
+    """Means of the controller outputs over the consecutive windows of ``w`` samples, (windows, 3)."""
+    n = len(y) // w
+    return y[:n * w, TRIM].reshape(n, w, -1).mean(axis=1)
+
+
+def sliding_means(y: np.ndarray, w: int, step: int) -> np.ndarray:
+    """Means of the controller outputs over windows of ``w`` samples every ``step`` samples, (windows, 3)."""
+    c = np.vstack([np.zeros((1, 3)), np.cumsum(y[:, TRIM], axis=0)])
+    a = np.arange(0, len(y) - w + 1, step)
+    return (c[a + w] - c[a]) / w
+
+
+def fit_trim(recs, k, w: int, degree: int) -> dict:
+    """Pooled least squares of the windows' trim on the FP basis of their record's k. The residual covariance ``S``
+    of a window is the spread of the records' mean residuals (degrees of freedom records - basis functions: the
+    unlogged airframe of each record, its centre of gravity above all, moves its whole trim) plus the spread of the
+    windows around their record's mean; the BIC counts records, the independent units."""
+    M = [window_means(y, w) for y in recs]
+    Gr = fp_basis(np.asarray(k, dtype=float), degree, K_RANGE)
+    G = np.repeat(Gr, [len(m) for m in M], axis=0)
+    B = np.linalg.lstsq(G, np.vstack(M), rcond=None)[0]
+    ebar = np.stack([m.mean(axis=0) for m in M]) - Gr @ B
+    dev = np.vstack([m - m.mean(axis=0) for m in M])
+    n_rec, p = Gr.shape
+    if n_rec <= p:
+        raise ValueError(f"degree {degree}: {p} basis functions need more than {n_rec} records")
+    within = dev.T @ dev / (len(dev) - n_rec)
+    S = ebar.T @ ebar / (n_rec - p) + within
+    bic = n_rec * np.linalg.slogdet(ebar.T @ ebar / n_rec)[1] + p * M[0].shape[1] * np.log(n_rec)
+    grid = np.array(list(itertools.product(*[np.linspace(lo, hi, K_GRID) for lo, hi in K_RANGE])))
+    return {"surface": fp_basis(grid, degree, K_RANGE) @ B, "S_inv": np.linalg.inv(S),
+            "logdet": np.linalg.slogdet(S)[1], "bic": bic}
+
+
+def trim_stat(model: dict, means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per window: the largest Gaussian log-likelihood of its trim over the k grid, and the smallest Mahalanobis
+    distance (the healthy detector's statistic)."""
+    d = means[:, None, :] - model["surface"][None]
+    q = np.einsum("wka,ab,wkb->wk", d, model["S_inv"], d)
+    return -0.5 * q.min(axis=1) - 0.5 * model["logdet"], q.min(axis=1)
 
 
 def fp_choice(sel) -> tuple[int, int]:
@@ -105,17 +181,13 @@ def fp_choice(sel) -> tuple[int, int]:
     return int(lags), int(deg)
 
 
-def loglik(res, seg) -> float:
-    """Gaussian log-likelihood of the residuals of ``seg`` through ``res`` with its residual covariance."""
-    e = np.asarray(res.residuals(seg))
-    S = np.atleast_2d(res.sigma)
-    L = np.linalg.cholesky(S)
-    z = np.linalg.solve(L, e.T)
-    return float(-0.5 * (z * z).sum() - e.shape[0] * np.log(np.diag(L)).sum())
-
-
 def band99(n: int, alpha: float = ALPHA) -> tuple[float, float]:
     return stats.binom.ppf(0.005, n, alpha) / n, stats.binom.isf(0.005, n, alpha) / n
+
+
+def lower95(correct: int, n: int) -> float:
+    """One-sided 95 % Clopper-Pearson lower bound of a share."""
+    return 0.0 if correct == 0 else float(stats.beta.ppf(0.05, correct, n - correct + 1))
 
 
 def windows(y, w):
@@ -125,116 +197,134 @@ def windows(y, w):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="a quarter of the records (a smoke run)")
+    ap.add_argument("--dev", action="store_true", help="evaluate on the development evaluation seed")
     args = ap.parse_args()
     q = 4 if args.quick else 1
-    n_fit, n_cal, n_nom, n_int, n_held = 20 // q, max(16 // q, 5), 8 // q, 40 // q, 20 // q
+    n_fit, n_cal, n_int, n_held = max(12 // q, 4), 64 // q, 84 // q, 42 // q      # records per class and level
     n_lfit, n_leval = max(4 // q, 2), max(3 // q, 1)
-    ev = evaluation_seed()
-    print(f"development seed {DEV_SEED}, evaluation seed {ev} (fresh, unstored)")
+    ev = DEV_EVAL_SEED if args.dev else evaluation_seed()
+    print(f"development seed {DEV_SEED}, evaluation seed {ev} "
+          + ("(the development evaluation seed)" if args.dev else "(fresh, unstored)"))
     t0 = time.perf_counter()
-    dev, cal, nom, ev_int, ev_held = {}, {}, {}, {}, {}
+    dev, ev_int, ev_held = {}, {}, {}
     for j, (c, rotor) in enumerate(CLASSES.items()):
-        dev[c] = simulate(seeds(DEV_SEED + j, n_fit, "out"), rotor)
-        cal[c] = simulate(seeds(DEV_SEED + 100 + j, n_cal, "out"), rotor)
-        nom[c] = simulate(seeds(DEV_SEED + 200 + j, n_nom), rotor, fleet=False, speed=5.0)
-        ev_int[c] = simulate(seeds(ev, n_int, "out", start=1000 * j), rotor)
-        ev_held[c] = simulate(seeds(ev, n_held, "in", start=1000 * j + 500), rotor)
-    print(f"simulated {4 * (n_fit + n_cal + n_nom + n_int + n_held)} records of {DURATION:g} s in "
+        dev[c] = simulate_levels(DEV_SEED + j, n_fit, rotor, "out")
+        ev_int[c] = simulate_levels(ev, n_int, rotor, "out", start=100000 * j)
+        ev_held[c] = simulate_levels(ev, n_held, rotor, "in", start=100000 * j + 50000)
+    cal = simulate_levels(DEV_SEED + 100, n_cal, 0, "out")
+    nrec = len(CLASSES) * len(LEVELS) * (n_fit + n_int + n_held) + len(LEVELS) * n_cal
+    print(f"simulated {nrec} records of {DURATION:g} s ({', '.join(LEVELS)} turbulence) in "
           f"{time.perf_counter() - t0:.0f} s")
 
-    # --- orders on the healthy development records
-    choice = {}
-    for variant in ("response", "control"):
-        sel = select_fp_order(dev["healthy"][0][variant], dev["healthy"][1], 10, 2, "var")
-        choice[variant] = fp_choice(sel)
-        print(f"{variant}: select_fp_order (BIC, lags <= 10, degree <= 2) on the healthy development records: "
-              f"minimum lags={sel.selected[0]}, degree={sel.selected[1]}; over degree >= 1: lags={choice[variant][0]}, "
-              f"degree={choice[variant][1]}")
+    # --- trim models at the frozen degree (BIC on the development records, and with --dev every degree's
+    # identification on the development evaluation records, printed below)
+    degrees = [d for d in range(MAX_TRIM_DEGREE + 1) if (d + 1) ** 2 < len(dev["healthy"][0])]
+    bic = {d: sum(fit_trim(dev[c][0], dev[c][1], WINDOWS[-1], d)["bic"] for c in CLASSES) for d in degrees}
+    print(f"trim FP regression: degree {TRIM_DEGREE} (frozen); BIC over records of the development set by degree: "
+          + ", ".join(f"{d}: {b:.0f}" for d, b in bic.items()))
+    trim = {w: {c: fit_trim(dev[c][0], dev[c][1], w, TRIM_DEGREE) for c in CLASSES} for w in WINDOWS}
+    if args.dev:
+        for d in degrees:
+            line = []
+            for w in WINDOWS:
+                tw = {c: fit_trim(dev[c][0], dev[c][1], w, d) for c in CLASSES}
+                for c in CLASSES:
+                    wrong = sum(int((np.array([trim_stat(tw[m], window_means(y, w))[0] for m in CLASSES]).argmax(axis=0)
+                                     != list(CLASSES).index(c)).sum()) for data in (ev_int, ev_held) for y in data[c][0])
+                    line.append(f"{c} {w // FS}s {wrong}")
+            print(f"  degree {d}: wrong windows " + ", ".join(line))
 
-    kr = np.array([SPEEDS, (0.0, FLEET.payload)])
-    results = {}
-    for variant in ("response", "control"):
-        lags, deg = choice[variant]
-        t1 = time.perf_counter()
-        fp = {c: FPVAR(dev[c][0][variant], dev[c][1], lags, degree=deg, k_range=kr).fit() for c in CLASSES}
-        tf = time.perf_counter() - t1
-        pt = {c: VAR(nom[c][0][variant], lags).fit() for c in CLASSES}
-        print(f"{variant}: FP-VAR fits (4 classes) {tf:.1f} s")
-        # calibrated healthy detector per window length, on the development calibration records at logged k
-        ftest = {}
-        for w in (2000, 500):
-            res = [fp["healthy"].residuals(y, k) for y, k in zip(cal["healthy"][0][variant], cal["healthy"][1])]
-            # the record-by-record null law needs >= 3 windows per record: records joined four by four (each
-            # record's residuals hold whole windows, so no window spans two records)
-            res = [np.concatenate(g) for g in np.array_split(np.array(res), max(len(res) // 4, 1))]
-            t = tsfdi.FTest(alpha=ALPHA, correction="bonferroni",
-                            threshold=tsfdi.ScaledChi2Threshold(ALPHA, min_windows=5))
-            ftest[w] = t.calibrate(res, window=w - lags, step=w - lags,
-                                   **t.reference(fp["healthy"].at(cal["healthy"][1][0])))
-        results[variant] = (fp, pt, ftest, lags)
+    # --- the healthy FP-VAR of the F detector
+    sel = select_fp_order(dev["healthy"][0], dev["healthy"][1], 10, 2, "var")
+    lags, deg = fp_choice(sel)
+    print(f"healthy FP-VAR: select_fp_order (BIC, lags <= 10, degree <= 2): minimum lags={sel.selected[0]}, "
+          f"degree={sel.selected[1]}; over degree >= 1: lags={lags}, degree={deg}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", tsfdi.exceptions.IllConditionedWarning)
+        fp = FPVAR(dev["healthy"][0], dev["healthy"][1], lags, degree=deg, k_range=K_RANGE).fit()
+
+    # --- detectors calibrated on the development calibration records
+    ftest, trim_thr = {}, {}
+    for w in WINDOWS:
+        group = -(-3 // (len(cal[0][0]) // w))         # records joined so that each holds >= 3 windows
+        res = [np.asarray(fp.residuals(y, k)) for y, k in zip(cal[0], cal[1])]
+        # each record's residuals hold whole windows of w - lags, so no window spans two records
+        res = [np.concatenate([r[:(len(r) // (w - lags)) * (w - lags)] for r in res[i:i + group]])
+               for i in range(0, len(res), group)]
+        t = tsfdi.FTest(alpha=ALPHA, correction="bonferroni", threshold=tsfdi.ScaledChi2Threshold(ALPHA, min_windows=5))
+        ftest[w] = t.calibrate(res, window=w - lags, step=w - lags, **t.reference(fp.at(cal[1][0])))
+        stat = np.concatenate([trim_stat(trim[w]["healthy"], sliding_means(y, w, CAL_STEP))[1] for y in cal[0]])
+        trim_thr[w] = tsfdi.EmpiricalThreshold(ALPHA).calibrate(stat).threshold_
 
     t1 = time.perf_counter()
+    # per record: correct windows, windows, and (healthy) the trim and F false alarms
+    score = {}
+    for w in WINDOWS:
+        for setname, data in (("interp", ev_int), ("heldout", ev_held)):
+            for c in CLASSES:
+                recs, ks, lvl = data[c]
+                for i, y in enumerate(recs):
+                    m = window_means(y, w)
+                    ll = np.array([trim_stat(trim[w][mm], m)[0] for mm in CLASSES])
+                    fa_t = fa_f = 0
+                    if c == "healthy":
+                        fa_t = int((trim_stat(trim[w]["healthy"], m)[1] > trim_thr[w]).sum())
+                        at = fp.at(ks[i])
+                        fa_f = sum(tsfdi.detect(seg, at, ftest[w]).reject for seg in windows(y, w))
+                    score[w, setname, c, i] = (lvl[i], int((ll.argmax(axis=0) == list(CLASSES).index(c)).sum()),
+                                               len(m), fa_t, fa_f)
+
+    def total(w, sets, c, level=None):
+        rows = [v for (w_, s_, c_, _), v in score.items() if w_ == w and s_ in sets and c_ == c
+                and (level is None or v[0] == level)]
+        return np.array(rows)[:, 1:].sum(axis=0)
+
     print()
-    print("Identification (percent of windows correct per class; Gaussian likelihood of the window under each "
-          "candidate at k) and healthy false alarms (detect, calibrated F test, "
-          f"alpha {ALPHA})")
-    print(f"{'variant':9s} {'models':7s} {'k':10s} {'set':7s} {'win':>4s} " + " ".join(f"{c:>8s}" for c in CLASSES)
-          + f" {'FA %':>6s} {'99% band':>12s}")
-    for variant, (fp, pt, ftest, lags) in results.items():
-        for models in ("FP", "point"):
-            for kmode in (("logged", "estimated") if models == "FP" else ("-",)):
-                for setname, data in (("interp", ev_int), ("heldout", ev_held)):
-                    cands = {}
-                    for c in CLASSES:
-                        for i, (y, k) in enumerate(zip(data[c][0][variant], data[c][1])):
-                            if models == "point":
-                                cands[c, i] = pt
-                            elif kmode == "logged":
-                                cands[c, i] = {m: fp[m].at(k) for m in CLASSES}
-                            else:
-                                with warnings.catch_warnings():
-                                    warnings.simplefilter("ignore")
-                                    cands[c, i] = {m: fp[m].at(fp[m].estimate_k(y, grid=5).k_hat) for m in CLASSES}
-                    for w in (2000, 500):
-                        correct, fa, nfa = {}, 0, 0
-                        for c in CLASSES:
-                            ok = []
-                            for i, y in enumerate(data[c][0][variant]):
-                                cand = cands[c, i]
-                                for seg in windows(y, w):
-                                    ok.append(max(CLASSES, key=lambda m: loglik(cand[m], seg)) == c)
-                                    if c == "healthy" and models == "FP":
-                                        nfa += 1
-                                        fa += tsfdi.detect(seg, cand["healthy"], ftest[w]).reject
-                            correct[c] = 100 * np.mean(ok)
-                        fa_s = ""
-                        if nfa:
-                            lo, hi = band99(nfa)
-                            fa_s = f"{100 * fa / nfa:6.2f} [{100 * lo:4.2f}, {100 * hi:4.2f}]"
-                        print(f"{variant:9s} {models:7s} {kmode:10s} {setname:7s} {w // FS:3d}s "
-                              + " ".join(f"{correct[c]:8.1f}" for c in CLASSES) + f" {fa_s}", flush=True)
-    print(f"(identification and detection {time.perf_counter() - t1:.0f} s)")
+    print("Identification (percent of windows correct per class: the class whose trim surface at its maximum-"
+          "likelihood k gives the window's mean controller output the largest likelihood) and healthy false "
+          f"alarms (alpha {ALPHA}) of the trim and F detectors")
+    print(f"{'set':8s} {'turb':8s} {'win':>4s} " + " ".join(f"{c:>8s}" for c in CLASSES)
+          + f" {'windows':>7s} {'FA trim %':>9s} {'FA F %':>7s} {'99% band':>13s}")
+    for w in WINDOWS:
+        for setname in ("interp", "heldout"):
+            for li, lv in list(enumerate(LEVELS)) + [(None, "all")]:
+                row = {c: total(w, (setname,), c, li) for c in CLASSES}
+                _, nwin, fa_t, fa_f = row["healthy"]
+                lo, hi = band99(nwin)
+                print(f"{setname:8s} {lv:8s} {w // FS:3d}s " + " ".join(f"{100 * r[0] / r[1]:8.1f}" for r in row.values())
+                      + f" {nwin:7d} {100 * fa_t / nwin:9.2f} {100 * fa_f / nwin:7.2f} [{100 * lo:4.2f}, {100 * hi:4.2f}]")
+    print()
+    print("Per class over both sets and all levels: correct / windows, percent, one-sided 95 % Clopper-Pearson lower "
+          "bound (target: >= 99.6 % at 20 s, >= 97 % at 5 s)")
+    for w in WINDOWS:
+        tot = {c: total(w, ("interp", "heldout"), c) for c in CLASSES}
+        print(f"{w // FS:3d}s " + "  ".join(f"{c}: {a}/{n} {100 * a / n:.2f} % (>= {100 * lower95(a, n):.2f} %)"
+                                            for c, (a, n, _, _) in tot.items()))
+        _, nwin, fa_t, fa_f = tot["healthy"]
+        lo, hi = band99(nwin)
+        print(f"     healthy false alarms: trim {fa_t}/{nwin} = {100 * fa_t / nwin:.2f} %, F {fa_f}/{nwin} = "
+              f"{100 * fa_f / nwin:.2f} %; 99 % band of {ALPHA} for {nwin} windows [{100 * lo:.2f}, {100 * hi:.2f}] %")
+    print(f"(identification and detection {time.perf_counter() - t1:.0f} s)", flush=True)
 
     # --- magnitude: loss of effectiveness at the nominal point
     print()
     print("Loss-of-effectiveness level by estimate_k (FP-VAR over the level, controller-aware channels, "
           f"fit levels {LEVELS_FIT}, evaluated at {LEVELS_EVAL})")
-    lags = choice["control"][0]
     for rotor in (1, 2):
         ys, ks = [], []
         for lv in LEVELS_FIT:
             r, _ = simulate(seeds(DEV_SEED + 300 + rotor, n_lfit, start=int(100 * lv) * 10), rotor if lv else 0,
-                            fleet=False, speed=5.0, level=lv if lv else 1.0)
-            ys += r["control"]
-            ks += [lv] * len(r["control"])
+                            "moderate", duration=25.0, fleet=False, speed=5.0, level=lv if lv else 1.0)
+            ys += r
+            ks += [lv] * len(r)
         sel = select_fp_order(ys, np.array(ks), lags, 3, "var")
         lf, df = fp_choice(sel)
         fpl = FPVAR(ys, np.array(ks), lf, degree=df).fit()
         err, cover = [], []
         for lv in LEVELS_EVAL:
-            r, _ = simulate(seeds(ev, n_leval, start=50000 + 1000 * rotor + int(100 * lv)), rotor, fleet=False,
-                            speed=5.0, level=lv)
-            for y in r["control"]:
+            r, _ = simulate(seeds(ev, n_leval, start=900000 + 1000 * rotor + int(100 * lv)), rotor, "moderate",
+                            duration=25.0, fleet=False, speed=5.0, level=lv)
+            for y in r:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     est = fpl.estimate_k(y)
