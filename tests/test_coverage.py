@@ -268,3 +268,29 @@ def test_record_coverage_bad_input(calibrated):
         record_coverage(boot.calibrate(b.model.held_out_residuals(), window=200), e)
     with pytest.raises(ValueError, match="not calibrated with the predictive record law"):
         record_coverage(tsfdi.FTest(alpha=0.01), e)
+
+
+@pytest.mark.slow
+def test_record_coverage_false_warnings_and_the_records_the_test_flags():
+    """Monte Carlo, fixed seed: 40 baselines of 10 aircraft, LB+F+M calibrated on their held-out residuals, judge 10
+    new aircraft of the same fleet each (400 records: warnings in the 99 % binomial band of alpha = 0.01) and one of
+    a noisier fleet (noise x1.5) each: warned of whenever the test flags its disjoint windows beyond their 99.9 %
+    band, and on >= 90 % of them."""
+    rng = np.random.default_rng(2032)
+    same, flagged, loud = [], [], []
+    for _ in range(40):
+        b = tsfdi.VAR(fleet(rng, 10), 2, trend="c").fit()
+        test = combined().calibrate(b.model.held_out_residuals(), window=200)
+        same += [not record_coverage(test, b.residuals(y)).covered for y in fleet(rng, 10)]
+        e = np.asarray(b.residuals(fleet(rng, 1, noise=1.5)[0]))
+        w = np.zeros(e.shape[0] // 198, dtype=bool)
+        for part in test.tests:
+            w |= (part.window_statistic(e, 198, 198) > part.threshold_).any(axis=1)
+        warned = not record_coverage(test, e).covered
+        loud.append(warned)
+        if w.sum() > stats.binom.ppf(0.9995, w.size, 0.01):
+            flagged.append(warned)
+    lo, hi = band(len(same), 0.01)
+    assert lo <= sum(same) <= hi, (sum(same), (lo, hi))
+    assert len(flagged) >= 30 and all(flagged), flagged
+    assert np.mean(loud) >= 0.9, np.mean(loud)

@@ -6,7 +6,9 @@ it silently changes meaning. :func:`coverage` says when: it compares a few recor
 (per channel: the mean of the signal, the log scale of its residuals, the autocorrelation of its residuals at lags
 ``1..lags``) with the spread of the same summaries over the fitting records, each fitting record's residuals taken
 through a model *not* fitted on it (:meth:`~tsfdi.models.AR.held_out_residuals`), as the new record's are.
-:meth:`tsfdi.Baselines.covers` is the same check for a baseline's state model. :func:`warn_if_not_covered` emits a
+:meth:`tsfdi.Baselines.covers` is the same check for a baseline's state model. :func:`record_coverage` checks a
+calibrated test's own statistics against the predictive record law its thresholds rest on (one-sided: the record
+whose false-alarm rate the calibration no longer bounds). :func:`warn_if_not_covered` emits a
 :class:`~tsfdi.exceptions.CoverageWarning`.
 """
 
@@ -49,9 +51,9 @@ class Coverage:
     alpha : float
         False-warning rate of the check on a record like the fitting records (all summaries together).
     table : pandas.DataFrame
-        One row per summary, indexed by (``summary``, ``channel``); ``summary`` is ``"mean"`` (the signal's mean,
-        the trim), ``"log_scale"`` (log root-mean-square residual) or ``"acf1"``, ``"acf2"``, ... (Fisher z,
-        ``arctanh``, of the residual autocorrelation at that lag). Columns: ``value`` (the new record's),
+        One row per summary, indexed by (``summary``, ``channel``) (of :func:`record_coverage`: see there);
+        ``summary`` is ``"mean"`` (the signal's mean, the trim), ``"log_scale"`` (log root-mean-square residual) or
+        ``"acf1"``, ``"acf2"``, ... (Fisher z, ``arctanh``, of the residual autocorrelation at that lag). Columns: ``value`` (the new record's),
         ``fit_mean``, ``fit_std``, ``fit_min``, ``fit_max`` (over the fitting records), ``lower``, ``upper`` (the
         predictive interval at the per-summary level), ``t`` (predictive t statistic), ``pvalue`` (two-sided,
         per summary), ``out`` (outside the interval), ``excess`` (``|t|`` over the interval's half-width in t
