@@ -242,7 +242,9 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
             raise ValueError(f"{name} is too short: {data.nobs} samples, at least {min_nobs} are needed")
         return data
     kind, index, channels, sname, time_dim, channel_dim = "numpy", None, None, None, "time", "channel"
-    if isinstance(data, pd.Series):
+    if type(data) is np.ndarray:    # the common case first (a plain array: not masked, no container checks)
+        arr = data
+    elif isinstance(data, pd.Series):
         kind, index, sname = "pandas", data.index, data.name
         arr = data.to_numpy()
     elif isinstance(data, pd.DataFrame):

@@ -168,7 +168,7 @@ class OrderSelection:
     def max_lags(self) -> int:
         return int(self.orders[-1])
 
-    @property
+    @cached_property
     def selected(self) -> int:
         """Order with the smallest BIC."""
         return int(self.orders[np.argmin(self.values["bic"])])

@@ -205,16 +205,16 @@ class LinearTimeSeriesModel:
         self.hold_back = hold_back
         rows = sum([r.nobs for r in self.records]) - hold_back * len(self.records)
         cols = self.df_eq + self.neqs
-        # the orders that set the size: na alone, or with nb / nk when the input's lags reach furthest
-        orders = f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")
+        def orders() -> str:    # the orders that set the size: na alone, or with nb / nk when the input's lags reach
+            return f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")   # furthest
         if rows * cols > MAX_VALUES:
-            check_size(rows * cols, f"{orders} on {rows:,} regression rows: the regressor ({rows:,} x {cols:,})")
+            check_size(rows * cols, f"{orders()} on {rows:,} regression rows: the regressor ({rows:,} x {cols:,})")
         minimum = hold_back + self.df_eq + 1
-        held = (f"hold back {hold_back}" if hold_back > self.max_lag or not self.nb else
-                f"hold back {hold_back}, the largest lag {lag_name}," if hold_back == self.na else
-                f"hold back {hold_back}, the largest lag nk + nb - 1,")
         if not self.multi and self.data.nobs < minimum:
-            raise ValueError(f"y is too short for {orders}: {self.data.nobs} samples, at least "
+            held = (f"hold back {hold_back}" if hold_back > self.max_lag or not self.nb else
+                    f"hold back {hold_back}, the largest lag {lag_name}," if hold_back == self.na else
+                    f"hold back {hold_back}, the largest lag nk + nb - 1,")
+            raise ValueError(f"y is too short for {orders()}: {self.data.nobs} samples, at least "
                              f"{minimum} are needed ({held} + {self.df_eq} parameters + 1)")
         if self.multi:
             for i, r in enumerate(self.records):
@@ -222,7 +222,7 @@ class LinearTimeSeriesModel:
                     raise ValueError(f"y[{i}] is too short: {r.nobs} samples, at least {hold_back + 1} are needed "
                                      f"(hold back {hold_back} + 1)")
             if rows < self.df_eq + 1:
-                raise ValueError(f"y is too short for {orders}: {rows} usable samples in all records, "
+                raise ValueError(f"y is too short for {orders()}: {rows} usable samples in all records, "
                                  f"at least {self.df_eq + 1} are needed ({self.df_eq} parameters + 1)")
         self._y_peak, self.y_scale, own = _channel_scale(self.records, "y", self.data.channels)
         self.u_scale = None
