@@ -85,30 +85,33 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     finite and reproducible, every exact order gets the same fit term, and the BIC penalty picks the smallest
     exact order. ``exact`` flags those fits; the callers warn.
     """
-    s = neqs
     own = scale is None                                     # the data's own units: no weights
-    scale = np.ones(s) if own else np.asarray(scale, dtype=float)
-    peak = scale if peak is None else np.asarray(peak, dtype=float)
-    floor = (EXACT_FIT_RTOL * peak) ** 2 if own else (EXACT_FIT_RTOL * (peak / scale)) ** 2   # units of the fit
-    sse = np.ascontiguousarray(sse, dtype=float)
-    out = np.empty((7, sse.shape[0]))
-    exact = np.empty(sse.shape[0], dtype=np.bool_)
-    _criteria_kernel(sse, np.asarray(sss, dtype=float).reshape(-1), float(nobs),
-                     np.ascontiguousarray(df_model, dtype=float).reshape(-1), floor, scale, own,
-                     criterion == "logdet", out, exact)
+    if peak is None:
+        peak = np.ones(neqs) if own else scale
+    q = len(sse)
+    out = np.empty((7, q))
+    exact = np.empty(q, dtype=np.bool_)
+    _criteria_kernel(np.asarray(sse, dtype=float), np.asarray(sss, dtype=float).reshape(-1), float(nobs),
+                     np.asarray(df_model).reshape(-1), np.asarray(peak, dtype=float),
+                     np.asarray(peak if own else scale, dtype=float), own, criterion == "logdet", out, exact)
     return dict(zip(("llf", "aic", "bic", "hqic", "rss_sss", "spp", "sigma2"), out), exact=exact)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _criteria_kernel(sse, sss, nobs, df_model, floor, scale, own, logdet_bic, out, exact):  # pragma: no cover
+def _criteria_kernel(sse, sss, nobs, df_model, peak, scale, own, logdet_bic, out, exact):  # pragma: no cover
     """:func:`information_criteria` in one compiled pass over the fits (numpy's small-array calls cost far more than
-    the arithmetic): rows ``llf, aic, bic, hqic, rss_sss, spp, sigma2`` of ``out`` and ``exact``.
+    the arithmetic): rows ``llf, aic, bic, hqic, rss_sss, spp, sigma2`` of ``out`` and ``exact`` (``scale`` is not read
+    when ``own``).
 
     A vector model's ``ln det Sigma`` comes from its Cholesky factor; the fits whose factor fails or whose
     log-determinant fails the bounds ``det / tr^(s-1) > max(floor)`` and ``det / tr^s > COLLINEAR_RTOL`` (the
     smallest eigenvalue is at least ``det / tr^(s-1)``, and ``det / tr^s`` times the largest) are decomposed in units
     of the floor, as the docstring of :func:`information_criteria` says."""
     q, s = sse.shape[0], sse.shape[1]
+    floor = np.empty(s)                     # the exact-fit floor of each channel's variance, in the units of the fit
+    for a in range(s):
+        f = EXACT_FIT_RTOL * peak[a] if own else EXACT_FIT_RTOL * (peak[a] / scale[a])
+        floor[a] = f ** 2
     var = np.empty((q, s))
     logdet = np.empty(q)
     for r in range(q):
