@@ -9,12 +9,16 @@
    identification) of every other record, each path starting from the same zarr store and timed from it: serially
    (the records read into this process's memory with one thread, dask's synchronous scheduler, then evaluated in
    memory), and on a ``dask.distributed`` cluster of 1 and of 2 worker processes (one thread each, so the GIL is
-   not the limit), each worker reading its chunks of the store, each cluster through one Client kept for all its
-   runs, as a user would. (Until issue 36's session 32 the serial path read the records into memory before its
-   timed runs and only the dask runs paid for reading the store, about 0.7-1 s of 17 s: the ratio compared
-   evaluate in memory with read + evaluate. Now both pay for their read; the serial read's time is printed.) The clusters are ``SubprocessCluster``: a
+   not the limit), each worker reading its chunks of the store. The clusters are ``SubprocessCluster``: a
    ``LocalCluster`` whose scheduler runs in a process of its own, as on a real cluster, so that the driver's process
-   holds the client alone (its memory is measured below).
+   holds the client alone (its memory is measured below). Each is started for its run, warmed up by an untimed
+   ``evaluate`` of 200 records (the workers import tsfdi and get the baselines, which the timed run then refers to,
+   as a user's second call does), and closed after it: one cluster is alive at a time, as a user has.
+   What changed in this yardstick in issue 36's session 32, and why: (a) the serial path read the records into
+   memory before its timed runs, while the workers read their chunks within theirs (0.7-1 s of ~17 s): the ratio
+   compared evaluate in memory with read + evaluate. Now both pay for their read; the serial read's time is
+   printed. (b) Both clusters were alive during every run; an idle cluster's scheduler, nanny and worker processes
+   use 7 % (1 worker) to 11 % (2 workers) of a core, which on 2 cores the running cluster shared.
    The three are interleaved ``--repeat`` times (the machine may be shared) and the medians reported; the count
    tables are checked equal to the serial ones. Each run also reports the CPU time (user and system) and the minor
    page faults of the process(es) doing the work -- this process for the serial run, the workers
@@ -51,6 +55,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import gc  # noqa: E402
 import json  # noqa: E402
 import resource  # noqa: E402
@@ -80,6 +85,8 @@ PREVIOUS = "f9e25de"
 #: the client keeps its last messages to the scheduler (each chunk's graph) for debugging: this many (default 1000)
 LOG = "distributed.admin.low-level-log-length"
 LEVELS = ("moderate", "severe")
+#: the dask runs: name -> worker processes (one thread each)
+CLUSTERS = {"1 worker": 1, "2 workers": 2}
 #: the variables the serial path reads into memory (what evaluate reads of each record)
 SIGNALS = ("roll", "pitch", "r", "lost_control")
 
@@ -180,11 +187,25 @@ def from_store(ds, base, reads: list):
     return tsfdi.evaluate(memory, base, **OPTIONS)
 
 
-def dask_runs(ds, base, clients: dict, repeat: int, runs: dict, driver_cpu: dict, reads: list | None = None) -> object:
+@contextlib.contextmanager
+def cluster(n: int, ds, base):
+    """A ``SubprocessCluster`` of ``n`` single-threaded workers and a Client of it, warmed up (the workers import
+    tsfdi, load the store's metadata and get the baselines: ``evaluate`` of 200 records, not timed)."""
+    with SubprocessCluster(n_workers=n, threads_per_worker=1, dashboard_address=":0") as cl, \
+            Client(cl, set_as_default=False) as client:
+        client.wait_for_workers(n)
+        with client.as_current():
+            tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
+        yield cl, client
+
+
+def dask_runs(ds, base, repeat: int, runs: dict, driver_cpu: dict, reads: list | None = None) -> object:
     """``repeat`` times: the serial path from the store (:func:`from_store`, when ``reads`` is given), then
-    ``evaluate`` of the store on each client in turn; each run appended to ``runs[name]`` as (wall s, others' CPU s,
-    user s, system s, page faults, CPU s of the busiest worker). Returns the last tables (checked equal to the serial
-    ones when there are)."""
+    ``evaluate`` of the store on each cluster of :data:`CLUSTERS` in turn, each started for its run and closed after
+    it (:func:`cluster`: one cluster alive at a time, as a user has; an idle cluster's scheduler, nannies and workers
+    use ~7-11 % of a core, which on 2 cores the running one would share); each run appended to ``runs[name]`` as
+    (wall s, others' CPU s, user s, system s, page faults, CPU s of the busiest worker). Returns the last tables
+    (checked equal to the serial ones when there are)."""
     ev = reference = None
     for r in range(repeat):
         line = []
@@ -192,8 +213,8 @@ def dask_runs(ds, base, clients: dict, repeat: int, runs: dict, driver_cpu: dict
             t, reference, other, u = measure(lambda: from_store(ds, base, reads))
             runs["serial"].append((t, other, *u))
             line.append(f"serial {t:.1f} s (read {reads[-1]:.1f} s; CPU {u[0] + u[1]:.1f} s, {u[2]:,.0f} faults)")
-        for name, client in clients.items():
-            with client.as_current():
+        for name, workers in CLUSTERS.items():
+            with cluster(workers, ds, base) as (_, client), client.as_current():
                 cpu, sched = time.process_time(), client.run_on_scheduler(usage)
                 t, ev, other, u = measure(lambda: tsfdi.evaluate(ds, base, **OPTIONS), client)
                 sched = client.run_on_scheduler(usage) - sched
@@ -211,15 +232,8 @@ def dask_only(store: Path, repeat: int, out: Path) -> None:
     warnings.simplefilter("ignore", UnstableModelWarning)
     ds = xr.open_zarr(store)
     base = tsfdi.fit_baselines(ds, fit_records=2, settle=5.0, duration=20.0, models=("var",))
-    runs: dict = {"1 worker": [], "2 workers": []}
-    with SubprocessCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as one, \
-            SubprocessCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as two, \
-            Client(one, set_as_default=False) as c1, Client(two, set_as_default=False) as c2:
-        clients = {"1 worker": c1, "2 workers": c2}
-        for client in clients.values():
-            with client.as_current():
-                tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
-        ev = dask_runs(ds, base, clients, repeat, runs, {})
+    runs: dict = {k: [] for k in CLUSTERS}
+    ev = dask_runs(ds, base, repeat, runs, {})
     pd.to_pickle({"runs": runs, "tsfdi": tsfdi.__file__,
                   "tables": {n: getattr(ev, n) for n in ("identification_counts", "detection_counts",
                                                            "detection_delays", "records")}}, out)
@@ -310,54 +324,48 @@ def main() -> None:
 
     runs: dict = {"serial": [], "1 worker": [], "2 workers": []}
     driver_cpu: dict = {}
-    with SubprocessCluster(n_workers=1, threads_per_worker=1, dashboard_address=":0") as one, \
-            SubprocessCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as two:
-        with Client(one, set_as_default=False) as c1, Client(two, set_as_default=False) as c2:
-            clients = {"1 worker": c1, "2 workers": c2}
-            for client in clients.values():          # workers import tsfdi and load the store's metadata
-                with client.as_current():
-                    tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
-            reads: list = []
-            reference = dask_runs(ds, base, clients, args.repeat, runs, driver_cpu, reads=reads)
-        print(f"\nserial path: the records read from the store in {statistics.median(reads):.2f} s (median; timed "
-              "within its runs, as the workers read their chunks within theirs)")
-        # a run is quiet when the other processes of the (shared) machine used under a tenth of a core meanwhile
-        quiet = {k: [r for r in v if r[1] < 0.1 * r[0]] for k, v in runs.items()}
-        use_quiet = all(len(v) >= 2 for v in quiet.values())
-        for label, chosen in (("all runs", runs), ("quiet runs", quiet)):
-            if not all(chosen.values()):
-                print(f"\nevaluate, {label}: none for " + ", ".join(k for k, v in chosen.items() if not v))
-                continue
-            m = {k: np.median(np.array(v), axis=0) for k, v in chosen.items()}
-            print(f"\nevaluate, median of the {label} ({', '.join(f'{k} {len(v)}' for k, v in chosen.items())}; tables "
-                  "equal to the serial ones in every run); CPU time and page faults of the process(es) doing the "
-                  "work (this one, or the workers added up):")
-            print(f"  {'':>9}  {'wall':>7} {'records/s':>10} {'rec-h/s':>8} {'user':>7} {'system':>7} "
-                  f"{'page faults':>12} {'busiest CPU':>12} {'others CPU':>11}")
-            for k, (t, other, user, system, faults, busiest) in m.items():
-                print(f"  {k:>9}: {t:6.1f}s {n_eval / t:10.1f} {hours / t:8.3f} {user:6.1f}s {system:6.2f}s "
-                      f"{faults:12,.0f} {busiest:11.1f}s {other:10.1f}s")
-            one_x, two_x = m["serial"][0] / m["1 worker"][0], m["1 worker"][0] / m["2 workers"][0]
-            cpu_x, cpu_2x = m["serial"][5] / m["1 worker"][5], m["1 worker"][5] / m["2 workers"][5]
-            print(f"  1 worker: {one_x:.2f}x the serial speed (acceptance >= 0.9: {'MET' if one_x >= 0.9 else 'NOT MET'}"
-                  f"); by CPU time (user + system) {cpu_x:.2f}x")
-            print(f"  2 workers: {two_x:.2f}x one worker (acceptance >= 1.8: {'MET' if two_x >= 1.8 else 'NOT MET'}), "
-                  f"{m['serial'][0] / m['2 workers'][0]:.2f}x the serial path; the 2 workers' CPU time is "
-                  f"{(m['2 workers'][2] + m['2 workers'][3]) / (m['1 worker'][2] + m['1 worker'][3]):.2f}x one "
-                  f"worker's (1.00 = no work added by splitting); by CPU time, one worker's over the busiest of the "
-                  f"two's (what 2 workers give with a core each and no wait), {cpu_2x:.2f}x")
-            if label == ("quiet runs" if use_quiet else "all runs"):
-                med, speedup = {k: v[0] for k, v in m.items()}, two_x
-        print(f"  (the ratios judged and projected below: {'quiet runs' if use_quiet else 'all runs'}; on a machine "
-              "shared with other jobs the wall times of 2 workers on 2 cores are not a clean measurement)")
-        print("  driver and scheduler CPU time during the dask runs (medians; on 2 cores they share the workers' "
-              "cores): " + ", ".join(f"{k} {statistics.median(d for d, _ in v):.1f} s + "
-                                     f"{statistics.median(c for _, c in v):.1f} s" for k, v in driver_cpu.items()))
-        print(f"  windows: {reference.detection_counts['windows'].sum():,} detection + "
-              f"{reference.identification_counts['windows'].sum():,} identification, counted in "
-              f"{len(reference.detection_counts)} + {len(reference.identification_counts)} rows (+ "
-              f"{len(reference.detection_delays)} delay rows)")
+    reads: list = []
+    reference = dask_runs(ds, base, args.repeat, runs, driver_cpu, reads=reads)
+    print(f"\nserial path: the records read from the store in {statistics.median(reads):.2f} s (median; timed "
+          "within its runs, as the workers read their chunks within theirs)")
+    # a run is quiet when the other processes of the (shared) machine used under a tenth of a core meanwhile
+    quiet = {k: [r for r in v if r[1] < 0.1 * r[0]] for k, v in runs.items()}
+    use_quiet = all(len(v) >= 2 for v in quiet.values())
+    for label, chosen in (("all runs", runs), ("quiet runs", quiet)):
+        if not all(chosen.values()):
+            print(f"\nevaluate, {label}: none for " + ", ".join(k for k, v in chosen.items() if not v))
+            continue
+        m = {k: np.median(np.array(v), axis=0) for k, v in chosen.items()}
+        print(f"\nevaluate, median of the {label} ({', '.join(f'{k} {len(v)}' for k, v in chosen.items())}; tables "
+              "equal to the serial ones in every run); CPU time and page faults of the process(es) doing the "
+              "work (this one, or the workers added up):")
+        print(f"  {'':>9}  {'wall':>7} {'records/s':>10} {'rec-h/s':>8} {'user':>7} {'system':>7} "
+              f"{'page faults':>12} {'busiest CPU':>12} {'others CPU':>11}")
+        for k, (t, other, user, system, faults, busiest) in m.items():
+            print(f"  {k:>9}: {t:6.1f}s {n_eval / t:10.1f} {hours / t:8.3f} {user:6.1f}s {system:6.2f}s "
+                  f"{faults:12,.0f} {busiest:11.1f}s {other:10.1f}s")
+        one_x, two_x = m["serial"][0] / m["1 worker"][0], m["1 worker"][0] / m["2 workers"][0]
+        cpu_x, cpu_2x = m["serial"][5] / m["1 worker"][5], m["1 worker"][5] / m["2 workers"][5]
+        print(f"  1 worker: {one_x:.2f}x the serial speed (acceptance >= 0.9: {'MET' if one_x >= 0.9 else 'NOT MET'}"
+              f"); by CPU time (user + system) {cpu_x:.2f}x")
+        print(f"  2 workers: {two_x:.2f}x one worker (acceptance >= 1.8: {'MET' if two_x >= 1.8 else 'NOT MET'}), "
+              f"{m['serial'][0] / m['2 workers'][0]:.2f}x the serial path; the 2 workers' CPU time is "
+              f"{(m['2 workers'][2] + m['2 workers'][3]) / (m['1 worker'][2] + m['1 worker'][3]):.2f}x one "
+              f"worker's (1.00 = no work added by splitting); by CPU time, one worker's over the busiest of the "
+              f"two's (what 2 workers give with a core each and no wait), {cpu_2x:.2f}x")
+        if label == ("quiet runs" if use_quiet else "all runs"):
+            med, speedup = {k: v[0] for k, v in m.items()}, two_x
+    print(f"  (the ratios judged and projected below: {'quiet runs' if use_quiet else 'all runs'}; on a machine "
+          "shared with other jobs the wall times of 2 workers on 2 cores are not a clean measurement)")
+    print("  driver and scheduler CPU time during the dask runs (medians; on 2 cores they share the workers' "
+          "cores): " + ", ".join(f"{k} {statistics.median(d for d, _ in v):.1f} s + "
+                                 f"{statistics.median(c for _, c in v):.1f} s" for k, v in driver_cpu.items()))
+    print(f"  windows: {reference.detection_counts['windows'].sum():,} detection + "
+          f"{reference.identification_counts['windows'].sum():,} identification, counted in "
+          f"{len(reference.detection_counts)} + {len(reference.identification_counts)} rows (+ "
+          f"{len(reference.detection_delays)} delay rows)")
 
+    with cluster(2, ds, base) as (two, _):
         print(f"\ndriver memory (MB) at 200 and {n:,} records: the dask runs on the 2 workers, the serial one reading "
               "the records into the driver")
         print(f"  {'call':<26} {'records':>8} {'traced peak':>12} {'held after':>11} {'RSS rise':>9} "
