@@ -372,7 +372,8 @@ def crazypad(conditions) -> list:
     first = cp.samples(FIRST_S)
     print("time-aligned record-level law (fixed a priori): at every sample, each candidate condition@drone predicts "
           "the flight's running summaries by the mean of its fitting flights' running summaries at that sample, with "
-          "the between-flight covariance at that sample pooled over every condition@airframe (multivariate t); "
+          "the between-flight covariance at that sample pooled over every condition@airframe (multivariate t; "
+          "in half of the designs its size per candidate, shrunk to the pooled one); "
           f"first summary after {FIRST_S:g} s; msprt, alpha {CRAZY_ALPHA:g}, Armitage bound; undecided = not "
           "correct")
     spread_check(F, info, first)
