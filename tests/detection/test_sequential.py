@@ -570,6 +570,8 @@ def test_aligned_record_effect_spread_groups_input_checks():
         aligned_record_effect(held, spread_groups={"m0": "a", "m1": "a"})
     with pytest.raises(ValueError, match="spread_groups: 'm9' is not a model of held_out"):
         aligned_record_effect(held, spread_groups={"m0": "a", "m1": "a", "m2": "b", "m9": "b"})
+    with pytest.raises(TypeError, match=r"spread_groups\['m1'\] must be a group label"):
+        aligned_record_effect(held, spread_groups={"m0": "a", "m1": ["a"], "m2": "b"})
 
 
 def test_aligned_record_effect_allocation_is_bounded(monkeypatch):

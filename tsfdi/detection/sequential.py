@@ -30,7 +30,7 @@ Theory* 40(6), 1994-2007.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Hashable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -1693,4 +1693,8 @@ def _spread_groups(spread_groups: Any, held_out: Mapping) -> list | None:
     extra = [m for m in spread_groups if m not in held_out]
     if extra:
         raise ValueError(f"spread_groups: {extra[0]!r} is not a model of held_out")
+    bad = [m for m in held_out if not isinstance(spread_groups[m], Hashable)]
+    if bad:
+        raise TypeError(f"spread_groups[{bad[0]!r}] must be a group label (a str, a number...), got "
+                        f"{type(spread_groups[bad[0]]).__name__}")
     return [spread_groups[m] for m in held_out]
