@@ -60,8 +60,8 @@ def float_like(value: Any, name: str, *, minimum: float | None = None, maximum: 
     """
     if value is None and optional:
         return None
-    if isinstance(value, (bool, np.bool_, np.timedelta64)) or not isinstance(value, (numbers.Real, np.floating,
-                                                                                      np.integer)):
+    if type(value) is not float and (isinstance(value, (bool, np.bool_, np.timedelta64))
+                                     or not isinstance(value, (numbers.Real, np.floating, np.integer))):
         raise TypeError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
     value = float(value)
     if not math.isfinite(value):

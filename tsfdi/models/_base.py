@@ -49,7 +49,8 @@ def _channel_scale(records: list[Signal], name: str, channels: list) -> tuple[np
         hi, lo = channel_extremes(r)        # (as_signal's, when it checked the record for constant channels)
         p = np.maximum(hi, -lo)
         peak = p if peak is None else np.maximum(peak, p)
-    lo, hi = (peak[0], peak[0]) if peak.size == 1 else (peak.min(), peak.max())
+    values = peak.tolist()                  # (a few channels: Python's min / max cost less than numpy's calls)
+    lo, hi = min(values), max(values)
     if lo < DATA_RANGE[0] or hi > DATA_RANGE[1]:
         j = int(np.argmin(peak) if lo < DATA_RANGE[0] else np.argmax(peak))
         raise ValueError(f"{name} peaks at {peak[j]:.3g} in channel {channels[j]!r}: the models need every "

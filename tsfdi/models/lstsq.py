@@ -263,7 +263,8 @@ def _channel_rows(records: list[np.ndarray], lags: int) -> tuple[np.ndarray, np.
     s = r.shape[1]
     if len(records) == 1:
         x = r.reshape(1, -1) if s == 1 and r.flags.c_contiguous else np.ascontiguousarray(r.T)
-        return x, np.zeros(1, dtype=np.int64), np.full(1, r.shape[0], dtype=np.int64)
+        bounds = np.array([0, r.shape[0]], dtype=np.int64)
+        return x, bounds[:1], bounds[1:]
     x = np.zeros((s, sum(r.shape[0] for r in records) + lags * (len(records) - 1)))
     starts, ends = np.empty(len(records), dtype=np.int64), np.empty(len(records), dtype=np.int64)
     pos = 0
@@ -301,9 +302,10 @@ def _lag_gram_kernel(x, starts, ends, p, const, out):  # pragma: no cover - comp
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def _direct_lag_products(x, p, C, S):  # pragma: no cover - compiled
     """``C[k, a, b] = sum_u x[a, u] x[b, u - k]`` for ``k = 0..p`` and ``S[a] = sum_u x[a, u]`` of the channel rows
-    ``x`` (shape (s, n), contiguous): dot products of contiguous rows, four lags per pass (each sample of ``x[b]``
-    loaded once for four products, the lag products' load-bound cost cut), their sums reassociated so that they run
-    in SIMD lanes (the operands are finite: the models check their data), ~1e-16 relative from the sums in order."""
+    ``x`` (shape (s, n), contiguous): dot products of contiguous rows, four lags and two lagged rows per pass
+    (:func:`_lag_pass`: the products are load-bound, and each loaded sample serves up to eight of them), their sums
+    reassociated so that they run in SIMD lanes (the operands are finite: the models check their data), ~1e-16
+    relative from the sums in order."""
     s, n = x.shape
     for a in range(s):
         acc = 0.0
@@ -311,33 +313,61 @@ def _direct_lag_products(x, p, C, S):  # pragma: no cover - compiled
             acc += x[a, u]
         S[a] = acc
     for a in range(s):
-        xa = x[a]
-        for b in range(s):
-            xb = x[b]
-            k = 0
-            while k + 3 <= p and n - k - 3 > 0:     # lags k .. k + 3 over the samples all four have, then the rest
-                m = n - k - 3
-                a0 = a1 = a2 = a3 = 0.0
-                for u in range(m):
-                    v = xb[u]
-                    a0 += xa[u + k] * v
-                    a1 += xa[u + k + 1] * v
-                    a2 += xa[u + k + 2] * v
-                    a3 += xa[u + k + 3] * v
-                for u in range(m, n - k):
-                    a0 += xa[u + k] * xb[u]
-                for u in range(m, n - k - 1):
-                    a1 += xa[u + k + 1] * xb[u]
-                for u in range(m, n - k - 2):
-                    a2 += xa[u + k + 2] * xb[u]
-                C[k, a, b], C[k + 1, a, b], C[k + 2, a, b], C[k + 3, a, b] = a0, a1, a2, a3
-                k += 4
-            while k <= p:
-                acc = 0.0
-                for u in range(n - k):
-                    acc += xa[u + k] * xb[u]
-                C[k, a, b] = acc
-                k += 1
+        for b in range(0, s - 1, 2):
+            _lag_pass(x[a], x[b], x[b + 1], True, n, p, C[:, a, b], C[:, a, b + 1])
+        if s % 2:
+            _lag_pass(x[a], x[s - 1], x[s - 1], False, n, p, C[:, a, s - 1], C[:, a, s - 1])
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"}, inline="always")
+def _lag_pass(xa, xb, xc, two, n, p, cb, cc):  # pragma: no cover - compiled
+    """``cb[k] = sum_u xa[u + k] xb[u]`` for ``k = 0..p`` and, when ``two``, ``cc[k]`` the same with ``xc``: four lags
+    per pass over the samples all four have, then each lag's last samples."""
+    k = 0
+    while k + 3 <= p and n - k - 3 > 0:
+        m = n - k - 3
+        b0 = b1 = b2 = b3 = c0 = c1 = c2 = c3 = 0.0
+        if two:
+            for u in range(m):
+                v, w = xb[u], xc[u]
+                y0, y1, y2, y3 = xa[u + k], xa[u + k + 1], xa[u + k + 2], xa[u + k + 3]
+                b0 += y0 * v
+                b1 += y1 * v
+                b2 += y2 * v
+                b3 += y3 * v
+                c0 += y0 * w
+                c1 += y1 * w
+                c2 += y2 * w
+                c3 += y3 * w
+        else:
+            for u in range(m):
+                v = xb[u]
+                b0 += xa[u + k] * v
+                b1 += xa[u + k + 1] * v
+                b2 += xa[u + k + 2] * v
+                b3 += xa[u + k + 3] * v
+        for u in range(m, n - k):
+            b0 += xa[u + k] * xb[u]
+            c0 += xa[u + k] * xc[u]
+        for u in range(m, n - k - 1):
+            b1 += xa[u + k + 1] * xb[u]
+            c1 += xa[u + k + 1] * xc[u]
+        for u in range(m, n - k - 2):
+            b2 += xa[u + k + 2] * xb[u]
+            c2 += xa[u + k + 2] * xc[u]
+        if two:
+            cc[k], cc[k + 1], cc[k + 2], cc[k + 3] = c0, c1, c2, c3
+        cb[k], cb[k + 1], cb[k + 2], cb[k + 3] = b0, b1, b2, b3
+        k += 4
+    while k <= p:
+        acc = acc2 = 0.0
+        for u in range(n - k):
+            acc += xa[u + k] * xb[u]
+            acc2 += xa[u + k] * xc[u]
+        if two:
+            cc[k] = acc2
+        cb[k] = acc
+        k += 1
 
 
 @numba.njit(cache=True)
