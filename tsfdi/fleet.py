@@ -231,8 +231,12 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
         try:
             for s in chunks:
                 # one task per chunk, which reads its records itself: the chunk's graph travels inside the task
-                # (culled and optimised where it is computed) instead of being ~8 tasks of the cluster's graph
-                queue.append((s, client.submit(_read_call, func, data.isel(record=s), s, shared, pure=False)))
+                # instead of being ~8 tasks of the cluster's graph. Culled to the chunk's reads here (dask.optimize,
+                # ~0.03 ms per chunk of the fleet, on the driver), so that the task and its cost on the worker do not
+                # grow with the fleet (the whole graph in every task: ~0.1 ms per chunk of the fleet, pickled here
+                # and culled on the worker, 0.12 s per task at 1,000 chunks)
+                lazy = dask.optimize(data.isel(record=s))[0]
+                queue.append((s, client.submit(_read_call, func, lazy, s, shared, pure=False)))
                 if len(queue) >= ahead:
                     yield _next(queue, bar)
             while queue:
