@@ -4,9 +4,13 @@ first on ``sys.path``, where that name would shadow the ``coverage`` package num
 benchmark.)
 
 Run: ``python benchmarks/baseline_coverage.py [--data PATH] [--reps N]`` (BLAS pinned to one thread; prints its
-run time,
-about 2-3 min on the 2-core development machine). Three sections, each warning at alpha = 0.01 (the check's
-false-warning rate on a record like the fitting records, all summaries together):
+run time, about 25 min on the 2-core development machine). Two checks side by side, each warning at alpha = 0.01 (the
+check's false-warning rate on a record like the fitting records, all summaries together): "summaries"
+(``coverage``: trims, residual scales and autocorrelations, two-sided per-summary predictive t) and "record law"
+(``record_coverage`` of LB+F+M -- ``tsfdi.AnyOf`` of Ljung-Box, F and mean tests, Sidak over parts and channels,
+calibrated on the held-out residuals -- one-sided: the tests' own statistics above the predictive record law their
+thresholds rest on); and, per section, of the records whose disjoint windows LB+F+M flags beyond their two-sided
+99.9 % binomial band of alpha (where its calibration does not hold), how many each check warned of. Three sections:
 
 1. Simulated fleet (fixed seed): VAR(2) records whose coefficients, channel noise scales and means vary by +-15 %
    between aircraft (factors 1 + N(0, 0.075^2), or uniform on 1 +- 0.15); per repetition a baseline on 5, 10 or
@@ -17,7 +21,8 @@ false-warning rate on a record like the fitting records, all summaries together)
    made on the normal flights; each log's two airborne segments are fitted and held out together): leave one
    normal flight out within an airframe (its segments judged against the drone's other normal flights:
    false-warning rate with its band); fit on one airframe's normal flights, judge the other's (fires?); the
-   payload conditions (add_weight_*, weight_on_string_*) against the same drone's normal flights.
+   payload conditions (add_weight_*, weight_on_string_*) against the same drone's normal flights. The record law
+   is LB+F+M calibrated at 1 s windows (a 5 s segment holds 4-5; at 2 s only 2, too few for a record's own law).
 3. Hexacopter (``tsfdi.datasets.simulate_hexacopter``, default aircraft, 30 s in severe turbulence, the first 5 s
    dropped; channels roll, pitch, yaw_rate): a VAR on 10 light aircraft (``FleetSpread(payload=0.1)``: payload 0-10 %
    of the gross weight), judged on 60 more of the same spread (false warnings) and on aircraft with a payload of
@@ -39,7 +44,7 @@ import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 import tsfdi  # noqa: E402
-from tsfdi.coverage import coverage  # noqa: E402
+from tsfdi.coverage import coverage, record_coverage  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import crazypad as cp  # noqa: E402
@@ -84,34 +89,84 @@ def warned(res, held, recs):
     return [not coverage(res, y, held_out=held, alpha=ALPHA).covered for y in recs]
 
 
+def combined(held, window):
+    """LB+F+M (``tsfdi.AnyOf``, Sidak over the parts and the channels: alpha is the decision's rate) calibrated on
+    held-out residuals with the predictive record law, for windows of ``window`` signal samples."""
+    parts = [tsfdi.LjungBox(lags=20, alpha=ALPHA, threshold="calibrated"),
+             tsfdi.FTest(alpha=ALPHA, threshold="calibrated"), tsfdi.MeanTest(alpha=ALPHA, threshold="calibrated")]
+    return tsfdi.AnyOf(parts).calibrate(held, window=window)
+
+
+def law_warned(test, res, recs):
+    """The record-law check (``record_coverage`` of the calibrated test) on every record."""
+    return [not record_coverage(test, res.residuals(y), alpha=ALPHA).covered for y in recs]
+
+
+def above_band(test, res, y):
+    """Whether the calibrated test flags the record's disjoint windows beyond the two-sided 99.9 % binomial band of
+    alpha (the record its calibration does not hold on)."""
+    e = np.asarray(res.residuals(y))
+    n = test.tests[0].calibration_window_[0]
+    flags = np.zeros(e.shape[0] // n, dtype=bool)
+    for part in test.tests:
+        flags |= (part.window_statistic(e, n, n) > part.threshold_).any(axis=1)
+    return flags.sum() > stats.binom.ppf(0.9995, flags.size, ALPHA)
+
+
 # ------------------------------------------------------------------ 1. simulated fleet
 def simulated(reps):
     print(f"1. Simulated fleet, VAR(2) with +-15 % aircraft-to-aircraft spread, {reps} baselines per row, "
-          f"alpha {ALPHA}")
+          f"alpha {ALPHA}; two checks: 'summaries' = coverage() (trims, residual scales and autocorrelations, "
+          "two-sided), 'record law' = record_coverage() of LB+F+M calibrated on the held-out residuals (200-sample "
+          "windows; one-sided: the tests' statistics above the predictive record law)")
     ok = True
+    kinds = {"same fleet": {}, "noise x1.5": {"noise": 1.5}, "dynamics x1.4": {"gain": 1.4},
+             "means +0.5": {"shift": 0.5}}
     for law in ("normal", "uniform"):
         for nfit in (5, 10, 20):
             rng = np.random.default_rng([31, nfit, law == "uniform"])
-            same, other = [], {"noise x1.5": [], "dynamics x1.4": [], "means +0.5": []}
+            out = {k: {"summaries": [], "record law": [], "above": []} for k in kinds}
             for _ in range(reps):
                 res = tsfdi.VAR(fleet(rng, nfit, law=law), 2, trend="c").fit()
                 held = res.model.held_out_residuals()
-                same += warned(res, held, fleet(rng, 10, law=law))
-                other["noise x1.5"] += warned(res, held, fleet(rng, 1, noise=1.5, law=law))
-                other["dynamics x1.4"] += warned(res, held, fleet(rng, 1, gain=1.4, law=law))
-                other["means +0.5"] += warned(res, held, fleet(rng, 1, shift=0.5, law=law))
-            power = ", ".join(f"{k} {100 * np.mean(v):5.1f} %" for k, v in other.items())
-            print(f"   {law:7s} spread, {nfit:2d} records: same fleet {rate(same)}; other fleets warned: {power}")
+                test = combined(held, 200)
+                for kind, kw in kinds.items():
+                    recs = fleet(rng, 10 if kind == "same fleet" else 1, law=law, **kw)
+                    out[kind]["summaries"] += warned(res, held, recs)
+                    out[kind]["record law"] += law_warned(test, res, recs)
+                    out[kind]["above"] += [above_band(test, res, y) for y in recs]
+            print(f"   {law:7s} spread, {nfit:2d} records:")
+            for check in ("summaries", "record law"):
+                power = ", ".join(f"{k} {100 * np.mean(out[k][check]):5.1f} %" for k in kinds if k != "same fleet")
+                print(f"     {check:10s}: same fleet {rate(out['same fleet'][check])}; other fleets warned: {power}")
+            flagged = {c: [w for k in kinds for w, a in zip(out[k][c], out[k]["above"]) if a]
+                       for c in ("summaries", "record law")}
+            print(f"     records whose windows LB+F+M flags beyond their 99.9 % band: {len(flagged['summaries'])}; "
+                  "warned: " + ", ".join(f"{c} {sum(v)}/{len(v)}" for c, v in flagged.items()))
             if law == "normal" and nfit == 10:
+                same = out["same fleet"]["summaries"]
                 lo, hi = band(len(same))
-                ok &= lo <= sum(same) <= hi and max(np.mean(v) for v in other.values()) >= 0.9
+                ok &= lo <= sum(same) <= hi and max(np.mean(out[k]["summaries"]) for k in kinds
+                                                    if k != "same fleet") >= 0.9
     return ok
 
 
 # ------------------------------------------------------------------ 2. CrazyPAD
+CHECKS = ("summaries", "record law")
+
+
 def judge(model, flights, channels):
-    """Per flight: one warning flag per airborne segment."""
-    return {f.log: warned(model.results, model.held, f.arrays(channels)) for f in flights}
+    """Per check, per flight: one warning flag per airborne segment. The record law is that of LB+F+M (Sidak over
+    the parts and channels, the choices of crazypad.py) calibrated at 1 s windows (a 5 s segment holds 4-5 of them;
+    at 2 s it holds 2, too few for a record's own law of Ljung-Box and F, which are then pooled without one)."""
+    test = cp.tests_for(model, ("LB+F+M",), ALPHA, cp.samples(1.0), True)["LB+F+M"]
+    return {"summaries": {f.log: warned(model.results, model.held, f.arrays(channels)) for f in flights},
+            "record law": {f.log: law_warned(test, model.results, f.arrays(channels)) for f in flights}}
+
+
+def tally(flags):
+    segs = [x for v in flags.values() for x in v]
+    return f"warned on {sum(any(v) for v in flags.values())}/{len(flags)} flights, {sum(segs)}/{len(segs)} segments"
 
 
 def crazypad(root):
@@ -121,18 +176,20 @@ def crazypad(root):
     normal = cp.load_condition(cp.NORMAL, choice.margin)
     drones = sorted({f.drone for f in normal})
     by_drone = {d: [f for f in normal if f.drone == d] for d in drones}
-    seg_flags, flight_flags = [], []
+    seg_flags, flight_flags = {c: [] for c in CHECKS}, {c: [] for c in CHECKS}
     for d, fl in by_drone.items():
         for i, f in enumerate(fl):
             model = cp.fit_model([g for j, g in enumerate(fl) if j != i], choice.channels, choice.order)
-            flags = judge(model, [f], choice.channels)[f.log]
-            seg_flags += flags
-            flight_flags.append(any(flags))
+            flags = judge(model, [f], choice.channels)
+            for c in CHECKS:
+                seg_flags[c] += flags[c][f.log]
+                flight_flags[c].append(any(flags[c][f.log]))
             print(f"   {d} leave {f.log} out: baseline of {len(fl) - 1} flights ({len(model.held)} segments); "
-                  f"segments warned {flags}")
-    print(f"   same airframe, leave one flight out: segments {rate(seg_flags)}")
+                  "segments warned " + ", ".join(f"{c} {flags[c][f.log]}" for c in CHECKS))
     p2 = 1 - (1 - ALPHA) ** 2
-    print(f"   same airframe, flights (either segment warns, nominal {100 * p2:.2f} %): {rate(flight_flags, p2)}")
+    for c in CHECKS:
+        print(f"   {c}: same airframe, leave one flight out: segments {rate(seg_flags[c])}; flights (either segment "
+              f"warns, nominal {100 * p2:.2f} %): {rate(flight_flags[c], p2)}")
     print("   (few trials: a 99 % band this wide cannot tell a rate of 0 % from one of several per cent)")
     full = {d: cp.fit_model(fl, choice.channels, choice.order) for d, fl in by_drone.items()}
     for d in drones:
@@ -140,20 +197,18 @@ def crazypad(root):
             if o == d:
                 continue
             flags = judge(full[d], by_drone[o], choice.channels)
-            segs = [x for v in flags.values() for x in v]
-            print(f"   fit on {d} ({len(by_drone[d])} flights), judge {o}'s normal flights: warned on "
-                  f"{sum(any(v) for v in flags.values())}/{len(flags)} flights, {sum(segs)}/{len(segs)} segments")
+            print(f"   fit on {d} ({len(by_drone[d])} flights), judge {o}'s normal flights: "
+                  + "; ".join(f"{c} {tally(flags[c])} {flags[c]}" for c in CHECKS))
     payload = [c for c in sorted(set(pd.read_csv(cp.ROOT / "flights.csv").condition))
                if c.startswith(("add_weight", "weight_on_string"))]
-    for c in payload:
+    for cond in payload:
         for d in drones:
-            fl = [f for f in cp.load_condition(c, choice.margin) if f.drone == d]
+            fl = [f for f in cp.load_condition(cond, choice.margin) if f.drone == d]
             if not fl:
                 continue
             flags = judge(full[d], fl, choice.channels)
-            segs = [x for v in flags.values() for x in v]
-            print(f"   payload {c} ({d}), against {d}'s normal flights: warned on "
-                  f"{sum(any(v) for v in flags.values())}/{len(flags)} flights, {sum(segs)}/{len(segs)} segments")
+            print(f"   payload {cond} ({d}), against {d}'s normal flights: "
+                  + "; ".join(f"{c} {tally(flags[c])}" for c in CHECKS))
 
 
 # ------------------------------------------------------------------ 3. hexacopter
@@ -176,9 +231,15 @@ def hexacopter():
     res, held = spec.fit(), spec.held_out_residuals()
     print(f"3. Hexacopter, VAR({order}) on 10 aircraft with payload 0-10 % (channels "
           f"{list(map(str, fit[0].channel.values))})")
-    print(f"   same spread (payload {p_light[10:].min():.2f}-{p_light[10:].max():.2f}): {rate(warned(res, held, new))}")
-    w = warned(res, held, heavy)
-    print(f"   heavier (payload 20-30 %): warned {sum(w)}/{len(w)} = {100 * np.mean(w):.1f} %")
+    test = combined(held, 200)
+    print(f"   same spread (payload {p_light[10:].min():.2f}-{p_light[10:].max():.2f}): summaries "
+          f"{rate(warned(res, held, new))}; record law {rate(law_warned(test, res, new))}")
+    w, lw = warned(res, held, heavy), law_warned(test, res, heavy)
+    up = [above_band(test, res, y) for y in heavy]
+    print(f"   heavier (payload 20-30 %): summaries warned {sum(w)}/{len(w)} = {100 * np.mean(w):.1f} %; record law "
+          f"warned {sum(lw)}/{len(lw)} = {100 * np.mean(lw):.1f} %; LB+F+M (2 s windows) flags {sum(up)} of them "
+          f"beyond their 99.9 % band, of which the summaries warned {sum(a and b for a, b in zip(up, w))} and the "
+          f"record law {sum(a and b for a, b in zip(up, lw))}")
     tables = [coverage(res, y, held_out=held, alpha=ALPHA).table for y in heavy]
     t = sum(tab["t"] for tab in tables) / len(tables)
     crit = float((tables[0]["t"].abs() / tables[0]["excess"]).iloc[0])          # the interval's |t| limit
