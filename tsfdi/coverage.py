@@ -243,14 +243,13 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
     A calibrated test (:class:`~tsfdi.LjungBox`, :class:`~tsfdi.FTest`, :class:`~tsfdi.MeanTest` or an
     :class:`~tsfdi.AnyOf` of them, calibrated with the predictive record-level law on held-out residuals of
     several records) predicts the law of its statistic on a *new* record from a record effect: each fitting
-    record's anchor (the log of its own ``false_alarm`` quantile) a normal draw
-    (:class:`~tsfdi.ScaledChi2Threshold`). This check asks whether the new record's anchor, per channel and part
-    -- the very statistics that flag its windows -- is a draw of that predictive law
-    (:meth:`~tsfdi.ScaledChi2Threshold.record_pvalue`): it warns when the record, not a window, is out of the law,
-    which is when the calibrated false-alarm rate no longer applies to it. :func:`coverage` compares generic
-    summaries (trims, residual scales and autocorrelations) two-sided; this check compares what the decision rests
-    on, one-sided, so that with few fitting records it warns of more of the records whose windows the test flags
-    beyond alpha (``benchmarks/baseline_coverage.py``).
+    record's level a normal draw (:class:`~tsfdi.ScaledChi2Threshold`). This check asks whether the new record's
+    level -- the log mean of the very statistics that flag its windows, per part and channel -- is a draw of that
+    predictive law (:meth:`~tsfdi.ScaledChi2Threshold.record_pvalue`): it warns when the record, not a window, is
+    out of the law, which is when the calibrated false-alarm rate no longer applies to it. :func:`coverage`
+    compares generic summaries (trims, residual scales and autocorrelations) two-sided; this check compares what
+    the decision rests on, one-sided, so that with few fitting records it warns of more of the records whose
+    windows the test flags beyond alpha (``benchmarks/baseline_coverage.py``).
 
     Parameters
     ----------
@@ -269,10 +268,10 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
     -------
     Coverage
         Its table has one row per (``summary`` = the part's class name, ``channel``): ``value`` the new record's
-        anchor, ``fit_mean`` / ``fit_std`` / ``fit_min`` / ``fit_max`` the fitting records' anchors, ``upper`` the
-        predictive bound at the Sidak share (``lower`` is ``-inf``: one-sided, see Notes), ``t`` the anchor's
-        distance in predictive standard deviations, ``pvalue`` the law's upper tail, ``excess`` the anchor's
-        distance from the fitting records' mean over the bound's (above 1 when out).
+        level (log mean statistic), ``fit_mean`` / ``fit_std`` / ``fit_min`` / ``fit_max`` the fitting records'
+        levels, ``upper`` the predictive bound at the Sidak share (``lower`` is ``-inf``: one-sided, see Notes),
+        ``t`` the level's distance in predictive standard deviations, ``pvalue`` the law's upper tail, ``excess``
+        the level's distance from the fitting records' mean over the bound's (above 1 when out).
 
     Raises
     ------
@@ -289,8 +288,8 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
     and the promise fails for a record whose statistics lie above the law; a record below it (a quieter aircraft)
     has fewer false alarms and is not warned of (its decisions are conservative, with less power). With as many
     windows as a fitting record the per-summary statistic is the Student t pivot of normal record
-    anchors, :math:`(a_{new} - ar a) / (s \sqrt{1 + 1/J}) \sim t_{J-1}`; the anchors of a new record with fewer
-    (more) windows are noisier (less noisy) and the law accounts for it. The new record's statistic is taken on
+    levels, :math:`(l_{new} - \bar l) / (s \sqrt{1 + 1/J}) \sim t_{J-1}`; the level of a new record with fewer
+    (more) windows is noisier (less noisy) and the law accounts for it. The new record's statistic is taken on
     windows of the calibrated length and step (the step read from the calibration's windows per independent window),
     as the fitting records' were.
     """
@@ -325,20 +324,20 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
         stat = np.asarray(part.window_statistic(sig.values, window, step), dtype=np.float64)
         for c, th in enumerate(ths):
             try:
-                anchor, z, p = th.record_pvalue(stat[:, c], sig.nobs // window)
+                level, z, p = th.record_pvalue(stat[:, c], sig.nobs // window)
             except ValueError as err:
                 raise ValueError(f"{name}, {label} channel {sig.channels[c]!r}: {err}") from None
-            fit = th.anchors_
-            rows.append((anchor, z, p, fit, th, sig.nobs // window))
+            fit = th.levels_
+            rows.append((level, z, p, fit, th, sig.nobs // window))
             index.append((label, str(sig.channels[c])))
     share = _share(alpha, len(rows))
-    anchors = np.array([r[0] for r in rows])
+    levels = np.array([r[0] for r in rows])
     centre = np.array([r[3].mean() for r in rows])
     upper = np.array([th.record_bound(share, windows) for *_, th, windows in rows])
-    table = pd.DataFrame({"value": anchors, "fit_mean": centre, "fit_std": [r[3].std(ddof=1) for r in rows],
+    table = pd.DataFrame({"value": levels, "fit_mean": centre, "fit_std": [r[3].std(ddof=1) for r in rows],
                           "fit_min": [r[3].min() for r in rows], "fit_max": [r[3].max() for r in rows],
                           "lower": -np.inf, "upper": upper, "t": [r[1] for r in rows], "pvalue": [r[2] for r in rows],
-                          "excess": (anchors - centre) / (upper - centre)},
+                          "excess": (levels - centre) / (upper - centre)},
                          index=pd.MultiIndex.from_tuples(index, names=["summary", "channel"]))
     return _verdict(table, alpha, parts[0].thresholds_[0].records_, sig.nobs)
 

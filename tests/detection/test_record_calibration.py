@@ -199,27 +199,28 @@ def test_predictive_f_law_holds_its_rate_where_the_answer_is_known():
     assert abs(rate - 1.0) < 0.08, (rate, se)
 
 
-def test_record_pvalue_is_the_t_pivot_of_the_record_anchors():
-    """A new record with as many windows as a fitting record: its anchor's p-value under the predictive record law
-    is the Student t pivot of the fitting records' anchors, (a - mean) / (s sqrt(1 + 1/J)) ~ t(J - 1), computed
-    here by hand (the between-record spread far above the anchors' sampling noise, where the posterior average
-    is the t law, upper tail); the bound at a level is the anchor whose p-value it is."""
+def test_record_pvalue_is_the_t_pivot_of_the_record_levels():
+    """A new record with as many windows as a fitting record: its level (log mean statistic) has, under the
+    predictive record law, the p-value of the Student t pivot of the fitting records' levels,
+    (l - mean) / (s sqrt(1 + 1/J)) ~ t(J - 1), upper tail, computed here by hand (the between-record spread far
+    above the levels' sampling noise, where the posterior average is the t law); the bound at a level is the record
+    level whose p-value it is."""
     rng = np.random.default_rng(5)
     j, per, nu = 8, 40, 150.0
     level = np.exp(0.5 * rng.standard_normal(j + 1))
     stat = [lev * rng.chisquare(nu, per) / nu for lev in level]
     th = ScaledChi2Threshold(0.01, shape="pooled").calibrate(np.concatenate(stat[:j]), independent=[per] * j,
                                                              groups=np.repeat(np.arange(j), per))
-    anchors = th.anchors_
+    levels = np.log([s.mean() for s in stat[:j]])
+    np.testing.assert_allclose(th.levels_, levels, rtol=1e-12)
     new = stat[j]
-    nu_hat = float(th.df_[0])
-    a = np.log(new.mean() / nu_hat * stats.chi2.isf(0.01, nu_hat))
-    t = (a - anchors.mean()) / (anchors.std(ddof=1) * np.sqrt(1 + 1 / j))
-    anchor, z, p = th.record_pvalue(new)
-    assert anchor == pytest.approx(a, rel=1e-12)
+    a = np.log(new.mean())
+    t = (a - levels.mean()) / (levels.std(ddof=1) * np.sqrt(1 + 1 / j))
+    lev, z, p = th.record_pvalue(new)
+    assert lev == pytest.approx(a, rel=1e-12)
     assert p == pytest.approx(stats.t.sf(t, j - 1), rel=1e-3)
     assert th.record_bound(p, per) == pytest.approx(a, rel=1e-3, abs=1e-4)
-    # a record's anchor far above the law: p below any usual level; far below: p near 1 (one-sided)
+    # a record far above the law: p below any usual level; far below: p near 1 (one-sided)
     assert th.record_pvalue(new * np.exp(3.0))[2] < 1e-4
     assert th.record_pvalue(new * np.exp(-3.0))[2] > 1 - 1e-3
 
