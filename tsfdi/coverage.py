@@ -53,11 +53,11 @@ class Coverage:
     table : pandas.DataFrame
         One row per summary, indexed by (``summary``, ``channel``) (of :func:`record_coverage`: see there);
         ``summary`` is ``"mean"`` (the signal's mean, the trim), ``"log_scale"`` (log root-mean-square residual) or
-        ``"acf1"``, ``"acf2"``, ... (Fisher z, ``arctanh``, of the residual autocorrelation at that lag). Columns: ``value`` (the new record's),
-        ``fit_mean``, ``fit_std``, ``fit_min``, ``fit_max`` (over the fitting records), ``lower``, ``upper`` (the
-        predictive interval at the per-summary level), ``t`` (predictive t statistic), ``pvalue`` (two-sided,
-        per summary), ``out`` (outside the interval), ``excess`` (``|t|`` over the interval's half-width in t
-        units: above 1 when out).
+        ``"acf1"``, ``"acf2"``, ... (Fisher z, ``arctanh``, of the residual autocorrelation at that lag).
+        Columns: ``value`` (the new record's), ``fit_mean``, ``fit_std``, ``fit_min``, ``fit_max`` (over the
+        fitting records), ``lower``, ``upper`` (the predictive interval at the per-summary level), ``t``
+        (predictive t statistic), ``pvalue`` (two-sided, per summary), ``out`` (outside the interval), ``excess``
+        (``|t|`` over the interval's half-width in t units: above 1 when out).
     records : int
         Fitting records the spread comes from.
     nobs : int
