@@ -110,25 +110,28 @@ def test_short_healthy_logs_calibrate_the_sprt():
         sprt_detector().calibrate([y[:330] for y in ys], [u[:330] for u in us], false_alarms_per_hour=60, fs=FS)
 
 
-@pytest.mark.slow
 def test_a_stream_calibrated_on_three_30s_logs_keeps_its_rate_on_ten_others():
-    """Monte Carlo (fixed seed): 25 times, three 30 s healthy logs set the thresholds for 60 false alarms per hour
-    (a stated upper bound: the 95 % bootstrap level over the records); ten new logs each run through the default
-    detector (freezing at its first alarm). A log of T = 30 s alarms with probability at most 1 - exp(-60 T / 3600):
-    the number of logs with an alarm stays below the upper end of the binomial band of that bound, and above the
-    lower end of the band of a quarter of the rate (the bound is not vacuous; 69 of 250 with this seed)."""
+    """Monte Carlo (fixed seed), the issue's acceptance: 100 times, three 30 s healthy logs set the threshold for
+    60 false alarms per flight hour; ten new 30 s logs then run through the calibrated detector without freezing
+    (the rate ``calibrate`` states is that of the statistic in normal operation). The rule: the pooled number of
+    alarm episodes over the 1,000 new logs (``false_alarms_per_hour()["all"]``) lies in the two-sided 99 %
+    binomial band of the stated rate over that exposure (an episode starts at one of the samples, probability
+    60 / (3600 fs) each). The stated rate is a predictive mean over new logs, so the band is two-sided. With this
+    seed: 528 episodes in 8.33 h (63.4 per hour; band 443-559); the old 95 % bound gave 264 (31.7 per hour).
+    The count is overdispersed (every calibration shares its threshold over ten logs; a log's alarms cluster):
+    over 300 repetitions the variance of a repetition's count was about 5.7 times its mean, so the band is the
+    project's yardstick, not a calibrated acceptance region."""
     rng = np.random.default_rng(2024)
-    reps, logs = 25, 10
-    alarmed = 0
+    reps, logs = 100, 10
+    episodes, samples = 0, 0
     for _ in range(reps):
         cal = [short_log(rng) for _ in range(3)]
-        det = sprt_detector().calibrate([c[0] for c in cal], [c[1] for c in cal], false_alarms_per_hour=60,
-                                        fs=FS)
+        det = sprt_detector(freeze_on_alarm=False).calibrate([c[0] for c in cal], [c[1] for c in cal],
+                                                             false_alarms_per_hour=60, fs=FS)
         for _ in range(logs):
             y, u = short_log(rng)
             det.reset()
-            alarmed += det.run(y, u).first_alarm is not None
-    n = reps * logs
-    p_stated = 1.0 - np.exp(-60.0 * 30.0 / 3600.0)
-    p_quarter = 1.0 - np.exp(-15.0 * 30.0 / 3600.0)
-    assert stats.binom.ppf(0.001, n, p_quarter) <= alarmed <= stats.binom.ppf(0.999, n, p_stated)
+            episodes += int(det.run(y, u).false_alarms_per_hour(FS).loc["all", "episodes"])
+            samples += len(y)
+    p = 60.0 / (3600.0 * FS)
+    assert stats.binom.ppf(0.005, samples, p) <= episodes <= stats.binom.ppf(0.995, samples, p)

@@ -36,8 +36,8 @@ _MIN_EMPIRICAL = 5.0     # expected episodes at the target rate needed for the e
 _MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
 _MIN_SPRT_RECORDS = 3    # armed (run, pair) records the SPRT calibration needs (its bootstrap draws records)
 _SPRT_BLOCK = 32         # samples per batch of the long-run variance in the SPRT scale of one record
-_SPRT_CONFIDENCE = 0.95  # the stated false-alarm band: its 5 % and 95 % bootstrap quantiles over records
-_SPRT_BOOTSTRAP = 200    # bootstrap draws of the healthy records
+_SPRT_BAND = (0.05, 0.5, 0.95)  # quantiles of a new log's false-alarm rate reported as ``rate_band``
+_SPRT_NODES = 400        # quantile nodes of the predictive law of a new log's Wald exponent
 _MIN_SPRT_CYCLES = 50    # restart cycles of the SPRT walk the calibration needs
 _TAIL_EPISODES = 20      # episodes above the base level of the tail fit
 _MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit accepts
@@ -1073,7 +1073,6 @@ class OnlineDetector:
         sprt = copy.copy(base)
         sprt.scale_ = h                              # the scaled walk has Wald's exponent 1
         lower = sprt.lower
-        k = len(self.pairs)
         walks = [(_cycle_maxima(h * z, lower), z.size / f_rec / _SECONDS_PER_HOUR) for z, f_rec in zip(zs, rates)]
         cycles = sum(m.size for m, _ in walks)
         if cycles < _MIN_SPRT_CYCLES:
@@ -1081,37 +1080,38 @@ class OnlineDetector:
                              f"least {_MIN_SPRT_CYCLES} are needed: give longer healthy runs (or check that they are "
                              "healthy)")
 
-        def fit(picked: list) -> tuple | None:
-            """Exponential tail of the cycle maxima: base level u, cycles above it per pair-hour, mean excess."""
-            m = np.sort(np.concatenate([walks[j][0] for j in picked]))
-            pair_hours = sum(walks[j][1] for j in picked)
-            n_u = min(_TAIL_EPISODES, m.size - 1)
-            if n_u < _MIN_TAIL_EPISODES:
-                return None
-            u = float(m[-n_u - 1])
-            return u, n_u / pair_hours, float(np.mean(m[-n_u:] - u)), n_u, pair_hours
+        # the tail of the cycle maxima of all records: base level u (the 21st highest), mean excess beta
+        m = np.sort(np.concatenate([mx for mx, _ in walks]))
+        n_u = _TAIL_EPISODES
+        u = float(m[-n_u - 1])
+        beta = float(np.mean(m[-n_u:] - u))
+        # the between-log effect: each record's own Wald exponent relative to the pooled one (1 after scaling);
+        # its log over records is normal, a new log's is predicted by Student's t (mean and spread estimated)
+        exps = []
+        for (i, pair, _, _), z in zip(records, zs):
+            try:
+                exps.append(_wald_exponent(h * z, f"healthy run {i}, pair {pair!r}"))
+            except ValueError as err:
+                raise ValueError(f"{err} (statistic='sprt' estimates the spread of the healthy logs from every "
+                                 "armed record)") from None
+        log_h = np.log(exps)
+        n_rec = log_h.size
+        spread = float(log_h.std(ddof=1)) * np.sqrt(1.0 + 1.0 / n_rec)
+        rel = np.exp(spread * stats.t.ppf((np.arange(_SPRT_NODES) + 0.5) / _SPRT_NODES, n_rec - 1))
 
-        def level(tail: tuple) -> float:
-            """Threshold whose expected alarms at ``rate`` (all pairs) are matched (mean-unbiased, as ``mean``)."""
-            u, per_hour, beta, n_u, pair_hours = tail
-            expected = rate / k * pair_hours
-            return u + beta * n_u * (((n_u + 1.0) / expected) ** (1.0 / n_u) - 1.0)
+        def per_hour(x: float, r: np.ndarray) -> np.ndarray:
+            """Alarms per flight hour at ``u + x`` of a new log with relative exponent ``r``, averaged over the
+            estimate of the mean excess (Gamma): n_u + 1 cycles above u on the healthy hours on average."""
+            return (n_u + 1.0) / hours * (1.0 + x * r / (n_u * beta)) ** -n_u
 
-        def rate_at(a: float, tail: tuple) -> float:
-            u, per_hour, beta, _, _ = tail
-            return float(k * per_hour * np.exp(-(a - u) / beta))
-
-        # the uncertainty of few records: the tail re-fitted on records drawn with replacement
-        gen = np.random.default_rng(0)
-        n_rec = len(zs)
-        tails = [t for t in (fit(list(gen.integers(0, n_rec, n_rec))) for _ in range(_SPRT_BOOTSTRAP)) if t]
-        levels = np.array([level(t) for t in tails])
-        whole = fit(list(range(n_rec)))
-        a = max(float(np.quantile(levels, _SPRT_CONFIDENCE)), level(whole))
+        x_min = -n_u * beta / float(rel.max()) * (1.0 - 1e-12)
+        x = optimize.brentq(lambda v: np.log(per_hour(v, rel).mean()) - np.log(rate), x_min, 1e3 * (abs(u) + n_u * beta),
+                            rtol=1e-12)
+        a = u + float(x)
         if not a > 0:
             raise ValueError(f"false_alarms_per_hour={rate:g} needs an SPRT threshold of {a:.4g}, not positive: "
                              "require fewer false alarms")
-        band = np.quantile([rate_at(a, t) for t in tails], [1.0 - _SPRT_CONFIDENCE, 0.5, _SPRT_CONFIDENCE])
+        band = np.quantile(per_hour(x, rel), _SPRT_BAND)
         self.threshold = a
         self._options["threshold"] = a
         self.sprt = sprt
@@ -1120,7 +1120,7 @@ class OnlineDetector:
             false_alarms_per_hour=rate, healthy_hours=hours, runs=len(ys), threshold=a, glrt_threshold=None,
             estimator="sprt cycle maxima", source_rates={"sprt": rate}, expected_episodes=rate * hours,
             healthy_episodes=int(sum((m >= a).sum() for m, _ in walks)),
-            tail={"sprt": {"u": whole[0], "n_u": whole[3], "beta": whole[2]}},
+            tail={"sprt": {"u": u, "n_u": n_u, "beta": beta, "log_exponent_sd": float(log_h.std(ddof=1))}},
             rate_band=tuple(float(b) for b in band), sprt_scale=h)
         self.reset()
         return self
