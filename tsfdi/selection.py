@@ -14,7 +14,7 @@ Nothing is refitted order by order. The regressor ``[const, -y[t-1], ..., -y[t-m
 grouped by lag, so one upper-triangular factor ``R`` of it gives every nested fit (see
 :func:`tsfdi.models.lstsq.nested_fits`). For AR and VAR models ``R`` is the Cholesky factor of the lag-product
 Gram matrix, computed in ``O(N max_lags)`` from lag products with end corrections, and the Gram matrix, its factor
-and the nested fits come from one compiled call (the spec's ``nested_fits``); when that factor loses digits
+and the nested fits come from compiled code (the spec's ``nested_fits``); when that factor loses digits
 (ill-conditioned regressor) it is recomputed by a QR decomposition of the regressor.
 
 Everything runs in the units of the model spec (:attr:`tsfdi.AR.y_scale`: each channel divided by a power of

@@ -129,7 +129,8 @@ def _scalar_stable(a):  # pragma: no cover - compiled
         d = 1.0 - k * k
         for i in range(m - 1):
             tmp[i] = (c[i] - k * c[m - 2 - i]) / d
-        c[:m - 1] = tmp[:m - 1]
+        for i in range(m - 1):              # (a loop: a slice assignment costs seconds to compile)
+            c[i] = tmp[i]
     return True
 
 
@@ -389,8 +390,7 @@ class LinearTimeSeriesModel:
 
         The regressor is grouped by lag, so one upper-triangular factor ``R`` of ``[X | Y]`` gives every order
         (:func:`~tsfdi.models.lstsq.nested_fits`). An AR / VAR computes its Gram matrix (:meth:`gram`, kept), the
-        Cholesky factor and the nested fits in one compiled call
-        (:func:`~tsfdi.models.lstsq.lag_gram_fits`); an ARX factors :meth:`gram` by
+        Cholesky factor and the nested fits in compiled code (:func:`~tsfdi.models.lstsq.lag_gram_fits`); an ARX factors :meth:`gram` by
         :func:`~tsfdi.models.lstsq.triangular_factor`. When the Cholesky factor loses digits (a column keeps less
         than ``GRAM_RELATIVE_FLOOR`` of its energy) ``R`` comes from a QR decomposition of the explicit regressor,
         with an :class:`~tsfdi.exceptions.IllConditionedWarning` when that is ill-conditioned.

@@ -91,8 +91,9 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     q = len(sse)
     out = np.empty((7, q))
     exact = np.empty(q, dtype=np.bool_)
-    _criteria_kernel(np.asarray(sse, dtype=float), np.asarray(sss, dtype=float).reshape(-1), float(nobs),
-                     np.asarray(df_model).reshape(-1), np.asarray(peak, dtype=float),
+    # sss copied: a read-only or strided view (a Gram matrix's diagonal) would make numba build a second signature
+    _criteria_kernel(np.asarray(sse, dtype=float), np.array(sss, dtype=float).reshape(-1), float(nobs),
+                     np.array(df_model, dtype=float).reshape(-1), np.asarray(peak, dtype=float),
                      np.asarray(peak if own else scale, dtype=float), own, criterion == "logdet", out, exact)
     return dict(zip(("llf", "aic", "bic", "hqic", "rss_sss", "spp", "sigma2"), out), exact=exact)
 
@@ -155,7 +156,8 @@ def _criteria_kernel(sse, sss, nobs, df_model, peak, scale, own, logdet_bic, out
                 for i in range(s):
                     for j in range(s):
                         scaled[i, j] = sigma[i, j] / root[i] / root[j]
-                lam = np.linalg.eigvalsh(scaled)
+                with numba.objmode(lam="float64[:]"):      # rare: numpy's (a compiled eigvalsh costs seconds to build)
+                    lam = np.linalg.eigvalsh(scaled)
                 low = max(1.0, COLLINEAR_RTOL * lam.max())
                 ld = log_floor_sum
                 exact[r] = False

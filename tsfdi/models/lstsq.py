@@ -165,8 +165,8 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
 
 
 def lag_gram_fits(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """:func:`lag_gram` and the residual cross products of the nested fits of every order ``1..lags`` in one compiled
-    call, or ``None`` for those when the Cholesky factor of the Gram matrix loses digits.
+    """:func:`lag_gram` and the residual cross products of the nested fits of every order ``1..lags`` (two compiled
+    calls), or ``None`` for those when the Cholesky factor of the Gram matrix loses digits.
 
     The nested fits are those of :func:`nested_fits` with the factor ``R`` of :func:`triangular_factor`'s Cholesky
     route: the factor by a Cholesky decomposition (:func:`_cholesky_upper`), accepted only when every column keeps
@@ -182,24 +182,22 @@ def lag_gram_fits(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -
     sse : ndarray, shape (p, s, s), or None
         ``sse[q - 1]``: residual cross products of the fit of order ``q``.
     """
-    x, starts, ends = _channel_rows(y if isinstance(y, list) else [y], lags)
-    s = x.shape[0]
-    gram = np.empty((int(const) + (lags + 1) * s,) * 2)
+    gram = lag_gram(y, lags, const=const)
+    s = (y[0] if isinstance(y, list) else y).shape[1]
     sse = np.empty((lags, s, s))
-    ok = _lag_gram_fits_kernel(x, starts, ends, lags, bool(const), GRAM_RELATIVE_FLOOR, gram, sse)
+    ok = _cholesky_fits(gram, s, bool(const), GRAM_RELATIVE_FLOOR, np.empty_like(gram), sse)
     return gram, sse if ok else None
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _lag_gram_fits_kernel(x, starts, ends, p, const, floor, gram, sse):  # pragma: no cover - compiled
-    """:func:`lag_gram_fits`: the Gram matrix into ``gram``, then its upper Cholesky factor ``R`` and the suffix sums
-    of the outer products of the rows of ``R[:, m:]`` (``m`` regressor columns) into ``sse``; ``False`` when the factor
-    fails the energy check (``sse`` left undefined)."""
-    _lag_gram_kernel(x, starts, ends, p, const, gram)
+@numba.njit(cache=True)
+def _cholesky_fits(gram, s, const, floor, R, sse):  # pragma: no cover - compiled
+    """:func:`lag_gram_fits` after the Gram matrix: its upper Cholesky factor ``R`` (:func:`_cholesky_upper`) and the
+    suffix sums of the outer products of the rows of ``R[:, m:]`` (``m`` regressor columns) into ``sse``; ``False``
+    when the factor fails the energy check (``sse`` left undefined). (Not one kernel with the Gram matrix: numba
+    would build that one's code a second time, seconds of compilation for microseconds.)"""
     n = gram.shape[0]
-    s = x.shape[0]
     m = n - s
-    R = np.empty((n, n))
+    p = sse.shape[0]
     if not _cholesky_upper(gram, floor, R):
         return False
     acc = np.zeros((s, s))
@@ -210,7 +208,9 @@ def _lag_gram_fits_kernel(x, starts, ends, p, const, floor, gram, sse):  # pragm
                 acc[a, b] += R[i, m + a] * R[i, m + b]
         q = (i - c) // s
         if (i - c) % s == 0 and 1 <= q <= p:
-            sse[q - 1] = acc
+            for a in range(s):
+                for b in range(s):
+                    sse[q - 1, a, b] = acc[a, b]
     return True
 
 
@@ -226,7 +226,9 @@ def _cholesky_upper(G, floor, R):  # pragma: no cover - compiled
     dominates at these sizes; a quarter of the passes over the trailing rows). Equal to LAPACK's ``potrf`` to
     rounding."""
     n = G.shape[0]
-    R[:] = G
+    for i in range(n):                      # (loops, not R[:] = G: a broadcast assignment costs seconds to compile)
+        for j in range(n):
+            R[i, j] = G[i, j]
     for i0 in range(0, n, 4):
         i1 = min(i0 + 4, n)
         for i in range(i0, i1):
@@ -288,9 +290,8 @@ def _lag_gram_kernel(x, starts, ends, p, const, out):  # pragma: no cover - comp
     _direct_lag_products(x, p, C, S0)
     hr = np.empty((nrec, p * s))
     tr = np.empty((nrec, p * s))
-    rows = 0
+    rows = (ends - starts).sum() - nrec * p     # (not a loop from a literal 0: numba would compile twice)
     for r in range(nrec):
-        rows += ends[r] - starts[r] - p
         for i in range(p):
             for a in range(s):
                 hr[r, i * s + a] = x[a, starts[r] + p - 1 - i]
@@ -313,13 +314,12 @@ def _direct_lag_products(x, p, C, S):  # pragma: no cover - compiled
             acc += x[a, u]
         S[a] = acc
     for a in range(s):
-        for b in range(0, s - 1, 2):
-            _lag_pass(x[a], x[b], x[b + 1], True, n, p, C[:, a, b], C[:, a, b + 1])
-        if s % 2:
-            _lag_pass(x[a], x[s - 1], x[s - 1], False, n, p, C[:, a, s - 1], C[:, a, s - 1])
+        for b in range(0, s, 2):
+            c = min(b + 1, s - 1)           # the next row, or none (c == b) after the last pair
+            _lag_pass(x[a], x[b], x[c], c > b, n, p, C[:, a, b], C[:, a, c])
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"}, inline="always")
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def _lag_pass(xa, xb, xc, two, n, p, cb, cc):  # pragma: no cover - compiled
     """``cb[k] = sum_u xa[u + k] xb[u]`` for ``k = 0..p`` and, when ``two``, ``cc[k]`` the same with ``xc``: four lags
     per pass over the samples all four have, then each lag's last samples."""
