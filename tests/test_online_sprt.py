@@ -97,7 +97,7 @@ def test_short_healthy_logs_calibrate_the_sprt():
     assert cal.healthy_hours == pytest.approx(3 * 37.0 / 3600) and cal.estimator == "sprt cycle maxima"
     assert det.threshold == cal.threshold > 0 and det.sprt.scale_ == cal.sprt_scale
     low, central, high = cal.rate_band
-    assert low <= central <= 60.0 and central <= high
+    assert low <= central <= 60.0 <= high     # a new log's rate: right-skewed, its mean the stated 60
     assert cal.tail["sprt"]["n_u"] == 20 and cal.healthy_episodes <= 3
     with pytest.raises(ValueError, match="fs .* is needed: healthy run 0"):
         sprt_detector().calibrate(ys, us, false_alarms_per_hour=60)
@@ -108,6 +108,18 @@ def test_short_healthy_logs_calibrate_the_sprt():
             [y[:, :1] for y in ys[:2]], [u[:, :1] for u in us[:2]], false_alarms_per_hour=60, fs=FS)
     with pytest.raises(ValueError, match="returned to its lower bound"), pytest.warns(ConvergenceWarning):
         sprt_detector().calibrate([y[:330] for y in ys], [u[:330] for u in us], false_alarms_per_hour=60, fs=FS)
+
+
+def test_sprt_calibration_refuses_a_record_too_short_for_its_own_exponent():
+    """The spread between logs comes from every armed record's own Wald exponent: a log whose pair armed too late
+    to estimate it is refused, naming the run, the pair and the samples needed (never dropped silently)."""
+    rng = np.random.default_rng(5)
+    logs = [short_log(rng, 37.0) for _ in range(3)]
+    ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
+    with pytest.raises(ValueError, match=r"healthy run 3, pair 'b': 123 armed samples, at least 320 are needed"):
+        sprt_detector().calibrate(ys + [ys[0][:500]], us + [us[0][:500]], false_alarms_per_hour=60, fs=FS)
+    det = sprt_detector().calibrate(ys + [ys[0][:700]], us + [us[0][:700]], false_alarms_per_hour=60, fs=FS)
+    assert det.calibration_.runs == 4 and det.calibration_.tail["sprt"]["log_exponent_sd"] > 0
 
 
 def test_a_stream_calibrated_on_three_30s_logs_keeps_its_rate_on_ten_others():

@@ -891,7 +891,8 @@ class OnlineDetector:
         :math:`\rho(x, r) = \frac{n_u + 1}{H}\big(1 + \frac{x r}{n_u\hat\beta}\big)^{-n_u}` alarms per flight hour
         (:math:`H` the healthy flight hours, all pairs; the Gamma law of :math:`\hat\beta` averaged over as in the
         exponential tail). The threshold :math:`a = u + x` solves :math:`E_r[\rho(x, r)] = \rho` (400 quantile
-        nodes of :math:`T`): the expected false-alarm rate of a new healthy log like the healthy ones equals
+        nodes of :math:`T`; a threshold below :math:`u`, for a rate above the healthy logs' top 21 cycles, takes
+        :math:`r = 1`): the expected false-alarm rate of a new healthy log like the healthy ones equals
         ``false_alarms_per_hour`` -- a predictive mean, not a bound, so over many logs the count falls on both
         sides of it. ``calibration_.rate_band`` gives the 5 %, 50 % and 95 % quantiles of :math:`\rho(x, r)`
         over :math:`r` (how far a single new log's rate may lie from the stated mean; right-skewed, the median
@@ -1112,10 +1113,11 @@ class OnlineDetector:
 
         def per_hour(x: float, r: np.ndarray) -> np.ndarray:
             """Alarms per flight hour at ``u + x`` of a new log with relative exponent ``r``, averaged over the
-            estimate of the mean excess (Gamma): n_u + 1 cycles above u on the healthy hours on average."""
-            return (n_u + 1.0) / hours * (1.0 + x * r / (n_u * beta)) ** -n_u
+            estimate of the mean excess (Gamma): n_u + 1 cycles above u on the healthy hours on average (below u,
+            x < 0, the pooled tail alone: the spread between logs is that of the tail beyond u)."""
+            return (n_u + 1.0) / hours * (1.0 + x * (r if x >= 0 else 1.0) / (n_u * beta)) ** -n_u * np.ones_like(r)
 
-        x_min = -n_u * beta / float(rel.max()) * (1.0 - 1e-12)
+        x_min = -n_u * beta * (1.0 - 1e-12)
         x = optimize.brentq(lambda v: np.log(per_hour(v, rel).mean()) - np.log(rate), x_min, 1e3 * (abs(u) + n_u * beta),
                             rtol=1e-12)
         a = u + float(x)
