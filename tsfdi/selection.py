@@ -171,7 +171,7 @@ class OrderSelection:
     @cached_property
     def selected(self) -> int:
         """Order with the smallest BIC."""
-        return int(self.orders[np.argmin(self.values["bic"])])
+        return int(self.orders[self.values["bic"].argmin()])
 
     @property
     def at_bound(self) -> bool:

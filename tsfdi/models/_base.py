@@ -207,8 +207,12 @@ class LinearTimeSeriesModel:
         self.hold_back = hold_back
         rows = sum([r.nobs for r in self.records]) - hold_back * len(self.records)
         cols = self.df_eq + self.neqs
-        def orders() -> str:    # the orders that set the size: na alone, or with nb / nk when the input's lags reach
-            return f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")   # furthest
+
+        def orders() -> str:
+            """The orders that set the size (na alone, or with nb / nk when the input's lags reach furthest), for the
+            messages: formatted only when one is raised."""
+            return f"{lag_name}={self.na}" + (f", nb={self.nb}, nk={self.nk}" if self.nb else "")
+
         if rows * cols > MAX_VALUES:
             check_size(rows * cols, f"{orders()} on {rows:,} regression rows: the regressor ({rows:,} x {cols:,})")
         minimum = hold_back + self.df_eq + 1
@@ -390,8 +394,8 @@ class LinearTimeSeriesModel:
 
         The regressor is grouped by lag, so one upper-triangular factor ``R`` of ``[X | Y]`` gives every order
         (:func:`~tsfdi.models.lstsq.nested_fits`). An AR / VAR computes its Gram matrix (:meth:`gram`, kept), the
-        Cholesky factor and the nested fits in compiled code (:func:`~tsfdi.models.lstsq.lag_gram_fits`); an ARX factors :meth:`gram` by
-        :func:`~tsfdi.models.lstsq.triangular_factor`. When the Cholesky factor loses digits (a column keeps less
+        Cholesky factor and the nested fits in compiled code (:func:`~tsfdi.models.lstsq.lag_gram_fits`); an ARX
+        factors :meth:`gram` by :func:`~tsfdi.models.lstsq.triangular_factor`. When the Cholesky factor loses digits (a column keeps less
         than ``GRAM_RELATIVE_FLOOR`` of its energy) ``R`` comes from a QR decomposition of the explicit regressor,
         with an :class:`~tsfdi.exceptions.IllConditionedWarning` when that is ill-conditioned.
 
