@@ -372,6 +372,9 @@ class ScaledChi2Threshold:
         The predictive law of a new record's anchor, at the point estimates: ``between_sd`` (:math:`\tau`),
         ``scale`` (:math:`\sqrt{\tau^2 + s^2 / J}`) and ``df`` (``J - 1``) of the posterior of
         :math:`\sigma^2`; ``None`` with ``record_effect="bootstrap"``, one record or pooled records.
+    levels_ : ndarray
+        With the predictive record law: each record's level, the log mean of its statistic (what
+        :meth:`record_pvalue` compares a new record's with).
     empirical_check_ : float or None
         The empirical :math:`1 - P_F` quantile of the sample when it holds at least ``10 / P_F`` independent
         windows (a check of the fitted law), else ``None``.
