@@ -4,14 +4,13 @@ alfa_detection.py, alfa_sensor_validation.py): the shared copy's selection, and 
 Needs ../shared/data/alfa (skipped without it, see ``shared_alfa`` in conftest.py).
 """
 
-import importlib.util
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from _scripts import load_script
 
 from tsfdi.datasets.alfa import list_alfa
 
@@ -19,11 +18,7 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 def benchmark(name: str):
-    spec = importlib.util.spec_from_file_location(f"{name}_data_bench", BENCHMARKS / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod                    # the dataclasses of a module look it up
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(f"benchmarks/{name}.py")
 
 
 def linked_copy(root: Path, shared: Path) -> Path:

@@ -4,23 +4,19 @@ Needs ../shared/data/crazypad (skipped without it, see ``shared_crazypad`` in co
 of the copy is read from its ``flights.csv``.
 """
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from _scripts import load_script
 
 CUT4 = "cut_propeller_M3_4mm_4mm_39mm"
 
 
 def load_benchmark():
     """A fresh import of benchmarks/crazypad.py, not yet pointed at a copy (its functions on names need none)."""
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "crazypad.py"
-    spec = importlib.util.spec_from_file_location("crazypad_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/crazypad.py")
 
 
 @pytest.fixture(scope="module")

@@ -7,11 +7,11 @@ run on small hand-made sites, so that it is known to fail when a figure or the l
 
 from __future__ import annotations
 
-import importlib.util
 import re
 from pathlib import Path
 
 import pytest
+from _scripts import load_script
 
 import tsfdi
 
@@ -20,10 +20,7 @@ DOCS = ROOT / "docs"
 
 
 def _load_check():
-    spec = importlib.util.spec_from_file_location("check_site", DOCS / "scripts" / "check_site.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("docs/scripts/check_site.py")
 
 
 check_site = _load_check()

@@ -13,6 +13,7 @@ import tsfdi
 from tsfdi.isolation import (STATUS, Isolation, IsolationSeries, ResidualSet, airspeed_from_gps,
                              airspeed_parity)
 from tests.conftest import as_kind, assert_kind, to_numpy
+from _scripts import load_script
 
 TABLE2 = pd.DataFrame([[1, 1, 0], [1, 0, 1], [0, 1, 1]], index=["R1", "R2", "R3"],
                       columns=["pitot", "gps2air", "thrust"])
@@ -256,15 +257,7 @@ def test_confirmed_equals_the_run_count():
 # ---------------------------------------------------------------------------------------------- benchmark 2 on ALFA
 def _bench(alfa=None):
     """benchmarks/alfa_isolation.py, reading the ALFA copy ``alfa`` (its functions on arrays need none)."""
-    import importlib.util
-    import sys
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "alfa_isolation.py"
-    spec = importlib.util.spec_from_file_location("alfa_isolation_bench", path)
-    bench = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = bench                  # the dataclasses of the module look it up
-    spec.loader.exec_module(bench)
+    bench = load_script("benchmarks/alfa_isolation.py")
     if alfa is not None:
         bench.DATA = alfa
     return bench

@@ -10,6 +10,7 @@ import tsfdi
 from tsfdi.detection.glrt import GLRT
 from tsfdi.models.recursive import RecursiveARX
 from tsfdi.online import OnlineDetector
+from _scripts import load_script
 
 
 def two_pairs(n=4000, change=3000, seed=0, bias=0.0, gain=0.0):
@@ -289,13 +290,7 @@ def test_mean_statistic_bad_input():
 def _alfa_benchmark(alfa=None):
     """benchmarks/alfa_detection.py, reading the ALFA copy ``alfa`` (the ``shared_alfa`` fixture; its functions on
     arrays need none)."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "alfa_detection.py"
-    spec = importlib.util.spec_from_file_location("alfa_detection_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = load_script("benchmarks/alfa_detection.py")
     if alfa is not None:
         mod.ROOT = alfa
     return mod

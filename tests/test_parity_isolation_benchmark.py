@@ -3,25 +3,18 @@ flags' mapping onto the residual grid, and the stated self-check bound."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from tsfdi.isolation import frozen_output
+from _scripts import load_script
 
 
 @pytest.fixture(scope="module")
 def bench():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "parity_isolation.py"
-    spec = importlib.util.spec_from_file_location("parity_isolation_bench", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/parity_isolation.py")
 
 
 def test_a_self_check_flag_completes_its_sensors_column(bench):

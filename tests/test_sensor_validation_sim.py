@@ -6,21 +6,16 @@ configurations' noise, and lags that never look ahead.
 """
 
 import copy
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tsfdi.datasets import simulate_hexacopter
+from _scripts import load_script
 
 
 def load_benchmark():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "sensor_validation_sim.py"
-    spec = importlib.util.spec_from_file_location("sensor_validation_sim_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/sensor_validation_sim.py")
 
 
 @pytest.fixture(scope="module")

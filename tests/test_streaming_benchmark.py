@@ -1,18 +1,13 @@
 """benchmarks/streaming.py (issue 34): its logs and its scoring, on a few short simulated logs."""
 
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _scripts import load_script
 
 
 def _streaming_benchmark():
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "streaming.py"
-    spec = importlib.util.spec_from_file_location("streaming_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/streaming.py")
 
 
 @pytest.mark.slow

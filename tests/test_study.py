@@ -3,26 +3,22 @@ a seed drawn at run time, printed in the report and stored nowhere else."""
 
 from __future__ import annotations
 
-import importlib.util
 import re
 import subprocess
 from pathlib import Path
 
 import pytest
+from _scripts import load_script
 
 from tsfdi.study import evaluation_seed
 
 ROOT = Path(__file__).resolve().parents[1]
-SCRIPT = ROOT / "docs" / "scripts" / "study.py"
 
 
 @pytest.fixture(scope="module")
 def study_script():
     """docs/scripts/study.py as a module (its main() is not run)."""
-    spec = importlib.util.spec_from_file_location("docs_study", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("docs/scripts/study.py")
 
 
 def test_evaluation_seed_is_drawn_anew():

@@ -10,6 +10,7 @@ from tsfdi import EmpiricalThreshold, RecursiveARX
 from tsfdi.detection.moving import MovingSquaredError, MovingSquaredErrorStream
 from tsfdi.models.emran import EMRAN
 from conftest import as_kind, assert_kind
+from _scripts import load_script
 
 
 def test_exported():
@@ -170,13 +171,7 @@ def test_alfa_benchmark_protocol(shared_alfa):
     """benchmarks/alfa_sensor_validation.py: fitting, calibration and held-out flights are disjoint (9 without
     failure, 18 + 18 pre-failure parts), the gyro's declared sensor noise is 0.02 deg/s, the added noise of a
     configuration is one draw per gyro update, and a record's statistic is the test's on its prediction errors."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "alfa_sensor_validation.py"
-    spec = importlib.util.spec_from_file_location("alfa_sensor_validation_bench", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    bench = load_script("benchmarks/alfa_sensor_validation.py")
     root = shared_alfa
     fit, calibration, held, names = bench.setup(root)
     assert (len(fit), len(calibration), len(held)) == (9, 18, 18)

@@ -11,8 +11,6 @@ extrapolate the record-to-record spread: its F test flags 5-15 % of new windows 
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,14 +18,11 @@ from scipy import stats
 
 import tsfdi
 from tsfdi.detection.threshold import ScaledChi2Threshold, records_needed
+from _scripts import load_script
 
 
 def _bench():
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "fleet_calibration.py"
-    spec = importlib.util.spec_from_file_location("fleet_calibration_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/fleet_calibration.py")
 
 
 FC = _bench()

@@ -3,8 +3,6 @@ approximation of known functions, agreement with the plain numpy loop of benchma
 equivalence, data kinds and bad input."""
 
 import copy
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,15 +10,12 @@ import pytest
 import tsfdi
 from tsfdi.models.emran import EMRAN
 from conftest import as_kind, assert_kind
+from _scripts import load_script
 
 
 @pytest.fixture(scope="module")
 def reference():
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "emran_throughput.py"
-    spec = importlib.util.spec_from_file_location("emran_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/emran_throughput.py")
 
 
 def test_exported():

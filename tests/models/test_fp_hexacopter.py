@@ -1,20 +1,15 @@
 """benchmarks/fp_hexacopter.py (issue 32): its functionally pooled trim model of the controller outputs and the
 identification rule built on it."""
 
-import importlib.util
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
+from _scripts import load_script
 
 
 def _benchmark():
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "fp_hexacopter.py"
-    spec = importlib.util.spec_from_file_location("fp_hexacopter_bench", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/fp_hexacopter.py")
 
 
 def _trim_records(B, rng, n_rec, offset_sd, noise_sd, n=4000):
