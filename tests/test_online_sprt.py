@@ -130,9 +130,8 @@ def test_a_stream_calibrated_on_three_30s_logs_keeps_its_rate_on_ten_others():
     binomial band of the stated rate over that exposure (an episode starts at one of the samples, probability
     60 / (3600 fs) each). The stated rate is a predictive mean over new logs, so the band is two-sided. With this
     seed: 528 episodes in 8.33 h (63.4 per hour; band 443-559); the old 95 % bound gave 264 (31.7 per hour).
-    The count is overdispersed (every calibration shares its threshold over ten logs; a log's alarms cluster):
-    over 300 repetitions the variance of a repetition's count was about 5.7 times its mean, so the band is the
-    project's yardstick, not a calibrated acceptance region."""
+    The count is overdispersed (every calibration shares its threshold over ten logs; a log's alarms cluster),
+    so the band is the project's yardstick, not a calibrated acceptance region."""
     rng = np.random.default_rng(2024)
     reps, logs = 100, 10
     episodes, samples = 0, 0
