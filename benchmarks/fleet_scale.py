@@ -79,6 +79,8 @@ from distributed.deploy.subprocess import SubprocessCluster  # noqa: E402
 import tsfdi  # noqa: E402
 from tsfdi.exceptions import UnstableModelWarning  # noqa: E402
 
+#: the smaller fleet of the memory section (and of the untimed warm-up): the driver at SMALL and --records
+SMALL = 200
 DURATION, FAILURE, CHUNK = 30.0, 5.0, 50
 #: the commit before issue 36 (dask workers' allocator, baselines sent once)
 PREVIOUS = "f9e25de"
@@ -195,7 +197,7 @@ def cluster(n: int, ds, base):
             Client(cl, set_as_default=False) as client:
         client.wait_for_workers(n)
         with client.as_current():
-            tsfdi.evaluate(balanced(ds, 200), base, **OPTIONS)
+            tsfdi.evaluate(balanced(ds, SMALL), base, **OPTIONS)
         yield cl, client
 
 
@@ -304,6 +306,9 @@ def main() -> None:
     ap.add_argument("--against", default=PREVIOUS, help="earlier commit whose dask runs are timed too ('': none)")
     ap.add_argument("--dask-only", nargs=2, type=Path, metavar=("STORE", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.records <= SMALL:
+        ap.error(f"--records must be above {SMALL}: the memory section compares the driver at {SMALL} records with "
+                 f"--records (got {args.records})")
     if args.dask_only:
         return dask_only(args.dask_only[0], args.repeat, args.dask_only[1])
     warnings.simplefilter("ignore", UnstableModelWarning)
@@ -366,8 +371,8 @@ def main() -> None:
           f"{len(reference.detection_delays)} delay rows)")
 
     with cluster(2, ds, base) as (two, _):
-        print(f"\ndriver memory (MB) at 200 and {n:,} records: the dask runs on the 2 workers, the serial one reading "
-              "the records into the driver")
+        print(f"\ndriver memory (MB) at {SMALL} and {n:,} records: the dask runs on the 2 workers, the serial one "
+              "reading the records into the driver")
         print(f"  {'call':<26} {'records':>8} {'traced peak':>12} {'held after':>11} {'RSS rise':>9} "
               f"{'per-record table':>17}")
         monitor = base.monitor("var", window="10s", test=per_channel(tsfdi.LjungBox, lags=20, alpha=1e-3))
@@ -380,7 +385,7 @@ def main() -> None:
                  "evaluate (serial)": (lambda d: evaluate(d[list(SIGNALS)].compute()), {})}
         peaks: dict = {}
         for name, (call, config) in calls.items():
-            for size in (200, n):
+            for size in (SMALL, n):
                 sub = balanced(ds, size) if size < n else ds
                 with dask.config.set(config), Client(two):
                     traced, held, rss, out = driver_memory(lambda: call(sub))
@@ -388,9 +393,9 @@ def main() -> None:
                 del out
                 peaks.setdefault(name, []).append((traced, table))
                 print(f"  {name:<26} {size:>8} {traced:>12.1f} {held:>11.1f} {rss:>9.1f} {table:>17.2f}")
-        data = (n - 200) * DURATION * 100 * 3 * 8 / 2**20
-        print(f"  200 -> {n} records: the records' float64 signals grow by {data:.0f} MB, their windows "
-              f"{n / 200:g}-fold")
+        data = (n - SMALL) * DURATION * 100 * 3 * 8 / 2**20
+        print(f"  {SMALL} -> {n} records: the records' float64 signals grow by {data:.0f} MB, their windows "
+              f"{n / SMALL:g}-fold")
         for name, ((p0, _), (p1, t1)) in peaks.items():
             print(f"    {name:<26} peak {p1 - p0:+7.1f} MB ({100 * (p1 - p0) / data:5.1f} % of the signals' growth)")
         (p0, _), (p1, t1) = peaks["evaluate (dask)"]
