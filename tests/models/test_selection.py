@@ -124,22 +124,21 @@ def test_gram_matches_explicit_cross_products():
 
 
 @pytest.mark.parametrize("const", [False, True])
-def test_lag_gram_fits_equal_the_cholesky_path(const):
-    """The fused kernel (Gram matrix, own Cholesky factor, nested fits in one call) against lag_gram + LAPACK's
-    factor (triangular_factor) + nested_fits, on the benchmark's shapes and on several records."""
+def test_cholesky_nested_fits_equal_the_lapack_path(const):
+    """The compiled route (own Cholesky factor and nested fits) against LAPACK's factor (triangular_factor) +
+    nested_fits, on the benchmark's shapes, several records, and ARX-like widths (groups wider than the targets)."""
     rng = np.random.default_rng(7)
     y6 = simulate_ar(TRUE_A6, 2000, rng)[:, None]
     Y = var4(3)
-    cases = [(y6, 50), (Y, 20), ([y6[:600], y6[600:1300], y6[1300:]], 13), ([Y[:500], Y[500:]], 7),
-             (rng.standard_normal((40, 2)), 5), (y6[:30], 1)]
-    for y, p in cases:
+    cases = [(y6, 50, 1), (Y, 20, 3), ([y6[:600], y6[600:1300], y6[1300:]], 13, 1), ([Y[:500], Y[500:]], 7, 3),
+             (rng.standard_normal((40, 2)), 5, 2), (y6[:30], 1, 1), (Y, 6, 1), (Y[:, :1], 12, 3)]
+    for y, p, group in cases:
         s = (y[0] if isinstance(y, list) else y).shape[1]
-        gram, sse = lstsq.lag_gram_fits(y, p, const=const)
-        ref_gram = lstsq.lag_gram(y, p, const=const)
-        np.testing.assert_array_equal(gram, ref_gram)
-        R = lstsq.triangular_factor(ref_gram, None, s)
-        ref = lstsq.nested_fits(R, s, int(const) + np.arange(1, p + 1) * s)
-        assert sse.shape == ref.shape == (p, s, s)
+        gram = lstsq.lag_gram(y, p, const=const)
+        widths = int(const) + np.arange(1, (gram.shape[0] - s - int(const)) // group + 1) * group
+        sse = lstsq.cholesky_nested_fits(gram, s, widths)
+        ref = lstsq.nested_fits(lstsq.triangular_factor(gram, None, s), s, widths)
+        assert sse.shape == ref.shape == (widths.size, s, s)
         np.testing.assert_allclose(sse, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())
 
 
@@ -189,7 +188,7 @@ def test_qr_fallback_for_ill_conditioned_regressors():
 
     R = lstsq.triangular_factor(gram, design)
     assert called, "the QR fallback was not used"
-    assert lstsq.lag_gram_fits(y[:, None], 10, const=False)[1] is None      # select_order's kernel declines too
+    assert lstsq.cholesky_nested_fits(gram, 1, np.arange(1, 11)) is None     # select_order's route declines too
     Rq = np.linalg.qr(design(), mode="r")
     np.testing.assert_allclose(np.abs(np.diag(R)), np.abs(np.diag(Rq)), rtol=1e-8)
     sel = tsfdi.select_order(y, 10)

@@ -25,7 +25,7 @@ from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning, UnstableModelWarning
 from tsfdi.models.archive import save as save_archive
 from tsfdi.models.criteria import EXACT_FIT_RTOL, information_criteria
-from tsfdi.models.lstsq import (MAX_VALUES, check_size, gram_factor, gram_solve, lag_gram, lag_gram_fits,
+from tsfdi.models.lstsq import (MAX_VALUES, check_size, cholesky_nested_fits, gram_factor, gram_solve, lag_gram,
                                 lag_residual_products, lagged_design, lstsq, nested_fits, triangular_factor)
 from tsfdi.summary import Summary
 
@@ -393,11 +393,11 @@ class LinearTimeSeriesModel:
         ``na = nb = q``). This is what :func:`tsfdi.select_order` tabulates.
 
         The regressor is grouped by lag, so one upper-triangular factor ``R`` of ``[X | Y]`` gives every order
-        (:func:`~tsfdi.models.lstsq.nested_fits`). An AR / VAR computes its Gram matrix (:meth:`gram`, kept), the
-        Cholesky factor and the nested fits in compiled code (:func:`~tsfdi.models.lstsq.lag_gram_fits`); an ARX
-        factors :meth:`gram` by :func:`~tsfdi.models.lstsq.triangular_factor`. When the Cholesky factor loses digits (a column keeps less
-        than ``GRAM_RELATIVE_FLOOR`` of its energy) ``R`` comes from a QR decomposition of the explicit regressor,
-        with an :class:`~tsfdi.exceptions.IllConditionedWarning` when that is ill-conditioned.
+        (:func:`~tsfdi.models.lstsq.nested_fits`): the Cholesky factor of :meth:`gram` and the nested fits in
+        compiled code (:func:`~tsfdi.models.lstsq.cholesky_nested_fits`). When that factor loses digits (a column
+        keeps less than ``GRAM_RELATIVE_FLOOR`` of its energy) ``R`` comes from a QR decomposition of the explicit
+        regressor (:func:`~tsfdi.models.lstsq.triangular_factor`), with an
+        :class:`~tsfdi.exceptions.IllConditionedWarning` when that is ill-conditioned.
 
         Parameters
         ----------
@@ -413,20 +413,11 @@ class LinearTimeSeriesModel:
         def design() -> np.ndarray:
             return np.hstack(self.design_all(scaled=True))
 
-        if self.nb == 0:
-            gram, sse = lag_gram_fits(self._lag_records(), self.na, const=bool(self.k_const))
-            if self._gram is None:
-                gram.setflags(write=False)
-                self._gram = gram
-            if sse is not None:
-                return sse
-            R = triangular_factor(None, design, s, stacklevel=stacklevel + 1)
-            group = s
-        else:
-            R = triangular_factor(self.gram(), design, s, stacklevel=stacklevel + 1)
-            group = s + self.n_inputs
-        widths = self.k_const + np.arange(1, min(self.na, self.nb or self.na) + 1) * group
-        return nested_fits(R, s, widths)
+        widths = self.k_const + np.arange(1, min(self.na, self.nb or self.na) + 1) * (s + self.n_inputs)
+        sse = cholesky_nested_fits(self.gram(), s, widths)
+        if sse is None:
+            sse = nested_fits(triangular_factor(None, design, s, stacklevel=stacklevel + 1), s, widths)
+        return sse
 
     def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
         """Fit criteria of fits on this spec's estimation sample, in the data's units

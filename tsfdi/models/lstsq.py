@@ -26,7 +26,7 @@ from scipy.linalg import blas, lapack
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "lag_gram_fits", "lag_products", "lag_residuals",
+__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "cholesky_nested_fits", "lag_products", "lag_residuals",
            "lag_residual_products", "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
@@ -164,53 +164,56 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
     return out
 
 
-def lag_gram_fits(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> tuple[np.ndarray, np.ndarray | None]:
-    """:func:`lag_gram` and the residual cross products of the nested fits of every order ``1..lags`` (two compiled
-    calls), or ``None`` for those when the Cholesky factor of the Gram matrix loses digits.
+def cholesky_nested_fits(gram: np.ndarray, n_targets: int, widths: np.ndarray) -> np.ndarray | None:
+    """:func:`nested_fits` of the Cholesky factor of ``gram`` in compiled code, or ``None`` when that factor loses
+    digits (the caller then factors the explicit regressor: :func:`triangular_factor` with no Gram matrix).
 
-    The nested fits are those of :func:`nested_fits` with the factor ``R`` of :func:`triangular_factor`'s Cholesky
-    route: the factor by a Cholesky decomposition (:func:`_cholesky_upper`), accepted only when every column keeps
-    more than ``GRAM_RELATIVE_FLOOR`` of its energy after projection on the columns before it (the check of
-    :func:`triangular_factor`); the residual cross products of order ``q`` are the suffix sums of the outer
-    products of the rows of ``R[:, m:]`` from row ``c + q s`` on. ``None`` sends the caller to
-    :func:`triangular_factor`'s QR route.
+    The factor comes from :func:`_cholesky_upper` (equal to LAPACK's ``potrf`` to rounding, faster at the sizes of
+    order selection), accepted only when every column keeps more than ``GRAM_RELATIVE_FLOOR`` of its energy after
+    projection on the columns before it (the check of :func:`triangular_factor`).
+
+    Parameters
+    ----------
+    gram : ndarray, shape (m + s, m + s)
+        Gram matrix of ``[X | Y]`` (``s = n_targets``).
+    n_targets : int
+        Number of target columns ``s``.
+    widths : ndarray of int, increasing
+        The nested fits' numbers of regressor columns.
 
     Returns
     -------
-    gram : ndarray, shape (c + (p + 1) s, c + (p + 1) s)
-        As :func:`lag_gram`.
-    sse : ndarray, shape (p, s, s), or None
-        ``sse[q - 1]``: residual cross products of the fit of order ``q``.
+    ndarray, shape (len(widths), s, s), or None
     """
-    gram = lag_gram(y, lags, const=const)
-    s = (y[0] if isinstance(y, list) else y).shape[1]
-    sse = np.empty((lags, s, s))
-    ok = _cholesky_fits(gram, s, bool(const), GRAM_RELATIVE_FLOOR, np.empty_like(gram), sse)
-    return gram, sse if ok else None
+    widths = np.asarray(widths, dtype=np.int64)
+    sse = np.empty((widths.size, n_targets, n_targets))
+    ok = _cholesky_fits(np.ascontiguousarray(gram, dtype=float), widths, GRAM_RELATIVE_FLOOR,
+                        np.empty(gram.shape), sse)
+    return sse if ok else None
 
 
 @numba.njit(cache=True)
-def _cholesky_fits(gram, s, const, floor, R, sse):  # pragma: no cover - compiled
-    """:func:`lag_gram_fits` after the Gram matrix: its upper Cholesky factor ``R`` (:func:`_cholesky_upper`) and the
-    suffix sums of the outer products of the rows of ``R[:, m:]`` (``m`` regressor columns) into ``sse``; ``False``
-    when the factor fails the energy check (``sse`` left undefined). (Not one kernel with the Gram matrix: numba
-    would build that one's code a second time, seconds of compilation for microseconds.)"""
-    n = gram.shape[0]
+def _cholesky_fits(gram, widths, floor, R, sse):  # pragma: no cover - compiled
+    """:func:`cholesky_nested_fits`: the upper Cholesky factor ``R`` of ``gram`` (:func:`_cholesky_upper`) and the
+    suffix sums of the outer products of the rows of ``R[:, m:]`` (``m`` regressor columns) from row ``widths[q]``
+    on into ``sse[q]``; ``False`` when the factor fails the energy check (``sse`` left undefined)."""
+    n, s = gram.shape[0], sse.shape[1]
     m = n - s
-    p = sse.shape[0]
     if not _cholesky_upper(gram, floor, R):
         return False
     acc = np.zeros((s, s))
-    c = 1 if const else 0
-    for i in range(n - 1, c - 1, -1):       # rows of R from the last up, as numpy's cumsum of the reversed rows
+    q = widths.shape[0] - 1
+    for i in range(n - 1, -1, -1):          # rows of R from the last up, as numpy's cumsum of the reversed rows
+        if q < 0:
+            break
         for a in range(max(i - m, 0), s):    # R[i, m + a] is zero below the diagonal (m + a < i)
             for b in range(max(i - m, 0), s):
                 acc[a, b] += R[i, m + a] * R[i, m + b]
-        q = (i - c) // s
-        if (i - c) % s == 0 and 1 <= q <= p:
+        while q >= 0 and widths[q] == i:
             for a in range(s):
                 for b in range(s):
-                    sse[q - 1, a, b] = acc[a, b]
+                    sse[q, a, b] = acc[a, b]
+            q -= 1
     return True
 
 
@@ -652,7 +655,8 @@ def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int 
         cond = np.linalg.cond(R[:m, :m])
         if not cond < COND_WARN:
             warnings.warn(f"the regressor of the largest order is ill-conditioned (condition number {cond:.3g}); "
-                          "criteria of the highest orders are not reliable", IllConditionedWarning, stacklevel=stacklevel)
+                          "criteria of the highest orders are not reliable", IllConditionedWarning,
+                          stacklevel=stacklevel)
     return R
 
 
