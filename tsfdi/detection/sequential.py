@@ -1661,8 +1661,8 @@ def _group_spread(F: list, R: np.ndarray, S: np.ndarray, group: list, dof: int) 
     q = S.shape[-1]
     inv = np.linalg.inv(S)
     # squared standardised deviations of the records from their model's centre, summed per model: (M, n)
-    m2 = np.array([np.einsum("tik,rti,rtk->t", inv, f - f.mean(axis=0), f - f.mean(axis=0), optimize=True)
-                   for f in F])
+    dev = [f - f.mean(axis=0) for f in F]
+    m2 = np.array([np.einsum("tik,rti,rtk->t", inv, d, d, optimize=True) for d in dev])
     labels = list(dict.fromkeys(group))
     member = np.array([[h == g for h in group] for g in labels], dtype=np.float64)       # (G, M)
     nu_g = member @ (R - 1.0)
