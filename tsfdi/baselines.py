@@ -118,8 +118,8 @@ class Records:
         if isinstance(data, xr.DataArray) and data.ndim == 3 and "record" in data.dims:
             # (xarray's transpose costs ~0.2 ms even when the dimensions are in order already)
             da = data if data.dims[:2] == ("record", "time") else data.transpose("record", "time", ...)
-            fs_ = _time_rate(da["time"].values, name) if fs is None else float_like(fs, "fs", minimum=0.0,
-                                                                                     strict_min=True)
+            fs_ = _time_rate(_coordinate(da, "time"), name) if fs is None else float_like(fs, "fs", minimum=0.0,
+                                                                                            strict_min=True)
             st, tb, ft, ids, lost = _labels(da, states, failure_times, turbulence, name)
             arr = np.asarray(da.values, dtype=np.float64)
             valid = ~lost
@@ -131,7 +131,7 @@ class Records:
                 finite[~finite] = [np.isfinite(arr[i]).all() for i in np.flatnonzero(~finite)]
                 valid &= finite
             vals = list(arr)
-            chans = tuple(str(c) for c in da[da.dims[2]].values)
+            chans = tuple(str(c) for c in _coordinate(da, da.dims[2]))
             return cls(vals, st, tb, ft, ids, valid, chans, fs_)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
             raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
@@ -238,7 +238,9 @@ def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: s
     keys = [k for k in ("state", "turbulence", "failure_time", "record") if k in data.coords]
     if "lost_control" in data.coords or (isinstance(data, xr.Dataset) and "lost_control" in data):
         keys.append("lost_control")
-    found = {k: data[k].values for k in keys}
+    # (the variables themselves: data[k] builds a DataArray with its coordinates for each, ~30x the cost)
+    variables = data.variables if isinstance(data, xr.Dataset) else data.coords.variables
+    found = {k: variables[k].values for k in keys}
 
     def coord(key, given, default):
         if given is not None:
@@ -254,10 +256,20 @@ def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: s
             coord("lost_control", None, False).astype(bool))
 
 
+def _coordinate(da: Any, dim: str) -> np.ndarray:
+    """The values of ``da[dim]``, read from the coordinate variable when there is one (``da[dim]`` builds a
+    DataArray with its coordinates first; without a coordinate it is the positions ``0, 1, ...``)."""
+    variable = da.coords.variables.get(dim)
+    return da[dim].values if variable is None else variable.values
+
+
 def _time_rate(time: np.ndarray, name: str) -> float:
     """Sampling frequency in Hz from a time coordinate in seconds (numbers), datetimes or timedeltas."""
-    idx = pd.Index(time)
-    if isinstance(idx, (pd.DatetimeIndex, pd.TimedeltaIndex)):
+    time = np.asarray(time)
+    idx = None if time.dtype.kind in "iuf" else pd.Index(time)     # (numbers: seconds, no index needed)
+    if idx is None:
+        dt = np.diff(time.astype(float))
+    elif isinstance(idx, (pd.DatetimeIndex, pd.TimedeltaIndex)):
         dt = np.asarray((idx[1:] - idx[:-1]).total_seconds())
     elif pd.api.types.is_numeric_dtype(idx.dtype) and not pd.api.types.is_bool_dtype(idx.dtype):
         dt = np.diff(np.asarray(idx, dtype=float))
@@ -784,8 +796,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     if per_cell is not None:
         seen: dict = {}
         chosen = []
-        for i in np.flatnonzero(ok):
-            key = (rec.state[i], rec.turbulence[i])
+        labels = list(zip(rec.state.tolist(), rec.turbulence.tolist()))     # (numpy scalar indexing costs more)
+        for i in np.flatnonzero(ok).tolist():
+            key = labels[i]
             if seen.get(key, 0) < per_cell and finite(i):
                 seen[key] = seen.get(key, 0) + 1
                 chosen.append(i)
