@@ -13,7 +13,8 @@ from conftest import as_kind
 from scipy import stats
 
 import tsfdi
-from tsfdi.coverage import ALL, MIN_RECORDS, Coverage, coverage, record_coverage, warn_if_not_covered
+from tsfdi.coverage import (ALL, MIN_RECORDS, Coverage, check_coverage, coverage, record_coverage,
+                            warn_if_not_covered)
 from tsfdi.exceptions import CoverageWarning, TsfdiWarning
 
 A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
@@ -315,3 +316,56 @@ def test_record_pvalues_of_every_part_hold_their_rate_on_the_fleet():
     lo, hi = stats.binom.ppf([0.0005, 0.9995], 2400, 0.01)
     for part, v in p.items():
         assert len(v) == 2400 and lo <= np.sum(np.array(v) < 0.01) <= hi, (part, np.sum(np.array(v) < 0.01), lo, hi)
+
+
+def test_detect_warns_and_keeps_the_coverage_of_an_uncovered_record(baseline, kind):
+    """detect (issue 31): a baseline fitted on 3 or more records judges whole records by the spread of its fitting
+    records' summaries; an out-of-fleet record warns naming detect, the summaries and what to do, and the decision
+    keeps the Coverage in details["coverage"] (that of coverage() itself); a covered record does not warn."""
+    b, _ = baseline
+    rng = np.random.default_rng(14)
+    names = ["roll", "pitch", "yaw"]
+    named = tsfdi.VAR([pd.DataFrame(r.values, columns=names) for r in b.model.records], 2, trend="c").fit() \
+        if kind != "numpy" else b
+    y = fleet(rng, 1, shift=0.8)[0]
+    with pytest.warns(CoverageWarning, match=r"detect: the record lies outside .*mean\[.*fit the baseline on flights"):
+        d = tsfdi.detect(as_kind(y, kind, names), named)
+    cov = d.details["coverage"]
+    pd.testing.assert_frame_equal(cov.table, coverage(named, as_kind(y, kind, names)).table)
+    assert not cov.covered and d.statistic.shape == (3,)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CoverageWarning)
+        ok = tsfdi.detect(as_kind(named.model.records[0].values, kind, names), named)
+    assert ok.details["coverage"].covered
+
+
+def test_detect_says_nothing_when_coverage_cannot_be_checked(baseline):
+    """One or two fitting records, or a signal shorter than every fitting record (a window): no check, no warning,
+    no "coverage" in details; the decision is that of the test."""
+    b, _ = baseline
+    rng = np.random.default_rng(15)
+    loud = fleet(rng, 1, noise=3.0)[0]
+    two = tsfdi.VAR(b.model.records[:2], 2, trend="c").fit()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CoverageWarning)
+        for res, y in ((two, loud), (b, loud[:1999])):
+            d = tsfdi.detect(y, res)
+            assert "coverage" not in d.details
+            np.testing.assert_array_equal(d.statistic, tsfdi.LjungBox().test(res.residuals(y)).statistic)
+
+
+def test_check_coverage_prefers_the_record_law_of_a_calibrated_test(calibrated):
+    """check_coverage: the record law of a test calibrated on 3 or more records when the record holds 3 of its
+    windows (the residuals computed when not given, named by the model's channels), else the summaries (a record
+    as long as the fitting records), else None (a shorter record; an uncalibrated test on a 2-record baseline)."""
+    b, test = calibrated
+    rng = np.random.default_rng(17)
+    y = fleet(rng, 1, noise=1.6)[0]
+    got = check_coverage(test, b, y)
+    ref = record_coverage(test, b.residuals(y))
+    np.testing.assert_allclose(got.table["pvalue"], ref.table["pvalue"], rtol=1e-12)
+    assert not got.covered and got.out.index[0][0] == "FTest"
+    pd.testing.assert_frame_equal(check_coverage(tsfdi.LjungBox(), b, y).table, coverage(b, y).table)
+    assert check_coverage(test, b, y[:598]) is None                  # 2 windows, shorter than the records
+    two = tsfdi.VAR(b.model.records[:2], 2, trend="c").fit()
+    assert check_coverage(tsfdi.LjungBox(), two, y) is None

@@ -531,3 +531,59 @@ def test_steady_window_longer_than_the_fault_records_is_refused(models, failure_
         _monitor(models, steady_window="70s")
     res = _monitor(models, steady_window="70s", steady_thresholds=[1.0, 1.0, 1.0][:failure_record.shape[1]])
     assert res.steady_window == 7000
+
+
+@pytest.fixture(scope="module")
+def fleet_baseline():
+    """A healthy VAR(2) on 8 records (3000 samples each) and an F test calibrated on their held-out residuals with
+    the predictive record law, for 200-sample windows."""
+    rng = np.random.default_rng(41)
+    spec = VAR([record("healthy", 3000, rng) for _ in range(8)], 2)
+    return spec.fit(), FTest(alpha=0.01, threshold="calibrated").calibrate(spec.held_out_residuals(), window=200), rng
+
+
+def test_run_and_screen_warn_of_a_record_the_baseline_does_not_cover(fleet_baseline):
+    """Monitor.run (issue 31): a record louder than the fitting records warns naming Monitor.run and the summaries
+    out, and MonitorResult.coverage holds the check: the detection test's record law when it carries one
+    (check_coverage), else the fitting records' summaries; screen has covered / outside per record and warns
+    naming the record; a record like the fitting ones is covered, without a warning."""
+    import warnings
+
+    from tsfdi.coverage import check_coverage, coverage
+    from tsfdi.exceptions import CoverageWarning
+
+    b, test, rng = fleet_baseline
+    ok, loud = record("healthy", 3000, rng), 1.5 * record("healthy", 3000, rng)
+    law = tsfdi.Monitor(b, window=200, step=100, fs=FS, detection_test=test)
+    plain = tsfdi.Monitor(b, window=200, step=100, fs=FS)
+    with pytest.warns(CoverageWarning, match=r"Monitor.run: the record lies outside .*FTest\[y0\]"):
+        res = law.run(loud)
+    pd.testing.assert_frame_equal(res.coverage.table, check_coverage(test, b, loud).table)
+    with pytest.warns(CoverageWarning, match=r"Monitor.run: the record lies outside .*log_scale\[all\]"):
+        res = plain.run(loud)
+    pd.testing.assert_frame_equal(res.coverage.table, coverage(b, loud).table)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CoverageWarning)
+        assert law.run(ok).coverage.covered and plain.run(ok).coverage.covered
+    with pytest.warns(CoverageWarning, match=r"Monitor.screen: record 1: the record lies outside .*FTest\[y0\]") as w:
+        table = law.screen([ok, loud])
+    assert len([x for x in w if issubclass(x.category, CoverageWarning)]) == 1
+    assert table["covered"].tolist() == [True, False] and str(table["covered"].dtype) == "boolean"
+    assert table["outside"].iloc[0] == "" and "FTest[y0]" in table["outside"].iloc[1]
+
+
+def test_monitor_says_nothing_when_coverage_cannot_be_checked(models, fleet_baseline):
+    """A baseline fitted on one record with an uncalibrated test, or a stream fed by update: coverage None, no
+    warning, screen's covered <NA>."""
+    import warnings
+
+    from tsfdi.exceptions import CoverageWarning
+
+    _, _, rng = fleet_baseline
+    loud = 3.0 * record("healthy", 3000, rng)
+    mon = _monitor(models)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CoverageWarning)
+        assert mon.run(loud).coverage is None
+        table = mon.screen([loud])
+    assert table["covered"].isna().all() and table["outside"].tolist() == [""]

@@ -15,6 +15,7 @@ whose false-alarm rate the calibration no longer bounds). :func:`warn_if_not_cov
 from __future__ import annotations
 
 import warnings
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,11 +23,11 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from tsfdi._data import as_signal
+from tsfdi._data import Signal, as_signal
 from tsfdi._validation import int_like, probability
 from tsfdi.exceptions import CoverageWarning
 
-__all__ = ["Coverage", "coverage", "record_coverage", "warn_if_not_covered", "MIN_RECORDS", "ALL"]
+__all__ = ["Coverage", "coverage", "record_coverage", "check_coverage", "warn_if_not_covered", "MIN_RECORDS", "ALL"]
 
 #: fitting records needed: the predictive law of a new record's summary is a t law with ``records - 1`` degrees of
 #: freedom, so two records give one degree of freedom (a Cauchy law whose intervals are too wide to warn of
@@ -108,6 +109,11 @@ def _summaries(y: np.ndarray, e: np.ndarray, lags: int) -> np.ndarray:
     return np.concatenate(out)
 
 
+#: results -> (lags, held_out given, its held-out residuals, the fitting records' summaries): one entry per (immutable)
+#: results object, so that judging many records against one baseline summarises its fitting records once
+_FIT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _index(channels: list, lags: int) -> pd.MultiIndex:
     chans = [str(c) for c in channels]
     rows = [(s, c) for s in ("mean", "log_scale") for c in chans] + ([("log_scale", ALL)] if len(chans) > 1 else [])
@@ -181,29 +187,11 @@ def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 
                          "more records")
     data = model.data
     k = data.nchan
-    if held_out is None:
-        held_out = model.held_out_residuals()
-    if isinstance(held_out, (str, bytes)) or not hasattr(held_out, "__len__") or len(held_out) != n:
-        raise ValueError(f"held_out must hold one residual series per fitting record ({n}), got "
-                         f"{len(held_out) if hasattr(held_out, '__len__') else type(held_out).__name__}")
     sig = as_signal(signal, name, min_nobs=model.max_lag + lags + 2, allow_constant=True)
     sig = sig.match_channels(data.channels, name, named=data.named)
-    new = _summaries(sig.values, np.asarray(results.residuals(sig.values), np.float64).reshape(-1, k), lags)
-    fit = []
-    for i, (rec, e) in enumerate(zip(records, held_out)):
-        e = np.asarray(e, dtype=np.float64)
-        e = e.reshape(e.shape[0], -1) if e.ndim else e
-        if e.ndim != 2 or e.shape[1] != k or e.shape[0] < lags + 2:
-            raise ValueError(f"held_out[{i}] must be a residual series of {k} channel(s) and at least {lags + 2} "
-                             f"samples, got shape {np.shape(e)}")
-        fit.append(_summaries(rec.values, e, lags))
-    F = np.array(fit)
     idx = _index(data.channels, lags)
-    bad = ~np.isfinite(F)
-    if bad.any():
-        i, j = np.argwhere(bad)[0]
-        raise ValueError(f"summary {idx[j][0]}[{idx[j][1]}] of fitting record {i} is not finite (a constant or "
-                         "perfectly predicted channel)")
+    F = _fit_summaries(results, held_out, lags, idx)
+    new = _summaries(sig.values, np.asarray(results.residuals(sig.values), np.float64).reshape(-1, k), lags)
     if not np.all(np.isfinite(new)):
         j = int(np.flatnonzero(~np.isfinite(new))[0])
         raise ValueError(f"{name}: summary {idx[j][0]}[{idx[j][1]}] is not finite (a constant or perfectly "
@@ -218,6 +206,40 @@ def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 
                           "fit_max": F.max(axis=0), "lower": centre - crit * scale, "upper": centre + crit * scale,
                           "t": t, "pvalue": p, "excess": np.abs(t) / crit}, index=idx)
     return _verdict(table, alpha, n, sig.nobs)
+
+
+def _fit_summaries(results: Any, held_out: Any, lags: int, idx: pd.MultiIndex) -> np.ndarray:
+    """The summaries of the fitting records of ``results`` (one row each) on their held-out residuals (``held_out``,
+    default ``results.model.held_out_residuals()``); kept for the next call with the same results, ``held_out`` and
+    ``lags``."""
+    known = _FIT.get(results)
+    if known is not None and known[0] == lags and known[1] is held_out:
+        return known[3]
+    model = results.model
+    records, k = model.records, model.data.nchan
+    n = len(records)
+    given = held_out
+    if held_out is None:
+        held_out = known[2] if known is not None and known[1] is None else model.held_out_residuals()
+    if isinstance(held_out, (str, bytes)) or not hasattr(held_out, "__len__") or len(held_out) != n:
+        raise ValueError(f"held_out must hold one residual series per fitting record ({n}), got "
+                         f"{len(held_out) if hasattr(held_out, '__len__') else type(held_out).__name__}")
+    fit = []
+    for i, (rec, e) in enumerate(zip(records, held_out)):
+        e = np.asarray(e, dtype=np.float64)
+        e = e.reshape(e.shape[0], -1) if e.ndim else e
+        if e.ndim != 2 or e.shape[1] != k or e.shape[0] < lags + 2:
+            raise ValueError(f"held_out[{i}] must be a residual series of {k} channel(s) and at least {lags + 2} "
+                             f"samples, got shape {np.shape(e)}")
+        fit.append(_summaries(rec.values, e, lags))
+    F = np.array(fit)
+    bad = ~np.isfinite(F)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"summary {idx[j][0]}[{idx[j][1]}] of fitting record {i} is not finite (a constant or "
+                         "perfectly predicted channel)")
+    _FIT[results] = (lags, given, held_out, F)
+    return F
 
 
 def _share(alpha: float, m: int) -> float:
@@ -340,6 +362,73 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
                           "excess": (levels - centre) / (upper - centre)},
                          index=pd.MultiIndex.from_tuples(index, names=["summary", "channel"]))
     return _verdict(table, alpha, parts[0].thresholds_[0].records_, sig.nobs)
+
+
+def check_coverage(test: Any, results: Any, signal: Any, *, resid: Any = None, held_out: Any = None,
+                   alpha: float = 0.01) -> Coverage | None:
+    """The coverage of a judged record by what its decision rests on, when that is enough to say; else ``None``.
+
+    What :func:`~tsfdi.detect`, :meth:`~tsfdi.Monitor.run` and :func:`~tsfdi.evaluate` check:
+
+    1. :func:`record_coverage` of ``test`` on the record's residuals when the test carries a predictive record law
+       (calibrated on held-out residuals of at least :data:`MIN_RECORDS` records) and the residuals hold at least
+       three windows of the calibrated length;
+    2. else :func:`coverage` of ``signal`` by ``results`` when they are an AR / VAR fitted on at least
+       :data:`MIN_RECORDS` records and ``signal`` is at least as long as the shortest of them (the summaries of a
+       shorter record are noisier than the fitting records' and would warn more often than ``alpha``);
+    3. else ``None``, at the cost of a few attribute look-ups (nothing is filtered).
+
+    Parameters
+    ----------
+    test : ResidualTest
+        The test of the decision.
+    results : fitted results
+        The baseline model.
+    signal : array_like, pandas, xarray or Signal
+        The record (time on axis 0).
+    resid : array_like, optional
+        The record's residuals through ``results`` when already computed (default: computed when the record law
+        applies).
+    held_out : sequence of residual series, optional
+        The fitting records' held-out residuals (:func:`coverage`; default computed once per ``results``).
+    alpha : float
+        False-warning rate of the check on a record like the fitting records.
+
+    Returns
+    -------
+    Coverage or None
+
+    Raises
+    ------
+    ValueError
+        The check applies but the record cannot be summarised (a constant channel: a non-finite summary).
+    """
+    nobs = signal.nobs if isinstance(signal, Signal) else len(signal)
+    model = getattr(results, "model", None)
+    window = _record_window(test)
+    if window is not None and nobs - int(getattr(results, "lags", 0)) >= 3 * window:
+        if resid is None:          # named by the model's channels (the warning names them)
+            resid = np.asarray(results.residuals(signal), dtype=np.float64)
+            resid = pd.DataFrame(resid.reshape(resid.shape[0], -1), columns=[str(c) for c in model.data.channels])
+        if np.shape(resid)[0] >= 3 * window:
+            return record_coverage(test, resid, alpha=alpha)
+    records = getattr(model, "records", None)
+    if (records is None or len(records) < MIN_RECORDS or getattr(model, "u_records", None) is not None
+            or nobs < min(r.nobs for r in records)):
+        return None
+    return coverage(results, signal, held_out=held_out, alpha=alpha)
+
+
+def _record_window(test: Any) -> int | None:
+    """The calibrated window of ``test`` when every part carries a predictive record law (:func:`record_coverage`
+    can judge a record with it), else ``None``."""
+    parts = getattr(test, "tests", (test,))
+    windows = {(getattr(p, "calibration_window_", None) or (None,))[0] for p in parts}
+    if len(windows) != 1 or None in windows or not all(
+            getattr(p, "thresholds_", None) and all(getattr(t, "record_law_", None) is not None
+                                                    for t in p.thresholds_) for p in parts):
+        return None
+    return int(windows.pop())
 
 
 def warn_if_not_covered(coverage: Coverage, where: str, *, stacklevel: int = 2) -> None:

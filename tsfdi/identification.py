@@ -9,6 +9,8 @@ ambiguity ("confusion between those types of failures"), none means no decision.
 
 from __future__ import annotations
 
+import dataclasses
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -17,9 +19,11 @@ import numpy as np
 import pandas as pd
 
 from tsfdi._data import Signal, as_signal, sampling_frequency, window_samples
+from tsfdi.coverage import check_coverage, warn_if_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.exceptions import CoverageWarning
 from tsfdi.models import ARXResults
 from tsfdi.summary import Summary
 from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
@@ -96,7 +100,19 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     Returns
     -------
     Decision
-        ``reject`` True means fault (H1).
+        ``reject`` True means fault (H1). ``details["coverage"]``: whether the baseline covers the record, a
+        :class:`~tsfdi.Coverage` (see Warns), when that can be said.
+
+    Warns
+    -----
+    CoverageWarning
+        The record lies outside the spread of the baseline's fitting records (:func:`tsfdi.coverage.check_coverage`:
+        an AR / VAR fitted on at least three records, ``signal`` at least as long as the shortest of them; a test
+        calibrated with a record law judges single windows here, too few for its own record-level check, which
+        :class:`~tsfdi.Monitor` and :func:`~tsfdi.evaluate` make). The warning names the summaries out: the
+        decision is not covered by the baseline (a fault, or a flight unlike the fitting ones: fit the baseline on
+        flights like it). Otherwise (fewer fitting records, a shorter signal) nothing is checked and ``details`` has
+        no ``"coverage"``; a record that cannot be summarised (a constant channel) is said in a ``CoverageWarning``.
 
     Raises
     ------
@@ -112,7 +128,16 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     sig = as_signal(signal, "signal", allow_constant=True)
     _check_model(baseline, "baseline", sig, "baseline")
     resid = _residuals(baseline, sig, u, "baseline")
-    return test.test(resid, **test.reference(baseline))
+    decision = test.test(resid, **test.reference(baseline))
+    try:
+        cov = check_coverage(test, baseline, sig, resid=resid)
+    except ValueError as err:
+        warnings.warn(f"detect: coverage not checked: {err}", CoverageWarning, stacklevel=2)
+        return decision
+    if cov is None:
+        return decision
+    warn_if_not_covered(cov, "detect")
+    return dataclasses.replace(decision, details={**decision.details, "coverage": cov})
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,9 @@ restarted SPRT of the healthy residuals detects and a restarted multi-hypothesis
 from __future__ import annotations
 
 import copy
+import dataclasses
 import datetime
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -21,9 +23,11 @@ import pandas as pd
 
 from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, option, probability
+from tsfdi.coverage import Coverage, check_coverage, warn_if_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.sequential import SPRT, msprt, renewal_walk
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.exceptions import CoverageWarning
 from tsfdi.models import ARXResults
 from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows
 
@@ -85,6 +89,11 @@ class MonitorResult:
     identification_time : float or None
         Time of the first ``"identification"`` event whose status is ``"identified"`` (with ``rule="sprt"``: the
         sequential decision, at its deciding sample).
+    coverage : Coverage or None
+        Of :meth:`Monitor.run`: whether the baseline covers the whole record (:func:`tsfdi.coverage.check_coverage`:
+        the detection test's record law, else the spread of the baseline's fitting records); ``None`` when that
+        cannot be said (one or two fitting records, a test without a record law, a short record) and for a stream
+        fed by :meth:`Monitor.update`.
     """
 
     events: list
@@ -96,6 +105,7 @@ class MonitorResult:
     fs: float | None = None
     steady_thresholds: np.ndarray | None = None
     identification_time: float | None = None
+    coverage: Coverage | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The events as a ``DataFrame`` (one row per event)."""
@@ -653,12 +663,33 @@ class Monitor:
         Returns
         -------
         MonitorResult
+            With :attr:`~MonitorResult.coverage`, whether the baseline covers the record.
+
+        Warns
+        -----
+        CoverageWarning
+            The record lies outside what the detection rests on (:func:`tsfdi.coverage.check_coverage`): the
+            predictive record law of a ``detection_test`` calibrated on held-out residuals of at least three records
+            (the record holding three of its windows), else the spread of the summaries of the baseline's fitting
+            records (an AR / VAR fitted on at least three records, the record at least as long as the shortest of
+            them). It names the summaries out: the record's decisions are not covered (a fault, or a flight unlike
+            the fitting ones: fit the baseline on flights like it). Nothing is checked (nor said) otherwise.
 
         Raises
         ------
         ValueError
             As :meth:`update`; also for a ``window`` longer than the signal (no window to test).
         """
+        res, unchecked = self._run(signal)
+        if unchecked:
+            warnings.warn(f"Monitor.run: coverage not checked: {unchecked}", CoverageWarning, stacklevel=2)
+        elif res.coverage is not None:
+            warn_if_not_covered(res.coverage, "Monitor.run")
+        return res
+
+    def _run(self, signal: Any) -> tuple:
+        """:meth:`run` without its warnings: the result, and why the coverage could not be checked ("" if it could
+        or need not be)."""
         self.reset()
         self.update(signal)
         nobs = self._offset + self._buffer.shape[0]
@@ -669,7 +700,12 @@ class Monitor:
             secs = (lambda n: f" ({n / self.fs:g} s)") if self.fs else (lambda n: "")
             raise ValueError(f"window ({self.window} samples{secs(self.window)}) is longer than the signal ({nobs} "
                              f"samples{secs(nobs)}): no window to test; give a shorter window or a longer signal")
-        return self.result()
+        res = self.result()
+        try:
+            cov = check_coverage(self.detection_test, self.baseline, as_signal(signal, "signal", allow_constant=True))
+        except ValueError as err:
+            return res, str(err)
+        return (res, "") if cov is None else (dataclasses.replace(res, coverage=cov), "")
 
     def screen(self, records: Any, *, progress: bool = False) -> pd.DataFrame:
         """Run the monitor over every record of many (offline, each from time 0 as :meth:`run`): one row per record.
@@ -693,8 +729,16 @@ class Monitor:
             Indexed by ``record`` (the ``record`` coordinate, else the position), with the other record coordinates of
             xarray input (``state``, ``turbulence``, ``failure_time``, ...), then ``windows`` (windows tested),
             ``fault_windows`` (windows the healthy model rejects), ``detection_time`` and ``steady_time`` (NaN without
-            the event) and ``label`` (:attr:`MonitorResult.label`, None without). ``detection_time`` is the time of the
-            first alarm (the end of the first rejected window), ready for :func:`tsfdi.score_records`.
+            the event), ``label`` (:attr:`MonitorResult.label`, None without), ``covered`` (whether the baseline
+            covers the record, :attr:`MonitorResult.coverage`; a nullable boolean, ``<NA>`` where that cannot be said)
+            and ``outside`` (the summaries of the record out of the fitting records' spread, ``""`` when none).
+            ``detection_time`` is the time of the first alarm (the end of the first rejected window), ready for
+            :func:`tsfdi.score_records`.
+
+        Warns
+        -----
+        CoverageWarning
+            One per record the baseline does not cover (as :meth:`run`), naming the record and its summaries out.
 
         Raises
         ------
@@ -718,8 +762,13 @@ class Monitor:
 
                 records = hexacopter_signals(records)
             parts = map_records(_screen_rows, records, self, progress=progress, desc="tsfdi screen")
-            return pd.concat(list(parts))
-        return _screen_rows(records, slice(0, None), self, progress=progress)
+            table = pd.concat(list(parts))
+        else:
+            table = _screen_rows(records, slice(0, None), self, progress=progress)
+        # the check ran where the records are; its warnings are said here, on the driver
+        for r, out in table["outside"][table["outside"] != ""].items():
+            warnings.warn(f"Monitor.screen: record {r}: {out}", CoverageWarning, stacklevel=2)
+        return table
 
     def result(self) -> MonitorResult:
         """Events and per-window table of everything fed so far."""
@@ -769,15 +818,20 @@ def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = 
     rows = []
     for i, x in enumerate(items):
         try:
-            res = m.run(x)
+            res, unchecked = m._run(x)
         except (TypeError, ValueError) as err:
             raise type(err)(f"records: record {index[i]}: {err}") from None
+        cov = res.coverage
+        outside = f"coverage not checked: {unchecked}" if unchecked else (
+            "" if cov is None or cov.covered else cov.warning_message())
         rows.append((len(res.windows), int(res.windows["fault"].sum()),
                      np.nan if res.detection_time is None else res.detection_time,
-                     np.nan if res.steady_time is None else res.steady_time, res.label))
-    windows, faults, detection, steady, label = zip(*rows)
+                     np.nan if res.steady_time is None else res.steady_time, res.label,
+                     pd.NA if cov is None else cov.covered, outside))
+    windows, faults, detection, steady, label, covered, outside = zip(*rows)
     index = pd.Index(index, name="record")
     table = {**coords, "windows": np.array(windows, dtype=np.int64), "fault_windows": np.array(faults, dtype=np.int64),
              "detection_time": np.array(detection, dtype=float), "steady_time": np.array(steady, dtype=float),
-             "label": pd.Series(label, index=index, dtype=object)}
+             "label": pd.Series(label, index=index, dtype=object),
+             "covered": pd.array(covered, dtype="boolean"), "outside": np.array(outside, dtype=object)}
     return pd.DataFrame(table, index=index)
