@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 import xarray as xr
 from _synthetic_fdi import FS
+from _synthetic_fdi import record as _synthetic_record
 from scipy import stats
 
 import tsfdi
@@ -337,3 +338,61 @@ def test_evaluate_with_paper_tests(synthetic, fitted):
         for name in ("identification_counts", "detection_counts", "detection_delays"):
             sub = getattr(ev, name).query("model == @m and method == 'variance'").reset_index(drop=True)
             pd.testing.assert_frame_equal(sub, getattr(one, name), check_exact=True, obj=name)
+
+
+def test_evaluate_warns_of_records_the_baselines_do_not_cover(synthetic):
+    """evaluate (issue 31): with 4 healthy fitting records the healthy part of every evaluated record (a healthy
+    record from settle s on) is judged by the spread of their summaries; a louder healthy record warns once naming
+    the record, model, method, window and the summaries out; Evaluation.coverage has a row per check, records its
+    covered column (<NA> for the fault records, whose healthy part is shorter than the fitting segments). The same
+    table, warning and counts from the records chunked on dask, where the check runs in the chunk's task; with the
+    test calibrated per state (record law of 4 records), the record law judges."""
+    import warnings
+
+    from tsfdi.coverage import coverage
+    from tsfdi.exceptions import CoverageWarning
+
+    recs, states, ft = synthetic
+    rng = np.random.default_rng(32)
+    loud = 1.6 * _synthetic_record("healthy", 4000, rng)
+    recs, states, ft = [*recs, loud], [*states, "healthy"], np.append(ft, np.nan)
+    kw = dict(states=states, failure_times=ft, fs=FS)
+    b = tsfdi.fit_baselines(recs, fit_records=4, settle=5.0, duration=None, max_lags=6, var_max_lags=6,
+                            steady_window="5s", calibrate=True, **kw)
+    opts = dict(models=("var",), tests={"whiteness": LjungBox(lags=20, alpha=1e-3)}, windows=("5s", "20s"),
+                settle=5.0, progress=False)
+    with pytest.warns(CoverageWarning, match=r"evaluate: record 15: model var, method whiteness, 5 s windows: the "
+                                             r"record lies outside .*log_scale\[all\].*fit the baseline on flights") as w:
+        ev = tsfdi.evaluate(recs, b, **kw, **opts)
+    assert len([x for x in w if issubclass(x.category, CoverageWarning)]) == 1
+    cov = ev.coverage
+    assert list(cov.columns) == ["record", "model", "method", "window", "covered", "pvalue", "records", "outside"]
+    assert cov["record"].tolist() == [4, 4, 15, 15] and cov["window"].tolist() == [5.0, 20.0, 5.0, 20.0]
+    assert cov["covered"].tolist() == [True, True, False, False] and (cov["records"] == 4).all()
+    ref = coverage(b.models["var"]["healthy"], loud[500:], held_out=b.heldout[("var", "healthy")])
+    assert cov["pvalue"].iloc[2] == pytest.approx(ref.pvalue, rel=1e-12)
+    covered = ev.records.set_index("record")["covered"]
+    assert str(covered.dtype) == "boolean" and not covered[15]
+    assert covered[4] and covered[[9, 14]].isna().all() and covered[list(b.fit_records)].isna().all()
+    x = xr.DataArray(np.stack(recs), dims=("record", "time", "channel"),
+                     coords={"state": ("record", states), "failure_time": ("record", ft),
+                             "time": np.arange(4000) / FS, "channel": ["y0", "y1"]}).chunk(record=4)
+    with pytest.warns(CoverageWarning, match=r"evaluate: record 15: "):
+        lazy = tsfdi.evaluate(x, b, **opts)
+    pd.testing.assert_frame_equal(lazy.coverage, cov)
+    pd.testing.assert_frame_equal(lazy.records, ev.records)
+    # a calibrated test: its record law judges (one row per window, each its own law)
+    cal = {"variance": FTest(alpha=0.01, threshold="calibrated")}
+    with pytest.warns(CoverageWarning, match=r"evaluate: record 15: .*FTest\[y0\]"):
+        law = tsfdi.evaluate(recs, b, **kw, **{**opts, "tests": cal, "windows": ("1s", "2s")})
+    # the fault records' healthy part (5 s before the failure) holds 5 windows of 1 s, 2 of 2 s: judged at 1 s only
+    assert law.coverage[["record", "window"]].values.tolist() == [[4, 1], [4, 2], [9, 1], [14, 1], [15, 1], [15, 2]]
+    assert law.coverage["covered"].tolist() == [True] * 4 + [False] * 2
+    assert law.coverage["outside"].str.contains("FTest").tolist() == [False] * 4 + [True] * 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CoverageWarning)
+        first = tsfdi.fit_baselines(recs, settle=5.0, duration=None, max_lags=6, var_max_lags=6,
+                                    steady_window="5s", **kw)
+        none = tsfdi.evaluate(recs, first, **kw, **opts)          # one fitting record per state: nothing checked
+    assert none.coverage.empty and list(none.coverage.columns) == list(cov.columns)
+    assert none.records["covered"].isna().all()

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
+import warnings
 import weakref
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
@@ -40,9 +41,11 @@ from scipy import stats
 from tsfdi._data import as_signal, refuse_masked, window_samples
 from tsfdi._validation import boolean, float_like, option
 from tsfdi.baselines import Baselines, Records
+from tsfdi.coverage import MIN_RECORDS, check_coverage
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.exceptions import CoverageWarning
 from tsfdi.summary import Summary
 from tsfdi.detection.sequential import msprt, msprt_scale
 from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
@@ -106,6 +109,12 @@ class Evaluation:
     sprt : dict
         The sequential rule's settings: ``alpha`` (the bound's error probability) and ``scale``, ``(turbulence,
         model)`` -> the scale correction of the log-likelihood ratios (1.0 without held-out residuals).
+    coverage : pandas.DataFrame
+        Whether the baselines cover each evaluated record's healthy part (:func:`tsfdi.coverage.check_coverage` of
+        the healthy model's detection test; see :func:`evaluate`): one row per ``record, model, method, window``
+        checked, with ``covered``, ``pvalue`` (the check's, alpha 0.01), ``records`` (fitting records behind it) and
+        ``outside`` (the warning: the summaries out, ``""`` when covered). Empty when nothing could be checked.
+        :attr:`records` has the column ``covered`` (every check of the record covered; ``<NA>`` where none ran).
 
     Notes
     -----
@@ -127,6 +136,7 @@ class Evaluation:
     calibration: pd.DataFrame = field(default_factory=pd.DataFrame)
     sequential_counts: pd.DataFrame = field(default_factory=pd.DataFrame)
     sprt: dict = field(default_factory=dict)
+    coverage: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     # -- identification
     def _percent(self, flags: dict, keys: Sequence[str] = ("model", "method", "window", "state")) -> pd.DataFrame:
@@ -425,7 +435,21 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     -------
     Evaluation
         The windows counted per distinct outcome (:attr:`Evaluation.identification_counts`,
-        :attr:`~Evaluation.detection_counts`, :attr:`~Evaluation.detection_delays`) and the rates read from them.
+        :attr:`~Evaluation.detection_counts`, :attr:`~Evaluation.detection_delays`) and the rates read from them;
+        whether the baselines cover each record (:attr:`Evaluation.coverage`, the ``covered`` column of
+        :attr:`~Evaluation.records`).
+
+    Warns
+    -----
+    CoverageWarning
+        One per evaluated record whose healthy part (all of a healthy record, a fault record's samples before the
+        failure; from ``settle`` s on, as the fitting segments start) the baselines do not cover, naming the record,
+        model, method, window and the summaries out (:func:`tsfdi.coverage.check_coverage`: the record law of a
+        detection test calibrated on held-out residuals of at least three healthy records, the part holding three
+        of its windows; else the spread of the summaries of the healthy model's fitting records, at least three,
+        the part at least as long as the shortest): its decisions are not covered by the baselines; fit them on
+        flights like it. Nothing is checked (nor said, nor spent) otherwise. The check runs where the records are
+        (on the dask workers for a chunked fleet); the warnings are said by the caller's process.
 
     Notes
     -----
@@ -511,7 +535,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                       for lvl, b in levels.items() for (m, meth) in tests for W in wins},
             "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
-            "detection": detection, "sprt": None}
+            "detection": detection, "sprt": None,
+            # the healthy model's fitting records' held-out residuals, for the summary check (kept by the baselines,
+            # else computed once here, not per record or worker): only where the check can run
+            "held_out": {(lvl, m): b.heldout.get((m, healthy)) or b.models[m][healthy].model.held_out_residuals()
+                         for lvl, b in levels.items() for m in models
+                         if len(b.models[m][healthy].model.records) >= MIN_RECORDS}}
     if sequential:
         plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): _sprt_scale(b, m) if b.heldout else 1.0
                                                        for lvl, b in levels.items() for m in models}}
@@ -524,7 +553,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
 
             iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
         for i in iterator:
-            _evaluate_record(rec.values[i], rec.state[i], rec.turbulence[i], rec.failure_time[i], plan, counts)
+            _evaluate_record(rec.values[i], rec.state[i], rec.turbulence[i], rec.failure_time[i], plan, counts, i)
     else:
         # records backed by dask: every chunk runs on the current dask scheduler and comes back as its counts, added
         # in record order: integer counts, so the tables are those of the loop above
@@ -544,8 +573,20 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     reasons = np.where(np.isin(rec.ids, list(fit)), "fitting record",
                        np.where(~rec.valid, "lost control / non-finite",
                                 np.where(use, "", "not selected")))
+    cover = pd.DataFrame(sorted(counts["coverage"], key=lambda row: row[0]), columns=["position", "model", "method", "window", "covered",
+                                                              "pvalue", "records", "outside"])
+    covered = pd.array([pd.NA] * len(rec.ids), dtype="boolean")
+    for i, part in cover.groupby("position", sort=True):
+        covered[i] = bool(part["covered"].all())
+        out = part[part["outside"] != ""]
+        if len(out):
+            warnings.warn(f"evaluate: record {rec.ids[i]}: " + "; ".join(
+                f"model {r.model}, method {r.method}, {r.window:g} s windows: {r.outside}" for r in out.itertuples()),
+                CoverageWarning, stacklevel=2)
+    cover.insert(0, "record", rec.ids[cover.pop("position").to_numpy(dtype=np.int64)])
+    cover = cover.astype({"covered": "boolean"})
     recs = pd.DataFrame({"record": rec.ids, "state": rec.state, "turbulence": rec.turbulence,
-                         "evaluated": use, "skipped": reasons})
+                         "evaluated": use, "skipped": reasons, "covered": covered})
     recs.attrs["healthy"] = healthy
     keys = ["turbulence", "model", "method", "window", "state"]
     ident = _count_table(counts["identification"], [*keys, *(f"acc_{f}" for f in faults),
@@ -582,7 +623,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                       rules=rules, alphas=alphas, lags=lag_of, records=recs,
                       nchan={m: len(first.model_channels(m)) for m in models},
                       thresholds="empirical" if empirical else "theoretical", calibration=pd.DataFrame(cal_rows),
-                      sequential_counts=seq,
+                      sequential_counts=seq, coverage=cover,
                       sprt={} if not sequential else {"alpha": sprt_alpha, "scale": {
                           ("" if lvl is None else lvl, m): v for (lvl, m), v in plan["sprt"]["scale"].items()}})
 
@@ -636,7 +677,8 @@ def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
 
 def _new_counts() -> dict:
     """Empty counts of :func:`evaluate`: identification and detection windows and delays per distinct outcome."""
-    return {"identification": Counter(), "detection": Counter(), "delays": Counter(), "sequential": Counter()}
+    return {"identification": Counter(), "detection": Counter(), "delays": Counter(), "sequential": Counter(),
+            "coverage": Counter()}
 
 
 def _count(counter: Counter, key: tuple, flags: np.ndarray, codes: Sequence = (), names: Sequence = ()) -> None:
@@ -683,16 +725,20 @@ def _count_table(counter: Counter, columns: list) -> pd.DataFrame:
         {**types, columns[-1]: np.int64})
 
 
-def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: dict, counts: dict) -> None:
+def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: dict, counts: dict,
+                     position: int) -> None:
     """Add the windows of one record (``evaluate``), every length, model and test, to ``counts``
-    (:func:`_new_counts`)."""
+    (:func:`_new_counts`); its coverage checks under its ``position`` in the records."""
     healthy, faults, fs, step_n = plan["healthy"], plan["faults"], plan["fs"], plan["step"]
     detection, rules = plan["detection"], plan["rules"]
     level = turb if plan["by_level"] else None
     is_fault = bool(state != healthy)
     names = [*faults, "ambiguous", "none"]
+    # the record's healthy part from settle s on, as the fitting segments: what the coverage check judges
+    part = slice(int(np.ceil(round(plan["settle"] * fs, 9))), int(np.floor(round(ft * fs, 9))) if is_fault else None)
     for m, (per_state, chans) in plan["models"][level].items():
         sig = as_signal(x_all[:, chans], "signal", allow_constant=True)
+        _check_coverage(sig.values[part], per_state[healthy], plan, (level, m), position, counts["coverage"])
         # each record is filtered once through every (member) model; the windows of every length and
         # test are slices of these residuals
         rw_h = ResidualWindows({healthy: per_state[healthy]})
@@ -737,13 +783,41 @@ def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: 
                 _count(counts["identification"], key, acc, codes, names)
 
 
+def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: int, out: Counter) -> None:
+    """The coverage checks of one record's healthy part ``x`` by the healthy model ``res`` of ``key`` (level,
+    model), one per method and window, into ``out`` (a row each): the record law of each calibrated detection test,
+    else the summary check, made once for every test without a record law."""
+    if x.shape[0] < 2:
+        return
+    level, m = key
+    done: dict = {}
+    for meth in plan["methods"]:
+        for W in plan["windows"]:
+            test = plan["tests"][(level, m, meth, W)][0]
+            memo = id(test) if test.calibrated else None
+            if memo not in done:
+                try:
+                    done[memo] = check_coverage(test, res, x, held_out=plan["held_out"].get(key))
+                except ValueError as err:
+                    done[memo] = f"coverage not checked: {err}"
+            cov = done[memo]
+            if cov is None:
+                continue
+            if isinstance(cov, str):
+                out[(position, m, meth, round(W / plan["fs"], 9), None, np.nan, 0, cov)] += 1
+            else:
+                out[(position, m, meth, round(W / plan["fs"], 9), cov.covered, cov.pvalue, cov.records,
+                     "" if cov.covered else cov.warning_message())] += 1
+
+
 def _evaluate_chunk(chunk: Any, where: slice, labels: Records, use: np.ndarray, plan: dict) -> tuple:
     """One chunk of records backed by dask, on a worker (``evaluate``): which of its records are valid, and the
-    counts of the windows of those evaluated."""
+    counts of the windows of those evaluated (and their coverage checks)."""
     rec = labels.read(where, chunk)
     counts = _new_counts()
     for j in np.flatnonzero(use[where] & rec.valid):
-        _evaluate_record(rec.values[j], rec.state[j], rec.turbulence[j], rec.failure_time[j], plan, counts)
+        _evaluate_record(rec.values[j], rec.state[j], rec.turbulence[j], rec.failure_time[j], plan, counts,
+                         where.start + j)
     return rec.valid, counts
 
 
