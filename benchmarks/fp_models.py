@@ -245,6 +245,10 @@ def report_depths(t: pd.DataFrame, all_depths: np.ndarray, inner: bool) -> None:
           f"{np.sqrt(np.mean((inner_d.k_hat - inner_d.depth) ** 2)):.2f} mm, coverage {inner_d.covers.mean():.0%} "
           f"({int(inner_d.covers.sum())}/{len(inner_d)})")
     log_cov = (np.abs(logs.k_hat - logs.depth) <= Z95 * logs.se).mean()
+    both = t[t.groupby("depth").drone.transform("nunique") == t.drone.nunique()]
+    print(f"  per airframe, on the {both.depth.nunique()} depths every airframe flew: " + ", ".join(
+        f"{drone} {len(g)} segments RMSE {np.sqrt(np.mean((g.k_hat - g.depth) ** 2)):.2f} mm, mean error "
+        f"{(g.k_hat - g.depth).mean():+.2f} mm" for drone, g in both.groupby("drone")))
     print(f"  per log (mean of its segments): RMSE {np.sqrt(np.mean((logs.k_hat - logs.depth) ** 2)):.2f} mm "
           f"over {len(logs)} logs, 95 % interval coverage {log_cov:.0%}; predicting the mean depth: RMSE "
           f"{np.sqrt(np.mean((all_depths - all_depths.mean()) ** 2)):.2f} mm")
