@@ -294,3 +294,9 @@ def test_detect_warns_when_the_baseline_does_not_cover_a_record(tmp_path, capsys
     capsys.readouterr()
     assert main(["detect", str(tmp_path / "noisy.csv"), "--baseline", str(tmp_path / "one.npz")]) == 0
     assert "outside the spread" not in capsys.readouterr().err
+    # monitor (issue 31): Monitor.run's check, said once per record naming the file, not the library's "Monitor.run"
+    assert main(["monitor", str(tmp_path / "like.csv"), str(tmp_path / "noisy.csv"), "--baseline",
+                 str(tmp_path / "base.npz"), "--window", "2s"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("warning:") == 1 and "noisy.csv" in err and "like.csv" not in err and "Monitor.run" not in err
+    assert f"against --baseline {tmp_path / 'base.npz'}" in err and "outside the spread" in err

@@ -628,7 +628,8 @@ def _detect(args: argparse.Namespace) -> int:
     if args.window is None:
         test = _tests(args, {}, None)
         data = _drop_short(data, *_min_samples(args, {"baseline": baseline}))
-        for i, frame, d in _each(data, lambda frame: detect(frame, baseline, test)):
+        # the library's own coverage warning ("detect: ...") is the one _warn_uncovered said above, naming the file
+        for i, frame, d in _each(data, lambda frame: _quiet(detect, frame, baseline, test)):
             print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.rec.fs:g} Hz, {frame.index[0]:g} s to "
                   f"{frame.index[-1]:g} s):\n{str(d.summary())}\n")
             per_channel = [np.atleast_1d(np.asarray(a))[None, :] for a in (d.statistic, d.threshold, d.pvalue,
@@ -670,6 +671,15 @@ def _warn_uncovered(path: str, baseline: Any, data: _Data) -> None:
             warnings.warn(f"{where}: coverage not checked: {exc}", CoverageWarning, stacklevel=2)
             continue
         warn_if_not_covered(cov, where)
+
+
+def _quiet(run: Callable, *args: Any) -> Any:
+    """``run(*args)`` without the library's coverage warnings (the command says them itself, naming the file)."""
+    from tsfdi.exceptions import CoverageWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CoverageWarning)
+        return run(*args)
 
 
 def _detect_rows(data: _Data, frame: pd.DataFrame, starts: Any, W: int, channels: Any, stat: Any, thr: Any,
@@ -822,6 +832,7 @@ def _monitor_sequential(args: argparse.Namespace, data: _Data, models: dict) -> 
          _monitor_args)
 def _monitor(args: argparse.Namespace) -> int:
     from tsfdi._data import window_samples
+    from tsfdi.coverage import warn_if_not_covered
     from tsfdi.monitoring import Monitor
 
     _check_out("--out", args.out)
@@ -855,7 +866,9 @@ def _monitor(args: argparse.Namespace) -> int:
             raise _reword(exc, data, (("steady_window", "--steady-window"), (" or steady_thresholds", ""))) from None
         raise ValueError(f"--baseline / --models: {exc}") from None
     rows = []
-    for i, frame, result in _each(data, monitor.run):
+    for i, frame, result in _each(data, lambda frame: _quiet(monitor.run, frame)):
+        if result.coverage is not None:       # Monitor.run's check, said naming the file
+            warn_if_not_covered(result.coverage, f"{data.rec.origin(i)} against --baseline {args.baseline}")
         events = result.to_frame()
         t0 = float(frame.index[0])
         for c in ("time", "window_start", "window_end"):       # times on the record's clock
