@@ -536,29 +536,43 @@ def _rolling_variance(x: np.ndarray, window: int, step: int) -> np.ndarray:
 @numba.njit(cache=True)
 def _window_variances(xt, starts, window, out):  # pragma: no cover - compiled
     """``out[w, c]``: variance of ``xt[c, starts[w]:starts[w] + window]`` from the running sums of ``x`` and ``x**2``
-    (the prefix sums of ``numpy.cumsum``, in its order, read only at the window edges), clipped at 0."""
+    (the prefix sums of ``numpy.cumsum``, in its order, read only at the window edges), clipped at 0. The sums run
+    from one window edge to the next in a branch-free loop (no test of every sample against the edges)."""
     k, n = xt.shape
-    for c in range(k):
-        s1 = 0.0
-        s2 = 0.0
-        w_lo = 0                    # next window whose start edge is due
-        w_hi = 0                    # next window whose end edge is due
-        a1 = np.empty(starts.size)
-        a2 = np.empty(starts.size)
-        for t in range(n + 1):
-            while w_lo < starts.size and starts[w_lo] == t:
-                a1[w_lo] = s1
-                a2[w_lo] = s2
-                w_lo += 1
-            while w_hi < starts.size and starts[w_hi] + window == t:
-                m = (s1 - a1[w_hi]) / window
-                v = (s2 - a2[w_hi]) / window - m * m
+    m = starts.size
+    s1 = np.zeros(k)
+    s2 = np.zeros(k)
+    a1 = np.empty((m, k))
+    a2 = np.empty((m, k))
+    w_lo = 0                    # next window whose start edge is due
+    w_hi = 0                    # next window whose end edge is due
+    t = 0
+    while True:
+        while w_lo < m and starts[w_lo] == t:
+            for c in range(k):
+                a1[w_lo, c] = s1[c]
+                a2[w_lo, c] = s2[c]
+            w_lo += 1
+        while w_hi < m and starts[w_hi] + window == t:
+            for c in range(k):
+                mean = (s1[c] - a1[w_hi, c]) / window
+                v = (s2[c] - a2[w_hi, c]) / window - mean * mean
                 out[w_hi, c] = 0.0 if v < 0.0 else v     # (NaN kept, as numpy.maximum)
-                w_hi += 1
-            if t < n:
-                v = xt[c, t]
-                s1 += v
-                s2 += v * v
+            w_hi += 1
+        if w_hi == m:
+            break
+        nxt = starts[w_hi] + window             # the next edge: a window's end, or an earlier start
+        if w_lo < m and starts[w_lo] < nxt:
+            nxt = starts[w_lo]
+        for c in range(k):
+            acc1, acc2 = s1[c], s2[c]
+            row = xt[c]
+            for u in range(t, nxt):
+                v = row[u]
+                acc1 += v
+                acc2 += v * v
+            s1[c], s2[c] = acc1, acc2
+        t = nxt
 
 
 def read_csv(path: Any, name: str = "path", **kwargs: Any) -> pd.DataFrame:
