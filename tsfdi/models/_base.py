@@ -8,7 +8,6 @@ defined by its model (data + options) and its parameters.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import warnings
 from functools import cached_property, partial
@@ -205,8 +204,10 @@ class LinearTimeSeriesModel:
         if hold_back < self.max_lag:
             raise ValueError(f"hold_back must be >= the largest lag ({self.max_lag}), got {hold_back}")
         self.hold_back = hold_back
-        rows = sum([r.nobs for r in self.records]) - hold_back * len(self.records)
-        cols = self.df_eq + self.neqs
+        nobs = [r.values.shape[0] for r in self.records]
+        rows = sum(nobs) - hold_back * len(nobs)
+        df_eq = self.df_eq
+        cols = df_eq + self.neqs
 
         def orders() -> str:
             """The orders that set the size (na alone, or with nb / nk when the input's lags reach furthest), for the
@@ -215,21 +216,21 @@ class LinearTimeSeriesModel:
 
         if rows * cols > MAX_VALUES:
             check_size(rows * cols, f"{orders()} on {rows:,} regression rows: the regressor ({rows:,} x {cols:,})")
-        minimum = hold_back + self.df_eq + 1
-        if not self.multi and self.data.nobs < minimum:
+        minimum = hold_back + df_eq + 1
+        if not self.multi and nobs[0] < minimum:
             held = (f"hold back {hold_back}" if hold_back > self.max_lag or not self.nb else
                     f"hold back {hold_back}, the largest lag {lag_name}," if hold_back == self.na else
                     f"hold back {hold_back}, the largest lag nk + nb - 1,")
-            raise ValueError(f"y is too short for {orders()}: {self.data.nobs} samples, at least "
-                             f"{minimum} are needed ({held} + {self.df_eq} parameters + 1)")
+            raise ValueError(f"y is too short for {orders()}: {nobs[0]} samples, at least "
+                             f"{minimum} are needed ({held} + {df_eq} parameters + 1)")
         if self.multi:
-            for i, r in enumerate(self.records):
-                if r.nobs <= hold_back:
-                    raise ValueError(f"y[{i}] is too short: {r.nobs} samples, at least {hold_back + 1} are needed "
+            for i, n in enumerate(nobs):
+                if n <= hold_back:
+                    raise ValueError(f"y[{i}] is too short: {n} samples, at least {hold_back + 1} are needed "
                                      f"(hold back {hold_back} + 1)")
-            if rows < self.df_eq + 1:
+            if rows < df_eq + 1:
                 raise ValueError(f"y is too short for {orders()}: {rows} usable samples in all records, "
-                                 f"at least {self.df_eq + 1} are needed ({self.df_eq} parameters + 1)")
+                                 f"at least {df_eq + 1} are needed ({df_eq} parameters + 1)")
         self._y_peak, self.y_scale, own = _channel_scale(self.records, "y", self.data.channels)
         self.u_scale = None
         if self.u_records is not None:
@@ -262,7 +263,8 @@ class LinearTimeSeriesModel:
         """
         top = self.na if not self.nb else min(self.na, self.nb)
         order = int_like(order, "order", minimum=1, maximum=top)
-        out = copy.copy(self)
+        out = object.__new__(type(self))           # (a shallow copy; copy.copy's reduce protocol costs more)
+        out.__dict__.update(self.__dict__)
         out.na, out.nb = order, order if self.nb else 0
         out.max_lag = max(out.na, out.nk + out.nb - 1 if out.nb else 0)
         k = out.df_eq
