@@ -361,8 +361,8 @@ def test_evaluate_warns_of_records_the_baselines_do_not_cover(synthetic):
                             steady_window="5s", calibrate=True, **kw)
     opts = dict(models=("var",), tests={"whiteness": LjungBox(lags=20, alpha=1e-3)}, windows=("5s", "20s"),
                 settle=5.0, progress=False)
-    with pytest.warns(CoverageWarning, match=r"evaluate: record 15: model var, method whiteness, 5 s windows: the "
-                                             r"record lies outside .*log_scale\[all\].*fit the baseline on flights") as w:
+    said = r"evaluate: record 15: model var, method whiteness, 5 s windows: the record lies outside .*log_scale"
+    with pytest.warns(CoverageWarning, match=said + r"\[all\].*fit the baseline on flights") as w:
         ev = tsfdi.evaluate(recs, b, **kw, **opts)
     assert len([x for x in w if issubclass(x.category, CoverageWarning)]) == 1
     cov = ev.coverage

@@ -536,10 +536,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
             "detection": detection, "sprt": None,
-            # the healthy model's fitting records' held-out residuals, for the summary check (kept by the baselines,
-            # else computed once here, not per record or worker): only where the check can run
-            "held_out": {(lvl, m): b.heldout.get((m, healthy)) or b.models[m][healthy].model.held_out_residuals()
-                         for lvl, b in levels.items() for m in models
+            # the healthy model's fitting records' held-out residuals, for the summary check: only where it can run
+            "held_out": {(lvl, m): _healthy_held_out(b, m) for lvl, b in levels.items() for m in models
                          if len(b.models[m][healthy].model.records) >= MIN_RECORDS}}
     if sequential:
         plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): _sprt_scale(b, m) if b.heldout else 1.0
@@ -573,8 +571,9 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     reasons = np.where(np.isin(rec.ids, list(fit)), "fitting record",
                        np.where(~rec.valid, "lost control / non-finite",
                                 np.where(use, "", "not selected")))
-    cover = pd.DataFrame(sorted(counts["coverage"], key=lambda row: row[0]), columns=["position", "model", "method", "window", "covered",
-                                                              "pvalue", "records", "outside"])
+    # the coverage checks, in record order (each record's in method and window order); warned of here, on the driver
+    cover = pd.DataFrame(sorted(counts["coverage"], key=lambda row: row[0]),
+                         columns=["position", "model", "method", "window", "covered", "pvalue", "records", "outside"])
     covered = pd.array([pd.NA] * len(rec.ids), dtype="boolean")
     for i, part in cover.groupby("position", sort=True):
         covered[i] = bool(part["covered"].all())
@@ -663,6 +662,23 @@ def _sprt_scale(base: Baselines, m: str) -> float:
         except ValueError as err:
             raise ValueError(f"the sequential rule cannot be scale-corrected for model {m!r} on the baselines' "
                              f"held-out residuals: {err}") from None
+    return known[m]
+
+
+#: Baselines -> {model: held-out residuals of the healthy model's fitting records}, for the coverage check of
+#: evaluate when the baselines do not keep them (calibrate=False): computed once per (immutable) baselines and model,
+#: on the driver, not per call, record or worker
+_HELD_OUT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _healthy_held_out(base: Baselines, m: str) -> list:
+    """The held-out residuals of the healthy model ``m``'s fitting records: the baselines' own, else computed once."""
+    kept = base.heldout.get((m, base.healthy))
+    if kept:
+        return kept
+    known = _HELD_OUT.setdefault(base, {})
+    if m not in known:
+        known[m] = base.models[m][base.healthy].model.held_out_residuals()
     return known[m]
 
 
