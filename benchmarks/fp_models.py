@@ -24,7 +24,7 @@ development machine, most of it the inner folds of section 2).
    coefficient) estimates nothing; ``--lags`` / ``--degree`` override it. Printed: per depth the estimates, and the
    RMSE of k_hat, the share of 95 % intervals that hold the true depth, per segment and per log (the mean of its
    segments' estimates), the coverage of the likelihood-ratio interval read off the profile curve, for pooled and
-   for per-point weighted least squares.
+   for per-point weighted least squares, and with one FP-VAR per airframe (the airframe as a logged second k).
    The curvature interval holds the record's noise and the FP coefficients' error, not the flight-to-flight spread
    of the depth's effect (airframe, session, the cut itself), so it undercovers. With pooled LS the benchmark adds
    a between-flight variance component, chosen inside each fold on its fitting depths only: each fitting depth
@@ -47,7 +47,7 @@ development machine, most of it the inner folds of section 2).
    logged. Tests of ``crazypad.py`` (``LB-S``, ``F-S``, ``M-S`` and ``LB+F+M``, ``tsfdi.AnyOf`` of the three, each
    at its Sidak share so that alpha is the decision's rate), calibrated on the baseline's held-out residuals;
    false-alarm rate at alpha 0.01 on disjoint 2 s windows with its two-sided 99 % binomial band (8 flights, 32
-   windows: the band is wide).
+   windows: the band is wide), and the rate of sliding 2 s windows (step 0.1 s, dependent: rate only).
 """
 
 from __future__ import annotations
@@ -246,9 +246,10 @@ def report_depths(t: pd.DataFrame, all_depths: np.ndarray, inner: bool) -> None:
           f"({int(inner_d.covers.sum())}/{len(inner_d)})")
     log_cov = (np.abs(logs.k_hat - logs.depth) <= Z95 * logs.se).mean()
     both = t[t.groupby("depth").drone.transform("nunique") == t.drone.nunique()]
-    print(f"  per airframe, on the {both.depth.nunique()} depths every airframe flew: " + ", ".join(
-        f"{drone} {len(g)} segments RMSE {np.sqrt(np.mean((g.k_hat - g.depth) ** 2)):.2f} mm, mean error "
-        f"{(g.k_hat - g.depth).mean():+.2f} mm" for drone, g in both.groupby("drone")))
+    if t.drone.nunique() > 1:
+        print(f"  per airframe, on the {both.depth.nunique()} depths every airframe flew: " + ", ".join(
+            f"{drone} {len(g)} segments RMSE {np.sqrt(np.mean((g.k_hat - g.depth) ** 2)):.2f} mm, mean error "
+            f"{(g.k_hat - g.depth).mean():+.2f} mm" for drone, g in both.groupby("drone")))
     print(f"  per log (mean of its segments): RMSE {np.sqrt(np.mean((logs.k_hat - logs.depth) ** 2)):.2f} mm "
           f"over {len(logs)} logs, 95 % interval coverage {log_cov:.0%}; predicting the mean depth: RMSE "
           f"{np.sqrt(np.mean((all_depths - all_depths.mean()) ** 2)):.2f} mm")
@@ -317,10 +318,12 @@ def healthy_baseline(kind: str, flights, ch, ks: dict) -> dict:
     return {d: cp.Model(res.at(k), ch.order, held) for d, k in ks.items()}
 
 
-def judge(models: dict, flights, ch, families=HEALTHY_TESTS, alpha: float = ALPHA, wsec: float = WINDOW_S) -> list:
-    """Rows (condition, drone, log, test, flagged, n) of the disjoint ``wsec`` windows of ``flights``, each
-    through its drone's model of ``models``; the tests calibrated on the held-out residuals (one calibration per
-    distinct model: the FP baseline's drones share theirs)."""
+def judge(models: dict, flights, ch, families=HEALTHY_TESTS, alpha: float = ALPHA, wsec: float = WINDOW_S,
+          steps=(WINDOW_S,)) -> list:
+    """Rows (condition, drone, log, step_s, test, flagged, n) of the ``wsec`` windows of ``flights`` every step of
+    ``steps`` (s; ``wsec``: disjoint windows), each flight through its drone's model of ``models``; the tests
+    calibrated on the held-out residuals (one calibration per distinct model: the FP baseline's drones share
+    theirs)."""
     window = cp.samples(wsec)
     calibrated = {}
     rows = []
@@ -329,14 +332,15 @@ def judge(models: dict, flights, ch, families=HEALTHY_TESTS, alpha: float = ALPH
         if id(model.held) not in calibrated:
             calibrated[id(model.held)] = cp.tests_for(model, families, alpha, window, True)
         tests = {fam: {"m": t} for fam, t in calibrated[id(model.held)].items()}
-        flagged, n = dict.fromkeys(families, 0), dict.fromkeys(families, 0)
-        for x in f.arrays(ch.channels):
-            fl = cp.flags({"m": model}, tests, x, window, window)
-            for fam in families:
-                flagged[fam] += int(fl[fam][1].sum())
-                n[fam] += int(fl[fam][1].shape[0])
-        rows += [{"condition": f.condition, "drone": f.drone, "log": f.log, "test": fam, "flagged": flagged[fam],
-                  "n": n[fam]} for fam in families]
+        for step_s in steps:
+            flagged, n = dict.fromkeys(families, 0), dict.fromkeys(families, 0)
+            for x in f.arrays(ch.channels):
+                fl = cp.flags({"m": model}, tests, x, window, cp.samples(step_s))
+                for fam in families:
+                    flagged[fam] += int(fl[fam][1].sum())
+                    n[fam] += int(fl[fam][1].shape[0])
+            rows += [{"condition": f.condition, "drone": f.drone, "log": f.log, "step_s": step_s, "test": fam,
+                      "flagged": flagged[fam], "n": n[fam]} for fam in families]
     return rows
 
 
@@ -348,8 +352,8 @@ def above_band(flagged: int, n: int, alpha: float = ALPHA) -> bool:
 
 def healthy_lofo(kind: str, folds=None) -> pd.DataFrame:
     """Leave one normal flight out over the normal flights of every drone: the choices (``crazypad.choose``) and the
-    ``kind`` baseline on the other flights, the held-out flight judged (``judge``); ``folds``: the held-out logs'
-    positions (default all)."""
+    ``kind`` baseline on the other flights, the held-out flight judged (``judge``: disjoint windows and sliding ones,
+    step ``crazypad.SLIDE_S``); ``folds``: the held-out logs' positions (default all)."""
     logs = cp.normal_logs()
     ks = airframe_k(f.drone for f in cp.load_condition(cp.NORMAL, (0.0, 0.0)))
     rows = []
@@ -357,8 +361,8 @@ def healthy_lofo(kind: str, folds=None) -> pd.DataFrame:
         ch = cp.choose(tuple(log for j, log in enumerate(logs) if j != i))
         flights = cp.load_condition(cp.NORMAL, ch.margin)
         models = healthy_baseline(kind, [f for f in flights if f.log != logs[i]], ch, ks)
-        rows += [{**r, "baseline": kind, "fold": i} for r in judge(models, [f for f in flights if f.log == logs[i]],
-                                                                  ch)]
+        held_out = [f for f in flights if f.log == logs[i]]
+        rows += [{**r, "baseline": kind, "fold": i} for r in judge(models, held_out, ch, steps=(WINDOW_S, cp.SLIDE_S))]
     return pd.DataFrame(rows)
 
 
@@ -371,11 +375,16 @@ def rate_line(g: pd.DataFrame, alpha: float = ALPHA) -> str:
 
 def report_healthy(fa: pd.DataFrame) -> None:
     for kind, d in fa.groupby("baseline", sort=False):
+        slide = d[(d.step_s != WINDOW_S) & (d.test == DETECTOR)]
+        d = d[d.step_s == WINDOW_S]
         print(f"  -- {kind} baseline: disjoint {WINDOW_S:g} s windows, alpha {ALPHA:g} (expected rate alpha)")
         for fam in HEALTHY_TESTS:
             print(f"    {fam:<7} {rate_line(d[d.test == fam])}")
         for drone, g in d[d.test == DETECTOR].groupby("drone"):
             print(f"    {DETECTOR} {drone} flights: {rate_line(g)}")
+        for step_s, g in slide.groupby("step_s"):
+            print(f"    {DETECTOR} sliding, step {step_s:g} s (dependent windows, rate only): "
+                  f"{int(g.flagged.sum())}/{int(g.n.sum())} = {100 * g.flagged.sum() / g.n.sum():.2f} %")
         det = d[d.test == DETECTOR]
         up = [r.log for r in det.itertuples() if above_band(r.flagged, r.n)]
         print(f"    flights above their own 99 % band ({DETECTOR}): {len(up)}/{len(det)}"
@@ -408,6 +417,12 @@ def crazypad(lags=None, degree=None) -> None:
                 print(f"  {depth:5.1f}  {len(g):8d}  {g.k_hat.mean():10.2f}  {g.se.median():9.2f}  "
                       f"{g.covers.mean():7.0%}  {g.at_bound.mean():10.0%}")
         report_depths(t, depths, weights == "pooled")
+    print("  -- the airframe as a second operating parameter (it is logged): one FP-VAR per airframe, the same as "
+          "k = (depth, airframe) with tensor degree (degree, 1); pooled LS, leave one depth out within the airframe")
+    for drone in sorted({s.drone for s in data}):
+        own = [s for s in data if s.drone == drone]
+        print(f"  {drone} ({len({s.depth for s in own})} depths):")
+        report_depths(depth_folds(own, lags, degree, inner=False), np.array([s.depth for s in own]), False)
 
     print(f"\n  detection of the cut flights by a healthy baseline (normal flights of both airframes, never a cut "
           f"flight: every depth is unseen), {DETECTOR}, alpha {ALPHA:g}, disjoint {WINDOW_S:g} s windows; a flight "
@@ -426,7 +441,7 @@ def crazypad(lags=None, degree=None) -> None:
             up = sum(above_band(r.flagged, r.n) for r in g.itertuples())
             print(f"     {depth:5.1f}  {x:3d}/{n:<3d} = {100 * x / n:5.1f} %  {up}/{len(g)}")
         x, n = int(det.flagged.sum()), int(det.n.sum())
-        ref = fa[(fa.baseline == kind) & (fa.test == DETECTOR)]
+        ref = fa[(fa.baseline == kind) & (fa.test == DETECTOR) & (fa.step_s == WINDOW_S)]
         print(f"     all    {x:3d}/{n:<3d} = {100 * x / n:5.1f} %  "
               f"{sum(above_band(r.flagged, r.n) for r in det.itertuples())}/{len(det)}; normal flights (leave one "
               f"flight out, section 3): {rate_line(ref)}, {sum(above_band(r.flagged, r.n) for r in ref.itertuples())}"

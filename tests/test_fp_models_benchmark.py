@@ -86,16 +86,23 @@ def test_fp_baseline_is_one_var_per_airframe_with_held_out_logs(bench, choice):
         bench.healthy_baseline("fp", [f for f in flights if f.drone == "E8"] + own[:1], choice, ks)
 
 
-def test_healthy_lofo_judges_the_held_out_flight_only(bench):
+def test_healthy_lofo_judges_the_held_out_flight_only(bench, capsys):
     logs = bench.cp.normal_logs()
     e9 = next(i for i, log in enumerate(logs) if log.startswith("E9"))
     fa = pd.concat([bench.healthy_lofo(kind, folds=[e9]) for kind in ("pooled", "fp")])
     assert set(fa.log) == {logs[e9]} and set(fa.drone) == {"E9"} and set(fa.baseline) == {"pooled", "fp"}
-    assert set(fa.test) == set(bench.HEALTHY_TESTS)
-    assert (fa.n == 4).all()                          # two segments of ~5 s: two disjoint 2 s windows each
+    assert set(fa.test) == set(bench.HEALTHY_TESTS) and set(fa.step_s) == {2.0, bench.cp.SLIDE_S}
+    disjoint = fa[fa.step_s == 2.0]
+    assert (disjoint.n == 4).all()                    # two segments of ~5 s: two disjoint 2 s windows each
+    assert (fa[fa.step_s == bench.cp.SLIDE_S].n > 50).all()
     assert ((fa.flagged >= 0) & (fa.flagged <= fa.n)).all()
-    line = bench.rate_line(fa[fa.test == bench.DETECTOR])
+    line = bench.rate_line(disjoint[disjoint.test == bench.DETECTOR])
     assert "99 % band" in line and line.split()[-1] in ("band", "ABOVE", "below")
+    bench.report_healthy(fa)
+    out = capsys.readouterr().out
+    assert "pooled baseline" in out and "fp baseline" in out
+    n = int(disjoint[(disjoint.baseline == "fp") & (disjoint.test == bench.DETECTOR)].n.sum())
+    assert f"/{n:<4d} = " in out and "sliding, step 0.1 s" in out    # the band on the disjoint windows only
 
 
 def test_the_spread_of_a_fold_is_chosen_on_its_fitting_depths(bench, choice):
