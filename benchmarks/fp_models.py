@@ -198,8 +198,9 @@ def per_log(t: pd.DataFrame) -> pd.DataFrame:
 
 def spread(t: pd.DataFrame) -> tuple:
     """Between-flight variance components (mm^2) from held-out estimates ``t``: the moment estimate
-    ``max(0, mean(err^2 - se^2))`` per segment and per log (the mean of its segments)."""
-    t = t.assign(tau2=0.0, tau2_log=0.0)
+    ``max(0, mean(err^2 - se^2))`` per segment and per log (the mean of its segments), over the estimates with a
+    finite standard error (a curvature that failed gives none)."""
+    t = t[np.isfinite(t.se)].assign(tau2=0.0, tau2_log=0.0)
     logs = per_log(t)
     return (max(0.0, float(np.mean((t.k_hat - t.depth) ** 2 - t.se ** 2))),
             max(0.0, float(np.mean((logs.k_hat - logs.depth) ** 2 - logs.se ** 2))))

@@ -48,6 +48,8 @@ def test_spread_is_the_excess_of_the_squared_error_over_se2():
     assert bench.spread(t) == (0.0, 0.0)
     t = t.assign(k_hat=[3.0, 3.0, 1.0, 1.0])          # a flight-level error: the per-log component carries it
     assert bench.spread(t)[1] == pytest.approx(1.0 - 0.25 / 2)
+    extra = pd.DataFrame({"depth": [2.0], "condition": "c", "log": ["z"], "k_hat": [9.0], "se": [np.inf]})
+    assert bench.spread(pd.concat([t, extra])) == bench.spread(t)    # no interval: not -inf, not left to zero tau
 
 
 def test_a_flight_is_detected_above_its_binomial_band():
