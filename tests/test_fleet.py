@@ -271,24 +271,28 @@ def test_workers_keep_freed_memory_and_get_the_arguments_once(monkeypatch):
     """A worker started by dask's nanny (MALLOC_TRIM_THRESHOLD_=65536, which also fixes the mmap threshold at 128
     kB) maps and unmaps every 2 MB temporary: 200 of them cost about 100,000 page faults. map_records sets the
     worker's allocator first (worker_allocator): a few. The arguments go to the workers once: a second call with
-    equal arguments refers to them, new ones are sent."""
+    equal arguments refers to them, new ones are sent. The fleet, still lazy, goes to the workers once per call and
+    each chunk's task only names its records (issue 36: a task carrying its chunk's graph cost the driver and the
+    scheduler ~10 ms of CPU time per chunk, which two workers on two cores lack)."""
     data = xr.Dataset({"v": (("record", "time"), np.zeros((4, 3)))}).chunk(record=1)
     assert not tsfdi.fleet.worker_allocator()           # the driver is not a dask worker: left as it is
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
             Client(cluster) as client:
-        sent = []
-        scatter = client.scatter
-        monkeypatch.setattr(client, "scatter", lambda *a, **k: sent.append(a) or scatter(*a, **k))
+        sent, tasks = [], []
+        scatter, submit = client.scatter, client.submit
+        monkeypatch.setattr(client, "scatter", lambda *a, **k: sent.append(a[0][0]) or scatter(*a, **k))
+        monkeypatch.setattr(client, "submit", lambda *a, **k: tasks.append(a) or submit(*a, **k))
         faults = list(map_records(_churn, data, 2**21))
         assert max(faults[1:]) < 2_000, faults           # the first chunk: the heap grows once
+        assert len(tasks) == 4 and not any(dask.is_dask_collection(x) for t in tasks for x in t), tasks
         assert list(map_records(_allocator, data)) == [True] * 4
-        assert len(sent) == 2
         small = data.isel(record=slice(0, 2))
         for offset in (1.0, 1.0, 2.0, 1.0):
             assert [s for _, s in map_records(_square, small, offset)] == [offset, offset]
         assert list(map_records(_churn, data, 2**21)) != []
         # equal arguments sent once while among the last SCATTERED = 2 sets; older ones are released, sent again
-        assert [a[0][0] for a in sent] == [(2**21,), (), (1.0,), (2.0,), (2**21,)]
+        assert [a for a in sent if isinstance(a, tuple)] == [(2**21,), (), (1.0,), (2.0,), (2**21,)]
+        assert [len(a.record) for a in sent if isinstance(a, xr.Dataset)] == [4, 4, 2, 2, 2, 2, 4]
 
 
 # ---------------------------------------------------------------------------------------- the driver's memory
