@@ -8,7 +8,9 @@ it silently changes meaning. :func:`coverage` says when: it compares a few recor
 through a model *not* fitted on it (:meth:`~tsfdi.models.AR.held_out_residuals`), as the new record's are.
 :meth:`tsfdi.Baselines.covers` is the same check for a baseline's state model. :func:`record_coverage` checks a
 calibrated test's own statistics against the predictive record law its thresholds rest on (one-sided: the record
-whose false-alarm rate the calibration no longer bounds). :func:`warn_if_not_covered` emits a
+whose false-alarm rate the calibration no longer bounds). :func:`check_coverage` picks the one a decision's test and
+baseline allow (``None`` when neither): what :func:`~tsfdi.detect`, :meth:`~tsfdi.Monitor.run` and
+:func:`~tsfdi.evaluate` run on the records they judge. :func:`warn_if_not_covered` emits a
 :class:`~tsfdi.exceptions.CoverageWarning`.
 """
 
