@@ -366,6 +366,7 @@ def test_check_coverage_prefers_the_record_law_of_a_calibrated_test(calibrated):
     np.testing.assert_allclose(got.table["pvalue"], ref.table["pvalue"], rtol=1e-12)
     assert not got.covered and got.out.index[0][0] == "FTest"
     pd.testing.assert_frame_equal(check_coverage(tsfdi.LjungBox(), b, y).table, coverage(b, y).table)
-    assert check_coverage(test, b, y[:598]) is None                  # 2 windows, shorter than the records
+    assert check_coverage(test, b, y[:590]) is None                  # 2 windows, shorter than the records
+    assert not check_coverage(test, b, y[:600]).covered             # 3 windows of 198 residuals: the record law
     two = tsfdi.VAR(b.model.records[:2], 2, trend="c").fit()
     assert check_coverage(tsfdi.LjungBox(), two, y) is None

@@ -16,6 +16,7 @@ baseline allow (``None`` when neither): what :func:`~tsfdi.detect`, :meth:`~tsfd
 
 from __future__ import annotations
 
+import functools
 import warnings
 import weakref
 from dataclasses import dataclass
@@ -23,7 +24,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy import stats
+from scipy import special
 
 from tsfdi._data import Signal, as_signal
 from tsfdi._validation import int_like, probability
@@ -117,7 +118,12 @@ _FIT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _index(channels: list, lags: int) -> pd.MultiIndex:
-    chans = [str(c) for c in channels]
+    return _summary_index(tuple(str(c) for c in channels), lags).copy()     # a copy: its names may be set
+
+
+@functools.lru_cache(maxsize=64)
+def _summary_index(chans: tuple, lags: int) -> pd.MultiIndex:
+    """The summaries' index of :func:`_index` (kept: an index is immutable, and building one costs ~1 ms)."""
     rows = [(s, c) for s in ("mean", "log_scale") for c in chans] + ([("log_scale", ALL)] if len(chans) > 1 else [])
     rows += [(f"acf{j}", c) for j in range(1, lags + 1) for c in chans]
     return pd.MultiIndex.from_tuples(rows, names=["summary", "channel"])
@@ -202,12 +208,11 @@ def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 
     scale = sd * np.sqrt(1.0 + 1.0 / n)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(scale > 0, (new - centre) / scale, np.where(new == centre, 0.0, np.inf * np.sign(new - centre)))
-    p = 2.0 * stats.t.sf(np.abs(t), n - 1)
-    crit = float(stats.t.isf(_share(alpha, len(new)) / 2.0, n - 1))
-    table = pd.DataFrame({"value": new, "fit_mean": centre, "fit_std": sd, "fit_min": F.min(axis=0),
-                          "fit_max": F.max(axis=0), "lower": centre - crit * scale, "upper": centre + crit * scale,
-                          "t": t, "pvalue": p, "excess": np.abs(t) / crit}, index=idx)
-    return _verdict(table, alpha, n, sig.nobs)
+    p = 2.0 * special.stdtr(n - 1, -np.abs(t))                       # the t law's two tails (scipy.stats.t, faster)
+    crit = float(-special.stdtrit(n - 1, _share(alpha, len(new)) / 2.0))
+    return _verdict({"value": new, "fit_mean": centre, "fit_std": sd, "fit_min": F.min(axis=0),
+                     "fit_max": F.max(axis=0), "lower": centre - crit * scale, "upper": centre + crit * scale,
+                     "t": t, "pvalue": p, "excess": np.abs(t) / crit}, idx, alpha, n, sig.nobs)
 
 
 def _fit_summaries(results: Any, held_out: Any, lags: int, idx: pd.MultiIndex) -> np.ndarray:
@@ -249,16 +254,19 @@ def _share(alpha: float, m: int) -> float:
     return float(-np.expm1(np.log1p(-alpha) / m))
 
 
-def _verdict(table: pd.DataFrame, alpha: float, records: int, nobs: int) -> Coverage:
-    """The :class:`Coverage` of a summary table (its ``pvalue`` column per summary): a summary is out when its
-    p-value is below the Sidak share of ``alpha``; the family p-value is the Sidak-adjusted smallest one."""
-    m = len(table)
-    table = table.assign(out=table["pvalue"].to_numpy() < _share(alpha, m))[
-        ["value", "fit_mean", "fit_std", "fit_min", "fit_max", "lower", "upper", "t", "pvalue", "out", "excess"]]
-    pmin = float(table["pvalue"].min())
+def _verdict(columns: dict, index: pd.MultiIndex, alpha: float, records: int, nobs: int) -> Coverage:
+    """The :class:`Coverage` of the summaries' ``columns`` (arrays, one value per summary of ``index``; ``pvalue``
+    per summary): a summary is out when its p-value is below the Sidak share of ``alpha``; the family p-value is
+    the Sidak-adjusted smallest one. The table is built once (pandas' overhead counts once per judged record)."""
+    p = np.asarray(columns["pvalue"], dtype=np.float64)
+    m = p.size
+    out = p < _share(alpha, m)
+    table = pd.DataFrame({**{c: columns[c] for c in ("value", "fit_mean", "fit_std", "fit_min", "fit_max", "lower",
+                                                     "upper", "t", "pvalue")}, "out": out,
+                          "excess": columns["excess"]}, index=index)
+    pmin = float(p.min())
     family = float(-np.expm1(m * np.log1p(-pmin))) if pmin < 1 else 1.0
-    return Coverage(covered=not bool(table["out"].any()), pvalue=family, alpha=alpha, table=table, records=records,
-                    nobs=nobs)
+    return Coverage(covered=not bool(out.any()), pvalue=family, alpha=alpha, table=table, records=records, nobs=nobs)
 
 
 def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "resid") -> Coverage:
@@ -358,12 +366,12 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
     levels = np.array([r[0] for r in rows])
     centre = np.array([r[3].mean() for r in rows])
     upper = np.array([th.record_bound(share, windows) for *_, th, windows in rows])
-    table = pd.DataFrame({"value": levels, "fit_mean": centre, "fit_std": [r[3].std(ddof=1) for r in rows],
-                          "fit_min": [r[3].min() for r in rows], "fit_max": [r[3].max() for r in rows],
-                          "lower": -np.inf, "upper": upper, "t": [r[1] for r in rows], "pvalue": [r[2] for r in rows],
-                          "excess": (levels - centre) / (upper - centre)},
-                         index=pd.MultiIndex.from_tuples(index, names=["summary", "channel"]))
-    return _verdict(table, alpha, parts[0].thresholds_[0].records_, sig.nobs)
+    return _verdict({"value": levels, "fit_mean": centre, "fit_std": np.array([r[3].std(ddof=1) for r in rows]),
+                     "fit_min": np.array([r[3].min() for r in rows]), "fit_max": np.array([r[3].max() for r in rows]),
+                     "lower": np.full(len(rows), -np.inf), "upper": upper, "t": np.array([r[1] for r in rows]),
+                     "pvalue": np.array([r[2] for r in rows]), "excess": (levels - centre) / (upper - centre)},
+                    pd.MultiIndex.from_tuples(index, names=["summary", "channel"]), alpha,
+                    parts[0].thresholds_[0].records_, sig.nobs)
 
 
 def check_coverage(test: Any, results: Any, signal: Any, *, resid: Any = None, held_out: Any = None,
