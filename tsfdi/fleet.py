@@ -194,10 +194,12 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
 
     Notes
     -----
-    With a ``dask.distributed`` Client (the one ``dask.compute`` would use) every chunk is one task
-    (``Client.submit``), which reads the chunk on its worker (its part of ``data``'s graph, computed there by dask's
-    synchronous scheduler: one task per chunk for the cluster's scheduler, not one per variable and step of the
-    read), and at most ``AHEAD`` chunks per worker thread are in flight; the driver waits for the
+    With a ``dask.distributed`` Client (the one ``dask.compute`` would use) ``data``, still lazy (its graph, not its
+    records), is sent to every worker once per call (``Client.scatter(broadcast=True)``), and every chunk is one task
+    (``Client.submit``) that names its records: the worker selects them and reads them (their part of ``data``'s
+    graph, computed there by dask's synchronous scheduler: one task per chunk for the cluster's scheduler, not one
+    per variable and step of the read; the driver and the scheduler never handle the reads), and at most ``AHEAD``
+    chunks per worker thread are in flight; the driver waits for the
     oldest, so the results come in order and a slow chunk holds back at most that many. With the threads, processes
     or synchronous scheduler the chunks are computed ``AHEAD`` per worker at a time by ``dask.compute``. Either way
     the driver holds at most that many results at once, whatever the number of records. An exception raised by
