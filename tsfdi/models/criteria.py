@@ -86,16 +86,18 @@ def information_criteria(sse: np.ndarray, sss: np.ndarray, nobs: int, df_model: 
     exact order. ``exact`` flags those fits; the callers warn.
     """
     own = scale is None                                     # the data's own units: no weights
-    if peak is None:
-        peak = np.ones(neqs) if own else scale
-    q = len(sse)
+    peak = np.asarray((np.ones(neqs) if own else scale) if peak is None else peak, dtype=float)
+    sse = np.asarray(sse, dtype=float)
+    q = sse.shape[0]
     out = np.empty((7, q))
     exact = np.empty(q, dtype=np.bool_)
     # sss copied: a read-only or strided view (a Gram matrix's diagonal) would make numba build a second signature
-    _criteria_kernel(np.asarray(sse, dtype=float), np.array(sss, dtype=float).reshape(-1), float(nobs),
-                     np.array(df_model, dtype=float).reshape(-1), np.asarray(peak, dtype=float),
-                     np.asarray(peak if own else scale, dtype=float), own, criterion == "logdet", out, exact)
-    return dict(zip(("llf", "aic", "bic", "hqic", "rss_sss", "spp", "sigma2"), out), exact=exact)
+    _criteria_kernel(sse, np.array(sss, dtype=float).reshape(-1), float(nobs),
+                     np.array(df_model, dtype=float).reshape(-1), peak, peak if own else np.asarray(scale, dtype=float),
+                     own, criterion == "logdet", out, exact)
+    llf, aic, bic, hqic, rss_sss, spp, sigma2 = out
+    return {"llf": llf, "aic": aic, "bic": bic, "hqic": hqic, "rss_sss": rss_sss, "spp": spp, "sigma2": sigma2,
+            "exact": exact}
 
 
 @numba.njit(cache=True, error_model="numpy")
