@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import as_signal, is_xarray, refuse_masked, rolling_variance, sampling_frequency, window_samples
+from tsfdi._data import (Signal, as_signal, is_xarray, refuse_masked, rolling_variance, sampling_frequency,
+                         window_samples)
 from tsfdi._validation import boolean, float_like, int_like, option, probability
 from tsfdi.coverage import MIN_RECORDS, Coverage, coverage
 from tsfdi.detection.base import ResidualTest
@@ -823,8 +824,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     out: dict = {m: {} for m in names}
     sels: dict = {}
     segments: dict = {}
+    chosen_states = list(zip(chosen.tolist(), rec.state[chosen].tolist()))     # (numpy scalar indexing costs)
     for state in (healthy,) + faults:
-        idx = [i for i in chosen if rec.state[i] == state]
+        idx = [i for i, st in chosen_states if st == state]
         if not idx:
             raise ValueError(f"no valid fitting record for state {state!r}")
         segs = [_segment(rec, i, settle, duration) for i in idx]
@@ -835,7 +837,9 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         segments[state] = segs
         # the segments as the signals DataFrames / Series of them would give (pandas kind, RangeIndex, channel
         # names), validated once as arrays: building and reading the pandas objects cost more than the order search
-        sigs = [dataclasses.replace(as_signal(g, f"record {rec.ids[i]}", vector=True, allow_constant=True),
+        # (finite=False: the choice above checked every fitting record for non-finite values already)
+        sigs = [dataclasses.replace(as_signal(g, f"record {rec.ids[i]}", vector=True, allow_constant=True,
+                                              finite=False),
                                     kind="pandas", index=pd.RangeIndex(g.shape[0]), channels=list(rec.channels))
                 for i, g in zip(idx, segs)]
         # (each segment's channels as contiguous rows: numpy reduces axis 0 of an (n, k) array slowly for small k)
@@ -851,8 +855,10 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                 sel = select_order(sigs, var_max_lags, "var")
             else:
                 j = rec.channels.index(m)
-                sel = select_order([dataclasses.replace(g, values=np.ascontiguousarray(g.values[:, [j]]), vector=False,
-                                                        channels=[m], name=m) for g in sigs], max_lags, "ar")
+                # (Signal made directly: dataclasses.replace reads every field's definition each call)
+                sel = select_order([Signal(values=np.ascontiguousarray(g.values[:, [j]]), kind=g.kind, vector=False,
+                                           index=g.index, channels=[m], name=m, time_dim=g.time_dim,
+                                           channel_dim=g.channel_dim) for g in sigs], max_lags, "ar")
             sels[(m, state)] = sel
             p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
                 min(order, sel.max_lags)
