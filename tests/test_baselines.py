@@ -325,6 +325,23 @@ def test_records_validity_of_a_record_array():
         Records.from_data(list(v), states=["h"] * 5, check_finite="no")
 
 
+def test_records_rate_and_labels_from_the_coordinates():
+    """Records.from_data reads fs, the channel names and the labels of a (record, time, channel) array from its
+    coordinate variables: a time coordinate of any real dtype (float16 included, which a pandas index refuses), and
+    positions (1 Hz) and channels 0, 1, ... when there is no coordinate."""
+    xr = pytest.importorskip("xarray")
+    v = np.random.default_rng(0).standard_normal((3, 40, 2))
+    labels = {"state": ("record", ["h", "f", "f"]), "turbulence": ("record", ["light"] * 3)}
+    for dtype in (np.float16, np.float32, np.int64):
+        da = xr.DataArray(v, dims=("record", "time", "channel"),
+                          coords={"time": (np.arange(40) * 2).astype(dtype), "channel": ["a", "b"], **labels})
+        rec = Records.from_data(da)
+        assert rec.fs == 0.5 and rec.channels == ("a", "b")
+        assert rec.state.tolist() == ["h", "f", "f"] and rec.turbulence.tolist() == ["light"] * 3
+    bare = Records.from_data(xr.DataArray(v, dims=("record", "time", "channel"), coords={"state": labels["state"]}))
+    assert bare.fs == 1.0 and bare.channels == ("0", "1") and bare.ids.tolist() == [0, 1, 2]
+
+
 def test_fit_baselines_skips_non_finite_records_of_an_array(synthetic):
     """fit_baselines reads only the records it considers for fitting (Records.from_data(check_finite=False)): a
     record holding NaN is still skipped ("first" / an int per cell, "all") or refused (named fitting records), as
