@@ -17,28 +17,29 @@ evaluation ones):
   payload band ``HELD_OUT``; the evaluation records inside it form the held-out-weight set, those outside it the
   interpolation set (speeds and payloads drawn afresh, so every evaluation point lies between fitting ones).
 * Identification (controller-aware, functionally pooled trim): what the controller does about a failed rotor is to
-  hold a large steady roll / pitch / yaw control (the compensation among the paper's eq. 2 outputs, about
-  (-170, 72, 105) for rotor 2 against (13, -32, -5) healthy), which the one-step prediction errors of an FP-VAR
-  barely see (its lags carry the level). That is where the earlier rule's rotor 2 confusion came from: on the
-  development records the FP-VAR likelihood sent the 5 s windows of rotor 2 records after the first 10 s to
-  healthy, in light turbulence most (``test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy``).
-  Per class, the window means of the three controller outputs are regressed on the FP basis of ``k``
-  (:func:`tsfdi.models.fp_basis`, Legendre, degree ``TRIM_DEGREE``), pooled least squares over all fitting windows
-  of all turbulence levels; the residual covariance ``S`` of a window is the spread of the records' mean residuals
-  (records - basis functions degrees of freedom: the unlogged airframe of a record moves its whole trim) plus the
-  spread of the windows around their record's mean. A window goes to the class whose trim surface, at that class's
-  maximum-likelihood ``k`` (a grid of ``K_GRID`` points per parameter over the fitted range), gives its mean the
-  largest Gaussian log-likelihood with ``S``: everything from the window itself (no logged ``k``, no turbulence
-  level, no other window of the record).
-* Healthy false alarms, alpha = 0.01 per window: the ``trim`` detector, the healthy trim statistic
-  ``min_k (m - M(k))' S^-1 (m - M(k))`` against the empirical 0.99 quantile (:class:`tsfdi.EmpiricalThreshold`) of
-  that statistic on windows every ``CAL_STEP`` samples of the development calibration records (healthy, all
-  levels, outside ``HELD_OUT``). For comparison ``F``: :func:`tsfdi.detect` with the healthy FP-VAR (channels roll,
-  pitch, yaw rate and the three controller outputs; order and degree by ``select_fp_order`` on the healthy
-  development records, BIC over degree >= 1) at the logged ``k`` and the F test calibrated as the shipped
-  pipeline does (``FTest.calibrate``, ``ScaledChi2Threshold(0.01, min_windows=5)``, records joined to hold three
-  windows each). The 99 % binomial band of alpha for the number of windows (windows of one record are not
-  independent: the band is narrower than the rate's real spread).
+  hold a large steady roll / pitch / yaw control (the compensation among the paper's eq. 2 outputs, about (-170, 72,
+  105) for rotor 2 against (13, -32, -5) healthy), which the one-step prediction errors of an FP-VAR barely see (its
+  lags carry the level). That is where the earlier rule's rotor 2 confusion came from: on the development records the
+  FP-VAR likelihood sent the 5 s windows of rotor 2 records after the first 10 s to healthy, in light turbulence most
+  (``test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy``). Per class, the window means of
+  the three controller outputs are regressed on the FP basis of ``k`` (:func:`tsfdi.models.fp_basis`, Legendre, degree
+  ``TRIM_DEGREE``), pooled least squares over all fitting windows of all turbulence levels (healthy: the development
+  fitting records and ``HEALTHY_POOL`` more per level, seed ``DEV_SEED + 100``; each rotor: its development fitting
+  records); the residual covariance ``S`` of a window is the spread of the records' mean residuals (records - basis
+  functions degrees of freedom: the unlogged airframe of a record moves its whole trim) plus the spread of the windows
+  around their record's mean. A window goes to the class whose trim surface, at that class's maximum-likelihood ``k``
+  (a grid of ``K_GRID`` points per parameter over the fitted range), gives its mean the largest Gaussian
+  log-likelihood with ``S``: everything from the window itself (no logged ``k``, no turbulence level, no other window
+  of the record).
+* Healthy false alarms, alpha = 0.01 per window: the ``trim`` detector, the healthy trim statistic ``min_k (m - M(k))'
+  S^-1 (m - M(k))`` against the empirical 0.99 quantile (:class:`tsfdi.EmpiricalThreshold`) of that statistic on
+  windows every ``CAL_STEP`` samples of the development calibration records (healthy, all levels, outside
+  ``HELD_OUT``; ``N_CAL`` per level, seed ``CAL_SEED``, none of them fitted). For comparison ``F``:
+  :func:`tsfdi.detect` with the healthy FP-VAR (channels roll, pitch, yaw rate and the three controller outputs; order
+  and degree by ``select_fp_order`` on the healthy development records, BIC over degree >= 1) at the logged ``k`` and
+  the F test calibrated as the shipped pipeline does (``FTest.calibrate``, ``ScaledChi2Threshold(0.01,
+  min_windows=5)``, records joined to hold three windows each). The 99 % binomial band of alpha for the number of
+  windows (windows of one record are not independent: the band is narrower than the rate's real spread).
 * The claim >= 99.6 % per class needs enough windows: the rule used is the one-sided 95 % Clopper-Pearson lower
   bound of the correct share over all evaluation windows of the class (interpolation and held-out weight
   together; 0 errors shows >= 99.6 % from 748 windows, the run has 756 20 s windows per class). Windows of one
@@ -49,6 +50,30 @@ evaluation ones):
   windows there, the F detector 0 %: below the band). Before that, the trim model's covariance over windows
   rather than records was found too small on a ``--quick --dev`` run (9 records per class, degree 2: every
   healthy window went to a fault).
+* Healthy class, changed after the evaluation run on seed 866863658 (trim alarms 1.72 % / 2.02 % of the 20 s / 5 s
+  healthy windows, 2.02 % above the 99 % band; 6 healthy 20 s windows sent to a fault), on development records only:
+  the healthy trim model was fitted on 36 records (its record covariance on 27 degrees of freedom) and the threshold
+  calibrated on 192 others. A second development evaluation seed, 20261130 (healthy records only, the design of the
+  evaluation sets), reproduced the excess with that design (2.03 % / 1.98 % of the 5 s windows, interpolation /
+  held-out weight). The statistic is a record-level quantity: the record spread of the trim (sd about 10 / 10 / 5 in
+  roll / pitch / yaw control, the unlogged airframe: uniform centre-of-gravity offsets) is at least 10 times the
+  spread of the windows around their record's mean in every turbulence level, the record means do not depend on the
+  level, and the attitude means explain none of it (R^2 <= 0.02); profiling k absorbs two of the three directions (the
+  healthy statistic's median is about that of chi-square with one degree of freedom). So the alarms come by record (an
+  alarmed record has 1-8 of its eight 5 s windows above the threshold) and a threshold set on a few records in the
+  tail is noisy. Tried on the development records (seeds 20261129 and 20261130, 378 healthy records each; rates of the
+  5 s windows, interpolation / held-out weight): a predictive law on the record covariance (F(1, records - basis
+  functions), the covariance inflated by the surface's leverage at each k: 0 % from 36 fitting records, 0.84-1.19 % /
+  0.50-0.99 % from 228); a covariance of the window from its own sample covariance (the turbulence seen in the window:
+  no change, 0.79-1.19 %); leave-one-record-out calibration on the fitting records (1.29-1.44 % / 1.19-1.29 % from
+  228, 0.64-1.84 % / 0.60-1.09 % from 528). Kept: the same statistic and model (no leverage term: it sent 1 + 5
+  healthy 20 s + 5 s windows to a fault there, without it 0 + 6), fitted on 228 healthy records (``HEALTHY_POOL``),
+  the empirical threshold from 300 other healthy records (``CAL_SEED``): 0.79-0.99 % of the 20 s and 0.60-1.19 % of
+  the 5 s windows on the four development sets, all in their bands; identification: healthy 0 of 1512 20 s and 6 of
+  6048 5 s windows wrong (the 36-record healthy model: 0 and 3), every rotor window correct on seed 20261129.
+  Resampling the 756 development records' alarm counts (378 records a run, rate 1.03 %): a run lands in the 99 % band
+  of its 3,024 5 s windows with probability 0.76 only (0.94 for the 756 20 s windows): the windows of a record are not
+  independent, the band is narrower than the rate's spread.
 * Magnitude: rotors 1 and 2 at the nominal point, moderate turbulence, 25 s records, FP-VAR (controller-aware
   channels) over the loss level, fitted at ``LEVELS_FIT`` (0: healthy records), ``estimate_k`` on records at
   ``LEVELS_EVAL`` (not fitted); RMSE in percentage points and coverage of the 95 % intervals.
@@ -77,6 +102,9 @@ from tsfdi.study import evaluation_seed  # noqa: E402
 
 DEV_SEED = 20261128
 DEV_EVAL_SEED = 20261129
+CAL_SEED = 20261131                      # the healthy calibration records of the detectors (development)
+HEALTHY_POOL = 64                        # more healthy fitting records per level (seed DEV_SEED + 100)
+N_CAL = 100                              # healthy calibration records per level
 FLEET = FleetSpread(payload=0.3)
 SPEEDS = (2.0, 10.0)
 HELD_OUT = (0.12, 0.18)
@@ -129,6 +157,11 @@ def simulate_levels(base: int, count: int, rotor: int, band: str | None, start: 
     turb = [lv for lv in LEVELS for _ in range(count)]
     recs, k = simulate(sds, rotor, turb)
     return recs, k, np.repeat(np.arange(len(LEVELS)), count)
+
+
+def join(*sets):
+    """One set of records from several sets of :func:`simulate_levels` (records, k and level index in order)."""
+    return sum((list(s[0]) for s in sets), []), np.vstack([s[1] for s in sets]), np.concatenate([s[2] for s in sets])
 
 
 def window_means(y: np.ndarray, w: int) -> np.ndarray:
@@ -200,7 +233,8 @@ def main() -> None:
     ap.add_argument("--dev", action="store_true", help="evaluate on the development evaluation seed")
     args = ap.parse_args()
     q = 4 if args.quick else 1
-    n_fit, n_cal, n_int, n_held = max(12 // q, 4), 64 // q, 84 // q, 42 // q      # records per class and level
+    n_fit, n_int, n_held = max(12 // q, 4), 84 // q, 42 // q                   # records per class and level
+    n_pool, n_cal = HEALTHY_POOL // q, N_CAL // q                                # healthy only, per level
     n_lfit, n_leval = max(4 // q, 2), max(3 // q, 1)
     ev = DEV_EVAL_SEED if args.dev else evaluation_seed()
     print(f"development seed {DEV_SEED}, evaluation seed {ev} "
@@ -211,23 +245,26 @@ def main() -> None:
         dev[c] = simulate_levels(DEV_SEED + j, n_fit, rotor, "out")
         ev_int[c] = simulate_levels(ev, n_int, rotor, "out", start=100000 * j)
         ev_held[c] = simulate_levels(ev, n_held, rotor, "in", start=100000 * j + 50000)
-    cal = simulate_levels(DEV_SEED + 100, n_cal, 0, "out")
-    nrec = len(CLASSES) * len(LEVELS) * (n_fit + n_int + n_held) + len(LEVELS) * n_cal
+    # the healthy trim surface and covariance from the healthy fitting records and the pool; the detectors
+    # calibrated on other records (CAL_SEED)
+    trim_fit = dict(dev, healthy=join(dev["healthy"], simulate_levels(DEV_SEED + 100, n_pool, 0, "out")))
+    cal = simulate_levels(CAL_SEED, n_cal, 0, "out")
+    nrec = len(CLASSES) * len(LEVELS) * (n_fit + n_int + n_held) + len(LEVELS) * (n_pool + n_cal)
     print(f"simulated {nrec} records of {DURATION:g} s ({', '.join(LEVELS)} turbulence) in "
           f"{time.perf_counter() - t0:.0f} s")
 
     # --- trim models at the frozen degree (BIC on the development records, and with --dev every degree's
     # identification on the development evaluation records, printed below)
-    degrees = [d for d in range(MAX_TRIM_DEGREE + 1) if (d + 1) ** 2 < len(dev["healthy"][0])]
-    bic = {d: sum(fit_trim(dev[c][0], dev[c][1], WINDOWS[-1], d)["bic"] for c in CLASSES) for d in degrees}
+    degrees = [d for d in range(MAX_TRIM_DEGREE + 1) if (d + 1) ** 2 < len(dev["rotor1"][0])]
+    bic = {d: sum(fit_trim(*trim_fit[c][:2], WINDOWS[-1], d)["bic"] for c in CLASSES) for d in degrees}
     print(f"trim FP regression: degree {TRIM_DEGREE} (frozen); BIC over records of the development set by degree: "
           + ", ".join(f"{d}: {b:.0f}" for d, b in bic.items()))
-    trim = {w: {c: fit_trim(dev[c][0], dev[c][1], w, TRIM_DEGREE) for c in CLASSES} for w in WINDOWS}
+    trim = {w: {c: fit_trim(*trim_fit[c][:2], w, TRIM_DEGREE) for c in CLASSES} for w in WINDOWS}
     if args.dev:
         for d in degrees:
             line = []
             for w in WINDOWS:
-                tw = {c: fit_trim(dev[c][0], dev[c][1], w, d) for c in CLASSES}
+                tw = {c: fit_trim(*trim_fit[c][:2], w, d) for c in CLASSES}
                 for c in CLASSES:
                     wrong = sum(int((np.array([trim_stat(tw[m], window_means(y, w))[0] for m in CLASSES]).argmax(axis=0)
                                      != list(CLASSES).index(c)).sum()) for data in (ev_int, ev_held) for y in data[c][0])
@@ -248,9 +285,10 @@ def main() -> None:
     for w in WINDOWS:
         group = -(-3 // (len(cal[0][0]) // w))         # records joined so that each holds >= 3 windows
         res = [np.asarray(fp.residuals(y, k)) for y, k in zip(cal[0], cal[1])]
-        # each record's residuals hold whole windows of w - lags, so no window spans two records
-        res = [np.concatenate([r[:(len(r) // (w - lags)) * (w - lags)] for r in res[i:i + group]])
-               for i in range(0, len(res), group)]
+        # each record's residuals hold whole windows of w - lags, so no window spans two records; consecutive
+        # records joined in len(res) // group groups of at least ``group`` records (none left short)
+        res = [np.concatenate([r[:(len(r) // (w - lags)) * (w - lags)] for r in res[i[0]:i[-1] + 1]])
+               for i in np.array_split(np.arange(len(res)), len(res) // group)]
         t = tsfdi.FTest(alpha=ALPHA, correction="bonferroni", threshold=tsfdi.ScaledChi2Threshold(ALPHA, min_windows=5))
         ftest[w] = t.calibrate(res, window=w - lags, step=w - lags, **t.reference(fp.at(cal[1][0])))
         stat = np.concatenate([trim_stat(trim[w]["healthy"], sliding_means(y, w, CAL_STEP))[1] for y in cal[0]])

@@ -61,6 +61,27 @@ def test_trim_statistic_is_the_smallest_distance_over_the_k_grid():
     np.testing.assert_allclose(B.sliding_means(recs[0], 500, 500), m)
 
 
+def test_healthy_trim_is_fitted_on_many_records_and_calibrated_on_others():
+    # the evaluation run of session 32 fitted the healthy trim surface and its 3 x 3 record covariance on 36
+    # records (27 degrees of freedom) and set the detector's threshold on 192 others: its alarms come by record
+    # (the airframe), and the threshold from a few records in the tail was 2.0 % of the 5 s windows on a second
+    # development seed. Now 228 fitting records and 300 calibration records, no record in both.
+    B = _benchmark()
+    n_lv = len(B.LEVELS)
+    fit = B.seeds(B.DEV_SEED, 12 * n_lv, "out") + B.seeds(B.DEV_SEED + 100, B.HEALTHY_POOL * n_lv, "out")
+    cal = B.seeds(B.CAL_SEED, B.N_CAL * n_lv, "out")
+    assert len(set(fit)) == len(fit) >= 200
+    assert len(set(cal)) == len(cal) >= 300
+    assert not set(fit) & set(cal)
+    # join keeps every record, its k and its level, in order
+    a = ([np.zeros((2, 6))], np.array([[2.0, 0.1]]), np.array([0]))
+    b = ([np.ones((3, 6)), np.full((1, 6), 2.0)], np.array([[3.0, 0.2], [4.0, 0.3]]), np.array([2, 1]))
+    recs, k, lv = B.join(a, b)
+    assert [r.shape[0] for r in recs] == [2, 3, 1]
+    np.testing.assert_array_equal(k, [[2.0, 0.1], [3.0, 0.2], [4.0, 0.3]])
+    np.testing.assert_array_equal(lv, [0, 2, 1])
+
+
 @pytest.mark.slow
 def test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy():
     # the earlier rule of this benchmark (largest Gaussian likelihood of the window's one-step prediction errors
