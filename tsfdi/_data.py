@@ -526,18 +526,18 @@ def _rolling_variance(x: np.ndarray, window: int, step: int) -> np.ndarray:
         raise ValueError(f"window must be <= the signal length {n_all}, got {window}")
     # the channels as contiguous rows: numpy reduces axis 0 of an (n, k) array slowly for small k
     xt = np.ascontiguousarray(np.asarray(x, dtype=np.float64).T)
-    xt = xt - xt.mean(axis=1, keepdims=True)
     starts = np.arange(0, n_all - window + 1, min(step, n_all))
     out = np.empty((starts.size, xt.shape[0]))
-    _window_variances(xt, starts, window, out)
+    _window_variances(xt, xt.mean(axis=1), starts, window, out)
     return out
 
 
 @numba.njit(cache=True)
-def _window_variances(xt, starts, window, out):  # pragma: no cover - compiled
+def _window_variances(xt, centre, starts, window, out):  # pragma: no cover - compiled
     """``out[w, c]``: variance of ``xt[c, starts[w]:starts[w] + window]`` from the running sums of ``x`` and ``x**2``
-    (the prefix sums of ``numpy.cumsum``, in its order, read only at the window edges), clipped at 0. The sums run
-    from one window edge to the next in a branch-free loop (no test of every sample against the edges)."""
+    of the signal less its mean ``centre`` (each sample less ``centre[c]`` as it is read: no centred copy), the prefix
+    sums of ``numpy.cumsum``, in its order, read only at the window edges, clipped at 0. The sums run from one
+    window edge to the next in a branch-free loop (no test of every sample against the edges)."""
     k, n = xt.shape
     m = starts.size
     s1 = np.zeros(k)
@@ -566,9 +566,9 @@ def _window_variances(xt, starts, window, out):  # pragma: no cover - compiled
             nxt = starts[w_lo]
         for c in range(k):
             acc1, acc2 = s1[c], s2[c]
-            row = xt[c]
+            row, mc = xt[c], centre[c]
             for u in range(t, nxt):
-                v = row[u]
+                v = row[u] - mc
                 acc1 += v
                 acc2 += v * v
             s1[c], s2[c] = acc1, acc2
