@@ -572,18 +572,20 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                        np.where(~rec.valid, "lost control / non-finite",
                                 np.where(use, "", "not selected")))
     # the coverage checks, in record order (each record's in method and window order); warned of here, on the driver
-    cover = pd.DataFrame(sorted(counts["coverage"], key=lambda row: row[0]),
-                         columns=["position", "model", "method", "window", "covered", "pvalue", "records", "outside"])
-    covered = pd.array([pd.NA] * len(rec.ids), dtype="boolean")
-    for i, part in cover.groupby("position", sort=True):
-        covered[i] = bool(part["covered"].all())
-        out = part[part["outside"] != ""]
-        if len(out):
-            warnings.warn(f"evaluate: record {rec.ids[i]}: " + "; ".join(
-                f"model {r.model}, method {r.method}, {r.window:g} s windows: {r.outside}" for r in out.itertuples()),
-                CoverageWarning, stacklevel=2)
-    cover.insert(0, "record", rec.ids[cover.pop("position").to_numpy(dtype=np.int64)])
-    cover = cover.astype({"covered": "boolean"})
+    rows = sorted(counts["coverage"], key=lambda row: row[0])
+    covered: list = [None] * len(rec.ids)            # a record: False when a check says so, True when one ran
+    said: dict = {}
+    for i, m, meth, w, ok, _, _, out in rows:
+        if ok is not None:
+            covered[i] = bool(ok) and covered[i] is not False
+        if out:
+            said.setdefault(i, []).append(f"model {m}, method {meth}, {w:g} s windows: {out}")
+    for i, parts in said.items():
+        warnings.warn(f"evaluate: record {rec.ids[i]}: " + "; ".join(parts), CoverageWarning, stacklevel=2)
+    cover = pd.DataFrame([(rec.ids[row[0]], *row[1:]) for row in rows],
+                         columns=["record", "model", "method", "window", "covered", "pvalue", "records", "outside"])
+    cover = cover.astype({"covered": "boolean", "window": np.float64, "pvalue": np.float64, "records": np.int64})
+    covered = pd.array(covered, dtype="boolean")
     recs = pd.DataFrame({"record": rec.ids, "state": rec.state, "turbulence": rec.turbulence,
                          "evaluated": use, "skipped": reasons, "covered": covered})
     recs.attrs["healthy"] = healthy
