@@ -29,7 +29,9 @@
    wall-time ratios, the same ratios by CPU time, which other jobs disturb far less: the serial process's over the
    one worker's, and the one worker's over the busiest of the two workers' (the speed-up of two workers that each
    have a core to themselves and never wait); and the CPU time of the driver and of the scheduler, which on a
-   2-core machine share the two workers' cores.
+   2-core machine share the two workers' cores. Where the workers' wall time went, from the scheduler's task stream
+   (which its dashboard records anyway; read after each run): computing, idle before their first task (the driver's
+   start), between tasks, and after their last (the tail), with the spread of the workers' last task ends.
    Acceptance (issue 36): one worker >= 0.9x the serial speed; two workers >= 1.8x one worker.
 4. The same dask runs with tsfdi of an earlier commit (``--against REF``, default :data:`PREVIOUS`, the commit before
    issue 36; ``--against ''`` skips it): this script again in a fresh interpreter with that tree first on
@@ -73,7 +75,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import psutil  # noqa: E402
 import xarray as xr  # noqa: E402
-from distributed import Client  # noqa: E402
+from distributed import Client, get_task_stream  # noqa: E402
 from distributed.deploy.subprocess import SubprocessCluster  # noqa: E402
 
 import tsfdi  # noqa: E402
@@ -201,13 +203,37 @@ def cluster(n: int, ds, base):
         yield cl, client
 
 
-def dask_runs(ds, base, repeat: int, runs: dict, driver_cpu: dict, reads: list | None = None) -> object:
+def workers_time(stream: list, start: float, stop: float) -> np.ndarray:
+    """Where the workers' wall time of a call from ``start`` to ``stop`` (``time.time()``) went, from its task stream
+    (``distributed.get_task_stream``), in seconds added up over the workers that ran a task: computing tasks, idle
+    before their first task (the driver's start: reading the labels, sending the arguments), idle between tasks
+    (waiting for the next one), idle after their last task (the tail: waiting for the other workers' last chunks,
+    then the driver's end); last, the spread of the workers' last task ends (the tail's imbalance)."""
+    spans: dict = {}
+    for task in stream:
+        for s in task["startstops"]:
+            if s["action"] == "compute":
+                spans.setdefault(task["worker"], []).append((s["start"], s["stop"]))
+    out = np.zeros(5)
+    ends = []
+    for spans_w in spans.values():
+        busy = sum(b - a for a, b in spans_w)
+        first, last = min(a for a, _ in spans_w), max(b for _, b in spans_w)
+        out += [busy, first - start, last - first - busy, stop - last, 0.0]
+        ends.append(last)
+    out[4] = max(ends) - min(ends) if ends else 0.0
+    return out
+
+
+def dask_runs(ds, base, repeat: int, runs: dict, driver_cpu: dict, reads: list | None = None,
+              idle: dict | None = None) -> object:
     """``repeat`` times: the serial path from the store (:func:`from_store`, when ``reads`` is given), then
     ``evaluate`` of the store on each cluster of :data:`CLUSTERS` in turn, each started for its run and closed after
     it (:func:`cluster`: one cluster alive at a time, as a user has; an idle cluster's scheduler, nannies and workers
     use ~7-11 % of a core, which on 2 cores the running one would share); each run appended to ``runs[name]`` as
-    (wall s, others' CPU s, user s, system s, page faults, CPU s of the busiest worker). Returns the last tables
-    (checked equal to the serial ones when there are)."""
+    (wall s, others' CPU s, user s, system s, page faults, CPU s of the busiest worker), and where the workers' wall
+    time went (:func:`workers_time`) to ``idle[name]``. Returns the last tables (checked equal to the serial ones
+    when there are)."""
     ev = reference = None
     for r in range(repeat):
         line = []
@@ -218,8 +244,20 @@ def dask_runs(ds, base, repeat: int, runs: dict, driver_cpu: dict, reads: list |
         for name, workers in CLUSTERS.items():
             with cluster(workers, ds, base) as (_, client), client.as_current():
                 cpu, sched = time.process_time(), client.run_on_scheduler(usage)
-                t, ev, other, u = measure(lambda: tsfdi.evaluate(ds, base, **OPTIONS), client)
+                span: list = []
+
+                def run():
+                    span.append(time.time())
+                    out = tsfdi.evaluate(ds, base, **OPTIONS)
+                    span.append(time.time())
+                    return out
+
+                # (the task stream: the scheduler's record, which its dashboard keeps anyway; read after the run)
+                with get_task_stream(client=client) as stream:
+                    t, ev, other, u = measure(run, client)
                 sched = client.run_on_scheduler(usage) - sched
+                if idle is not None:
+                    idle.setdefault(name, []).append(workers_time(stream.data, *span))
                 driver_cpu.setdefault(name, []).append((time.process_time() - cpu, sched[0] + sched[1]))
             runs[name].append((t, other, *u))
             line.append(f"{name} {t:.1f} s (CPU {u[0] + u[1]:.1f} s, {u[2]:,.0f} faults)")
@@ -330,7 +368,8 @@ def main() -> None:
     runs: dict = {"serial": [], "1 worker": [], "2 workers": []}
     driver_cpu: dict = {}
     reads: list = []
-    reference = dask_runs(ds, base, args.repeat, runs, driver_cpu, reads=reads)
+    idle: dict = {}
+    reference = dask_runs(ds, base, args.repeat, runs, driver_cpu, reads=reads, idle=idle)
     print(f"\nserial path: the records read from the store in {statistics.median(reads):.2f} s (median; timed "
           "within its runs, as the workers read their chunks within theirs)")
     # a run is quiet when the other processes of the (shared) machine used under a tenth of a core meanwhile
@@ -365,6 +404,12 @@ def main() -> None:
     print("  driver and scheduler CPU time during the dask runs (medians; on 2 cores they share the workers' "
           "cores): " + ", ".join(f"{k} {statistics.median(d for d, _ in v):.1f} s + "
                                  f"{statistics.median(c for _, c in v):.1f} s" for k, v in driver_cpu.items()))
+    print("  where the workers' wall time went (task stream; medians over all runs, seconds added up over the "
+          "workers; wall x workers = the sum of the first four):")
+    print(f"  {'':>9}  {'computing':>9} {'before 1st':>10} {'between':>8} {'after last':>10} {'last ends spread':>16}")
+    for k, v in idle.items():
+        b, first, gaps, end, spread = np.median(np.array(v), axis=0)
+        print(f"  {k:>9}: {b:8.2f}s {first:9.2f}s {gaps:7.2f}s {end:9.2f}s {spread:15.2f}s")
     print(f"  windows: {reference.detection_counts['windows'].sum():,} detection + "
           f"{reference.identification_counts['windows'].sum():,} identification, counted in "
           f"{len(reference.detection_counts)} + {len(reference.identification_counts)} rows (+ "
