@@ -131,7 +131,7 @@ def identify_windows_ftest_workload():
     return lambda: tsfdi.identify_windows(record, models, test, window=window, step=step)
 
 
-def _hexacopter():
+def _hexacopter(fit_records=10):
     import warnings
 
     import tsfdi
@@ -144,18 +144,18 @@ def _hexacopter():
     except ImportError:                                     # before issue 16
         from tsfdi.evaluation import hexacopter_signals
     sig = hexacopter_signals(load_hexacopter(ROOT / "data" / "hexacopter.nc"))   # this repository's copy
-    bases = {lvl: tsfdi.fit_baselines(sig, fit_turbulence=lvl, duration=None, models=["var"], fit_records=10,
-                                      order=20) for lvl in ("light", "moderate", "severe")}
+    bases = {lvl: tsfdi.fit_baselines(sig, fit_turbulence=lvl, duration=None, models=["var"],
+                                      fit_records=fit_records, order=20) for lvl in ("light", "moderate", "severe")}
     new = hasattr(tsfdi, "ResidualWindows")
     kw = ({"tests": {"whiteness": tsfdi.LjungBox(lags=20, alpha=1e-3)}, "windows": ("5s", "10s", "20s")} if new
           else {"methods": ("whiteness",), "windows": (5.0, 10.0, 20.0)})
     return sig, bases, kw
 
 
-def evaluate_workload():
+def evaluate_workload(fit_records=10):
     import tsfdi
 
-    sig, bases, kw = _hexacopter()
+    sig, bases, kw = _hexacopter(fit_records)
     return lambda: tsfdi.evaluate(sig, bases, models=("var",), progress=False, **kw)
 
 
@@ -217,7 +217,7 @@ def _fit_baselines_workload(**kw):
 
 
 WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
-             "evaluate": evaluate_workload, "monitor": monitor_workload, "glrt": glrt_workload,
+             "evaluate": evaluate_workload, "evaluate_first": lambda: evaluate_workload("first"), "monitor": monitor_workload, "glrt": glrt_workload,
              "rls_d4": lambda: _rls_workload(4), "rls_d20": lambda: _rls_workload(20),
              "rls_d60": lambda: _rls_workload(60),
              "var_fit_c": lambda: _var_fit_workload("c"), "var_fit_n": lambda: _var_fit_workload("n"),
