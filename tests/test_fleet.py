@@ -4,6 +4,7 @@ bit for bit, and the driver does not hold the records."""
 
 from __future__ import annotations
 
+import pickle
 import re
 import textwrap
 import tracemalloc
@@ -273,7 +274,8 @@ def test_workers_keep_freed_memory_and_get_the_arguments_once(monkeypatch):
     worker's allocator first (worker_allocator): a few. The arguments go to the workers once: a second call with
     equal arguments refers to them, new ones are sent. The fleet, still lazy, goes to the workers once per call and
     each chunk's task only names its records (issue 36: a task carrying its chunk's graph cost the driver and the
-    scheduler ~10 ms of CPU time per chunk, which two workers on two cores lack)."""
+    scheduler ~10 ms of CPU time per chunk, which two workers on two cores lack); records held in memory go in
+    their chunks' tasks."""
     data = xr.Dataset({"v": (("record", "time"), np.zeros((4, 3)))}).chunk(record=1)
     assert not tsfdi.fleet.worker_allocator()           # the driver is not a dask worker: left as it is
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
@@ -293,6 +295,14 @@ def test_workers_keep_freed_memory_and_get_the_arguments_once(monkeypatch):
         # equal arguments sent once while among the last SCATTERED = 2 sets; older ones are released, sent again
         assert [a for a in sent if isinstance(a, tuple)] == [(2**21,), (), (1.0,), (2.0,), (2**21,)]
         assert [len(a.record) for a in sent if isinstance(a, xr.Dataset)] == [4, 4, 2, 2, 2, 2, 4]
+        # records held in memory (80 kB per chunk, above HELD_PER_CHUNK): each chunk goes in its own task, with its
+        # records only, instead of the whole fleet to every worker
+        sent.clear()
+        tasks.clear()
+        held = xr.Dataset({"v": (("record", "time"), np.ones((3, 10_000)))}).chunk(record=1)
+        assert [s for _, s in map_records(_square, held, 0.0)] == [10_000.0] * 3
+        assert not any(isinstance(a, xr.Dataset) for a in sent)
+        assert len(tasks) == 3 and all(80_000 < len(pickle.dumps(t[2])) < 160_000 for t in tasks)
 
 
 # ---------------------------------------------------------------------------------------- the driver's memory

@@ -157,10 +157,24 @@ def _call(func: Callable, chunk: Any, where: slice, args: tuple) -> Any:
     return func(chunk, where, *args)
 
 
-def _read_call(func: Callable, data: Any, where: slice, args: tuple) -> Any:
-    """:func:`_call` on the chunk ``where`` of ``data`` (the whole fleet, still backed by dask, sent to the workers
-    once), read here, in this task, by dask's synchronous scheduler (its graph culled to the chunk's reads here)."""
-    return _call(func, data.isel(record=where).compute(scheduler="synchronous"), where, args)
+def _read_call(func: Callable, data: Any, select: slice, where: slice, args: tuple) -> Any:
+    """:func:`_call` on the chunk ``where``, the records ``select`` of ``data`` (still backed by dask: the whole
+    fleet, sent to the workers once, or the chunk alone), read here, in this task, by dask's synchronous scheduler."""
+    return _call(func, data.isel(record=select).compute(scheduler="synchronous"), where, args)
+
+
+#: bytes of records in memory per chunk up to which :func:`map_records` sends the fleet to every worker once (a
+#: fleet read from a store: its graph, the reads, and its labels); above, the records are held in memory (a fleet
+#: chunked with ``.chunk()``), and each chunk goes in its own task instead of the whole fleet to every worker
+HELD_PER_CHUNK = 2**16
+
+
+def _held_bytes(data: Any) -> int:
+    """Bytes of the arrays that ``data``'s dask graph holds and of its variables along ``record`` in memory."""
+    import numpy as np
+
+    held = sum(v.nbytes for v in data.__dask_graph__().values() if isinstance(v, np.ndarray))
+    return int(held) + sum(v.nbytes for v in _record_variables(data) if v.chunks is None)
 
 
 def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, desc: str = "tsfdi") -> Iterator:
@@ -198,7 +212,9 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
     records), is sent to every worker once per call (``Client.scatter(broadcast=True)``), and every chunk is one task
     (``Client.submit``) that names its records: the worker selects them and reads them (their part of ``data``'s
     graph, computed there by dask's synchronous scheduler: one task per chunk for the cluster's scheduler, not one
-    per variable and step of the read; the driver and the scheduler never handle the reads), and at most ``AHEAD``
+    per variable and step of the read; the driver and the scheduler never handle the reads). Records held in memory
+    (``data`` chunked with ``.chunk()``: more than :data:`HELD_PER_CHUNK` bytes per chunk in its graph or its
+    variables) go instead each chunk in its own task, culled here, not all to every worker. At most ``AHEAD``
     chunks per worker thread are in flight; the driver waits for the
     oldest, so the results come in order and a slow chunk holds back at most that many. With the threads, processes
     or synchronous scheduler the chunks are computed ``AHEAD`` per worker at a time by ``dask.compute``. Either way
@@ -230,16 +246,19 @@ def map_records(func: Callable, data: Any, *args: Any, progress: bool = False, d
                     yield result
             return
         shared = _scatter(client, args)
-        # the fleet, still lazy (its graph: ~7 kB per chunk), goes to every worker once, and each task names its
-        # chunk: one task per chunk, which selects and reads its records itself. Neither the driver nor the
-        # scheduler handles the reads: an optimized graph per chunk in each task cost the driver ~7 ms and the
-        # scheduler ~3 ms of CPU time per chunk (culling, pickling, unpickling zarr's arrays), which the workers
-        # lack when they have all the cores
-        fleet = client.scatter([data], broadcast=True, hash=False)[0]
+        # a fleet read from a store: the fleet, still lazy (its graph: ~15 kB per chunk), goes to every worker once,
+        # and each task names its chunk: one task per chunk, which selects and reads its records itself. Neither
+        # the driver nor the scheduler handles the reads: an optimized graph per chunk in each task cost the driver
+        # ~7 ms and the scheduler ~3 ms of CPU time per chunk (culling, pickling, unpickling zarr's arrays), which
+        # the workers lack when they have all the cores. A fleet whose graph holds its records (in memory): each
+        # task carries its chunk's part, culled here
+        once = _held_bytes(data) <= HELD_PER_CHUNK * len(chunks)
+        fleet = client.scatter([data], broadcast=True, hash=False)[0] if once else None
         queue: deque = deque()
         try:
             for s in chunks:
-                queue.append((s, client.submit(_read_call, func, fleet, s, shared, pure=False)))
+                task = (fleet, s) if once else (dask.optimize(data.isel(record=s))[0], slice(None))
+                queue.append((s, client.submit(_read_call, func, *task, s, shared, pure=False)))
                 if len(queue) >= ahead:
                     yield _next(queue, bar)
             while queue:
