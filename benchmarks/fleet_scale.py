@@ -86,7 +86,7 @@ SMALL = 200
 DURATION, FAILURE, CHUNK = 30.0, 5.0, 50
 #: the commit before issue 36 (dask workers' allocator, baselines sent once)
 PREVIOUS = "f9e25de"
-#: the client keeps its last messages to the scheduler (each chunk's graph) for debugging: this many (default 1000)
+#: the client keeps its last messages to the scheduler (each chunk's task) for debugging: this many (default 1000)
 LOG = "distributed.admin.low-level-log-length"
 LEVELS = ("moderate", "severe")
 #: the dask runs: name -> worker processes (one thread each)
@@ -449,7 +449,7 @@ def main() -> None:
               f"{'FLAT' if p1 - p0 < 0.02 * data else 'NOT FLAT'} (acceptance: it grows by less than 2 % of the "
               f"signals). Each chunk comes back as its windows counted per distinct outcome (a few kB). What grows: "
               f"the row per record of Evaluation.records ({t1 * 2**20 / n:.0f} bytes), and the client's log of its "
-              f"last 1,000 messages to the scheduler (dask config {LOG}; each chunk's graph is one; bounded) -- "
+              f"last 1,000 messages to the scheduler (dask config {LOG}; each chunk's task is one; bounded) -- "
               f"without it the peak grows by {q1 - q0:+.1f} MB")
 
     if args.against:
