@@ -303,6 +303,7 @@ def test_workers_keep_freed_memory_and_get_the_arguments_once(monkeypatch):
         assert [s for _, s in map_records(_square, held, 0.0)] == [10_000.0] * 3
         assert not any(isinstance(a, xr.Dataset) for a in sent)
         assert len(tasks) == 3 and all(80_000 < len(pickle.dumps(t[2])) < 160_000 for t in tasks)
+        assert [s for _, s in map_records(_square, small.compute(), 1.0)] == [1.0]     # not backed by dask: one chunk
 
 
 # ---------------------------------------------------------------------------------------- the driver's memory

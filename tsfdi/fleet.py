@@ -173,7 +173,8 @@ def _held_bytes(data: Any) -> int:
     """Bytes of the arrays that ``data``'s dask graph holds and of its variables along ``record`` in memory."""
     import numpy as np
 
-    held = sum(v.nbytes for v in data.__dask_graph__().values() if isinstance(v, np.ndarray))
+    graph = data.__dask_graph__()
+    held = 0 if graph is None else sum(v.nbytes for v in graph.values() if isinstance(v, np.ndarray))
     return int(held) + sum(v.nbytes for v in _record_variables(data) if v.chunks is None)
 
 
