@@ -37,12 +37,13 @@ def brute_tail(scale, df, sa2: float, samp: float, j: int, t: float) -> float:
     return total / len(scale)
 
 
-@pytest.mark.parametrize("records", [4, 5, 10])
-@pytest.mark.parametrize("shape,tau", [("pooled", 0.3), ("record", 0.03)])
+@pytest.mark.parametrize("records", [4, 5, 10, 20])
+@pytest.mark.parametrize("shape,tau", [("pooled", 0.3), ("record", 0.03), ("pooled", 0.0)])
 def test_predictive_threshold_has_the_stated_tail(records, shape, tau):
     # white-noise records, 10 disjoint windows of 198 samples each, log variance N(0, tau^2) from record to record;
     # the F variance ratio of each window (tau 0.3: the fleet's noise spread; 0.03: a spread hidden in the windows'
-    # sampling noise, Ljung-Box-like, each record its own shape)
+    # sampling noise, Ljung-Box-like, each record its own shape; 0: no spread, the anchor law far narrower than a
+    # window's)
     rng = np.random.default_rng(31_000 + records)
     for pf in (1 - (1 - 1e-3) ** (1 / 3), 1e-5):
         x = tau * rng.standard_normal(records)
