@@ -271,11 +271,11 @@ def _within_nodes(scale: np.ndarray, df: np.ndarray) -> tuple[np.ndarray, np.nda
     mid, mass = np.exp(0.5 * (lw[1:] + lw[:-1])), np.diff(np.exp(lw))
     # records with the same law (a pooled shape) once, weighted by how many share it
     _, first, count = np.unique(np.round(np.c_[np.log(scale), df], 10), axis=0, return_index=True,
-                                   return_counts=True)
+                                return_counts=True)
     y, w = [], []
     for i, k in zip(first, count):
         q = 2.0 * np.concatenate([special.gammaincinv(0.5 * df[i], mid), special.gammainccinv(0.5 * df[i], mid)])
-        y.append(math.log(scale[i]) + np.log(q))
+        y.append(math.log(scale[i]) + np.log(np.maximum(q, 1e-300)))     # a quantile 0 (tiny df): as good as 0
         w.append(k * np.concatenate([mass, mass]))
     w = np.concatenate(w)
     return np.concatenate(y), w / w.sum()
