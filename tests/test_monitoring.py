@@ -570,6 +570,15 @@ def test_run_and_screen_warn_of_a_record_the_baseline_does_not_cover(fleet_basel
     assert len([x for x in w if issubclass(x.category, CoverageWarning)]) == 1
     assert table["covered"].tolist() == [True, False] and str(table["covered"].dtype) == "boolean"
     assert table["outside"].iloc[0] == "" and "FTest[y0]" in table["outside"].iloc[1]
+    # several uncovered records (a fleet screened at once): one warning with their number and the first of them,
+    # not one per record; each record's summaries out stay in the table
+    louder = [(1.5 + 0.1 * i) * record("healthy", 3000, rng) for i in range(7)]
+    with pytest.warns(CoverageWarning, match=r"Monitor.screen: 7 of 8 records checked lie outside .*records 1, 2, 3, "
+                                             r"4, 5, \.\.\.\); the summaries out of each are in the 'outside' column"
+                      ) as w:
+        table = law.screen([ok, *louder])
+    assert len([x for x in w if issubclass(x.category, CoverageWarning)]) == 1
+    assert table["covered"].tolist() == [True] + [False] * 7 and (table["outside"].iloc[1:] != "").all()
 
 
 def test_monitor_says_nothing_when_coverage_cannot_be_checked(models, fleet_baseline):

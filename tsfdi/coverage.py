@@ -30,7 +30,9 @@ from tsfdi._data import Signal, as_signal
 from tsfdi._validation import int_like, probability
 from tsfdi.exceptions import CoverageWarning
 
-__all__ = ["Coverage", "coverage", "record_coverage", "check_coverage", "warn_if_not_covered", "MIN_RECORDS", "ALL"]
+__all__ = ["Coverage", "coverage", "record_coverage", "check_coverage", "warn_if_not_covered",
+           "warn_records_not_covered",
+           "MIN_RECORDS", "ALL"]
 
 #: fitting records needed: the predictive law of a new record's summary is a t law with ``records - 1`` degrees of
 #: freedom, so two records give one degree of freedom (a Cauchy law whose intervals are too wide to warn of
@@ -439,6 +441,43 @@ def _record_window(test: Any) -> int | None:
                                                     for t in p.thresholds_) for p in parts):
         return None
     return int(windows.pop())
+
+
+#: record identifiers named in :func:`warn_records_not_covered`'s one warning for many records
+NAMED_RECORDS = 5
+
+
+def warn_records_not_covered(outside: Any, where: str, *, judged: int, see: str, stacklevel: int = 2) -> None:
+    """One :class:`~tsfdi.exceptions.CoverageWarning` for the records of a call that the baseline does not cover:
+    the record's own message when there is one, else how many of ``judged`` records lie outside, the first
+    :data:`NAMED_RECORDS` of them, and where the summaries out of each are kept (``see``), so that a fleet screened
+    at once does not print a warning per record. Nothing when ``outside`` is empty.
+
+    Parameters
+    ----------
+    outside : mapping
+        Record identifier -> the summaries out (the text of :meth:`Coverage.warning_message`), in record order.
+    where : str
+        The caller (``"Monitor.screen"``, ``"evaluate"``).
+    judged : int
+        Records whose coverage was checked.
+    see : str
+        Where the per-record result is, e.g. ``"the 'outside' column"``.
+    stacklevel : int
+        Counted from the caller of this function, as :func:`warnings.warn` does from its own caller.
+    """
+    items = list(dict(outside).items())
+    if not items:
+        return
+    if len(items) == 1:
+        (r, out), = items
+        msg = f"{where}: record {r}: {out}"
+    else:
+        named = ", ".join(str(r) for r, _ in items[:NAMED_RECORDS]) + (", ..." if len(items) > NAMED_RECORDS else "")
+        msg = (f"{where}: {len(items)} of {judged} records checked lie outside the spread of the baseline's fitting "
+               f"records (records {named}); the summaries out of each are in {see}. Decisions on them are not "
+               "covered by the baseline's calibration: fit the baseline on flights like these")
+    warnings.warn(msg, CoverageWarning, stacklevel=stacklevel + 1)
 
 
 def warn_if_not_covered(coverage: Coverage, where: str, *, stacklevel: int = 2) -> None:

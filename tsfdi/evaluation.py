@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
-import warnings
 import weakref
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
@@ -41,11 +40,10 @@ from scipy import stats
 from tsfdi._data import as_signal, refuse_masked, window_samples
 from tsfdi._validation import boolean, float_like, option
 from tsfdi.baselines import Baselines, Records
-from tsfdi.coverage import MIN_RECORDS, check_coverage
+from tsfdi.coverage import MIN_RECORDS, check_coverage, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
-from tsfdi.exceptions import CoverageWarning
 from tsfdi.summary import Summary
 from tsfdi.detection.sequential import msprt, msprt_scale
 from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
@@ -442,14 +440,15 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     Warns
     -----
     CoverageWarning
-        One per evaluated record whose healthy part (all of a healthy record, a fault record's samples before the
-        failure; from ``settle`` s on, as the fitting segments start) the baselines do not cover, naming the record,
-        model, method, window and the summaries out (:func:`tsfdi.coverage.check_coverage`: the record law of a
-        detection test calibrated on held-out residuals of at least three healthy records, the part holding three
-        of its windows; else the spread of the summaries of the healthy model's fitting records, at least three,
-        the part at least as long as the shortest): its decisions are not covered by the baselines; fit them on
-        flights like it. Nothing is checked (nor said, nor spent) otherwise. The check runs where the records are
-        (on the dask workers for a chunked fleet); the warnings are said by the caller's process.
+        When the baselines do not cover the healthy part of evaluated records (all of a healthy record, a fault record's
+        samples before the failure; from ``settle`` s on, as the fitting segments start): for one record, naming it, the
+        model, method, window and the summaries out; for several, one warning with their number and the first of them
+        (each one's summaries out in :attr:`Evaluation.coverage`). The check is :func:`tsfdi.coverage.check_coverage`:
+        the record law of a detection test calibrated on held-out residuals of at least three healthy records, the part
+        holding three of its windows; else the spread of the summaries of the healthy model's fitting records, at least
+        three, the part at least as long as the shortest. Their decisions are not covered by the baselines: fit them on
+        flights like these. Nothing is checked (nor said, nor spent) otherwise. The check runs where the records are (on
+        the dask workers for a chunked fleet); the warnings are said by the caller's process.
 
     Notes
     -----
@@ -580,8 +579,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             covered[i] = bool(ok) and covered[i] is not False
         if out:
             said.setdefault(i, []).append(f"model {m}, method {meth}, {w:g} s windows: {out}")
-    for i, parts in said.items():
-        warnings.warn(f"evaluate: record {rec.ids[i]}: " + "; ".join(parts), CoverageWarning, stacklevel=2)
+    warn_records_not_covered({rec.ids[i]: "; ".join(parts) for i, parts in said.items()}, "evaluate",
+                             judged=sum(c is not None for c in covered), see="Evaluation.coverage")
     cover = pd.DataFrame([(rec.ids[row[0]], *row[1:]) for row in rows],
                          columns=["record", "model", "method", "window", "covered", "pvalue", "records", "outside"])
     cover = cover.astype({"covered": "boolean", "window": np.float64, "pvalue": np.float64, "records": np.int64})

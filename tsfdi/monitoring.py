@@ -23,7 +23,7 @@ import pandas as pd
 
 from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, option, probability
-from tsfdi.coverage import Coverage, check_coverage, warn_if_not_covered
+from tsfdi.coverage import Coverage, check_coverage, warn_if_not_covered, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.sequential import SPRT, msprt, renewal_walk
 from tsfdi.detection.whiteness import LjungBox
@@ -738,7 +738,8 @@ class Monitor:
         Warns
         -----
         CoverageWarning
-            One per record the baseline does not cover (as :meth:`run`), naming the record and its summaries out.
+            When the baseline does not cover some records: for one, naming it and its summaries out (as :meth:`run`);
+            for several, one warning with their number and the first of them (the summaries out in ``outside``).
 
         Raises
         ------
@@ -766,8 +767,8 @@ class Monitor:
         else:
             table = _screen_rows(records, slice(0, None), self, progress=progress)
         # the check ran where the records are; its warnings are said here, on the driver
-        for r, out in table["outside"][table["outside"] != ""].items():
-            warnings.warn(f"Monitor.screen: record {r}: {out}", CoverageWarning, stacklevel=2)
+        warn_records_not_covered(table["outside"][table["outside"] != ""], "Monitor.screen",
+                                 judged=int(table["covered"].notna().sum()), see="the 'outside' column")
         return table
 
     def result(self) -> MonitorResult:
