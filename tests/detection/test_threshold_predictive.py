@@ -57,3 +57,15 @@ def test_predictive_threshold_has_the_stated_tail(records, shape, tau):
                           law.threshold_)
         assert abs(tail / pf - 1) < 0.02, (records, shape, pf, tail / pf)
         assert law.pvalue(law.threshold_) == pytest.approx(pf, rel=1e-6)
+
+
+def test_predictive_pvalue_is_zero_at_infinity_and_decreasing():
+    """The predictive law's p-value: ~1 at 0, decreasing, and 0 at an infinite statistic (the interpolation grid
+    ends near the float range; beyond it the grid's last p-value was returned)."""
+    rng = np.random.default_rng(7)
+    thr = ScaledChi2Threshold(0.01)
+    stat = np.concatenate([rng.chisquare(5, size=20) * np.exp(0.1 * rng.standard_normal()) for _ in range(5)])
+    thr.calibrate(stat[:, None], groups=np.repeat(np.arange(5), 20))
+    p = thr.pvalue(np.array([0.0, 1.0, 10.0, 100.0, 1e6, 1e300, np.inf]))
+    assert p[0] > 1 - 1e-9 and np.all(np.diff(p) < 0) and p[-1] == 0.0
+    assert abs(float(thr.pvalue(thr.threshold_)) - 0.01) < 1e-9

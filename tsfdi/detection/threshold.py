@@ -735,7 +735,8 @@ class ScaledChi2Threshold:
         if self.record_law_ is not None:
             with np.errstate(divide="ignore"):
                 lv = np.log(v)
-            return np.minimum(1.0, np.exp(np.interp(lv, *self._pvalue_grid)))
+            p = np.minimum(1.0, np.exp(np.interp(lv, *self._pvalue_grid)))
+            return np.where(v == np.inf, 0.0, p)      # (the grid ends near the float range: no tail beyond it)
         with np.errstate(over="ignore"):                # beyond the float range: a tail of 0
             tail = special.chdtrc(self.df_, v[..., None] / self.scale_).mean(axis=-1)
         return np.minimum(1.0, tail * self._pvalue_factor)
