@@ -118,6 +118,21 @@ def test_out_of_fleet_record_names_the_summaries_and_warns(baseline):
         cov.covered = True
 
 
+def test_given_held_out_residuals_are_read_on_every_call(baseline):
+    """The fitting records' summaries are kept between calls only for the model's own held-out residuals: residuals
+    the caller gives are read each time, so a series changed in place between two calls changes the check."""
+    b, rng = baseline
+    y = fleet(rng, 1)[0]
+    held = [np.array(h, dtype=np.float64) for h in b.model.held_out_residuals()]
+    own = coverage(b, y, held_out=held)
+    for h in held:
+        h *= 3.0                                                           # louder fitting records, in place
+    louder = coverage(b, y, held_out=held)
+    assert not np.allclose(louder.table["fit_mean"], own.table["fit_mean"])
+    pd.testing.assert_frame_equal(coverage(b, y).table, own.table)         # the model's own residuals: as given first
+    pd.testing.assert_frame_equal(coverage(b, y).table, own.table)         # (and kept)
+
+
 def test_covered_record_does_not_warn(baseline):
     b, rng = baseline
     cov = coverage(b, b.model.records[0].values)           # a fitting record itself lies within the spread

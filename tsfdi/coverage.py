@@ -114,8 +114,9 @@ def _summaries(y: np.ndarray, e: np.ndarray, lags: int) -> np.ndarray:
     return np.concatenate(out)
 
 
-#: results -> (lags, held_out given, its held-out residuals, the fitting records' summaries): one entry per (immutable)
-#: results object, so that judging many records against one baseline summarises its fitting records once
+#: results -> {lags: the fitting records' summaries on the model's own held-out residuals}: one entry per (immutable)
+#: results object, so that judging many records against one baseline summarises its fitting records once (only what
+#: the library computed is kept: a ``held_out`` the caller gives may change between calls)
 _FIT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -219,17 +220,16 @@ def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 
 
 def _fit_summaries(results: Any, held_out: Any, lags: int, idx: pd.MultiIndex) -> np.ndarray:
     """The summaries of the fitting records of ``results`` (one row each) on their held-out residuals (``held_out``,
-    default ``results.model.held_out_residuals()``); kept for the next call with the same results, ``held_out`` and
-    ``lags``."""
-    known = _FIT.get(results)
-    if known is not None and known[0] == lags and known[1] is held_out:
-        return known[3]
+    default ``results.model.held_out_residuals()``, whose summaries are kept for the next call with the same results
+    and ``lags``)."""
+    if held_out is None:
+        known = _FIT.setdefault(results, {})
+        if lags not in known:
+            known[lags] = _fit_summaries(results, results.model.held_out_residuals(), lags, idx)
+        return known[lags]
     model = results.model
     records, k = model.records, model.data.nchan
     n = len(records)
-    given = held_out
-    if held_out is None:
-        held_out = known[2] if known is not None and known[1] is None else model.held_out_residuals()
     if isinstance(held_out, (str, bytes)) or not hasattr(held_out, "__len__") or len(held_out) != n:
         raise ValueError(f"held_out must hold one residual series per fitting record ({n}), got "
                          f"{len(held_out) if hasattr(held_out, '__len__') else type(held_out).__name__}")
@@ -247,7 +247,6 @@ def _fit_summaries(results: Any, held_out: Any, lags: int, idx: pd.MultiIndex) -
         i, j = np.argwhere(bad)[0]
         raise ValueError(f"summary {idx[j][0]}[{idx[j][1]}] of fitting record {i} is not finite (a constant or "
                          "perfectly predicted channel)")
-    _FIT[results] = (lags, given, held_out, F)
     return F
 
 

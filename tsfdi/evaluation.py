@@ -40,7 +40,7 @@ from scipy import stats
 from tsfdi._data import as_signal, refuse_masked, window_samples
 from tsfdi._validation import boolean, float_like, option
 from tsfdi.baselines import Baselines, Records
-from tsfdi.coverage import MIN_RECORDS, check_coverage, warn_records_not_covered
+from tsfdi.coverage import check_coverage, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
@@ -534,10 +534,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                       for lvl, b in levels.items() for (m, meth) in tests for W in wins},
             "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
-            "detection": detection, "sprt": None,
-            # the healthy model's fitting records' held-out residuals, for the summary check: only where it can run
-            "held_out": {(lvl, m): _healthy_held_out(b, m) for lvl, b in levels.items() for m in models
-                         if len(b.models[m][healthy].model.records) >= MIN_RECORDS}}
+            "detection": detection, "sprt": None}
     if sequential:
         plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): _sprt_scale(b, m) if b.heldout else 1.0
                                                        for lvl, b in levels.items() for m in models}}
@@ -663,23 +660,6 @@ def _sprt_scale(base: Baselines, m: str) -> float:
         except ValueError as err:
             raise ValueError(f"the sequential rule cannot be scale-corrected for model {m!r} on the baselines' "
                              f"held-out residuals: {err}") from None
-    return known[m]
-
-
-#: Baselines -> {model: held-out residuals of the healthy model's fitting records}, for the coverage check of
-#: evaluate when the baselines do not keep them (calibrate=False): computed once per (immutable) baselines and model,
-#: on the driver, not per call, record or worker
-_HELD_OUT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _healthy_held_out(base: Baselines, m: str) -> list:
-    """The held-out residuals of the healthy model ``m``'s fitting records: the baselines' own, else computed once."""
-    kept = base.heldout.get((m, base.healthy))
-    if kept:
-        return kept
-    known = _HELD_OUT.setdefault(base, {})
-    if m not in known:
-        known[m] = base.models[m][base.healthy].model.held_out_residuals()
     return known[m]
 
 
@@ -814,7 +794,7 @@ def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: i
             memo = id(test) if test.calibrated else None
             if memo not in done:
                 try:
-                    done[memo] = check_coverage(test, res, x, held_out=plan["held_out"].get(key))
+                    done[memo] = check_coverage(test, res, x)
                 except ValueError as err:
                     done[memo] = f"coverage not checked: {err}"
             cov = done[memo]
