@@ -228,17 +228,16 @@ def records_needed(false_alarm: float) -> int:
     return j
 
 
-def _posterior_sd(sa2: float, samp: float, j: int, extra: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Standard deviations ``sqrt(max(s2 - samp, 0) + s2 / j + extra)`` of a new record's anchor about the records'
-    mean anchor on Gauss-Legendre nodes of the posterior ``s2 = sa2 (j - 1) / chi2(j - 1)``, and their weights
-    (``extra``: the sampling variance of the new record's own estimated anchor, 0 for its true anchor)."""
+def _posterior_sd(sa2: float, samp: float, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """Standard deviations ``sqrt(max(s2 - samp, 0) + s2 / j)`` of a new record's true anchor about the records'
+    mean anchor on Gauss-Legendre nodes of the posterior ``s2 = sa2 (j - 1) / chi2(j - 1)``, and their weights."""
     from scipy import stats
 
     t, wt = _NODES                                        # Gauss-Legendre on ln u, u the chi2 law's probability
     lu = 0.5 * math.log(1e-14) * (1.0 - t)
     u, wu = np.exp(lu), 0.5 * -math.log(1e-14) * wt * np.exp(lu)
     s2 = sa2 * (j - 1.0) / stats.chi2.ppf(u, j - 1.0)
-    return np.sqrt(np.maximum(s2 - samp, 0.0) + s2 / j + extra), wu / wu.sum()
+    return np.sqrt(np.maximum(s2 - samp, 0.0) + s2 / j), wu / wu.sum()
 
 
 def _anchor_table(sa2: float, samp: float, j: int) -> tuple[np.ndarray, np.ndarray]:
