@@ -24,7 +24,8 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.exceptions import CoverageWarning
-from tsfdi.models import ARXResults
+from tsfdi.detection.threshold import EmpiricalThreshold
+from tsfdi.models import ARXResults, FPMeanResults
 from tsfdi.summary import Summary
 from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
 
@@ -78,6 +79,66 @@ def _residuals(res: Any, signal: Any, u: Any, what: str) -> Any:
     return res.residuals(signal)
 
 
+def _mean_models(models: Mapping, arg: str) -> bool:
+    """Whether the models are window-mean models (:class:`~tsfdi.models.FPMeanResults`); a mixture with residual
+    models is refused (their likelihoods are of different data)."""
+    kinds = {isinstance(res, FPMeanResults) for res in models.values()}
+    if len(kinds) > 1:
+        raise TypeError(f"{arg} mixes FPMean results with residual models (AR, VAR, ARX): an FPMean model judges a "
+                        "window's mean, the others its residuals; identify with one kind")
+    return kinds == {True}
+
+
+def _mean_thresholds(test: Any, models: Mapping, arg: str) -> dict:
+    """Name -> the calibrated :class:`~tsfdi.EmpiricalThreshold` of the statistic of each FPMean model, or None (no
+    threshold: the model accepts every window)."""
+    def check(t: Any, what: str) -> EmpiricalThreshold | None:
+        if t is None:
+            return None
+        if not isinstance(t, EmpiricalThreshold):
+            raise TypeError(f"{what} must be a calibrated EmpiricalThreshold (or None) for FPMean models: their "
+                            "statistic min_k (m - M(k))' S^-1 (m - M(k)) is not a residual test's; got "
+                            f"{type(t).__name__}")
+        t.check_fitted()
+        return t
+
+    if isinstance(test, Mapping):
+        missing = [name for name in models if name not in test]
+        if missing:
+            raise ValueError(f"{arg} is a mapping but has no threshold for the model(s) {missing}")
+        return {name: check(test[name], f"{arg}[{name!r}]") for name in models}
+    return dict.fromkeys(models, check(test, arg))
+
+
+def _mean_decision(res: FPMeanResults, q: float, ll: float, kh: np.ndarray, thr: EmpiricalThreshold | None
+                   ) -> Decision:
+    """The decision of an FPMean model on one window: statistic ``min_k q(k)`` against the threshold (none: accept),
+    the window's log-likelihood and ``k`` in ``details``."""
+    limit = np.inf if thr is None else thr.threshold_
+    return Decision(statistic=q, threshold=limit, pvalue=np.nan if thr is None else float(thr.pvalue(q)),
+                    alpha=np.nan if thr is None else thr.false_alarm, reject=bool(q > limit), df=np.nan,
+                    nobs=res.model.window,
+                    null_hypothesis="the window's mean lies on the model's surface at some k (the model fits)",
+                    alternative_hypothesis="it does not (another class, or a fault)",
+                    details={"loglik": float(ll), "k_hat": kh}, channels=("joint",),
+                    test="FPMean" + ("" if thr is None else " + EmpiricalThreshold"))
+
+
+def _mean_scores(res: FPMeanResults, sig: Signal, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Statistic, log-likelihood and ``k`` of every window of ``sig`` (numpy arrays)."""
+    plain = dataclasses.replace(sig, kind="numpy", index=None)
+    return (np.asarray(res.statistic(plain, step)), np.asarray(res.loglike(plain, step)),
+            np.asarray(res.estimate_k(plain, step)))
+
+
+def _mean_check(res: Any, name: str, sig: Signal, window: int, arg: str) -> None:
+    data = res.model.data
+    sig.match_channels(data.channels, "signal", named=data.named)
+    if window != res.model.window:
+        raise ValueError(f"{arg} {name!r} was fitted on windows of {res.model.window} samples; the window is "
+                         f"{window} (its covariance S holds for its own window length only)")
+
+
 def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: Any = None) -> Decision:
     """Healthy-vs-fault decision: drive ``signal`` through ``baseline`` and test the residuals.
 
@@ -88,11 +149,15 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
         ``DataArray`` with a channel coordinate) is matched to a model fitted on named data by channel name, in
         any order; an array by position.
     baseline : fitted results
-        The healthy model :math:`M_0` (``tsfdi.AR(...).fit()`` or ``tsfdi.VAR(...).fit()``).
-    test : ResidualTest, optional
+        The healthy model :math:`M_0` (``tsfdi.AR(...).fit()`` or ``tsfdi.VAR(...).fit()``), or a functionally
+        pooled mean of windows (:class:`tsfdi.models.FPMean` results): then ``signal`` is one window of the model's
+        ``window`` samples and the statistic is its :meth:`~tsfdi.models.FPMeanResults.statistic`.
+    test : ResidualTest or EmpiricalThreshold, optional
         :class:`~tsfdi.FTest`, :class:`~tsfdi.LjungBox` (default, ``lags=20``) or :class:`~tsfdi.GLRT`.
         What the test needs from the baseline (reference variance and degrees of freedom for the F test,
-        sigma for the GLRT) is taken from the fitted results.
+        sigma for the GLRT) is taken from the fitted results. For an FPMean baseline: an
+        :class:`~tsfdi.EmpiricalThreshold` calibrated on the statistic of healthy records the baseline was not fitted
+        on (required: the statistic's null law has no closed form); the decision's p-value is the threshold's.
     u : array_like, optional
         Input signal for an input-output baseline (``tsfdi.ARX(...).fit()``), passed to its ``residuals``;
         required for such a baseline, refused for AR / VAR baselines.
@@ -117,15 +182,28 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     Raises
     ------
     TypeError
-        ``baseline`` is not fitted results, ``test`` is not a residual test, ``u`` is missing for an ARX baseline
-        or given for an AR / VAR one, or ``signal`` is not numeric.
+        ``baseline`` is not fitted results, ``test`` is not a residual test (for an FPMean baseline: not a
+        calibrated EmpiricalThreshold), ``u`` is missing for an ARX baseline or given for another, or ``signal`` is
+        not numeric.
     ValueError
         ``signal`` is not 1-D / 2-D, holds NaN / inf or a masked value, is too short for the model and test, lacks
         a channel of the baseline or has one it does not know (named), or has a channel count other than the
-        baseline's.
+        baseline's; for an FPMean baseline, ``signal`` is not one window of its length, or ``test`` is an
+        uncalibrated threshold.
     """
-    test = _check_test(test)
     sig = as_signal(signal, "signal", allow_constant=True)
+    if isinstance(baseline, FPMeanResults):
+        if u is not None:
+            raise TypeError("u is only for input-output (ARX) models: an FPMean baseline has no input; leave u out")
+        if test is None:
+            raise TypeError("test: an FPMean baseline needs a calibrated EmpiricalThreshold of its statistic "
+                            "(EmpiricalThreshold(alpha).calibrate(baseline.statistic(healthy record)) on healthy "
+                            "records it was not fitted on)")
+        thr = _mean_thresholds(test, {"baseline": baseline}, "test")["baseline"]
+        _mean_check(baseline, "baseline", sig, sig.nobs, "baseline")
+        q, ll, kh = _mean_scores(baseline, sig, sig.nobs)
+        return _mean_decision(baseline, q[0], ll[0], kh[0], thr)
+    test = _check_test(test)
     _check_model(baseline, "baseline", sig, "baseline")
     resid = _residuals(baseline, sig, u, "baseline")
     decision = test.test(resid, **test.reference(baseline))
@@ -177,7 +255,12 @@ class Identification:
     @property
     def ranking(self) -> tuple:
         """Model names from most to least plausible: by signal-level p-value (descending), ties and tests
-        without p-values broken by the largest statistic/threshold ratio (ascending)."""
+        without p-values broken by the largest statistic/threshold ratio (ascending). For window-mean models
+        (:class:`~tsfdi.models.FPMean`, whose decisions carry ``details["loglik"]``): by the window's
+        log-likelihood (descending), the likelihood rule of :func:`identify_windows`."""
+        if all("loglik" in d.details for d in self.decisions.values()):
+            return tuple(sorted(self.decisions, key=lambda name: -self.decisions[name].details["loglik"]))
+
         def key(item):
             name, d = item
             p = d.signal_pvalue
@@ -238,12 +321,18 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
         model's channels by name (see :func:`detect`).
     models : mapping
         Name -> fitted results (``tsfdi.AR(...).fit()`` / ``tsfdi.VAR(...).fit()``), e.g. the healthy
-        model and one model per fault type. All must have the signal's number of channels.
+        model and one model per fault type. All must have the signal's number of channels. Or name ->
+        functionally pooled means of windows (:class:`tsfdi.models.FPMean` results, all of them: the kinds do not
+        mix): ``signal`` is then one window of the models' ``window`` samples, each model's decision carries the
+        window's :meth:`~tsfdi.models.FPMeanResults.loglike` (``details["loglik"]``) and ``k``
+        (``details["k_hat"]``), and :attr:`Identification.ranking` orders the models by it.
     test : ResidualTest or mapping, optional
         The test applied to each model's residuals (default ``LjungBox()``), or a mapping name -> test: each
         model with its own test, e.g. thresholds calibrated on that model's held-out residuals
         (``LjungBox(...).calibrate(spec.held_out_residuals(), window=...)`` for each fault model's spec), so that
-        every candidate's accept / reject has a known size.
+        every candidate's accept / reject has a known size. For FPMean models: a calibrated
+        :class:`~tsfdi.EmpiricalThreshold` of their statistic, a mapping name -> threshold, or ``None`` (default: no
+        threshold, every model accepts and only the ranking decides).
     u : array_like, optional
         Input signal when the candidates are input-output models (``tsfdi.ARX``): required for those, refused for
         AR / VAR models.
@@ -258,8 +347,19 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
         As :func:`detect`, for every model; also for ``models`` that is not a non-empty mapping.
     """
     models = _check_models(models)
-    tests = _model_tests(test, models)
     sig = as_signal(signal, "signal", allow_constant=True)
+    if _mean_models(models, "models"):
+        if u is not None:
+            raise TypeError("u is only for input-output (ARX) models: FPMean models have no input; leave u out")
+        thresholds = _mean_thresholds(test, models, "test")
+        for name, res in models.items():
+            _mean_check(res, name, sig, sig.nobs, "models")
+        decisions = {}
+        for name, res in models.items():
+            q, ll, kh = _mean_scores(res, sig, sig.nobs)
+            decisions[name] = _mean_decision(res, q[0], ll[0], kh[0], thresholds[name])
+        return Identification(decisions=decisions, test=_test_name(thresholds))
+    tests = _model_tests(test, models)
     for name, res in models.items():
         _check_model(res, name, sig, "models")
     decisions = {}
@@ -270,8 +370,9 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
 
 
 def _test_name(tests: dict) -> str:
-    """The class name of the tests (one name when every model has a test of the same class)."""
-    names = list(dict.fromkeys(type(t).__name__ for t in tests.values()))
+    """The class name of the tests (one name when every model has a test of the same class; ``"none"`` for an
+    FPMean model without a threshold)."""
+    names = list(dict.fromkeys("none" if t is None else type(t).__name__ for t in tests.values()))
     return names[0] if len(names) == 1 else "+".join(names)
 
 
@@ -397,7 +498,10 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     ----------
     signal, models, test :
         As in :func:`identify`; the models are AR / VAR results (the windowed engine filters the signal alone, so
-        input-output ARX models are refused: use :func:`identify` with ``u`` on each window).
+        input-output ARX models are refused: use :func:`identify` with ``u`` on each window), or FPMean results
+        (``window`` must be theirs; the result's ``windows.loglik`` is each window's
+        :meth:`~tsfdi.models.FPMeanResults.loglike`, so ``decide("likelihood")`` gives the class of the largest
+        likelihood among the accepted models, among all when no threshold is given).
     window, step : int or time span
         As in pandas ``rolling``: an int counts samples, a time span (``"2s"``, ``pandas.Timedelta``) is converted
         with the signal's time index or ``fs``.
@@ -418,18 +522,44 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
         and the test's lags.
     """
     models = _check_models(models)
-    tests = _model_tests(test, models)
     sig = as_signal(signal, "signal", allow_constant=True)
     rate = sampling_frequency(sig, fs)
     window = window_samples(window, "window", rate, minimum=2)
     step = window_samples(step, "step", rate, minimum=1)
     if window > sig.nobs:
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
+    timed = sig.index is not None and sampling_frequency(sig, None) is not None      # a time index, not positions
+    if _mean_models(models, "models"):
+        return _mean_windows(sig, models, test, window, step, pd.Index(sig.index) if timed else None, rate)
+    tests = _model_tests(test, models)
     for name, res in models.items():
         _check_model(res, name, sig, "models")
     engine = ResidualWindows(models).fit(sig)
     ws = engine.statistics(tests, window=window, step=step, loglik=False)
-    timed = sig.index is not None and sampling_frequency(sig, None) is not None      # a time index, not positions
     return WindowedIdentification(ws, tuple(tests.values()),
                                   tuple(tests[name].reference(res) for name, res in models.items()), engine,
                                   pd.Index(sig.index) if timed else None, rate)
+
+
+def _mean_windows(sig: Signal, models: Mapping, test: Any, window: int, step: int, time: Any,
+                  rate: float | None) -> WindowedIdentification:
+    """:func:`identify_windows` with FPMean models: every window's statistic, threshold and log-likelihood."""
+    thresholds = _mean_thresholds(test, models, "test")
+    for name, res in models.items():
+        _mean_check(res, name, sig, window, "models")
+    scores = [_mean_scores(res, sig, step) for res in models.values()]
+    starts = np.arange(0, sig.nobs - window + 1, step)
+    q = np.stack([sc[0] for sc in scores], axis=1)
+    thr = np.array([np.inf if t is None else t.threshold_ for t in thresholds.values()])
+    pv = np.stack([np.full(len(starts), np.nan) if t is None else np.asarray(t.pvalue(sc[0]), dtype=float)
+                   for t, sc in zip(thresholds.values(), scores)], axis=1)
+    decisions = tuple(tuple(_mean_decision(res, sc[0][w], sc[1][w], sc[2][w], t)
+                            for res, sc, t in zip(models.values(), scores, thresholds.values()))
+                      for w in range(len(starts)))
+    rej = (q > thr)[:, :, None]
+    ws = WindowStatistics(models=tuple(models), channels=("joint",), starts=starts, window=window, step=step,
+                          nobs=(window,) * len(models), statistic=q[:, :, None],
+                          threshold=np.broadcast_to(thr, q.shape)[:, :, None].copy(), pvalue=pv[:, :, None],
+                          channel_reject=rej, reject=rej[:, :, 0], loglik=np.stack([sc[1] for sc in scores], axis=1),
+                          decisions=decisions)
+    return WindowedIdentification(ws, tuple(thresholds.values()), ({},) * len(models), None, time, rate)

@@ -9,12 +9,12 @@ from tsfdi.models.ar import AR, ARResults
 from tsfdi.models.archive import load
 from tsfdi.models.arx import ARX, ARXResults
 from tsfdi.models.emran import EMRAN, EMRANResults
-from tsfdi.models.fp import (FPAR, FPARX, FPVAR, FPOrderSelection, FPResults, OperatingPointEstimate, fp_basis,
-                             select_fp_order)
+from tsfdi.models.fp import (FPAR, FPARX, FPVAR, FPMean, FPMeanResults, FPOrderSelection, FPResults,
+                             OperatingPointEstimate, fp_basis, select_fp_order)
 from tsfdi.models.recursive import RecursiveARX, RecursiveARXResults, RecursiveARXState
 from tsfdi.models.var import VAR, VARResults
 
 __all__ = ["AR", "ARResults", "ARX", "ARXResults", "EMRAN", "EMRANResults", "VAR", "VARResults", "RecursiveARX",
            "RecursiveARXResults", "RecursiveARXState", "HeldOutResiduals", "load",
-           "FPAR", "FPVAR", "FPARX", "FPResults", "OperatingPointEstimate", "FPOrderSelection", "select_fp_order",
+           "FPAR", "FPVAR", "FPARX", "FPResults", "FPMean", "FPMeanResults", "OperatingPointEstimate", "FPOrderSelection", "select_fp_order",
            "fp_basis"]

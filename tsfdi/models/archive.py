@@ -40,7 +40,9 @@ without the checksums; archives of a newer version are refused, not misread.
 This module imports no model family: the families that can be archived (AR, VAR, ARX) register their
 class here with :func:`register` when their module is imported (the functionally pooled FPAR, FPVAR, FPARX add the
 fields ``k`` (the operating point of every record), ``k_range``, and ``weights`` for a weighted fit, and the
-options ``degree``, ``basis``, ``weights``, ``k_names``), so the results' ``save`` method (in the
+options ``degree``, ``basis``, ``weights``, ``k_names``; the functionally pooled mean of windows FPMean stores the
+fields ``k`` and ``k_range`` and the options ``window``, ``grid``, ``degree``, ``basis``, ``k_names`` instead of an
+order), so the results' ``save`` method (in the
 common base module) and :func:`load` share one format module without an import circle.
 """
 
@@ -85,9 +87,12 @@ _BUILDERS = {
     "FPARX": lambda cls, y, u, o: cls(y, u, o["k"], o["na"], o["nb"], o["nk"], o["degree"], o["trend"],
                                       basis=o["basis"], weights=o["weights"], hold_back=o["hold_back"],
                                       k_range=o["k_range"]),
+    # the functionally pooled mean of windows (tsfdi.models.fp.FPMean): no order, a window and a search grid
+    "FPMean": lambda cls, y, u, o: cls(y, o["k"], o["window"], o["degree"], basis=o["basis"], k_range=o["k_range"],
+                                       grid=o["grid"]),
 }
 #: the families whose archives hold operating points (fields ``k``, ``k_range``, optionally ``weights``)
-_FP_FAMILIES = ("FPAR", "FPVAR", "FPARX")
+_FP_FAMILIES = ("FPAR", "FPVAR", "FPARX", "FPMean")
 
 # what reading a damaged zip archive or member raises (zipfile, zlib, truncated reads, a bad compression type
 # or encryption flag, a member name that is not valid UTF-8)
@@ -563,7 +568,7 @@ def _read(p: Path) -> tuple[_Archive, dict, int, str]:
 
 # ------------------------------------------------------------------------------------------- public API
 def save(results: Any, path: Any) -> Path:
-    """Write ``results`` (AR, VAR or ARX) to ``path`` as a compressed ``.npz`` archive (format version 2).
+    """Write ``results`` (AR, VAR, ARX, or a functionally pooled FPAR, FPVAR, FPARX, FPMean) to ``path`` as a compressed ``.npz`` archive (format version 2).
 
     ``.npz`` is appended to a file name that does not end with it, as :func:`numpy.savez` does. The file is
     written next to its final name and renamed into place, so an interrupted save leaves no partial archive.
@@ -625,15 +630,20 @@ def save(results: Any, path: Any) -> Path:
 
     ymeta = records(model.records, "y")
     umeta = None if model.u_records is None else records(model.u_records, "u")
-    options = {"na": model.na, "nb": model.nb, "nk": model.nk, "trend": model.trend,
-               "hold_back": model.hold_back, "criterion": model.criterion}
-    if type(model).__name__ in _FP_FAMILIES:
+    family = type(model).__name__
+    if family == "FPMean":
+        options: dict[str, Any] = {"window": model.window, "grid": model.grid}
+    else:
+        options = {"na": model.na, "nb": model.nb, "nk": model.nk, "trend": model.trend,
+                   "hold_back": model.hold_back, "criterion": model.criterion}
+    if family in _FP_FAMILIES:
         arrays["k"] = np.asarray(model.k, dtype=np.float64)
         arrays["k_range"] = np.asarray(model.k_range, dtype=np.float64)
-        if results.weights is not None:
+        if getattr(results, "weights", None) is not None:
             arrays["weights"] = np.asarray(results.weights, dtype=np.float64)
-        options.update(degree=list(model.degree), basis=model.basis, weights=model.weights,
-                       k_names=list(model.k_names))
+        options.update(degree=list(model.degree), basis=model.basis, k_names=list(model.k_names))
+        if family != "FPMean":
+            options["weights"] = model.weights
     meta: dict[str, Any] = {"format": FORMAT, "version": VERSION, "family": type(model).__name__,
                             "options": options, "multi": model.multi, "y": ymeta, "u": umeta}
     payload = {"meta": _npy_bytes(np.array(json.dumps(meta)))}
@@ -670,7 +680,7 @@ def load(path: Any) -> Any:
 
     Returns
     -------
-    ARResults, VARResults or ARXResults
+    ARResults, VARResults, ARXResults, FPResults or FPMeanResults
         The results of the stored model with the stored parameters (not re-estimated).
 
     Raises
@@ -691,9 +701,12 @@ def load(path: Any) -> Any:
     archive, meta, version, family = _read(p)
 
     options = archive.entry(meta, "", "options", dict)
-    opts: dict[str, Any] = {k: archive.entry(options, "options.", k, int) for k in ("na", "nb", "nk", "hold_back")}
-    opts["trend"] = archive.choice(options, "options.", "trend", ("n", "c"))
-    opts["criterion"] = archive.choice(options, "options.", "criterion", ("logdet", "trace"))
+    if family == "FPMean":
+        opts: dict[str, Any] = {k: archive.entry(options, "options.", k, int) for k in ("window", "grid")}
+    else:
+        opts = {k: archive.entry(options, "options.", k, int) for k in ("na", "nb", "nk", "hold_back")}
+        opts["trend"] = archive.choice(options, "options.", "trend", ("n", "c"))
+        opts["criterion"] = archive.choice(options, "options.", "criterion", ("logdet", "trace"))
     fp = family in _FP_FAMILIES
     if fp:
         degree = archive.entry(options, "options.", "degree", list)
@@ -703,7 +716,8 @@ def load(path: Any) -> Any:
         opts["k_range"] = archive.float_array("k_range", 2)
         opts["degree"] = [archive.entry({"degree": g}, "options.", "degree", int) for g in degree]
         opts["basis"] = archive.choice(options, "options.", "basis", ("legendre", "chebyshev"))
-        opts["weights"] = archive.choice(options, "options.", "weights", ("pooled", "point"))
+        if family != "FPMean":
+            opts["weights"] = archive.choice(options, "options.", "weights", ("pooled", "point"))
     multi = archive.entry(meta, "", "multi", bool)
     ymeta = archive.entry(meta, "", "y", list)
     umeta = archive.entry(meta, "", "u", list, type(None))
@@ -720,11 +734,11 @@ def load(path: Any) -> Any:
         raise archive.damaged(f"the data (fields {fields}) do not fit the {family} options in field 'meta' "
                               f"({exc})") from None
     params = archive.float_array("params")
-    if params.shape != (model.df_eq, model.neqs):
-        raise archive.damaged(f"field 'params' has shape {params.shape}, the stored {family} model needs "
-                              f"{(model.df_eq, model.neqs)}")
+    shape = (model.n_basis, model.neqs) if family == "FPMean" else (model.df_eq, model.neqs)
+    if params.shape != shape:
+        raise archive.damaged(f"field 'params' has shape {params.shape}, the stored {family} model needs {shape}")
     weights = None
-    if fp and opts["weights"] == "point":
+    if fp and opts.get("weights") == "point":
         weights = archive.float_array("weights", model.neqs)
         if weights.shape[0] != len(model.records) or not (weights > 0).all():
             raise archive.damaged(f"field 'weights' must hold one positive weight per record and channel, shape "
@@ -732,4 +746,9 @@ def load(path: Any) -> Any:
     extra = sorted(set(archive.raw) - archive.used)
     if extra:
         raise archive.damaged(f"field(s) {', '.join(repr(f) for f in extra)} are not part of a model file")
+    if family == "FPMean":
+        try:
+            return model.results_class(model, params)
+        except ValueError as exc:
+            raise archive.damaged(f"the stored FPMean model cannot be rebuilt ({exc})") from None
     return model.results_class(model, params) if not fp else model.results_class(model, params, weights)
