@@ -596,3 +596,18 @@ def test_monitor_says_nothing_when_coverage_cannot_be_checked(models, fleet_base
         assert mon.run(loud).coverage is None
         table = mon.screen([loud])
     assert table["covered"].isna().all() and table["outside"].tolist() == [""]
+
+
+def test_functionally_pooled_models_are_refused_naming_at_k():
+    """An FP model has no single parameter set: Monitor asks for its point model ``.at(k)`` instead of failing with an
+    AttributeError inside the windowed engine."""
+    rng = np.random.default_rng(5)
+    recs = [record("healthy", 1500, rng) * (1 + 0.2 * k) for k in (0.0, 0.5, 1.0)]
+    fp = tsfdi.models.FPVAR(recs, [0.0, 0.5, 1.0], 2, degree=1).fit()
+    with pytest.raises(TypeError, match=r"^baseline is a functionally pooled model .*\.at\(k\)"):
+        tsfdi.Monitor(fp, window=200, fs=FS, test=FTest(alpha=0.01))
+    point = VAR(recs[0], 2).fit()
+    with pytest.raises(TypeError, match=r"^models\['f'\] is a functionally pooled model"):
+        tsfdi.Monitor(point, {"f": fp}, window=200, fs=FS, test=FTest(alpha=0.01))
+    monitor = tsfdi.Monitor(fp.at(0.5), window=200, fs=FS, test=FTest(alpha=0.01))
+    assert monitor.run(recs[1]).windows.shape[0] > 0

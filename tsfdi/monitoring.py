@@ -28,7 +28,7 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.sequential import SPRT, msprt, renewal_walk
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.exceptions import CoverageWarning
-from tsfdi.models import ARXResults
+from tsfdi.models import ARXResults, FPResults
 from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows
 
 __all__ = ["Monitor", "MonitorResult", "MonitorEvent", "rolling_variance"]
@@ -273,6 +273,11 @@ class Monitor:
         if isinstance(baseline, ARXResults):
             raise TypeError("baseline is an ARX (input-output) model: Monitor filters the output stream alone and "
                             "takes AR / VAR models")
+        pooled = [n for n, m in {"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}.items()
+                  if isinstance(m, FPResults)]
+        if pooled:
+            raise TypeError(f"{pooled[0]} is a functionally pooled model (FPResults): give its point model at the "
+                            "record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
         self.nchan = ResidualWindows({"healthy": baseline}).nchan
         if models:
             nf = ResidualWindows(models).nchan
