@@ -131,6 +131,18 @@ class Signal:
                       index=self.index, channels=channels, name=self.name, time_dim=self.time_dim,
                       channel_dim=self.channel_dim)
 
+    def channel(self, j: int) -> "Signal":
+        """Channel ``j`` alone as a scalar signal named after it (what a ``Series`` of that channel gives), with
+        its extremes (:func:`channel_extremes`) when this signal has them already."""
+        name = self.channels[j]
+        out = Signal(values=np.ascontiguousarray(self.values[:, j:j + 1]), kind=self.kind, vector=False,
+                     index=self.index, channels=[name], name=name, time_dim=self.time_dim,
+                     channel_dim=self.channel_dim)
+        kept = self.__dict__.get("_extremes")
+        if kept is not None:
+            object.__setattr__(out, "_extremes", (kept[0][j:j + 1], kept[1][j:j + 1]))
+        return out
+
     def wrap(self, values: np.ndarray, start: int = 0, *, channels: list | None = None,
              name: Any = None, vector: bool | None = None) -> Any:
         """Wrap an array whose rows are the samples ``start, start + 1, ...`` of this signal.
@@ -325,12 +337,13 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
 def channel_extremes(signal: Signal) -> tuple[np.ndarray, np.ndarray]:
     """Largest and smallest value of every channel of ``signal`` (two arrays of shape ``(nchan,)``, not to be
     modified): the ones :func:`as_signal` computed for its checks when it made this very object, else computed
-    here."""
+    here once and kept with it (a signal's values are not changed after it is made)."""
     kept = signal.__dict__.get("_extremes")
-    if kept is not None:
-        return kept
-    cols = np.ascontiguousarray(signal.values.T)
-    return cols.max(axis=1), cols.min(axis=1)
+    if kept is None:
+        cols = np.ascontiguousarray(signal.values.T)
+        kept = (cols.max(axis=1), cols.min(axis=1))
+        object.__setattr__(signal, "_extremes", kept)
+    return kept
 
 
 def _numeric_time(kind: str, index: pd.Index | None) -> bool:

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import (Signal, as_signal, is_xarray, refuse_masked, rolling_variance, sampling_frequency,
-                         window_samples)
+from tsfdi._data import (Signal, as_signal, channel_extremes, is_xarray, refuse_masked, rolling_variance,
+                         sampling_frequency, window_samples)
 from tsfdi._validation import boolean, float_like, int_like, option, probability
 from tsfdi.coverage import MIN_RECORDS, Coverage, coverage
 from tsfdi.detection.base import ResidualTest
@@ -825,6 +825,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     sels: dict = {}
     segments: dict = {}
     chosen_states = list(zip(chosen.tolist(), rec.state[chosen].tolist()))     # (numpy scalar indexing costs)
+    ranges: dict = {}                   # segment length -> its RangeIndex
     for state in (healthy,) + faults:
         idx = [i for i, st in chosen_states if st == state]
         if not idx:
@@ -837,14 +838,15 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         segments[state] = segs
         # the segments as the signals DataFrames / Series of them would give (pandas kind, RangeIndex, channel
         # names), validated once as arrays: building and reading the pandas objects cost more than the order search
-        # (finite=False: the choice above checked every fitting record for non-finite values already)
-        sigs = [dataclasses.replace(as_signal(g, f"record {rec.ids[i]}", vector=True, allow_constant=True,
-                                              finite=False),
-                                    kind="pandas", index=pd.RangeIndex(g.shape[0]), channels=list(rec.channels))
+        # (finite=False: the choice above checked every fitting record for non-finite values already), made as
+        # Signals directly (dataclasses.replace reads every field's definition each call), one index per length
+        ranges.update((g.shape[0], pd.RangeIndex(g.shape[0])) for g in segs if g.shape[0] not in ranges)
+        sigs = [Signal(values=as_signal(g, f"record {rec.ids[i]}", vector=True, allow_constant=True,
+                                        finite=False).values,
+                       kind="pandas", vector=True, index=ranges[g.shape[0]], channels=list(rec.channels))
                 for i, g in zip(idx, segs)]
-        # (each segment's channels as contiguous rows: numpy reduces axis 0 of an (n, k) array slowly for small k)
-        flat = [[c for c, f in zip(rec.channels, gt.min(axis=1) == gt.max(axis=1)) if f]
-                for gt in (np.ascontiguousarray(g.T) for g in segs)]
+        # each segment's extremes, kept with its signal for the models' units (channel_extremes)
+        flat = [[c for c, hi, lo in zip(rec.channels, *channel_extremes(g)) if hi == lo] for g in sigs]
         for m in names:
             for i, f in zip(idx, flat):
                 const = f if m == "var" else [c for c in f if c == m]
@@ -855,10 +857,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                 sel = select_order(sigs, var_max_lags, "var")
             else:
                 j = rec.channels.index(m)
-                # (Signal made directly: dataclasses.replace reads every field's definition each call)
-                sel = select_order([Signal(values=np.ascontiguousarray(g.values[:, [j]]), kind=g.kind, vector=False,
-                                           index=g.index, channels=[m], name=m, time_dim=g.time_dim,
-                                           channel_dim=g.channel_dim) for g in sigs], max_lags, "ar")
+                sel = select_order([g.channel(j) for g in sigs], max_lags, "ar")
             sels[(m, state)] = sel
             p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
                 min(order, sel.max_lags)
