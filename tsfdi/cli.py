@@ -152,10 +152,10 @@ def _reword(exc: Exception, data: _Data, subs: tuple = (), record: int = 0) -> V
 
 
 def _each(data: _Data, run: Callable) -> Iterator[tuple[int, pd.DataFrame, Any]]:
-    """``(i, frame, run(frame))`` record by record, a library error told about record ``i`` (:func:`_reword`)."""
+    """``(i, frame, run(i, frame))`` record by record, a library error told about record ``i`` (:func:`_reword`)."""
     for i, frame in enumerate(data.frames):
         try:
-            out = run(frame)
+            out = run(i, frame)
         except (ValueError, TypeError) as exc:
             raise _reword(exc, data, record=i) from None
         yield i, frame, out
@@ -222,14 +222,17 @@ def _check_out(flag: str, path: str | None) -> None:
 
 # ---------------------------------------------------------------------------------------------------- models
 def _load(flag: str, spec: str, path: str) -> Any:
-    from tsfdi.models import ARXResults, load
+    from tsfdi.models import ARResults, ARXResults, FPResults, VARResults, load
 
     try:
         res = load(path)
     except (OSError, ValueError, TypeError) as exc:
         raise ValueError(f"{flag} {spec}: {exc}") from None
-    if isinstance(res, ARXResults):
-        raise ValueError(f"{flag} {spec}: an ARX (input-output) model; the command line tests AR / VAR models")
+    if not isinstance(res, (ARResults, VARResults, FPResults)) or getattr(res.model, "nb", 0):
+        kind = ("an ARX (input-output)" if isinstance(res, ARXResults) or getattr(res.model, "nb", 0) else
+                f"a {type(res).__name__.removesuffix('Results')}")
+        raise ValueError(f"{flag} {spec}: {kind} model; the command line tests AR / VAR models and their "
+                         "functionally pooled forms (FP-AR / FP-VAR)")
     return res
 
 
@@ -263,6 +266,115 @@ def _check_channels(data: _Data, models: dict) -> None:
         name, ch = next(iter(bad.items()))
         raise ValueError(f"--columns: {data.path} gives {k} column(s) {data.columns} but {name} was fitted on "
                          f"{len(ch)} channel(s) {ch}; choose them with --columns")
+
+
+def _k_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME=VALUE[,VALUE...]",
+                   help="operating point of the functionally pooled models (from 'tsfdi fit --k'): NAME=VALUE, the "
+                        "logged value of every record, or NAME=VALUE,VALUE,... one per data file in the order given, "
+                        "repeated for each of the models' parameters (e.g. --k depth=2.5); or 'estimate': each "
+                        "record's maximum-likelihood operating point (tsfdi.models.FPResults.estimate_k on the whole "
+                        "record), printed with its 95%% interval, the record then tested at it. Required with a "
+                        "functionally pooled model, refused without one")
+
+
+def _k_given(args: argparse.Namespace, data: _Data, *, fit: bool = False) -> dict[str, np.ndarray]:
+    """``--k NAME=VALUE,...`` as NAME -> one value per record of ``data`` (each file's value on its records; one
+    value for every file, except when fitting)."""
+    files = [os.fspath(f) for f in args.data]
+    per_file = [files.index(f) for f in data.rec.files]
+    given: dict[str, np.ndarray] = {}
+    for name, values in args.k:
+        if name in given:
+            raise ValueError(f"--k {name}: given twice")
+        if len(values) != len(files) and (fit or len(values) != 1):
+            raise ValueError(f"--k {name}: {len(values)} value(s) for {len(files)} data file(s); give one per file, "
+                             "in the order of the files" + ("" if fit else ", or one for every file"))
+        given[name] = np.asarray(values if len(values) > 1 else values * len(files))[per_file]
+    return given
+
+
+def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tuple[list[dict], list[dict]]:
+    """Per record of ``data``: the point results of every model of ``models`` (keyed by how the user gave it,
+    ``"--baseline fp.npz"`` / ``"--models f1"``; a functionally pooled one at its ``--k``, logged or estimated and
+    printed) and the operating points used (flag -> {parameter: value})."""
+    from tsfdi.models import FPResults
+
+    fp = {flag: m for flag, m in models.items() if isinstance(m, FPResults)}
+    if args.k and not fp:
+        raise ValueError(f"--k: the operating point of a functionally pooled model ('tsfdi fit --k'), but "
+                         f"{' and '.join(models)} {'is a point model' if len(models) == 1 else 'are point models'}; "
+                         "leave --k out")
+    if fp and not args.k:
+        flag, m = next(iter(fp.items()))
+        names = m.model.k_names
+        over = ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(names, m.model.k_range))
+        raise ValueError(f"{flag} is a functionally pooled model over {over}: give its operating point with "
+                         f"{' '.join(f'--k {n}=VALUE' for n in names)} (logged) or --k estimate (from each record)")
+    if fp and args.threshold == "calibrated":
+        raise ValueError(f"--threshold calibrated: {next(iter(fp))} is a functionally pooled model, and tsfdi does not "
+                         "compute its held-out residuals (each fitting record through the model fitted on the others, "
+                         "at its own k) yet; use --threshold theoretical")
+    estimate = bool(args.k) and any(name == "estimate" for name, _ in args.k)
+    if estimate and len(args.k) > 1:
+        raise ValueError("--k estimate estimates every parameter of the models; give it alone")
+    given = {} if estimate or not fp else _k_given(args, data)
+    for flag, m in fp.items():
+        missing = [n for n in m.model.k_names if n not in given]
+        if not estimate and missing:
+            raise ValueError(f"--k: {flag} is a functionally pooled model over {', '.join(m.model.k_names)}; give "
+                             f"{' '.join(f'--k {n}=VALUE' for n in missing)}")
+    unused = [n for n in given if not any(n in m.model.k_names for m in fp.values())]
+    if unused:
+        raise ValueError(f"--k {unused[0]}: no model is pooled over {unused[0]!r} (their operating parameters: "
+                         f"{', '.join(dict.fromkeys(n for m in fp.values() for n in m.model.k_names))})")
+    points, used = [], []
+    for i, frame in enumerate(data.frames):
+        at, ks = {}, {}
+        for flag, m in models.items():
+            if flag not in fp:
+                at[flag] = m
+                continue
+            if estimate:
+                k = _estimate(data, i, frame, flag, m)
+            else:
+                k = np.array([given[n][i] for n in m.model.k_names])
+            at[flag] = m.at(k)
+            ks[flag] = dict(zip(m.model.k_names, k.tolist()))
+        points.append(at)
+        used.append(ks)
+    return points, used
+
+
+def _estimate(data: _Data, i: int, frame: pd.DataFrame, flag: str, model: Any) -> np.ndarray:
+    """:meth:`tsfdi.models.FPResults.estimate_k` of record ``i``, printed with its interval (warnings naming the
+    record)."""
+    if max(model.model.degree) == 0:
+        raise ValueError(f"--k estimate: {flag} has degree 0: it does not depend on "
+                         f"{', '.join(model.model.k_names)}, which cannot be estimated from it; give "
+                         f"{' '.join(f'--k {n}=VALUE' for n in model.model.k_names)}")
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            est = model.estimate_k(frame)
+        except (ValueError, TypeError) as exc:
+            raise _reword(exc, data, record=i) from None
+    where = f"{data.rec.origin(i)}, {flag}"
+    for w in said:
+        warnings.warn(f"{where}: {w.message}", w.category, stacklevel=2)
+    level = f"{100 * (1 - est.alpha):g} %"
+    parts = [f"{n} = {v:.6g} ({level} interval {lo:.6g} to {hi:.6g})"
+             for n, v, (lo, hi) in zip(est.names, est.k_hat, est.conf_int)]
+    print(f"{where}: estimated {', '.join(parts)}" + (
+        "; at a bound of the fitted range: the record may lie outside it" if est.at_bound else ""))
+    return np.asarray(est.k_hat, dtype=float)
+
+
+def _k_columns(used: dict, baseline: str | None = None) -> dict[str, float]:
+    """The operating points of one record as table columns: ``k_NAME`` for ``baseline`` (the flag of the baseline),
+    ``k_NAME_MODEL`` for a model of ``--models`` (the prefix keeps them apart from the table's own columns)."""
+    return {(f"k_{n}" if flag == baseline else f"k_{n}_{flag.rpartition(' ')[2]}"): v
+            for flag, ks in used.items() for n, v in ks.items()}
 
 
 def _test(args: argparse.Namespace, threshold: Any = "theoretical") -> Any:
@@ -340,7 +452,7 @@ def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool
 
 def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
     """Fewest samples a tested window needs (the models' largest order plus the test's ``min_resid``), and why."""
-    order = max(int(m.lags) for m in models.values())
+    order = max(int(m.model.na) for m in models.values())
     test = " + ".join({"whiteness": f"--lags {args.lags}", "variance": "the F test", "mean": "the mean test"}[m]
                       for m in args.method)
     return order + _test(args).min_resid, f"the models' largest order ({order}) with {test}"
@@ -531,10 +643,8 @@ def _order_args(p: argparse.ArgumentParser) -> None:
                    help="BIC of a VAR from the log-determinant or the trace of the residual covariance")
 
 
-def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
-    """``select_order`` on the records of ``args`` (pooled when several)."""
-    from tsfdi.selection import select_order
-
+def _fit_records(args: argparse.Namespace) -> tuple[_Data, str, list]:
+    """The records of ``args`` to fit on, the model kind (``"ar"`` / ``"var"``) and the signals."""
     data = _read(args, require_choice=True)
     data = _drop_short(data, args.max_lags + 2, f"--max-lags {args.max_lags}")
     k = len(data.columns)
@@ -543,7 +653,14 @@ def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
         raise ValueError(f"--model ar needs one column, got {k} {data.columns}: pick one with --columns")
     if model == "var" and k < 2:
         raise ValueError(f"--model var needs at least two columns, got {data.columns}: add some with --columns")
-    ys = [f.iloc[:, 0] if model == "ar" else f for f in data.frames]
+    return data, model, [f.iloc[:, 0] if model == "ar" else f for f in data.frames]
+
+
+def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
+    """``select_order`` on the records of ``args`` (pooled when several)."""
+    from tsfdi.selection import select_order
+
+    data, model, ys = _fit_records(args)
     try:
         sel = select_order(ys if len(ys) > 1 else ys[0], args.max_lags, model, trend=args.trend,
                            criterion=args.criterion)
@@ -559,14 +676,32 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--coefficients", action="store_true", help="print the coefficient tables too (default: the "
                    "model's header only; tsfdi.load(FILE).summary() shows them in Python)")
     p.add_argument("--quiet", action="store_true", help="print only the one-line result and where it was saved")
+    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME=VALUE,VALUE,...",
+                   help="operating parameter of the records, making the model functionally pooled (FP-AR / FP-VAR, "
+                        "tsfdi.models.FPVAR: its coefficients are Legendre polynomials of k, fitted on every record "
+                        "at once): one value per data file, in the order of the files, every record of a file at "
+                        "its file's value, e.g. --k depth=0,0,4 for three files (at least two distinct values); "
+                        "repeat --k for several parameters (--k speed=2,5,8 --k mass=1.2,1.2,1.5)")
+    p.add_argument("--degree", type=lambda t: opt.integer(t, 0), default=None,
+                   help="with --k: the polynomials' degree in every parameter (default: the degree of smallest "
+                        "BIC, 0 .. --max-degree, with the order, on a common sample: tsfdi.models.select_fp_order)")
+    p.add_argument("--max-degree", type=lambda t: opt.integer(t, 0), default=None,
+                   help="with --k: largest degree searched (default 2, or one less than the fewest distinct values "
+                        "of a parameter)")
 
 
 @command("fit", "fit an AR / VAR baseline model (order by BIC) on records of a CSV, netCDF or flight-log file and "
-                "save it (.npz)", _fit_args)
+                "save it (.npz); with --k, a functionally pooled model over operating points", _fit_args)
 def _fit(args: argparse.Namespace) -> int:
     _check_out("--out", args.out)
     if args.lags is not None and args.lags > args.max_lags:
         raise ValueError(f"--lags {args.lags} exceeds --max-lags {args.max_lags}")
+    if args.k is not None:
+        return _fit_fp(args)
+    for flag, value in (("--degree", args.degree), ("--max-degree", args.max_degree)):
+        if value is not None:
+            raise ValueError(f"{flag} is the degree of a functionally pooled model: give the records' operating "
+                             "points with --k, or leave it out")
     sel, data, model = _order_selection(args)
     res = sel.fit(args.lags)
     if bool(np.asarray(sel.values["exact"])[list(sel.orders).index(res.lags)]):
@@ -580,6 +715,66 @@ def _fit(args: argparse.Namespace) -> int:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
     print(f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) at {data.rec.fs:g} Hz "
           f"({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}")
+    if not args.quiet:
+        summary = res.summary()
+        print(str(summary if args.coefficients else dataclasses.replace(summary, tables=[])))
+    print(f"saved to {written}")
+    return 0
+
+
+def _fit_fp(args: argparse.Namespace) -> int:
+    """``fit --k``: an FP-AR / FP-VAR over the records' operating points, order and degree by BIC unless given."""
+    from tsfdi.models import FPAR, FPVAR, select_fp_order
+
+    if any(name == "estimate" for name, _ in args.k):
+        raise ValueError("--k estimate is for detect / identify / monitor (the k of a record under a fitted model); "
+                         "fit needs the operating point of every data file: --k NAME=VALUE,VALUE,...")
+    data, model, ys = _fit_records(args)
+    k = pd.DataFrame(_k_given(args, data, fit=True))
+    distinct = k.nunique()
+    if (distinct < 2).any():
+        name = distinct.idxmin()
+        raise ValueError(f"--k {name}: every record is at {name} = {k[name].iloc[0]:g}; a functionally pooled model "
+                         "needs records at two or more operating points")
+    most = int(distinct.min()) - 1          # a degree needs one more distinct value of every parameter
+    if None not in (args.degree, args.max_degree) and args.degree > args.max_degree:
+        raise ValueError(f"--degree {args.degree} exceeds --max-degree {args.max_degree}")
+    for flag, value in (("--degree", args.degree), ("--max-degree", args.max_degree)):
+        if value is not None and value > most:
+            raise ValueError(f"{flag} {value}: {distinct.idxmin()} takes {most + 1} distinct values in the records, "
+                             f"enough for degree {most} at most")
+    max_degree = next(v for v in (args.degree, args.max_degree, min(2, most)) if v is not None)
+    subs = (("max_lags", "--max-lags"), ("lags=", "--lags "), ("degree=", "--degree "), ("k: ", "--k: "))
+    try:
+        if args.lags is not None and args.degree is not None:
+            res = {"ar": FPAR, "var": FPVAR}[model](ys, k, args.lags, args.degree, args.trend).fit()
+            how = "given"
+        else:
+            sel = select_fp_order(ys, k, args.max_lags, max_degree, model, trend=args.trend)
+            bic = sel.table["bic"]
+            if args.lags is not None:
+                bic = bic[bic.index.get_level_values("lags") == args.lags]
+            if args.degree is not None:
+                bic = bic[bic.index.get_level_values("degree") == args.degree]
+            if not np.isfinite(bic).any():
+                raise ValueError("no order and degree asked for gives a well-conditioned fit")
+            lags, degree = bic.idxmin()
+            res = sel.fit(int(lags), int(degree))
+            how = f"BIC over lags 1..{args.max_lags}, degree 0..{max_degree}"
+    except (ValueError, TypeError) as exc:
+        raise _reword(exc, data, subs) from None
+    try:
+        written = res.save(args.out)
+    except OSError as exc:
+        raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
+    m = res.model
+    over = ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(m.k_names, m.k_range))
+    print(f"FP-{model.upper()}({m.na}), degree {', '.join(map(str, m.degree))} ({how}) over {over} on {data.columns} "
+          f"from {len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz "
+          f"({res.nobs} samples): BIC {res.bic:.6g}")
+    if max(m.degree) == 0:
+        print(f"note: degree 0: the model does not depend on {', '.join(m.k_names)} (one pooled {model.upper()}), "
+              f"which detect / identify / monitor --k estimate cannot estimate from it; --degree 1 fits a dependence")
     if not args.quiet:
         summary = res.summary()
         print(str(summary if args.coefficients else dataclasses.replace(summary, tables=[])))
@@ -610,6 +805,7 @@ def _detect_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--baseline", required=True, help="healthy model (.npz from 'tsfdi fit')")
     _window_args(p, "window length (default: each whole record)")
     _test_args(p)
+    _k_arg(p)
     p.add_argument("--out", default=None, help="write the table to this CSV file")
 
 
@@ -622,27 +818,32 @@ def _detect(args: argparse.Namespace) -> int:
     _check_out("--out", args.out)
     baseline = _load("--baseline", args.baseline, args.baseline)
     data = _read(args, _channels(baseline))
-    _check_channels(data, {f"--baseline {args.baseline}": baseline})
-    _warn_uncovered(args.baseline, baseline, data)
+    flag = f"--baseline {args.baseline}"
+    _check_channels(data, {flag: baseline})
     rows = []
     if args.window is None:
-        test = _tests(args, {}, None)
         data = _drop_short(data, *_min_samples(args, {"baseline": baseline}))
+        points, used = _operating_points(args, data, {flag: baseline})
+        _warn_uncovered(args.baseline, [p[flag] for p in points], data)
+        test = _tests(args, {}, None)
         # the library's own coverage warning ("detect: ...") is the one _warn_uncovered said above, naming the file
-        for i, frame, d in _each(data, lambda frame: _quiet(detect, frame, baseline, test)):
+        for i, frame, d in _each(data, lambda i, frame: _quiet(detect, frame, points[i][flag], test)):
             print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.rec.fs:g} Hz, {frame.index[0]:g} s to "
                   f"{frame.index[-1]:g} s):\n{str(d.summary())}\n")
             per_channel = [np.atleast_1d(np.asarray(a))[None, :] for a in (d.statistic, d.threshold, d.pvalue,
                                                                             d.reject)]
-            rows.append(_detect_rows(data, frame, [0], len(frame), d.channels, *per_channel))
+            rows.append(_detect_rows(data, frame, [0], len(frame), d.channels, *per_channel).assign(
+                **_k_columns(used[i], flag)))
     else:
         W, S = _windows_in_samples(args, data, {"baseline": baseline})
         data = _drop_short(data, W, f"--window {args.window}")
-        test = _tests(args, {"baseline": (f"--baseline {args.baseline}", baseline)}, W)
-        for _, frame, ws in _each(data, lambda frame: ResidualWindows({"baseline": baseline}).fit(frame).statistics(
-                test, window=W, step=S, loglik=False)):
+        points, used = _operating_points(args, data, {flag: baseline})
+        _warn_uncovered(args.baseline, [p[flag] for p in points], data)
+        test = _tests(args, {"baseline": (flag, baseline)}, W)
+        for i, frame, ws in _each(data, lambda i, frame: ResidualWindows({"baseline": points[i][flag]}).fit(
+                frame).statistics(test, window=W, step=S, loglik=False)):
             rows.append(_detect_rows(data, frame, ws.starts, W, ws.channels, ws.statistic[:, 0], ws.threshold[:, 0],
-                                     ws.pvalue[:, 0], ws.channel_reject[:, 0]))
+                                     ws.pvalue[:, 0], ws.channel_reject[:, 0]).assign(**_k_columns(used[i], flag)))
     table = _table(rows, data)
     if args.window is not None:
         _show(table)
@@ -652,18 +853,20 @@ def _detect(args: argparse.Namespace) -> int:
     return 0
 
 
-def _warn_uncovered(path: str, baseline: Any, data: _Data) -> None:
-    """A warning per record of ``data`` that the records ``baseline`` was fitted on do not cover
+def _warn_uncovered(path: str, baselines: list, data: _Data) -> None:
+    """A warning per record of ``data`` that the records its baseline (``baselines[i]``: the ``--baseline`` model, at
+    the record's operating point when functionally pooled) was fitted on do not cover
     (:func:`tsfdi.coverage.coverage` at its default rate), when they are enough to say (an AR / VAR fitted on at least
     :data:`~tsfdi.coverage.MIN_RECORDS` records): its decisions are then out of the baseline's domain."""
     from tsfdi.coverage import MIN_RECORDS, coverage, warn_if_not_covered
     from tsfdi.exceptions import CoverageWarning
     from tsfdi.models import ARResults, VARResults
 
-    if not isinstance(baseline, (ARResults, VARResults)) or len(baseline.model.records) < MIN_RECORDS:
+    first = baselines[0]
+    if not isinstance(first, (ARResults, VARResults)) or len(first.model.records) < MIN_RECORDS:
         return
-    held = baseline.model.held_out_residuals()
-    for i, frame in enumerate(data.frames):
+    held = first.model.held_out_residuals()
+    for i, (frame, baseline) in enumerate(zip(data.frames, baselines)):
         where = f"{data.rec.origin(i)} against --baseline {path}"
         try:
             cov = coverage(baseline, frame, held_out=held)
@@ -711,6 +914,7 @@ def _identify_args(p: argparse.ArgumentParser) -> None:
                         "with its decision time")
     p.add_argument("--sprt-alpha", type=opt.probability, default=0.01,
                    help="error probability of the sequential rule's bound (--rule sprt)")
+    _k_arg(p)
     p.add_argument("--out", default=None, help="write the table to this CSV file")
 
 
@@ -723,18 +927,18 @@ def _identify_sequential(args: argparse.Namespace, data: _Data, models: dict) ->
         raise ValueError("--window does not apply to --rule sprt (one sequential decision per record); leave it out")
     if args.threshold != "theoretical":
         raise ValueError("--threshold calibrated does not apply to --rule sprt (no residual test); leave it out")
-    engine = ResidualWindows(models)
-    order = max(engine.orders.values())
+    order = max(int(m.model.na) for m in models.values())
     data = _drop_short(data, order + 2, f"the models' largest order ({order}) with --rule sprt")
+    points, used = _operating_points(args, data, {f"--models {n}": m for n, m in models.items()})
     rows = []
-    for _, frame, seq in _each(data, lambda frame: msprt(engine.fit(frame).loglik(), alpha=args.sprt_alpha,
-                                                         models=list(models))):
+    for i, frame, seq in _each(data, lambda i, frame: msprt(ResidualWindows(dict(zip(models, points[i].values()))).fit(
+            frame).loglik(), alpha=args.sprt_alpha, models=list(models))):
         t = frame.index.to_numpy()
         decided = seq.label >= 0
         rows.append(pd.DataFrame({"start": [t[order]],
                                   "decision_time": [t[order + seq.decision_time - 1] if decided else np.nan],
                                   "status": ["identified" if decided else "undecided"],
-                                  "label": [list(models)[seq.label] if decided else ""]}))
+                                  "label": [list(models)[seq.label] if decided else ""], **_k_columns(used[i])}))
     return rows
 
 
@@ -756,11 +960,13 @@ def _identify(args: argparse.Namespace) -> int:
     else:
         W, S = _windows_in_samples(args, data, models)
         data = _drop_short(data, W, f"--window {args.window}")
+    points, used = _operating_points(args, data, {f"--models {n}": m for n, m in models.items()})
     test = _tests(args, {n: (f"--models {n}", m) for n, m in models.items()}, None if args.window is None else W)
     rows = []
     whole = args.window is None         # each record is one window
-    for _, frame, wins in _each(data, lambda frame: identify_windows(
-            frame, models, test, window=len(frame) if whole else W, step=len(frame) if whole else S)):
+    for i, frame, wins in _each(data, lambda i, frame: identify_windows(
+            frame, dict(zip(models, points[i].values())), test, window=len(frame) if whole else W,
+            step=len(frame) if whole else S)):
         start = frame.index.to_numpy()[wins.starts]
         table = pd.DataFrame({"start": start, "end": np.round(start + wins.windows.window / data.rec.fs, 9)})
         for j, name in enumerate(wins.models):
@@ -769,7 +975,7 @@ def _identify(args: argparse.Namespace) -> int:
         # the status is that of the paper rule (how many models accept), whichever rule picks the label
         table["status"] = wins.status
         table["label"] = [lab or "" for lab in wins.decide(args.rule)]
-        rows.append(table)
+        rows.append(table.assign(**_k_columns(used[i])))
     table = _table(rows, data)
     _show(table)
     _write("--out", table, args.out)
@@ -801,6 +1007,7 @@ def _monitor_args(p: argparse.ArgumentParser) -> None:
                         "identification's bound")
     p.add_argument("--sprt-ratio", type=opt.positive, default=2.0,
                    help="--rule sprt: the residual variance ratio (to the baseline's) the detection SPRT tests for")
+    _k_arg(p)
     p.add_argument("--out", default=None, help="write the events to this CSV file")
 
 
@@ -819,7 +1026,7 @@ def _monitor_sequential(args: argparse.Namespace, data: _Data, models: dict) -> 
     if args.sprt_ratio == 1.0:
         raise ValueError("--sprt-ratio must differ from 1 (the fault's variance would be the baseline's)")
     S = window_samples(args.step, "--step", data.rec.fs, minimum=1)
-    order = max(int(m.lags) for m in models.values())
+    order = max(int(m.model.na) for m in models.values())
     data = _drop_short(data, order + 1, f"the models' largest order ({order}) with --rule sprt")
     print(f"sequential (SPRT, variance ratio {args.sprt_ratio:g}, alpha {args.sprt_alpha:g}), rows every "
           f"{data.span(S)}, at {data.rec.fs:g} Hz")
@@ -839,17 +1046,20 @@ def _monitor(args: argparse.Namespace) -> int:
     baseline = _load("--baseline", args.baseline, args.baseline)
     models = _load_models("--models", args.models) if args.models else {}
     data = _read(args, _channels(baseline))
-    given = {f"--baseline {args.baseline}": baseline, **{f"--models {n}": m for n, m in models.items()}}
+    flag = f"--baseline {args.baseline}"
+    given = {flag: baseline, **{f"--models {n}": m for n, m in models.items()}}
     _check_channels(data, given)
     V = window_samples(args.steady_window, "--steady-window", data.rec.fs, minimum=2)
     if args.rule == "sprt":
         data, S, detection_test, sprt = _monitor_sequential(args, data, {"baseline": baseline, **models})
+        points, used = _operating_points(args, data, given)
         W = test = None
     else:
         if args.window is None:
             raise ValueError("--window is required (except with --rule sprt)")
         W, S = _windows_in_samples(args, data, {"baseline": baseline, **models})
         data = _drop_short(data, W, f"--window {args.window}")
+        points, used = _operating_points(args, data, given)
         tests = _tests(args, {"": (f"--baseline {args.baseline}", baseline),
                               **{n: (f"--models {n}", m) for n, m in models.items()}}, W)
         if isinstance(tests, dict):         # calibrated: the baseline's own test detects, each model's identifies
@@ -858,15 +1068,22 @@ def _monitor(args: argparse.Namespace) -> int:
         else:
             test, detection_test = tests, None
         sprt = {}
-    try:
-        monitor = Monitor(baseline, models or None, window=W, step=S, fs=data.rec.fs, test=test,
-                          detection_test=detection_test, steady_window=V, rule=args.rule, **sprt)
-    except (ValueError, TypeError) as exc:      # the steady-state thresholds come from the --models' records
-        if str(exc).startswith("steady_window"):
-            raise _reword(exc, data, (("steady_window", "--steady-window"), (" or steady_thresholds", ""))) from None
-        raise ValueError(f"--baseline / --models: {exc}") from None
+
+    def build(at: dict) -> Monitor:
+        """The monitor of the point models ``at`` (one per record when some are functionally pooled)."""
+        healthy, *faults = at.values()
+        try:
+            return Monitor(healthy, dict(zip(models, faults)) or None, window=W, step=S, fs=data.rec.fs, test=test,
+                           detection_test=detection_test, steady_window=V, rule=args.rule, **sprt)
+        except (ValueError, TypeError) as exc:      # the steady-state thresholds come from the --models' records
+            if str(exc).startswith("steady_window"):
+                raise _reword(exc, data, (("steady_window", "--steady-window"), (" or steady_thresholds", ""))) \
+                    from None
+            raise ValueError(f"--baseline / --models: {exc}") from None
+
+    shared = None if any(used) else build(points[0])
     rows = []
-    for i, frame, result in _each(data, lambda frame: _quiet(monitor.run, frame)):
+    for i, frame, result in _each(data, lambda i, frame: _quiet((shared or build(points[i])).run, frame)):
         if result.coverage is not None:       # Monitor.run's check, said naming the file
             warn_if_not_covered(result.coverage, f"{data.rec.origin(i)} against --baseline {args.baseline}")
         events = result.to_frame()
@@ -877,7 +1094,7 @@ def _monitor(args: argparse.Namespace) -> int:
               f"{'-' if result.detection_time is None else f'{t0 + result.detection_time:g} s'}, label "
               f"{result.label or '-'}" + ("" if result.identification_time is None else
                                           f" (decided at {t0 + result.identification_time:g} s)"))
-        rows.append(events)
+        rows.append(events.assign(**_k_columns(used[i], flag)))
     table = _table(rows, data)
     _show(table)
     _write("--out", table, args.out)

@@ -17,7 +17,7 @@ import pandas as pd
 
 __all__ = ["HelpFormatter", "finite", "integer", "positive", "probability", "count", "seed", "two_or_more", "span",
            "spans", "instant", "duration", "time_from_start", "csv_list", "record_numbers", "where", "order", "METHODS",
-           "method"]
+           "method", "operating_point"]
 
 #: The residual tests of ``--method``: Ljung-Box whiteness, the F test of the variance, the mean-shift test.
 METHODS = ("whiteness", "variance", "mean")
@@ -186,3 +186,18 @@ def method(text: str) -> tuple[str, ...]:
     if len(set(names)) < len(names):
         raise argparse.ArgumentTypeError(f"must name each test once, got {text!r}")
     return tuple(names)
+
+
+def operating_point(text: str) -> tuple[str, list[float] | None]:
+    """``--k``: ``NAME=VALUE[,VALUE...]`` (the values of an operating parameter: one per data file, or one for all),
+    ``VALUE[,VALUE...]`` (the parameter named ``k``) or ``estimate`` (``("estimate", None)``: the operating point
+    estimated from each record)."""
+    word = text.strip()
+    if word.lower() == "estimate":
+        return "estimate", None
+    name, sep, values = word.partition("=")
+    name, parts = (name.strip(), csv_list(values)) if sep else ("k", csv_list(word))
+    if not name or not parts or not all(_bare_number(v) for v in parts):
+        raise argparse.ArgumentTypeError(f"must be NAME=VALUE[,VALUE...] such as 'depth=0,0,4' (one finite value per "
+                                         f"data file, or one for all), or 'estimate', got {text!r}")
+    return name, [float(v) for v in parts]

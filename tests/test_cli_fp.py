@@ -1,0 +1,201 @@
+"""Functionally pooled models on the command line (issue 32): ``tsfdi fit --k`` fits an FP-AR / FP-VAR over the
+operating points of the data files, and ``detect`` / ``identify`` / ``monitor`` test new records at a logged
+``--k NAME=VALUE`` or at the ``--k estimate`` of each record, exactly as the library does with ``FPResults.at(k)``."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import tsfdi
+from tsfdi.cli import main
+from tsfdi.models import FPVAR, select_fp_order
+
+FS = 100.0
+KS = (0.0, 0.5, 1.0)
+CRAZYPAD = Path(__file__).resolve().parents[1] / "data" / "crazypad" / "controller"
+CHANNELS = ("controller.r_roll,controller.r_pitch,controller.r_yaw,controller.cmd_roll,controller.cmd_pitch,"
+            "controller.cmd_yaw")
+
+
+def _record(k: float, n: int, rng) -> pd.DataFrame:
+    """A VAR(1) whose coefficients move with k (a known FP-VAR of degree 1)."""
+    y = np.zeros((n + 100, 2))
+    e = rng.standard_normal((n + 100, 2))
+    for t in range(1, n + 100):
+        y[t, 0] = (0.5 + 0.3 * k) * y[t - 1, 0] + e[t, 0]
+        y[t, 1] = 0.3 * y[t - 1, 0] + (0.2 - 0.4 * k) * y[t - 1, 1] + e[t, 1]
+    return pd.DataFrame({"time": np.arange(n) / FS, "a": y[100:, 0], "b": y[100:, 1]})
+
+
+@pytest.fixture(scope="module")
+def flights(tmp_path_factory):
+    """Three fitting files at k = 0, 0.5, 1, two new ones (k = 0.7 and 0.2), and the FP-VAR fitted by the command."""
+    folder = tmp_path_factory.mktemp("fp")
+    rng = np.random.default_rng(32)
+    fit = []
+    for k in KS:
+        fit.append(folder / f"k{k}.csv")
+        _record(k, 3000, rng).to_csv(fit[-1], index=False)
+    new = []
+    for k in (0.7, 0.2):
+        new.append(folder / f"new{k}.csv")
+        _record(k, 3000, rng).to_csv(new[-1], index=False)
+    model = folder / "fp.npz"
+    assert main(["fit", *map(str, fit), "--k", "a=0,0.5,1", "--lags", "1", "--degree", "1", "--out", str(model),
+                 "--quiet"]) == 0
+    return {"fit": fit, "new": new, "model": model, "folder": folder}
+
+
+def _frame(path) -> pd.DataFrame:
+    return pd.read_csv(path).set_index("time")
+
+
+def test_fit_with_k_is_the_library_fpvar(flights, capsys):
+    res = tsfdi.load(flights["model"])
+    ref = FPVAR([_frame(p) for p in flights["fit"]], pd.DataFrame({"a": KS}), 1, 1).fit()
+    assert type(res.model) is FPVAR and res.model.k_names == ["a"]
+    np.testing.assert_allclose(np.asarray(res.params), np.asarray(ref.params), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(res.model.k_range, [[0.0, 1.0]])
+    # order and degree by BIC: the minimum of select_fp_order on the same records
+    out = flights["folder"] / "bic.npz"
+    assert main(["fit", *map(str, flights["fit"]), "--k", "a=0,0.5,1", "--max-lags", "4", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    sel = select_fp_order([_frame(p) for p in flights["fit"]], pd.DataFrame({"a": KS}), 4, 2, "var")
+    lags, degree = sel.selected
+    assert f"FP-VAR({lags}), degree {degree} (BIC over lags 1..4, degree 0..2) over a in [0, 1]" in text
+    assert "from 3 record(s) at 3 operating point(s)" in text and "Operating parameters  a in [0, 1]" in text
+    np.testing.assert_allclose(np.asarray(tsfdi.load(out).params), np.asarray(sel.fit().params), rtol=1e-10)
+
+
+def test_detect_at_a_logged_k_is_detect_at_k(flights, capsys):
+    fp = tsfdi.load(flights["model"])
+    table = flights["folder"] / "detect.csv"
+    assert main(["detect", str(flights["new"][0]), "--baseline", str(flights["model"]), "--k", "a=0.7",
+                 "--method", "variance", "--alpha", "0.01", "--out", str(table)]) == 0
+    capsys.readouterr()
+    t = pd.read_csv(table)
+    ref = tsfdi.detect(_frame(flights["new"][0]), fp.at(0.7), tsfdi.FTest(alpha=0.01))
+    np.testing.assert_allclose(t[["statistic_a", "statistic_b"]].to_numpy()[0], ref.statistic, rtol=1e-12)
+    assert t["k_a"].tolist() == [0.7] and not t["fault"].any()
+    # windows, one value per file: each file tested at its own k
+    assert main(["detect", *map(str, flights["new"]), "--baseline", str(flights["model"]), "--k", "a=0.7,0.2",
+                 "--window", "5s", "--step", "5s", "--method", "variance", "--alpha", "0.01", "--out",
+                 str(table)]) == 0
+    t = pd.read_csv(table)
+    assert t.groupby("record")["k_a"].unique().map(list).to_dict() == {"new0.2.csv": [0.2], "new0.7.csv": [0.7]}
+    first = t[t["record"] == "new0.2.csv"].iloc[0]
+    ref = tsfdi.detect(_frame(flights["new"][1]).iloc[:500], fp.at(0.2), tsfdi.FTest(alpha=0.01))
+    np.testing.assert_allclose(first[["statistic_a", "statistic_b"]].to_numpy(float), ref.statistic, rtol=1e-10)
+
+
+def test_estimated_k_is_printed_with_its_interval_and_used(flights, capsys):
+    fp = tsfdi.load(flights["model"])
+    table = flights["folder"] / "est.csv"
+    assert main(["detect", *map(str, flights["new"]), "--baseline", str(flights["model"]), "--k", "estimate",
+                 "--method", "variance", "--alpha", "0.01", "--out", str(table)]) == 0
+    text = capsys.readouterr().out
+    t = pd.read_csv(table)
+    for path, true in zip(flights["new"], (0.7, 0.2)):
+        est = fp.estimate_k(_frame(path))
+        line = next(x for x in text.splitlines() if x.startswith(f"{path}, --baseline"))
+        k, lo, hi = map(float, re.search(r"estimated a = (\S+) \(95 % interval (\S+) to (\S+)\)", line).groups())
+        np.testing.assert_allclose([k, lo, hi], [est.k_hat[0], *est.conf_int[0]], rtol=1e-5)
+        assert lo < true < hi
+        row = t[t["record"] == path.name]
+        assert row["k_a"].iloc[0] == pytest.approx(est.k_hat[0], rel=1e-12)
+        ref = tsfdi.detect(_frame(path), fp.at(est.k_hat), tsfdi.FTest(alpha=0.01))
+        np.testing.assert_allclose(row[["statistic_a", "statistic_b"]].to_numpy()[0], ref.statistic, rtol=1e-12)
+
+
+def test_identify_and_monitor_take_fp_models(flights, capsys):
+    point = flights["folder"] / "point0.npz"
+    assert main(["fit", str(flights["fit"][0]), "--lags", "1", "--out", str(point), "--quiet"]) == 0
+    table = flights["folder"] / "ident.csv"
+    assert main(["identify", str(flights["new"][0]), "--models", f"fp={flights['model']}", f"k0={point}", "--k",
+                 "a=0.7", "--window", "10s", "--step", "10s", "--method", "variance", "--out", str(table)]) == 0
+    t = pd.read_csv(table)
+    fp = tsfdi.load(flights["model"])
+    ref = tsfdi.identify_windows(_frame(flights["new"][0]), {"fp": fp.at(0.7), "k0": tsfdi.load(point)},
+                                 tsfdi.FTest(alpha=1e-3), window=1000, step=1000)
+    np.testing.assert_allclose(t[["pvalue_fp", "pvalue_k0"]], ref.windows.min_pvalue, rtol=1e-10)
+    assert (t["k_a_fp"] == 0.7).all() and "k_a_k0" not in t and list(t["status"]) == list(ref.status)
+    capsys.readouterr()
+    assert main(["identify", *map(str, flights["new"]), "--models", f"fp={flights['model']}", f"k0={point}",
+                 "--k", "estimate", "--rule", "sprt", "--out", str(table)]) == 0
+    assert "new0.2.csv, --models fp: estimated a = " in capsys.readouterr().out
+    assert list(pd.read_csv(table).columns) == ["record", "start", "decision_time", "status", "label", "k_a_fp"]
+    events = flights["folder"] / "events.csv"
+    assert main(["monitor", *map(str, flights["new"]), "--baseline", str(flights["model"]), "--k", "a=0.7,0.2",
+                 "--window", "5s", "--step", "5s", "--method", "variance", "--alpha", "1e-6", "--out",
+                 str(events)]) == 0
+    text = capsys.readouterr().out
+    assert "new0.7.csv: detection at -, label -" in text and "new0.2.csv: detection at -, label -" in text
+
+
+def test_fp_errors_name_the_flag(flights, capsys):
+    fp, new, fit = str(flights["model"]), str(flights["new"][0]), list(map(str, flights["fit"]))
+    out = str(flights["folder"] / "x.npz")
+    cases = [
+        (["detect", new, "--baseline", fp],
+         f"--baseline {fp} is a functionally pooled model over a in [0, 1]: give its operating point with --k a=VALUE "
+         "(logged) or --k estimate (from each record)"),
+        (["detect", new, "--baseline", fp, "--k", "b=1"], f"--k: --baseline {fp} is a functionally pooled model over "
+                                                          "a; give --k a=VALUE"),
+        (["detect", new, "--baseline", fp, "--k", "a=1", "--k", "b=2"], "--k b: no model is pooled over 'b'"),
+        (["detect", new, "--baseline", fp, "--k", "a=1,2"], "--k a: 2 value(s) for 1 data file(s); give one per "
+                                                            "file, in the order of the files, or one for every file"),
+        (["detect", new, "--baseline", fp, "--k", "a=1", "--window", "5s", "--threshold", "calibrated"],
+         f"--threshold calibrated: --baseline {fp} is a functionally pooled model"),
+        (["detect", new, "--baseline", fp, "--k", "estimate", "--k", "a=1"], "--k estimate estimates every parameter"),
+        (["detect", new, "--baseline", fp, "--k", "a"], "argument --k: must be NAME=VALUE[,VALUE...]"),
+        (["fit", *fit, "--k", "a=0,1", "--out", out], "--k a: 2 value(s) for 3 data file(s); give one per file, in the "
+                                                      "order of the files\n"),
+        (["fit", *fit, "--k", "estimate", "--out", out], "--k estimate is for detect / identify / monitor"),
+        (["fit", *fit, "--k", "a=1,1,1", "--out", out], "--k a: every record is at a = 1; a functionally pooled "
+                                                        "model needs records at two or more operating points"),
+        (["fit", *fit, "--k", "a=0,1,1", "--degree", "2", "--out", out],
+         "--degree 2: a takes 2 distinct values in the records, enough for degree 1 at most"),
+        (["fit", *fit, "--k", "a=0,0.5,1", "--degree", "2", "--max-degree", "1", "--out", out],
+         "--degree 2 exceeds --max-degree 1"),
+        (["fit", *fit, "--degree", "1", "--out", out], "--degree is the degree of a functionally pooled model: give "
+                                                       "the records' operating points with --k"),
+    ]
+    for argv, said in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert said in err, (argv, err)
+    point = flights["folder"] / "point.npz"
+    assert main(["fit", fit[0], "--lags", "1", "--out", str(point), "--quiet"]) == 0
+    assert main(["detect", new, "--baseline", str(point), "--k", "a=1"]) == 2
+    assert (f"--k: the operating point of a functionally pooled model ('tsfdi fit --k'), but --baseline {point} is a "
+            "point model; leave --k out") in capsys.readouterr().err
+    flat = flights["folder"] / "flat.npz"
+    assert main(["fit", *fit, "--k", "a=0,0.5,1", "--lags", "1", "--degree", "0", "--out", str(flat)]) == 0
+    assert "note: degree 0: the model does not depend on a" in capsys.readouterr().out
+    assert main(["detect", new, "--baseline", str(flat), "--k", "estimate"]) == 2
+    assert f"--k estimate: --baseline {flat} has degree 0: it does not depend on a" in capsys.readouterr().err
+
+
+def test_crazypad_cut_depth_estimated_from_the_shipped_logs(tmp_path, capsys):
+    """Fit an FP-VAR over the depth removed from propeller M3 (0: the two normal logs, 4 mm: the cut log) on their
+    airborne part before 24 s; the depth of the part after 24 s, estimated from it alone, tells the cut log."""
+    files = [f"{CRAZYPAD}/normal_flight/E8_log00.csv.gz", f"{CRAZYPAD}/normal_flight/E8_log01.csv.gz",
+             f"{CRAZYPAD}/cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz"]
+    read = ["--time-unit", "ms", "--rows-where", "controller.cmd_thrust>0", "--margin", "1s", "--columns", CHANNELS]
+    model = tmp_path / "depth.npz"
+    assert main(["fit", *files, *read, "--stop", "24s", "--trend", "c", "--max-lags", "12", "--k", "depth=0,0,4",
+                 "--degree", "1", "--out", str(model), "--quiet"]) == 0
+    assert "over depth in [0, 4]" in capsys.readouterr().out
+    table = tmp_path / "detect.csv"
+    assert main(["detect", *files, *read, "--start", "24s", "--baseline", str(model), "--k", "estimate",
+                 "--method", "variance", "--alpha", "0.01", "--out", str(table)]) == 0
+    text = capsys.readouterr().out
+    depth = pd.read_csv(table).set_index("record")["k_depth"]
+    assert depth.max() == depth["cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0"] > 3.0
+    assert (depth.drop("cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0") < 1.0).all()
+    assert text.count("estimated depth = ") == 3
