@@ -125,8 +125,10 @@ def _mean_decision(res: FPMeanResults, q: float, ll: float, kh: np.ndarray, thr:
 
 
 def _mean_scores(res: FPMeanResults, sig: Signal, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Statistic, log-likelihood and ``k`` of every window of ``sig`` (numpy arrays)."""
-    plain = dataclasses.replace(sig, kind="numpy", index=None)
+    """Statistic, log-likelihood and ``k`` of every window of ``sig`` (numpy arrays; channels matched by name)."""
+    data = res.model.data
+    plain = dataclasses.replace(sig.match_channels(data.channels, "signal", named=data.named), kind="numpy",
+                                index=None)
     return (np.asarray(res.statistic(plain, step)), np.asarray(res.loglike(plain, step)),
             np.asarray(res.estimate_k(plain, step)))
 

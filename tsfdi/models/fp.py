@@ -1224,6 +1224,11 @@ def select_fp_order(y: Any, k: Any, max_lags: int, max_degree: int, model: str =
 
 # --------------------------------------------------------------------------------------------------------------
 # the functionally pooled mean of windows (the trim model)
+# the local refinement of k: a pattern search on 5 points per parameter over +- h about the best point so far, h
+# (first one grid cell) kept after a move and halved otherwise, until h < _REFINE_TOL * the range or _REFINE rounds
+_REFINE = 100
+_REFINE_TOL = 1e-7
+
 def _window_means(values: np.ndarray, window: int, starts: np.ndarray) -> np.ndarray:
     """Means of ``values`` (nobs, s) over ``[a, a + window)`` for every start ``a``, (windows, s), computed in chunks
     of at most ~4M samples (the mean of consecutive windows is that of the reshaped record)."""
@@ -1291,15 +1296,17 @@ class FPMean:
     k_range : array_like (d, 2), optional
         The interval of each parameter mapped onto ``[-1, 1]`` and searched for ``k`` (default: the range of ``k``).
     grid : int
-        Points per parameter of the search grid of ``k`` (>= 2; the grid's best point is then refined by bounded
-        local grids).
+        Points per parameter of the search grid of ``k`` (>= 2); the grid's best point is then refined by a pattern
+        search (5 points per parameter about the best point so far, their spacing halved when none is better,
+        bounded by ``k_range``) to ``1e-7`` of the range.
 
     Raises
     ------
     ValueError
         Fewer than 2 records, a record shorter than ``window`` or with a constant channel or NaN / inf (named
         ``y[i]``), records whose channels differ, ``k`` not one finite point per record, a parameter with fewer
-        distinct values than ``degree + 1``, no more records than basis functions, no record with two windows.
+        distinct values than ``degree + 1``, fewer records than basis functions plus channels, no record with two
+        windows.
     TypeError
         Non-numeric data or ``k``, a non-integer degree or grid, a ``window`` that is neither an int nor a time span.
 
@@ -1327,9 +1334,11 @@ class FPMean:
         if short:
             raise ValueError(f"y[{short[0]}] has {recs[short[0]].nobs} samples, fewer than window={self.window}")
         self.k, self.k_names, self.degree, self.k_range = _operating_setup(k, len(recs), degree, k_range)
-        p = int(np.prod([g + 1 for g in self.degree]))
-        if len(recs) <= p:
-            raise ValueError(f"degree {self.degree}: {p} basis functions need more than {len(recs)} records")
+        p, s = int(np.prod([g + 1 for g in self.degree])), first.nchan
+        if len(recs) < p + s:
+            raise ValueError(f"degree {self.degree}: {p} basis functions and {s} channel(s) need at least {p + s} "
+                             f"records (the records' covariance has records - basis functions degrees of freedom), "
+                             f"y has {len(recs)}")
         if all(r.nobs < 2 * self.window for r in recs):
             raise ValueError(f"y: no record holds two windows of {self.window} samples: the spread of the windows "
                              "about their record's mean cannot be estimated")
@@ -1480,8 +1489,7 @@ class FPMeanResults:
     # --- new windows
     def _profile(self, signal: Any, step: Any) -> tuple:
         """The signal, its window starts, and per window the smallest ``q(k)`` and its ``k``: the grid's best point
-        refined by local grids of 5 points per parameter over +- one grid cell, halved 8 times (bounded by
-        ``k_range``)."""
+        refined by a pattern search on local grids of 5 points per parameter (bounded by ``k_range``)."""
         m = self.model
         sig = as_signal(signal, "signal", allow_constant=True)
         sig = sig.match_channels(m.data.channels, "signal", named=m.data.named)
@@ -1504,17 +1512,21 @@ class FPMeanResults:
             best = np.argmin(qg, axis=1)
             kc = self._k_grid[best]
             qc = qg[np.arange(len(mc)), best]
-            h = (hi - lo) / (m.grid - 1)
-            for _ in range(8):
-                cand = np.clip(kc[:, None, :] + offs[None] * h, lo, hi)                   # (w, 5^d, d)
+            h = np.tile((hi - lo) / (m.grid - 1), (len(mc), 1))
+            tol = _REFINE_TOL * (hi - lo)
+            for _ in range(_REFINE):
+                active = (h > tol).any(axis=1)
+                if not active.any():
+                    break
+                cand = np.clip(kc[:, None, :] + offs[None] * h[:, None, :], lo, hi)       # (w, 5^d, d)
                 surf = fp_basis(cand.reshape(-1, d), m.degree, m.k_range, m.basis) @ self._params2d
                 dv = mc[:, None, :] - surf.reshape(len(mc), offs.shape[0], -1)
                 qq = np.einsum("wka,ab,wkb->wk", dv, self._S_inv, dv)
                 j = np.argmin(qq, axis=1)
-                better = qq[np.arange(len(mc)), j] < qc
+                better = (qq[np.arange(len(mc)), j] < qc) & active
                 kc = np.where(better[:, None], cand[np.arange(len(mc)), j], kc)
                 qc = np.where(better, qq[np.arange(len(mc)), j], qc)
-                h = h / 2
+                h = np.where(better[:, None], h, h / 2)
             q[c:c + len(mc)] = qc
             k_hat[c:c + len(mc)] = kc
         return sig, starts, q, k_hat
