@@ -568,7 +568,8 @@ def _read(p: Path) -> tuple[_Archive, dict, int, str]:
 
 # ------------------------------------------------------------------------------------------- public API
 def save(results: Any, path: Any) -> Path:
-    """Write ``results`` (AR, VAR, ARX, or a functionally pooled FPAR, FPVAR, FPARX, FPMean) to ``path`` as a compressed ``.npz`` archive (format version 2).
+    """Write ``results`` (AR, VAR, ARX, or a functionally pooled FPAR, FPVAR, FPARX, FPMean) to ``path`` as a
+    compressed ``.npz`` archive (format version 2).
 
     ``.npz`` is appended to a file name that does not end with it, as :func:`numpy.savez` does. The file is
     written next to its final name and renamed into place, so an interrupted save leaves no partial archive.
