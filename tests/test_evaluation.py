@@ -396,3 +396,21 @@ def test_evaluate_warns_of_records_the_baselines_do_not_cover(synthetic):
         none = tsfdi.evaluate(recs, first, **kw, **opts)          # one fitting record per state: nothing checked
     assert none.coverage.empty and list(none.coverage.columns) == list(cov.columns)
     assert none.records["covered"].isna().all()
+
+
+def test_functionally_pooled_models_are_refused_naming_at_k(synthetic, fitted):
+    """An FP model in the baselines is named with the way out (its point model .at(k)) instead of an AttributeError
+    from the coverage check; its point model at one k is evaluated as any VAR."""
+    import dataclasses
+
+    recs, states, ft = synthetic
+    healthy = [r[:1000] * (1 + 0.2 * k) for r, k in zip(recs[:3], (0.0, 0.5, 1.0))]
+    fp = tsfdi.models.FPVAR(healthy, [0.0, 0.5, 1.0], 2, degree=1).fit()
+    pooled = dataclasses.replace(fitted, models={**fitted.models, "var": {**fitted.models["var"], "healthy": fp}})
+    with pytest.raises(TypeError, match=r"^baselines.models\['var'\]\['healthy'\] is a functionally pooled model "
+                                        r".*\.at\(k\)"):
+        tsfdi.evaluate(recs, pooled, states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0,
+                       progress=False)
+    at = dataclasses.replace(pooled, models={**pooled.models, "var": {**pooled.models["var"], "healthy": fp.at(0.0)}})
+    ev = tsfdi.evaluate(recs, at, states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0, progress=False)
+    assert len(ev.records)

@@ -44,6 +44,7 @@ from tsfdi.coverage import check_coverage, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
+from tsfdi.models import FPResults
 from tsfdi.summary import Summary
 from tsfdi.detection.sequential import msprt, msprt_scale
 from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
@@ -484,6 +485,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     for m in models:
         if not isinstance(m, str) or m not in first.models:
             raise ValueError(f"models must be among the fitted models {list(first.models)}, got {m!r}")
+    pooled = next(((m, s) for b in ([first] if by_level is None else by_level.values()) for m in models
+                   for s, r in b.models[m].items() if isinstance(r, FPResults)), None)
+    if pooled:
+        raise TypeError(f"baselines.models[{pooled[0]!r}][{pooled[1]!r}] is a functionally pooled model (FPResults): "
+                        "evaluate tests every record with one point model per state; give its point model at an "
+                        "operating point, .at(k) (a mapping turbulence level -> Baselines for one point per level)")
     if not isinstance(windows, (list, tuple)):
         windows = [windows]
     wins = {window_samples(w, "windows", rec.fs, minimum=2): None for w in windows}
