@@ -466,7 +466,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     page = (root / "docs" / "guide" / "cli.md").read_text()
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
-    assert len(commands) == 15
+    assert len(commands) == 17
     pytest.importorskip("pyulog")
     (tmp_path / "data").symlink_to(root / "data")
     monkeypatch.chdir(tmp_path)
@@ -477,6 +477,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
         key = argv[1] + (" calibrated" if "--threshold calibrated" in line else "")
         key += f" {argv[2].split('/')[3]}" if argv[2].startswith("data/crazypad/") else ""      # its condition
         key += " 4 records" if "crazyflie4.npz" in line else ""
+        key += " depth" if "depth.npz" in line else ""
         printed[key] = capsys.readouterr().out
     # select-order: the orders the page quotes
     assert re.search(r"Selected \(min BIC\) +7\n", printed["select-order"])
@@ -507,6 +508,18 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     assert "from 4 record(s)" in printed["fit normal_flight 4 records"]
     cut = printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm 4 records"]
     assert cut.strip().splitlines()[-1] == "fault in 6 of 6 window(s)"
+    # the FP-VAR over the depth cut from M3: the estimates the page prints, its windows flagged (5 of the normal
+    # flights' 6, the cut log's 3) and the k_depth column
+    assert re.search(r"FP-VAR\(\d+\), degree 1 \(BIC over lags 1..12, degree 0..1\) over depth in \[0, 4\]",
+                     printed["fit normal_flight depth"])
+    said = re.findall(r"^(\S+) record 0, --baseline depth.npz: estimated depth = (.*)$",
+                      printed["detect normal_flight depth"], re.M)
+    for name, text in said:
+        assert f"{name} record 0, --baseline depth.npz: estimated depth = {text}" in page
+    assert len(said) == 3
+    table = [row.split() for row in printed["detect normal_flight depth"].splitlines() if ".csv.gz:0" in row]
+    assert [(r[0].split("/")[0], r[-2]) for r in table].count(("normal_flight", "True")) == 5
+    assert all(r[-2] == "True" for r in table if r[0].startswith("cut_")) and len(table) == 9
     # without --min-windows 5 the page's "6 non-overlapping windows, fewer than the default 30" is the message
     line = next(c for c in commands if "--baseline crazyflie.npz" in c)
     assert main(shlex.split(line.replace(" --min-windows 5", ""))[1:]) == 2
