@@ -182,20 +182,21 @@ def test_fp_errors_name_the_flag(flights, capsys):
 
 
 def test_crazypad_cut_depth_estimated_from_the_shipped_logs(tmp_path, capsys):
-    """Fit an FP-VAR over the depth removed from propeller M3 (0: the two normal logs, 4 mm: the cut log) on their
-    airborne part before 24 s; the depth of the part after 24 s, estimated from it alone, tells the cut log."""
+    """Fit an FP-VAR over the length cut from the 47 mm blades of propeller M3 (0: the two normal logs, 8 mm: the
+    cut log, 4 mm from each edge) on their airborne part before 24 s; the depth of the part after 24 s, estimated from
+    it alone, tells the cut log."""
     files = [f"{CRAZYPAD}/normal_flight/E8_log00.csv.gz", f"{CRAZYPAD}/normal_flight/E8_log01.csv.gz",
              f"{CRAZYPAD}/cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz"]
     read = ["--time-unit", "ms", "--rows-where", "controller.cmd_thrust>0", "--margin", "1s", "--columns", CHANNELS]
     model = tmp_path / "depth.npz"
-    assert main(["fit", *files, *read, "--stop", "24s", "--trend", "c", "--max-lags", "12", "--k", "depth=0,0,4",
+    assert main(["fit", *files, *read, "--stop", "24s", "--trend", "c", "--max-lags", "12", "--k", "depth=0,0,8",
                  "--degree", "1", "--out", str(model), "--quiet"]) == 0
-    assert "over depth in [0, 4]" in capsys.readouterr().out
+    assert "over depth in [0, 8]" in capsys.readouterr().out
     table = tmp_path / "detect.csv"
     assert main(["detect", *files, *read, "--start", "24s", "--baseline", str(model), "--k", "estimate",
                  "--method", "variance", "--alpha", "0.01", "--out", str(table)]) == 0
     text = capsys.readouterr().out
     depth = pd.read_csv(table).set_index("record")["k_depth"]
-    assert depth.max() == depth["cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0"] > 3.0
-    assert (depth.drop("cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0") < 1.0).all()
+    assert depth.max() == depth["cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0"] > 6.0
+    assert (depth.drop("cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0") < 2.0).all()
     assert text.count("estimated depth = ") == 3

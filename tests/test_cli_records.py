@@ -510,7 +510,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     assert cut.strip().splitlines()[-1] == "fault in 6 of 6 window(s)"
     # the FP-VAR over the depth cut from M3: the estimates the page prints, its windows flagged (5 of the normal
     # flights' 6, the cut log's 3) and the k_depth column
-    assert re.search(r"FP-VAR\(\d+\), degree 1 \(BIC over lags 1..12, degree 0..1\) over depth in \[0, 4\]",
+    assert re.search(r"FP-VAR\(\d+\), degree 1 \(BIC over lags 1..12, degree 0..1\) over depth in \[0, 8\]",
                      printed["fit normal_flight depth"])
     said = re.findall(r"^(\S+) record 0, --baseline depth.npz: estimated depth = (.*)$",
                       printed["detect normal_flight depth"], re.M)
