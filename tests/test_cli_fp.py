@@ -200,3 +200,33 @@ def test_crazypad_cut_depth_estimated_from_the_shipped_logs(tmp_path, capsys):
     assert depth.max() == depth["cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0"] > 6.0
     assert (depth.drop("cut_propeller_M3_4mm_4mm_39mm/E8_log00.csv.gz:0") < 2.0).all()
     assert text.count("estimated depth = ") == 3
+
+
+def test_crazypad_cut_series_unseen_depths_estimated(shared_crazypad, tmp_path, capsys):
+    """Real flights of the M3 cut series (../shared/data): an FP-VAR over the length cut (0, 2, 4, 6, 8 mm; two E8 logs
+    each) estimates the depth of logs at depths it never saw (3 and 7 mm) and of a normal log it did not fit: within
+    2.5 mm each, RMSE 0.85 mm when written (the FP guide's leave-one-depth-out RMSE over the series is 1.2 mm per
+    log)."""
+    folder = shared_crazypad / "controller"
+    read = ["--time-unit", "ms", "--rows-where", "controller.cmd_thrust>0", "--margin", "1s", "--columns", CHANNELS]
+    fit = {"normal_flight": 0, "cut_propeller_M3_1mm_1mm_45mm": 2, "cut_propeller_M3_2mm_2mm_43mm": 4,
+           "cut_propeller_M3_3mm_3mm_41mm": 6, "cut_propeller_M3_4mm_4mm_39mm": 8}
+    logs = {"normal_flight": ("00", "01"), "cut_propeller_M3_2mm_2mm_43mm": ("01", "02")}
+    files = [str(folder / c / f"E8_log{n}.csv.gz") for c in fit for n in logs.get(c, ("00", "01"))]
+    depths = [str(d) for d in fit.values() for _ in range(2)]
+    model = tmp_path / "series.npz"
+    assert main(["fit", *files, *read, "--trend", "c", "--max-lags", "12", "--k", "depth=" + ",".join(depths),
+                 "--degree", "1", "--out", str(model), "--quiet"]) == 0
+    assert "from 20 record(s) at 5 operating point(s)" in capsys.readouterr().out
+    new = {"cut_propeller_M3_1.5mm_1.5mm_44mm/E8_log00": 3, "cut_propeller_M3_1.5mm_1.5mm_44mm/E8_log01": 3,
+           "cut_propeller_M3_3.5mm_3.5mm_40mm/E8_log00": 7, "cut_propeller_M3_3.5mm_3.5mm_40mm/E8_log01": 7,
+           "normal_flight/E8_log02": 0}
+    table = tmp_path / "estimates.csv"
+    assert main(["detect", *(str(folder / f"{n}.csv.gz") for n in new), *read, "--baseline", str(model), "--k",
+                 "estimate", "--method", "variance", "--alpha", "0.01", "--out", str(table)]) == 0
+    assert capsys.readouterr().out.count("estimated depth = ") == 10          # two airborne records per log
+    t = pd.read_csv(table)                  # one row per record, in the order of the files
+    assert len(t) == 10
+    err = t["k_depth"] - [d for d in new.values() for _ in range(2)]
+    assert (err.abs() < 2.5).all(), t[["record", "k_depth"]]
+    assert np.sqrt(np.mean(err ** 2)) < 1.5
