@@ -137,6 +137,15 @@ def test_identify_and_monitor_take_fp_models(flights, capsys):
     assert "new0.7.csv: detection at -, label -" in text and "new0.2.csv: detection at -, label -" in text
 
 
+def test_a_logged_k_beyond_the_fitted_range_is_said(flights, capsys):
+    assert main(["detect", *map(str, flights["new"]), "--baseline", str(flights["model"]), "--k", "a=1.5,-0.25"]) == 0
+    err = capsys.readouterr().err
+    assert (f"tsfdi detect: warning: --k a=-0.25,1.5: outside the range --baseline {flights['model']} was fitted on "
+            "(a in [0, 1]), where its polynomials extrapolate") in err
+    assert main(["detect", str(flights["new"][0]), "--baseline", str(flights["model"]), "--k", "a=1"]) == 0
+    assert "warning" not in capsys.readouterr().err
+
+
 def test_fp_errors_name_the_flag(flights, capsys):
     fp, new, fit = str(flights["model"]), str(flights["new"][0]), list(map(str, flights["fit"]))
     out = str(flights["folder"] / "x.npz")

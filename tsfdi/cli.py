@@ -298,6 +298,7 @@ def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tu
     """Per record of ``data``: the point results of every model of ``models`` (keyed by how the user gave it,
     ``"--baseline fp.npz"`` / ``"--models f1"``; a functionally pooled one at its ``--k``, logged or estimated and
     printed) and the operating points used (flag -> {parameter: value})."""
+    from tsfdi.exceptions import CoverageWarning
     from tsfdi.models import FPResults
 
     fp = {flag: m for flag, m in models.items() if isinstance(m, FPResults)}
@@ -328,6 +329,13 @@ def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tu
     if unused:
         raise ValueError(f"--k {unused[0]}: no model is pooled over {unused[0]!r} (their operating parameters: "
                          f"{', '.join(dict.fromkeys(n for m in fp.values() for n in m.model.k_names))})")
+    for flag, m in fp.items():          # a logged point beyond the fitted range: the polynomials extrapolate
+        for n, (lo, hi) in zip(m.model.k_names, m.model.k_range if given else []):
+            out = sorted({float(v) for v in given[n] if not lo <= v <= hi})
+            if out:
+                warnings.warn(f"--k {n}={','.join(f'{v:g}' for v in out)}: outside the range {flag} was fitted on "
+                              f"({n} in [{lo:g}, {hi:g}]), where its polynomials extrapolate", CoverageWarning,
+                              stacklevel=2)
     points, used = [], []
     for i, frame in enumerate(data.frames):
         at, ks = {}, {}
