@@ -72,6 +72,19 @@ def test_fit_with_k_is_the_library_fpvar(flights, capsys):
     np.testing.assert_allclose(np.asarray(tsfdi.load(out).params), np.asarray(sel.fit().params), rtol=1e-10)
 
 
+def test_select_order_with_k_is_select_fp_order(flights, capsys):
+    table = flights["folder"] / "orders.csv"
+    assert main(["select-order", *map(str, flights["fit"]), "--k", "a=0,0.5,1", "--max-lags", "3", "--max-degree", "1",
+                 "--out", str(table)]) == 0
+    text = capsys.readouterr().out
+    sel = select_fp_order([_frame(p) for p in flights["fit"]], pd.DataFrame({"a": KS}), 3, 1, "var")
+    assert "FP-VAR over a in [0, 1] on ['a', 'b'] from 3 record(s) at 3 operating point(s), 100 Hz" in text
+    assert f"Selected (lags, degree)  {sel.selected}" in text
+    pd.testing.assert_frame_equal(pd.read_csv(table), sel.table.reset_index(), check_dtype=False)
+    assert main(["select-order", str(flights["fit"][0]), "--max-degree", "1"]) == 2
+    assert "--max-degree is the degree of a functionally pooled model" in capsys.readouterr().err
+
+
 def test_detect_at_a_logged_k_is_detect_at_k(flights, capsys):
     fp = tsfdi.load(flights["model"])
     table = flights["folder"] / "detect.csv"

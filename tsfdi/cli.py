@@ -309,9 +309,9 @@ def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tu
     if fp and not args.k:
         flag, m = next(iter(fp.items()))
         names = m.model.k_names
-        over = ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(names, m.model.k_range))
-        raise ValueError(f"{flag} is a functionally pooled model over {over}: give its operating point with "
-                         f"{' '.join(f'--k {n}=VALUE' for n in names)} (logged) or --k estimate (from each record)")
+        raise ValueError(f"{flag} is a functionally pooled model over {_fp_range(m.model.k_range, names)}: give its "
+                         f"operating point with {' '.join(f'--k {n}=VALUE' for n in names)} (logged) or --k estimate "
+                         "(from each record)")
     if fp and args.threshold == "calibrated":
         raise ValueError(f"--threshold calibrated: {next(iter(fp))} is a functionally pooled model, and tsfdi does not "
                          "compute its held-out residuals (each fitting record through the model fitted on the others, "
@@ -649,6 +649,15 @@ def _order_args(p: argparse.ArgumentParser) -> None:
                         "of that level)")
     p.add_argument("--criterion", choices=("logdet", "trace"), default="logdet",
                    help="BIC of a VAR from the log-determinant or the trace of the residual covariance")
+    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME=VALUE,VALUE,...",
+                   help="operating parameter of the records, making the model functionally pooled (FP-AR / FP-VAR, "
+                        "tsfdi.models.FPVAR: its coefficients are Legendre polynomials of k, fitted on every record "
+                        "at once): one value per data file, in the order of the files, every record of a file at "
+                        "its file's value, e.g. --k depth=0,0,4 for three files (at least two distinct values); "
+                        "repeat --k for several parameters (--k speed=2,5,8 --k mass=1.2,1.2,1.5)")
+    p.add_argument("--max-degree", type=lambda t: opt.integer(t, 0), default=None,
+                   help="with --k: largest degree searched (default 2, or one less than the fewest distinct values "
+                        "of a parameter)")
 
 
 def _fit_records(args: argparse.Namespace) -> tuple[_Data, str, list]:
@@ -684,18 +693,9 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--coefficients", action="store_true", help="print the coefficient tables too (default: the "
                    "model's header only; tsfdi.load(FILE).summary() shows them in Python)")
     p.add_argument("--quiet", action="store_true", help="print only the one-line result and where it was saved")
-    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME=VALUE,VALUE,...",
-                   help="operating parameter of the records, making the model functionally pooled (FP-AR / FP-VAR, "
-                        "tsfdi.models.FPVAR: its coefficients are Legendre polynomials of k, fitted on every record "
-                        "at once): one value per data file, in the order of the files, every record of a file at "
-                        "its file's value, e.g. --k depth=0,0,4 for three files (at least two distinct values); "
-                        "repeat --k for several parameters (--k speed=2,5,8 --k mass=1.2,1.2,1.5)")
     p.add_argument("--degree", type=lambda t: opt.integer(t, 0), default=None,
                    help="with --k: the polynomials' degree in every parameter (default: the degree of smallest "
                         "BIC, 0 .. --max-degree, with the order, on a common sample: tsfdi.models.select_fp_order)")
-    p.add_argument("--max-degree", type=lambda t: opt.integer(t, 0), default=None,
-                   help="with --k: largest degree searched (default 2, or one less than the fewest distinct values "
-                        "of a parameter)")
 
 
 @command("fit", "fit an AR / VAR baseline model (order by BIC) on records of a CSV, netCDF or flight-log file and "
@@ -730,13 +730,12 @@ def _fit(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fit_fp(args: argparse.Namespace) -> int:
-    """``fit --k``: an FP-AR / FP-VAR over the records' operating points, order and degree by BIC unless given."""
-    from tsfdi.models import FPAR, FPVAR, select_fp_order
-
+def _fp_records(args: argparse.Namespace) -> tuple[_Data, str, list, pd.DataFrame, int]:
+    """``fit`` / ``select-order --k``: the records, the model kind, the signals, their operating points (a DataFrame,
+    one column per parameter) and the largest degree to search."""
     if any(name == "estimate" for name, _ in args.k):
         raise ValueError("--k estimate is for detect / identify / monitor (the k of a record under a fitted model); "
-                         "fit needs the operating point of every data file: --k NAME=VALUE,VALUE,...")
+                         f"{args.command} needs the operating point of every data file: --k NAME=VALUE,VALUE,...")
     data, model, ys = _fit_records(args)
     k = pd.DataFrame(_k_given(args, data, fit=True))
     distinct = k.nunique()
@@ -745,13 +744,25 @@ def _fit_fp(args: argparse.Namespace) -> int:
         raise ValueError(f"--k {name}: every record is at {name} = {k[name].iloc[0]:g}; a functionally pooled model "
                          "needs records at two or more operating points")
     most = int(distinct.min()) - 1          # a degree needs one more distinct value of every parameter
-    if None not in (args.degree, args.max_degree) and args.degree > args.max_degree:
-        raise ValueError(f"--degree {args.degree} exceeds --max-degree {args.max_degree}")
-    for flag, value in (("--degree", args.degree), ("--max-degree", args.max_degree)):
+    degree = getattr(args, "degree", None)
+    if None not in (degree, args.max_degree) and degree > args.max_degree:
+        raise ValueError(f"--degree {degree} exceeds --max-degree {args.max_degree}")
+    for flag, value in (("--degree", degree), ("--max-degree", args.max_degree)):
         if value is not None and value > most:
             raise ValueError(f"{flag} {value}: {distinct.idxmin()} takes {most + 1} distinct values in the records, "
                              f"enough for degree {most} at most")
-    max_degree = next(v for v in (args.degree, args.max_degree, min(2, most)) if v is not None)
+    return data, model, ys, k, next(v for v in (degree, args.max_degree, min(2, most)) if v is not None)
+
+
+def _fp_range(k_range: Any, names: Any) -> str:
+    return ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(names, k_range))
+
+
+def _fit_fp(args: argparse.Namespace) -> int:
+    """``fit --k``: an FP-AR / FP-VAR over the records' operating points, order and degree by BIC unless given."""
+    from tsfdi.models import FPAR, FPVAR, select_fp_order
+
+    data, model, ys, k, max_degree = _fp_records(args)
     subs = (("max_lags", "--max-lags"), ("lags=", "--lags "), ("degree=", "--degree "), ("k: ", "--k: "))
     try:
         if args.lags is not None and args.degree is not None:
@@ -776,8 +787,8 @@ def _fit_fp(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
     m = res.model
-    over = ", ".join(f"{n} in [{lo:g}, {hi:g}]" for n, (lo, hi) in zip(m.k_names, m.k_range))
-    print(f"FP-{model.upper()}({m.na}), degree {', '.join(map(str, m.degree))} ({how}) over {over} on {data.columns} "
+    print(f"FP-{model.upper()}({m.na}), degree {', '.join(map(str, m.degree))} ({how}) over "
+          f"{_fp_range(m.k_range, m.k_names)} on {data.columns} "
           f"from {len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz "
           f"({res.nobs} samples): BIC {res.bic:.6g}")
     if max(m.degree) == 0:
@@ -795,12 +806,27 @@ def _select_order_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default=None, help="write the table to this CSV file")
 
 
-@command("select-order", "tabulate BIC, AIC, RSS/SSS and SPP of the orders 1 .. --max-lags on a common sample",
-         _select_order_args)
+@command("select-order", "tabulate BIC, AIC, RSS/SSS and SPP of the orders 1 .. --max-lags on a common sample "
+                         "(with --k: the log-likelihood, AIC and BIC of every order and degree of a functionally "
+                         "pooled model)", _select_order_args)
 def _select_order(args: argparse.Namespace) -> int:
+    from tsfdi.models import select_fp_order
+
     _check_out("--out", args.out)
-    sel, data, model = _order_selection(args)
-    print(f"{model.upper()} on {data.columns} from {len(data.frames)} record(s) at {data.rec.fs:g} Hz")
+    if args.k is None:
+        if args.max_degree is not None:
+            raise ValueError("--max-degree is the degree of a functionally pooled model: give the records' operating "
+                             "points with --k, or leave it out")
+        sel, data, model = _order_selection(args)
+        print(f"{model.upper()} on {data.columns} from {len(data.frames)} record(s) at {data.rec.fs:g} Hz")
+    else:
+        data, model, ys, k, max_degree = _fp_records(args)
+        try:
+            sel = select_fp_order(ys, k, args.max_lags, max_degree, model, trend=args.trend)
+        except (ValueError, TypeError) as exc:
+            raise _reword(exc, data, (("max_lags", "--max-lags"),)) from None
+        print(f"FP-{model.upper()} over {_fp_range(sel.spec['k_range'], k.columns)} on {data.columns} from "
+              f"{len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz")
     print(str(sel.summary()))
     _write("--out", sel.table.reset_index(), args.out)
     return 0
