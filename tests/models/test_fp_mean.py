@@ -217,3 +217,22 @@ def test_detect_and_identify_take_fp_mean_results():
     ident = tsfdi.identify(y[0][:500], models)
     lls = {c: float(m.loglike(y[0][:500])[0]) for c, m in models.items()}
     assert ident.ranking == tuple(sorted(lls, key=lambda c: -lls[c]))
+
+
+def test_a_signal_changed_in_place_is_searched_again():
+    # the results keep the last signal's profile (statistic, loglike and estimate_k search k once): keyed by the
+    # signal's values, so a signal changed in place between two calls is not answered from the previous search
+    rng = np.random.default_rng(9)
+    y, k = records(rng, 12, n=1000)
+    res, fresh = FPMean(y, k, 250, 1).fit(), FPMean(y, k, 250, 1).fit()
+    sig = y[0].copy()
+    before = res.loglike(sig)
+    sig[:, 0] += 30.0
+    after = res.loglike(sig)
+    assert not np.allclose(before, after)
+    np.testing.assert_array_equal(after, fresh.loglike(sig))
+    np.testing.assert_array_equal(res.estimate_k(sig), fresh.estimate_k(sig))
+    assert res.loglike(sig, 125).shape == (7,)
+    out = res.statistic(sig)
+    out[:] = 0.0                               # the caller's array is a copy
+    assert (res.statistic(sig) > 0).all()

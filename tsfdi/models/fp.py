@@ -23,6 +23,7 @@ lag products of :mod:`tsfdi.models.lstsq` (no FP regressor is built). The parame
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import itertools
 import warnings
 from functools import cached_property
@@ -1441,7 +1442,7 @@ class FPMeanResults:
         vals = {"model": model, "_params2d": B, "S": S, "S_rec": S_rec, "S_within": within, "_bse2d": bse,
                 "_S_inv": np.linalg.inv(S), "_logdet": float(logdet), "_k_grid": k_grid,
                 "_surface": fp_basis(k_grid, model.degree, model.k_range, model.basis) @ B,
-                "nobs": n_rec, "nwindows": int(counts.sum()), "llf": float(llf),
+                "nobs": n_rec, "nwindows": int(counts.sum()), "llf": float(llf), "_last": {},
                 "bic": float(-2 * llf + (p * s + s * (s + 1) // 2) * np.log(n_rec))}
         for name, value in vals.items():
             object.__setattr__(self, name, value)
@@ -1498,6 +1499,12 @@ class FPMeanResults:
             raise ValueError(f"signal has {sig.nobs} samples, fewer than the model's window ({w})")
         step = w if step is None else window_samples(step, "step", sampling_frequency(sig, None), minimum=1)
         starts = np.arange(0, sig.nobs - w + 1, step)
+        # the last signal's profile is kept (keyed by its values and step): statistic, loglike and estimate_k of
+        # one signal search k once
+        key = (hashlib.blake2b(sig.values.tobytes(), digest_size=16).digest(), sig.values.shape, step)
+        last = self._last.get("profile")
+        if last is not None and last[0] == key:
+            return sig, starts, last[1], last[2]
         means = _window_means(sig.values, w, starts)
         d = self._k_grid.shape[1]
         q = np.empty(starts.size)
@@ -1529,6 +1536,9 @@ class FPMeanResults:
                 h = np.where(better[:, None], h, h / 2)
             q[c:c + len(mc)] = qc
             k_hat[c:c + len(mc)] = kc
+        q.setflags(write=False)
+        k_hat.setflags(write=False)
+        self._last["profile"] = (key, q, k_hat)
         return sig, starts, q, k_hat
 
     def _per_window(self, sig: Any, starts: np.ndarray, values: np.ndarray, columns: list | None, name: str) -> Any:
@@ -1563,7 +1573,7 @@ class FPMeanResults:
         ndarray (windows,), or a Series / DataArray indexed by the time of each window's first sample
         """
         sig, starts, q, _ = self._profile(signal, step)
-        return self._per_window(sig, starts, q, None, "statistic")
+        return self._per_window(sig, starts, q.copy(), None, "statistic")
 
     def loglike(self, signal: Any, step: Any = None) -> Any:
         """The Gaussian log-likelihood of every window's mean at its maximum-likelihood ``k``,
@@ -1581,7 +1591,7 @@ class FPMeanResults:
         indexed by the time of each window's first sample
         """
         sig, starts, _, k_hat = self._profile(signal, step)
-        return self._per_window(sig, starts, k_hat, list(self.model.k_names), "k_hat")
+        return self._per_window(sig, starts, k_hat.copy(), list(self.model.k_names), "k_hat")
 
     # --- output
     def summary(self, alpha: float = 0.05) -> Summary:
