@@ -389,6 +389,10 @@ def check_coverage(test: Any, results: Any, signal: Any, *, resid: Any = None, h
        shorter record are noisier than the fitting records' and would warn more often than ``alpha``);
     3. else ``None``, at the cost of a few attribute look-ups (nothing is filtered).
 
+    One check, not both: where both apply, warning when either fires (each at its Sidak share of ``alpha``) warned
+    of fewer of the records the test misjudges than the record law alone, both with false-warning rates in the
+    binomial band of ``alpha`` (simulated fleets and hexacopters, ``benchmarks/baseline_coverage.py --sections 5``).
+
     Parameters
     ----------
     test : ResidualTest
