@@ -150,6 +150,47 @@ def test_identify_and_monitor_take_fp_models(flights, capsys):
     assert "new0.7.csv: detection at -, label -" in text and "new0.2.csv: detection at -, label -" in text
 
 
+def _fleet(path, ks, rng) -> list[pd.DataFrame]:
+    """A netCDF file of records over (record, time) with a per-record coordinate ``mass`` (as ``tsfdi simulate
+    --fleet`` writes); returns the records."""
+    import xarray as xr
+
+    frames = [_record(k, 2000, rng).set_index("time") for k in ks]
+    xr.Dataset({c: (("record", "time"), np.stack([f[c].to_numpy() for f in frames])) for c in ("a", "b")},
+               coords={"record": np.arange(len(ks)), "time": frames[0].index.to_numpy(), "mass": ("record", ks),
+                       "state": ("record", ["healthy"] * len(ks))}).to_netcdf(path, engine="h5netcdf")
+    return frames
+
+
+def test_k_from_a_netcdf_per_record_coordinate(flights, capsys):
+    rng = np.random.default_rng(7)
+    folder = flights["folder"]
+    ks = [0.0, 0.5, 1.0, 0.0, 1.0]
+    frames = _fleet(folder / "fleet.nc", ks, rng)
+    new = _fleet(folder / "newfleet.nc", [0.7, 0.2], rng)
+    model = folder / "mass.npz"
+    assert main(["fit", str(folder / "fleet.nc"), "--where", "state=healthy", "--k", "mass", "--lags", "1", "--degree",
+                 "1", "--out", str(model), "--quiet"]) == 0
+    assert "over mass in [0, 1] on ['a', 'b'] from 5 record(s) at 3 operating point(s)" in capsys.readouterr().out
+    ref = FPVAR(frames, pd.DataFrame({"mass": ks}), 1, 1).fit()
+    np.testing.assert_allclose(np.asarray(tsfdi.load(model).params), np.asarray(ref.params), rtol=1e-10)
+    table = folder / "mass.csv"
+    assert main(["detect", str(folder / "newfleet.nc"), "--baseline", str(model), "--k", "mass", "--method",
+                 "variance", "--out", str(table)]) == 0
+    t = pd.read_csv(table)
+    assert t["k_mass"].tolist() == [0.7, 0.2]
+    for row, frame, k in zip(t.itertuples(), new, (0.7, 0.2)):
+        d = tsfdi.detect(frame, ref.at(k), tsfdi.FTest(alpha=1e-3))
+        np.testing.assert_allclose([row.statistic_a, row.statistic_b], d.statistic, rtol=1e-8)
+    capsys.readouterr()
+    assert main(["detect", str(folder / "newfleet.nc"), "--baseline", str(model), "--k", "speed"]) == 2
+    assert (f"--k speed: {folder / 'newfleet.nc'} has no numeric per-record coordinate 'speed'; its per-record "
+            "coordinates are ['mass']") in capsys.readouterr().err
+    assert main(["detect", str(flights["new"][0]), "--baseline", str(model), "--k", "mass"]) == 2
+    assert (f"--k mass: the per-record coordinate of netCDF data, but {flights['new'][0]} is not a netCDF file; give "
+            "--k mass=VALUE,... (one value per data file)") in capsys.readouterr().err
+
+
 def test_a_logged_k_beyond_the_fitted_range_is_said(flights, capsys):
     assert main(["detect", *map(str, flights["new"]), "--baseline", str(flights["model"]), "--k", "a=1.5,-0.25"]) == 0
     err = capsys.readouterr().err
@@ -174,7 +215,9 @@ def test_fp_errors_name_the_flag(flights, capsys):
         (["detect", new, "--baseline", fp, "--k", "a=1", "--window", "5s", "--threshold", "calibrated"],
          f"--threshold calibrated: --baseline {fp} is a functionally pooled model"),
         (["detect", new, "--baseline", fp, "--k", "estimate", "--k", "a=1"], "--k estimate estimates every parameter"),
-        (["detect", new, "--baseline", fp, "--k", "a"], "argument --k: must be NAME=VALUE[,VALUE...]"),
+        (["detect", new, "--baseline", fp, "--k", "a=x"], "argument --k: must be NAME=VALUE[,VALUE...]"),
+        (["detect", new, "--baseline", fp, "--k", "a,b"], "argument --k: must name one coordinate (repeat --k for "
+                                                          "several), got 'a,b'"),
         (["fit", *fit, "--k", "a=0,1", "--out", out], "--k a: 2 value(s) for 3 data file(s); give one per file, in the "
                                                       "order of the files\n"),
         (["fit", *fit, "--k", "estimate", "--out", out], "--k estimate is for detect / identify / monitor"),

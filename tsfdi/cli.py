@@ -269,10 +269,11 @@ def _check_channels(data: _Data, models: dict) -> None:
 
 
 def _k_arg(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME=VALUE[,VALUE...]",
+    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME[=VALUE,...]",
                    help="operating point of the functionally pooled models (from 'tsfdi fit --k'): NAME=VALUE, the "
                         "logged value of every record, or NAME=VALUE,VALUE,... one per data file in the order given, "
-                        "repeated for each of the models' parameters (e.g. --k depth=2.5); or 'estimate': each "
+                        "or NAME, the per-record coordinate NAME of netCDF data, repeated for each of the models' "
+                        "parameters (e.g. --k depth=2.5); or 'estimate': each "
                         "record's maximum-likelihood operating point (tsfdi.models.FPResults.estimate_k on the whole "
                         "record), printed with its 95%% interval, the record then tested at it. Required with a "
                         "functionally pooled model, refused without one")
@@ -287,11 +288,47 @@ def _k_given(args: argparse.Namespace, data: _Data, *, fit: bool = False) -> dic
     for name, values in args.k:
         if name in given:
             raise ValueError(f"--k {name}: given twice")
+        if values is None:
+            given[name] = _k_coordinate(name, data)
+            continue
         if len(values) != len(files) and (fit or len(values) != 1):
             raise ValueError(f"--k {name}: {len(values)} value(s) for {len(files)} data file(s); give one per file, "
                              "in the order of the files" + ("" if fit else ", or one for every file"))
         given[name] = np.asarray(values if len(values) > 1 else values * len(files))[per_file]
     return given
+
+
+def _k_coordinate(name: str, data: _Data) -> np.ndarray:
+    """``--k NAME``: the per-record coordinate ``NAME`` of the netCDF data files (over ``record``, or a scalar for a
+    file of one record), one value per record of ``data``."""
+    import xarray as xr
+
+    by_file: dict[str, dict] = {}
+    out = np.empty(len(data.frames))
+    for i, (path, rid) in enumerate(zip(data.rec.files, data.rec.ids)):
+        if path not in by_file:
+            try:
+                with xr.open_dataset(path, engine="h5netcdf") as ds:
+                    var = ds.variables.get(name)
+                    if var is None or var.dims not in ((), ("record",)) or var.dtype.kind not in "iuf":
+                        have = [str(c) for c, v in ds.variables.items()
+                                if v.dims == ("record",) and v.dtype.kind in "iuf" and c != "record"]
+                        raise ValueError(f"--k {name}: {path} has no numeric per-record coordinate {name!r}; its "
+                                         f"per-record coordinates are {have}")
+                    labels = ds["record"].values if "record" in ds.coords else np.arange(ds.sizes.get("record", 1))
+                    values = np.broadcast_to(np.asarray(var.values, dtype=float), labels.shape)
+                    by_file[path] = dict(zip(map(str, labels), values.tolist()))
+            except (OSError, TypeError, KeyError):
+                raise ValueError(f"--k {name}: the per-record coordinate of netCDF data, but {path} is not a netCDF "
+                                 f"file; give --k {name}=VALUE,... (one value per data file)") from None
+        values, rid = by_file[path], str(rid)
+        key = rid if rid in values else rid.rpartition(".")[0]          # a piece "2.0" of record "2"
+        if key not in values and len(values) > 1:
+            raise ValueError(f"--k {name}: no {name!r} for {data.rec.origin(i)} in {path}")
+        out[i] = values[key] if key in values else next(iter(values.values()))     # a file of one record
+        if not np.isfinite(out[i]):
+            raise ValueError(f"--k {name}: {data.rec.origin(i)} has {name} = {out[i]}")
+    return out
 
 
 def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tuple[list[dict], list[dict]]:
@@ -649,12 +686,14 @@ def _order_args(p: argparse.ArgumentParser) -> None:
                         "of that level)")
     p.add_argument("--criterion", choices=("logdet", "trace"), default="logdet",
                    help="BIC of a VAR from the log-determinant or the trace of the residual covariance")
-    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME=VALUE,VALUE,...",
+    p.add_argument("--k", type=opt.operating_point, action="append", default=None, metavar="NAME[=VALUE,...]",
                    help="operating parameter of the records, making the model functionally pooled (FP-AR / FP-VAR, "
                         "tsfdi.models.FPVAR: its coefficients are Legendre polynomials of k, fitted on every record "
                         "at once): one value per data file, in the order of the files, every record of a file at "
                         "its file's value, e.g. --k depth=0,0,4 for three files (at least two distinct values); "
-                        "repeat --k for several parameters (--k speed=2,5,8 --k mass=1.2,1.2,1.5)")
+                        "or NAME, the per-record coordinate NAME of netCDF data (e.g. --k mass for the records of "
+                        "'tsfdi simulate --fleet'); repeat --k for several parameters (--k speed=2,5,8 --k "
+                        "mass=1.2,1.2,1.5)")
     p.add_argument("--max-degree", type=lambda t: opt.integer(t, 0), default=None,
                    help="with --k: largest degree searched (default 2, or one less than the fewest distinct values "
                         "of a parameter)")
