@@ -26,7 +26,7 @@ from scipy.linalg import blas, lapack
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_blocks", "lag_gram", "cholesky_nested_fits", "lag_products", "lag_residuals",
+__all__ = ["lagged_design", "lstsq", "lag_gram", "cholesky_nested_fits", "lag_products", "lag_residuals",
            "lag_residual_products", "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
@@ -106,24 +106,6 @@ def lstsq(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
             warnings.warn(f"the regressor is ill-conditioned (rank {rank} of {X.shape[1]}, condition number "
                           f"{cond:.3g}); the estimates are not reliable", IllConditionedWarning, stacklevel=3)
     return coef
-
-
-def lag_blocks(y: np.ndarray | list[np.ndarray], lags: int) -> tuple[np.ndarray, list[int]]:
-    """The records one after the other with ``lags`` zero samples between two (no product of samples at most
-    ``lags`` apart pairs two records), zero-padded to a multiple of ``lags + 1`` samples and cut in blocks of
-    ``lags + 1`` samples (the layout of :func:`_blocks`), and where each record starts: the layout
-    :func:`lag_residual_products` reads (written straight into one zeroed buffer)."""
-    records = y if isinstance(y, list) else [y]
-    s, B = records[0].shape[1], lags + 1
-    n = sum(r.shape[0] for r in records) + lags * (len(records) - 1)
-    rows = -(-n // B)
-    buf = np.zeros((rows * B, s))
-    starts, pos = [], 0
-    for r in records:
-        buf[pos:pos + r.shape[0]] = r
-        starts.append(pos)
-        pos += r.shape[0] + lags
-    return buf.reshape(rows, B * s), starts
 
 
 def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.ndarray:
@@ -540,69 +522,72 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
     """``X'(Y - X coef)`` of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` over ``t = p .. n-1``, summed
     over the records, without the regressor.
 
-    The records end to end (``p`` zero samples between two, as :func:`lag_gram`) give the residuals of all
-    (:func:`lag_residuals`, those of each record's first ``p`` samples and of the gaps set to zero) and their lag
-    products with the samples, ``D[k] = sum_t e[t] y[t-k]'``, by the block products of :func:`lag_products`:
-    four BLAS-3 calls in all. The block of lag ``k`` is ``-D[k]'``, the intercept row ``sum_t e[t]``. This is the
-    right-hand side of a refinement step of the normal equations: accurate to rounding of ``|X| |e|``, where
+    The records end to end (``p`` zero samples between two, as :func:`lag_gram`) give the residuals of all in one
+    compiled pass (those of each record's first ``p`` samples and of the gaps set to zero) and their lag products with
+    the samples, ``D[k] = sum_t e[t] y[t-k]'``, as dot products of contiguous channel rows summed in SIMD order (as
+    :func:`_direct_lag_products`). The block of lag ``k`` is ``-D[k]'``, the intercept row ``sum_t e[t]``. This is
+    the right-hand side of a refinement step of the normal equations: accurate to rounding of ``|X| |e|``, where
     ``X'Y - X'X coef`` from the Gram matrix loses the digits of ``|X| |Y|``.
     """
     records = y if isinstance(y, list) else [y]
     s = records[0].shape[1]
     c = int(const)
     p = (coef.shape[0] - c) // s
-    if s == 1:      # a scalar output: one compiled pass (the BLAS-3 route below pays ~20 numpy calls for ~1e5 flops)
-        x, starts, ends = _channel_rows(records, p)
-        out = np.empty((c + p, 1))
-        _scalar_residual_products(x[0], starts, ends, np.ascontiguousarray(coef[c:, 0]), coef[0, 0] if c else 0.0,
-                                  c, np.empty(x.shape[1]), out[:, 0])
-        return out
-    M, starts = lag_blocks(records, p)
-    E = _residual_blocks(M, coef, const)
-    e = E.reshape(-1, s)
-    end = 0
-    for st, r in zip(starts, records):
-        e[end:st + p] = 0.0                         # the gap before the record and its first p samples
-        end = st + r.shape[0]
-    e[end:] = 0.0                                   # the zero padding of the last block
-    D = _block_products(E, M, p, s, lag0=False)     # D[k][j, a]: e[t, j] y[t-k, a], k >= 1
+    x, starts, ends = _channel_rows(records, p)
     out = np.empty((c + p * s, s))
-    out[c:] = -D[1:].transpose(0, 2, 1).reshape(p * s, s)
-    if c:
-        out[0] = E.sum(axis=0).reshape(p + 1, s).sum(axis=0)
+    _residual_products(x, starts, ends, np.ascontiguousarray(coef[c:].reshape(p, s, s)), coef[0] if c else np.zeros(s),
+                       c, np.empty_like(x), out)
     return out
 
 
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
-def _scalar_residual_products(x, starts, ends, a, c0, c, e, out):  # pragma: no cover - compiled
-    """:func:`lag_residual_products` of one channel ``x`` (records end to end, ``p`` zeros between two) with lag
-    coefficients ``a`` and intercept ``c0``: the residuals ``e[t] = x[t] - c0 + sum_k a[k-1] x[t-k]`` on each
-    record's rows ``starts[r] + p .. ends[r] - 1`` (zero elsewhere) by contiguous axpys, then ``sum_t e[t]`` and ``-sum_t e[t] x[t-k]`` as dot products
-    summed in SIMD order (as :func:`_direct_lag_products`)."""
-    n, p = x.shape[0], a.shape[0]
-    for t in range(n):
-        e[t] = x[t] - c0
-    rest = e[p:]                                    # (slices: numba vectorizes the axpys on views, not on t - k)
-    for k in range(1, p + 1):
-        w = a[k - 1]
-        lagged = x[p - k:n - k]
-        for i in range(n - p):
-            rest[i] += w * lagged[i]
-    end = 0
-    for r in range(starts.shape[0]):                # the gap before each record and its first p samples
-        e[end:starts[r] + p] = 0.0
-        end = ends[r]
-    if c:
-        acc = 0.0
+def _residual_products(x, starts, ends, W, c0, c, e, out):  # pragma: no cover - compiled
+    """:func:`lag_residual_products` of ``s`` channel rows ``x`` (records end to end, ``p`` zeros between two) with lag
+    coefficients ``W[k - 1, a, j]`` (channel ``a`` at lag ``k`` in equation ``j``) and intercepts ``c0``: each
+    equation's residuals ``e[j, t] = x[j, t] - c0[j] + sum_{k, a} W[k - 1, a, j] x[a, t - k]`` on each record's rows
+    ``starts[r] + p .. ends[r] - 1`` (zero elsewhere) by contiguous passes of four lag terms each, then ``sum_t e[j, t]``
+    and ``-sum_t e[j, t] x[a, t - k]`` by :func:`_lag_pass` (two channels per pass)."""
+    s, n = x.shape
+    p = W.shape[0]
+    m = n - p
+    terms = p * s
+    cb = np.empty(p + 1)
+    cc = np.empty(p + 1)
+    for j in range(s):
+        ej, xj, cj = e[j], x[j], c0[j]
         for t in range(n):
-            acc += e[t]
-        out[0] = acc
-    for k in range(1, p + 1):
-        acc = 0.0
-        later, lagged = e[k:], x[:n - k]
-        for i in range(n - k):
-            acc += later[i] * lagged[i]
-        out[c + k - 1] = -acc
+            ej[t] = xj[t] - cj
+        rest = ej[p:]                               # (slices: numba vectorizes the passes on views, not on t - k)
+        q = 0
+        while q < terms:
+            # terms q .. q + 3 (lag q // s + 1, channel q % s); past the last term a zero weight on the first
+            k0, k1, k2, k3 = q // s + 1, (q + 1) // s + 1, (q + 2) // s + 1, (q + 3) // s + 1
+            a0, a1, a2, a3 = q % s, (q + 1) % s, (q + 2) % s, (q + 3) % s
+            w0 = W[k0 - 1, a0, j]
+            w1 = W[k1 - 1, a1, j] if q + 1 < terms else 0.0
+            w2 = W[k2 - 1, a2, j] if q + 2 < terms else 0.0
+            w3 = W[k3 - 1, a3, j] if q + 3 < terms else 0.0
+            k1, k2, k3 = min(k1, p), min(k2, p), min(k3, p)
+            l0, l1, l2, l3 = x[a0, p - k0:n - k0], x[a1, p - k1:n - k1], x[a2, p - k2:n - k2], x[a3, p - k3:n - k3]
+            for i in range(m):
+                rest[i] += w0 * l0[i] + w1 * l1[i] + w2 * l2[i] + w3 * l3[i]
+            q += 4
+        end = 0
+        for r in range(starts.shape[0]):            # the gap before each record and its first p samples
+            ej[end:starts[r] + p] = 0.0
+            end = ends[r]
+        if c:
+            acc = 0.0
+            for t in range(n):
+                acc += ej[t]
+            out[0, j] = acc
+        for a in range(0, s, 2):
+            b = min(a + 1, s - 1)                   # the next channel, or none (b == a) after the last pair
+            _lag_pass(ej, x[a], x[b], b > a, n, p, cb, cc)
+            for k in range(1, p + 1):
+                out[c + (k - 1) * s + a, j] = -cb[k]
+                if b > a:
+                    out[c + (k - 1) * s + b, j] = -cc[k]
 
 
 def _diagonal_sums(P: np.ndarray, Q: np.ndarray | None, p: int, s: int) -> np.ndarray:
