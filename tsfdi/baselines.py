@@ -874,14 +874,16 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                                        for e in out[m][state].model.held_out_residuals()]
     # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
     step = max(1, int(round(0.1 * rec.fs)))
-    peaks = []
-    for i in chosen:
-        if rec.state[i] in faults:
+    variances = []
+    for i, st in chosen_states:
+        if st != healthy:
             post = _segment(rec, i, settle, None)
             if post.shape[0] >= V:
-                peaks.append(rolling_variance(post, V, step).max(axis=0))
-    thr = steady_factor * np.max(peaks, axis=0) if peaks else np.full(len(rec.channels), np.inf)
-    if peaks and not np.all(np.isfinite(thr)):
+                variances.append(rolling_variance(post, V, step))
+    # (one maximum over the windows of all records: numpy reduces axis 0 of a few channels slowly, per call)
+    thr = (steady_factor * np.concatenate(variances).max(axis=0) if variances
+           else np.full(len(rec.channels), np.inf))
+    if variances and not np.all(np.isfinite(thr)):
         raise ValueError(f"steady_factor={steady_factor:g} makes the steady-state thresholds overflow: give a smaller "
                          "factor")
     return Baselines(models=out, selections=sels, channels=rec.channels, healthy=healthy, faults=faults,
