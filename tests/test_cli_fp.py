@@ -239,6 +239,17 @@ def test_fp_errors_name_the_flag(flights, capsys):
     assert main(["detect", new, "--baseline", str(point), "--k", "a=1"]) == 2
     assert (f"--k: the operating point of a functionally pooled model ('tsfdi fit --k'), but --baseline {point} is a "
             "point model; leave --k out") in capsys.readouterr().err
+    # model files the command line does not test are named by kind
+    frames = [_frame(p) for p in flights["fit"]]
+    mean = flights["folder"] / "mean.npz"
+    tsfdi.models.FPMean(frames + frames[:1], pd.DataFrame({"a": [*KS, 0.0]}), 500, 1).fit().save(mean)
+    arx = flights["folder"] / "arx.npz"
+    fparx = tsfdi.models.FPARX([f["a"] for f in frames], [f["b"] for f in frames], pd.DataFrame({"a": KS}), 1, 1)
+    fparx.fit().save(arx)
+    for path, kind in ((mean, "FPMeanResults of a FPMean model"), (arx, "an ARX (input-output) model")):
+        assert main(["detect", new, "--baseline", str(path), "--k", "a=1"]) == 2
+        assert (f"--baseline {path}: {kind}; the command line tests AR / VAR models and their functionally pooled "
+                "forms (FP-AR / FP-VAR)") in capsys.readouterr().err
     flat = flights["folder"] / "flat.npz"
     assert main(["fit", *fit, "--k", "a=0,0.5,1", "--lags", "1", "--degree", "0", "--out", str(flat)]) == 0
     assert "note: degree 0: the model does not depend on a" in capsys.readouterr().out

@@ -229,10 +229,10 @@ def _load(flag: str, spec: str, path: str) -> Any:
     except (OSError, ValueError, TypeError) as exc:
         raise ValueError(f"{flag} {spec}: {exc}") from None
     if not isinstance(res, (ARResults, VARResults, FPResults)) or getattr(res.model, "nb", 0):
-        kind = ("an ARX (input-output)" if isinstance(res, ARXResults) or getattr(res.model, "nb", 0) else
-                f"a {type(res).__name__.removesuffix('Results')}")
-        raise ValueError(f"{flag} {spec}: {kind} model; the command line tests AR / VAR models and their "
-                         "functionally pooled forms (FP-AR / FP-VAR)")
+        kind = ("an ARX (input-output) model" if isinstance(res, ARXResults) or getattr(res.model, "nb", 0) else
+                f"{type(res).__name__} of a {type(res.model).__name__} model")
+        raise ValueError(f"{flag} {spec}: {kind}; the command line tests AR / VAR models and their functionally "
+                         "pooled forms (FP-AR / FP-VAR)")
     return res
 
 
