@@ -21,15 +21,16 @@ evaluation ones):
   105) for rotor 2 against (13, -32, -5) healthy), which the one-step prediction errors of an FP-VAR barely see (its
   lags carry the level). That is where the earlier rule's rotor 2 confusion came from: on the development records the
   FP-VAR likelihood sent the 5 s windows of rotor 2 records after the first 10 s to healthy, in light turbulence most
-  (``test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy``). Per class, the window means of
-  the three controller outputs are regressed on the FP basis of ``k`` (:func:`tsfdi.models.fp_basis`, Legendre, degree
-  ``TRIM_DEGREE``), pooled least squares over all fitting windows of all turbulence levels (healthy: the development
-  fitting records and ``HEALTHY_POOL`` more per level, seed ``DEV_SEED + 100``; each rotor: its development fitting
-  records); the residual covariance ``S`` of a window is the spread of the records' mean residuals (records - basis
+  (``test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy``). Per class, the trim model
+  :class:`tsfdi.models.FPMean`: the window means of the three controller outputs regressed on the FP basis of ``k``
+  (Legendre, degree ``TRIM_DEGREE``), pooled least squares over all fitting windows of all turbulence levels
+  (healthy: the development fitting records and ``HEALTHY_POOL`` more per level, seed ``DEV_SEED + 100``; each rotor:
+  its development fitting records); the residual covariance ``S`` of a window is the spread of the records' mean residuals (records - basis
   functions degrees of freedom: the unlogged airframe of a record moves its whole trim) plus the spread of the windows
   around their record's mean. A window goes to the class whose trim surface, at that class's maximum-likelihood ``k``
-  (a grid of ``K_GRID`` points per parameter over the fitted range), gives its mean the largest Gaussian
-  log-likelihood with ``S``: everything from the window itself (no logged ``k``, no turbulence level, no other window
+  (a grid of ``K_GRID`` points per parameter over the fitted range, refined by bounded local grids), gives its mean the
+  largest Gaussian log-likelihood with ``S`` (:func:`tsfdi.identify_windows` with the FPMean results,
+  ``decide("likelihood")``): everything from the window itself (no logged ``k``, no turbulence level, no other window
   of the record).
 * Healthy false alarms, alpha = 0.01 per window: the ``trim`` detector, the healthy trim statistic ``min_k (m - M(k))'
   S^-1 (m - M(k))`` against the empirical 0.99 quantile (:class:`tsfdi.EmpiricalThreshold`) of that statistic on
@@ -87,7 +88,6 @@ for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 import argparse  # noqa: E402
-import itertools  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
 
@@ -97,7 +97,7 @@ from scipy import stats  # noqa: E402
 import tsfdi  # noqa: E402
 from tsfdi.datasets import simulate_hexacopter  # noqa: E402
 from tsfdi.datasets.hexacopter import FleetSpread, HexacopterParameters  # noqa: E402
-from tsfdi.models import FPVAR, fp_basis, select_fp_order  # noqa: E402
+from tsfdi.models import FPVAR, FPMean, FPMeanResults, select_fp_order  # noqa: E402
 from tsfdi.study import evaluation_seed  # noqa: E402
 
 DEV_SEED = 20261128
@@ -164,47 +164,16 @@ def join(*sets):
     return sum((list(s[0]) for s in sets), []), np.vstack([s[1] for s in sets]), np.concatenate([s[2] for s in sets])
 
 
-def window_means(y: np.ndarray, w: int) -> np.ndarray:
-    """Means of the controller outputs over the consecutive windows of ``w`` samples, (windows, 3)."""
-    n = len(y) // w
-    return y[:n * w, TRIM].reshape(n, w, -1).mean(axis=1)
+def fit_trim(recs, k, w: int, degree: int) -> FPMeanResults:
+    """The trim model (:class:`tsfdi.models.FPMean`) of the controller outputs of the records on windows of ``w``
+    samples."""
+    return FPMean([y[:, TRIM] for y in recs], k, w, degree, k_range=K_RANGE, grid=K_GRID).fit()
 
 
-def sliding_means(y: np.ndarray, w: int, step: int) -> np.ndarray:
-    """Means of the controller outputs over windows of ``w`` samples every ``step`` samples, (windows, 3)."""
-    c = np.vstack([np.zeros((1, 3)), np.cumsum(y[:, TRIM], axis=0)])
-    a = np.arange(0, len(y) - w + 1, step)
-    return (c[a + w] - c[a]) / w
-
-
-def fit_trim(recs, k, w: int, degree: int) -> dict:
-    """Pooled least squares of the windows' trim on the FP basis of their record's k. The residual covariance ``S``
-    of a window is the spread of the records' mean residuals (degrees of freedom records - basis functions: the
-    unlogged airframe of each record, its centre of gravity above all, moves its whole trim) plus the spread of the
-    windows around their record's mean; the BIC counts records, the independent units."""
-    M = [window_means(y, w) for y in recs]
-    Gr = fp_basis(np.asarray(k, dtype=float), degree, K_RANGE)
-    G = np.repeat(Gr, [len(m) for m in M], axis=0)
-    B = np.linalg.lstsq(G, np.vstack(M), rcond=None)[0]
-    ebar = np.stack([m.mean(axis=0) for m in M]) - Gr @ B
-    dev = np.vstack([m - m.mean(axis=0) for m in M])
-    n_rec, p = Gr.shape
-    if n_rec <= p:
-        raise ValueError(f"degree {degree}: {p} basis functions need more than {n_rec} records")
-    within = dev.T @ dev / (len(dev) - n_rec)
-    S = ebar.T @ ebar / (n_rec - p) + within
-    bic = n_rec * np.linalg.slogdet(ebar.T @ ebar / n_rec)[1] + p * M[0].shape[1] * np.log(n_rec)
-    grid = np.array(list(itertools.product(*[np.linspace(lo, hi, K_GRID) for lo, hi in K_RANGE])))
-    return {"surface": fp_basis(grid, degree, K_RANGE) @ B, "S_inv": np.linalg.inv(S),
-            "logdet": np.linalg.slogdet(S)[1], "bic": bic}
-
-
-def trim_stat(model: dict, means: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per window: the largest Gaussian log-likelihood of its trim over the k grid, and the smallest Mahalanobis
-    distance (the healthy detector's statistic)."""
-    d = means[:, None, :] - model["surface"][None]
-    q = np.einsum("wka,ab,wkb->wk", d, model["S_inv"], d)
-    return -0.5 * q.min(axis=1) - 0.5 * model["logdet"], q.min(axis=1)
+def identify_trim(models: dict, y: np.ndarray, w: int) -> np.ndarray:
+    """The class of every consecutive window of ``w`` samples of record ``y``: the largest log-likelihood of the trim
+    models (:func:`tsfdi.identify_windows` without thresholds, ``decide("likelihood")``)."""
+    return np.array(tsfdi.identify_windows(y[:, TRIM], models, window=w, step=w).decide("likelihood"))
 
 
 def fp_choice(sel) -> tuple[int, int]:
@@ -256,7 +225,7 @@ def main() -> None:
     # --- trim models at the frozen degree (BIC on the development records, and with --dev every degree's
     # identification on the development evaluation records, printed below)
     degrees = [d for d in range(MAX_TRIM_DEGREE + 1) if (d + 1) ** 2 < len(dev["rotor1"][0])]
-    bic = {d: sum(fit_trim(*trim_fit[c][:2], WINDOWS[-1], d)["bic"] for c in CLASSES) for d in degrees}
+    bic = {d: sum(fit_trim(*trim_fit[c][:2], WINDOWS[-1], d).bic for c in CLASSES) for d in degrees}
     print(f"trim FP regression: degree {TRIM_DEGREE} (frozen); BIC over records of the development set by degree: "
           + ", ".join(f"{d}: {b:.0f}" for d, b in bic.items()))
     trim = {w: {c: fit_trim(*trim_fit[c][:2], w, TRIM_DEGREE) for c in CLASSES} for w in WINDOWS}
@@ -266,8 +235,8 @@ def main() -> None:
             for w in WINDOWS:
                 tw = {c: fit_trim(*trim_fit[c][:2], w, d) for c in CLASSES}
                 for c in CLASSES:
-                    wrong = sum(int((np.array([trim_stat(tw[m], window_means(y, w))[0] for m in CLASSES]).argmax(axis=0)
-                                     != list(CLASSES).index(c)).sum()) for data in (ev_int, ev_held) for y in data[c][0])
+                    wrong = sum(int((identify_trim(tw, y, w) != c).sum()) for data in (ev_int, ev_held)
+                                for y in data[c][0])
                     line.append(f"{c} {w // FS}s {wrong}")
             print(f"  degree {d}: wrong windows " + ", ".join(line))
 
@@ -291,8 +260,8 @@ def main() -> None:
                for i in np.array_split(np.arange(len(res)), len(res) // group)]
         t = tsfdi.FTest(alpha=ALPHA, correction="bonferroni", threshold=tsfdi.ScaledChi2Threshold(ALPHA, min_windows=5))
         ftest[w] = t.calibrate(res, window=w - lags, step=w - lags, **t.reference(fp.at(cal[1][0])))
-        stat = np.concatenate([trim_stat(trim[w]["healthy"], sliding_means(y, w, CAL_STEP))[1] for y in cal[0]])
-        trim_thr[w] = tsfdi.EmpiricalThreshold(ALPHA).calibrate(stat).threshold_
+        stat = np.concatenate([trim[w]["healthy"].statistic(y[:, TRIM], CAL_STEP) for y in cal[0]])
+        trim_thr[w] = tsfdi.EmpiricalThreshold(ALPHA).calibrate(stat)
 
     t1 = time.perf_counter()
     # per record: correct windows, windows, and (healthy) the trim and F false alarms
@@ -302,15 +271,14 @@ def main() -> None:
             for c in CLASSES:
                 recs, ks, lvl = data[c]
                 for i, y in enumerate(recs):
-                    m = window_means(y, w)
-                    ll = np.array([trim_stat(trim[w][mm], m)[0] for mm in CLASSES])
+                    labels = identify_trim(trim[w], y, w)
                     fa_t = fa_f = 0
                     if c == "healthy":
-                        fa_t = int((trim_stat(trim[w]["healthy"], m)[1] > trim_thr[w]).sum())
+                        fa_t = sum(tsfdi.detect(seg, trim[w]["healthy"], trim_thr[w]).reject
+                                   for seg in windows(y[:, TRIM], w))
                         at = fp.at(ks[i])
                         fa_f = sum(tsfdi.detect(seg, at, ftest[w]).reject for seg in windows(y, w))
-                    score[w, setname, c, i] = (lvl[i], int((ll.argmax(axis=0) == list(CLASSES).index(c)).sum()),
-                                               len(m), fa_t, fa_f)
+                    score[w, setname, c, i] = (lvl[i], int((labels == c).sum()), len(labels), fa_t, fa_f)
 
     def total(w, sets, c, level=None):
         rows = [v for (w_, s_, c_, _), v in score.items() if w_ == w and s_ in sets and c_ == c

@@ -1,5 +1,5 @@
-"""benchmarks/fp_hexacopter.py (issue 32): its functionally pooled trim model of the controller outputs and the
-identification rule built on it."""
+"""benchmarks/fp_hexacopter.py (issue 32): its records and the identification rule built on the trim model
+(:class:`tsfdi.models.FPMean`, tested in tests/models/test_fp_mean.py)."""
 
 import warnings
 
@@ -10,55 +10,6 @@ from _scripts import load_script
 
 def _benchmark():
     return load_script("benchmarks/fp_hexacopter.py")
-
-
-def _trim_records(B, rng, n_rec, offset_sd, noise_sd, n=4000):
-    """Records whose controller outputs (the last three of six channels) are a linear surface of k plus a
-    per-record offset (an unlogged airframe) plus white noise."""
-    k = np.column_stack([rng.uniform(*B.SPEEDS, n_rec), rng.uniform(0.0, B.FLEET.payload, n_rec)])
-    recs = []
-    for kk in k:
-        level = np.array([10.0 + 2.0 * kk[0], -30.0 + 40.0 * kk[1], 5.0 - kk[0]]) + rng.normal(0, offset_sd, 3)
-        y = np.zeros((n, 6))
-        y[:, 3:] = level + rng.normal(0, noise_sd, (n, 3))
-        recs.append(y)
-    return recs, k
-
-
-def test_trim_covariance_keeps_the_record_spread_with_few_records_per_basis_function():
-    # 12 records, degree 2 (9 basis functions): a covariance of the window residuals over windows - basis
-    # functions takes the record offsets the surface absorbs for noise it has seen and is about half the true
-    # spread; over records - basis functions it is unbiased
-    B = _benchmark()
-    rng = np.random.default_rng(3)
-    var = []
-    for _ in range(40):
-        recs, k = _trim_records(B, rng, 12, offset_sd=5.0, noise_sd=20.0)
-        var.append(np.diag(np.linalg.inv(B.fit_trim(recs, k, 500, 2)["S_inv"])))
-    true = 5.0 ** 2 + 20.0 ** 2 / 500
-    assert np.mean(var) == pytest.approx(true, rel=0.15)
-
-
-def test_trim_degree_needs_more_records_than_basis_functions():
-    B = _benchmark()
-    recs, k = _trim_records(B, np.random.default_rng(0), 9, 1.0, 1.0)
-    with pytest.raises(ValueError, match="9 basis functions need more than 9 records"):
-        B.fit_trim(recs, k, 500, 2)
-
-
-def test_trim_statistic_is_the_smallest_distance_over_the_k_grid():
-    B = _benchmark()
-    rng = np.random.default_rng(1)
-    recs, k = _trim_records(B, rng, 30, offset_sd=1.0, noise_sd=5.0)
-    model = B.fit_trim(recs, k, 500, 1)
-    m = B.window_means(recs[0], 500)
-    ll, q = B.trim_stat(model, m)
-    d = m[:, None, :] - model["surface"][None]
-    full = np.einsum("wka,ab,wkb->wk", d, model["S_inv"], d)
-    np.testing.assert_allclose(q, full.min(axis=1))
-    np.testing.assert_allclose(ll, -0.5 * q - 0.5 * model["logdet"])
-    # sliding means at step w are the window means
-    np.testing.assert_allclose(B.sliding_means(recs[0], 500, 500), m)
 
 
 def test_healthy_trim_is_fitted_on_many_records_and_calibrated_on_others():
@@ -93,13 +44,13 @@ def test_trim_identifies_the_rotor2_windows_the_fp_var_likelihood_calls_healthy(
     fit = {c: B.simulate_levels(B.DEV_SEED + j, 4, r, "out") for j, (c, r) in enumerate(B.CLASSES.items())}
     test, _ = B.simulate(B.seeds(B.DEV_SEED + 7, 3, "out"), 2, "light")
     trim = {c: B.fit_trim(fit[c][0], fit[c][1], 500, 1) for c in B.CLASSES}
+    assert all(isinstance(t, B.FPMeanResults) for t in trim.values())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fp = {c: B.FPVAR(fit[c][0], fit[c][1], 10, degree=1, k_range=B.K_RANGE).fit() for c in B.CLASSES}
     trim_ok, fp_ok = [], []
     for y in test:
-        ll = np.array([B.trim_stat(trim[c], B.window_means(y, 500))[0] for c in B.CLASSES])
-        trim_ok += list(ll.argmax(axis=0) == 2)
+        trim_ok += list(B.identify_trim(trim, y, 500) == "rotor2")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = {c: fp[c].at(fp[c].estimate_k(y, grid=5).k_hat) for c in B.CLASSES}

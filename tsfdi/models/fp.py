@@ -1225,9 +1225,9 @@ def select_fp_order(y: Any, k: Any, max_lags: int, max_degree: int, model: str =
 
 # --------------------------------------------------------------------------------------------------------------
 # the functionally pooled mean of windows (the trim model)
-# the local refinement of k: a pattern search on 5 points per parameter over +- h about the best point so far, h
-# (first one grid cell) kept after a move and halved otherwise, until h < _REFINE_TOL * the range or _REFINE rounds
-_REFINE = 100
+# the local refinement of k (FPMeanResults._profile): at most _REFINE rounds, until the local grid spans less than
+# _REFINE_TOL of the range
+_REFINE = 50
 _REFINE_TOL = 1e-7
 
 def _window_means(values: np.ndarray, window: int, starts: np.ndarray) -> np.ndarray:
@@ -1297,9 +1297,9 @@ class FPMean:
     k_range : array_like (d, 2), optional
         The interval of each parameter mapped onto ``[-1, 1]`` and searched for ``k`` (default: the range of ``k``).
     grid : int
-        Points per parameter of the search grid of ``k`` (>= 2); the grid's best point is then refined by a pattern
-        search (5 points per parameter about the best point so far, their spacing halved when none is better,
-        bounded by ``k_range``) to ``1e-7`` of the range.
+        Points per parameter of the search grid of ``k`` (>= 2); the grid's best point is then refined by local
+        grids about the best point so far (21 points per parameter for one parameter, 13 for two, fewer for more), each
+        spanning +- one spacing of the previous one and bounded by ``k_range``, to ``1e-7`` of the range.
 
     Raises
     ------
@@ -1490,7 +1490,7 @@ class FPMeanResults:
     # --- new windows
     def _profile(self, signal: Any, step: Any) -> tuple:
         """The signal, its window starts, and per window the smallest ``q(k)`` and its ``k``: the grid's best point
-        refined by a pattern search on local grids of 5 points per parameter (bounded by ``k_range``)."""
+        refined by local grids (bounded by ``k_range``), each spanning one spacing of the previous one."""
         m = self.model
         sig = as_signal(signal, "signal", allow_constant=True)
         sig = sig.match_channels(m.data.channels, "signal", named=m.data.named)
@@ -1509,31 +1509,33 @@ class FPMeanResults:
         d = self._k_grid.shape[1]
         q = np.empty(starts.size)
         k_hat = np.empty((starts.size, d))
-        chunk = max(1, (1 << 20) // (self._surface.shape[0] * self.neqs))
         lo, hi = self.model.k_range[:, 0], self.model.k_range[:, 1]
-        offs = np.array(list(itertools.product(*[np.linspace(-1.0, 1.0, 5)] * d)))        # (5^d, d)
+        n_loc = min(21, max(5, int(150 ** (1 / d)))) | 1                             # odd: the centre is a candidate
+        offs = np.array(list(itertools.product(*[np.linspace(-1.0, 1.0, n_loc)] * d)))      # (n_loc^d, d)
+        chunk = max(1, (1 << 20) // (max(self._surface.shape[0], offs.shape[0]) * self.neqs))
         for c in range(0, starts.size, chunk):
             mc = means[c:c + chunk]
+            rows = np.arange(len(mc))
             dev = mc[:, None, :] - self._surface[None]
             qg = np.einsum("wka,ab,wkb->wk", dev, self._S_inv, dev)
             best = np.argmin(qg, axis=1)
             kc = self._k_grid[best]
-            qc = qg[np.arange(len(mc)), best]
-            h = np.tile((hi - lo) / (m.grid - 1), (len(mc), 1))
-            tol = _REFINE_TOL * (hi - lo)
+            qc = qg[rows, best]
+            # refinement: a local grid of n_loc points per parameter over +- h about the best point so far, h (first
+            # one cell of the grid) shrunk to the local grid's spacing every round, until h < _REFINE_TOL * range
+            h = (hi - lo) / (m.grid - 1)
             for _ in range(_REFINE):
-                active = (h > tol).any(axis=1)
-                if not active.any():
+                if not (h > _REFINE_TOL * (hi - lo)).any():
                     break
-                cand = np.clip(kc[:, None, :] + offs[None] * h[:, None, :], lo, hi)       # (w, 5^d, d)
+                cand = np.clip(kc[:, None, :] + offs[None] * h, lo, hi)                   # (w, n_loc^d, d)
                 surf = fp_basis(cand.reshape(-1, d), m.degree, m.k_range, m.basis) @ self._params2d
                 dv = mc[:, None, :] - surf.reshape(len(mc), offs.shape[0], -1)
-                qq = np.einsum("wka,ab,wkb->wk", dv, self._S_inv, dv)
+                qq = np.einsum("wka,wka->wk", dv @ self._S_inv, dv)
                 j = np.argmin(qq, axis=1)
-                better = (qq[np.arange(len(mc)), j] < qc) & active
-                kc = np.where(better[:, None], cand[np.arange(len(mc)), j], kc)
-                qc = np.where(better, qq[np.arange(len(mc)), j], qc)
-                h = np.where(better[:, None], h, h / 2)
+                better = qq[rows, j] < qc
+                kc = np.where(better[:, None], cand[rows, j], kc)
+                qc = np.where(better, qq[rows, j], qc)
+                h = h * 2 / (n_loc - 1)
             q[c:c + len(mc)] = qc
             k_hat[c:c + len(mc)] = kc
         q.setflags(write=False)
