@@ -70,6 +70,11 @@ def test_fit_with_k_is_the_library_fpvar(flights, capsys):
     assert f"FP-VAR({lags}), degree {degree} (BIC over lags 1..4, degree 0..2) over a in [0, 1]" in text
     assert "from 3 record(s) at 3 operating point(s)" in text and "Operating parameters  a in [0, 1]" in text
     np.testing.assert_allclose(np.asarray(tsfdi.load(out).params), np.asarray(sel.fit().params), rtol=1e-10)
+    # values without a name: the parameter k
+    assert main(["fit", *map(str, flights["fit"]), "--k", "0,0.5,1", "--lags", "1", "--degree", "1", "--out",
+                 str(out)]) == 0
+    assert "FP-VAR(1), degree 1 (given) over k in [0, 1]" in capsys.readouterr().out
+    assert tsfdi.load(out).model.k_names == ["k"]
 
 
 def test_select_order_with_k_is_select_fp_order(flights, capsys):
@@ -95,6 +100,11 @@ def test_detect_at_a_logged_k_is_detect_at_k(flights, capsys):
     ref = tsfdi.detect(_frame(flights["new"][0]), fp.at(0.7), tsfdi.FTest(alpha=0.01))
     np.testing.assert_allclose(t[["statistic_a", "statistic_b"]].to_numpy()[0], ref.statistic, rtol=1e-12)
     assert t["k_a"].tolist() == [0.7] and not t["fault"].any()
+    # values without a name are the model's only parameter
+    bare = flights["folder"] / "bare.csv"
+    assert main(["detect", str(flights["new"][0]), "--baseline", str(flights["model"]), "--k", "0.7", "--method",
+                 "variance", "--alpha", "0.01", "--out", str(bare)]) == 0
+    pd.testing.assert_frame_equal(pd.read_csv(bare), t)
     # windows, one value per file: each file tested at its own k
     assert main(["detect", *map(str, flights["new"]), "--baseline", str(flights["model"]), "--k", "a=0.7,0.2",
                  "--window", "5s", "--step", "5s", "--method", "variance", "--alpha", "0.01", "--out",

@@ -273,19 +273,26 @@ def _k_arg(p: argparse.ArgumentParser) -> None:
                    help="operating point of the functionally pooled models (from 'tsfdi fit --k'): NAME=VALUE, the "
                         "logged value of every record, or NAME=VALUE,VALUE,... one per data file in the order given, "
                         "or NAME, the per-record coordinate NAME of netCDF data, repeated for each of the models' "
-                        "parameters (e.g. --k depth=2.5); or 'estimate': each "
+                        "parameters (e.g. --k depth=2.5; values without NAME= are those of the models' only "
+                        "parameter); or 'estimate': each "
                         "record's maximum-likelihood operating point (tsfdi.models.FPResults.estimate_k on the whole "
                         "record), printed with its 95%% interval, the record then tested at it. Required with a "
                         "functionally pooled model, refused without one")
 
 
-def _k_given(args: argparse.Namespace, data: _Data, *, fit: bool = False) -> dict[str, np.ndarray]:
+def _k_given(args: argparse.Namespace, data: _Data, *, fit: bool = False, only: str | None = None
+             ) -> dict[str, np.ndarray]:
     """``--k NAME=VALUE,...`` as NAME -> one value per record of ``data`` (each file's value on its records; one
-    value for every file, except when fitting)."""
+    value for every file, except when fitting). Values without a name are those of ``k`` when fitting, else of the
+    models' ``only`` parameter."""
     files = [os.fspath(f) for f in args.data]
     per_file = [files.index(f) for f in data.rec.files]
     given: dict[str, np.ndarray] = {}
     for name, values in args.k:
+        if not name and not fit and only is None:
+            raise ValueError(f"--k {','.join(f'{v:g}' for v in values)}: the models have several operating "
+                             "parameters; name the one given, --k NAME=VALUE")
+        name = name or ("k" if fit else only)
         if name in given:
             raise ValueError(f"--k {name}: given twice")
         if values is None:
@@ -356,7 +363,8 @@ def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tu
     estimate = bool(args.k) and any(name == "estimate" for name, _ in args.k)
     if estimate and len(args.k) > 1:
         raise ValueError("--k estimate estimates every parameter of the models; give it alone")
-    given = {} if estimate or not fp else _k_given(args, data)
+    names = list(dict.fromkeys(n for m in fp.values() for n in m.model.k_names))
+    given = {} if estimate or not fp else _k_given(args, data, only=names[0] if len(names) == 1 else None)
     for flag, m in fp.items():
         missing = [n for n in m.model.k_names if n not in given]
         if not estimate and missing:
@@ -365,7 +373,7 @@ def _operating_points(args: argparse.Namespace, data: _Data, models: dict) -> tu
     unused = [n for n in given if not any(n in m.model.k_names for m in fp.values())]
     if unused:
         raise ValueError(f"--k {unused[0]}: no model is pooled over {unused[0]!r} (their operating parameters: "
-                         f"{', '.join(dict.fromkeys(n for m in fp.values() for n in m.model.k_names))})")
+                         f"{', '.join(names)})")
     for flag, m in fp.items():          # a logged point beyond the fitted range: the polynomials extrapolate
         for n, (lo, hi) in zip(m.model.k_names, m.model.k_range if given else []):
             out = sorted({float(v) for v in given[n] if not lo <= v <= hi})
@@ -690,7 +698,8 @@ def _order_args(p: argparse.ArgumentParser) -> None:
                    help="operating parameter of the records, making the model functionally pooled (FP-AR / FP-VAR, "
                         "tsfdi.models.FPVAR: its coefficients are Legendre polynomials of k, fitted on every record "
                         "at once): one value per data file, in the order of the files, every record of a file at "
-                        "its file's value, e.g. --k depth=0,0,4 for three files (at least two distinct values); "
+                        "its file's value, e.g. --k depth=0,0,4 for three files (at least two distinct values; "
+                        "without NAME= the parameter is named k); "
                         "or NAME, the per-record coordinate NAME of netCDF data (e.g. --k mass for the records of "
                         "'tsfdi simulate --fleet'); repeat --k for several parameters (--k speed=2,5,8 --k "
                         "mass=1.2,1.2,1.5)")

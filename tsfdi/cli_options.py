@@ -190,8 +190,9 @@ def method(text: str) -> tuple[str, ...]:
 
 def operating_point(text: str) -> tuple[str, list[float] | None]:
     """``--k``: ``NAME=VALUE[,VALUE...]`` (the values of an operating parameter: one per data file, or one for all),
-    ``VALUE[,VALUE...]`` (the parameter named ``k``), ``NAME`` (``(NAME, None)``: the per-record coordinate of netCDF
-    data) or ``estimate`` (``("estimate", None)``: the operating point estimated from each record)."""
+    ``VALUE[,VALUE...]`` (``("", values)``: the model's only parameter, ``k`` when fitting), ``NAME`` (``(NAME, None)``:
+    the per-record coordinate of netCDF data) or ``estimate`` (``("estimate", None)``: the operating point estimated
+    from each record)."""
     word = text.strip()
     if word.lower() == "estimate":
         return "estimate", None
@@ -200,8 +201,8 @@ def operating_point(text: str) -> tuple[str, list[float] | None]:
         if "," in name or any(c.isspace() for c in name):
             raise argparse.ArgumentTypeError(f"must name one coordinate (repeat --k for several), got {text!r}")
         return name, None
-    name, parts = (name.strip(), csv_list(values)) if sep else ("k", csv_list(word))
-    if not name or not parts or not all(_bare_number(v) for v in parts):
+    name, parts = (name.strip(), csv_list(values)) if sep else ("", csv_list(word))
+    if (sep and not name) or not parts or not all(_bare_number(v) for v in parts):
         raise argparse.ArgumentTypeError(f"must be NAME=VALUE[,VALUE...] such as 'depth=0,0,4' (one finite value per "
                                          f"data file, or one for all), a netCDF coordinate NAME, or 'estimate', got "
                                          f"{text!r}")
