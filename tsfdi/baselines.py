@@ -258,10 +258,13 @@ def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: s
 
 
 def _coordinate(da: Any, dim: str) -> np.ndarray:
-    """The values of ``da[dim]`` for a dimension ``dim``, read from its index (``da[dim]`` builds a DataArray with its
-    coordinates first, and the coordinate variable's values pass through xarray's indexing adapter; without a
-    coordinate the index is the positions ``0, 1, ...``)."""
-    return np.asarray(da.get_index(dim))
+    """The values of ``da[dim]``: from its index when it has one (the coordinate variable's values pass through
+    xarray's indexing adapter, ~7 us), else from the coordinate variable (``da[dim]`` builds a DataArray with its
+    coordinates first; without a coordinate it is the positions ``0, 1, ...``)."""
+    if dim in da.xindexes:
+        return np.asarray(da.get_index(dim))
+    variable = da.coords.variables.get(dim)
+    return da[dim].values if variable is None else variable.values
 
 
 def _time_rate(time: np.ndarray, name: str) -> float:
