@@ -340,6 +340,9 @@ def test_records_rate_and_labels_from_the_coordinates():
         assert rec.state.tolist() == ["h", "f", "f"] and rec.turbulence.tolist() == ["light"] * 3
     bare = Records.from_data(xr.DataArray(v, dims=("record", "time", "channel"), coords={"state": labels["state"]}))
     assert bare.fs == 1.0 and bare.channels == ("0", "1") and bare.ids.tolist() == [0, 1, 2]
+    # a coordinate without an index (xarray's drop_indexes) is read from its variable, not the default positions
+    loose = Records.from_data(da.drop_indexes(["time", "channel"]))
+    assert loose.fs == 0.5 and loose.channels == ("a", "b")
 
 
 def test_fit_baselines_skips_non_finite_records_of_an_array(synthetic):
