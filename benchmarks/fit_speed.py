@@ -37,8 +37,9 @@ from previous_commit import CLOCKS, compare, median_time  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 #: the commit before fit() went through the Gram matrix (issue 36)
 AGAINST = "cf49e9f"
-#: the commit before session 31's fit / fit_baselines / select_order changes (issue 36)
-PREVIOUS = "1aa5ada"
+#: the commit before session 34's fit_baselines changes (issue 36: residual products in one compiled kernel, the
+#: segments' extremes computed once; session 31's changes start after 1aa5ada)
+PREVIOUS = "e75e770"
 CHANNELS = ("roll", "pitch", "r")
 #: workloads of benchmarks/previous_commit.py timed here: name -> (description, timed units per run)
 WORKLOADS = {
