@@ -535,8 +535,9 @@ def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *,
     p = (coef.shape[0] - c) // s
     x, starts, ends = _channel_rows(records, p)
     out = np.empty((c + p * s, s))
-    _residual_products(x, starts, ends, np.ascontiguousarray(coef[c:].reshape(p, s, s)), coef[0] if c else np.zeros(s),
-                       c, np.empty_like(x), out)
+    # (contiguous operands: one compiled signature whatever the layout of coef)
+    _residual_products(x, starts, ends, np.ascontiguousarray(coef[c:].reshape(p, s, s)),
+                       np.ascontiguousarray(coef[0]) if c else np.zeros(s), c, np.empty_like(x), out)
     return out
 
 
