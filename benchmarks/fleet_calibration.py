@@ -2,15 +2,34 @@
 
 1. A simulated fleet: VAR(2) records whose coefficients (``A + 0.04 N(0, 1)``) and innovation scale (log-normal
    +-15 % per record and channel) vary from aircraft to aircraft. A baseline VAR(2) is fitted on 5, 10 or 20
-   records, the F and Ljung-Box tests (Sidak over the 3 channels, so alpha is the decision's rate) are calibrated on
-   its held-out residuals (windows of 200 samples), and 60 new records of the same fleet (600 disjoint windows) are
-   judged. Over ``--fleets`` fleets (``--seed``: the first): the realised rate of the decision averaged over fleets,
-   its 99.9 % interval over the independent fleets, for the F test the same mean with the fitting records' noise
-   levels as control variate (:func:`pivot_rate`), its spread, and how many fleets fall in the two-sided 99.9 %
-   binomial band of one fleet's 600 windows, whether the mean over fleets lies in the all-fleets band ("mean in
-   band") and how often an *exact* law would (``yardstick_reach``: 1,500 runs of as many ideal fleets with this
-   layout and the measured row's between / within spread; the yardstick's own reach); "old" is the per-record
-   mixture with a 90 % bootstrap bound (``record_effect="bootstrap"``), "new" the predictive record-level law.
+   records of a fleet, the F and Ljung-Box tests (Sidak over the 3 channels, so alpha is the decision's rate) are
+   calibrated on its held-out residuals (windows of 200 samples) with the predictive record-level law, and new
+   records of the same fleet are judged on their disjoint windows. A predictive threshold's rate is alpha *averaged
+   over the fitting fleets* (one fleet's few fitting records set a threshold whose rate on its new records varies
+   far beyond the binomial), so every row (records) draws its own ``--fleets`` independent fleets (fleet ``f`` of
+   row ``J`` from the generator seeded ``[seed, J, f]``: no fleet is shared between rows) and pools their new
+   windows. Printed per row and alpha: the pooled rate, the two-sided 99.9 % binomial band of alpha for the pooled
+   window count, the fleet-clustered 99.9 % interval of the pooled rate (t over the fleets), the ratio of the
+   clustered to the binomial standard error (near 1: the binomial band is the right yardstick; above: the band is
+   too narrow for this design), and the median calibrated threshold of channel y0 (p10-p90 over the fleets) by
+   number of fitting records. The seed is a fresh ``tsfdi.study.evaluation_seed()`` (printed, stored nowhere)
+   unless ``--seed`` reproduces a run.
+
+   Design, chosen on development seeds only (40 new records per fleet; 800 fleets each with 5 and 10 records, seeds
+   50000-50799 and 60000-60799, 600 with 20 records, seeds 80000-80599; never the evaluation seed): the spread of
+   the pooled rate between fleet draws is ``sqrt((V_b + alpha / m) / F)``, ``V_b`` the between-fleet variance of a
+   fleet's expected rate, ``m`` the windows per fleet, ``F`` the fleets, and the binomial band's half-width is
+   ``3.29 sqrt(alpha / (m F))``: their ratio does not depend on ``F`` but on ``m``. The largest ``V_b`` was F with
+   5 records at 0.01 (a fleet's expected rate has sd 2.9 alpha; with 10 / 20 records 1.9 / 1.6, at 0.001 4.7-5.5
+   alpha; Ljung-Box 0.3-1.3 alpha), so ``NEW = 5`` new records (``m = 50`` windows) keeps the between-fleet spread
+   of the pooled rate at most 0.62 of the band's half-width in every row (the binomial band is still narrower than
+   the clustered interval for F: its SE ratio is ~2.3 there), and ``FLEETS = 300`` per row (15,000 windows) is what
+   a run of about five minutes affords. The same development fleets give the expected rate of the decision over
+   fleets (cluster standard error; for F with the fitting records' true noise levels as control variate): F
+   0.95 +- 0.05 / 0.94 +- 0.04 / 0.99 +- 0.05 alpha at 0.01 (5 / 10 / 20 records), 1.00 +- 0.11 / 0.97 +- 0.13 /
+   1.06 +- 0.18 at 0.001: unbiased; Ljung-Box 0.59 +- 0.02 / 0.94 +- 0.02 / 1.14 +- 0.02 at 0.01 and
+   0.29 +- 0.04 / 1.09 +- 0.07 / 1.42 +- 0.08 at 0.001: conservative with 5 records, liberal with 20 (not fixed,
+   see ``ScaledChi2Threshold``'s record law).
 2. CrazyPAD (``../shared/data/crazypad``, the functions of ``benchmarks/crazypad.py``: margin, channels and VAR
    order chosen on the fitting flights, each log's two airborne segments fitted and held out together), normal
    flights of both airframes (E8, E9). The tests, each Sidak-corrected over the channels so that alpha is the
@@ -32,8 +51,8 @@
    records only. A VAR (BIC order) fitted on 10 aircraft, the tests calibrated on its held-out residuals, 40 other
    aircraft judged (2 s windows, disjoint): in band?
 
-Run: ``python benchmarks/fleet_calibration.py [--fleets 40] [--seed 2031] [--predictive-only] [--data PATH]
-[--no-crazypad] [--no-hexacopter]``
+Run: ``python benchmarks/fleet_calibration.py [--fleets 300] [--new 5] [--seed SEED] [--data PATH] [--no-crazypad]
+[--no-hexacopter]``
 (BLAS pinned to one thread; prints its run time).
 """
 
@@ -54,6 +73,7 @@ from scipy import stats  # noqa: E402
 
 import tsfdi  # noqa: E402
 from tsfdi.coverage import coverage, record_coverage  # noqa: E402
+from tsfdi.study import evaluation_seed  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import crazypad as cp  # noqa: E402
@@ -61,121 +81,67 @@ import crazypad as cp  # noqa: E402
 A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
 A2 = -0.2 * np.eye(3)
 N, WINDOW, SPREAD, NOISE = 2000, 200, 0.04, 0.15
-RECORDS, NEW, ALPHAS = (5, 10, 20), 60, (1e-2, 1e-3)
-
-
-def fleet(rng: np.random.Generator, count: int, n: int = N) -> tuple:
-    """``count`` records of the fleet: VAR(2) with coefficients ``A + SPREAD N(0, 1)`` and innovations scaled by
-    ``exp(NOISE z)``, ``z`` standard normal per record and channel (+-15 %, log-normal) (all records simulated at
-    once); returns the records and ``z`` (count, 3)."""
-    b1 = A1 + SPREAD * rng.standard_normal((count, 3, 3))
-    b2 = A2 + SPREAD * rng.standard_normal((count, 3, 3))
-    e = rng.standard_normal((n + 200, count, 3))
-    z = rng.standard_normal((count, 3))
-    e = e * np.exp(NOISE * z)
-    y = np.zeros_like(e)
-    for t in range(2, n + 200):
-        y[t] = np.einsum("rij,rj->ri", b1, y[t - 1]) + np.einsum("rij,rj->ri", b2, y[t - 2]) + e[t]
-    return [y[200:, r] for r in range(count)], z
+RECORDS, ALPHAS = (5, 10, 20), (1e-2, 1e-3)
+#: fleets per row and new records per fleet (chosen on development seeds, see the module docstring)
+FLEETS, NEW = 300, 5
 
 
 def fleet_records(rng: np.random.Generator, count: int, n: int = N) -> list:
-    """The records of :func:`fleet`."""
-    return fleet(rng, count, n)[0]
+    """``count`` records of the fleet: VAR(2) with coefficients ``A + SPREAD N(0, 1)`` and innovations scaled by
+    ``exp(NOISE z)``, ``z`` standard normal per record and channel (+-15 %, log-normal) (all records simulated at
+    once)."""
+    b1 = A1 + SPREAD * rng.standard_normal((count, 3, 3))
+    b2 = A2 + SPREAD * rng.standard_normal((count, 3, 3))
+    e = rng.standard_normal((n + 200, count, 3))
+    e = e * np.exp(NOISE * rng.standard_normal((count, 3)))
+    y = np.zeros_like(e)
+    for t in range(2, n + 200):
+        y[t] = np.einsum("rij,rj->ri", b1, y[t - 1]) + np.einsum("rij,rj->ri", b2, y[t - 2]) + e[t]
+    return [y[200:, r] for r in range(count)]
 
 
-def pivot_rate(z: np.ndarray, alpha: float) -> float:
-    """Control variate of the F test's rate: per channel, the exact Student t prediction bound of a new record's log
-    noise variance (``2 NOISE z``) from the fitting records' ``z`` (records, 3) at the Sidak share of ``alpha``, and
-    the probability that a new record's variance exceeds it; the mean over channels divided by the share. Its
-    expectation over fleets is exactly 1 (the t pivot), and it moves with the F test's rate, which the fitting
-    records' noise levels drive."""
-    j = z.shape[0]
-    share = 1.0 - (1.0 - alpha) ** (1.0 / z.shape[1])
-    bound = z.mean(axis=0) + stats.t.isf(share, j - 1) * z.std(axis=0, ddof=1) * np.sqrt(1.0 + 1.0 / j)
-    return float(stats.norm.sf(bound).mean() / share)
-
-
-def make_test(family: str, alpha: float, effect: str):
+def make_test(family: str, alpha: float, effect: str = "predictive"):
     thr = tsfdi.ScaledChi2Threshold(alpha, record_effect=effect)
     if family == "F":
         return tsfdi.FTest(alpha=alpha, correction="sidak", threshold=thr)
     return tsfdi.LjungBox(lags=20, alpha=alpha, correction="sidak", threshold=thr)
 
 
-def decision_rate(test, new_resid: list) -> float:
-    """Fraction of the disjoint windows of the new records' residuals whose decision (any channel) rejects."""
+def decision_flags(test, new_resid: list) -> np.ndarray:
+    """Whether the decision (any channel) rejects, on every disjoint window of the new records' residuals."""
     n = WINDOW - 2
     flags = []
     for e in new_resid:
-        s = test.window_statistic(e, n, n, **getattr(test, "_bench_ref", {}))
+        s = test.window_statistic(e, n, n)
         thr, _ = test.threshold_pvalue(s, n)
         flags.append((s > thr).any(axis=1))
-    return float(np.concatenate(flags).mean())
+    return np.concatenate(flags)
 
 
-def one_fleet(seed: int, records=RECORDS, alphas=ALPHAS, effects=("bootstrap", "predictive"),
-              families=("F", "LB")) -> list:
-    """Rows (records, alpha, family, effect, rate, threshold of channel 0, :func:`pivot_rate`) of one simulated
-    fleet: the baselines fit on the first 5 / 10 / 20 records of the fleet, all judged on the same 60 new records."""
-    rng = np.random.default_rng(seed)
-    fit, z = fleet(rng, max(records))
-    new = fleet_records(rng, NEW)
+def decision_rate(test, new_resid: list) -> float:
+    """Fraction of the disjoint windows of the new records' residuals whose decision (any channel) rejects."""
+    return float(decision_flags(test, new_resid).mean())
+
+
+def fleet_rows(records: int, seed: int, fleets: int, new: int) -> list:
+    """Rows (records, fleet, alpha, test, flagged windows, windows, threshold of channel 0) of ``fleets``
+    independent fleets of the row ``records`` (fleet ``f`` from the generator seeded ``[seed, records, f]``): a
+    baseline VAR(2) fitted on ``records`` records of the fleet, the tests calibrated on its held-out residuals, and
+    ``new`` new records of the same fleet judged."""
     rows = []
-    for j in records:
-        spec = tsfdi.VAR(fit[:j], 2)
+    for f in range(fleets):
+        rng = np.random.default_rng([seed, records, f])
+        fit, fresh = fleet_records(rng, records), fleet_records(rng, new)
+        spec = tsfdi.VAR(fit, 2)
         base = spec.fit()
         held = spec.held_out_residuals()
-        resid = [np.asarray(base.residuals(x)) for x in new]
-        for a in alphas:
-            for fam in families:
-                for eff in effects:
-                    test = make_test(fam, a, eff).calibrate(held, window=WINDOW)
-                    laws = [t.record_law_ for t in test.thresholds_]
-                    between = np.mean([law["between_sd"] for law in laws]) if laws[0] is not None else np.nan
-                    within = np.sqrt(np.mean([np.mean(2.0 / t.df_) for t in test.thresholds_]))
-                    rows.append((j, a, fam, eff, decision_rate(test, resid), float(test.threshold_[0]),
-                                 pivot_rate(z[:j], a), between, within))
+        resid = [np.asarray(base.residuals(x)) for x in fresh]
+        for a in ALPHAS:
+            for fam in ("F", "LB"):
+                test = make_test(fam, a).calibrate(held, window=WINDOW)
+                flags = decision_flags(test, resid)
+                rows.append((records, f, a, fam, int(flags.sum()), flags.size, float(test.threshold_[0])))
     return rows
-
-
-def exact_factor(j: int, share: float, ratio: float) -> float:
-    """``c`` of the exact law of :func:`yardstick_reach`: ``E_s[P(N(0, k^2 + ratio^2) > s k c)] = share`` with
-    ``k^2 = 1 + 1/j`` and ``s^2 ~ chi2(j - 1) / (j - 1)`` (on 4,000 quantiles of that law), by bisection."""
-    u = (np.arange(4000) + 0.5) / 4000
-    s = np.sqrt(stats.chi2.ppf(u, j - 1) / (j - 1))
-    k = np.sqrt(1.0 + 1.0 / j)
-    tot = np.sqrt(k * k + ratio * ratio)
-    lo, hi = 0.0, 1e4
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if stats.norm.sf(s * k * mid / tot).mean() > share else (lo, mid)
-    return 0.5 * (lo + hi)
-
-
-def yardstick_reach(j: int, alpha: float, ratio: float, fleets: int, sets: int = 1500, seed: int = 0) -> tuple:
-    """How often an *exact* law meets the yardstick "the mean rate over ``fleets`` fleets inside the all-fleets
-    99.9 % binomial band" (the share of ``sets`` independent runs that do), and its mean rate over all runs.
-
-    The ideal fleet has this benchmark's layout (``j`` fitting records, ``NEW`` new records of ``(N - 2) //
-    (WINDOW - 2)`` windows, 3 independent channels, Sidak): a record's log statistic level is normal between
-    records (sd 1), a window's log statistic that level plus normal noise of sd ``ratio`` (within over between, as
-    the calibrations of the measured row estimate it); the fitting records' levels are known exactly. The law
-    flags a window above ``mean + s sqrt(1 + 1/j) c`` of the fitting records' levels, ``c`` from
-    :func:`exact_factor`: its rate over fleets is exactly the per-channel share (the new level minus the mean is
-    independent of ``s``), so the decision's expected rate is exactly ``alpha``; what it cannot avoid is that a
-    fleet's rate depends on its few fitting records."""
-    rng = np.random.default_rng(seed)
-    windows = (N - 2) // (WINDOW - 2)
-    share = 1.0 - (1.0 - alpha) ** (1.0 / 3.0)
-    c = exact_factor(j, share, ratio)
-    x = rng.standard_normal((sets, fleets, 3, j))
-    thr = x.mean(axis=-1) + x.std(axis=-1, ddof=1) * np.sqrt(1.0 + 1.0 / j) * c
-    p = stats.norm.sf((thr[:, :, None, :] - rng.standard_normal((sets, fleets, NEW, 3))) / ratio)
-    rate = rng.binomial(windows, 1.0 - np.prod(1.0 - p, axis=-1)).sum(axis=-1) / (NEW * windows)
-    mean = rate.mean(axis=-1)
-    lo, hi = band(NEW * windows * fleets, alpha)
-    return float(np.mean((mean >= lo) & (mean <= hi))), float(mean.mean())
 
 
 def band(n: int, alpha: float) -> tuple:
@@ -184,49 +150,35 @@ def band(n: int, alpha: float) -> tuple:
     return lo / n, hi / n
 
 
-def ratio(g: pd.DataFrame) -> float:
-    """Within- over between-record spread of a row's calibrations (medians over its fleets; at most 30: a spread
-    estimated as 0 leaves the windows' binomial noise only)."""
-    return float(min(g.within.median() / max(g.between.median(), 1e-9), 30.0))
-
-
-def fleet_table(fleets: int, seed: int = 2031, effects=("bootstrap", "predictive")) -> None:
-    """The table of part 1. Besides the binomial bands (which treat every window of every fleet as independent), the
-    mean rate's 99.9 % t interval over the independent fleets (a fleet's rate varies far beyond the binomial: its
-    fitting records are a sample of the fleet), and for the F test the mean rate with :func:`pivot_rate` as control
-    variate (``rate - beta (pivot - 1) alpha``, ``beta`` by least squares; unbiased, with its own 99.9 % interval;
-    the Ljung-Box rate does not follow the noise levels)."""
+def fleet_table(seed: int, fleets: int = FLEETS, new: int = NEW) -> pd.DataFrame:
+    """Part 1: per row (fitting records, alpha, test) the pooled rate of the decision on the new records' windows of
+    all the row's fleets, the two-sided 99.9 % binomial band of alpha for that many windows, the fleet-clustered
+    99.9 % interval of the pooled rate (t over the fleets' rates: every fleet holds as many windows), the ratio of
+    the clustered to the binomial standard error, and the median calibrated threshold of channel y0 (and its p10-p90
+    over the fleets) by number of fitting records."""
     t0 = time.perf_counter()
-    rows = [(f, *r) for f in range(fleets) for r in one_fleet(seed + f, effects=effects)]
-    df = pd.DataFrame(rows, columns=["fleet", "records", "alpha", "test", "calibration", "rate", "threshold",
-                                     "pivot_rate", "between", "within"])
-    windows = NEW * ((N - 2) // (WINDOW - 2))
+    df = pd.DataFrame([r for j in RECORDS for r in fleet_rows(j, seed, fleets, new)],
+                      columns=["records", "fleet", "alpha", "test", "flagged", "windows", "threshold"])
     q = stats.t.isf(5e-4, fleets - 1)
     out = []
-    for (j, a, fam, eff), g in df.groupby(["records", "alpha", "test", "calibration"], sort=False):
-        lo, hi = band(windows, a)
-        lo_all, hi_all = band(windows * fleets, a)
-        y, c = g["rate"].to_numpy(), g["pivot_rate"].to_numpy() * a
-        beta = np.cov(y, c)[0, 1] / c.var(ddof=1) if fam == "F" and c.var() > 0 else 0.0
-        adj = y - beta * (c - a)
-        cv = f"{100 * adj.mean():.3g} +- {100 * q * adj.std(ddof=1) / np.sqrt(fleets):.2g}" if fam == "F" else "-"
-        out.append({"records": j, "alpha": a, "test": fam, "calibration": eff,
-                    "mean rate %": 100 * y.mean(), "band (all fleets) %": f"{100 * lo_all:.3g}-{100 * hi_all:.3g}",
-                    "mean in band": "yes" if lo_all <= y.mean() <= hi_all else "no",
-                    "exact law in band %": "-" if eff != "predictive" else
-                    f"{100 * yardstick_reach(j, a, ratio(g), fleets)[0]:.0f}",
-                    "99.9 % CI over fleets %": f"{100 * (y.mean() - q * y.std(ddof=1) / np.sqrt(fleets)):.3g}-"
-                    f"{100 * (y.mean() + q * y.std(ddof=1) / np.sqrt(fleets)):.3g}",
-                    "control-variate mean %": cv,
-                    "median %": 100 * np.median(y), "p10-p90 %": f"{100 * g.rate.quantile(.1):.2f}-"
-                    f"{100 * g.rate.quantile(.9):.2f}", "fleets in band": f"{((y >= lo) & (y <= hi)).sum()}/"
-                    f"{len(g)}", "one-fleet band %": f"{100 * lo:.3g}-{100 * hi:.3g}",
-                    "threshold y0": g.threshold.median()})
-    print(f"simulated fleet: {fleets} fleets (seeds {seed}-{seed + fleets - 1}), {NEW} new records x "
-          f"{(N - 2) // (WINDOW - 2)} windows each, Sidak over 3 channels ({time.perf_counter() - t0:.0f} s)")
-    print(pd.DataFrame(out).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-    print("mean in band: the mean rate over the fleets inside the all-fleets band; exact law in band %: how often an "
-          "exact law (expected rate alpha) meets that yardstick with this many fleets (yardstick_reach, 1,500 runs)")
+    for (fam, a, j), g in df.groupby(["test", "alpha", "records"], sort=False):
+        x, n = int(g.flagged.sum()), int(g.windows.sum())
+        rate = g.flagged.to_numpy() / g.windows.to_numpy()
+        lo, hi = band(n, a)
+        se = rate.std(ddof=1) / np.sqrt(fleets)
+        out.append({"test": fam, "alpha": a, "records": j, "flagged": f"{x}/{n}", "rate %": 100 * x / n,
+                    "band %": f"{100 * lo:.3g}-{100 * hi:.3g}",
+                    "in band": "yes" if lo <= x / n <= hi else ("ABOVE" if x / n > hi else "below"),
+                    "fleet 99.9 % CI %": f"{100 * max(x / n - q * se, 0):.3g}-{100 * (x / n + q * se):.3g}",
+                    "SE fleets/binomial": se / np.sqrt(a * (1 - a) / n),
+                    "threshold y0": g.threshold.median(),
+                    "y0 p10-p90": f"{g.threshold.quantile(0.1):.3g}-{g.threshold.quantile(0.9):.3g}"})
+    print(f"1. simulated fleet (evaluation seed {seed}): per row {fleets} independent fleets, {new} new records x "
+          f"{(N - 2) // (WINDOW - 2)} disjoint windows each, Sidak over 3 channels, predictive calibration "
+          f"({time.perf_counter() - t0:.0f} s)")
+    tab = pd.DataFrame(out).sort_values(["test", "alpha", "records"], ascending=[True, False, True])
+    print(tab.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    return tab
 
 
 # ------------------------------------------------------------------ 2. CrazyPAD, real flights
@@ -418,16 +370,19 @@ def hexacopter_rows() -> None:
 
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--fleets", type=int, default=40)
-    p.add_argument("--seed", type=int, default=2031, help="seed of the first simulated fleet")
-    p.add_argument("--predictive-only", action="store_true", help="skip the bootstrap law in the fleet table")
+    p.add_argument("--fleets", type=int, default=FLEETS, help="independent fleets per row of part 1 (0: skip it)")
+    p.add_argument("--new", type=int, default=NEW, help="new records judged per fleet")
+    p.add_argument("--seed", type=int, default=None,
+                   help="evaluation seed of part 1, to reproduce a run (default: a fresh one, printed)")
     p.add_argument("--data", default=None, help="CrazyPAD folder (default ../shared/data/crazypad)")
     p.add_argument("--no-crazypad", action="store_true")
     p.add_argument("--no-hexacopter", action="store_true")
     args = p.parse_args(argv)
     t0 = time.perf_counter()
     if args.fleets:
-        fleet_table(args.fleets, args.seed, ("predictive",) if args.predictive_only else ("bootstrap", "predictive"))
+        if args.fleets < 2 or args.new < 1:
+            p.error("--fleets needs at least 2 fleets and --new at least 1 record")
+        fleet_table(evaluation_seed() if args.seed is None else args.seed, args.fleets, args.new)
     if not args.no_crazypad:
         crazypad_rows(args.data)
     if not args.no_hexacopter:
