@@ -561,7 +561,7 @@ def _residual_products(x, starts, ends, W, c0, c, e, out):  # pragma: no cover -
         rest = ej[p:]                               # (slices: numba vectorizes the passes on views, not on t - k)
         q = 0
         while q < terms:
-            # terms q .. q + 3 (lag q // s + 1, channel q % s); past the last term a zero weight on the first
+            # terms q .. q + 3 (lag q // s + 1, channel q % s); past the last term, zero weights (lags clamped to p)
             k0, k1, k2, k3 = q // s + 1, (q + 1) // s + 1, (q + 2) // s + 1, (q + 3) // s + 1
             a0, a1, a2, a3 = q % s, (q + 1) % s, (q + 2) % s, (q + 3) % s
             w0 = W[k0 - 1, a0, j]
