@@ -546,8 +546,8 @@ def _residual_products(x, starts, ends, W, c0, c, e, out):  # pragma: no cover -
     """:func:`lag_residual_products` of ``s`` channel rows ``x`` (records end to end, ``p`` zeros between two) with lag
     coefficients ``W[k - 1, a, j]`` (channel ``a`` at lag ``k`` in equation ``j``) and intercepts ``c0``: each
     equation's residuals ``e[j, t] = x[j, t] - c0[j] + sum_{k, a} W[k - 1, a, j] x[a, t - k]`` on each record's rows
-    ``starts[r] + p .. ends[r] - 1`` (zero elsewhere) by contiguous passes of four lag terms each, then ``sum_t e[j, t]``
-    and ``-sum_t e[j, t] x[a, t - k]`` by :func:`_lag_pass` (two channels per pass)."""
+    ``starts[r] + p .. ends[r] - 1`` (zero elsewhere) by contiguous passes of four lag terms each, then
+    ``sum_t e[j, t]`` and ``-sum_t e[j, t] x[a, t - k]`` by :func:`_lag_pass` (two channels per pass)."""
     s, n = x.shape
     p = W.shape[0]
     m = n - p
