@@ -4,7 +4,11 @@
 ``identify`` drives it through every candidate model (healthy and fault models) and applies the same test to
 each: the paper's multiple binary hypothesis tests. A model is *accepted* when its residuals pass the test
 (for vector residuals: every channel passes). One accepted model is an identification, several are an
-ambiguity ("confusion between those types of failures"), none means no decision.
+ambiguity ("confusion between those types of failures"), none means no decision. Functionally pooled means of
+windows (:class:`tsfdi.models.FPMean`, the trim of a signal over operating parameters) can be the models instead
+(all of them; they have no residuals): a window's mean is judged at each class's maximum-likelihood operating point,
+the classes are ranked by that likelihood, and the detector's statistic is compared with a calibrated
+:class:`~tsfdi.EmpiricalThreshold`.
 """
 
 from __future__ import annotations

@@ -18,6 +18,10 @@ lag products of :mod:`tsfdi.models.lstsq` (no FP regressor is built). The parame
 
 :meth:`FPResults.estimate_k` turns a fitted FP model around: the operating point that best explains a new record
 (maximum likelihood over ``k``) with its confidence interval, i.e. fault-magnitude or operating-point estimation.
+
+:class:`FPMean` is the same expansion for the level of a signal's windows (the trim a closed loop holds, where a
+compensated fault shows): each class's window means as a surface over ``k``, the window's likelihood maximised over
+``k`` for :func:`tsfdi.identify`, and its distance for a detector with a calibrated threshold.
 """
 
 from __future__ import annotations
