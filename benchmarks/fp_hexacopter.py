@@ -25,9 +25,9 @@ evaluation ones):
   :class:`tsfdi.models.FPMean`: the window means of the three controller outputs regressed on the FP basis of ``k``
   (Legendre, degree ``TRIM_DEGREE``), pooled least squares over all fitting windows of all turbulence levels
   (healthy: the development fitting records and ``HEALTHY_POOL`` more per level, seed ``DEV_SEED + 100``; each rotor:
-  its development fitting records); the residual covariance ``S`` of a window is the spread of the records' mean residuals (records - basis
-  functions degrees of freedom: the unlogged airframe of a record moves its whole trim) plus the spread of the windows
-  around their record's mean. A window goes to the class whose trim surface, at that class's maximum-likelihood ``k``
+  its development fitting records); the residual covariance ``S`` of a window is the spread of the records' mean
+  residuals (records - basis functions degrees of freedom: the unlogged airframe of a record moves its whole trim)
+  plus the spread of the windows around their record's mean. A window goes to the class whose trim surface, at that class's maximum-likelihood ``k``
   (a grid of ``K_GRID`` points per parameter over the fitted range, refined by bounded local grids), gives its mean the
   largest Gaussian log-likelihood with ``S`` (:func:`tsfdi.identify_windows` with the FPMean results,
   ``decide("likelihood")``): everything from the window itself (no logged ``k``, no turbulence level, no other window
