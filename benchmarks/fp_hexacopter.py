@@ -30,8 +30,8 @@ evaluation ones):
   plus the spread of the windows around their record's mean. A window goes to the class whose trim surface, at that
   class's maximum-likelihood ``k`` (a grid of ``K_GRID`` points per parameter over the fitted range, refined by
   bounded local grids), gives its mean the largest Gaussian log-likelihood with ``S`` (:func:`tsfdi.identify_windows`
-  with the FPMean results, ``decide("likelihood")``): everything from the window itself (no logged ``k``, no turbulence level, no other window
-  of the record).
+  with the FPMean results, ``decide("likelihood")``): everything from the window itself (no logged ``k``, no
+  turbulence level, no other window of the record).
 * Healthy false alarms, alpha = 0.01 per window: the ``trim`` detector, the healthy trim statistic ``min_k (m - M(k))'
   S^-1 (m - M(k))`` against the empirical 0.99 quantile (:class:`tsfdi.EmpiricalThreshold`) of that statistic on
   windows every ``CAL_STEP`` samples of the development calibration records (healthy, all levels, outside
