@@ -192,6 +192,11 @@ def test_bad_input_is_refused_naming_the_argument():
         FPMean(y, k, 2.5)
     with pytest.raises(ValueError, match="sampling frequency is unknown"):
         FPMean(y, k, "2s")
+    idx100 = pd.timedelta_range(0, periods=1000, freq="10ms")
+    frames = [pd.DataFrame(v, index=idx100) for v in y]
+    frames[3] = pd.DataFrame(y[3], index=pd.timedelta_range(0, periods=1000, freq="20ms"))
+    with pytest.raises(ValueError, match=r"y\[3\] is sampled at 50 Hz but y\[0\] at 100 Hz"):
+        FPMean(frames, k, "2s")
     with pytest.raises(ValueError, match="grid must be >= 2"):
         FPMean(y, k, 250, grid=1)
     with pytest.raises(ValueError, match="basis"):

@@ -1334,7 +1334,14 @@ class FPMean:
                                            reference="y[0] has the")
                           for i, r in enumerate(recs[1:], start=1)]
         self.records = tuple(recs)
-        self.window = window_samples(window, "window", sampling_frequency(first, None, "y[0]"), minimum=1)
+        rates = [sampling_frequency(r, None, f"y[{i}]") for i, r in enumerate(recs)]
+        timed = [(i, f) for i, f in enumerate(rates) if f is not None]
+        odd = [i for i, f in timed if abs(f / timed[0][1] - 1.0) > 0.01]
+        if odd:
+            raise ValueError(f"y[{odd[0]}] is sampled at {rates[odd[0]]:g} Hz but y[{timed[0][0]}] at "
+                             f"{timed[0][1]:g} Hz: the windows of the records must span the same time (resample with "
+                             "tsfdi.align)")
+        self.window = window_samples(window, "window", rates[0], minimum=1)
         short = [i for i, r in enumerate(recs) if r.nobs < self.window]
         if short:
             raise ValueError(f"y[{short[0]}] has {recs[short[0]].nobs} samples, fewer than window={self.window}")
