@@ -21,9 +21,9 @@ from tsfdi.exceptions import CoverageWarning, TsfdiWarning
 from tsfdi.identification import Identification, WindowedIdentification, detect, identify, identify_windows
 from tsfdi.io import read_records
 from tsfdi.isolation import Isolation, IsolationSeries, ResidualSet
-from tsfdi.models import (AR, ARX, EMRAN, FPAR, FPARX, FPVAR, VAR, ARResults, ARXResults, EMRANResults, FPOrderSelection,
-                          FPResults, HeldOutResiduals, OperatingPointEstimate, RecursiveARX, RecursiveARXResults,
-                          VARResults, load, select_fp_order)
+from tsfdi.models import (AR, ARX, EMRAN, FPAR, FPARX, FPVAR, VAR, ARResults, ARXResults, EMRANResults, FPMean,
+                          FPMeanResults, FPOrderSelection, FPResults, HeldOutResiduals, OperatingPointEstimate,
+                          RecursiveARX, RecursiveARXResults, VARResults, load, select_fp_order)
 from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
 from tsfdi.online import OnlineCalibration, OnlineDetection, OnlineDetector
 from tsfdi.selection import OrderSelection, select_order
@@ -37,7 +37,8 @@ __all__ = [
     "EMRANResults",
     "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # functionally pooled models
-    "FPAR", "FPVAR", "FPARX", "FPResults", "OperatingPointEstimate", "FPOrderSelection", "select_fp_order",
+    "FPAR", "FPVAR", "FPARX", "FPResults", "FPMean", "FPMeanResults", "OperatingPointEstimate", "FPOrderSelection",
+    "select_fp_order",
     # residual tests and decisions
     "ResidualTest", "AnyOf", "Decision", "FTest", "LjungBox", "MeanTest", "GLRT", "ParameterGLRT", "MovingSquaredError",
     "EmpiricalThreshold",
