@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import datetime
 import lzma
+import math
 import numbers
 import tarfile
 import zipfile
@@ -310,25 +311,31 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         raise ValueError(f"{name} has no channels")
     if arr.shape[0] < min_nobs:
         raise ValueError(f"{name} is too short: {arr.shape[0]} samples, at least {min_nobs} are needed")
-    extremes = None
+    extremes, passed = None, False
     if not allow_constant and arr.shape[0] > 1:     # each channel's extremes, kept for channel_extremes
         cols = np.ascontiguousarray(arr.T)        # reductions along contiguous rows: ~30x faster than axis 0
-        extremes = (cols.max(axis=1), cols.min(axis=1))
+        extremes = (np.maximum.reduce(cols, axis=1), np.minimum.reduce(cols, axis=1))
+        # every spread positive and finite: finite values, none constant (a few channels: Python's comparisons cost
+        # less than numpy's calls); otherwise the checks below say which
+        passed = all(0.0 < d < math.inf for d in (extremes[0] - extremes[1]).tolist())
     # finite extremes with a finite spread mean finite values (a NaN propagates to both extremes, an inf shows in
     # one); a spread that is not finite (or an overflow of it) leaves the decision to the scan of every value
-    if finite and (extremes is None or not np.isfinite(extremes[0] - extremes[1]).all()) and not np.isfinite(arr).all():
+    if not passed and finite and (extremes is None or not np.isfinite(extremes[0] - extremes[1]).all()) \
+            and not np.isfinite(arr).all():
         bad = int((~np.isfinite(arr)).sum())
         first = int(np.argwhere(~np.isfinite(arr))[0, 0])
         raise ValueError(f"{name} contains {bad} NaN/inf value(s) (first at sample {first}); "
                          "remove or interpolate them first")
-    if extremes is not None:
+    if not passed and extremes is not None:
         const = extremes[0] == extremes[1]
         if const.any():
             which = [channels[i] for i in np.flatnonzero(const)]
             raise ValueError(f"{name} is constant in channel(s) {which}: a model cannot be identified from it")
-    time_step(index, name, numeric=_numeric_time(kind, index))
-    sig = Signal(values=np.ascontiguousarray(arr), kind=kind, vector=was_vector, index=index,
-                 channels=list(channels), name=sname, time_dim=time_dim, channel_dim=channel_dim)
+    if index is not None:
+        time_step(index, name, numeric=_numeric_time(kind, index))
+    # arr is contiguous (_numeric's copy, or a column added to it) and channels a list made here
+    sig = Signal(values=arr, kind=kind, vector=was_vector, index=index, channels=channels, name=sname,
+                 time_dim=time_dim, channel_dim=channel_dim)
     if extremes is not None:    # not a field: a Signal made from this one (dataclasses.replace, ...) computes its own
         object.__setattr__(sig, "_extremes", extremes)
     return sig

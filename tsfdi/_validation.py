@@ -80,6 +80,8 @@ def probability(value: Any, name: str = "alpha") -> float:
 
 def option(value: Any, name: str, options: Iterable[str]) -> str:
     """Return ``value`` if it is one of ``options`` (case-insensitive) or raise naming ``name``."""
+    if type(value) is str and type(options) is tuple and value in options:    # the common case: no copies
+        return value
     options = tuple(options)
     if not isinstance(value, str) or value.lower() not in options:
         raise ValueError(f"{name} must be one of {', '.join(repr(o) for o in options)}, got {value!r}")

@@ -120,10 +120,9 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
             spec = VAR(data, max_lags, trend=trend, criterion=criterion)
     s = spec.neqs
     orders = np.arange(1, max_lags + 1)
-    widths = spec.k_const + orders * (s + spec.n_inputs)     # ARX order p: na = nb = p
     sse = spec.nested_fits(stacklevel=3)
     sss = spec.gram().diagonal()[-s:]      # diag(Y'Y) (the squared column norms of R's last columns, to rounding)
-    values = spec.criteria(sse, sss, widths * s)
+    values = spec.criteria(sse, sss, (spec.k_const + orders * (s + spec.n_inputs)) * s)   # ARX order p: na = nb = p
     if values["exact"].any():
         said = "".join(f"; {c}" for c in spec.collinear_channels())
         warnings.warn(f"orders {orders[values['exact']].tolist()} fit the data exactly (a residual RMS below "
