@@ -119,10 +119,12 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
         else:
             spec = VAR(data, max_lags, trend=trend, criterion=criterion)
     s = spec.neqs
-    orders = np.arange(1, max_lags + 1)
+    w, k = s + spec.n_inputs, spec.k_const
     sse = spec.nested_fits(stacklevel=3)
     sss = spec.gram().diagonal()[-s:]      # diag(Y'Y) (the squared column norms of R's last columns, to rounding)
-    values = spec.criteria(sse, sss, (spec.k_const + orders * (s + spec.n_inputs)) * s)   # ARX order p: na = nb = p
+    # the coefficients of order p (all equations): s (k_const + p w); ARX order p: na = nb = p
+    values = spec.criteria(sse, sss, np.arange(s * (k + w), s * (k + w * max_lags) + 1, s * w))
+    orders = np.arange(1, max_lags + 1)
     if values["exact"].any():
         said = "".join(f"; {c}" for c in spec.collinear_channels())
         warnings.warn(f"orders {orders[values['exact']].tolist()} fit the data exactly (a residual RMS below "

@@ -411,14 +411,12 @@ class LinearTimeSeriesModel:
         ndarray, shape (top, s, s)
         """
         s = self.neqs
-
-        def design() -> np.ndarray:
-            return np.hstack(self.design_all(scaled=True))
-
-        widths = self.k_const + np.arange(1, min(self.na, self.nb or self.na) + 1) * (s + self.n_inputs)
+        w, k = s + self.n_inputs, self.k_const
+        widths = np.arange(k + w, k + w * min(self.na, self.nb or self.na) + 1, w)    # k_const + q w, q = 1 .. top
         sse = cholesky_nested_fits(self.gram(), s, widths)
         if sse is None:
-            sse = nested_fits(triangular_factor(None, design, s, stacklevel=stacklevel + 1), s, widths)
+            sse = nested_fits(triangular_factor(None, lambda: np.hstack(self.design_all(scaled=True)), s,
+                                                stacklevel=stacklevel + 1), s, widths)
         return sse
 
     def criteria(self, sse: np.ndarray, sss: np.ndarray, df_model: np.ndarray) -> dict[str, np.ndarray]:
