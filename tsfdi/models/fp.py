@@ -26,6 +26,7 @@ compensated fault shows): each class's window means as a surface over ``k``, the
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import hashlib
 import itertools
@@ -42,6 +43,7 @@ from scipy.linalg import lapack
 from tsfdi._data import as_signal, sampling_frequency, window_samples
 from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning
+from tsfdi.models._base import HeldOutResiduals
 from tsfdi.models.ar import AR
 from tsfdi.models.archive import register
 from tsfdi.models.archive import save as save_archive
@@ -294,53 +296,54 @@ class _FPModel:
         b = np.einsum("ic,iac,ij->ajc", w, XY, G).reshape(kp * q, s)
         return A, b
 
-    def _solve(self, A: np.ndarray, b: np.ndarray, G: np.ndarray, w: np.ndarray | None) -> np.ndarray:
-        """FP coefficients (fit units, ``(df_eq, s)``) from the pooled normal equations (one system per equation
-        when weighted), with one refinement step on the residual products; the SVD of the explicit FP regressor
-        when the Cholesky factor would lose digits."""
+    def _solve(self, A: np.ndarray, b: np.ndarray, idx: np.ndarray, w: np.ndarray | None) -> np.ndarray:
+        """FP coefficients (fit units, ``(df_eq, s)``) of the records ``idx`` from the pooled normal equations (one
+        system per equation when weighted), with one refinement step on the residual products; the SVD of the
+        explicit FP regressor when the Cholesky factor would lose digits."""
         out = np.empty(b.shape)
         for e in range(A.shape[0]):
             cols = slice(None) if A.shape[0] == 1 else slice(e, e + 1)
             R = gram_factor(A[e], A.shape[1])
             if R is None:
-                X, Y = self._fp_design(G, None if w is None else w[:, e])
+                X, Y = self._fp_design(idx, None if w is None else w[:, e])
                 out[:, cols] = lstsq(X, Y[:, cols])
                 continue
             coef = lapack.dpotrs(R, b[:, cols], lower=0)[0]
-            coef = coef + lapack.dpotrs(R, self._residual_products(coef, G, cols, w, e), lower=0)[0]
+            coef = coef + lapack.dpotrs(R, self._residual_products(coef, idx, cols, w, e), lower=0)[0]
             out[:, cols] = coef
         return out
 
-    def _fp_design(self, G: np.ndarray, w: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """The explicit FP regressor ``phi[t] (x) G(k_i)`` and target of all records (rows weighted by
-        ``sqrt(w_i)``)."""
+    def _fp_design(self, idx: np.ndarray, w: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """The explicit FP regressor ``phi[t] (x) G(k_i)`` and target of the records ``idx`` (rows weighted by
+        ``sqrt(w)``, one weight per record of ``idx``)."""
         xs, ys = [], []
-        for i in range(len(self.records)):
+        for r, i in enumerate(idx):
             X, Y = self._design(i)
-            sq = 1.0 if w is None else np.sqrt(w[i])
-            xs.append((X[:, :, None] * G[i][None, None, :]).reshape(X.shape[0], -1) * sq)
+            sq = 1.0 if w is None else np.sqrt(w[r])
+            xs.append((X[:, :, None] * self.G[i][None, None, :]).reshape(X.shape[0], -1) * sq)
             ys.append(Y * sq)
         return np.vstack(xs), np.vstack(ys)
 
-    def _residual_products(self, coef: np.ndarray, G: np.ndarray, cols: slice, w: np.ndarray | None,
+    def _residual_products(self, coef: np.ndarray, idx: np.ndarray, cols: slice, w: np.ndarray | None,
                            e: int) -> np.ndarray:
-        """``X_fp' W (Y - X_fp coef)`` = ``sum_i w_i (Phi_i' E_i) (x) G_i`` with ``E_i`` the residuals of record ``i``
-        through ``theta(k_i)`` (:func:`~tsfdi.models.lstsq.lag_residual_products` for an FP-AR / FP-VAR)."""
+        """``X_fp' W (Y - X_fp coef)`` = ``sum_i w_i (Phi_i' E_i) (x) G_i`` over the records ``idx``, with ``E_i`` the
+        residuals of record ``i`` through ``theta(k_i)`` (:func:`~tsfdi.models.lstsq.lag_residual_products` for an
+        FP-AR / FP-VAR)."""
         pt = self.point
-        q = G.shape[1]
+        q = self.n_basis
         kp = coef.shape[0] // q
         full = np.zeros((coef.shape[0], self.neqs))
         full[:, cols] = coef
         total = np.zeros((kp, q, coef.shape[1]))
-        for i in range(len(self.records)):
-            theta = np.einsum("ajc,j->ac", full.reshape(kp, q, -1), G[i])
+        for r, i in enumerate(idx):
+            theta = np.einsum("ajc,j->ac", full.reshape(kp, q, -1), self.G[i])
             if pt.nb == 0:
                 y = self._scaled(i)[0][pt.hold_back - pt.na:]
-                r = lag_residual_products(y, theta, const=bool(pt.k_const))[:, cols]
+                res = lag_residual_products(y, theta, const=bool(pt.k_const))[:, cols]
             else:
                 X, Y = self._design(i)
-                r = X.T @ (Y - X @ theta)[:, cols]
-            total += (1.0 if w is None else w[i, e]) * r[:, None, :] * G[i][None, :, None]
+                res = X.T @ (Y - X @ theta)[:, cols]
+            total += (1.0 if w is None else w[r, e]) * res[:, None, :] * self.G[i][None, :, None]
         return total.reshape(kp * q, -1)
 
     def fit(self) -> FPResults:
@@ -357,37 +360,133 @@ class _FPModel:
         (:func:`~tsfdi.models.lstsq.lstsq`, with an :class:`~tsfdi.exceptions.IllConditionedWarning` when
         ill-conditioned).
         """
-        grams = self.record_grams()
-        kp = self.df_point
-        A, b = self._pooled_system(grams, None, self.G, kp)
-        coef = self._solve(A, b, self.G, None)
-        w = None
-        if self.weights == "point":
-            s2 = self._record_sse(coef).diagonal(axis1=1, axis2=2) / np.asarray(self.nobs_records)[:, None]
-            if not (s2 > 0).all():
-                raise ValueError("weights='point': a record is fitted exactly (zero residual variance); use "
-                                 "weights='pooled'")
-            w = 1.0 / s2
-            A, b = self._pooled_system(grams, w, self.G, kp)
-            coef = self._solve(A, b, self.G, w)
+        coef, w = self._fit_coef(np.arange(len(self.records)), self.record_grams())
         params = coef * np.repeat(self._unit_columns(), self.n_basis)[:, None] * self.point.y_scale[None, :]
         if not np.isfinite(params).all():
             raise ValueError("y: the FP coefficients leave the floating-point range; rescale y (and u)")
-        return FPResults(self, params, None if w is None else w)
+        return FPResults(self, params, w)
 
-    def _record_sse(self, coef: np.ndarray) -> np.ndarray:
-        """Residual cross products ``E_i'E_i`` of every record through ``theta(k_i)`` (fit units), (records, s, s)."""
-        return np.stack([e.T @ e for e in self._record_resid(coef)])
+    def _fit_coef(self, idx: np.ndarray, grams: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """The FP coefficients (fit units) fitted on the records ``idx`` alone (``grams``: :meth:`record_grams` of
+        all records), and their weights (records of ``idx``, s) with ``weights="point"``."""
+        kp = self.df_point
+        A, b = self._pooled_system(grams[idx], None, self.G[idx], kp)
+        coef = self._solve(A, b, idx, None)
+        if self.weights == "pooled":
+            return coef, None
+        s2 = (self._record_sse(coef, idx).diagonal(axis1=1, axis2=2)
+              / np.asarray(self.nobs_records, dtype=float)[idx, None])
+        if not (s2 > 0).all():
+            raise ValueError("weights='point': a record is fitted exactly (zero residual variance); use "
+                             "weights='pooled'")
+        w = 1.0 / s2
+        A, b = self._pooled_system(grams[idx], w, self.G[idx], kp)
+        return self._solve(A, b, idx, w), w
 
-    def _record_resid(self, coef: np.ndarray) -> list[np.ndarray]:
+    def _record_sse(self, coef: np.ndarray, idx: Any = None) -> np.ndarray:
+        """Residual cross products ``E_i'E_i`` of the records ``idx`` (default all) through ``theta(k_i)`` (fit
+        units), (records, s, s)."""
+        return np.stack([e.T @ e for e in self._record_resid(coef, idx)])
+
+    def _record_resid(self, coef: np.ndarray, idx: Any = None) -> list[np.ndarray]:
         q = self.n_basis
         kp = self.df_point
         out = []
-        for i in range(len(self.records)):
+        for i in range(len(self.records)) if idx is None else idx:
             theta = np.einsum("ajc,j->ac", coef.reshape(kp, q, -1), self.G[i])
             X, Y = self._design(i)
             out.append(Y - X @ theta)
         return out
+
+    # --- held-out residuals
+    def held_out_residuals(self, blocks: int | None = None, *, groups: Any = None) -> HeldOutResiduals:
+        """Residuals of each record at its own operating point ``k_i`` through the FP model fitted on all the
+        *other* records.
+
+        The FP counterpart of :meth:`tsfdi.AR.held_out_residuals` (see there why a calibrated threshold needs
+        them): the null sample of a global baseline, each record filtered as the baseline filters a new flight
+        at its operating point. Every fold is the FP fit of this spec (same lags, degree, basis, trend, weights,
+        ``hold_back``) on the remaining records, from their Gram matrices (:meth:`record_grams`, accumulated
+        once), so it equals ``type(self)(other records, their k, ...).fit().residuals(record_i, k_i)`` without
+        rebuilding the records (the polynomial space, hence the fit, does not depend on ``k_range``). They are
+        also what :meth:`FPResults.at` carries, so that :meth:`tsfdi.LjungBox.calibrated_for` and the coverage
+        checks (:func:`tsfdi.coverage.check_coverage`) of a model at ``k`` read the FP model's null, not that of
+        a point model pooled over the operating points.
+
+        Parameters
+        ----------
+        blocks : None
+            Only ``None``: an FP model holds out whole records (a block of one record would leave its operating
+            point in the fit). Kept so that the call reads as the point models'.
+        groups : sequence, optional
+            One label per record: the records sharing a label are held out together (e.g. all the records of one
+            operating point, or the flights of one airframe).
+
+        Returns
+        -------
+        HeldOutResiduals
+            One residual series per record, in record order and the record's data kind, the residuals of
+            :meth:`FPResults.residuals` (samples ``max_lag .. nobs - 1``, index from position ``max_lag``), with
+            ``lags`` the model's ``max_lag``.
+
+        Raises
+        ------
+        ValueError
+            ``blocks`` given; ``groups`` not one label per record or a single label; a fold whose remaining
+            records hold fewer distinct operating points than the basis needs (degree ``d`` in one parameter needs
+            ``d + 1``), or too few regression rows, named in the message.
+        """
+        if blocks is not None:
+            raise ValueError(f"blocks must be None for an FP model, got {blocks!r}: its records are held out whole "
+                             "(a block of a record would leave its operating point in the fit); use groups")
+        n = len(self.records)
+        if groups is None:
+            label = list(range(n))
+        else:
+            if isinstance(groups, (str, bytes)) or not hasattr(groups, "__len__"):
+                raise ValueError(f"groups must be a sequence of one label per record, got {groups!r}")
+            label = list(groups)
+            if len(label) != n:
+                raise ValueError(f"groups must hold one label per record ({n}), got {len(label)}")
+            if len(set(label)) < 2:
+                raise ValueError("groups must hold at least two distinct labels: holding out every record leaves "
+                                 "nothing to fit")
+        grams = self.record_grams()
+        pt = self.point
+        scale = np.repeat(self._unit_columns(), self.n_basis)[:, None] * pt.y_scale[None, :]
+        nobs = np.asarray(self.nobs_records)
+        out: list = [None] * n
+        for g in dict.fromkeys(label):
+            members = [i for i in range(n) if label[i] == g]
+            keep = np.array([i for i in range(n) if label[i] != g])
+            what = (f"y[{members[0]}]" if groups is None
+                    else f"group {g.item() if isinstance(g, np.generic) else g!r} (y[{', '.join(map(str, members))}])")
+            points = len(np.unique(self.k[keep], axis=0))
+            degree = self.degree[0] if len(self.degree) == 1 else self.degree
+            if np.linalg.matrix_rank(self.G[keep]) < self.n_basis:
+                raise ValueError(
+                    f"removing {what} leaves {points} distinct operating point(s), too few for the {self.n_basis} "
+                    f"basis functions of degree {degree} in {', '.join(self.k_names)}: fit records at more "
+                    "operating points, hold out fewer records together (groups) or lower the degree")
+            if nobs[keep].sum() < self.df_eq + 1:
+                raise ValueError(f"removing {what} leaves {nobs[keep].sum()} regression rows for {self.df_eq} "
+                                 "coefficients per equation: fit more or longer records")
+            params = self._fit_coef(keep, grams)[0] * scale
+            for i in members:
+                theta = np.einsum("ajc,j->ac", params.reshape(self.df_point, self.n_basis, -1), self.G[i])
+                rec = self.records[i]
+                u = None if self.u_records is None else self.u_records[i].values
+                e = pt.results_class(pt, theta)._residuals_array(rec.values, u)
+                out[i] = rec.wrap(e, self.max_lag)
+        return HeldOutResiduals(out, lags=self.max_lag)
+
+    @cached_property
+    def _point_at(self) -> Any:
+        """The point spec of :meth:`FPResults.at`: the point family on all the records (a copy of :attr:`point`)
+        whose ``held_out_residuals`` are this FP model's."""
+        spec = copy.copy(self.point)
+        spec.held_out_residuals = self.held_out_residuals
+        return spec
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(records={len(self.records)}, {self._lag_name}={self.na}, "
@@ -754,9 +853,14 @@ class FPResults:
         :meth:`residuals` at ``k``; ``sigma`` (VAR) / ``sigma2`` (AR, ARX) is ``sigma(k)``, and ``nobs``,
         ``df_resid``, ``llf``, ``bse`` and the criteria follow from it with the FP model's regression rows ``nobs``
         (so a test's reference variance and its degrees of freedom are the FP model's). The model behind it is the
-        point family on all the FP records, so ``resid`` (the in-sample residuals of every record through
-        ``theta(k)``) does not match ``sigma(k)`` away from the records at ``k``, and ``save`` stores those records
-        with ``theta(k)``: a loaded copy recomputes its residual covariance from them, not ``sigma(k)``.
+        point family on all the FP records whose ``held_out_residuals`` are the FP model's
+        (:meth:`FPAR.held_out_residuals`: each record at its own ``k_i`` through the FP model fitted without it), so
+        that :meth:`tsfdi.LjungBox.calibrated_for` and the coverage checks of :func:`tsfdi.detect`,
+        :class:`tsfdi.Monitor` and :func:`tsfdi.evaluate` read the FP model's null. ``resid`` (the in-sample
+        residuals of every record through ``theta(k)``) does not match ``sigma(k)`` away from the records at ``k``,
+        and ``save`` stores those records with ``theta(k)``: a loaded copy is a point model, whose residual
+        covariance and held-out residuals are recomputed from those records (not ``sigma(k)``, not the FP model's
+        null): save the FP results and call ``at(k)`` after loading them.
 
         Parameters
         ----------
@@ -771,7 +875,7 @@ class FPResults:
         pt = self.model.point
         sc = pt.y_scale
         sse = self.sigma(kk) * self.nobs / np.outer(sc, sc)          # the point results' E'E, in its fit units
-        return pt.results_class(pt, self._theta2d(kk), residual_products=sse)
+        return pt.results_class(self.model._point_at, self._theta2d(kk), residual_products=sse)
 
     def residuals(self, y: Any, k: Any, u: Any = None) -> Any:
         """One-step prediction errors of a new signal through the model at operating point ``k``
