@@ -29,7 +29,7 @@ from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.exceptions import CoverageWarning
 from tsfdi.detection.threshold import EmpiricalThreshold
-from tsfdi.models import ARXResults, FPMeanResults
+from tsfdi.models import ARXResults, FPMeanResults, FPResults
 from tsfdi.summary import Summary
 from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
 
@@ -62,6 +62,10 @@ def _check_model(res: Any, name: str, sig: Signal, arg: str) -> None:
     if not hasattr(res, "residuals"):
         raise TypeError(f"{arg} must hold fitted results (AR, VAR or ARX) with a residuals() method; "
                         f"{name!r} is a {type(res).__name__}")
+    if isinstance(res, FPResults):
+        raise TypeError(f"{arg if name == arg else f'{arg}[{name!r}]'} is a functionally pooled model (FPResults): "
+                        "give its point model at the record's operating point, .at(k) (k logged, or "
+                        ".estimate_k(signal).k_hat)")
     data = getattr(getattr(res, "model", None), "data", None)
     if isinstance(data, Signal) and data.named and sig.named:
         sig.match_channels(data.channels, "signal")
@@ -188,7 +192,8 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     Raises
     ------
     TypeError
-        ``baseline`` is not fitted results, ``test`` is not a residual test (for an FPMean baseline: not a
+        ``baseline`` is not fitted results or is a functionally pooled model itself (:class:`~tsfdi.FPResults`:
+        give its point model ``.at(k)``), ``test`` is not a residual test (for an FPMean baseline: not a
         calibrated EmpiricalThreshold), ``u`` is missing for an ARX baseline or given for another, or ``signal`` is
         not numeric.
     ValueError

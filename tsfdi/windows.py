@@ -33,7 +33,7 @@ from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows
-from tsfdi.models import ARXResults
+from tsfdi.models import ARXResults, FPResults
 
 __all__ = ["RULES", "SEQUENTIAL_RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
 
@@ -214,6 +214,9 @@ class ResidualWindows:
         for name, res in models.items():
             if not hasattr(res, "residuals"):
                 raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR), got {type(res).__name__}")
+            if isinstance(res, FPResults):
+                raise TypeError(f"models[{name!r}] is a functionally pooled model (FPResults): give its point model "
+                                "at the record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
             if isinstance(res, ARXResults):
                 raise TypeError(f"models[{name!r}] is an ARX (input-output) model: the windowed engine filters the "
                                 "output alone and takes AR / VAR models; test ARX models with tsfdi.identify(..., u=)")
