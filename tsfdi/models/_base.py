@@ -320,11 +320,11 @@ class LinearTimeSeriesModel:
 
     @property
     def neqs(self) -> int:
-        return self.data.nchan
+        return self.records[0].values.shape[1]      # (data.nchan without two calls: read several times a fit)
 
     @property
     def n_inputs(self) -> int:
-        return 0 if self.u_data is None else self.u_data.nchan
+        return 0 if self.u_records is None else self.u_records[0].values.shape[1]
 
     @property
     def df_eq(self) -> int:
