@@ -296,10 +296,12 @@ class _FPModel:
         b = np.einsum("ic,iac,ij->ajc", w, XY, G).reshape(kp * q, s)
         return A, b
 
-    def _solve(self, A: np.ndarray, b: np.ndarray, idx: np.ndarray, w: np.ndarray | None) -> np.ndarray:
+    def _solve(self, A: np.ndarray, b: np.ndarray, idx: np.ndarray, w: np.ndarray | None, refine: bool = True
+               ) -> np.ndarray:
         """FP coefficients (fit units, ``(df_eq, s)``) of the records ``idx`` from the pooled normal equations (one
-        system per equation when weighted), with one refinement step on the residual products; the SVD of the
-        explicit FP regressor when the Cholesky factor would lose digits."""
+        system per equation when weighted), with one refinement step on the residual products (``refine``: a pass
+        over the records' samples); the SVD of the explicit FP regressor when the Cholesky factor would lose
+        digits."""
         out = np.empty(b.shape)
         for e in range(A.shape[0]):
             cols = slice(None) if A.shape[0] == 1 else slice(e, e + 1)
@@ -309,7 +311,8 @@ class _FPModel:
                 out[:, cols] = lstsq(X, Y[:, cols])
                 continue
             coef = lapack.dpotrs(R, b[:, cols], lower=0)[0]
-            coef = coef + lapack.dpotrs(R, self._residual_products(coef, idx, cols, w, e), lower=0)[0]
+            if refine:
+                coef = coef + lapack.dpotrs(R, self._residual_products(coef, idx, cols, w, e), lower=0)[0]
             out[:, cols] = coef
         return out
 
@@ -366,12 +369,14 @@ class _FPModel:
             raise ValueError("y: the FP coefficients leave the floating-point range; rescale y (and u)")
         return FPResults(self, params, w)
 
-    def _fit_coef(self, idx: np.ndarray, grams: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    def _fit_coef(self, idx: np.ndarray, grams: np.ndarray, refine: bool = True
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
         """The FP coefficients (fit units) fitted on the records ``idx`` alone (``grams``: :meth:`record_grams` of
-        all records), and their weights (records of ``idx``, s) with ``weights="point"``."""
+        all records), and their weights (records of ``idx``, s) with ``weights="point"``; ``refine``: see
+        :meth:`_solve`."""
         kp = self.df_point
         A, b = self._pooled_system(grams[idx], None, self.G[idx], kp)
-        coef = self._solve(A, b, idx, None)
+        coef = self._solve(A, b, idx, None, refine)
         if self.weights == "pooled":
             return coef, None
         s2 = (self._record_sse(coef, idx).diagonal(axis1=1, axis2=2)
@@ -381,7 +386,7 @@ class _FPModel:
                              "weights='pooled'")
         w = 1.0 / s2
         A, b = self._pooled_system(grams[idx], w, self.G[idx], kp)
-        return self._solve(A, b, idx, w), w
+        return self._solve(A, b, idx, w, refine), w
 
     def _record_sse(self, coef: np.ndarray, idx: Any = None) -> np.ndarray:
         """Residual cross products ``E_i'E_i`` of the records ``idx`` (default all) through ``theta(k_i)`` (fit
@@ -406,8 +411,9 @@ class _FPModel:
         The FP counterpart of :meth:`tsfdi.AR.held_out_residuals` (see there why a calibrated threshold needs
         them): the null sample of a global baseline, each record filtered as the baseline filters a new flight
         at its operating point. Every fold is the FP fit of this spec (same lags, degree, basis, trend, weights,
-        ``hold_back``) on the remaining records, from their Gram matrices (:meth:`record_grams`, accumulated
-        once), so it equals ``type(self)(other records, their k, ...).fit().residuals(record_i, k_i)`` without
+        ``hold_back``) on the remaining records, solved from their Gram matrices (:meth:`record_grams`, accumulated
+        once; no refinement pass over the samples, so a fold costs a solve, as the point models' folds, unless the
+        Gram matrix is too ill-conditioned and the SVD of the explicit FP regressor takes over), so it equals ``type(self)(other records, their k, ...).fit().residuals(record_i, k_i)`` without
         rebuilding the records (the polynomial space, hence the fit, does not depend on ``k_range``). They are
         also what :meth:`FPResults.at` carries, so that :meth:`tsfdi.LjungBox.calibrated_for` and the coverage
         checks (:func:`tsfdi.coverage.check_coverage`) of a model at ``k`` read the FP model's null, not that of
@@ -471,7 +477,7 @@ class _FPModel:
             if nobs[keep].sum() < self.df_eq + 1:
                 raise ValueError(f"removing {what} leaves {nobs[keep].sum()} regression rows for {self.df_eq} "
                                  "coefficients per equation: fit more or longer records")
-            params = self._fit_coef(keep, grams)[0] * scale
+            params = self._fit_coef(keep, grams, refine=False)[0] * scale
             for i in members:
                 theta = np.einsum("ajc,j->ac", params.reshape(self.df_point, self.n_basis, -1), self.G[i])
                 rec = self.records[i]
