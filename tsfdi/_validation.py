@@ -34,6 +34,8 @@ def int_like(value: Any, name: str, *, minimum: int | None = None, maximum: int 
 
     Booleans and non-integral floats are rejected.
     """
+    if type(value) is int and (minimum is None or value >= minimum) and (maximum is None or value <= maximum):
+        return value                        # the common case in one test
     if value is None and optional:
         return None
     # numpy counts timedelta64 as an integer type: a time span is not a count (a plain int skips the abstract-class
@@ -58,6 +60,10 @@ def float_like(value: Any, name: str, *, minimum: float | None = None, maximum: 
 
     ``strict_min`` / ``strict_max`` make the bounds exclusive.
     """
+    if type(value) is float and math.isfinite(value) and (minimum is None or (
+            value > minimum if strict_min else value >= minimum)) and (maximum is None or (
+            value < maximum if strict_max else value <= maximum)):
+        return value                        # the common case in one test
     if value is None and optional:
         return None
     if type(value) is not float and (isinstance(value, (bool, np.bool_, np.timedelta64))

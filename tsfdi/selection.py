@@ -169,7 +169,7 @@ class OrderSelection:
     def max_lags(self) -> int:
         return int(self.orders[-1])
 
-    @cached_property
+    @property
     def selected(self) -> int:
         """Order with the smallest BIC."""
         return int(self.orders[self.values["bic"].argmin()])
