@@ -379,8 +379,14 @@ class _FPModel:
         coef = self._solve(A, b, idx, None, refine)
         if self.weights == "pooled":
             return coef, None
-        s2 = (self._record_sse(coef, idx).diagonal(axis1=1, axis2=2)
-              / np.asarray(self.nobs_records, dtype=float)[idx, None])
+        if refine:
+            sse = self._record_sse(coef, idx).diagonal(axis1=1, axis2=2)
+        else:       # diag(E_i'E_i) from the Gram matrices: YY - 2 theta'XY + theta'XX theta, no pass over the samples
+            g = grams[idx]
+            theta = np.einsum("ajc,ij->iac", coef.reshape(kp, self.n_basis, -1), self.G[idx])
+            sse = (np.einsum("icc->ic", g[:, kp:, kp:]) - 2 * np.einsum("iac,iac->ic", theta, g[:, :kp, kp:])
+                   + np.einsum("iac,iab,ibc->ic", theta, g[:, :kp, :kp], theta))
+        s2 = sse / np.asarray(self.nobs_records, dtype=float)[idx, None]
         if not (s2 > 0).all():
             raise ValueError("weights='point': a record is fitted exactly (zero residual variance); use "
                              "weights='pooled'")
