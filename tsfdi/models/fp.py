@@ -421,7 +421,7 @@ class _FPModel:
         once; no refinement pass over the samples, so a fold costs a solve, as the point models' folds, unless the
         Gram matrix is too ill-conditioned and the SVD of the explicit FP regressor takes over), so it equals ``type(self)(other records, their k, ...).fit().residuals(record_i, k_i)`` without
         rebuilding the records (the polynomial space, hence the fit, does not depend on ``k_range``). They are
-        also what :meth:`FPResults.at` carries, so that :meth:`tsfdi.LjungBox.calibrated_for` and the coverage
+        also what :meth:`tsfdi.FPResults.at` carries, so that :meth:`tsfdi.LjungBox.calibrated_for` and the coverage
         checks (:func:`tsfdi.coverage.check_coverage`) of a model at ``k`` read the FP model's null, not that of
         a point model pooled over the operating points.
 
@@ -438,7 +438,7 @@ class _FPModel:
         -------
         HeldOutResiduals
             One residual series per record, in record order and the record's data kind, the residuals of
-            :meth:`FPResults.residuals` (samples ``max_lag .. nobs - 1``, index from position ``max_lag``), with
+            :meth:`tsfdi.FPResults.residuals` (samples ``max_lag .. nobs - 1``, index from position ``max_lag``), with
             ``lags`` the model's ``max_lag``.
 
         Raises
@@ -866,7 +866,7 @@ class FPResults:
         ``df_resid``, ``llf``, ``bse`` and the criteria follow from it with the FP model's regression rows ``nobs``
         (so a test's reference variance and its degrees of freedom are the FP model's). The model behind it is the
         point family on all the FP records whose ``held_out_residuals`` are the FP model's
-        (:meth:`FPAR.held_out_residuals`: each record at its own ``k_i`` through the FP model fitted without it), so
+        (:meth:`tsfdi.FPAR.held_out_residuals`: each record at its own ``k_i`` through the FP model fitted without it), so
         that :meth:`tsfdi.LjungBox.calibrated_for` and the coverage checks of :func:`tsfdi.detect`,
         :class:`tsfdi.Monitor` and :func:`tsfdi.evaluate` read the FP model's null. ``resid`` (the in-sample
         residuals of every record through ``theta(k)``) does not match ``sigma(k)`` away from the records at ``k``,
