@@ -109,3 +109,16 @@ def test_at_k_calibrates_and_checks_coverage_on_the_fp_null():
     c = coverage(pt, y)
     pd.testing.assert_frame_equal(c.table, coverage(pt, y, held_out=null).table)
     assert not c.table.equals(coverage(pt, y, held_out=pooled).table)
+
+
+def test_a_point_at_k_is_not_saved_as_a_plain_point_model(tmp_path):
+    """fp.at(k) saved and loaded would be a point model whose held-out residuals are the pooled point model's (the
+    wrong null, silently): save refuses it, naming what to save instead; the FP results themselves save."""
+    rng = np.random.default_rng(7)
+    ys = [simulate_ar(k, 400, rng) for k in KS]
+    fp = FPAR(ys, KS, 2, degree=1).fit()
+    with pytest.raises(ValueError, match="save the FP results"):
+        fp.at(0.45).save(tmp_path / "pt")
+    assert not list(tmp_path.iterdir())
+    fp.save(tmp_path / "fp")
+    np.testing.assert_array_equal(tsfdi.load(tmp_path / "fp.npz").at(0.45).params, fp.at(0.45).params)

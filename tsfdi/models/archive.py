@@ -582,8 +582,8 @@ def save(results: Any, path: Any) -> Path:
     Raises
     ------
     ValueError
-        A record's time index or name that cannot be stored exactly (see the module documentation), or
-        parameters that are not finite.
+        A record's time index or name that cannot be stored exactly (see the module documentation), parameters
+        that are not finite, or an FP model's point at k (``FPResults.at``: save the FP results instead).
     FileNotFoundError
         The directory of ``path`` does not exist.
     """
@@ -591,6 +591,10 @@ def save(results: Any, path: Any) -> Path:
     if not path.name.lower().endswith(".npz"):
         path = path.with_name(path.name + ".npz")
     model = results.model
+    if "held_out_residuals" in vars(model):
+        raise ValueError("results is a functionally pooled model's point at k (FPResults.at): its held-out "
+                         "residuals are the FP model's, which a saved point model cannot keep (loaded, it would "
+                         "calibrate on another model's null); save the FP results and call .at(k) after loading")
     params = np.asarray(results.params2d, dtype=np.float64)
     if not np.isfinite(params).all():
         raise ValueError("the parameters contain NaN/inf: these results cannot be saved")
