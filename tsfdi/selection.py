@@ -125,7 +125,7 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     # the coefficients of order p (all equations): s (k_const + p w); ARX order p: na = nb = p
     values = spec.criteria(sse, sss, np.arange(s * (k + w), s * (k + w * max_lags) + 1, s * w))
     orders = np.arange(1, max_lags + 1)
-    if values["exact"].any():
+    if np.count_nonzero(values["exact"]):     # (ndarray.any goes through a Python wrapper)
         said = "".join(f"; {c}" for c in spec.collinear_channels())
         warnings.warn(f"orders {orders[values['exact']].tolist()} fit the data exactly (a residual RMS below "
                       f"{EXACT_FIT_RTOL:g} times its peak, or collinear channels{said}): their likelihood is "
