@@ -503,8 +503,10 @@ class LinearTimeSeriesModel:
     def _lag_records(self) -> list:
         """Each record's samples in the units of the fit from ``hold_back - na`` on: the rows of :meth:`gram` and of
         the AR / VAR fit's refinement (:func:`~tsfdi.models.lstsq.lag_residual_products`, no regressor built)."""
-        p, h = self.na, self.hold_back
-        return [self._scaled_values(i)[0][h - p:] for i in range(len(self.records))]
+        p, h = self.na, self.hold_back        # (as _scaled_values, without the inputs and the samples held back)
+        if self._rescaled:
+            return [r.values[h - p:] / self.y_scale for r in self.records]
+        return [r.values[h - p:] for r in self.records]
 
     # --- held-out residuals ------------------------------------------------------------------------
     def held_out_residuals(self, blocks: int | None = None, *, groups: Any = None) -> list:
