@@ -761,12 +761,20 @@ def _fit(args: argparse.Namespace) -> int:
         raise ValueError(f"{model.upper()}({res.lags}) fits the {len(data.columns)} column(s) of {data.path} exactly: "
                          f"collinear or constant channels{f' ({said})' if said else ''}, so the model would explain "
                          "any flight and detect nothing; not saved. Choose the channels with --columns")
+    return _save_fitted(res, args, f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) "
+                        f"at {data.rec.fs:g} Hz ({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, "
+                        f"SPP {res.spp:.2f}")
+
+
+def _save_fitted(res: Any, args: argparse.Namespace, *lines: str) -> int:
+    """``fit``: save ``res`` to ``--out``, print ``lines``, the summary (its coefficient tables with
+    ``--coefficients``; nothing with ``--quiet``) and where it was saved."""
     try:
         written = res.save(args.out)
     except OSError as exc:
         raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
-    print(f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) at {data.rec.fs:g} Hz "
-          f"({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, SPP {res.spp:.2f}")
+    for line in lines:
+        print(line)
     if not args.quiet:
         summary = res.summary()
         print(str(summary if args.coefficients else dataclasses.replace(summary, tables=[])))
@@ -826,23 +834,16 @@ def _fit_fp(args: argparse.Namespace) -> int:
             how = f"BIC over lags 1..{args.max_lags}, degree 0..{max_degree}"
     except (ValueError, TypeError) as exc:
         raise _reword(exc, data, subs) from None
-    try:
-        written = res.save(args.out)
-    except OSError as exc:
-        raise ValueError(f"--out {args.out}: cannot write the file ({exc.strerror or exc})") from None
     m = res.model
-    print(f"FP-{model.upper()}({m.na}), degree {', '.join(map(str, m.degree))} ({how}) over "
-          f"{_fp_range(m.k_range, m.k_names)} on {data.columns} "
-          f"from {len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz "
-          f"({res.nobs} samples): BIC {res.bic:.6g}")
+    lines = [f"FP-{model.upper()}({m.na}), degree {', '.join(map(str, m.degree))} ({how}) over "
+             f"{_fp_range(m.k_range, m.k_names)} on {data.columns} "
+             f"from {len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz "
+             f"({res.nobs} samples): BIC {res.bic:.6g}"]
     if max(m.degree) == 0:
-        print(f"note: degree 0: the model does not depend on {', '.join(m.k_names)} (one pooled {model.upper()}), "
-              f"which detect / identify / monitor --k estimate cannot estimate from it; --degree 1 fits a dependence")
-    if not args.quiet:
-        summary = res.summary()
-        print(str(summary if args.coefficients else dataclasses.replace(summary, tables=[])))
-    print(f"saved to {written}")
-    return 0
+        lines.append(f"note: degree 0: the model does not depend on {', '.join(m.k_names)} (one pooled "
+                     f"{model.upper()}), which detect / identify / monitor --k estimate cannot estimate from it; "
+                     "--degree 1 fits a dependence")
+    return _save_fitted(res, args, *lines)
 
 
 def _select_order_args(p: argparse.ArgumentParser) -> None:

@@ -700,7 +700,18 @@ class LinearTimeSeriesModel:
                 f"{self._lag_name}={self.na}, trend={self.trend!r})")
 
 
-class LinearTimeSeriesResults:
+class FrozenResults:
+    """Fitted results are immutable: ``__init__`` sets their attributes once (``object.__setattr__``) and any later
+    assignment or deletion raises ``AttributeError`` (cached properties still fill ``__dict__``)."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable")
+
+
+class LinearTimeSeriesResults(FrozenResults):
     """Immutable results of a least-squares time-series fit.
 
     Attributes are computed on first access and cached. Information criteria follow the likelihood form
@@ -747,12 +758,6 @@ class LinearTimeSeriesResults:
                 raise ValueError(f"residual_products must be a finite ({k}, {k}) matrix, got shape {sse.shape}")
             sse.setflags(write=False)
             self.__dict__["_sse"] = sse                     # the cached_property's value
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
-
-    def __delattr__(self, name: str) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable")
 
     # --- in-sample quantities ----------------------------------------------------------------------
     @cached_property

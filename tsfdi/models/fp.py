@@ -43,7 +43,7 @@ from scipy.linalg import lapack
 from tsfdi._data import as_signal, sampling_frequency, window_samples
 from tsfdi._validation import int_like, option, probability
 from tsfdi.exceptions import IllConditionedWarning
-from tsfdi.models._base import HeldOutResiduals
+from tsfdi.models._base import FrozenResults, HeldOutResiduals
 from tsfdi.models.ar import AR
 from tsfdi.models.archive import register
 from tsfdi.models.archive import save as save_archive
@@ -599,7 +599,7 @@ class FPARX(_FPModel):
                          hold_back=hold_back, k_range=k_range, u=u, nb=nb, nk=nk)
 
 
-class FPResults:
+class FPResults(FrozenResults):
     """Results of :meth:`FPAR.fit` / :meth:`FPVAR.fit` / :meth:`FPARX.fit` (immutable).
 
     Attributes
@@ -631,12 +631,6 @@ class FPResults:
             weights = np.array(weights, dtype=float).reshape(len(model.records), model.neqs)
             weights.setflags(write=False)
         object.__setattr__(self, "weights", weights)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
-
-    def __delattr__(self, name: str) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable")
 
     # --- parameters
     @property
@@ -1513,7 +1507,7 @@ class FPMean:
                 f"basis={self.basis!r})")
 
 
-class FPMeanResults:
+class FPMeanResults(FrozenResults):
     """Results of :meth:`FPMean.fit` (immutable).
 
     Attributes
@@ -1573,12 +1567,6 @@ class FPMeanResults:
                 "bic": float(-2 * llf + (p * s + s * (s + 1) // 2) * np.log(n_rec))}
         for name, value in vals.items():
             object.__setattr__(self, name, value)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable; fit the model again to change it")
-
-    def __delattr__(self, name: str) -> None:
-        raise AttributeError(f"{type(self).__name__} is immutable")
 
     # --- parameters
     @property
