@@ -491,8 +491,9 @@ class CalibratedTest(ResidualTest):
         Parameters
         ----------
         models : mapping
-            Name -> fitted results (AR, VAR) that carry the records they were fitted on (as fitted, or read by
-            :func:`tsfdi.load`).
+            Name -> fitted results that carry the records they were fitted on (as fitted, or read by
+            :func:`tsfdi.load`): AR, VAR, ARX, or a functionally pooled model's point ``FPResults.at(k)``, whose
+            held-out residuals are the FP model's.
         window : int
             Signal samples per tested window (a window of ``window`` samples has ``window - lags`` residuals, see
             :meth:`calibrate`); the thresholds hold for that length only.
@@ -522,7 +523,8 @@ class CalibratedTest(ResidualTest):
         for name, res in models.items():
             spec = getattr(res, "model", None)
             if not hasattr(spec, "held_out_residuals"):
-                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR), got {type(res).__name__}")
+                raise TypeError(f"models[{name!r}] must be fitted results whose model has held_out_residuals (AR, "
+                                f"VAR, ARX, FPResults.at(k)), got {type(res).__name__}")
             try:
                 out[name] = copy.deepcopy(self).calibrate(spec.held_out_residuals(), window=window, step=step)
             except ValueError as exc:
