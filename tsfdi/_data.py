@@ -311,16 +311,18 @@ def as_signal(data: Any, name: str = "y", *, vector: bool | None = None, min_nob
         raise ValueError(f"{name} has no channels")
     if arr.shape[0] < min_nobs:
         raise ValueError(f"{name} is too short: {arr.shape[0]} samples, at least {min_nobs} are needed")
-    extremes, passed = None, False
+    extremes, spreads, passed = None, None, False
     if not allow_constant and arr.shape[0] > 1:     # each channel's extremes, kept for channel_extremes
         cols = np.ascontiguousarray(arr.T)        # reductions along contiguous rows: ~30x faster than axis 0
         extremes = (np.maximum.reduce(cols, axis=1), np.minimum.reduce(cols, axis=1))
-        # every spread positive and finite: finite values, none constant (a few channels: Python's comparisons cost
-        # less than numpy's calls); otherwise the checks below say which
-        passed = all(0.0 < d < math.inf for d in (extremes[0] - extremes[1]).tolist())
+        # every spread positive and finite: finite values, none constant (a few channels: Python's arithmetic costs
+        # less than numpy's calls, and an overflow or inf - inf gives inf / nan without a RuntimeWarning); otherwise
+        # the checks below say which
+        spreads = [hi - lo for hi, lo in zip(extremes[0].tolist(), extremes[1].tolist())]
+        passed = all(0.0 < d < math.inf for d in spreads)
     # finite extremes with a finite spread mean finite values (a NaN propagates to both extremes, an inf shows in
     # one); a spread that is not finite (or an overflow of it) leaves the decision to the scan of every value
-    if not passed and finite and (extremes is None or not np.isfinite(extremes[0] - extremes[1]).all()) \
+    if not passed and finite and (spreads is None or not all(math.isfinite(d) for d in spreads)) \
             and not np.isfinite(arr).all():
         bad = int((~np.isfinite(arr)).sum())
         first = int(np.argwhere(~np.isfinite(arr))[0, 0])

@@ -194,10 +194,12 @@ def test_pandas_y_and_u_with_different_indexes_are_refused():
     assert tsfdi.ARX(Y1, late, 2, 2).fit().nobs == 198
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_non_finite_values_are_found_through_the_channel_extremes():
     """as_signal reads finiteness from each channel's extremes (which the models reuse for their peaks): a NaN, an
     inf of either sign in any channel is still refused with its count and first sample, and finite data whose
-    spread overflows (1e308 and -1e308 in one channel) is still accepted."""
+    spread overflows (1e308 and -1e308 in one channel) is still accepted, neither with a RuntimeWarning from the
+    spread's arithmetic (numpy's overflow / inf - inf warnings leaked to the user before)."""
     import dataclasses
 
     from tsfdi._data import as_signal, channel_extremes
