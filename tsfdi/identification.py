@@ -137,8 +137,22 @@ def _mean_scores(res: FPMeanResults, sig: Signal, step: int) -> tuple[np.ndarray
     data = res.model.data
     plain = dataclasses.replace(sig.match_channels(data.channels, "signal", named=data.named), kind="numpy",
                                 index=None)
-    return (np.asarray(res.statistic(plain, step)), np.asarray(res.loglike(plain, step)),
-            np.asarray(res.estimate_k(plain, step)))
+    return res.profile(plain, step)
+
+
+def _mean_identify(sig: Signal, models: Mapping, test: Any, u: Any, arg: str) -> tuple[dict, dict]:
+    """:func:`detect` / :func:`identify` with FPMean models on one window (``sig``): name -> decision, and name ->
+    threshold."""
+    if u is not None:
+        raise TypeError("u is only for input-output (ARX) models: FPMean models have no input; leave u out")
+    thresholds = _mean_thresholds(test, models, "test")
+    for name, res in models.items():
+        _mean_check(res, name, sig, sig.nobs, arg)
+    decisions = {}
+    for name, res in models.items():
+        q, ll, kh = _mean_scores(res, sig, sig.nobs)
+        decisions[name] = _mean_decision(res, q[0], ll[0], kh[0], thresholds[name])
+    return decisions, thresholds
 
 
 def _mean_check(res: Any, name: str, sig: Signal, window: int, arg: str) -> None:
@@ -204,16 +218,11 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     """
     sig = as_signal(signal, "signal", allow_constant=True)
     if isinstance(baseline, FPMeanResults):
-        if u is not None:
-            raise TypeError("u is only for input-output (ARX) models: an FPMean baseline has no input; leave u out")
         if test is None:
             raise TypeError("test: an FPMean baseline needs a calibrated EmpiricalThreshold of its statistic "
                             "(EmpiricalThreshold(alpha).calibrate(baseline.statistic(healthy record)) on healthy "
                             "records it was not fitted on)")
-        thr = _mean_thresholds(test, {"baseline": baseline}, "test")["baseline"]
-        _mean_check(baseline, "baseline", sig, sig.nobs, "baseline")
-        q, ll, kh = _mean_scores(baseline, sig, sig.nobs)
-        return _mean_decision(baseline, q[0], ll[0], kh[0], thr)
+        return _mean_identify(sig, {"baseline": baseline}, test, u, "baseline")[0]["baseline"]
     test = _check_test(test)
     _check_model(baseline, "baseline", sig, "baseline")
     resid = _residuals(baseline, sig, u, "baseline")
@@ -360,15 +369,7 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
     models = _check_models(models)
     sig = as_signal(signal, "signal", allow_constant=True)
     if _mean_models(models, "models"):
-        if u is not None:
-            raise TypeError("u is only for input-output (ARX) models: FPMean models have no input; leave u out")
-        thresholds = _mean_thresholds(test, models, "test")
-        for name, res in models.items():
-            _mean_check(res, name, sig, sig.nobs, "models")
-        decisions = {}
-        for name, res in models.items():
-            q, ll, kh = _mean_scores(res, sig, sig.nobs)
-            decisions[name] = _mean_decision(res, q[0], ll[0], kh[0], thresholds[name])
+        decisions, thresholds = _mean_identify(sig, models, test, u, "models")
         return Identification(decisions=decisions, test=_test_name(thresholds))
     tests = _model_tests(test, models)
     for name, res in models.items():

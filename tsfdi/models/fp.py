@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import hashlib
 import itertools
 import warnings
 from functools import cached_property
@@ -1563,7 +1562,7 @@ class FPMeanResults(FrozenResults):
         vals = {"model": model, "_params2d": B, "S": S, "S_rec": S_rec, "S_within": within, "_bse2d": bse,
                 "_S_inv": np.linalg.inv(S), "_logdet": float(logdet), "_k_grid": k_grid,
                 "_surface": fp_basis(k_grid, model.degree, model.k_range, model.basis) @ B,
-                "nobs": n_rec, "nwindows": int(counts.sum()), "llf": float(llf), "_last": {},
+                "nobs": n_rec, "nwindows": int(counts.sum()), "llf": float(llf),
                 "bic": float(-2 * llf + (p * s + s * (s + 1) // 2) * np.log(n_rec))}
         for name, value in vals.items():
             object.__setattr__(self, name, value)
@@ -1614,12 +1613,6 @@ class FPMeanResults(FrozenResults):
             raise ValueError(f"signal has {sig.nobs} samples, fewer than the model's window ({w})")
         step = w if step is None else window_samples(step, "step", sampling_frequency(sig, None), minimum=1)
         starts = np.arange(0, sig.nobs - w + 1, step)
-        # the last signal's profile is kept (keyed by its values and step): statistic, loglike and estimate_k of
-        # one signal search k once
-        key = (hashlib.blake2b(sig.values.tobytes(), digest_size=16).digest(), sig.values.shape, step)
-        last = self._last.get("profile")
-        if last is not None and last[0] == key:
-            return sig, starts, last[1], last[2]
         means = _window_means(sig.values, w, starts)
         d = self._k_grid.shape[1]
         q = np.empty(starts.size)
@@ -1653,9 +1646,6 @@ class FPMeanResults(FrozenResults):
                 h = h * 2 / (n_loc - 1)
             q[c:c + len(mc)] = qc
             k_hat[c:c + len(mc)] = kc
-        q.setflags(write=False)
-        k_hat.setflags(write=False)
-        self._last["profile"] = (key, q, k_hat)
         return sig, starts, q, k_hat
 
     def _per_window(self, sig: Any, starts: np.ndarray, values: np.ndarray, columns: list | None, name: str) -> Any:
@@ -1690,14 +1680,16 @@ class FPMeanResults(FrozenResults):
         ndarray (windows,), or a Series / DataArray indexed by the time of each window's first sample
         """
         sig, starts, q, _ = self._profile(signal, step)
-        return self._per_window(sig, starts, q.copy(), None, "statistic")
+        return self._per_window(sig, starts, q, None, "statistic")
 
     def loglike(self, signal: Any, step: Any = None) -> Any:
         """The Gaussian log-likelihood of every window's mean at its maximum-likelihood ``k``,
         ``-1/2 (s ln 2 pi + ln det S + min_k q(k))``; parameters and return as :meth:`statistic`."""
         sig, starts, q, _ = self._profile(signal, step)
-        ll = -0.5 * (self.neqs * np.log(2 * np.pi) + self._logdet + q)
-        return self._per_window(sig, starts, ll, None, "loglike")
+        return self._per_window(sig, starts, self._loglike(q), None, "loglike")
+
+    def _loglike(self, q: np.ndarray) -> np.ndarray:
+        return -0.5 * (self.neqs * np.log(2 * np.pi) + self._logdet + q)
 
     def estimate_k(self, signal: Any, step: Any = None) -> Any:
         """The maximum-likelihood operating point of every window (the ``k`` of :meth:`statistic`), in ``k_range``.
@@ -1708,7 +1700,21 @@ class FPMeanResults(FrozenResults):
         indexed by the time of each window's first sample
         """
         sig, starts, _, k_hat = self._profile(signal, step)
-        return self._per_window(sig, starts, k_hat.copy(), list(self.model.k_names), "k_hat")
+        return self._per_window(sig, starts, k_hat, list(self.model.k_names), "k_hat")
+
+    def profile(self, signal: Any, step: Any = None) -> tuple:
+        """:meth:`statistic`, :meth:`loglike` and :meth:`estimate_k` of every window from one search over ``k``
+        (what :func:`tsfdi.identify` needs of each model); parameters as :meth:`statistic`.
+
+        Returns
+        -------
+        tuple
+            ``(statistic, loglike, k_hat)``, each as its method returns it.
+        """
+        sig, starts, q, k_hat = self._profile(signal, step)
+        return (self._per_window(sig, starts, q, None, "statistic"),
+                self._per_window(sig, starts, self._loglike(q), None, "loglike"),
+                self._per_window(sig, starts, k_hat, list(self.model.k_names), "k_hat"))
 
     # --- output
     def summary(self, alpha: float = 0.05) -> Summary:
