@@ -500,7 +500,7 @@ class WindowedIdentification:
 
 
 def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: Any,
-                     step: Any = 1, fs: float | None = None) -> WindowedIdentification:
+                     step: Any = 1, fs: float | None = None, u: Any = None) -> WindowedIdentification:
     """:func:`identify` on every sliding window of one record.
 
     Window ``w`` covers signal samples ``[w * step, w * step + window)``. The record is filtered once through each
@@ -509,22 +509,27 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     Parameters
     ----------
     signal, models, test :
-        As in :func:`identify`; the models are AR / VAR results (the windowed engine filters the signal alone, so
-        input-output ARX models are refused: use :func:`identify` with ``u`` on each window), or FPMean results
+        As in :func:`identify`; the models are AR / VAR results, ARX results (input-output models, e.g. an
+        FP-ARX's point ``.at(k)``; then ``u`` is required), or FPMean results
         (``window`` must be theirs; the result's ``windows.loglik`` is each window's
         :meth:`~tsfdi.models.FPMeanResults.loglike`, so ``decide("likelihood")`` gives the class of the largest
-        likelihood among the accepted models, among all when no threshold is given).
+        likelihood among the accepted models, among all when no threshold is given). The kinds do not mix.
     window, step : int or time span
         As in pandas ``rolling``: an int counts samples, a time span (``"2s"``, ``pandas.Timedelta``) is converted
         with the signal's time index or ``fs``.
     fs : float, optional
         Sampling frequency in Hz (default: read from the signal's time index when a time span is given).
+    u : array_like, Series, DataFrame or DataArray, optional
+        The record's input for ARX models (required for them, refused for the others): as long as ``signal``, with
+        its index when both carry one, its channels matched to the models' inputs by name when both are named. The
+        residuals of every window are those of ``results.residuals(signal, u)`` on the window.
 
     Returns
     -------
     WindowedIdentification
         Arrays over windows, models and channels; ``result[w]`` is the :class:`Identification` of window ``w``
-        (with ``span = (start, stop)``), equal to ``identify(signal[start:stop], models, test)``.
+        (with ``span = (start, stop)``), equal to ``identify(signal[start:stop], models, test)`` (with
+        ``u=u[start:stop]`` for ARX models).
 
     Raises
     ------
@@ -542,11 +547,13 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
         raise ValueError(f"window must be <= the signal length {sig.nobs}, got {window}")
     timed = sig.index is not None and sampling_frequency(sig, None) is not None      # a time index, not positions
     if _mean_models(models, "models"):
+        if u is not None:
+            raise TypeError("u is only for input-output (ARX) models: FPMean models have no input; leave u out")
         return _mean_windows(sig, models, test, window, step, pd.Index(sig.index) if timed else None, rate)
     tests = _model_tests(test, models)
     for name, res in models.items():
         _check_model(res, name, sig, "models")
-    engine = ResidualWindows(models).fit(sig)
+    engine = ResidualWindows(models).fit(sig, u=u)
     ws = engine.statistics(tests, window=window, step=step, loglik=False)
     return WindowedIdentification(ws, tuple(tests.values()),
                                   tuple(tests[name].reference(res) for name, res in models.items()), engine,

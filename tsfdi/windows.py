@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import solve_triangular
 
-from tsfdi._data import as_signal
+from tsfdi._data import as_signal, check_paired
 from tsfdi._validation import boolean, int_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
@@ -198,8 +198,9 @@ class ResidualWindows:
     Parameters
     ----------
     models : mapping
-        Name -> fitted AR / VAR results, all with the same number of channels. Input-output (ARX) models are
-        refused: the engine filters the output alone (use :func:`tsfdi.identify` with ``u`` on each window).
+        Name -> fitted AR / VAR results, all with the same number of channels; or name -> fitted ARX results
+        (input-output models, e.g. an FP-ARX's point ``.at(k)``), all with the same inputs: :meth:`fit` then takes
+        the record's input ``u``. The kinds do not mix (a model with inputs and one without take different data).
 
     Examples
     --------
@@ -217,11 +218,15 @@ class ResidualWindows:
             if isinstance(res, FPResults):
                 raise TypeError(f"models[{name!r}] is a functionally pooled model (FPResults): give its point model "
                                 "at the record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
-            if isinstance(res, ARXResults):
-                raise TypeError(f"models[{name!r}] is an ARX (input-output) model: the windowed engine filters the "
-                                "output alone and takes AR / VAR models; test ARX models with tsfdi.identify(..., u=)")
+        kinds = {isinstance(res, ARXResults) for res in models.values()}
+        if len(kinds) > 1:
+            raise TypeError("models mixes ARX (input-output) models with AR / VAR models: the ARX residuals are of the "
+                            "output given u, the others of the output alone; test one kind per engine")
+        #: whether the models take an input ``u`` (ARX models)
+        self.inputs = kinds == {True}
         self.models = dict(models)
-        self.orders = {name: int(res.lags) for name, res in self.models.items()}
+        # the first residual is at the largest lag (an ARX's input lags nk + nb - 1 may reach beyond na)
+        self.orders = {name: int(res.model.max_lag if self.inputs else res.lags) for name, res in self.models.items()}
         nchan = {int(getattr(r, "neqs", 1)) for r in self.models.values()}
         if len(nchan) > 1:
             raise ValueError(f"every model must have the same number of channels, got {sorted(nchan)}")
@@ -234,17 +239,29 @@ class ResidualWindows:
             raise ValueError("models fitted on named channels must share one channel order, got "
                              + "; ".join(f"{name!r}: {c}" for name, c in named.items()))
         self._channels = list(orders.pop()) if orders else None
+        self._inputs = None             # the models' input channels (named: matched by name), or their number
+        if self.inputs:
+            fitted = {name: (tuple(str(c) for c in r.model.u_data.channels), r.model.u_data.named)
+                      for name, r in self.models.items()}
+            if len(set(fitted.values())) > 1:
+                raise ValueError("ARX models must share one set of inputs, in one order, got "
+                                 + "; ".join(f"{name!r}: {list(c)}" for name, (c, _) in fitted.items()))
+            self._inputs = next(iter(fitted.values()))
         self._resid: dict | None = None
         self.nobs_: int | None = None
         self.channels_: tuple = ()
 
-    def fit(self, signal: Any, *, channels: Any = None) -> ResidualWindows:
+    def fit(self, signal: Any, *, u: Any = None, channels: Any = None) -> ResidualWindows:
         """Filter the record through every model once and keep the residuals.
 
         Parameters
         ----------
         signal : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, k)
             The record (``k`` = the models' channels), finite.
+        u : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, n_inputs)
+            The record's input, for ARX models only (required for them, refused otherwise): as long as ``signal``,
+            with its index when both carry one, its channels matched to the models' inputs by name when both are
+            named (else by position). The residuals are the models' ``residuals(signal, u)``.
         channels : sequence of str, optional
             Channel names (default: those of ``signal``).
 
@@ -256,16 +273,36 @@ class ResidualWindows:
         ------
         TypeError, ValueError
             A ``signal`` that is not numeric, not 1-D / 2-D, holds NaN / inf or masked values, is shorter than a
-            model's order + 1 or has another number of channels than the models.
+            model's order + 1 or has another number of channels than the models; ``u`` missing for ARX models or
+            given for others, or (named ``u``) not numeric and finite, of another length or index than ``signal``, or
+            without the models' inputs.
         """
         sig = as_signal(signal, "signal", allow_constant=True)
         if sig.nchan != self.nchan:
             raise ValueError(f"signal has {sig.nchan} channel(s) but the models were fitted on {self.nchan}")
         if self._channels is not None:          # a named signal is reordered to the models' channels, by name
             sig = sig.match_channels(self._channels, "signal")
-        resid = {name: np.asarray(res.residuals(sig), dtype=np.float64).reshape(-1, self.nchan)
+        usig = self._input(u, sig)
+        resid = {name: np.asarray(res.residuals(sig) if usig is None else res.residuals(sig, usig),
+                                  dtype=np.float64).reshape(-1, self.nchan)
                  for name, res in self.models.items()}
         return self._set(resid, sig.nobs, sig.channels if channels is None else channels)
+
+    def _input(self, u: Any, sig: Any) -> Any:
+        """``u`` checked against ``sig`` and the models' inputs (in their order), or None for models without input."""
+        if not self.inputs:
+            if u is not None:
+                raise TypeError("u is only for input-output (ARX) models: these models have no exogenous input; "
+                                "leave u out")
+            return None
+        if u is None:
+            raise TypeError("u is required: the models are ARX (input-output) models; pass the record's input as u=")
+        usig = as_signal(u, "u", allow_constant=True)
+        if usig.nobs != sig.nobs:
+            raise ValueError(f"u has {usig.nobs} samples but signal has {sig.nobs}: they must match")
+        check_paired(sig, usig, ("signal", "u"))
+        channels, named = self._inputs
+        return usig.match_channels(channels, "u", named=named, reference="the models were fitted with")
 
     def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
         """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model fitted without

@@ -1,0 +1,126 @@
+"""Input-output (ARX, FP-ARX point) models in the windowed engine: ResidualWindows and identify_windows with ``u``."""
+
+import numpy as np
+import pandas as pd
+import pytest
+import scipy.signal as sps
+import xarray as xr
+
+import tsfdi
+from tsfdi.windows import ResidualWindows
+
+
+def simulate(gain, n, rng):
+    """Output of two inputs through a plant whose first input's gain is ``gain`` (a loss of effectiveness)."""
+    u = rng.standard_normal((n, 2))
+    y = (sps.lfilter([0, 0.8 * gain, 0.3], [1, -0.5], u[:, 0]) + sps.lfilter([0, 0, 0.5], [1, -0.5], u[:, 1])
+         + 0.1 * rng.standard_normal(n))
+    return y, u
+
+
+@pytest.fixture(scope="module")
+def arx():
+    rng = np.random.default_rng(2032)
+    # nb = 3, nk = 1: the input lags reach 3 samples back, beyond na = 1 (the first residual is at max_lag = 3)
+    return {name: tsfdi.ARX(*simulate(g, 3000, rng), 1, 3, nk=1).fit() for name, g in (("healthy", 1.0),
+                                                                                       ("loss", 0.5))}
+
+
+@pytest.fixture(scope="module")
+def record():
+    rng = np.random.default_rng(7)
+    y0, u0 = simulate(1.0, 1200, rng)
+    y1, u1 = simulate(0.5, 1200, rng)
+    return np.r_[y0, y1], np.r_[u0, u1]
+
+
+@pytest.mark.parametrize("test", [tsfdi.FTest(1e-3), tsfdi.LjungBox(10, 1e-3), tsfdi.GLRT(alpha=1e-3)])
+def test_windows_equal_identify_on_each_window(arx, record, test):
+    y, u = record
+    wi = tsfdi.identify_windows(y, arx, test, window=400, step=200, u=u)
+    if isinstance(test, tsfdi.FTest):        # the loss of gain changes the residual variance (not its whiteness)
+        assert wi.labels[0] == "healthy" and wi.labels[-1] == "loss"
+    for w, (s, e) in enumerate(zip(wi.starts, wi.stops)):
+        one = tsfdi.identify(y[s:e], arx, test, u=u[s:e])
+        assert wi[w].label == one.label
+        for name in arx:
+            np.testing.assert_allclose(wi[w].decisions[name].statistic, one.decisions[name].statistic, rtol=1e-9)
+
+
+def test_residuals_are_the_record_residuals_windowed(arx, record):
+    """The engine's residuals are ``results.residuals(y, u)`` of the record, window by window (no re-filtering)."""
+    y, u = record
+    ws = ResidualWindows(arx).fit(y, u=u).statistics(tsfdi.FTest(1e-3), window=300, step=150)
+    for j, (name, res) in enumerate(arx.items()):
+        e = res.residuals(y, u)
+        p = res.model.max_lag
+        assert ws.nobs[j] == 300 - p == 297
+        for w, s in enumerate(ws.starts):
+            want = tsfdi.FTest(1e-3).test(e[s:s + 300 - p], **tsfdi.FTest().reference(res)).statistic
+            np.testing.assert_allclose(ws.statistic[w, j], want, rtol=1e-12)
+    # the per-sample log-likelihood is that of those residuals under sigma2
+    ll = ResidualWindows(arx).fit(y, u=u).loglik()
+    e = arx["loss"].residuals(y, u)
+    s2 = arx["loss"].sigma2
+    np.testing.assert_allclose(ll[:, 1], -0.5 * (np.log(s2) + e ** 2 / s2 + np.log(2 * np.pi)))
+
+
+def test_pandas_and_xarray_inputs_matched_by_name(record):
+    rng = np.random.default_rng(3)
+    yt, ut = simulate(1.0, 3000, rng)
+    idx = pd.RangeIndex(3000, name="time") / 100.0
+    fit_u = pd.DataFrame(ut, columns=["cmd_a", "cmd_b"], index=idx)
+    res = tsfdi.ARX(pd.Series(yt, index=idx, name="gyro"), fit_u, 1, 3, nk=1).fit()
+    y, u = record
+    t = pd.Index(np.arange(len(y)) / 100.0, name="time")
+    ys = pd.Series(y, index=t, name="gyro")
+    us = pd.DataFrame(u[:, ::-1], columns=["cmd_b", "cmd_a"], index=t)          # columns in another order
+    want = tsfdi.identify_windows(y, {"h": res}, tsfdi.FTest(1e-3), window=400, step=200, u=u)
+    got = tsfdi.identify_windows(ys, {"h": res}, tsfdi.FTest(1e-3), window="4s", step="2s", u=us)
+    np.testing.assert_allclose(got.statistic, want.statistic, rtol=1e-12)
+    assert got.to_frame()["start"].iloc[1] == 2.0
+    ux = xr.DataArray(u[:, ::-1], dims=("time", "channel"), coords={"time": t.values, "channel": ["cmd_b", "cmd_a"]})
+    yx = xr.DataArray(y, dims=("time",), coords={"time": t.values}, name="gyro")
+    got = tsfdi.identify_windows(yx, {"h": res}, tsfdi.FTest(1e-3), window=400, step=200, u=ux)
+    np.testing.assert_allclose(got.statistic, want.statistic, rtol=1e-12)
+    with pytest.raises(ValueError, match=r"u: missing channel\(s\) \['cmd_a'\]"):
+        tsfdi.identify_windows(ys, {"h": res}, window=400, u=us.rename(columns={"cmd_a": "cmd_c"}))
+    with pytest.raises(ValueError, match="signal and u have different indexes"):
+        tsfdi.identify_windows(ys, {"h": res}, window=400, u=us.set_axis(t + 0.005))
+
+
+def test_fp_arx_point_accepted(record):
+    rng = np.random.default_rng(11)
+    gains = [0.25, 0.5, 0.75, 1.0]
+    recs = [simulate(g, 2000, rng) for g in gains]
+    fp = tsfdi.models.FPARX([r[0] for r in recs], [r[1] for r in recs], pd.DataFrame({"gain": gains}), 1, 3,
+                            nk=1).fit()
+    models = {"healthy": fp.at(1.0), "half": fp.at(0.5)}
+    y, u = record
+    wi = tsfdi.identify_windows(y, models, tsfdi.FTest(1e-3), window=400, step=200, u=u)
+    assert wi.labels[0] == "healthy" and wi.labels[-1] == "half"
+    np.testing.assert_allclose(wi[2].decisions["half"].statistic,
+                               tsfdi.identify(y[400:800], models, tsfdi.FTest(1e-3),
+                                              u=u[400:800]).decisions["half"].statistic)
+
+
+def test_input_refused_or_required(arx, record):
+    y, u = record
+    ar = {"healthy": tsfdi.AR(y[:1200], 3).fit()}
+    with pytest.raises(TypeError, match="u is required"):
+        tsfdi.identify_windows(y, arx, window=400)
+    with pytest.raises(TypeError, match="u is required"):
+        ResidualWindows(arx).fit(y)
+    with pytest.raises(TypeError, match="u is only for input-output"):
+        tsfdi.identify_windows(y, ar, window=400, u=u)
+    with pytest.raises(TypeError, match="models mixes ARX"):
+        tsfdi.identify_windows(y, {**arx, **ar}, window=400, u=u)
+    with pytest.raises(ValueError, match="u has 2399 samples but signal has 2400"):
+        tsfdi.identify_windows(y, arx, window=400, u=u[1:])
+    with pytest.raises(ValueError, match=r"u has 1 channel\(s\) but the models were fitted with 2"):
+        tsfdi.identify_windows(y, arx, window=400, u=u[:, 0])
+    with pytest.raises(ValueError, match="u .*NaN"):
+        tsfdi.identify_windows(y, arx, window=400, u=np.where(np.arange(len(y))[:, None] == 5, np.nan, u))
+    one = tsfdi.ARX(y[:1200], u[:, :1][:1200], 1, 2).fit()
+    with pytest.raises(ValueError, match="ARX models must share one set of inputs"):
+        ResidualWindows({**arx, "one": one})
