@@ -67,10 +67,10 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from scipy import stats  # noqa: E402
+from scipy import optimize, stats  # noqa: E402
 
 import tsfdi  # noqa: E402
-from tsfdi.models import FPVAR, select_fp_order  # noqa: E402
+from tsfdi.models import FPVAR, fp_basis, select_fp_order  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import crazypad as cp  # noqa: E402
@@ -392,6 +392,211 @@ def report_healthy(fa: pd.DataFrame) -> None:
               + (f" ({', '.join(up)})" if up else ""))
 
 
+# ------------------------------------------------------------------ detection through depth models (every depth unseen)
+TRIM_DEGREES = (1, 2, 3)                 # the trim surface's depth degree, chosen per fold by BIC over its records
+DEPTH_STEPS = 321                        # the trim profile's depth grid (0.025 mm over 0-8 mm)
+
+
+def chibar_isf(alpha: float, parts: int) -> float:
+    """Upper ``alpha`` point of the sum of ``parts`` independent likelihood-ratio statistics of ``k = 0`` on the
+    boundary of ``k >= 0``, each ``0.5 chi2_0 + 0.5 chi2_1`` (the chi-bar-square law): ``P(T > t) = sum_j
+    C(parts, j) 2^-parts P(chi2_j > t)``."""
+    w = stats.binom.pmf(np.arange(1, parts + 1), parts, 0.5)
+    df = np.arange(1, parts + 1)
+    if w.sum() <= alpha:
+        return 0.0
+    return float(optimize.brentq(lambda t: float(w @ stats.chi2.sf(t, df)) - alpha, 0.0, 1e4))
+
+
+def chibar_mean(parts: int) -> float:
+    """Mean of the chi-bar-square law of ``chibar_isf``: half a degree of freedom per part."""
+    return 0.5 * parts
+
+
+def cut_flights(ch) -> list:
+    """(depth, flight) of every normal flight (depth 0) and every log of the M3 cut series."""
+    return ([(0.0, f) for f in cp.load_condition(cp.NORMAL, ch.margin)]
+            + [(depth, f) for depth, cond in cut_series() for f in cp.load_condition(cond, ch.margin)])
+
+
+def var_model(ch):
+    """Fitter of (a): the FP-VAR (trend "c") over the depth, lags ``ch.order`` (BIC on the normal flights), degree 1
+    (a priori), of every segment of the given (depth, flight) items."""
+    def fit(items):
+        recs = [x for _, f in items for x in f.arrays(ch.channels)]
+        k = [d for d, f in items for _ in f.segments]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return FPVAR(recs, k, ch.order, 1, "c").fit()
+    return fit
+
+
+def var_stat(ch):
+    """Statistic of (a) for one flight: per segment ``estimate_k`` (bounded to the fitted range, whose lower end is
+    the normal flights' 0) and the likelihood ratio ``2 (llf(k_hat) - llf(0))``; the flight's statistic their sum
+    (one boundary chi-bar part per segment), its depth the mean of the segments' estimates."""
+    def stat(res, flight):
+        lr, k_hat, se = [], [], []
+        for x in flight.arrays(ch.channels):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                est = res.estimate_k(x, grid=81)
+            if est.grid[0][0] != 0.0:
+                raise ValueError(f"the FP-VAR's depth range starts at {est.grid[0][0]:g}, not at the normal flights' 0")
+            lr.append(max(0.0, 2 * (est.llf - est.loglik[0][0])))
+            k_hat.append(est.k_hat[0])
+            se.append(est.bse[0])
+        half = Z95 * np.sqrt(np.mean(np.square(se)) / len(se))
+        k = float(np.mean(k_hat))
+        return {"T": float(sum(lr)), "parts": len(lr), "k_hat": k, "lo": k - half, "hi": k + half,
+                "T_seg": tuple(lr)}
+    return stat
+
+
+def trim_record(flight, window: int) -> np.ndarray:
+    """The commands of a flight's segments, each cut to its whole ``window``-sample windows, end to end (no window
+    spans two segments)."""
+    return np.vstack([x[:len(x) - len(x) % window] for x in flight.arrays(cp.COMMANDS)])
+
+
+def trim_model(airframes: dict, window: int):
+    """Fitter of (b): ``tsfdi.FPMean`` of the commands' window means over k = (depth, airframe) (airframe: the
+    categorical ``airframe_k``, degree 1), one record per flight, the depth degree among ``TRIM_DEGREES`` of the
+    smallest BIC (over records) of the fitting flights."""
+    def fit(items):
+        recs = [trim_record(f, window) for _, f in items]
+        k = [[d, airframes[f.drone]] for d, f in items]
+        fits = [tsfdi.FPMean(recs, k, window, (deg, 1)).fit() for deg in TRIM_DEGREES]
+        return min(fits, key=lambda r: r.bic)
+    return fit
+
+
+def trim_profile(res, means: np.ndarray, airframe: float, V: np.ndarray) -> tuple:
+    """(depth grid, q) of window means ``means`` ``(n, s)``: ``q(k) = (m - M(k, airframe))' V^-1 (m - M(...))``
+    on ``DEPTH_STEPS`` depths of the model's range."""
+    m = res.model
+    grid = np.linspace(*m.k_range[0], DEPTH_STEPS)
+    surf = fp_basis(np.column_stack([grid, np.full_like(grid, airframe)]), m.degree, m.k_range, m.basis) @ res.params2d
+    dev = means[:, None, :] - surf[None]
+    return grid, np.einsum("wka,ab,wkb->wk", dev, np.linalg.inv(V), dev)
+
+
+def trim_stat(airframes: dict, window: int):
+    """Statistic of (b) for one flight: its mean trim over all its windows against the surface at its logged
+    airframe, variance ``S_rec + S_within / windows`` (a new flight's offset plus its windows' mean spread);
+    ``T = q(0) - min_k q(k)`` over depth (one boundary chi-bar part), the depth of the minimum and the
+    likelihood-ratio 95 % interval. Per window (c, window counting): the same with ``S`` and the window's mean."""
+    def stat(res, flight):
+        x = trim_record(flight, window)
+        means = x.reshape(-1, window, x.shape[1]).mean(axis=1)
+        a = airframes[flight.drone]
+        grid, q = trim_profile(res, means.mean(axis=0, keepdims=True), a, res.S_rec + res.S_within / len(means))
+        q = q[0]
+        if grid[0] != 0.0:
+            raise ValueError(f"the trim model's depth range starts at {grid[0]:g}, not at the normal flights' 0")
+        j = int(np.argmin(q))
+        inside = grid[q - q[j] <= stats.chi2.isf(0.05, 1)]
+        _, qw = trim_profile(res, means, a, res.S)
+        return {"T": float(q[0] - q[j]), "parts": 1, "k_hat": float(grid[j]), "lo": float(inside.min()),
+                "hi": float(inside.max()), "T_seg": tuple((qw[:, 0] - qw.min(axis=1)).tolist()),
+                "degree": res.model.degree[0]}
+    return stat
+
+
+def detection_folds(items: list, fit, stat, depths=None, normals=None) -> pd.DataFrame:
+    """Leave one depth out for the cut flights and one flight out for the normal ones (``items``: (depth, flight),
+    normal flights at depth 0), each judged by ``stat`` through the model ``fit`` on the rest, with the scale of
+    its fold: the mean of the statistics of the fold's normal flights, each left out in turn from the fold's
+    fitting items (nested: the judged flights are never seen), over their chi-bar mean (``chibar_mean``).
+    ``depths`` / ``normals``: the cut depths / normal flights' positions to judge (default all). One row per
+    judged flight."""
+    fits: dict = {}
+    normal = [i for i, (d, _) in enumerate(items) if d == 0.0]
+
+    def without(gone):
+        key = frozenset(gone)
+        if key not in fits:
+            fits[key] = fit([it for i, it in enumerate(items) if i not in key])
+        return fits[key]
+
+    def scale(gone):
+        cal = [stat(without(gone | {j}), items[j][1]) for j in normal if j not in gone]
+        return sum(c["T"] for c in cal) / sum(chibar_mean(c["parts"]) for c in cal)
+
+    folds = [frozenset(i for i, (d, _) in enumerate(items) if d == depth)
+             for depth in sorted({d for d, _ in items if d > 0}) if depths is None or depth in depths]
+    folds += [frozenset({j}) for pos, j in enumerate(normal) if normals is None or pos in normals]
+    rows = []
+    for gone in folds:
+        res, c = without(gone), scale(gone)
+        for i in sorted(gone):
+            depth, f = items[i]
+            rows.append({"depth": depth, "drone": f.drone, "log": f.log, "scale": c, **stat(res, f)})
+    return pd.DataFrame(rows)
+
+
+def decide(t: pd.DataFrame, alpha: float = ALPHA) -> pd.DataFrame:
+    """Flight decisions at ``alpha``: ``nominal`` (T above the chi-bar point) and ``calibrated`` (T above the scale
+    of its fold times that point); ``windows``: per-part statistics above the one-part point counted against the
+    flight's 99 % binomial band (``above_band``)."""
+    one = chibar_isf(alpha, 1)
+    return t.assign(nominal=[r.T > chibar_isf(alpha, r.parts) for r in t.itertuples()],
+                    calibrated=[r.T > r.scale * chibar_isf(alpha, r.parts) for r in t.itertuples()],
+                    windows=[above_band(int(np.sum(np.array(r.T_seg) > one)), len(r.T_seg), alpha)
+                             for r in t.itertuples()])
+
+
+def report_detection_folds(t: pd.DataFrame, name: str) -> None:
+    t = decide(t)
+    cut, normal = t[t.depth > 0], t[t.depth == 0]
+    print(f"  -- {name}: flights detected per depth (nominal chi-bar / calibrated / window counting); depth of the "
+          f"flight: estimate and 95 % interval")
+    print("     depth  flights  nominal  calibrated  windows  mean k_hat  covered")
+    for depth, g in cut.groupby("depth"):
+        cov = ((g.lo <= depth) & (depth <= g.hi)).mean()
+        print(f"     {depth:5.1f}  {len(g):7d}  {int(g.nominal.sum()):7d}  {int(g.calibrated.sum()):10d}  "
+              f"{int(g.windows.sum()):7d}  {g.k_hat.mean():10.2f}  {cov:7.0%}")
+    lo, hi = cp.binomial_band(len(normal), ALPHA)
+    for rule in ("nominal", "calibrated", "windows"):
+        x = int(normal[rule].sum())
+        band = "in band" if lo <= x / len(normal) <= hi else ("ABOVE" if x / len(normal) > hi else "below")
+        print(f"     {rule:<10} cut flights {int(cut[rule].sum())}/{len(cut)}; normal flights (leave one out) "
+              f"{x}/{len(normal)}, 99 % band [{100 * lo:.1f}, {100 * hi:.1f}] % {band}"
+              + (f" ({', '.join(normal.log[normal[rule]])})" if x else ""))
+    err = cut.k_hat - cut.depth
+    cov = (cut.lo <= cut.depth) & (cut.depth <= cut.hi)
+    print(f"     depth per flight (cut flights, every depth unseen): RMSE {np.sqrt(np.mean(err ** 2)):.2f} mm, mean "
+          f"error {err.mean():+.2f} mm, 95 % interval coverage {cov.mean():.0%} ({int(cov.sum())}/{len(cut)}), median "
+          f"half-width {((cut.hi - cut.lo) / 2).median():.2f} mm; normal flights: mean k_hat "
+          f"{normal.k_hat.mean():.2f} mm; calibration scale median {t.scale.median():.2f} "
+          f"[{t.scale.min():.2f}, {t.scale.max():.2f}]")
+    if "degree" in t:
+        print(f"     depth degree chosen (flights judged): {t.degree.value_counts().sort_index().to_dict()}")
+
+
+def depth_detection(ch) -> None:
+    """The cut flights of every depth detected through models of the depth, the normal flights (depth 0) and the
+    cut depths fitted together (see the module docstring, section 2): (a) the FP-VAR's likelihood ratio of k = 0
+    against k_hat, (b) the controller's trim (``tsfdi.FPMean`` over depth and airframe), each per flight (pooled)
+    and by counting its parts (segments / windows)."""
+    items = cut_flights(ch)
+    airframes = airframe_k(f.drone for d, f in items if d == 0.0)
+    window = cp.samples(WINDOW_S)
+    print(f"\n  detection through models of the depth: normal flights (k = 0) and the cut depths fitted together, "
+          f"leave one depth out (cut flights) / one flight out (normal flights), alpha {ALPHA:g}; a flight is a cut "
+          "when the likelihood ratio of k = 0 against k_hat exceeds the chi-bar-square point (nominal), or that point "
+          "times the fold's scale from its normal flights left out in turn (calibrated, nested)")
+    for name, fit, stat in (
+            (f"(a) FP-VAR over depth (lags {ch.order}: BIC on the normal flights; degree 1 a priori), per segment "
+             "estimate_k", var_model(ch), var_stat(ch)),
+            (f"(b) trim: FPMean of the commands' {WINDOW_S:g} s window means over (depth, airframe "
+             f"{', '.join(f'{d} {k:g}' for d, k in airframes.items())}), depth degree by BIC per fold among "
+             f"{TRIM_DEGREES}, one record per flight", trim_model(airframes, window), trim_stat(airframes, window))):
+        t0 = time.perf_counter()
+        t = detection_folds(items, fit, stat)
+        report_detection_folds(t, f"{name} ({time.perf_counter() - t0:.0f} s)")
+
+
 # ------------------------------------------------------------------ the CrazyPAD sections
 def crazypad(lags=None, degree=None) -> None:
     print("\n== 2. CrazyPAD propeller M3 cut depth (k = 47 mm - blade length), leave one depth out")
@@ -447,6 +652,8 @@ def crazypad(lags=None, degree=None) -> None:
               f"{sum(above_band(r.flagged, r.n) for r in det.itertuples())}/{len(det)}; normal flights (leave one "
               f"flight out, section 3): {rate_line(ref)}, {sum(above_band(r.flagged, r.n) for r in ref.itertuples())}"
               f"/{len(ref)} flights above their band")
+
+    depth_detection(ch)
 
     print(f"\n== 3. CrazyPAD healthy flights of both airframes, leave one flight out ({len(cp.normal_logs())} folds): "
           f"a pooled baseline (one VAR of both airframes) and an FP baseline (FP-VAR, k = airframe "
