@@ -611,3 +611,72 @@ def test_functionally_pooled_models_are_refused_naming_at_k():
         tsfdi.Monitor(point, {"f": fp}, window=200, fs=FS, test=FTest(alpha=0.01))
     monitor = tsfdi.Monitor(fp.at(0.5), window=200, fs=FS, test=FTest(alpha=0.01))
     assert monitor.run(recs[1]).windows.shape[0] > 0
+
+
+def _arx_record(gain, n, rng, failure=None):
+    """Output of two commands through a plant whose first command's gain drops to ``gain`` from ``failure``
+    (a compensated loss of effectiveness seen in the command-response relation)."""
+    import scipy.signal as sps
+
+    u = rng.standard_normal((n, 2))
+    g = np.ones(n)
+    g[(0 if failure is None else failure):] = gain
+    y = (sps.lfilter([0, 0.8], [1, -0.5], g * u[:, 0]) + sps.lfilter([0, 0, 0.5], [1, -0.5], u[:, 1])
+         + 0.1 * rng.standard_normal(n))
+    return y, u
+
+
+@pytest.fixture(scope="module")
+def arx_models():
+    rng = np.random.default_rng(32)
+    return {name: tsfdi.ARX(*_arx_record(g, 4000, rng), 1, 3, nk=1).fit()
+            for name, g in (("healthy", 1.0), ("f1", 0.5), ("f2", 0.0))}
+
+
+@pytest.mark.parametrize("rule", ["paper", "sprt"])
+def test_arx_models_with_their_input(arx_models, rule):
+    """Monitor with ARX models: the input ``u`` beside the stream, the windows those of ``identify_windows(y, u=)``;
+    streamed block by block it gives the events of the whole record."""
+    y, u = _arx_record(0.5, 3000, np.random.default_rng(33), failure=1000)
+    opts = dict(fs=FS, steady_window="5s", steady_thresholds=[3 * y[1500:].var()])
+    opts.update(dict(test=FTest(alpha=1e-4), window="5s", step="1s") if rule == "paper" else dict(rule="sprt"))
+    mon = tsfdi.Monitor(arx_models["healthy"], {"f1": arx_models["f1"], "f2": arx_models["f2"]}, **opts)
+    res = mon.run(y, u=u)
+    assert 10.0 < res.detection_time <= 12.0 and res.label == "f1"
+    if rule == "paper":
+        wi = tsfdi.identify_windows(y, {"healthy": arx_models["healthy"]}, FTest(alpha=1e-4), window=500,
+                                    step=100, u=u)
+        np.testing.assert_allclose(res.windows["detect_statistic"], wi.statistic[:, 0, 0] / wi.threshold[:, 0, 0])
+    mon.reset()
+    streamed = []
+    for k in range(0, y.shape[0], 137):
+        streamed += mon.update(y[k:k + 137], u=u[k:k + 137])
+    assert streamed == res.events
+    pd.testing.assert_frame_equal(mon.result().windows, res.windows)
+    # named: u's columns in another order, matched to the models' inputs by name
+    named = {n: tsfdi.ARX(pd.Series(r.model.data.values[:, 0], name="gyro"),
+                          pd.DataFrame(r.model.u_data.values, columns=["cmd_a", "cmd_b"]), 1, 3, nk=1).fit()
+             for n, r in arx_models.items()}
+    mon = tsfdi.Monitor(named["healthy"], {"f1": named["f1"], "f2": named["f2"]}, **opts)
+    got = mon.run(pd.Series(y, name="gyro"), u=pd.DataFrame(u[:, ::-1], columns=["cmd_b", "cmd_a"]))
+    assert got.events == res.events
+
+
+def test_arx_input_required_or_refused(arx_models, models, failure_record):
+    y, u = _arx_record(1.0, 1000, np.random.default_rng(34))
+    mon = tsfdi.Monitor(arx_models["healthy"], window="5s", fs=FS, test=FTest(alpha=1e-4))
+    with pytest.raises(TypeError, match="u is required"):
+        mon.run(y)
+    with pytest.raises(ValueError, match="u has 999 samples but signal has 1000"):
+        mon.run(y, u=u[1:])
+    with pytest.raises(ValueError, match=r"u has 1 channel\(s\) but the models were fitted with 2"):
+        mon.run(y, u=u[:, 0])
+    with pytest.raises(ValueError, match="signal and u have different indexes"):
+        mon.run(pd.Series(y), u=pd.DataFrame(u, index=np.arange(1, 1001)))
+    with pytest.raises(TypeError, match="u is only for input-output"):
+        _monitor(models).run(failure_record, u=failure_record)
+    with pytest.raises(TypeError, match="baseline and models mix ARX"):
+        tsfdi.Monitor(arx_models["healthy"], {"f": tsfdi.AR(y, 2).fit()}, window="5s", fs=FS)
+    one = tsfdi.ARX(y, u[:, 0], 1, 2).fit()
+    with pytest.raises(ValueError, match="ARX models must share one set of inputs"):
+        tsfdi.Monitor(arx_models["healthy"], {"f": one}, window="5s", fs=FS)

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import Signal, as_signal, refuse_masked, rolling_variance, sampling_frequency, window_samples
+from tsfdi._data import Signal, as_signal, check_paired, refuse_masked, rolling_variance, sampling_frequency, window_samples
 from tsfdi._validation import boolean, float_like, option, probability
 from tsfdi.coverage import Coverage, check_coverage, warn_if_not_covered, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
@@ -166,10 +166,13 @@ class Monitor:
     Parameters
     ----------
     baseline : fitted results
-        Healthy model :math:`M_0` (AR or VAR results; input-output ARX models are refused).
+        Healthy model :math:`M_0`: AR or VAR results, or ARX results (an input-output model, e.g. an FP-ARX's
+        point ``.at(k)``, with the controller's commands as inputs: then every block of the stream comes with its
+        input, ``run(signal, u=...)`` / ``update(samples, u=...)``).
     models : mapping or None
-        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels; ``None`` (or an empty
-        mapping) for detection only.
+        Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels (and, for an ARX
+        baseline, ARX models with its inputs: the kinds do not mix); ``None`` (or an empty mapping) for detection
+        only.
     window : int or time span
         Window length, as in pandas ``rolling``: an int counts samples, a time span (``"20s"``,
         ``pandas.Timedelta``) is converted with ``fs``.
@@ -269,16 +272,25 @@ class Monitor:
             raise TypeError(f"models must be a mapping name -> fitted fault models, or None to detect only, got "
                             f"{type(models).__name__}")
         if not hasattr(baseline, "residuals"):
-            raise TypeError(f"baseline must be fitted results (AR or VAR), got {type(baseline).__name__}")
-        if isinstance(baseline, ARXResults):
-            raise TypeError("baseline is an ARX (input-output) model: Monitor filters the output stream alone and "
-                            "takes AR / VAR models")
+            raise TypeError(f"baseline must be fitted results (AR, VAR or ARX), got {type(baseline).__name__}")
+        if len({isinstance(m, ARXResults) for m in (baseline, *models.values())}) > 1:
+            raise TypeError("baseline and models mix ARX (input-output) models with AR / VAR models: the ARX "
+                            "residuals are of the output given u, the others of the output alone; use one kind")
         pooled = [n for n, m in {"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}.items()
                   if isinstance(m, FPResults)]
         if pooled:
             raise TypeError(f"{pooled[0]} is a functionally pooled model (FPResults): give its point model at the "
                             "record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
+        engine = ResidualWindows({"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}
+                                 if isinstance(baseline, ARXResults) else {"healthy": baseline})
         self.nchan = ResidualWindows({"healthy": baseline}).nchan
+        #: whether the models take an input ``u`` (ARX models), the same for baseline and fault models (checked by
+        #: ``engine``), and its channels in the models' order with whether they are named
+        self.inputs = engine.inputs
+        self._order = engine.orders["baseline" if self.inputs else "healthy"]
+        self._fault_order = max(ResidualWindows(models).orders.values()) if models else 0
+        u_data = baseline.model.u_data if self.inputs else None
+        self._u_channels = None if u_data is None else ([str(c) for c in u_data.channels], u_data.named)
         if models:
             nf = ResidualWindows(models).nchan
             if nf != self.nchan:
@@ -363,8 +375,6 @@ class Monitor:
         self.test, self.detection_test = None, detection_test
         sigma = self.baseline.sigma if hasattr(self.baseline, "sigma") else self.baseline.sigma2
         self._sigma = np.asarray(sigma, dtype=np.float64).reshape(self.nchan, self.nchan)
-        self._order = int(self.baseline.lags)
-        self._fault_order = max((int(r.lags) for r in self.models.values()), default=0)
 
     def __repr__(self) -> str:
         what = f"models={list(self.models)}" if self.models else "models=None (detection only)"
@@ -431,6 +441,7 @@ class Monitor:
         self._channels: list | None = None     # channel names of the stream (its first block), in model order
         self._named = False
         self._buffer = np.empty((0, self.nchan))
+        self._ubuffer = np.empty((0, len(self._u_channels[0]) if self.inputs else 0))   # the input beside it
         self._offset = 0           # stream position of _buffer[0]
         self._next = 0             # stream position of the next window start
         self._phase = "healthy"
@@ -448,10 +459,31 @@ class Monitor:
         self._row_ident: tuple = ()             # (label, status) of an identification within the current step
 
     # ------------------------------------------------------------------------------------------------------------
-    def _values(self, samples: Any) -> np.ndarray:
-        """The samples in the stream's channel order; the first block sets the channels (matched to the baseline's
-        by name when both are named) and, without ``fs``, the sampling frequency from its time index."""
+    def _values(self, samples: Any, u: Any) -> tuple:
+        """The samples in the stream's channel order and their input (in the models' order; ``None`` without
+        inputs); the first block sets the channels (matched to the baseline's by name when both are named) and,
+        without ``fs``, the sampling frequency from its time index."""
         sig = as_signal(samples, "signal", allow_constant=True)
+        return self._channel_values(sig), self._input_values(u, sig)
+
+    def _input_values(self, u: Any, sig: Signal) -> np.ndarray | None:
+        """The block's input ``u`` in the models' input order, checked against the block ``sig``."""
+        if not self.inputs:
+            if u is not None:
+                raise TypeError("u is only for input-output (ARX) models: the baseline has no exogenous input; "
+                                "leave u out")
+            return None
+        if u is None:
+            raise TypeError("u is required: the baseline is an ARX (input-output) model; pass the input of the "
+                            "samples as u=")
+        usig = as_signal(u, "u", allow_constant=True)
+        if usig.nobs != sig.nobs:
+            raise ValueError(f"u has {usig.nobs} samples but signal has {sig.nobs}: they must match")
+        check_paired(sig, usig, ("signal", "u"))
+        channels, named = self._u_channels
+        return usig.match_channels(channels, "u", named=named, reference="the models were fitted with").values
+
+    def _channel_values(self, sig: Signal) -> np.ndarray:
         if self._channels is not None:
             return sig.match_channels(self._channels, "signal", named=self._named).values
         sig = sig.match_channels(self._model_channels, "signal", named=self._model_named)
@@ -472,6 +504,24 @@ class Monitor:
         self._channels, self._named = list(sig.channels if sig.named else self._model_channels), sig.named
         return sig.values
 
+    def _residuals(self, res: Any, lo: int, hi: int | None = None) -> np.ndarray:
+        """Residuals of the buffered stream positions ``[lo, hi)`` through ``res`` (given their input for ARX)."""
+        a, b = lo - self._offset, None if hi is None else hi - self._offset
+        e = (res.residuals(self._record(self._buffer[a:b])) if not self.inputs else
+             res.residuals(self._record(self._buffer[a:b]), self._ubuffer[a:b]))
+        return np.asarray(e, dtype=np.float64).reshape(-1, self.nchan)
+
+    def _append(self, x: np.ndarray, ux: np.ndarray | None) -> None:
+        self._buffer = np.concatenate([self._buffer, x])
+        if ux is not None:
+            self._ubuffer = np.concatenate([self._ubuffer, ux])
+
+    def _keep(self, keep: int) -> None:
+        """Forget the buffered samples before stream position ``keep``."""
+        self._buffer = self._buffer[keep - self._offset:]
+        self._ubuffer = self._ubuffer[keep - self._offset:]
+        self._offset = keep
+
     def _record(self, x: np.ndarray) -> Any:
         """Samples of the stream as a signal the models match by name (when the stream is named)."""
         if not self._named:
@@ -482,8 +532,9 @@ class Monitor:
     def _t(self, pos: int) -> float:
         return round(pos / (1.0 if self.fs is None else self.fs), 9)
 
-    def _process(self, x: np.ndarray, pos0: int, hist: int) -> list:
-        """Windows starting at ``x[hist]``, ``x[hist + step]``, ...; ``x[0]`` is stream position ``pos0``.
+    def _process(self, x: np.ndarray, pos0: int, hist: int, ux: np.ndarray | None = None) -> list:
+        """Windows starting at ``x[hist]``, ``x[hist + step]``, ...; ``x[0]`` is stream position ``pos0``; ``ux``
+        the input beside ``x`` (ARX models).
 
         The ``hist`` samples before the first window only feed the rolling variance."""
         W, S, V = self.window, self.step, self.steady_window
@@ -491,10 +542,11 @@ class Monitor:
         if body.shape[0] < W:
             return []
         record = self._record(body)
-        det = ResidualWindows({"healthy": self.baseline}).fit(record).statistics(self.detection_test, window=W,
-                                                                                  step=S)
+        ubody = None if ux is None else ux[hist:]
+        det = ResidualWindows({"healthy": self.baseline}).fit(record, u=ubody).statistics(self.detection_test,
+                                                                                           window=W, step=S)
         if self.models:
-            ident = ResidualWindows(self.models).fit(record).statistics(self.test, window=W, step=S)
+            ident = ResidualWindows(self.models).fit(record, u=ubody).statistics(self.test, window=W, step=S)
             names, rej, labels, state = ident.models, ident.reject.T, ident.labels(self.rule), ident.status
         d_stat, d_thr = det.statistic[:, 0], det.threshold[:, 0]
         d_pv, d_rej = det.pvalue[:, 0], det.reject[:, 0]
@@ -536,18 +588,17 @@ class Monitor:
         return new_events
 
     # ------------------------------------------------------------------------------------------------------------
-    def _update_sequential(self, x: np.ndarray) -> list:
+    def _update_sequential(self, x: np.ndarray, ux: np.ndarray | None) -> list:
         """:meth:`update` of the sequential rule: every new sample through the detection SPRT, the rows of the
         completed steps (with the steady-state check at their ends) and, once steady, the identification MSPRT."""
         first = self._offset + self._buffer.shape[0]          # stream position of x[0]
-        self._buffer = np.concatenate([self._buffer, x])
+        self._append(x, ux)
         end = self._offset + self._buffer.shape[0]
         n = end - first
         peak, alarm, cycle = np.full(n, -np.inf), np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64)
         a = max(first, self._order)                            # first new sample with a healthy residual
         if end > a:
-            seg = self._buffer[a - self._order - self._offset:]
-            e = np.asarray(self.baseline.residuals(self._record(seg)), dtype=np.float64).reshape(-1, self.nchan)
+            e = self._residuals(self.baseline, a - self._order)
             z = self.detection_test.loglik_ratio(e, self._sigma)
             test = self.detection_test
             p, al, cy, _, self._s, start = renewal_walk(z, test.lower, test.upper, state=self._s,
@@ -572,9 +623,7 @@ class Monitor:
             if b % S == 0:
                 self._sequential_row(b, events)
             pos = b
-        keep = max(self._offset, end - self.steady_window - max(self._order, self._fault_order))
-        self._buffer = self._buffer[keep - self._offset:]
-        self._offset = keep
+        self._keep(max(self._offset, end - self.steady_window - max(self._order, self._fault_order)))
         self._events.extend(events)
         return events
 
@@ -586,8 +635,9 @@ class Monitor:
         if upto <= lo:
             return
         pm = self._fault_order
-        seg = self._buffer[lo - pm - self._offset: upto - self._offset]
-        ll = ResidualWindows(self.models).fit(self._record(seg)).loglik(common=pm)
+        a, b = lo - pm - self._offset, upto - self._offset
+        ll = ResidualWindows(self.models).fit(self._record(self._buffer[a:b]),
+                                              u=self._ubuffer[a:b] if self.inputs else None).loglik(common=pm)
         res = msprt(ll, alpha=self.sprt_alpha, restart=True, scale=self.sprt_scale, models=list(self.models),
                     state=self._w)
         self._w = res.state
@@ -621,13 +671,16 @@ class Monitor:
         self._rows.append(row)
         self._row_peak, self._row_alarm, self._row_ident = -np.inf, False, ()
 
-    def update(self, samples: Any) -> list:
+    def update(self, samples: Any, *, u: Any = None) -> list:
         """Feed the next samples of a stream; returns the events of the windows they complete.
 
         Parameters
         ----------
         samples : array_like, DataFrame or DataArray, shape (n, k)
             New samples (time on axis 0), continuing the stream.
+        u : array_like, Series, DataFrame or DataArray, shape (n,) or (n, n_inputs)
+            Their input, for ARX models only (required for them, refused otherwise): as many samples, the same
+            index when both carry one, the channels matched to the models' inputs by name when both are named.
 
         Returns
         -------
@@ -638,32 +691,34 @@ class Monitor:
         ValueError
             Samples that are not a finite signal, a missing / extra channel (named) or another number of channels;
             a time span (``window``, ``step``, ``steady_window``; the defaults are time spans) without ``fs`` when
-            the first block carries no time index.
+            the first block carries no time index; ``u`` of another length, index or inputs.
+        TypeError
+            ``u`` missing for ARX models or given for others.
         """
-        x = self._values(samples)
+        x, ux = self._values(samples, u)
         if self.sequential:
-            return self._update_sequential(x)
-        self._buffer = np.concatenate([self._buffer, x])
+            return self._update_sequential(x, ux)
+        self._append(x, ux)
         end = self._offset + self._buffer.shape[0]
         W, S = self.window, self.step
         if end - self._next < W:
             return []
         nwin = (end - self._next - W) // S + 1
         hist = self._next - self._offset
-        seg = self._buffer[:hist + (nwin - 1) * S + W]
-        events = self._process(seg, self._offset, hist)
+        n = hist + (nwin - 1) * S + W
+        events = self._process(self._buffer[:n], self._offset, hist, self._ubuffer[:n] if self.inputs else None)
         self._next += nwin * S
-        keep = max(self._offset, self._next - max(self.steady_window - W, 0))
-        self._buffer = self._buffer[keep - self._offset:]
-        self._offset = keep
+        self._keep(max(self._offset, self._next - max(self.steady_window - W, 0)))
         return events
 
-    def run(self, signal: Any) -> MonitorResult:
+    def run(self, signal: Any, *, u: Any = None) -> MonitorResult:
         """Monitor a whole record from time 0 (resets the monitor first).
 
         Parameters
         ----------
         signal : array_like, DataFrame or DataArray, shape (nobs, k)
+        u : array_like, Series, DataFrame or DataArray, optional
+            The record's input, for ARX models only (as in :meth:`update`).
 
         Returns
         -------
@@ -685,18 +740,18 @@ class Monitor:
         ValueError
             As :meth:`update`; also for a ``window`` longer than the signal (no window to test).
         """
-        res, unchecked = self._run(signal)
+        res, unchecked = self._run(signal, u)
         if unchecked:
             warnings.warn(f"Monitor.run: coverage not checked: {unchecked}", CoverageWarning, stacklevel=2)
         elif res.coverage is not None:
             warn_if_not_covered(res.coverage, "Monitor.run")
         return res
 
-    def _run(self, signal: Any) -> tuple:
+    def _run(self, signal: Any, u: Any = None) -> tuple:
         """:meth:`run` without its warnings: the result, and why the coverage could not be checked ("" if it could
         or need not be)."""
         self.reset()
-        self.update(signal)
+        self.update(signal, u=u)
         nobs = self._offset + self._buffer.shape[0]
         if self.sequential and nobs <= max(self._order, self._fault_order):
             raise ValueError(f"signal has {nobs} samples: the sequential rule needs more than the models' largest "
@@ -706,8 +761,13 @@ class Monitor:
             raise ValueError(f"window ({self.window} samples{secs(self.window)}) is longer than the signal ({nobs} "
                              f"samples{secs(nobs)}): no window to test; give a shorter window or a longer signal")
         res = self.result()
+        sig = as_signal(signal, "signal", allow_constant=True)
+        resid = None
+        if self.inputs:               # an ARX baseline's residuals need the input: given, named by its output
+            e = np.asarray(self.baseline.residuals(sig, u), dtype=np.float64).reshape(-1, self.nchan)
+            resid = pd.DataFrame(e, columns=[str(c) for c in self.baseline.model.data.channels])
         try:
-            cov = check_coverage(self.detection_test, self.baseline, as_signal(signal, "signal", allow_constant=True))
+            cov = check_coverage(self.detection_test, self.baseline, sig, resid=resid)
         except ValueError as err:
             return res, str(err)
         return (res, "") if cov is None else (dataclasses.replace(res, coverage=cov), "")
