@@ -448,8 +448,8 @@ def var_stat(ch):
             se.append(est.bse[0])
         half = Z95 * np.sqrt(np.mean(np.square(se)) / len(se))
         k = float(np.mean(k_hat))
-        return {"T": float(sum(lr)), "parts": len(lr), "k_hat": k, "lo": k - half, "hi": k + half,
-                "T_seg": tuple(lr)}
+        return {"lr": float(sum(lr)), "parts": len(lr), "k_hat": k, "lo": k - half, "hi": k + half,
+                "lr_parts": tuple(lr)}
     return stat
 
 
@@ -461,12 +461,13 @@ def trim_record(flight, window: int) -> np.ndarray:
 
 def trim_model(airframes: dict, window: int):
     """Fitter of (b): ``tsfdi.FPMean`` of the commands' window means over k = (depth, airframe) (airframe: the
-    categorical ``airframe_k``, degree 1), one record per flight, the depth degree among ``TRIM_DEGREES`` of the
-    smallest BIC (over records) of the fitting flights."""
+    categorical ``airframe_k``, degree 1), one record per flight, the depth degree among ``TRIM_DEGREES`` (those the
+    fitting depths allow) of the smallest BIC (over records) of the fitting flights."""
     def fit(items):
         recs = [trim_record(f, window) for _, f in items]
         k = [[d, airframes[f.drone]] for d, f in items]
-        fits = [tsfdi.FPMean(recs, k, window, (deg, 1)).fit() for deg in TRIM_DEGREES]
+        depths = len({d for d, _ in items})             # degree d needs d + 1 depths
+        fits = [tsfdi.FPMean(recs, k, window, (deg, 1)).fit() for deg in TRIM_DEGREES if deg < depths]
         return min(fits, key=lambda r: r.bic)
     return fit
 
@@ -497,8 +498,8 @@ def trim_stat(airframes: dict, window: int):
         j = int(np.argmin(q))
         inside = grid[q - q[j] <= stats.chi2.isf(0.05, 1)]
         _, qw = trim_profile(res, means, a, res.S)
-        return {"T": float(q[0] - q[j]), "parts": 1, "k_hat": float(grid[j]), "lo": float(inside.min()),
-                "hi": float(inside.max()), "T_seg": tuple((qw[:, 0] - qw.min(axis=1)).tolist()),
+        return {"lr": float(q[0] - q[j]), "parts": 1, "k_hat": float(grid[j]), "lo": float(inside.min()),
+                "hi": float(inside.max()), "lr_parts": tuple((qw[:, 0] - qw.min(axis=1)).tolist()),
                 "degree": res.model.degree[0]}
     return stat
 
@@ -521,7 +522,7 @@ def detection_folds(items: list, fit, stat, depths=None, normals=None) -> pd.Dat
 
     def scale(gone):
         cal = [stat(without(gone | {j}), items[j][1]) for j in normal if j not in gone]
-        return sum(c["T"] for c in cal) / sum(chibar_mean(c["parts"]) for c in cal)
+        return sum(c["lr"] for c in cal) / sum(chibar_mean(c["parts"]) for c in cal)
 
     folds = [frozenset(i for i, (d, _) in enumerate(items) if d == depth)
              for depth in sorted({d for d, _ in items if d > 0}) if depths is None or depth in depths]
@@ -540,9 +541,9 @@ def decide(t: pd.DataFrame, alpha: float = ALPHA) -> pd.DataFrame:
     of its fold times that point); ``windows``: per-part statistics above the one-part point counted against the
     flight's 99 % binomial band (``above_band``)."""
     one = chibar_isf(alpha, 1)
-    return t.assign(nominal=[r.T > chibar_isf(alpha, r.parts) for r in t.itertuples()],
-                    calibrated=[r.T > r.scale * chibar_isf(alpha, r.parts) for r in t.itertuples()],
-                    windows=[above_band(int(np.sum(np.array(r.T_seg) > one)), len(r.T_seg), alpha)
+    return t.assign(nominal=[r.lr > chibar_isf(alpha, r.parts) for r in t.itertuples()],
+                    calibrated=[r.lr > r.scale * chibar_isf(alpha, r.parts) for r in t.itertuples()],
+                    windows=[above_band(int(np.sum(np.array(r.lr_parts) > one)), len(r.lr_parts), alpha)
                              for r in t.itertuples()])
 
 

@@ -121,3 +121,97 @@ def test_the_spread_of_a_fold_is_chosen_on_its_fitting_depths(bench, choice):
     plain = bench.depth_folds(data, 2, 1, inner=False, held=[2.0])
     assert (plain.tau2 == 0).all()
     np.testing.assert_allclose(plain.k_hat, t.k_hat)
+
+
+# ------------------------------------------------------------------ detection through models of the depth
+def test_chibar_point_is_the_boundary_mixture():
+    bench = load_benchmark()
+    from scipy import stats
+    # one part: half the mass at 0, so the upper alpha point is chi2_1's upper 2 alpha point
+    assert bench.chibar_isf(0.01, 1) == pytest.approx(stats.chi2.isf(0.02, 1))
+    rng = np.random.default_rng(3)
+    draws = (rng.standard_normal((400_000, 3)).clip(min=0) ** 2).sum(axis=1)     # three boundary LR statistics
+    assert np.mean(draws > bench.chibar_isf(0.01, 3)) == pytest.approx(0.01, abs=0.001)
+    assert np.mean(draws > stats.chi2.isf(0.01, 3)) < 0.005                        # chi2_3 would be conservative
+    assert bench.chibar_mean(3) == pytest.approx(draws.mean(), rel=0.01)
+
+
+class _Flight:
+    def __init__(self, log):
+        self.drone, self.log, self.segments = "E8", log, (None,)
+
+
+def test_detection_folds_never_fit_or_calibrate_on_the_judged_flight():
+    bench = load_benchmark()
+    items = [(0.0, _Flight(f"n{i}")) for i in range(4)] + [(d, _Flight(f"c{d}{i}")) for d in (1.0, 2.0) for i in range(2)]
+    seen = []
+
+    def fit(fitted):
+        seen.append({f.log for _, f in fitted})
+        return frozenset(f.log for _, f in fitted)
+
+    def stat(model, flight):
+        assert flight.log not in model                  # never judged by a model that saw it
+        return {"lr": float(len(model)), "parts": 2, "k_hat": 0.0, "lo": 0.0, "hi": 1.0, "lr_parts": (0.0, 0.0)}
+
+    t = bench.detection_folds(items, fit, stat)
+    assert list(t.log) == ["c1.00", "c1.01", "c2.00", "c2.01", "n0", "n1", "n2", "n3"]
+    # a depth fold: its model without the depth (6 items), its scale from the 4 normal flights each also left out
+    # (5 items each): mean T 5 over chi-bar mean 1
+    assert (t.lr[t.depth > 0] == 6).all() and (t.scale[t.depth > 0] == 5).all()
+    # a normal flight's fold: its model on the other 7, its scale from the other 3 normal flights (6 items each)
+    assert (t.lr[t.depth == 0] == 7).all() and (t.scale[t.depth == 0] == 6).all()
+    assert all(len(s) in (5, 6, 7) for s in seen) and len(seen) == len({frozenset(s) for s in seen})   # fitted once
+    one = bench.detection_folds(items, fit, stat, depths=[2.0], normals=[1])
+    assert list(one.log) == ["c2.00", "c2.01", "n1"]
+    d = bench.decide(t.assign(lr=[100.0, 0.1] + [0.0] * 6, lr_parts=[(9.0, 9.0), (9.0, 0.0)] + [(0.0, 0.0)] * 6))
+    assert list(d.nominal[:2]) == [True, False] and list(d.calibrated[:2]) == [True, False]
+    assert list(d.windows[:2]) == [True, False]       # 2 of 2 parts above the band of alpha, 1 of 2 inside it
+
+
+@pytest.fixture(scope="module")
+def small_items(bench, choice):
+    """The normal flights and the cut flights of three depths."""
+    return [it for it in bench.cut_flights(choice) if it[0] in (0.0, 1.0, 2.0, 4.0)]
+
+
+def test_trim_detection_on_a_subset(bench, choice, small_items, capsys):
+    cp = bench.cp
+    airframes = bench.airframe_k(f.drone for d, f in small_items if d == 0.0)
+    window = cp.samples(bench.WINDOW_S)
+    fit, stat = bench.trim_model(airframes, window), bench.trim_stat(airframes, window)
+    t = bench.detection_folds(small_items, fit, stat, depths=[2.0], normals=[0, 7])
+    normal = [f for d, f in small_items if d == 0.0]
+    assert list(t.depth) == [2.0] * 6 + [0.0, 0.0] and list(t.log[6:]) == [normal[0].log, normal[7].log]
+    assert ((t.lr >= 0) & (t.lo <= t.k_hat) & (t.k_hat <= t.hi) & (t.scale > 0)).all()
+    assert t.k_hat.between(0.0, 4.0).all() and set(t.degree) <= set(bench.TRIM_DEGREES)
+    assert (t.lr_parts.map(len) == 4).all()              # two segments of two whole 2 s windows each
+    # the flight's record: whole windows of each segment end to end, one window never spanning two segments
+    f = normal[0]
+    rec = bench.trim_record(f, window)
+    segs = f.arrays(cp.COMMANDS)
+    np.testing.assert_array_equal(rec[:window], segs[0][:window])
+    np.testing.assert_array_equal(rec[-window:], segs[1][len(segs[1]) // window * window - window:
+                                                        len(segs[1]) // window * window])
+    # the flight's statistic at its airframe: the flight's mean trim against the fold's surface, by hand
+    res = fit([it for it in small_items if it[0] != 2.0])
+    d2 = [f for d, f in small_items if d == 2.0][0]
+    x = bench.trim_record(d2, window)
+    m = x.reshape(-1, window, 3).mean(axis=1)
+    V = res.S_rec + res.S_within / len(m)
+    G = bench.fp_basis(np.array([[0.0, airframes[d2.drone]]]), res.model.degree, res.model.k_range)
+    r = m.mean(axis=0) - (G @ res.params2d)[0]
+    q0 = r @ np.linalg.solve(V, r)
+    got = stat(res, d2)
+    assert q0 - got["lr"] == pytest.approx(min(bench.trim_profile(res, m.mean(axis=0, keepdims=True),
+                                                                 airframes[d2.drone], V)[1][0]))
+    bench.report_detection_folds(t, "trim")
+    out = capsys.readouterr().out
+    assert "2.0        6" in out and "normal flights (leave one out)" in out and "depth degree chosen" in out
+
+
+def test_fp_var_detection_on_a_subset(bench, choice, small_items):
+    t = bench.detection_folds(small_items, bench.var_model(choice), bench.var_stat(choice), depths=[4.0], normals=[])
+    assert list(t.depth) == [4.0] * 6 and (t.lr_parts.map(len) == 2).all() and (t.parts == 2).all()
+    assert (t.lr == t.lr_parts.map(sum)).all() and (t.scale > 0).all()
+    assert t.k_hat.between(0.0, 2.0).all()            # bounded to its fold's range (0-2 mm without 4 mm)
