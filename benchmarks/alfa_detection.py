@@ -280,7 +280,7 @@ def prepare(df):
 
 def channel_detector(name, threshold):
     ch = CHANNELS[name]
-    return OnlineDetector([name], threshold=threshold, freeze_on_alarm=True, nonfinite="skip",
+    return OnlineDetector([name], threshold=threshold, freeze_on_alarm=True, nonfinite="skip", nk=0, eps=1e-2,
                           arm_after=int(round(ARM_AFTER_S * FS)), **ch["options"])
 
 

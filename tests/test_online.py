@@ -13,6 +13,16 @@ from tsfdi.online import OnlineDetector
 from _scripts import load_script
 
 
+#: paper 001's settings, the constructor's defaults before issue 34 made the autopilot-log recipe the default: the
+#: tests of the Z-score, GLRT and moving-average paths pass them explicitly (the reproduction stays reachable)
+PAPER001 = dict(na=2, nb=2, nk=0, forgetting_factor=0.995, eps=1e-2, statistic="zscore")
+
+
+def paper001(pairs, **options):
+    """An OnlineDetector with paper 001's settings, ``options`` overriding them."""
+    return OnlineDetector(pairs, **{**PAPER001, **options})
+
+
 def two_pairs(n=4000, change=3000, seed=0, bias=0.0, gain=0.0):
     """Pair A: y = 0.7 y[-1] + u + e; pair B: y = 0.5 y[-1] + 0.8 u + e with a fault in B from ``change``."""
     rng = np.random.default_rng(seed)
@@ -32,16 +42,29 @@ def test_module_and_exports():
 
     assert tsfdi.OnlineDetector is OnlineDetector and tsfdi.OnlineDetection is OnlineDetection
     assert not hasattr(tsfdi.monitoring, "OnlineDetector")
-    det = OnlineDetector(2, na=1, nb=1)
+    det = paper001(2, na=1, nb=1)
     assert det.freeze_on_alarm and all(m.freeze_on_alarm for m in det.models)
     # "mean" mode freezes the models itself (at the first alarm of the moving average), not through the model
     assert mean_detector().freeze_on_alarm and not any(m.freeze_on_alarm for m in mean_detector().models)
-    assert not OnlineDetector(2, freeze_on_alarm=False).models[0].freeze_on_alarm
+    assert not paper001(2, freeze_on_alarm=False).models[0].freeze_on_alarm
+
+
+def test_the_defaults_are_the_autopilot_log_recipe():
+    """Issue 34: the simplest call gets the recipe of the guide (body rate against the actuator control one sample
+    later, SPRT), not paper 001's settings, which alarmed on every healthy simulated autopilot log."""
+    det = OnlineDetector(["roll", "pitch", "yaw"])
+    m = det.models[0]
+    assert (m.na, m.nb, m.nk, m.forgetting_factor, m.eps) == (1, 2, 1, 0.999, 0.03)
+    assert det.statistic == "sprt" and det.glrt is None and det.sprt.alternative == "variance"
+    assert det.threshold == pytest.approx(np.log(0.99 / 1e-9)) and det.freeze_on_alarm and det.nonfinite == "skip"
+    ref = paper001(["roll", "pitch", "yaw"])
+    assert (ref.models[0].na, ref.models[0].nk, ref.statistic, ref.threshold) == (2, 0, "zscore", 4.5)
+    assert ref.glrt is not None
 
 
 def test_first_alarm_per_pair_and_overall():
     y, u = two_pairs(gain=1.0)
-    det = OnlineDetector(["a", "b"], na=1, nb=1)
+    det = paper001(["a", "b"], na=1, nb=1)
     out = det.run(y, u)
     fa = out.first_alarms
     assert list(fa.index) == ["a", "b"]
@@ -56,8 +79,8 @@ def test_first_alarm_per_pair_and_overall():
 def test_glrt_catches_a_small_bias_the_zscore_misses():
     # a bias of 1.5 sigma: single samples rarely pass 4.5 sigma, the windowed GLRT accumulates evidence
     y, u = two_pairs(bias=0.15, seed=3)
-    z_only = OnlineDetector(["a", "b"], na=1, nb=1, glrt=None).run(y, u)
-    both = OnlineDetector(["a", "b"], na=1, nb=1, glrt=GLRT(window=20, alpha=1e-6)).run(y, u)
+    z_only = paper001(["a", "b"], na=1, nb=1, glrt=None).run(y, u)
+    both = paper001(["a", "b"], na=1, nb=1, glrt=GLRT(window=20, alpha=1e-6)).run(y, u)
     fb = both.first_alarms.loc["b"]
     assert fb["source"] == "glrt" and 3000 <= fb["position"] <= 3040
     zpos = z_only.first_alarms.loc["b", "position"]
@@ -74,13 +97,13 @@ def test_glrt_catches_a_small_bias_the_zscore_misses():
 
 def test_streaming_blocks_and_samples_agree():
     y, u = two_pairs(n=1500, change=1200, gain=1.0, seed=5)
-    whole = OnlineDetector(2, na=1, nb=1).run(y, u)
-    det = OnlineDetector(2, na=1, nb=1)
+    whole = paper001(2, na=1, nb=1).run(y, u)
+    det = paper001(2, na=1, nb=1)
     det.run(y[:500], u[:500])
     det.run(y[500:900], u[500:900])
     last = det.run(y[900:], u[900:])
     pd.testing.assert_frame_equal(last.first_alarms, whole.first_alarms)
-    step = OnlineDetector(2, na=1, nb=1)
+    step = paper001(2, na=1, nb=1)
     flags = np.array([step.update(y[t], u[t]) for t in range(len(y))])
     np.testing.assert_array_equal(flags, whole.alarm)
     pd.testing.assert_frame_equal(step.first_alarms, whole.first_alarms)
@@ -100,8 +123,8 @@ def test_data_kinds_and_timestamps(kind):
         uu = xr.DataArray(u, dims=("time", "pair"), coords={"time": index})
     else:
         yy, uu = y, u
-    out = OnlineDetector(["a", "b"], na=1, nb=1).run(yy, uu)
-    ref = OnlineDetector(["a", "b"], na=1, nb=1).run(y, u)
+    out = paper001(["a", "b"], na=1, nb=1).run(yy, uu)
+    ref = paper001(["a", "b"], na=1, nb=1).run(y, u)
     assert out.first_alarm == ref.first_alarm and out.first_alarm_pair == ref.first_alarm_pair
     assert out.first_alarm == out.first_alarms["position"][out.first_alarms["position"] >= 0].min()
     assert 3000 <= out.first_alarms.loc["b", "position"] <= 3010
@@ -116,40 +139,40 @@ def test_data_kinds_and_timestamps(kind):
 def test_nonfinite_and_bad_input():
     y, u = two_pairs(n=1000, change=900, gain=1.0)
     y[100, 0] = np.nan
-    out = OnlineDetector(2, na=1, nb=1).run(y, u)
+    out = paper001(2, na=1, nb=1).run(y, u)
     assert out.first_alarms["position"].iloc[1] >= 900
-    assert OnlineDetector(2, na=1, nb=1).models[0].nonfinite == "skip"
-    det = OnlineDetector(2, na=1, nb=1)
+    assert paper001(2, na=1, nb=1).models[0].nonfinite == "skip"
+    det = paper001(2, na=1, nb=1)
     det.run(y, u)
     assert det.models[0].n_skipped == 1
     with pytest.raises(ValueError, match="NaN"):
-        OnlineDetector(2, na=1, nb=1, nonfinite="raise").run(y, u)
+        paper001(2, na=1, nb=1, nonfinite="raise").run(y, u)
     with pytest.raises(ValueError, match="one column per pair"):
-        OnlineDetector(3).run(y, u)
+        paper001(3).run(y, u)
     with pytest.raises(ValueError, match="same length"):
-        OnlineDetector(2).run(y, u[:-1])
+        paper001(2).run(y, u[:-1])
     with pytest.raises(TypeError, match="pairs"):
-        OnlineDetector(1.5)
+        paper001(1.5)
     with pytest.raises(ValueError, match="distinct"):
-        OnlineDetector(["a", "a"])
+        paper001(["a", "a"])
     with pytest.raises(TypeError, match="glrt"):
-        OnlineDetector(2, glrt="yes")
+        paper001(2, glrt="yes")
     with pytest.raises(ValueError, match="forgetting_factor"):
-        OnlineDetector(2, forgetting_factor=1.5)
+        paper001(2, forgetting_factor=1.5)
     with pytest.raises(ValueError, match="na"):
-        OnlineDetector(2, na=-1)
+        paper001(2, na=-1)
 
 
 def test_rls_options_are_passed_on_or_refused_by_name():
     # gate is the detector's own choice: it was a duplicate keyword of RecursiveARX (a TypeError from Python)
     with pytest.raises(TypeError, match=r"^gate is set by OnlineDetector: .*gate='relative'.* P0, trend, theta0"):
-        OnlineDetector(2, gate="absolute")
+        paper001(2, gate="absolute")
     with pytest.raises(TypeError, match=r"^gate is set by OnlineDetector"):
-        OnlineDetector(2, gate="relative")
+        paper001(2, gate="relative")
     with pytest.raises(TypeError, match=r"^gates is not an option of OnlineDetector"):
-        OnlineDetector(2, gates="absolute")
+        paper001(2, gates="absolute")
     # every option reaches every pair's model: its own parameters under their name, the others as given
-    det = OnlineDetector(["a", "b"], na=1, nb=2, nk=1, forgetting_factor=0.99, threshold=3.0, freeze_on_alarm=False,
+    det = paper001(["a", "b"], na=1, nb=2, nk=1, forgetting_factor=0.99, threshold=3.0, freeze_on_alarm=False,
                          nonfinite="raise", n_inputs=2, arm_after=5, eps=0.05, P0=10.0, trend="c",
                          theta0=[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], stable_samples=7, variance_tol=0.02,
                          min_variance_samples=9)
@@ -178,7 +201,7 @@ def mean_detector(**kw):
     opts = dict(na=0, nb=1, trend="c", forgetting_factor=0.999, P0=1e2, n_inputs=2, statistic="mean", window=10,
                 direction="down", threshold=0.6, arm_after=300)
     opts.update(kw)
-    return OnlineDetector(["thrust"], **opts)
+    return paper001(["thrust"], **opts)
 
 
 def test_mean_statistic_detects_a_level_drop_within_the_window_and_not_before():
@@ -241,7 +264,7 @@ def test_arm_after_suppresses_alarms_in_the_baseline_phase():
     assert 404 <= mean_detector(arm_after=300).run(y, u).first_alarm <= 412
     # Z-score mode: the recursive model's alarms and the GLRT obey the same phase
     yy, uu = two_pairs(gain=1.0)
-    out = OnlineDetector(["a", "b"], na=1, nb=1, arm_after=3500).run(yy, uu)
+    out = paper001(["a", "b"], na=1, nb=1, arm_after=3500).run(yy, uu)
     assert (out.first_alarms["position"] == -1).all() or out.first_alarms["position"].max() >= 3500
     assert not out.alarm[:3500].any()
 
@@ -272,18 +295,18 @@ def test_mean_statistic_bad_input():
     with pytest.raises(ValueError, match="n_inputs"):
         mean_detector().run(y, u[:, :1])
     with pytest.raises(ValueError, match="statistic"):
-        OnlineDetector(1, statistic="median")
+        paper001(1, statistic="median")
     with pytest.raises(ValueError, match="direction"):
-        OnlineDetector(1, direction="sideways")
+        paper001(1, direction="sideways")
     with pytest.raises(ValueError, match="window"):
-        OnlineDetector(1, window=0)
+        paper001(1, window=0)
     with pytest.raises(ValueError, match="arm_after"):
-        OnlineDetector(1, arm_after=-1)
+        paper001(1, arm_after=-1)
     with pytest.raises(TypeError, match="freeze_on_alarm"):
-        OnlineDetector(1, freeze_on_alarm="yes")
+        paper001(1, freeze_on_alarm="yes")
     with pytest.raises(TypeError, match="halt_on_alarm"):           # the former name is not an option any more
-        OnlineDetector(1, halt_on_alarm=True)
-    assert mean_detector().glrt is None and OnlineDetector(1).glrt is not None
+        paper001(1, halt_on_alarm=True)
+    assert mean_detector().glrt is None and paper001(1).glrt is not None
 
 
 # ------------------------------------------------------------------ real flights with the shipped settings
@@ -450,7 +473,7 @@ def test_calibrated_rate_holds_on_new_healthy_runs(opts):
     from scipy import stats
 
     ys, us = healthy_runs(20, seed=0)
-    det = OnlineDetector(1, na=1, nb=1, freeze_on_alarm=False, **opts)
+    det = paper001(1, na=1, nb=1, freeze_on_alarm=False, **opts)
     assert det.calibration_ is None
     assert det.calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS) is det
     cal = det.calibration_
@@ -474,7 +497,7 @@ def test_calibrated_default_detector_first_alarms_and_a_fault():
     from scipy import stats
 
     ys, us = healthy_runs(20, seed=0)
-    det = OnlineDetector(["ax"], na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS)
+    det = paper001(["ax"], na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS)
     assert det.freeze_on_alarm and det.threshold < 4.5     # 2 per hour at 20 Hz is looser than 4.5 sigma
     new_y, new_u = healthy_runs(20, seed=1)
     alarmed = 0
@@ -494,8 +517,8 @@ def test_calibrated_default_detector_first_alarms_and_a_fault():
 
 def test_calibration_extrapolates_short_healthy_data_with_an_exponential_tail():
     ys, us = healthy_runs(20, seed=0)
-    two = OnlineDetector(1, na=1, nb=1, glrt=None).calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS)
-    half = OnlineDetector(1, na=1, nb=1, glrt=None).calibrate(ys, us, false_alarms_per_hour=0.5, fs=FS)
+    two = paper001(1, na=1, nb=1, glrt=None).calibrate(ys, us, false_alarms_per_hour=2.0, fs=FS)
+    half = paper001(1, na=1, nb=1, glrt=None).calibrate(ys, us, false_alarms_per_hour=0.5, fs=FS)
     cal = half.calibration_
     assert two.calibration_.estimator == "empirical" and cal.estimator == "exponential tail"
     fit = cal.tail["zscore"]
@@ -505,7 +528,7 @@ def test_calibration_extrapolates_short_healthy_data_with_an_exponential_tail():
     assert half.threshold == pytest.approx(fit["u"] + fit["beta"] * n_u * (((n_u + 1) / k) ** (1 / n_u) - 1))
     assert half.threshold > two.threshold
     # with the GLRT, below 5 expected episodes each source gets half the rate (union bound)
-    both = OnlineDetector(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=1.0, fs=FS)
+    both = paper001(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=1.0, fs=FS)
     assert both.calibration_.source_rates == {"zscore": 0.5, "glrt": 0.5}
     assert both.calibration_.estimator == "exponential tail" and set(both.calibration_.tail) == {"zscore", "glrt"}
     assert both.glrt.threshold_ == both.calibration_.glrt_threshold
@@ -539,15 +562,15 @@ def test_false_alarms_per_hour_report():
     assert sum(int(p.false_alarms_per_hour(20.0).loc["all", "episodes"]) for p in parts) == starts
     # several pairs: "all" is the sum over the pairs
     yy, uu = two_pairs(gain=1.0)
-    rep = OnlineDetector(["a", "b"], na=1, nb=1, freeze_on_alarm=False).run(yy, uu).false_alarms_per_hour(50.0)
+    rep = paper001(["a", "b"], na=1, nb=1, freeze_on_alarm=False).run(yy, uu).false_alarms_per_hour(50.0)
     assert rep.loc["all", "episodes"] == rep.loc["a", "episodes"] + rep.loc["b", "episodes"] > 0
 
 
 def test_calibration_reads_fs_from_the_time_index_and_resets():
     ys, us = healthy_runs(5, seed=2)
-    ref = OnlineDetector(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=20.0, fs=FS)
+    ref = paper001(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=20.0, fs=FS)
     index = pd.date_range("2020-01-01", periods=len(ys[0]), freq="50ms")
-    det = OnlineDetector(1, na=1, nb=1)
+    det = paper001(1, na=1, nb=1)
     det.run(ys[0][:100], us[0][:100])
     det.calibrate([pd.Series(y, index=index) for y in ys], [pd.Series(u, index=index) for u in us],
                   false_alarms_per_hour=20.0)
@@ -557,7 +580,7 @@ def test_calibration_reads_fs_from_the_time_index_and_resets():
 
 def test_calibration_bad_input():
     ys, us = healthy_runs(3, seed=0, minutes=2.0)
-    det = OnlineDetector(1, na=1, nb=1)
+    det = paper001(1, na=1, nb=1)
     with pytest.raises(ValueError, match="false_alarms_per_hour"):
         det.calibrate(ys, us, false_alarms_per_hour=0.0, fs=FS)
     with pytest.raises(TypeError, match="false_alarms_per_hour"):

@@ -7,11 +7,10 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from test_online import two_pairs
+from test_online import paper001, two_pairs
 
 from tsfdi.exceptions import ConvergenceWarning
 from tsfdi.models.recursive import RecursiveARX
-from tsfdi.online import OnlineDetector
 
 
 def equivariant_p0(cy, cu):
@@ -23,11 +22,11 @@ def equivariant_p0(cy, cu):
 @pytest.mark.parametrize("cy, cu", [(1e-3, 1e-3), (1e3, 1e3), (1e3, 1.0), (1e-3, 1.0), (1.0, 1e3)])
 def test_scaling_the_signals_arms_at_the_same_sample(cy, cu):
     y, u = two_pairs(gain=1.0)
-    ref = OnlineDetector(["a", "b"], na=1, nb=1).run(y, u)
+    ref = paper001(["a", "b"], na=1, nb=1).run(y, u)
     assert (ref.first_alarms["armed_at"] > 0).all()
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
-        got = OnlineDetector(["a", "b"], na=1, nb=1, P0=equivariant_p0(cy, cu)).run(y * cy, u * cu)
+        got = paper001(["a", "b"], na=1, nb=1, P0=equivariant_p0(cy, cu)).run(y * cy, u * cu)
     pd.testing.assert_frame_equal(got.first_alarms, ref.first_alarms)
     np.testing.assert_array_equal(got.alarm, ref.alarm)
     np.testing.assert_allclose(got.zscore, ref.zscore, rtol=1e-6, atol=1e-9)
@@ -73,7 +72,7 @@ def test_the_model_turns_stable_exactly_where_the_gate_says(gaps):
         u[[70]] = np.nan
     k = gate_sample(y, u)
     assert 25 <= k < 500
-    det = OnlineDetector(["b"], na=1, nb=1, nonfinite="skip")
+    det = paper001(["b"], na=1, nb=1, nonfinite="skip")
     assert det.models[0].gate == "relative" and det.models[0].eps == det.eps == 1e-2     # the estimator's own gate
     with pytest.warns(ConvergenceWarning, match="its parameter step never stayed below eps"):
         det.run(y[:k], u[:k])
@@ -85,8 +84,8 @@ def test_the_model_turns_stable_exactly_where_the_gate_says(gaps):
 def test_blocks_and_samples_arm_at_the_same_sample():
     y, u = two_pairs(n=1200, change=900, gain=1.0)
     y[100:103, 0] = np.nan
-    ref = OnlineDetector(["a", "b"], na=1, nb=1).run(y, u)
-    det = OnlineDetector(["a", "b"], na=1, nb=1)
+    ref = paper001(["a", "b"], na=1, nb=1).run(y, u)
+    det = paper001(["a", "b"], na=1, nb=1)
     with pytest.warns(ConvergenceWarning, match="sample 36"):      # not armed yet at the end of the first block
         for k in range(0, 1200, 37):
             det.run(y[k:k + 37], u[k:k + 37])
@@ -104,7 +103,7 @@ def test_a_pair_that_never_arms_warns_with_its_time_once_per_stream():
     u = pd.DataFrame({"ua": rng.standard_normal(n), "ub": rng.standard_normal(n)}, index=index)
     ya = pd.Series(np.convolve(u["ua"], [0.0, 1.0, 0.5])[:n], index=index) + 0.1 * rng.standard_normal(n)
     y = pd.DataFrame({"a": ya, "b": rng.standard_normal(n)}, index=index)   # b does not depend on its input
-    det = OnlineDetector(["a", "b"], na=1, nb=2)
+    det = paper001(["a", "b"], na=1, nb=2)
     with pytest.warns(ConvergenceWarning) as caught:
         out = det.run(y, u)
     assert len(caught) == 1
@@ -119,14 +118,14 @@ def test_a_pair_that_never_arms_warns_with_its_time_once_per_stream():
         for i in range(50):                             # update() never warns
             det.update(y.to_numpy()[i], u.to_numpy()[i])
         # the moving average does not wait for arming: nothing to warn about
-        OnlineDetector(["a", "b"], na=1, nb=2, statistic="mean").run(y, u)
+        paper001(["a", "b"], na=1, nb=2, statistic="mean").run(y, u)
     det.reset()
     with pytest.warns(ConvergenceWarning, match="'b' has not armed"):
         det.run(y, u)
     # numpy input: the sample number; a record too short for the variance gate says so
     with pytest.warns(ConvergenceWarning, match=r"'a' has not armed by the end of the data at sample 199, .*model "
                                                 r"is stable but its error variance has not settled"):
-        OnlineDetector(["a"], na=1, nb=2).run(y["a"].to_numpy()[:200], u["ua"].to_numpy()[:200])
+        paper001(["a"], na=1, nb=2).run(y["a"].to_numpy()[:200], u["ua"].to_numpy()[:200])
 
 
 def test_calibrate_names_the_healthy_run_that_never_arms():
@@ -135,7 +134,7 @@ def test_calibrate_names_the_healthy_run_that_never_arms():
     us = [rng.standard_normal(4000) for _ in range(2)]
     with pytest.warns(ConvergenceWarning) as caught:
         with pytest.raises(ValueError, match="false_alarms_per_hour"):
-            OnlineDetector(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=1.0, fs=20.0)
+            paper001(1, na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=1.0, fs=20.0)
     assert [str(w.message)[:56] for w in caught] == [f"healthy run {i}: OnlineDetector pair 'pair0' has not armed"
                                                      for i in range(2)]
 
@@ -174,19 +173,19 @@ def test_px4_rate_pairs_arm(shared_px4):
     y, u = rate_pairs(px4 / "sample.ulg")
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
-        out = OnlineDetector(["roll", "pitch", "yaw"]).run(y, u)
+        out = paper001(["roll", "pitch", "yaw"]).run(y, u)
     armed = out.first_alarms["armed_at"].to_numpy() / out.fs
     assert np.all((armed > 3.0) & (armed < 10.0)), armed
     # sample_log_small.ulg (6.5 s on the ground): on the gyro grid (400 Hz) every axis arms within 1 s ...
     y, u = rate_pairs(px4 / "sample_log_small.ulg", fs=400.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
-        out = OnlineDetector(["roll", "pitch", "yaw"]).run(y, u)
+        out = paper001(["roll", "pitch", "yaw"]).run(y, u)
     assert np.all((out.first_alarms["armed_at"] > 0) & (out.first_alarms["armed_at"] < 400))
     # ... at the set-point rate (51 Hz, 332 samples) none does: one warning per axis with the time the log ends
     y, u = rate_pairs(px4 / "sample_log_small.ulg")
     with pytest.warns(ConvergenceWarning) as caught:
-        out = OnlineDetector(["roll", "pitch", "yaw"]).run(y, u)
+        out = paper001(["roll", "pitch", "yaw"]).run(y, u)
     assert (out.first_alarms["armed_at"] == -1).all()
     assert [str(w.message).split("'")[1] for w in caught] == ["roll", "pitch", "yaw"]
     assert all("6.47237 s after the first sample" in str(w.message) for w in caught)

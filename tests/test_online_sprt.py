@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 from scipy.signal import lfilter
-from test_online import two_pairs
+from test_online import PAPER001, two_pairs
 
 from tsfdi.detection.glrt import GLRT
 from tsfdi.detection.sequential import SPRT
@@ -27,13 +27,14 @@ def short_log(rng, seconds=30.0):
 
 
 def sprt_detector(**kw):
-    return OnlineDetector(["a", "b"], na=1, nb=1, statistic="sprt", **kw)
+    """The SPRT on the synthetic pairs, whose output follows the input at the same sample (paper 001's settings)."""
+    return OnlineDetector(["a", "b"], **{**PAPER001, "na": 1, "nb": 1, "statistic": "sprt", **kw})
 
 
 def test_sprt_statistic_detects_a_bias_and_restarts():
     y, u = two_pairs(bias=0.3)
     det = sprt_detector()
-    assert det.threshold == pytest.approx(np.log(0.99 / 1e-4))          # the default SPRT's upper bound
+    assert det.threshold == pytest.approx(np.log(0.99 / 1e-9))          # the default SPRT's upper bound
     assert det.glrt is None and det.sprt.restart
     out = det.run(y, u)
     fa = out.first_alarms
@@ -82,7 +83,7 @@ def test_sprt_options_are_checked():
         sprt_detector(sprt="wald")
     with pytest.raises(ValueError, match="statistic"):
         OnlineDetector(2, statistic="cusum")
-    assert OnlineDetector(2).sprt is None and OnlineDetector(2).threshold == 4.5
+    assert OnlineDetector(2, statistic="zscore").sprt is None and OnlineDetector(2, statistic="zscore").threshold == 4.5
 
 
 def test_short_healthy_logs_calibrate_the_sprt():
@@ -91,7 +92,7 @@ def test_short_healthy_logs_calibrate_the_sprt():
     logs = [short_log(rng, 37.0) for _ in range(3)]
     ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
     with pytest.raises(ValueError, match="healthy hours are needed"):
-        OnlineDetector(["a", "b"], na=1, nb=1).calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
+        OnlineDetector(["a", "b"], **{**PAPER001, "na": 1, "nb": 1}).calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
     det = sprt_detector().calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
     cal = det.calibration_
     assert cal.healthy_hours == pytest.approx(3 * 37.0 / 3600) and cal.estimator == "sprt cycle maxima"
@@ -104,7 +105,7 @@ def test_short_healthy_logs_calibrate_the_sprt():
     with pytest.raises(ValueError, match="not positive: require fewer false alarms"):
         sprt_detector().calibrate(ys, us, false_alarms_per_hour=1e7, fs=FS)
     with pytest.raises(ValueError, match="at least 3 armed"):
-        OnlineDetector(["a"], na=1, nb=1, statistic="sprt").calibrate(
+        OnlineDetector(["a"], **{**PAPER001, "na": 1, "nb": 1, "statistic": "sprt"}).calibrate(
             [y[:, :1] for y in ys[:2]], [u[:, :1] for u in us[:2]], false_alarms_per_hour=60, fs=FS)
     with pytest.raises(ValueError, match="returned to its lower bound"), pytest.warns(ConvergenceWarning):
         sprt_detector().calibrate([y[:330] for y in ys], [u[:330] for u in us], false_alarms_per_hour=60, fs=FS)
