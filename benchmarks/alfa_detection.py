@@ -680,6 +680,101 @@ def recipe_report(flights, onset, fault, after_s=3.0):
     print(pd.DataFrame(rows).to_string(index=False))
 
 
+# --------------------------------------------------------------------------- S: the recipe, calibrated in the folds
+#: S (issue 34): false alarms per flight hour asked of ``OnlineDetector.calibrate`` in every fold, all pairs
+#: together (fixed in advance; split equally over the detectors, union bound)
+SPRT_RATE = 2.0
+
+
+def healthy_part(df, onset):
+    """The rows of ``df`` before ``onset`` (seconds from its first row): the whole flight when ``onset`` is NaN."""
+    if not np.isfinite(onset):
+        return df
+    return df[(df.index - df.index[0]).total_seconds() < onset]
+
+
+def recipe_groups():
+    """``RECIPE_PAIRS`` grouped by their number of inputs: one OnlineDetector per group (its pairs share
+    ``n_inputs``), in the order of ``RECIPE_PAIRS``."""
+    groups = {}
+    for name, (_, ucols) in RECIPE_PAIRS.items():
+        groups.setdefault(len(ucols), []).append(name)
+    return list(groups.values())
+
+
+def recipe_signals(df, names):
+    """``y`` and ``u`` of the recipe pairs ``names`` in ``df`` (inputs pair by pair, as OnlineDetector takes them)."""
+    return df[[RECIPE_PAIRS[p][0] for p in names]], df[[c for p in names for c in RECIPE_PAIRS[p][1]]]
+
+
+def recipe_detector(names):
+    """The recipe's OnlineDetector on the pairs ``names`` (default SPRT and threshold), armed after the baseline."""
+    return OnlineDetector(list(names), n_inputs=len(RECIPE_PAIRS[names[0]][1]),
+                          arm_after=int(round(ARM_AFTER_S * FS)), **RECIPE)
+
+
+def sprt_folds(flights, onset, rate=SPRT_RATE):
+    """S: the recipe calibrated by leave-one-flight-out, the defaults' code path (``OnlineDetector.calibrate``).
+
+    For held-out flight ``i`` each group's detector (:func:`recipe_groups`) is calibrated with
+    ``false_alarms_per_hour = rate / n_groups`` on the healthy parts (:func:`healthy_part`) of the *other* flights
+    only, then run on flight ``i``; its first alarm is the earliest over the groups. A group whose calibration
+    raises ``ValueError`` in a fold cannot be used there: the message is kept and the fold has no alarm (``alarm``
+    NaN; :func:`sprt_report` then does not score S). Returns ``(alarm, refusals)``: the held-out first-alarm times (s, NaN: none or refused) and
+    ``{group name: [(fold, message), ...]}``.
+    """
+    from tsfdi.exceptions import ConvergenceWarning
+
+    healthy = [healthy_part(df, o) for df, o in zip(flights, onset)]
+    groups = recipe_groups()
+    alarm = np.full(len(flights), np.nan)
+    refusals = {"+".join(g): [] for g in groups}
+    for i, df in enumerate(flights):
+        firsts = []
+        for names in groups:
+            det = recipe_detector(names)
+            runs = [recipe_signals(h, names) for j, h in enumerate(healthy) if j != i]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ConvergenceWarning)     # pairs that never arm: no alarm from them
+                try:
+                    det.calibrate([y for y, _ in runs], [u for _, u in runs],
+                                  false_alarms_per_hour=rate / len(groups))
+                except ValueError as e:
+                    refusals["+".join(names)].append((i, str(e)))
+                    continue
+                firsts.append(first_alarm_s(df, det.run(*recipe_signals(df, names))))
+        if len(firsts) == len(groups) and np.isfinite(firsts).any():
+            alarm[i] = np.nanmin(firsts)
+    return alarm, refusals
+
+
+def sprt_report(flights, onset, score, rate=SPRT_RATE):
+    """Print S (:func:`sprt_folds`) and S0, the recipe at its default threshold (no calibration, nothing chosen
+    from data); return the scores of S0 and of S (None when a fold's calibration was refused)."""
+    groups = recipe_groups()
+    alarm0 = np.full(len(flights), np.nan)
+    for i, df in enumerate(flights):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            firsts = [first_alarm_s(df, recipe_detector(g).run(*recipe_signals(df, g))) for g in groups]
+        alarm0[i] = np.nanmin(firsts) if np.isfinite(firsts).any() else np.nan
+    alarm, refusals = sprt_folds(flights, onset, rate)
+    print(f"\nS: the recipe of R through OnlineDetector.calibrate(false_alarms_per_hour={rate:g}, all pairs; "
+          f"{rate / len(groups):g} per detector) in\neach of the {len(flights)} leave-one-flight-out folds, on the "
+          "fitting flights' healthy parts only (flights without failure whole,\nfailure flights before the onset), "
+          f"one detector per group of pairs with the same number of inputs: {groups}")
+    refused = sorted({i for v in refusals.values() for i, _ in v})
+    for g, v in refusals.items():
+        if v:
+            print(f"  {g}: calibrate refused in {len(v)} of {len(flights)} folds, e.g. fold {v[0][0]}: {v[0][1]}")
+        else:
+            print(f"  {g}: calibrated in every fold")
+    if refused:
+        print(f"S is not scored: calibrate refused the fitting flights' healthy data in {len(refused)} of "
+              f"{len(flights)} folds (its messages above).")
+    return score(alarm0), (None if refused else score(alarm))
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=ROOT, metavar="PATH",
@@ -748,6 +843,7 @@ def main(argv=None):
     print(dep.to_string(index=False, float_format="{:.2f}".format))
 
     recipe_report(flights, onset, fault)
+    sc_s0, sc_s = sprt_report(flights, onset, score)
 
     # B: physical channels, thresholds by leave-one-flight-out
     grids = {c: CHANNELS[c]["grid"] for c in CHANNELS}
@@ -816,6 +912,9 @@ def main(argv=None):
             f"C, thresholds for P_F = {PF_FLIGHT:g} per flight (C-PF: set in each fold on the fitting flights' "
             "healthy parts only, held-out)": sc_pf,
             "C-fit (C's all-flight choice: in-sample, optimistic)": sc_cf,
+            "S0 (the recipe of R at its default SPRT threshold: nothing chosen from data)": sc_s0,
+            **({} if sc_s is None else {f"S (the recipe, calibrate(false_alarms_per_hour={SPRT_RATE:g}) on the fitting "
+                                        "flights' healthy parts, held-out)": sc_s}),
     }.items():
         print(f"\nTable I-like summary, configuration {name}")
         print(table(sc).to_string())
@@ -834,7 +933,9 @@ def main(argv=None):
         print(ref.to_string(na_rep="-"))
         print("all: " + ", ".join(f"{k} {v:g}" for k, v in KEIPOUR_TOTALS.items()))
         for name, sc in {"A (paper 001 settings on this copy)": sc_a,
-                         f"C (held-out outcomes of the {len(flights)}-flight leave-one-flight-out)": sc_c}.items():
+                         f"C (held-out outcomes of the {len(flights)}-flight leave-one-flight-out)": sc_c,
+                         "S0 (the recipe at its default SPRT threshold)": sc_s0,
+                         **({} if sc_s is None else {"S (the recipe calibrated in the folds, held-out)": sc_s})}.items():
             print(f"\nSame 22 flights, configuration {name}")
             print(table(sc[sub], kind[sub], kinds).to_string())
 

@@ -71,3 +71,41 @@ def test_sensor_validation_noise_from_any_official_imu_file(shared_alfa, tmp_pat
     shutil.rmtree(sample)
     with pytest.raises(FileNotFoundError, match="mavros-imu-data.csv"):
         bench.sensor_noise(root)
+
+
+def test_sprt_folds_calibrate_on_the_other_flights_healthy_parts_only(shared_alfa, monkeypatch):
+    """Configuration S of alfa_detection.py: in fold i every detector is calibrated (OnlineDetector.calibrate, the
+    defaults' code path) on the rows before the onset of the other flights only -- never on flight i, never on a
+    row at or after an onset -- and a fold whose calibration is refused raises no alarm (it is not scored)."""
+    bench = benchmark("alfa_detection")
+    tab = list_alfa(shared_alfa)
+    pick = [tab.index[tab.fault == f][0] for f in ("engine", "rudder", "none", "ailerons")]
+    flights = [bench.prepare(bench.load_alfa(tab.merged_path[i])) for i in pick]
+    onset = tab.onset_s.to_numpy(dtype=float)[pick]
+    for df, o in zip(flights, onset):
+        part = bench.healthy_part(df, o)
+        t = (part.index - df.index[0]).total_seconds()
+        assert part.index.equals(df.index[: len(part)]) and (t < o).all() if np.isfinite(o) else part is df
+        assert np.isnan(o) or len(part) == int(((df.index - df.index[0]).total_seconds() < o).sum())
+
+    seen = []
+
+    class Spy(bench.OnlineDetector):
+        def calibrate(self, y_runs, u_runs, **kwargs):
+            seen.append((self.pairs, [y.index[[0, -1]] for y in y_runs]))
+            raise ValueError("refused by the spy")
+
+    monkeypatch.setattr(bench, "OnlineDetector", Spy)
+    alarm, refusals = bench.sprt_folds(flights, onset)
+    groups = bench.recipe_groups()
+    assert np.isnan(alarm).all()
+    assert {g: [i for i, _ in v] for g, v in refusals.items()} == {"+".join(g): list(range(4)) for g in groups}
+    assert len(seen) == 4 * len(groups)
+    for k, (pairs, spans) in enumerate(seen):
+        i = k // len(groups)
+        assert list(pairs) == groups[k % len(groups)]
+        others = [j for j in range(4) if j != i]
+        for (first, last), j in zip(spans, others, strict=True):
+            assert first == flights[j].index[0]
+            end = flights[j].index[0] + pd.Timedelta(seconds=onset[j]) if np.isfinite(onset[j]) else None
+            assert last == flights[j].index[-1] if end is None else last < end
