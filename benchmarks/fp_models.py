@@ -448,8 +448,8 @@ def var_stat(ch):
             se.append(est.bse[0])
         half = Z95 * np.sqrt(np.mean(np.square(se)) / len(se))
         k = float(np.mean(k_hat))
-        return {"lr": float(sum(lr)), "parts": len(lr), "k_hat": k, "lo": k - half, "hi": k + half,
-                "lr_parts": tuple(lr)}
+        return {"lr": float(sum(lr)), "crit": chibar_isf(ALPHA, len(lr)), "mean0": chibar_mean(len(lr)),
+                "lr_parts": tuple(lr), "crit_part": chibar_isf(ALPHA, 1), "k_hat": k, "lo": k - half, "hi": k + half}
     return stat
 
 
@@ -498,9 +498,39 @@ def trim_stat(airframes: dict, window: int):
         j = int(np.argmin(q))
         inside = grid[q - q[j] <= stats.chi2.isf(0.05, 1)]
         _, qw = trim_profile(res, means, a, res.S)
-        return {"lr": float(q[0] - q[j]), "parts": 1, "k_hat": float(grid[j]), "lo": float(inside.min()),
-                "hi": float(inside.max()), "lr_parts": tuple((qw[:, 0] - qw.min(axis=1)).tolist()),
+        return {"lr": float(q[0] - q[j]), "crit": chibar_isf(ALPHA, 1), "mean0": chibar_mean(1),
+                "lr_parts": tuple((qw[:, 0] - qw.min(axis=1)).tolist()), "crit_part": chibar_isf(ALPHA, 1),
+                "k_hat": float(grid[j]), "lo": float(inside.min()), "hi": float(inside.max()),
                 "degree": res.model.degree[0]}
+    return stat
+
+
+def healthy_trim_model(airframes: dict, window: int):
+    """Fitter of (b0): ``tsfdi.FPMean`` of the commands' window means of the normal flights only (the cut flights
+    of the items are ignored: no depth is ever seen) over the airframe (categorical, degree 1), one record per
+    flight."""
+    def fit(items):
+        normal = [f for d, f in items if d == 0.0]
+        return tsfdi.FPMean([trim_record(f, window) for f in normal], [airframes[f.drone] for f in normal],
+                            window, 1).fit()
+    return fit
+
+
+def healthy_trim_stat(airframes: dict, window: int):
+    """Statistic of (b0) for one flight: the Mahalanobis distance of its mean trim from the healthy trim of its
+    airframe, variance ``S_rec + S_within / windows``, nominally chi-square with one degree of freedom per command;
+    per window the same with ``S``. No depth estimate."""
+    def stat(res, flight):
+        x = trim_record(flight, window)
+        means = x.reshape(-1, window, x.shape[1]).mean(axis=1)
+        m = res.model
+        dev = means - (fp_basis([airframes[flight.drone]], m.degree, m.k_range, m.basis) @ res.params2d)[0]
+        r = dev.mean(axis=0)
+        crit = stats.chi2.isf(ALPHA, res.neqs)
+        return {"lr": float(r @ np.linalg.solve(res.S_rec + res.S_within / len(means), r)), "crit": crit,
+                "mean0": float(res.neqs), "crit_part": crit,
+                "lr_parts": tuple(np.einsum("wa,wa->w", dev, np.linalg.solve(res.S, dev.T).T).tolist()),
+                "k_hat": np.nan, "lo": np.nan, "hi": np.nan}
     return stat
 
 
@@ -508,9 +538,11 @@ def detection_folds(items: list, fit, stat, depths=None, normals=None) -> pd.Dat
     """Leave one depth out for the cut flights and one flight out for the normal ones (``items``: (depth, flight),
     normal flights at depth 0), each judged by ``stat`` through the model ``fit`` on the rest, with the scale of
     its fold: the mean of the statistics of the fold's normal flights, each left out in turn from the fold's
-    fitting items (nested: the judged flights are never seen), over their chi-bar mean (``chibar_mean``).
-    ``depths`` / ``normals``: the cut depths / normal flights' positions to judge (default all). One row per
-    judged flight."""
+    fitting items (nested: the judged flights are never seen), over their nominal means. ``stat(model, flight)``
+    gives a dict: ``lr`` (the flight's statistic), ``crit`` / ``mean0`` (its nominal upper ``ALPHA`` point and
+    mean), ``lr_parts`` / ``crit_part`` (the statistics of its parts, segments or windows, and their nominal
+    point), ``k_hat``, ``lo``, ``hi`` (its depth and 95 % interval, NaN without one). ``depths`` / ``normals``: the
+    cut depths / normal flights' positions to judge (default all). One row per judged flight."""
     fits: dict = {}
     normal = [i for i, (d, _) in enumerate(items) if d == 0.0]
 
@@ -522,7 +554,7 @@ def detection_folds(items: list, fit, stat, depths=None, normals=None) -> pd.Dat
 
     def scale(gone):
         cal = [stat(without(gone | {j}), items[j][1]) for j in normal if j not in gone]
-        return sum(c["lr"] for c in cal) / sum(chibar_mean(c["parts"]) for c in cal)
+        return sum(c["lr"] for c in cal) / sum(c["mean0"] for c in cal)
 
     folds = [frozenset(i for i, (d, _) in enumerate(items) if d == depth)
              for depth in sorted({d for d, _ in items if d > 0}) if depths is None or depth in depths]
@@ -536,27 +568,26 @@ def detection_folds(items: list, fit, stat, depths=None, normals=None) -> pd.Dat
     return pd.DataFrame(rows)
 
 
-def decide(t: pd.DataFrame, alpha: float = ALPHA) -> pd.DataFrame:
-    """Flight decisions at ``alpha``: ``nominal`` (T above the chi-bar point) and ``calibrated`` (T above the scale
-    of its fold times that point); ``windows``: per-part statistics above the one-part point counted against the
-    flight's 99 % binomial band (``above_band``)."""
-    one = chibar_isf(alpha, 1)
-    return t.assign(nominal=[r.lr > chibar_isf(alpha, r.parts) for r in t.itertuples()],
-                    calibrated=[r.lr > r.scale * chibar_isf(alpha, r.parts) for r in t.itertuples()],
-                    windows=[above_band(int(np.sum(np.array(r.lr_parts) > one)), len(r.lr_parts), alpha)
+def decide(t: pd.DataFrame) -> pd.DataFrame:
+    """Flight decisions at ``ALPHA``: ``nominal`` (``lr`` above its nominal point ``crit``), ``calibrated`` (above
+    ``scale * crit``) and ``windows`` (the parts' statistics above the one-part point ``crit_part``, counted against
+    the flight's 99 % binomial band, ``above_band``)."""
+    return t.assign(nominal=t.lr > t.crit, calibrated=t.lr > t.scale * t.crit,
+                    windows=[above_band(int(np.sum(np.array(r.lr_parts) > r.crit_part)), len(r.lr_parts))
                              for r in t.itertuples()])
 
 
 def report_detection_folds(t: pd.DataFrame, name: str) -> None:
     t = decide(t)
     cut, normal = t[t.depth > 0], t[t.depth == 0]
-    print(f"  -- {name}: flights detected per depth (nominal chi-bar / calibrated / window counting); depth of the "
-          f"flight: estimate and 95 % interval")
-    print("     depth  flights  nominal  calibrated  windows  mean k_hat  covered")
-    for depth, g in cut.groupby("depth"):
-        cov = ((g.lo <= depth) & (depth <= g.hi)).mean()
-        print(f"     {depth:5.1f}  {len(g):7d}  {int(g.nominal.sum()):7d}  {int(g.calibrated.sum()):10d}  "
-              f"{int(g.windows.sum()):7d}  {g.k_hat.mean():10.2f}  {cov:7.0%}")
+    depth = cut.k_hat.notna().all()
+    print(f"  -- {name}: flights detected per depth (nominal / calibrated / window counting)"
+          + ("; depth of the flight: estimate and 95 % interval" if depth else ""))
+    print("     depth  flights  nominal  calibrated  windows" + ("  mean k_hat  covered" if depth else ""))
+    for d, g in cut.groupby("depth"):
+        cov = ((g.lo <= d) & (d <= g.hi)).mean()
+        print(f"     {d:5.1f}  {len(g):7d}  {int(g.nominal.sum()):7d}  {int(g.calibrated.sum()):10d}  "
+              f"{int(g.windows.sum()):7d}" + (f"  {g.k_hat.mean():10.2f}  {cov:7.0%}" if depth else ""))
     lo, hi = cp.binomial_band(len(normal), ALPHA)
     for rule in ("nominal", "calibrated", "windows"):
         x = int(normal[rule].sum())
@@ -564,6 +595,10 @@ def report_detection_folds(t: pd.DataFrame, name: str) -> None:
         print(f"     {rule:<10} cut flights {int(cut[rule].sum())}/{len(cut)}; normal flights (leave one out) "
               f"{x}/{len(normal)}, 99 % band [{100 * lo:.1f}, {100 * hi:.1f}] % {band}"
               + (f" ({', '.join(normal.log[normal[rule]])})" if x else ""))
+    if not depth:
+        print(f"     calibration scale median {t.scale.median():.2f} "
+              f"[{t.scale.min():.2f}, {t.scale.max():.2f}]")
+        return
     err = cut.k_hat - cut.depth
     cov = (cut.lo <= cut.depth) & (cut.depth <= cut.hi)
     print(f"     depth per flight (cut flights, every depth unseen): RMSE {np.sqrt(np.mean(err ** 2)):.2f} mm, mean "
@@ -592,7 +627,10 @@ def depth_detection(ch) -> None:
              "estimate_k", var_model(ch), var_stat(ch)),
             (f"(b) trim: FPMean of the commands' {WINDOW_S:g} s window means over (depth, airframe "
              f"{', '.join(f'{d} {k:g}' for d, k in airframes.items())}), depth degree by BIC per fold among "
-             f"{TRIM_DEGREES}, one record per flight", trim_model(airframes, window), trim_stat(airframes, window))):
+             f"{TRIM_DEGREES}, one record per flight", trim_model(airframes, window), trim_stat(airframes, window)),
+            ("(b0) healthy trim: FPMean of the normal flights' commands only (no cut flight fitted) over the "
+             "airframe; the flight's mean trim against its airframe's, nominally chi-square",
+             healthy_trim_model(airframes, window), healthy_trim_stat(airframes, window))):
         t0 = time.perf_counter()
         t = detection_folds(items, fit, stat)
         report_detection_folds(t, f"{name} ({time.perf_counter() - t0:.0f} s)")

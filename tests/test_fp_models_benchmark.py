@@ -143,7 +143,8 @@ class _Flight:
 
 def test_detection_folds_never_fit_or_calibrate_on_the_judged_flight():
     bench = load_benchmark()
-    items = [(0.0, _Flight(f"n{i}")) for i in range(4)] + [(d, _Flight(f"c{d}{i}")) for d in (1.0, 2.0) for i in range(2)]
+    items = ([(0.0, _Flight(f"n{i}")) for i in range(4)]
+             + [(d, _Flight(f"c{d}{i}")) for d in (1.0, 2.0) for i in range(2)])
     seen = []
 
     def fit(fitted):
@@ -152,20 +153,22 @@ def test_detection_folds_never_fit_or_calibrate_on_the_judged_flight():
 
     def stat(model, flight):
         assert flight.log not in model                  # never judged by a model that saw it
-        return {"lr": float(len(model)), "parts": 2, "k_hat": 0.0, "lo": 0.0, "hi": 1.0, "lr_parts": (0.0, 0.0)}
+        return {"lr": float(len(model)), "crit": 10.0, "mean0": 1.0, "lr_parts": (0.0, 0.0), "crit_part": 5.0,
+                "k_hat": 0.0, "lo": 0.0, "hi": 1.0}
 
     t = bench.detection_folds(items, fit, stat)
     assert list(t.log) == ["c1.00", "c1.01", "c2.00", "c2.01", "n0", "n1", "n2", "n3"]
     # a depth fold: its model without the depth (6 items), its scale from the 4 normal flights each also left out
-    # (5 items each): mean T 5 over chi-bar mean 1
+    # (5 items each): mean statistic 5 over the nominal mean 1
     assert (t.lr[t.depth > 0] == 6).all() and (t.scale[t.depth > 0] == 5).all()
     # a normal flight's fold: its model on the other 7, its scale from the other 3 normal flights (6 items each)
     assert (t.lr[t.depth == 0] == 7).all() and (t.scale[t.depth == 0] == 6).all()
     assert all(len(s) in (5, 6, 7) for s in seen) and len(seen) == len({frozenset(s) for s in seen})   # fitted once
     one = bench.detection_folds(items, fit, stat, depths=[2.0], normals=[1])
     assert list(one.log) == ["c2.00", "c2.01", "n1"]
-    d = bench.decide(t.assign(lr=[100.0, 0.1] + [0.0] * 6, lr_parts=[(9.0, 9.0), (9.0, 0.0)] + [(0.0, 0.0)] * 6))
-    assert list(d.nominal[:2]) == [True, False] and list(d.calibrated[:2]) == [True, False]
+    # nominal: above crit 10; calibrated: above scale 5 x 10; windows: parts above crit_part 5 above the band
+    d = bench.decide(t.assign(lr=[60.0, 20.0] + [0.0] * 6, lr_parts=[(9.0, 9.0), (9.0, 0.0)] + [(0.0, 0.0)] * 6))
+    assert list(d.nominal[:2]) == [True, True] and list(d.calibrated[:2]) == [True, False]
     assert list(d.windows[:2]) == [True, False]       # 2 of 2 parts above the band of alpha, 1 of 2 inside it
 
 
@@ -212,6 +215,28 @@ def test_trim_detection_on_a_subset(bench, choice, small_items, capsys):
 
 def test_fp_var_detection_on_a_subset(bench, choice, small_items):
     t = bench.detection_folds(small_items, bench.var_model(choice), bench.var_stat(choice), depths=[4.0], normals=[])
-    assert list(t.depth) == [4.0] * 6 and (t.lr_parts.map(len) == 2).all() and (t.parts == 2).all()
+    assert list(t.depth) == [4.0] * 6 and (t.lr_parts.map(len) == 2).all()
+    assert (t.crit == bench.chibar_isf(0.01, 2)).all() and (t.mean0 == 1.0).all()     # two segments, two parts
     assert (t.lr == t.lr_parts.map(sum)).all() and (t.scale > 0).all()
     assert t.k_hat.between(0.0, 2.0).all()            # bounded to its fold's range (0-2 mm without 4 mm)
+
+
+def test_healthy_trim_sees_no_cut_flight(bench, small_items):
+    cp = bench.cp
+    airframes = bench.airframe_k(f.drone for d, f in small_items if d == 0.0)
+    window = cp.samples(bench.WINDOW_S)
+    fit, stat = bench.healthy_trim_model(airframes, window), bench.healthy_trim_stat(airframes, window)
+    normal = [it for it in small_items if it[0] == 0.0]
+    res = fit(small_items)
+    np.testing.assert_array_equal(res.params2d, fit(normal).params2d)        # the cut flights are not fitted
+    assert res.nobs == len(normal)
+    # a flight's distance from its airframe's healthy trim, by hand: the airframe's surface is its flights' mean
+    cut = [f for d, f in small_items if d == 4.0][0]
+    m = bench.trim_record(cut, window).reshape(-1, window, 3).mean(axis=1)
+    own = np.vstack([bench.trim_record(f, window) for _, f in normal if f.drone == cut.drone])
+    r = m.mean(axis=0) - own.reshape(-1, window, 3).mean(axis=(0, 1))
+    got = stat(res, cut)
+    assert got["lr"] == pytest.approx(r @ np.linalg.solve(res.S_rec + res.S_within / len(m), r), rel=1e-9)
+    assert got["crit"] == pytest.approx(11.3448667, rel=1e-6) and got["mean0"] == 3.0 and len(got["lr_parts"]) == 4
+    t = bench.detection_folds(small_items, fit, stat, depths=[1.0], normals=[2])
+    assert list(t.depth) == [1.0] * 6 + [0.0] and t.k_hat.isna().all() and (t.scale > 0).all()
