@@ -345,6 +345,29 @@ def test_records_rate_and_labels_from_the_coordinates():
     assert loose.fs == 0.5 and loose.channels == ("a", "b")
 
 
+
+
+def test_records_of_a_dask_array_read_no_record():
+    """Records.from_data of a dask-backed (record, time, channel) array takes the channels, fs and length from its
+    coordinates and reads no record (a fleet's chunks are read where they are used): a chunk that fails when read
+    does not fail here; an array of other dims is refused naming the argument."""
+    xr = pytest.importorskip("xarray")
+    dask = pytest.importorskip("dask")
+    da_ = pytest.importorskip("dask.array")
+
+    def unreadable():
+        raise AssertionError("a record was read")
+
+    lazy = da_.from_delayed(dask.delayed(unreadable)(), (4, 30, 2), dtype=float)
+    da = xr.DataArray(lazy, dims=("record", "time", "channel"),
+                      coords={"time": np.arange(30) / 50, "channel": ["p", "q"], "state": ("record", ["h"] * 4)})
+    rec = Records.from_data(da)
+    assert rec.channels == ("p", "q") and rec.fs == pytest.approx(50.0) and rec.length == 30 and rec.source is da
+    assert Records.from_data(da.transpose("time", "record", "channel"), fs=10).fs == 10.0
+    with pytest.raises(TypeError, match=r"data backed by dask must be .*dims \('record', 'time'\)"):
+        Records.from_data(da.isel(channel=0))
+
+
 def test_fit_baselines_skips_non_finite_records_of_an_array(synthetic):
     """fit_baselines reads only the records it considers for fitting (Records.from_data(check_finite=False)): a
     record holding NaN is still skipped ("first" / an int per cell, "all") or refused (named fitting records), as

@@ -93,8 +93,8 @@ class Records:
         record, else 1 Hz.
 
         A ``Dataset`` or ``DataArray`` backed by dask and chunked along ``record`` (:func:`tsfdi.fleet.is_chunked`)
-        is not read: the labels come from its coordinates, the channels and ``fs`` from its first record, and the
-        data stays in :attr:`source`."""
+        is not read: the labels, the channels and ``fs`` come from its coordinates, and the data stays in
+        :attr:`source`."""
         check_finite = boolean(check_finite, "check_finite")
         if isinstance(data, Records):
             return data
@@ -107,11 +107,16 @@ class Records:
                 from tsfdi.datasets.hexacopter import hexacopter_signals
 
                 data = hexacopter_signals(data)
+            if not (isinstance(data, xr.DataArray) and data.ndim == 3 and "time" in data.dims):
+                raise TypeError(f"{name} backed by dask must be a hexacopter xarray.Dataset or a (record, time, "
+                                f"channel) DataArray, got {type(data).__name__} with dims {data.dims}")
             st, tb, ft, ids, lost = _labels(data, states, failure_times, turbulence, name)
-            head = cls.from_data(data.isel(record=slice(0, 1)).compute(), states=st[:1], failure_times=ft[:1],
-                                 turbulence=tb[:1], fs=fs, name=name)
-            return cls([], st, tb, ft, ids, ~lost, head.channels, head.fs, source=data,
-                       length=int(head.values[0].shape[0]))
+            # channels, fs and length from the coordinates: no record is read here (each chunk is read where used)
+            third = next(d for d in data.dims if d not in ("record", "time"))
+            fs_ = _time_rate(_coordinate(data, "time"), name) if fs is None else float_like(fs, "fs", minimum=0.0,
+                                                                                            strict_min=True)
+            return cls([], st, tb, ft, ids, ~lost, tuple(str(c) for c in _coordinate(data, third)), fs_,
+                       source=data, length=int(data.sizes["time"]))
         if isinstance(data, xr.Dataset):
             from tsfdi.datasets.hexacopter import hexacopter_signals
 
