@@ -73,12 +73,18 @@ class _Data:
 
     ``split``: whether the records may be pieces of longer ones (``--rows-where``, ``--nan-policy omit``, the gaps
     of a flight log or of ``--resample``): a piece too short for the command is then dropped with a note instead
-    of refused. ``rows``: ``"--start 10 / --stop 35"`` when the part used was selected by row numbers."""
+    of refused. ``rows``: ``"--start 10 / --stop 35"`` when the part used was selected by row numbers. ``inputs``:
+    per record, the ``--u`` columns (the input of ARX models) beside ``frames``, or ``None``."""
 
     rec: Records
     frames: list
     split: bool = False
     rows: str = ""
+    inputs: list | None = None
+
+    def u(self, i: int) -> pd.DataFrame | None:
+        """The input of record ``i`` (``None`` without ``--u``)."""
+        return None if self.inputs is None else self.inputs[i]
 
     @property
     def columns(self) -> list[str]:
@@ -101,26 +107,47 @@ class _Data:
         return f"{n} sample{'s' if n != 1 else ''} = {n / self.rec.fs:.6g} s"
 
     def keep(self, pos: list[int]) -> _Data:
-        return _Data(self.rec.read(np.asarray(pos, dtype=int)), [self.frames[i] for i in pos], True, self.rows)
+        return _Data(self.rec.read(np.asarray(pos, dtype=int)), [self.frames[i] for i in pos], True, self.rows,
+                     None if self.inputs is None else [self.inputs[i] for i in pos])
 
 
-def _read(args: argparse.Namespace, columns: list[str] | None = None, require_choice: bool = False) -> _Data:
+def _read(args: argparse.Namespace, columns: list[str] | None = None, require_choice: bool = False,
+          inputs: list[str] | None = None) -> _Data:
     """The records of the data files ``args.data`` (:func:`tsfdi.read_records` with the data flags); ``columns``
     are used without ``--columns`` (the channels of a model); ``require_choice`` as in read_records (fit /
-    select-order)."""
+    select-order). ``inputs``: the ``--u`` columns, read with the others (the same rows, split together) and kept
+    apart in :attr:`_Data.inputs`."""
     if args.margin and not args.rows_where:
         raise ValueError("--margin trims the runs of --rows-where: give --rows-where too")
+    outputs = opt.csv_list(args.columns) if args.columns else columns
+    both = [c for c in inputs or () if c in (outputs or ())]
+    if both:
+        raise ValueError(f"--u {both[0]}: the column is also an output (--columns {','.join(outputs)}); a column is "
+                         "either the model's output or its input")
     try:
-        rec = read_records(args.data, columns=args.columns or columns, time=args.time_column,
-                           time_unit=args.time_unit, fs=args.fs, start=args.start, stop=args.stop,
-                           rows_where=args.rows_where, margin=args.margin, resample=args.resample,
+        rec = read_records(args.data, columns=None if outputs is None else outputs + list(inputs or ()),
+                           time=args.time_column, time_unit=args.time_unit, fs=args.fs, start=args.start,
+                           stop=args.stop, rows_where=args.rows_where, margin=args.margin, resample=args.resample,
                            nan_policy=args.nan_policy, records=[r for g in args.record or [] for r in g] or None,
                            where=args.where, topics=args.topics, require_choice=require_choice)
     except (ValueError, TypeError) as exc:
-        raise ValueError(_flags(str(exc))) from None
+        msg = str(exc)
+        if any(f"no column {c!r}" in msg for c in inputs or ()):        # said of an input column: --u, not --columns
+            msg = re.sub(r"^columns\b", "--u", msg)
+        raise ValueError(_flags(msg)) from None
     rows = " / ".join(f"--{f} {getattr(args, f)}" for f in ("start", "stop") if isinstance(getattr(args, f), int))
     split = bool(args.topics or args.resample or args.rows_where or args.nan_policy == "omit")
-    return _Data(rec, rec.frames(), split, rows)
+    if not inputs:
+        return _Data(rec, rec.frames(), split, rows)
+    missing = [c for c in inputs if c not in rec.channels]       # (all numeric columns read: one is not there)
+    if missing:
+        raise ValueError(f"--u {missing[0]}: {', '.join(dict.fromkeys(rec.files))} has no numeric column "
+                         f"{missing[0]!r}; its columns are {list(rec.channels)}")
+    keep = [j for j, c in enumerate(rec.channels) if c not in inputs]
+    frames = rec.frames()
+    out = dataclasses.replace(rec, values=[v[:, keep] for v in rec.values],
+                              channels=tuple(rec.channels[j] for j in keep))
+    return _Data(out, [f.drop(columns=inputs) for f in frames], split, rows, [f[inputs] for f in frames])
 
 
 def _drop_short(data: _Data, need: int, why: str) -> _Data:
@@ -228,11 +255,10 @@ def _load(flag: str, spec: str, path: str) -> Any:
         res = load(path)
     except (OSError, ValueError, TypeError) as exc:
         raise ValueError(f"{flag} {spec}: {exc}") from None
-    if not isinstance(res, (ARResults, VARResults, FPResults)) or getattr(res.model, "nb", 0):
-        kind = ("an ARX (input-output) model" if isinstance(res, ARXResults) or getattr(res.model, "nb", 0) else
-                f"{type(res).__name__} of a {type(res.model).__name__} model")
-        raise ValueError(f"{flag} {spec}: {kind}; the command line tests AR / VAR models and their functionally "
-                         "pooled forms (FP-AR / FP-VAR)")
+    if not isinstance(res, (ARResults, VARResults, ARXResults, FPResults)):
+        raise ValueError(f"{flag} {spec}: {type(res).__name__} of a {type(res.model).__name__} model; the command "
+                         "line tests AR / VAR / ARX models and their functionally pooled forms (FP-AR / FP-VAR / "
+                         "FP-ARX)")
     return res
 
 
@@ -255,6 +281,59 @@ def _load_models(flag: str, specs: list[str]) -> dict:
 
 def _channels(res: Any) -> list[str]:
     return [str(c) for c in res.model.data.channels]
+
+
+def _inputs(res: Any) -> tuple[list[str], bool] | None:
+    """The inputs of an ARX / FP-ARX model and whether they are named (fitted on columns), or ``None`` (AR / VAR)."""
+    records = res.model.u_records            # (an FP model's are those of its point family)
+    if records is None:
+        return None
+    u = records[0]          # columns of a DataFrame, or a named Series (one input)
+    return [str(c) for c in u.channels], bool(u.named or (not u.vector and u.name is not None))
+
+
+def _input_columns(args: argparse.Namespace, models: dict) -> list[str] | None:
+    """The ``--u`` columns of the models (keyed by how the user gave them, ``"--baseline m.npz"``): by default the
+    inputs an ARX model was fitted with; ``None`` for AR / VAR models (``--u`` refused)."""
+    ins = {flag: _inputs(m) for flag, m in models.items()}
+    (first, have), *rest = ins.items()
+    for flag, other in rest:
+        if (other is None) != (have is None):
+            arx, plain = (first, flag) if other is None else (flag, first)
+            raise ValueError(f"{arx} is an ARX (input-output) model and {plain} an AR / VAR model: their residuals "
+                             "are of different data (the output given --u, the output alone); test one kind")
+        if other is not None and other[0] != have[0]:
+            raise ValueError(f"{flag} was fitted with the inputs {other[0]} but {first} with {have[0]}: the models "
+                             "must share their inputs")
+    if have is None:
+        if args.u is not None:
+            raise ValueError(f"--u {','.join(args.u)}: {' and '.join(models)} "
+                             f"{'has' if len(models) == 1 else 'have'} no input (AR / VAR); leave --u out")
+        return None
+    names, named = have
+    if args.u is None:
+        if not named:
+            raise ValueError(f"{first} is an ARX model of {len(names)} unnamed input(s): give their columns with --u "
+                             "COL[,COL...], in the order of the model's inputs")
+        return names
+    if not named:
+        if len(args.u) != len(names):
+            raise ValueError(f"--u {','.join(args.u)}: {first} was fitted with {len(names)} input(s)")
+        return args.u
+    missing, extra = [c for c in names if c not in args.u], [c for c in args.u if c not in names]
+    if missing or extra:
+        raise ValueError(f"--u {','.join(args.u)}: {first} was fitted with the inputs {names}"
+                         + (f"; missing {missing}" if missing else "") + (f"; not an input: {extra}" if extra else ""))
+    return names
+
+
+def _u_arg(p: argparse.ArgumentParser, fit: bool = False) -> None:
+    p.add_argument("--u", type=opt.column_list, default=None, metavar="COL[,COL...]",
+                   help="input columns of an ARX model, e.g. the controller's commands "
+                        "(controller.cmd_roll,controller.cmd_pitch,controller.cmd_yaw): " + (
+                            "fit an ARX model (FP-ARX with --k) of the one --columns output given them" if fit else
+                            "the inputs of the ARX models given (default: the columns they were fitted with); "
+                            "refused for AR / VAR models"))
 
 
 def _check_channels(data: _Data, models: dict) -> None:
@@ -405,7 +484,7 @@ def _estimate(data: _Data, i: int, frame: pd.DataFrame, flag: str, model: Any) -
     with warnings.catch_warnings(record=True) as said:
         warnings.simplefilter("always")
         try:
-            est = model.estimate_k(frame)
+            est = model.estimate_k(frame, data.u(i))
         except (ValueError, TypeError) as exc:
             raise _reword(exc, data, record=i) from None
     where = f"{data.rec.origin(i)}, {flag}"
@@ -501,7 +580,7 @@ def _window_args(p: argparse.ArgumentParser, window_help: str, *, required: bool
 
 def _min_samples(args: argparse.Namespace, models: dict) -> tuple[int, str]:
     """Fewest samples a tested window needs (the models' largest order plus the test's ``min_resid``), and why."""
-    order = max(int(m.model.na) for m in models.values())
+    order = max(int(m.model.max_lag) for m in models.values())
     test = " + ".join({"whiteness": f"--lags {args.lags}", "variance": "the F test", "mean": "the mean test"}[m]
                       for m in args.method)
     return order + _test(args).min_resid, f"the models' largest order ({order}) with {test}"
@@ -682,7 +761,11 @@ def _order_args(p: argparse.ArgumentParser) -> None:
     _add_data_args(p, records_help="required when the file holds several records; several are pooled into one "
                                    "model")
     p.add_argument("--model", choices=("ar", "var"), default=None,
-                   help="ar (one column) or var (several); default from the number of columns")
+                   help="ar (one column) or var (several); default from the number of columns (arx with --u)")
+    _u_arg(p, fit=True)
+    p.add_argument("--nk", type=lambda t: opt.integer(t, 0), default=0,
+                   help="with --u: the input delay in samples (0: u[t] acts on y[t], as a command on the rate it "
+                        "drives within a sample)")
     p.add_argument("--max-lags", type=opt.count, default=20, help="largest order searched")
     p.add_argument("--trend", choices=("n", "c"), default="n",
                    help="n: no intercept (signals about zero, as the papers' models); c: an intercept, for signals "
@@ -705,10 +788,22 @@ def _order_args(p: argparse.ArgumentParser) -> None:
 
 
 def _fit_records(args: argparse.Namespace) -> tuple[_Data, str, list]:
-    """The records of ``args`` to fit on, the model kind (``"ar"`` / ``"var"``) and the signals."""
-    data = _read(args, require_choice=True)
-    data = _drop_short(data, args.max_lags + 2, f"--max-lags {args.max_lags}")
+    """The records of ``args`` to fit on, the model kind (``"ar"`` / ``"var"`` / ``"arx"``) and the signals (the
+    inputs of an ARX in ``data.inputs``)."""
+    data = _read(args, require_choice=True, inputs=args.u)
+    data = _drop_short(data, args.max_lags + args.nk + 2, f"--max-lags {args.max_lags}")
     k = len(data.columns)
+    if args.u is None and args.nk:
+        raise ValueError(f"--nk {args.nk} is the input delay of an ARX model: give its inputs with --u, or leave it "
+                         "out")
+    if args.u is not None:
+        if args.model is not None:
+            raise ValueError(f"--model {args.model}: with --u the model is an ARX (one output given the inputs); "
+                             "leave --model out")
+        if k != 1:
+            raise ValueError(f"--u: an ARX model has one output, but the data gives {k} other column(s) "
+                             f"{data.columns}: pick the output with --columns (one ARX per output)")
+        return data, "arx", [f.iloc[:, 0] for f in data.frames]
     model = args.model or ("ar" if k == 1 else "var")
     if model == "ar" and k != 1:
         raise ValueError(f"--model ar needs one column, got {k} {data.columns}: pick one with --columns")
@@ -723,8 +818,10 @@ def _order_selection(args: argparse.Namespace) -> tuple[Any, _Data, str]:
 
     data, model, ys = _fit_records(args)
     try:
+        us = data.inputs
         sel = select_order(ys if len(ys) > 1 else ys[0], args.max_lags, model, trend=args.trend,
-                           criterion=args.criterion)
+                           criterion=args.criterion, **({} if us is None else {"u": us if len(us) > 1 else us[0],
+                                                                             "nk": args.nk}))
     except (ValueError, TypeError) as exc:
         raise _reword(exc, data, (("lags=", "--max-lags "),)) from None
     return sel, data, model
@@ -761,7 +858,9 @@ def _fit(args: argparse.Namespace) -> int:
         raise ValueError(f"{model.upper()}({res.lags}) fits the {len(data.columns)} column(s) of {data.path} exactly: "
                          f"collinear or constant channels{f' ({said})' if said else ''}, so the model would explain "
                          "any flight and detect nothing; not saved. Choose the channels with --columns")
-    return _save_fitted(res, args, f"{model.upper()}({res.lags}) on {data.columns} from {len(data.frames)} record(s) "
+    name = f"ARX({res.lags}, {res.lags}, nk={args.nk}) of {data.columns} given --u {args.u}" if model == "arx" else \
+        f"{model.upper()}({res.lags}) on {data.columns}"
+    return _save_fitted(res, args, f"{name} from {len(data.frames)} record(s) "
                         f"at {data.rec.fs:g} Hz ({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, "
                         f"SPP {res.spp:.2f}")
 
@@ -812,16 +911,18 @@ def _fp_range(k_range: Any, names: Any) -> str:
 
 def _fit_fp(args: argparse.Namespace) -> int:
     """``fit --k``: an FP-AR / FP-VAR over the records' operating points, order and degree by BIC unless given."""
-    from tsfdi.models import FPAR, FPVAR, select_fp_order
+    from tsfdi.models import FPAR, FPARX, FPVAR, select_fp_order
 
     data, model, ys, k, max_degree = _fp_records(args)
     subs = (("max_lags", "--max-lags"), ("lags=", "--lags "), ("degree=", "--degree "), ("k: ", "--k: "))
+    inputs = {} if data.inputs is None else {"u": data.inputs, "nk": args.nk}
     try:
         if args.lags is not None and args.degree is not None:
-            res = {"ar": FPAR, "var": FPVAR}[model](ys, k, args.lags, args.degree, args.trend).fit()
+            res = (FPARX(ys, data.inputs, k, args.lags, args.lags, args.nk, args.degree, args.trend) if inputs else
+                   {"ar": FPAR, "var": FPVAR}[model](ys, k, args.lags, args.degree, args.trend)).fit()
             how = "given"
         else:
-            sel = select_fp_order(ys, k, args.max_lags, max_degree, model, trend=args.trend)
+            sel = select_fp_order(ys, k, args.max_lags, max_degree, model, trend=args.trend, **inputs)
             bic = sel.table["bic"]
             if args.lags is not None:
                 bic = bic[bic.index.get_level_values("lags") == args.lags]
@@ -835,7 +936,7 @@ def _fit_fp(args: argparse.Namespace) -> int:
     except (ValueError, TypeError) as exc:
         raise _reword(exc, data, subs) from None
     m = res.model
-    lines = [f"FP-{model.upper()}({m.na}), degree {', '.join(map(str, m.degree))} ({how}) over "
+    lines = [f"FP-{model.upper()}({m.na}{f', {m.na}, nk={args.nk}' if inputs else ''}), degree {', '.join(map(str, m.degree))} ({how}) over "
              f"{_fp_range(m.k_range, m.k_names)} on {data.columns} "
              f"from {len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz "
              f"({res.nobs} samples): BIC {res.bic:.6g}"]
@@ -867,7 +968,8 @@ def _select_order(args: argparse.Namespace) -> int:
     else:
         data, model, ys, k, max_degree = _fp_records(args)
         try:
-            sel = select_fp_order(ys, k, args.max_lags, max_degree, model, trend=args.trend)
+            sel = select_fp_order(ys, k, args.max_lags, max_degree, model, trend=args.trend,
+                                  **({} if data.inputs is None else {"u": data.inputs, "nk": args.nk}))
         except (ValueError, TypeError) as exc:
             raise _reword(exc, data, (("max_lags", "--max-lags"),)) from None
         print(f"FP-{model.upper()} over {_fp_range(sel.spec['k_range'], k.columns)} on {data.columns} from "
@@ -882,6 +984,7 @@ def _detect_args(p: argparse.ArgumentParser) -> None:
     _add_data_args(p, columns_help="comma-separated columns, matched to the baseline's channels by name (default: "
                                    "the baseline's channels)")
     p.add_argument("--baseline", required=True, help="healthy model (.npz from 'tsfdi fit')")
+    _u_arg(p)
     _window_args(p, "window length (default: each whole record)")
     _test_args(p)
     _k_arg(p)
@@ -896,8 +999,8 @@ def _detect(args: argparse.Namespace) -> int:
 
     _check_out("--out", args.out)
     baseline = _load("--baseline", args.baseline, args.baseline)
-    data = _read(args, _channels(baseline))
     flag = f"--baseline {args.baseline}"
+    data = _read(args, _channels(baseline), inputs=_input_columns(args, {flag: baseline}))
     _check_channels(data, {flag: baseline})
     rows = []
     if args.window is None:
@@ -906,7 +1009,7 @@ def _detect(args: argparse.Namespace) -> int:
         _warn_uncovered(args.baseline, [p[flag] for p in points], data)
         test = _tests(args, {}, None)
         # the library's own coverage warning ("detect: ...") is the one _warn_uncovered said above, naming the file
-        for i, frame, d in _each(data, lambda i, frame: _quiet(detect, frame, points[i][flag], test)):
+        for i, frame, d in _each(data, lambda i, frame: _quiet(detect, frame, points[i][flag], test, u=data.u(i))):
             print(f"{data.rec.origin(i)} ({data.span(len(frame))} at {data.rec.fs:g} Hz, {frame.index[0]:g} s to "
                   f"{frame.index[-1]:g} s):\n{str(d.summary())}\n")
             per_channel = [np.atleast_1d(np.asarray(a))[None, :] for a in (d.statistic, d.threshold, d.pvalue,
@@ -920,7 +1023,7 @@ def _detect(args: argparse.Namespace) -> int:
         _warn_uncovered(args.baseline, [p[flag] for p in points], data)
         test = _tests(args, {"baseline": (flag, baseline)}, W)
         for i, frame, ws in _each(data, lambda i, frame: ResidualWindows({"baseline": points[i][flag]}).fit(
-                frame).statistics(test, window=W, step=S, loglik=False)):
+                frame, u=data.u(i)).statistics(test, window=W, step=S, loglik=False)):
             rows.append(_detect_rows(data, frame, ws.starts, W, ws.channels, ws.statistic[:, 0], ws.threshold[:, 0],
                                      ws.pvalue[:, 0], ws.channel_reject[:, 0]).assign(**_k_columns(used[i], flag)))
     table = _table(rows, data)
@@ -959,13 +1062,14 @@ def _warn_uncovered(path: str, baselines: list, data: _Data) -> None:
         warn_if_not_covered(cov, where)
 
 
-def _quiet(run: Callable, *args: Any) -> Any:
-    """``run(*args)`` without the library's coverage warnings (the command says them itself, naming the file)."""
+def _quiet(run: Callable, *args: Any, **kwargs: Any) -> Any:
+    """``run(*args, **kwargs)`` without the library's coverage warnings (the command says them itself, naming the
+    file)."""
     from tsfdi.exceptions import CoverageWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CoverageWarning)
-        return run(*args)
+        return run(*args, **kwargs)
 
 
 def _detect_rows(data: _Data, frame: pd.DataFrame, starts: Any, W: int, channels: Any, stat: Any, thr: Any,
@@ -988,6 +1092,7 @@ def _identify_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--models", required=True, nargs="+", metavar="NAME=PATH",
                    help="saved models (.npz from 'tsfdi fit'), as NAME=PATH or PATH (name = file stem); each "
                         "name once")
+    _u_arg(p)
     _window_args(p, "window length (default: each whole record)")
     _test_args(p)
     p.add_argument("--rule", choices=("paper", "likelihood", "pvalue", "sprt"), default="paper",
@@ -1010,12 +1115,12 @@ def _identify_sequential(args: argparse.Namespace, data: _Data, models: dict) ->
         raise ValueError("--window does not apply to --rule sprt (one sequential decision per record); leave it out")
     if args.threshold != "theoretical":
         raise ValueError("--threshold calibrated does not apply to --rule sprt (no residual test); leave it out")
-    order = max(int(m.model.na) for m in models.values())
+    order = max(int(m.model.max_lag) for m in models.values())
     data = _drop_short(data, order + 2, f"the models' largest order ({order}) with --rule sprt")
     points, used = _operating_points(args, data, {f"--models {n}": m for n, m in models.items()})
     rows = []
     for i, frame, seq in _each(data, lambda i, frame: msprt(ResidualWindows(dict(zip(models, points[i].values()))).fit(
-            frame).loglik(), alpha=args.sprt_alpha, models=list(models))):
+            frame, u=data.u(i)).loglik(), alpha=args.sprt_alpha, models=list(models))):
         t = frame.index.to_numpy()
         decided = seq.label >= 0
         rows.append(pd.DataFrame({"start": [t[order]],
@@ -1031,8 +1136,9 @@ def _identify(args: argparse.Namespace) -> int:
 
     _check_out("--out", args.out)
     models = _load_models("--models", args.models)
-    data = _read(args, _channels(next(iter(models.values()))))
-    _check_channels(data, {f"--models {n}": m for n, m in models.items()})
+    given = {f"--models {n}": m for n, m in models.items()}
+    data = _read(args, _channels(next(iter(models.values()))), inputs=_input_columns(args, given))
+    _check_channels(data, given)
     if args.rule == "sprt":
         table = _table(_identify_sequential(args, data, models), data)
         _show(table)
@@ -1049,7 +1155,7 @@ def _identify(args: argparse.Namespace) -> int:
     whole = args.window is None         # each record is one window
     for i, frame, wins in _each(data, lambda i, frame: identify_windows(
             frame, dict(zip(models, points[i].values())), test, window=len(frame) if whole else W,
-            step=len(frame) if whole else S)):
+            step=len(frame) if whole else S, u=data.u(i))):
         start = frame.index.to_numpy()[wins.starts]
         table = pd.DataFrame({"start": start, "end": np.round(start + wins.windows.window / data.rec.fs, 9)})
         for j, name in enumerate(wins.models):
@@ -1073,6 +1179,7 @@ def _monitor_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--models", nargs="+", default=None, metavar="NAME=PATH",
                    help="fault models identifying the windows after a detection, as NAME=PATH or PATH (name = "
                         "file stem); default none: detection only")
+    _u_arg(p)
     _window_args(p, "window length (required, except with --rule sprt)")
     p.add_argument("--steady-window", type=opt.span, default="10s",
                    help="rolling-variance window of the steady-state check (paper 003): identification starts once "
@@ -1109,7 +1216,7 @@ def _monitor_sequential(args: argparse.Namespace, data: _Data, models: dict) -> 
     if args.sprt_ratio == 1.0:
         raise ValueError("--sprt-ratio must differ from 1 (the fault's variance would be the baseline's)")
     S = window_samples(args.step, "--step", data.rec.fs, minimum=1)
-    order = max(int(m.model.na) for m in models.values())
+    order = max(int(m.model.max_lag) for m in models.values())
     data = _drop_short(data, order + 1, f"the models' largest order ({order}) with --rule sprt")
     print(f"sequential (SPRT, variance ratio {args.sprt_ratio:g}, alpha {args.sprt_alpha:g}), rows every "
           f"{data.span(S)}, at {data.rec.fs:g} Hz")
@@ -1128,9 +1235,9 @@ def _monitor(args: argparse.Namespace) -> int:
     _check_out("--out", args.out)
     baseline = _load("--baseline", args.baseline, args.baseline)
     models = _load_models("--models", args.models) if args.models else {}
-    data = _read(args, _channels(baseline))
     flag = f"--baseline {args.baseline}"
     given = {flag: baseline, **{f"--models {n}": m for n, m in models.items()}}
+    data = _read(args, _channels(baseline), inputs=_input_columns(args, given))
     _check_channels(data, given)
     V = window_samples(args.steady_window, "--steady-window", data.rec.fs, minimum=2)
     if args.rule == "sprt":
@@ -1166,7 +1273,8 @@ def _monitor(args: argparse.Namespace) -> int:
 
     shared = None if any(used) else build(points[0])
     rows = []
-    for i, frame, result in _each(data, lambda i, frame: _quiet((shared or build(points[i])).run, frame)):
+    for i, frame, result in _each(data, lambda i, frame: _quiet((shared or build(points[i])).run, frame,
+                                                                u=data.u(i))):
         if result.coverage is not None:       # Monitor.run's check, said naming the file
             warn_if_not_covered(result.coverage, f"{data.rec.origin(i)} against --baseline {args.baseline}")
         events = result.to_frame()

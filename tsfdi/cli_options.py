@@ -16,8 +16,8 @@ import warnings
 import pandas as pd
 
 __all__ = ["HelpFormatter", "finite", "integer", "positive", "probability", "count", "seed", "two_or_more", "span",
-           "spans", "instant", "duration", "time_from_start", "csv_list", "record_numbers", "where", "order", "METHODS",
-           "method", "operating_point"]
+           "spans", "instant", "duration", "time_from_start", "csv_list", "column_list", "record_numbers", "where", "order",
+           "METHODS", "method", "operating_point"]
 
 #: The residual tests of ``--method``: Ljung-Box whiteness, the F test of the variance, the mean-shift test.
 METHODS = ("whiteness", "variance", "mean")
@@ -148,6 +148,17 @@ def time_from_start(text: str) -> float:
 def csv_list(text: str | None) -> list[str] | None:
     """The non-empty comma-separated items of ``text`` (``None`` stays ``None``)."""
     return None if text is None else [t.strip() for t in text.split(",") if t.strip()]
+
+
+def column_list(text: str) -> list[str]:
+    """``COL[,COL...]``: one or more column names, each once (``--u``)."""
+    names = csv_list(text)
+    if not names:
+        raise argparse.ArgumentTypeError(f"must name one or more columns, COL[,COL...], got {text!r}")
+    twice = [c for i, c in enumerate(names) if c in names[:i]]
+    if twice:
+        raise argparse.ArgumentTypeError(f"must name each column once, {twice[0]!r} is given twice in {text!r}")
+    return names
 
 
 def record_numbers(text: str) -> list[int]:
