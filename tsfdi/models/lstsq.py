@@ -21,12 +21,12 @@ import warnings
 import numba
 import numpy as np
 from scipy import linalg
-from scipy.linalg import blas, lapack
+from scipy.linalg import lapack
 
 from tsfdi._validation import MAX_VALUES
 from tsfdi.exceptions import IllConditionedWarning
 
-__all__ = ["lagged_design", "lstsq", "lag_gram", "cholesky_nested_fits", "lag_products", "lag_residuals",
+__all__ = ["lagged_design", "lstsq", "lag_gram", "cholesky_nested_fits",
            "lag_residual_products", "triangular_factor", "nested_fits", "gram_factor",
            "gram_solve", "check_size", "MAX_VALUES"]
 
@@ -113,7 +113,7 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
 
     The lag-product blocks are Toeplitz up to end effects. With ``L[i, j] = sum_{t=p}^{n-1} y[t-i] y[t-j]'``
     (lag space, ``i, j = 0..p``), the first block row follows from the full lag products
-    ``C_k = sum_{u=k}^{n-1} y[u] y[u-k]'`` (:func:`lag_products`) less the ``u < p`` terms, and shifting
+    ``C_k = sum_{u=k}^{n-1} y[u] y[u-k]'`` less the ``u < p`` terms, and shifting
     the summation window by one sample gives
 
     .. math::  L[i+1, j+1] = L[i, j] + y[p-1-i]\, y[p-1-j]' - y[n-1-i]\, y[n-1-j]' .
@@ -122,8 +122,7 @@ def lag_gram(y: np.ndarray | list[np.ndarray], lags: int, *, const: bool) -> np.
     kernels), instead of ``O(n p^2 s^2)`` for ``X'X``. For a list of records (the sum of their Gram
     matrices) the lag products come from the records end to end with ``p`` zero samples between two, and the
     end corrections are summed over the records. The lag products are dot products of contiguous channel rows
-    summed in SIMD order (:func:`_direct_lag_products`): faster than the block products of :func:`lag_products`
-    at every size measured (2,000 x 1 to 60,000 x 3), equal to them to rounding (~1e-15 relative).
+    summed in SIMD order (:func:`_direct_lag_products`).
 
     Parameters
     ----------
@@ -416,108 +415,6 @@ def _assemble_gram(C, hr, tr, S0, rows, const, out):  # pragma: no cover - compi
                         S[a] += hr[r, i * s + a] - tr[r, i * s + a]
 
 
-def _blocks(y: np.ndarray, B: int) -> np.ndarray:
-    """``y`` (n, s) zero-padded to a multiple of ``B`` samples, as rows of ``B`` samples: shape (rows, B s)."""
-    n, s = y.shape
-    rows = -(-n // B)
-    yp = np.zeros((rows * B, s))
-    yp[:n] = y
-    return yp.reshape(rows, B * s)
-
-
-def lag_products(y: np.ndarray, lags: int, x: np.ndarray | None = None) -> np.ndarray:
-    """``C[k] = sum_{u=k}^{n-1} x[u] y[u-k]'`` for ``k = 0..lags`` (``x`` defaults to ``y``), shape
-    ``(lags + 1, s, s)``.
-
-    The signal is cut into blocks of ``B = lags + 1`` samples, stacked as the rows of ``M``; every pair of
-    samples at most ``lags`` apart lies in one block or in two consecutive blocks, so the two matrix
-    products ``Mx'M`` and ``Mx[1:]' M[:-1]`` hold every lag product exactly once per pair and the
-    ``C[k]`` are sums along their block diagonals. Same O(n lags s^2) work as ``lags + 1`` dot products,
-    done by two BLAS-3 calls. ``x`` has the shape of ``y``.
-    """
-    n, s = y.shape
-    B = lags + 1
-    M = _blocks(y, B)
-    return _block_products(M if x is None else _blocks(x, B), M, lags, s)
-
-
-def _block_products(Mx: np.ndarray, M: np.ndarray, p: int, s: int, *, lag0: bool = True) -> np.ndarray:
-    """``C[k] = sum_u x[u] y[u-k]'``, ``k = 0..p``, from the blocks ``Mx`` and ``M`` of ``x`` and ``y``
-    (:func:`_blocks`, ``B = p + 1``): the two block products and the sums along their block diagonals
-    (:func:`lag_products`). Only the block pairs whose lag is in ``0..p`` are multiplied (two row bands of each
-    product, :func:`_band_product`: about two thirds of the full products), and ``P = M'M`` by numpy's symmetric
-    product when ``Mx`` is ``M``. ``lag0=False``: ``C[0]`` is not computed (left zero)."""
-    B = p + 1
-    if Mx is M and lag0:
-        P = M.T @ M                         # one symmetric rank-k update (numpy calls syrk for X'X)
-    else:
-        P = _band_product(Mx, M, 0 if lag0 else 1, p, s, B)
-    Q = _band_product(Mx[1:], M[:-1], -p, -1, s, B) if M.shape[0] > 1 else None
-    return _diagonal_sums(P, Q, p, s)
-
-
-def _band_product(X: np.ndarray, Y: np.ndarray, lo: int, hi: int, s: int, B: int) -> np.ndarray:
-    """``X'Y`` (both ``(rows, B s)``) computed only where the block row ``a`` and block column ``b`` have
-    ``lo <= a - b <= hi``, in two bands of block rows (each multiplied against the block columns it needs); the
-    other entries are zero."""
-    out = np.zeros((B * s, B * s))
-    h = (B + 1) // 2
-    for a0, a1 in ((0, h), (h, B)):
-        b0, b1 = max(0, a0 - hi), min(B, a1 - lo)
-        if a1 > a0 and b1 > b0:
-            out[a0 * s:a1 * s, b0 * s:b1 * s] = X[:, a0 * s:a1 * s].T @ Y[:, b0 * s:b1 * s]
-    return out
-
-
-def _residual_blocks(M: np.ndarray, coef: np.ndarray, const: bool) -> np.ndarray:
-    """The residuals ``E`` in the layout of the blocks ``M`` of a signal (rows of ``B = p + 1`` samples,
-    :func:`_blocks`), before any sample is set aside; see :func:`lag_residuals`."""
-    c = int(const)
-    s = coef.shape[1]
-    p = (coef.shape[0] - c) // s
-    B = p + 1
-    # W[k][i, j] (input i, equation j) padded so that block [b, a] of T0 is W[a - b] (zero for a < b) and of T1
-    # W[B + a - b] (zero for a >= b): both read at a - b + B - 1
-    zero = np.zeros((B, s, s))
-    lag = np.arange(B - 1, 2 * B - 1)[None, :] - np.arange(B)[:, None]       # [b, a] = a - b + B - 1
-    T0 = np.concatenate([zero[1:], np.eye(s)[None], coef[c:].reshape(p, s, s)])[lag].transpose(0, 2, 1, 3)
-    T1 = np.concatenate([coef[c:].reshape(p, s, s), zero])[lag].transpose(0, 2, 1, 3)
-    # T0 is upper triangular with a unit diagonal (W_0 = I), T1 strictly lower triangular: two triangular
-    # products (BLAS trmm, half the work of a general product) on the transposed, Fortran-ordered view of M
-    E = blas.dtrmm(1.0, T0.reshape(B * s, B * s), M.T, side=0, lower=0, trans_a=1, diag=1).T
-    if M.shape[0] > 1:
-        E[1:] += blas.dtrmm(1.0, T1.reshape(B * s, B * s), M[:-1].T, side=0, lower=1, trans_a=1).T
-    if c:
-        E -= np.tile(coef[0], B)
-    return E
-
-
-def lag_residuals(y: np.ndarray, coef: np.ndarray, *, const: bool) -> np.ndarray:
-    """Residuals of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` with coefficients ``coef``, computed
-    without the regressor: ``e[t] = y[t] - c + sum_k y[t-k] coef_k`` for ``t >= p``, zero for ``t < p``.
-
-    With ``W_0 = I`` and ``W_k`` the block of lag ``k`` (``coef[c + (k-1) s : c + k s]``), the samples cut into
-    blocks of ``B = p + 1`` (rows of ``M``, as :func:`lag_products`) give ``E = M T_0 + M_{-1} T_1`` with two
-    block-Toeplitz ``(B s, B s)`` matrices of the ``W_k``: two BLAS-3 calls, O(n p s^2).
-
-    Parameters
-    ----------
-    y : ndarray, shape (n, s)
-    coef : ndarray, shape (c + p s, s)
-        Regression coefficients, rows ``[const, lag 1 block, ..., lag p block]``.
-    const : bool
-
-    Returns
-    -------
-    ndarray, shape (n, s)
-    """
-    n, s = y.shape
-    p = (coef.shape[0] - int(const)) // s
-    e = _residual_blocks(_blocks(y, p + 1), coef, const).reshape(-1, s)[:n]
-    e[:p] = 0.0
-    return e
-
-
 def lag_residual_products(y: np.ndarray | list[np.ndarray], coef: np.ndarray, *, const: bool) -> np.ndarray:
     """``X'(Y - X coef)`` of the lag regression ``[const, -y[t-1], ..., -y[t-p]]`` over ``t = p .. n-1``, summed
     over the records, without the regressor.
@@ -589,33 +486,6 @@ def _residual_products(x, starts, ends, W, c0, c, e, out):  # pragma: no cover -
                 out[c + (k - 1) * s + a, j] = -cb[k]
                 if b > a:
                     out[c + (k - 1) * s + b, j] = -cc[k]
-
-
-def _diagonal_sums(P: np.ndarray, Q: np.ndarray | None, p: int, s: int) -> np.ndarray:
-    """Sums along the block diagonals of the block products of :func:`lag_products`: entry ``(a, i, b, j)`` of
-    ``P = Mx'M`` has lag ``a - b``, of ``Q = Mx[1:]'M[:-1]`` (``None`` for a single block) lag ``B + a - b``; the
-    entries with a lag in ``0..p`` add up to ``C[lag, i, j]``, shape ``(p + 1, s, s)``. Each sum runs in the
-    order of ``numpy.bincount`` over the flattened product (the kernel it replaces: same values bit for bit)."""
-    C = np.zeros((p + 1, s, s))
-    _add_diagonals(P, 0, p, s, C)
-    if Q is not None:
-        D = np.zeros((p + 1, s, s))
-        _add_diagonals(Q, p + 1, p, s, D)
-        C += D
-    return C
-
-
-@numba.njit(cache=True)
-def _add_diagonals(P, shift, p, s, out):  # pragma: no cover - compiled
-    """``out[shift + a - b, i, j] += P[a s + i, b s + j]`` where ``0 <= shift + a - b <= p``, rows in order."""
-    B = p + 1
-    for a in range(B):
-        for i in range(s):
-            for b in range(B):
-                lag = shift + a - b
-                if 0 <= lag <= p:
-                    for j in range(s):
-                        out[lag, i, j] += P[a * s + i, b * s + j]
 
 
 def triangular_factor(gram: np.ndarray | None, design: callable, n_targets: int = 1, *,
