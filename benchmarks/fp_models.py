@@ -2,8 +2,9 @@
 the cut depth of CrazyPAD propeller M3 estimated from a flight (leave one depth out).
 
 Run: ``python benchmarks/fp_models.py [--data PATH] [--lags N] [--degree D]`` (BLAS pinned to one thread; reads
-``../shared/data/crazypad`` for sections 2-3, skipped with a message when it is missing; about 5 min on the 2-core
-development machine, most of it the inner folds of section 2).
+``../shared/data/crazypad`` for sections 2-3, skipped with a message when it is missing; about 8 min on the 2-core
+development machine, most of it the inner folds of section 2 and the nested folds of its detection through models of
+the depth).
 
 1. Cost, simulated FP-VAR data (6 channels, 16 operating points x 2 records x 2000 samples, lags 8, Legendre degree
    3): ``FPVAR.fit`` against the point models it replaces (one ``VAR`` per operating point) and one pooled ``VAR``
@@ -35,6 +36,24 @@ development machine, most of it the inner folds of section 2).
    flights (never a cut flight), ``LB+F+M`` at alpha 0.01 on disjoint 2 s windows; per depth the share of windows
    flagged and of flights detected (a flight is detected when its flagged windows lie above the two-sided 99 %
    binomial band of alpha for its windows), beside the normal flights' false-alarm rate of section 3.
+   Detection through models of the depth (``depth_detection``): the normal flights (k = 0) and the cut flights fitted
+   together, leave one depth out for the cut flights and one flight out for the normal ones (their false-alarm rate
+   with its 99 % binomial band, 8 flights); one decision per flight (log) at alpha 0.01. (a) The FP-VAR over the
+   depth (lags ``crazypad.choose``'s BIC order on the normal flights, degree 1 a priori: nothing chosen on a cut
+   flight), ``estimate_k`` per segment bounded to the fitted range whose lower end is the normal flights' 0, the
+   flight's statistic the sum over its segments of the likelihood ratio ``2 (llf(k_hat) - llf(0))``; nominally
+   chi-bar-square (each segment's ratio half 0, half chi2_1: k = 0 is the boundary). (b) The controller's trim:
+   ``tsfdi.FPMean`` of the three commands' 2 s window means over k = (depth, airframe) (airframe categorical,
+   degree 1; depth degree 1-3 by BIC over the fold's fitting flights), one record per flight (its segments' whole
+   windows), the flight's mean trim against the surface at its logged airframe with variance ``S_rec + S_within /
+   windows``: ``q(0) - min q(k)`` over a depth grid, its minimum the depth estimate, the likelihood-ratio 95 %
+   interval. (b0) The healthy trim: ``tsfdi.FPMean`` of the normal flights only over the airframe (no cut flight
+   ever fitted), the flight's Mahalanobis distance from its airframe's trim, nominally chi2 with 3 degrees of
+   freedom. Three rules per detector: nominal (the law above), calibrated (that point times the fold's scale, the
+   mean statistic of its normal flights each left out in turn from the fold's fitting flights over its nominal
+   mean: nested, the judged flight never fitted nor calibrated on) and window counting (each part, a segment for
+   (a), a 2 s window for (b) / (b0), against its nominal point, flagged parts above the flight's 99 % band). Depth
+   RMSE and 95 % interval coverage per flight for (a) (curvature interval of the segments' mean) and (b).
 3. CrazyPAD healthy flights of both airframes (E8, E9), leave one flight out over all normal flights, the choices
    of ``crazypad.choose`` on each fold's fitting flights, two baselines: pooled (one VAR of both airframes,
    ``crazypad.fit_model``, held-out residuals log by log) and FP (an FP-VAR whose k is the airframe, a category:
@@ -595,6 +614,8 @@ def report_detection_folds(t: pd.DataFrame, name: str) -> None:
         print(f"     {rule:<10} cut flights {int(cut[rule].sum())}/{len(cut)}; normal flights (leave one out) "
               f"{x}/{len(normal)}, 99 % band [{100 * lo:.1f}, {100 * hi:.1f}] % {band}"
               + (f" ({', '.join(normal.log[normal[rule]])})" if x else ""))
+    print("     calibrated, per airframe: " + ", ".join(
+        f"{drone} cut flights {int(g.calibrated.sum())}/{len(g)}" for drone, g in cut.groupby("drone")))
     if not depth:
         print(f"     calibration scale median {t.scale.median():.2f} "
               f"[{t.scale.min():.2f}, {t.scale.max():.2f}]")
