@@ -221,7 +221,7 @@ def test_fp_var_detection_on_a_subset(bench, choice, small_items):
     assert t.k_hat.between(0.0, 2.0).all()            # bounded to its fold's range (0-2 mm without 4 mm)
 
 
-def test_healthy_trim_sees_no_cut_flight(bench, small_items):
+def test_healthy_trim_sees_no_cut_flight(bench, small_items, capsys):
     cp = bench.cp
     airframes = bench.airframe_k(f.drone for d, f in small_items if d == 0.0)
     window = cp.samples(bench.WINDOW_S)
@@ -240,3 +240,6 @@ def test_healthy_trim_sees_no_cut_flight(bench, small_items):
     assert got["crit"] == pytest.approx(11.3448667, rel=1e-6) and got["mean0"] == 3.0 and len(got["lr_parts"]) == 4
     t = bench.detection_folds(small_items, fit, stat, depths=[1.0], normals=[2])
     assert list(t.depth) == [1.0] * 6 + [0.0] and t.k_hat.isna().all() and (t.scale > 0).all()
+    bench.report_detection_folds(t, "healthy trim")
+    out = capsys.readouterr().out
+    assert "calibration scale median" in out and "RMSE" not in out and "k_hat" not in out    # no depth estimate
