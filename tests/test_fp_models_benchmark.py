@@ -1,6 +1,7 @@
 """benchmarks/fp_models.py (issue 32), its CrazyPAD rows on reduced paths: the healthy baselines over both airframes
-(pooled and FP, leave one flight out), the detection rule of a flight, and the between-flight spread of the depth
-estimate chosen on the fitting depths only.
+(pooled and FP, leave one flight out), the detection rule of a flight, the between-flight spread of the depth
+estimate chosen on the fitting depths only, and the detection of the cut flights through models of the depth (FP-VAR
+likelihood ratio, trim over depth and airframe, healthy trim; nested folds on a subset of depths).
 
 The data-bound tests need ../shared/data/crazypad (``shared_crazypad`` in conftest.py)."""
 
