@@ -109,3 +109,25 @@ def test_sprt_folds_calibrate_on_the_other_flights_healthy_parts_only(shared_alf
             assert first == flights[j].index[0]
             end = flights[j].index[0] + pd.Timedelta(seconds=onset[j]) if np.isfinite(onset[j]) else None
             assert last == flights[j].index[-1] if end is None else last < end
+
+
+def test_thrust_variants_base_is_the_thrust_channel_and_signs_split_the_input(shared_alfa):
+    """Configuration T of alfa_detection.py: the base variant is B's thrust channel (the same statistic), and a
+    ``+`` / ``-`` column is the positive / negative part of the input (not the input itself, not dropped)."""
+    bench = benchmark("alfa_detection")
+    tab = list_alfa(shared_alfa)
+    df = bench.prepare(bench.load_alfa(tab.merged_path[tab.index[tab.fault == "engine"][0]]))
+    t, s = bench.thrust_variant_statistic(df, "thrust (B, C)")
+    t_b, s_b = bench.channel_statistic(df, "thrust")
+    np.testing.assert_array_equal(t, t_b)
+    np.testing.assert_array_equal(s, s_b)
+    a = df["field.aspd_error"]
+    split = df.assign(pos=a.clip(lower=0), neg=a.clip(upper=0))
+    bench.THRUST_VARIANTS["check"] = (["pos", "neg", "field.alt_error"], {})
+    try:
+        _, expected = bench.thrust_variant_statistic(split, "check")
+    finally:
+        del bench.THRUST_VARIANTS["check"]
+    _, got = bench.thrust_variant_statistic(df, "airspeed error split by sign")
+    np.testing.assert_array_equal(got, expected)
+    assert np.isfinite(got).sum() > 1000 and not np.array_equal(got, s)
