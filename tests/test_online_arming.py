@@ -11,6 +11,7 @@ from test_online import paper001, two_pairs
 
 from tsfdi.exceptions import ConvergenceWarning
 from tsfdi.models.recursive import RecursiveARX
+from tsfdi.online import OnlineDetector
 
 
 def equivariant_p0(cy, cu):
@@ -189,3 +190,67 @@ def test_px4_rate_pairs_arm(shared_px4):
     assert (out.first_alarms["armed_at"] == -1).all()
     assert [str(w.message).split("'")[1] for w in caught] == ["roll", "pitch", "yaw"]
     assert all("6.47237 s after the first sample" in str(w.message) for w in caught)
+
+
+# ------------------------------------------------------------------------------- take-off: settle (issue 34)
+def take_off(ground=10.0, flight=35.0, seed=2, failure_time=None):
+    """Rates and actuator controls of the realistic hexacopter's autopilot log (50 Hz) with ``ground`` seconds
+    standing still before its trimmed flight starts (``simulate_hexacopter`` starts trimmed in the air: it cannot
+    climb from the ground or step its reference, so the take-off is this step from rest to flight); a whole
+    rotor lost ``failure_time`` seconds into the flight when given."""
+    import xarray as xr
+
+    import tsfdi
+    from tsfdi.datasets import sensor_log, simulate_hexacopter
+
+    ds = simulate_hexacopter(1, duration=flight, fs=1000, speed=0.0, turbulence="moderate", seed=seed,
+                             failed_rotor=0 if failure_time is None else 2,
+                             failure_time=0.0 if failure_time is None else failure_time)
+    rec = ds.isel(record=0)
+    rest = rec.isel(time=slice(0, int(ground * 1000))).copy(deep=True)
+    for name in rest.data_vars:
+        if rest[name].dims == ("time",):
+            rest[name][:] = 0.0
+    rest["az"][:] = -9.81                                  # level at rest: the accelerometer reads -g (NED)
+    both = xr.concat([rest, rec.assign_coords(time=rec.time + ground)], dim="time", data_vars="minimal",
+                     coords="minimal", compat="override")
+    log = sensor_log(both, rng=seed)
+    (f,) = tsfdi.align({"gyro": log["gyro"][["p", "q", "r"]],
+                        "commands": log["commands"][["roll_control", "pitch_control", "yaw_control"]]}, fs=50)
+    return f.iloc[:, :3], f.iloc[:, 3:]
+
+
+def test_settle_arms_after_the_take_off_transient_instead_of_alarming():
+    """Issue 34: pairs that arm while the vehicle stands still alarmed when it took off. With ``settle`` the
+    scale comes from errors of a steady regime and a crossing soon after arming re-arms the pair: no alarm at
+    take-off, armed within 10 s of it, and a rotor lost in flight is still found at once."""
+    y, u = take_off()
+    pairs = ["roll", "pitch", "yaw"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        before = OnlineDetector(pairs).run(y, u)                      # settle=0: the scale taken at arming
+        out = OnlineDetector(pairs, settle=250).run(y, u)
+    assert (before.first_alarms["armed_at"] < 500).any() and 500 <= before.first_alarm <= 505   # at take-off
+    armed = out.first_alarms["armed_at"].to_numpy()
+    assert out.first_alarm is None and np.all((armed >= 500) & (armed < 1000)), armed
+    y, u = take_off(failure_time=20.0)                               # at 30 s of the log, sample 1500
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        out = OnlineDetector(pairs, settle=250).run(y, u)
+    assert 1500 <= out.first_alarm <= 1500 + 25, out.first_alarms
+
+
+def test_settle_streams_as_a_block():
+    y, u = take_off(flight=15.0)
+    pairs = ["roll", "pitch", "yaw"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        ref = OnlineDetector(pairs, settle=250).run(y, u)
+        det = OnlineDetector(pairs, settle=250)
+        parts = [det.run(y.iloc[i:i + 97], u.iloc[i:i + 97]) for i in range(0, len(y), 97)]
+    np.testing.assert_array_equal(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic))
+    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
+    det = OnlineDetector(pairs, settle=250)
+    alarms = np.array([det.update(y.to_numpy()[i], u.to_numpy()[i]) for i in range(len(y))])
+    np.testing.assert_array_equal(alarms, ref.alarm)
+    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)

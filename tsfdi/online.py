@@ -41,6 +41,8 @@ _SPRT_NODES = 400        # quantile nodes of the predictive law of a new log's W
 _MIN_SPRT_CYCLES = 50    # restart cycles of the SPRT walk the calibration needs
 _TAIL_EPISODES = 20      # episodes above the base level of the tail fit
 _MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit accepts
+_STEADY_RATIO = 4.0      # statistic="sprt": largest ratio of the error variances of the two halves of the errors
+                         # that set the scale at arming (a steady regime)
 #: the RecursiveARX options OnlineDetector passes on (it sets the others: gate, threshold, freeze_on_alarm, ...)
 _RLS_OPTIONS = ("P0", "trend", "theta0", "stable_samples", "variance_tol", "min_variance_samples")
 
@@ -383,6 +385,10 @@ class OnlineDetector:
         The sequential test of ``statistic="sprt"`` (ignored otherwise): ``alternative`` "variance" (the error
         variance grows by ``ratio``: any change that makes the errors larger, either sign) or "mean" (a shift of
         ``shift`` standard deviations, one-sided), with ``restart=True``. With it ``glrt`` must be None.
+    settle : int, default 0
+        ``statistic="sprt"``: samples after arming during which a crossing of ``threshold`` re-arms the pair
+        instead of alarming, with its scale taken from a steady regime (see Notes); for a log that starts on the
+        ground and takes off. 0: the scale is the Welford standard deviation at arming and every crossing alarms.
     **rls_options
         Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``theta0``, ``stable_samples``
         (consecutive samples the model and the variance gates must hold), ``variance_tol``,
@@ -408,6 +414,18 @@ class OnlineDetector:
     failures, and ``alpha=1e-4`` (upper bound 9.2) alarms on 4 of the 12 healthy logs (the largest healthy
     statistic was 11.4, the smallest within 0.5 s of a failure 68). Paper 001's
     reproduction takes those arguments explicitly. For a stated false-alarm rate use :meth:`calibrate`.
+
+    **Settle (take-off).** With ``statistic="sprt"`` the errors are standardised by a scale fixed at arming.
+    A pair that arms while the vehicle stands still takes the scale of the ground and alarms at take-off. With
+    ``settle`` :math:`= S > 0` the pair arms on a *steady regime*: once the error variance is stable, the next
+    :math:`W = \max(S, \text{min\_variance\_samples})` finite errors give the mean and scale if the variances
+    of their two halves agree within a factor 4 (else the window slides by half); and a walk that reaches
+    ``threshold`` within :math:`S` samples of arming is taken for a regime still changing, not a fault: no alarm,
+    the pair re-arms from the next :math:`W` errors. A fault within :math:`S` samples of arming is therefore
+    absorbed into the scale, and a vehicle standing armed on the ground for more than :math:`W + S` samples
+    before take-off has a steady ground regime and still alarms at take-off (start the stream at take-off or
+    set ``arm_after``). :meth:`calibrate` runs its healthy logs with the same rule at the detector's threshold
+    before calibration.
 
     **Arming gate.** Paper 001 (section IV-B) considers the model stable for fault detection when the parameter
     step :math:`\|L(k)\hat e(k)\|_\infty < \epsilon` "for some time", with :math:`\epsilon` "a small positive number"
@@ -444,7 +462,7 @@ class OnlineDetector:
                  threshold: float | None = None, glrt: Any = "default", freeze_on_alarm: bool = True,
                  nonfinite: str = "skip", n_inputs: int = 1, statistic: str = "sprt", window: int = 20,
                  direction: str = "both", arm_after: int = 0, eps: float = 0.03, sprt: Any = "default",
-                 **rls_options: Any) -> None:
+                 settle: int = 0, **rls_options: Any) -> None:
         if isinstance(pairs, (int, np.integer)) and not isinstance(pairs, bool):
             n = int_like(pairs, "pairs", minimum=1)
             names = tuple(f"pair{i}" for i in range(n))
@@ -482,6 +500,8 @@ class OnlineDetector:
         self.arm_after = int_like(arm_after, "arm_after", minimum=0)
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
         self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
+        self.settle = int_like(settle, "settle", minimum=0)
+        self._settle_level: float | None = None   # the alarm-free copies of calibrate: the level settle watches
         self.freeze_on_alarm = boolean(freeze_on_alarm, "freeze_on_alarm")
         if isinstance(glrt, str) and glrt == "default":
             glrt = GLRT(window=20, alpha=1e-6) if self.statistic == "zscore" else None
@@ -496,7 +516,7 @@ class OnlineDetector:
                              glrt=glrt, freeze_on_alarm=self.freeze_on_alarm, nonfinite=self.nonfinite,
                              n_inputs=self.n_inputs, statistic=self.statistic, window=self.window,
                              direction=self.direction, arm_after=self.arm_after, eps=self.eps, sprt=sprt,
-                             **rls_options)
+                             settle=self.settle, **rls_options)
         self.calibration_: OnlineCalibration | None = None
         zs = self.statistic == "zscore"
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
@@ -519,8 +539,7 @@ class OnlineDetector:
         self._source = [""] * k
         self._time: list = [None] * k
         self._tail = np.full((k, max(self.window - 1, 0)), np.nan)
-        self._walks: list = [None] * k   # statistic="sprt": [sd, mean at arming, walk value] per armed pair
-        self._cycles = np.zeros(k, dtype=np.int64)
+        self._walks: list = [None] * k   # statistic="sprt": the walk of every armed pair (see _sprt_walk)
         self._stat_alarmed = np.zeros(k, dtype=bool)
         self._last_alarm = np.zeros(k, dtype=bool)
         self._nobs = 0
@@ -598,38 +617,83 @@ class OnlineDetector:
 
     def _sprt_walk(self, c: int, e: np.ndarray, vstable: np.ndarray, var: np.ndarray, mean: np.ndarray,
                    start: int, commit: bool) -> tuple:
-        """Restarted SPRT of the errors ``e`` of pair ``c`` continuing its walk (the state kept when ``commit``):
-        armed from the sample after the error variance became stable and positive, on the errors minus the
-        Welford mean at arming, scaled by the Welford standard deviation at arming."""
+        """Restarted SPRT of the errors ``e`` of pair ``c`` continuing its walk (the state kept when ``commit``).
+
+        ``settle=0``: armed from the sample after the error variance became stable and positive, on the errors
+        minus the Welford mean at arming, scaled by the Welford standard deviation at arming. ``settle > 0`` (see
+        the class Notes): from then on the next ``max(settle, min_variance_samples)`` finite errors whose two
+        halves' variances agree give the mean and scale, and a crossing of the alarm level within ``settle``
+        samples of arming re-arms the pair instead of alarming. Returns the walk (NaN where not armed) and the
+        alarms."""
         n = e.shape[0]
-        walk = self._walks[c]
+        path = np.full(n, np.nan)
+        alarm = np.zeros(n, dtype=bool)
+        walk = self._walks[c]                  # [sd, mean, walk value, end of the settle period, errors collected]
+        armed_at = int(self._armed_at[c])
         lo = 0
         if walk is None:
             vs = np.flatnonzero(vstable & np.isfinite(var) & (var > 0))
             if not vs.size:
-                return np.full(n, np.nan), np.zeros(n, dtype=bool), None, 0
+                return path, alarm
             lo = int(vs[0]) + 1
-            walk = [float(np.sqrt(var[vs[0]])), float(mean[vs[0]]), 0.0]
-        z = np.full(n, np.nan)
-        w = (e[lo:] - walk[1]) / walk[0]
-        ok = np.isfinite(w)
-        if ok.any():
-            z[lo:][ok] = self.sprt.loglik_ratio(w[ok], 1.0)
-        path, alarm, _, cycles, s, _ = renewal_walk(z, self.sprt.lower, self.threshold, state=walk[2])
+            if self.settle:
+                walk = [np.nan, np.nan, 0.0, 0, []]
+            else:
+                armed_at = start + lo
+                walk = [float(np.sqrt(var[vs[0]])), float(mean[vs[0]]), 0.0, armed_at, None]
+        walk = list(walk)
+        level = self.threshold if self._settle_level is None else self._settle_level
+        while lo < n:
+            if walk[4] is not None:                         # arming: collect the errors of the scale
+                need = max(self.settle, self._models[c].min_variance_samples) - len(walk[4])
+                fin = lo + np.flatnonzero(np.isfinite(e[lo:]))
+                if fin.size < need:
+                    walk[4] = walk[4] + e[fin].tolist()
+                    break
+                j = int(fin[need - 1])
+                x = np.array(walk[4] + e[fin[:need]].tolist())
+                sd = float(x.std(ddof=1))
+                lo = j + 1
+                half = x.size // 2
+                v = (float(x[:half].var()), float(x[half:].var()))
+                if not (sd > 0 and max(v) <= _STEADY_RATIO * min(v)):
+                    walk[4] = x[half:].tolist()             # not a steady regime: slide by half the errors
+                    continue
+                armed_at = start + lo
+                walk = [sd, float(x.mean()), 0.0, armed_at + self.settle, None]
+                continue
+            z = np.full(n - lo, np.nan)
+            w = (e[lo:] - walk[1]) / walk[0]
+            ok = np.isfinite(w)
+            if ok.any():
+                z[ok] = self.sprt.loglik_ratio(w[ok], 1.0)
+            p, a, _, _, state, _ = renewal_walk(z, self.sprt.lower, self.threshold, state=walk[2])
+            settling = start + lo + np.arange(n - lo) < walk[3]
+            if settling.any():
+                hit = a if level == self.threshold else renewal_walk(z, self.sprt.lower, level, state=walk[2])[1]
+                hits = np.flatnonzero(hit & settling)
+                if hits.size:                               # not a steady regime yet: re-arm
+                    j = int(hits[0])
+                    path[lo:lo + j + 1] = p[:j + 1]
+                    lo += j + 1
+                    walk[4] = []
+                    continue
+            path[lo:] = p
+            alarm[lo:] = a
+            walk[2] = float(state)
+            lo = n
         alarm &= (start + np.arange(n)) >= self.arm_after
         if commit:
-            if self._walks[c] is None:
-                self._armed_at[c] = start + lo
-            self._walks[c] = [walk[0], walk[1], float(s)]
-            self._cycles[c] += cycles
-        return path, alarm, walk, cycles
+            self._armed_at[c] = armed_at
+            self._walks[c] = walk
+        return path, alarm
 
     def _run_sprt(self, c: int, m: RecursiveARX, yc: np.ndarray, uc: np.ndarray, start: int):
         """Run pair ``c`` with the restarted SPRT, freezing its model at the first alarm (as sample by sample)."""
         snap = m.get_state() if self.freeze_on_alarm and not self._stat_alarmed[c] else None
         parts = [m.run(yc, uc)]
         e, _, _, vstable, var, mean = self._join(parts)
-        _, alarm, _, _ = self._sprt_walk(c, e, vstable, var, mean, start, commit=False)
+        _, alarm = self._sprt_walk(c, e, vstable, var, mean, start, commit=False)
         if snap is not None and alarm.any():
             i = int(np.flatnonzero(alarm)[0])
             m.set_state(snap)
@@ -637,7 +701,7 @@ class OnlineDetector:
             m.freeze()
             parts.append(m.run(yc[i:], uc[i:]))
         e, z, _, vstable, var, mean = self._join(parts)
-        stat, alarm, _, _ = self._sprt_walk(c, e, vstable, var, mean, start, commit=True)
+        stat, alarm = self._sprt_walk(c, e, vstable, var, mean, start, commit=True)
         if alarm.any():
             self._stat_alarmed[c] = True
         return e, z, stat, alarm, vstable, var, mean
@@ -795,7 +859,9 @@ class OnlineDetector:
         if self.glrt is not None:
             glrt = copy.copy(self.glrt)
             glrt.threshold = _HUGE
-        return OnlineDetector(self.pairs, **{**self._options, "threshold": _HUGE, "glrt": glrt})
+        free = OnlineDetector(self.pairs, **{**self._options, "threshold": _HUGE, "glrt": glrt})
+        free._settle_level = self.threshold
+        return free
 
     @staticmethod
     def _runs(runs: Any, name: str) -> list:
@@ -1081,7 +1147,7 @@ class OnlineDetector:
             hours += n / f / _SECONDS_PER_HOUR
             resid = np.asarray(out.resid, dtype=float).reshape(n, -1)
             for c, walk in enumerate(free._walks):
-                if walk is None:
+                if free._armed_at[c] < 0:
                     continue
                 start = max(int(free._armed_at[c]), self.arm_after)
                 w = (resid[start:, c] - walk[1]) / walk[0]
