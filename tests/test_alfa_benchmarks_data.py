@@ -131,3 +131,35 @@ def test_thrust_variants_base_is_the_thrust_channel_and_signs_split_the_input(sh
     _, got = bench.thrust_variant_statistic(df, "airspeed error split by sign")
     np.testing.assert_array_equal(got, expected)
     assert np.isfinite(got).sum() > 1000 and not np.array_equal(got, s)
+
+
+def test_lofo_criterion_is_the_fold_choice_on_its_fitting_flights():
+    """lofo's criterion (used by configuration CT to choose the thrust structure in each fold) is the number of
+    correct outcomes and the mean detection time of the fold's choice on the other flights only."""
+    bench = benchmark("alfa_detection")
+    onset = np.array([10.0, np.nan, 20.0])
+    times = {"a": np.array([[5.0, 12.0], [30.0, np.nan], [21.0, 25.0]])}
+    alarm, labels, _, _, _, criterion = bench.lofo(onset, times, {"a": np.array([1.0, 2.0])})
+    np.testing.assert_array_equal(criterion, [[2, 5.0], [2, 3.5], [2, 2.0]])
+    np.testing.assert_array_equal(alarm, [12.0, np.nan, 25.0])
+    assert labels == ["a 2"] * 3
+
+
+def test_thrust_variant_chosen_in_each_fold_on_its_fitting_flights(monkeypatch):
+    """Configuration CT picks, in each fold, the thrust variant whose choice scores best on the other flights
+    (ties: the first variant), and applies that fold's thresholds to the held-out flight."""
+    bench = benchmark("alfa_detection")
+    onset = np.array([10.0, np.nan, 20.0])
+    t = np.arange(0.0, 40.0, 0.5)
+
+    def statistic(i, name):
+        if name == "early":                                        # alarms at 5 s on every flight
+            return t, np.where(t >= 5.0, 3.0, 0.0)
+        return t, np.where(t >= onset[i] + 1.0, 3.0, 0.0) if np.isfinite(onset[i]) else np.zeros_like(t)
+
+    monkeypatch.setattr(bench, "THRUST_VARIANTS", {"early": None, "at onset": None, "same": None})
+    monkeypatch.setattr(bench, "thrust_variant_statistic", statistic)
+    grids = {"thrust": np.array([1.0, 2.0])}
+    alarm, labels = bench.lofo_thrust_variants([0, 1, 2], onset, {"thrust": None}, grids)
+    np.testing.assert_array_equal(alarm, [11.0, np.nan, 21.0])
+    assert labels == ["thrust variant 'at onset': thrust 1"] * 3
