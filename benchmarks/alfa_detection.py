@@ -247,7 +247,7 @@ PAPER_NB = int(round(1.0 * FS))
 
 def paper_detector():
     return OnlineDetector(list(PAPER_PAIRS), na=0, nb=PAPER_NB, nk=0, forgetting_factor=1.0, P0=1e4, threshold=4.5,
-                          glrt=None, freeze_on_alarm=True, nonfinite="skip")
+                          glrt=None, freeze_on_alarm=True, nonfinite="skip", statistic="zscore", eps=1e-2)
 
 
 # --------------------------------------------------------------------------- configuration B (physical)
