@@ -68,19 +68,26 @@ from tsfdi.online import OnlineDetector
 PAIRS = ("roll", "pitch", "yaw")
 RATES = ("p", "q", "r")
 CONTROLS = ("roll_control", "pitch_control", "yaw_control")
+MOTORS = tuple(f"motor_command{i}" for i in range(1, 7))
+#: candidate pair sets: the logged inputs of each body-rate pair (topic.column) and the set's own options
+PAIR_SETS = {
+    "controls": ([[f"commands.{c}"] for c in CONTROLS], {}),      # each rate against its axis's actuator control
+    "motors": ([[f"motors.{m}" for m in MOTORS]] * 3, {"eps": 0.05}),  # each rate against the six motor commands
+}
 TURBULENCE = ("light", "moderate", "severe")
-#: the development grid: ARX orders (na, nb) and the requested false alarms per hour
+#: the development grid: pair set, ARX orders (na, nb) and the requested false alarms per hour
 ORDERS = ((1, 2), (1, 3))
 REQUESTED = (0.01, 0.1, 1.0, 10.0)
 DEADLINE = 0.5          # seconds: a failure must be found within this
 LOSS = (0.1, 1.0)       # loss of effectiveness of the failed rotor, drawn uniformly (1: the whole rotor)
+SMALL = (0.1, 0.3)      # the development's extra failure logs: small losses, which the rate loop hides best
 SETTINGS = dict(nk=1, statistic="sprt", forgetting_factor=0.999, eps=0.03, nonfinite="skip")
 
 
 def make_logs(gen: np.random.Generator, n: int, *, failures: bool, duration: float, fs: float,
               loss: tuple = LOSS) -> list:
-    """``n`` simulated autopilot logs on the ``fs`` grid: (DataFrame y+u, failure time or None, rotor, turbulence,
-    loss of effectiveness drawn uniformly in ``loss``)."""
+    """``n`` simulated autopilot logs on the ``fs`` grid: (DataFrame of the gyro rates, actuator controls and
+    motor commands, failure time or None, rotor, turbulence, loss of effectiveness drawn uniformly in ``loss``)."""
     seeds = gen.integers(0, 2**31 - 1, n)
     turb = [TURBULENCE[i] for i in gen.integers(0, 3, n)]
     rotors = gen.integers(1, 7, n) if failures else np.zeros(n, dtype=int)
@@ -95,7 +102,8 @@ def make_logs(gen: np.random.Generator, n: int, *, failures: bool, duration: flo
         if bool(rec["lost_control"]):
             rec = rec.sel(time=slice(None, float(rec["lost_control_time"]) - 0.002))
         log = sensor_log(rec, rng=int(seeds[i]) ^ 0x5E75)
-        frames = tsfdi.align({"gyro": log["gyro"][list(RATES)], "commands": log["commands"][list(CONTROLS)]}, fs=fs)
+        frames = tsfdi.align({"gyro": log["gyro"][list(RATES)], "commands": log["commands"][list(CONTROLS)],
+                              "motors": log["motors"][list(MOTORS)]}, fs=fs)
         if len(frames) != 1:
             raise RuntimeError(f"log {i} split into {len(frames)} records by align")
         f = frames[0]
@@ -103,8 +111,10 @@ def make_logs(gen: np.random.Generator, n: int, *, failures: bool, duration: flo
     return out
 
 
-def split(f: pd.DataFrame):
-    return f.iloc[:, :3], f.iloc[:, 3:]
+def split(f: pd.DataFrame, pairs: str = "controls"):
+    """Outputs (the three gyro rates) and inputs (``n_inputs`` columns per pair, pair by pair) of a log."""
+    inputs = PAIR_SETS[pairs][0]
+    return f[[f"gyro.{r}" for r in RATES]], f[[c for cols in inputs for c in cols]]
 
 
 def seconds(f: pd.DataFrame) -> np.ndarray:
@@ -112,27 +122,28 @@ def seconds(f: pd.DataFrame) -> np.ndarray:
     return idx.total_seconds().to_numpy() if isinstance(idx, pd.TimedeltaIndex) else np.asarray(idx, dtype=float)
 
 
-def detector(na: int, nb: int, **options) -> OnlineDetector:
-    return OnlineDetector(list(PAIRS), na=na, nb=nb, **{**SETTINGS, **options})
+def detector(pairs: str, na: int, nb: int, **options) -> OnlineDetector:
+    inputs, own = PAIR_SETS[pairs]
+    return OnlineDetector(list(PAIRS), na=na, nb=nb, n_inputs=len(inputs[0]), **{**SETTINGS, **own, **options})
 
 
-def calibrated(healthy: list, na: int, nb: int, rate: float) -> OnlineDetector:
-    det = detector(na, nb)
-    ys, us = zip(*(split(f) for f, *_ in healthy))
+def calibrated(healthy: list, pairs: str, na: int, nb: int, rate: float) -> OnlineDetector:
+    det = detector(pairs, na, nb)
+    ys, us = zip(*(split(f, pairs) for f, *_ in healthy))
     return det.calibrate(list(ys), list(us), false_alarms_per_hour=rate)
 
 
-def unfrozen(det: OnlineDetector, na: int, nb: int) -> OnlineDetector:
+def unfrozen(det: OnlineDetector, pairs: str, na: int, nb: int) -> OnlineDetector:
     """``det`` (calibrated) without freezing at an alarm: every alarm episode of a healthy stretch counts."""
-    return detector(na, nb, threshold=det.threshold, sprt=det.sprt, freeze_on_alarm=False)
+    return detector(pairs, na, nb, threshold=det.threshold, sprt=det.sprt, freeze_on_alarm=False)
 
 
-def score(det: OnlineDetector, free: OnlineDetector, logs: list) -> pd.DataFrame:
+def score(det: OnlineDetector, free: OnlineDetector, logs: list, pairs: str = "controls") -> pd.DataFrame:
     """One row per log: kind, turbulence, rotor, failure time, first alarm (s), delay, outcome, hours, episodes
     (``free``: the same detector without freezing, whose alarm episodes on the healthy stretch are counted)."""
     rows = []
     for f, ft, rotor, turb, level in logs:
-        y, u = split(f)
+        y, u = split(f, pairs)
         t = seconds(f)
         det.reset()
         with warnings.catch_warnings(record=True) as caught:
@@ -184,6 +195,15 @@ def summary(tab: pd.DataFrame) -> pd.DataFrame:
         "latest arming s": [tab.armed_s.max()]}).round(4)
 
 
+def by_loss(tab: pd.DataFrame) -> pd.DataFrame:
+    """Failure logs, found, found within the deadline and mean delay per bin of the loss of effectiveness."""
+    fail = tab[tab.kind == "failure"]
+    bins = pd.cut(fail["loss"], [0.0, 0.3, 0.5, 0.7, 0.9, 1.0])
+    return fail.groupby(bins, observed=True).agg(
+        logs=("outcome", "size"), found=("outcome", lambda o: int((o == "found").sum())),
+        within=("delay_s", lambda d: int((d <= DEADLINE).sum())), mean_delay_s=("delay_s", "mean")).round(3)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dev", type=int, default=12, help="development logs of each kind (healthy, failure)")
@@ -198,31 +218,41 @@ def main(argv=None) -> None:
     dev = np.random.default_rng(args.dev_seed)
     dev_healthy = make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs)
     dev_fail = make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=tuple(args.loss))
-    print(f"development: {args.dev} healthy + {args.dev} failure logs of {args.duration:g} s at {args.fs:g} Hz "
+    dev_fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL)
+    print(f"development: {args.dev} healthy + {args.dev} failure logs (loss {args.loss[0]:g}-{args.loss[1]:g}) + "
+          f"{args.dev} failure logs (loss {SMALL[0]:g}-{SMALL[1]:g}) of {args.duration:g} s at {args.fs:g} Hz "
           f"(seed {args.dev_seed}), {time.time() - t0:.0f} s")
     grid = []
-    for na, nb in ORDERS:
-        for rate in REQUESTED:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                det = calibrated(dev_healthy, na, nb, rate)
-            s = summary(score(det, unfrozen(det, na, nb), dev_healthy + dev_fail)).iloc[0]
-            ok = s[f"within {DEADLINE} s"] == s["failure logs"] and s["false episodes"] == 0
-            grid.append({"na": na, "nb": nb, "requested / h": rate, "threshold": det.threshold,
-                         "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
-                         "found in time": int(s[f"within {DEADLINE} s"]), "false episodes": int(s["false episodes"]),
-                         "mean delay s": s["mean delay s"], "ok": ok})
+    for pairs in PAIR_SETS:
+        for na, nb in ORDERS:
+            for rate in REQUESTED:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    try:
+                        det = calibrated(dev_healthy, pairs, na, nb, rate)
+                    except ValueError as err:               # e.g. a pair armed too late on a healthy log
+                        print(f"pairs={pairs}, na={na}, nb={nb}, {rate:g} per hour: not calibrated: {err}")
+                        continue
+                s = summary(score(det, unfrozen(det, pairs, na, nb), dev_healthy + dev_fail, pairs)).iloc[0]
+                grid.append({"pairs": pairs, "na": na, "nb": nb, "requested / h": rate, "threshold": det.threshold,
+                             "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
+                             "found in time": int(s[f"within {DEADLINE} s"]),
+                             "false episodes": int(s["false episodes"]), "mean delay s": s["mean delay s"]})
     grid = pd.DataFrame(grid)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(grid.to_string(index=False))
     grid["quiet"] = grid["false episodes"] == 0
-    pick = grid.sort_values(["quiet", "found in time", "requested / h", "mean delay s"],
-                            ascending=[False, False, True, True]).iloc[0]
-    na, nb, rate = int(pick["na"]), int(pick["nb"]), float(pick["requested / h"])
-    print(f"chosen on the development logs: na={na}, nb={nb}, false_alarms_per_hour={rate:g}")
+    order = grid.sort_values(["quiet", "found in time", "requested / h", "mean delay s"],
+                             ascending=[False, False, True, True])
+    picks = {p: order[order.pairs == p].iloc[0] for p in PAIR_SETS}       # each set's best, for comparison
+    pick = order.iloc[0]
+    pairs, na, nb, rate = str(pick["pairs"]), int(pick["na"]), int(pick["nb"]), float(pick["requested / h"])
+    print(f"chosen on the development logs: pairs={pairs}, na={na}, nb={nb}, false_alarms_per_hour={rate:g}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        det = calibrated(dev_healthy, na, nb, rate)
+        dets = {p: calibrated(dev_healthy, p, int(r["na"]), int(r["nb"]), float(r["requested / h"]))
+                for p, r in picks.items()}
+    det = dets[pairs]
     cal = det.calibration_
     print(f"calibrated on {cal.runs} healthy logs ({cal.healthy_hours * 60:.1f} min): SPRT threshold "
           f"{det.threshold:.3f}, scale {cal.sprt_scale:.3f}; stated false alarms per hour: {rate:g} on average over "
@@ -233,17 +263,28 @@ def main(argv=None) -> None:
     t1 = time.time()
     logs = (make_logs(fresh, args.eval, failures=False, duration=args.duration, fs=args.fs)
             + make_logs(fresh, args.eval, failures=True, duration=args.duration, fs=args.fs, loss=tuple(args.loss)))
-    tab = score(det, unfrozen(det, na, nb), logs)
+    tab = score(det, unfrozen(det, pairs, na, nb), logs, pairs)
     print(f"evaluation: {args.eval} healthy + {args.eval} failure logs (fresh seed), {time.time() - t1:.0f} s")
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(summary(tab).to_string(index=False))
+        # beside it, on the same logs: the other pair set at its own development choice, and the constructor's
+        # defaults uncalibrated (the rates against the actuator controls, the SPRT at its upper bound)
+        for p, r in picks.items():
+            if p != pairs:
+                other = score(dets[p], unfrozen(dets[p], p, int(r["na"]), int(r["nb"])), logs, p)
+                print(f"\npairs={p} at its development choice (na={int(r['na'])}, nb={int(r['nb'])}, "
+                      f"{float(r['requested / h']):g} per hour, threshold {dets[p].threshold:.3f}):")
+                print(by_loss(other).to_string())
+                print(summary(other).to_string(index=False))
+        plain = OnlineDetector(list(PAIRS))
+        dflt = score(plain, OnlineDetector(list(PAIRS), freeze_on_alarm=False), logs)
+        print(f"\nOnlineDetector(pairs) uncalibrated, rates against the actuator controls (threshold "
+              f"{plain.threshold:.3f}):")
+        print(by_loss(dflt).to_string())
+        print(summary(dflt).to_string(index=False))
         fail = tab[tab.kind == "failure"]
-        bins = pd.cut(fail["loss"], [0.0, 0.3, 0.5, 0.7, 0.9, 1.0])
-        by = fail.groupby(bins, observed=True).agg(
-            logs=("outcome", "size"), found=("outcome", lambda o: int((o == "found").sum())),
-            within=("delay_s", lambda d: int((d <= DEADLINE).sum())), mean_delay_s=("delay_s", "mean"))
         print(f"\nby loss of effectiveness (within: found within {DEADLINE} s):")
-        print(by.round(3).to_string())
+        print(by_loss(tab).to_string())
         print("\nper failure log:")
         print(fail[["turbulence", "rotor", "loss", "failure_s", "first_alarm_s", "delay_s", "outcome"]].round(3)
               .to_string(index=False))

@@ -18,13 +18,17 @@ def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
     failures = B.make_logs(gen, 3, failures=True, duration=40.0, fs=50.0, loss=(0.5, 1.0))
     f, ft, rotor, turb, loss = failures[0]
     assert list(f.columns) == ["gyro.p", "gyro.q", "gyro.r", "commands.roll_control", "commands.pitch_control",
-                               "commands.yaw_control"]
+                               "commands.yaw_control", *(f"motors.motor_command{i}" for i in range(1, 7))]
     assert 15.0 <= ft <= 30.0 and 1 <= rotor <= 6 and turb in B.TURBULENCE and 0.5 <= loss <= 1.0
-    det = B.calibrated(healthy[:3], 1, 2, 1.0)
-    assert det.calibration_.runs == 3 and det.statistic == "sprt" and det.models[0].nk == 1
-    tab = B.score(det, B.unfrozen(det, 1, 2), healthy[3:] + failures)
-    fail = tab[tab.kind == "failure"]
-    assert (fail.outcome == "found").all() and (fail.delay_s <= B.DEADLINE).all(), fail
-    assert tab.false_episodes.sum() == 0
-    s = B.summary(tab).iloc[0]
-    assert s["found"] == 3 and s["healthy h"] == pytest.approx(tab.healthy_hours.sum(), abs=1e-4)
+    y, u = B.split(f, "motors")
+    assert list(y.columns) == ["gyro.p", "gyro.q", "gyro.r"] and u.shape[1] == 18     # six motors per pair
+    for pairs in B.PAIR_SETS:
+        det = B.calibrated(healthy[:3], pairs, 1, 2, 1.0)
+        assert det.calibration_.runs == 3 and det.statistic == "sprt" and det.models[0].nk == 1
+        tab = B.score(det, B.unfrozen(det, pairs, 1, 2), healthy[3:] + failures, pairs)
+        fail = tab[tab.kind == "failure"]
+        assert (fail.outcome == "found").all() and (fail.delay_s <= B.DEADLINE).all(), (pairs, fail)
+        assert tab.false_episodes.sum() == 0
+        s = B.summary(tab).iloc[0]
+        assert s["found"] == 3 and s["healthy h"] == pytest.approx(tab.healthy_hours.sum(), abs=1e-4)
+    assert B.by_loss(tab)["logs"].sum() == 3
