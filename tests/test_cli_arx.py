@@ -47,6 +47,7 @@ def _frame(path) -> pd.DataFrame:
     return pd.read_csv(path).set_index("time")
 
 
+@pytest.mark.filterwarnings("ignore::tsfdi.exceptions.ConvergenceWarning")   # max_lags 4 at the BIC bound
 def test_fit_is_the_library_arx(files, capsys):
     f = _frame(files["healthy"])
     res = tsfdi.load(files["healthy.npz"])
@@ -88,6 +89,28 @@ def test_detect_and_identify_are_the_library_with_u(files, tmp_path):
                  "--out", str(out)]) == 0
     d = tsfdi.detect(y, models["healthy"], tsfdi.FTest(1e-3), u=u)
     np.testing.assert_allclose(pd.read_csv(out)["statistic_gyro"], d.statistic, rtol=1e-6)
+
+
+@pytest.mark.filterwarnings("ignore::tsfdi.exceptions.ConvergenceWarning")   # max_lags 4 at the BIC bound
+def test_select_order_and_sequential_identify(files, tmp_path):
+    f = _frame(files["new"])
+    out = tmp_path / "orders.csv"
+    assert main(["select-order", str(files["healthy"]), "--columns", "gyro", "--u", "cmd_a,cmd_b", "--max-lags", "4",
+                 "--out", str(out)]) == 0
+    h = _frame(files["healthy"])
+    ref = tsfdi.select_order(h["gyro"], 4, "arx", u=h[["cmd_a", "cmd_b"]])
+    np.testing.assert_allclose(pd.read_csv(out)["bic"], np.asarray(ref.table["bic"]), rtol=1e-9)
+    out = tmp_path / "sprt.csv"
+    assert main(["identify", str(files["new"]), "--models", f"healthy={files['healthy.npz']}",
+                 f"loss={files['loss.npz']}", "--rule", "sprt", "--out", str(out)]) == 0
+    models = {n: tsfdi.load(files[f"{n}.npz"]) for n in ("healthy", "loss")}
+    from tsfdi.detection.sequential import msprt
+
+    seq = msprt(ResidualWindows(models).fit(f["gyro"], u=f[["cmd_a", "cmd_b"]]).loglik(), alpha=0.01,
+                models=list(models))
+    got = pd.read_csv(out)
+    assert got["label"].iloc[0] == seq.name == "healthy"           # decided within the healthy first 10 s
+    assert got["decision_time"].iloc[0] == pytest.approx(f.index[2 + seq.decision_time - 1])
 
 
 @pytest.mark.parametrize("rule", ["paper", "sprt"])

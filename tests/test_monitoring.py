@@ -680,3 +680,5 @@ def test_arx_input_required_or_refused(arx_models, models, failure_record):
     one = tsfdi.ARX(y, u[:, 0], 1, 2).fit()
     with pytest.raises(ValueError, match="ARX models must share one set of inputs"):
         tsfdi.Monitor(arx_models["healthy"], {"f": one}, window="5s", fs=FS)
+    with pytest.raises(TypeError, match="records: screen runs the records without an input"):
+        mon.screen([y, y])

@@ -89,6 +89,22 @@ def test_pandas_and_xarray_inputs_matched_by_name(record):
         tsfdi.identify_windows(ys, {"h": res}, window=400, u=us.set_axis(t + 0.005))
 
 
+def test_named_inputs_in_each_models_own_order(record):
+    """Models fitted on the same named inputs in different column orders: each takes ``u`` by name."""
+    rng = np.random.default_rng(5)
+    fits = [simulate(g, 3000, rng) for g in (1.0, 0.5)]
+    ab = tsfdi.ARX(fits[0][0], pd.DataFrame(fits[0][1], columns=["a", "b"]), 1, 3, nk=1).fit()
+    ba = tsfdi.ARX(fits[1][0], pd.DataFrame(fits[1][1][:, ::-1], columns=["b", "a"]), 1, 3, nk=1).fit()
+    y, u = record
+    un = pd.DataFrame(u, columns=["a", "b"])
+    ws = ResidualWindows({"ab": ab, "ba": ba}).fit(y, u=un).statistics(tsfdi.FTest(1e-3), window=400, step=400)
+    for j, res in enumerate((ab, ba)):
+        e = res.residuals(y, un)
+        want = [tsfdi.FTest(1e-3).test(e[s:s + 397], **tsfdi.FTest().reference(res)).statistic for s in ws.starts]
+        np.testing.assert_allclose(ws.statistic[:, j, 0], np.ravel(want), rtol=1e-12)
+    assert ws.labels()[0] == 0 and ws.labels()[-1] == 1
+
+
 def test_fp_arx_point_accepted(record):
     rng = np.random.default_rng(11)
     gains = [0.25, 0.5, 0.75, 1.0]

@@ -302,7 +302,7 @@ def _input_columns(args: argparse.Namespace, models: dict) -> list[str] | None:
             arx, plain = (first, flag) if other is None else (flag, first)
             raise ValueError(f"{arx} is an ARX (input-output) model and {plain} an AR / VAR model: their residuals "
                              "are of different data (the output given --u, the output alone); test one kind")
-        if other is not None and other[0] != have[0]:
+        if other is not None and set(other[0]) != set(have[0]):
             raise ValueError(f"{flag} was fitted with the inputs {other[0]} but {first} with {have[0]}: the models "
                              "must share their inputs")
     if have is None:

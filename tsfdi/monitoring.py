@@ -283,7 +283,7 @@ class Monitor:
                             "record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
         engine = ResidualWindows({"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}
                                  if isinstance(baseline, ARXResults) else {"healthy": baseline})
-        self.nchan = ResidualWindows({"healthy": baseline}).nchan
+        self.nchan = engine.nchan
         #: whether the models take an input ``u`` (ARX models), the same for baseline and fault models (checked by
         #: ``engine``), and its channels in the models' order with whether they are named
         self.inputs = engine.inputs
@@ -809,7 +809,8 @@ class Monitor:
         Raises
         ------
         TypeError
-            ``records`` of another kind.
+            ``records`` of another kind, or ARX models (the records come without their input: :meth:`run` each
+            record with ``u=``).
         ValueError
             A record that :meth:`run` refuses (NaN after a loss of control, too short, other channels), named.
 
@@ -819,6 +820,9 @@ class Monitor:
         """
         from tsfdi.fleet import is_chunked, map_records
 
+        if self.inputs:
+            raise TypeError("records: screen runs the records without an input, but the models are ARX (input-output) "
+                            "models; run each record with its input, Monitor.run(signal, u=...)")
         progress = boolean(progress, "progress")
         if is_chunked(records):
             import xarray as xr

@@ -239,13 +239,14 @@ class ResidualWindows:
             raise ValueError("models fitted on named channels must share one channel order, got "
                              + "; ".join(f"{name!r}: {c}" for name, c in named.items()))
         self._channels = list(orders.pop()) if orders else None
-        self._inputs = None             # the models' input channels (named: matched by name), or their number
+        self._inputs = None             # the first model's inputs and whether they are named (matched by name)
         if self.inputs:
-            fitted = {name: (tuple(str(c) for c in r.model.u_data.channels), r.model.u_data.named)
+            fitted = {name: ([str(c) for c in r.model.u_data.channels], r.model.u_data.named)
                       for name, r in self.models.items()}
-            if len(set(fitted.values())) > 1:
-                raise ValueError("ARX models must share one set of inputs, in one order, got "
-                                 + "; ".join(f"{name!r}: {list(c)}" for name, (c, _) in fitted.items()))
+            # named inputs: one set (each model takes them by name, in its own order); else one count
+            if len({frozenset(c) if named else len(c) for c, named in fitted.values()}) > 1:
+                raise ValueError("ARX models must share one set of inputs, got "
+                                 + "; ".join(f"{name!r}: {c}" for name, (c, _) in fitted.items()))
             self._inputs = next(iter(fitted.values()))
         self._resid: dict | None = None
         self.nobs_: int | None = None
