@@ -662,6 +662,26 @@ def test_arx_models_with_their_input(arx_models, rule):
     assert got.events == res.events
 
 
+@pytest.mark.parametrize("rule", ["paper", "sprt"])
+def test_arx_named_inputs_in_each_models_own_order(arx_models, rule):
+    """A fault model fitted on the inputs in another column order than the baseline takes them by name: the events
+    are those of the same model fitted in the baseline's order."""
+    def fit(res, cols):
+        u = pd.DataFrame(res.model.u_data.values, columns=["cmd_a", "cmd_b"])[cols]
+        return tsfdi.ARX(pd.Series(res.model.data.values[:, 0], name="gyro"), u, 1, 3, nk=1).fit()
+
+    y, u = _arx_record(0.5, 3000, np.random.default_rng(35), failure=1000)
+    opts = dict(fs=FS, steady_window="5s", steady_thresholds=[3 * y[1500:].var()])
+    opts.update(dict(test=FTest(alpha=1e-4), window="5s", step="1s") if rule == "paper" else dict(rule="sprt"))
+    base = fit(arx_models["healthy"], ["cmd_a", "cmd_b"])
+    got, want = ({"f1": fit(arx_models["f1"], order), "f2": fit(arx_models["f2"], order)}
+                 for order in (["cmd_b", "cmd_a"], ["cmd_a", "cmd_b"]))
+    u = pd.DataFrame(u, columns=["cmd_a", "cmd_b"])
+    res = tsfdi.Monitor(base, got, **opts).run(pd.Series(y, name="gyro"), u=u)
+    assert res.events == tsfdi.Monitor(base, want, **opts).run(pd.Series(y, name="gyro"), u=u).events
+    assert res.label == "f1"
+
+
 def test_arx_input_required_or_refused(arx_models, models, failure_record):
     y, u = _arx_record(1.0, 1000, np.random.default_rng(34))
     mon = tsfdi.Monitor(arx_models["healthy"], window="5s", fs=FS, test=FTest(alpha=1e-4))

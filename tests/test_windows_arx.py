@@ -145,8 +145,9 @@ def test_input_refused_or_required(arx, record):
 def test_crazypad_rates_given_the_commands(shared_crazypad):
     """Real flights (CrazyPAD, drone E8): each gyro rate given the three commands (one ARX per axis, each axis at the
     Sidak share of alpha = 0.01), fitted on four normal logs. The windows of a time-indexed flight equal ``identify``
-    on each window; the mean test flags most 2 s windows of a large M3 cut (11 of 18 measured) (which the attitude loop compensates) and
-    none of the normal log left out of the fit (``benchmarks/crazypad_controller.py`` measures this in full)."""
+    on each window; the mean test flags most 2 s windows of a large M3 cut (which the attitude loop compensates; 11
+    of 18 measured) and none of the normal log left out of the fit (``benchmarks/crazypad_controller.py`` measures
+    this in full)."""
     from tsfdi.datasets import load_crazypad
 
     gyro = ["controller.r_roll", "controller.r_pitch", "controller.r_yaw"]

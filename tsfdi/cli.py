@@ -936,7 +936,8 @@ def _fit_fp(args: argparse.Namespace) -> int:
     except (ValueError, TypeError) as exc:
         raise _reword(exc, data, subs) from None
     m = res.model
-    lines = [f"FP-{model.upper()}({m.na}{f', {m.na}, nk={args.nk}' if inputs else ''}), degree {', '.join(map(str, m.degree))} ({how}) over "
+    order = f"{m.na}, {m.na}, nk={args.nk}" if inputs else f"{m.na}"
+    lines = [f"FP-{model.upper()}({order}), degree {', '.join(map(str, m.degree))} ({how}) over "
              f"{_fp_range(m.k_range, m.k_names)} on {data.columns} "
              f"from {len(data.frames)} record(s) at {len(k.drop_duplicates())} operating point(s), {data.rec.fs:g} Hz "
              f"({res.nobs} samples): BIC {res.bic:.6g}"]

@@ -16,8 +16,8 @@ import warnings
 import pandas as pd
 
 __all__ = ["HelpFormatter", "finite", "integer", "positive", "probability", "count", "seed", "two_or_more", "span",
-           "spans", "instant", "duration", "time_from_start", "csv_list", "column_list", "record_numbers", "where", "order",
-           "METHODS", "method", "operating_point"]
+           "spans", "instant", "duration", "time_from_start", "csv_list", "column_list", "record_numbers", "where",
+           "order", "METHODS", "method", "operating_point"]
 
 #: The residual tests of ``--method``: Ljung-Box whiteness, the F test of the variance, the mean-shift test.
 METHODS = ("whiteness", "variance", "mean")

@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import Signal, as_signal, check_paired, refuse_masked, rolling_variance, sampling_frequency, window_samples
+from tsfdi._data import (Signal, as_signal, check_paired, refuse_masked, rolling_variance, sampling_frequency,
+                         window_samples)
 from tsfdi._validation import boolean, float_like, option, probability
 from tsfdi.coverage import Coverage, check_coverage, warn_if_not_covered, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
@@ -508,8 +509,14 @@ class Monitor:
         """Residuals of the buffered stream positions ``[lo, hi)`` through ``res`` (given their input for ARX)."""
         a, b = lo - self._offset, None if hi is None else hi - self._offset
         e = (res.residuals(self._record(self._buffer[a:b])) if not self.inputs else
-             res.residuals(self._record(self._buffer[a:b]), self._ubuffer[a:b]))
+             res.residuals(self._record(self._buffer[a:b]), self._input(self._ubuffer[a:b])))
         return np.asarray(e, dtype=np.float64).reshape(-1, self.nchan)
+
+    def _input(self, ux: np.ndarray | None) -> Any:
+        """Buffered inputs as a signal every model takes by name (named inputs: each model in its own order)."""
+        if ux is None or not self._u_channels[1]:
+            return ux
+        return pd.DataFrame(ux, columns=self._u_channels[0])
 
     def _append(self, x: np.ndarray, ux: np.ndarray | None) -> None:
         self._buffer = np.concatenate([self._buffer, x])
@@ -542,7 +549,7 @@ class Monitor:
         if body.shape[0] < W:
             return []
         record = self._record(body)
-        ubody = None if ux is None else ux[hist:]
+        ubody = None if ux is None else self._input(ux[hist:])
         det = ResidualWindows({"healthy": self.baseline}).fit(record, u=ubody).statistics(self.detection_test,
                                                                                            window=W, step=S)
         if self.models:
@@ -637,7 +644,8 @@ class Monitor:
         pm = self._fault_order
         a, b = lo - pm - self._offset, upto - self._offset
         ll = ResidualWindows(self.models).fit(self._record(self._buffer[a:b]),
-                                              u=self._ubuffer[a:b] if self.inputs else None).loglik(common=pm)
+                                              u=self._input(self._ubuffer[a:b] if self.inputs else None)
+                                              ).loglik(common=pm)
         res = msprt(ll, alpha=self.sprt_alpha, restart=True, scale=self.sprt_scale, models=list(self.models),
                     state=self._w)
         self._w = res.state
