@@ -32,7 +32,14 @@ Data and settings, all fixed before looking at a faulty flight, or chosen on nor
 
 Sections: (1) false alarms, leave one normal log out (5 folds: fitted and calibrated on the other 4 logs, tested on
 the held-out log), with the 99 % binomial band of alpha; (2) detection: fitted on the 5 normal logs, the percent of
-the 2 s windows flagged on every M3 cut flight, per condition and over all of them.
+the 2 s windows flagged on every M3 cut flight, per condition and over all of them; (3) identification among five
+conditions of the cut depth series, chosen before any run (``IDENTIFY``: normal flight and the M3 cuts of 1, 2, 3
+and 4 mm on both edges), leave one flight out: one model per condition and kind (the held-out flight's own
+condition fitted on its other logs, every other condition on all its logs), each with the ``F+M`` test calibrated
+on its own held-out residuals; every 2 s window, step 0.5 s, of the held-out flight is labelled by the paper rule
+(the one accepted model) and the likelihood rule (the most likely accepted model, any model when none is accepted;
+the ARX's likelihood is the sum of its three axes' Gaussian log-likelihoods, the axes' residuals taken as
+independent), percent of the windows correct.
 """
 
 from __future__ import annotations
@@ -59,6 +66,9 @@ ALPHA = 0.01
 MAX_LAGS = 20
 FAMILIES = ("F", "M", "F+M")
 MODELS = ("VAR gyro", "VAR gyro+cmd", "ARX gyro|cmd")
+IDENTIFY = ("normal_flight", "cut_propeller_M3_1mm_1mm_45mm", "cut_propeller_M3_2mm_2mm_43mm",
+            "cut_propeller_M3_3mm_3mm_41mm", "cut_propeller_M3_4mm_4mm_39mm")
+IDENTIFY_STEP_S = 0.5
 
 
 def segments(root: Path, condition: str) -> list[pd.DataFrame]:
@@ -110,6 +120,17 @@ class Baseline:
                       for _, _, _, held, a in self.parts]
         self.orders = [int(res.model.max_lag) for _, _, res, _, _ in self.parts]
 
+    def windows(self, seg: pd.DataFrame, family: str, step: int, common: int) -> tuple:
+        """Every window (``self.W``, ``step`` apart) of ``seg`` under ``family``: rejected (some part rejects) and
+        the log-likelihood score on the samples from ``common`` on (summed over the parts)."""
+        rej, ll = False, 0.0
+        for (cols, inputs, res, _, _), tests in zip(self.parts, self.tests):
+            y = seg[cols[0]] if inputs is not None else seg[cols]
+            ws = tsfdi.ResidualWindows({"m": res}).fit(y, u=None if inputs is None else seg[inputs]).statistics(
+                tests[family], window=self.W, step=step, common=common)
+            rej, ll = rej | ws.reject[:, 0], ll + ws.loglik[:, 0]
+        return rej, ll
+
     def flags(self, seg: pd.DataFrame) -> dict:
         """Family -> bool per 2 s window (step = window) of ``seg``: some part rejects."""
         out = {}
@@ -120,6 +141,36 @@ class Baseline:
                 rej = rw.statistics(tests[f], window=self.W, step=self.W, loglik=False).reject[:, 0]
                 out[f] = rej if f not in out else out[f] | rej
         return out
+
+
+def identification(root: Path, W: int, step: int) -> pd.DataFrame:
+    """Section 3: percent of the windows of the held-out flights labelled with their own condition."""
+    flights = {c: logs_of(segments(root, c)) for c in IDENTIFY}
+    rows = []
+    for kind in MODELS:
+        full = {c: Baseline(kind, [s for segs in fl.values() for s in segs], W) for c, fl in flights.items()}
+        counts = {r: [0, 0] for r in ("paper", "likelihood")}
+        status = np.zeros(3, dtype=int)         # paper rule: identified, ambiguous, none
+        for c, fl in flights.items():
+            for out, held in fl.items():
+                models = {**full, c: Baseline(kind, [s for log, segs in fl.items() if log != out for s in segs], W)}
+                common = max(max(b.orders) for b in models.values())
+                truth = list(models).index(c)
+                for seg in held:
+                    got = [models[m].windows(seg, "F+M", step, common) for m in models]
+                    acc = ~np.column_stack([g[0] for g in got])
+                    ll = np.column_stack([g[1] for g in got])
+                    for rule in counts:
+                        lab = tsfdi.windows.decide(acc, rule, loglik=ll)
+                        counts[rule][0] += int((lab == truth).sum())
+                        counts[rule][1] += lab.size
+                    n_acc = acc.sum(axis=1)
+                    status += [int((n_acc == 1).sum()), int((n_acc > 1).sum()), int((n_acc == 0).sum())]
+        n = status.sum()
+        rows.append({"model": kind, **{f"{r} rule": f"{100 * k / n:.1f} %" for r, (k, n) in counts.items()},
+                     "windows": n, **{f"paper: {w}": f"{100 * c / n:.1f} %"
+                                      for w, c in zip(("identified", "ambiguous", "none"), status)}})
+    return pd.DataFrame(rows)
 
 
 def band(n: int, p: float) -> tuple:
@@ -181,6 +232,9 @@ def main() -> None:
     per = pd.DataFrame({kind: [100 * det[kind, "F+M", c][0] / det[kind, "F+M", c][1] for c in cuts]
                         for kind in MODELS}, index=[c.removeprefix("cut_propeller_M3_") for c in cuts])
     print(per.round(1).to_string())
+    print(f"\nidentification among {len(IDENTIFY)} conditions ({', '.join(IDENTIFY)}), leave one flight out, "
+          f"windows of {WINDOW_S:g} s, step {IDENTIFY_STEP_S:g} s, F+M calibrated, percent of windows correct:")
+    print(identification(root, W, int(round(IDENTIFY_STEP_S * fs))).to_string(index=False))
     print(f"\nrun time {time.perf_counter() - t0:.0f} s")
 
 
