@@ -2,7 +2,7 @@
 the cut depth of CrazyPAD propeller M3 estimated from a flight (leave one depth out).
 
 Run: ``python benchmarks/fp_models.py [--data PATH] [--lags N] [--degree D]`` (BLAS pinned to one thread; reads
-``../shared/data/crazypad`` for sections 2-3, skipped with a message when it is missing; about 8 min on the 2-core
+``../shared/data/crazypad`` for sections 2-3, skipped with a message when it is missing; about 6 min on the 2-core
 development machine, most of it the inner folds of section 2 and the nested folds of its detection through models of
 the depth).
 
@@ -641,8 +641,9 @@ def depth_detection(ch) -> None:
     window = cp.samples(WINDOW_S)
     print(f"\n  detection through models of the depth: normal flights (k = 0) and the cut depths fitted together, "
           f"leave one depth out (cut flights) / one flight out (normal flights), alpha {ALPHA:g}; a flight is a cut "
-          "when the likelihood ratio of k = 0 against k_hat exceeds the chi-bar-square point (nominal), or that point "
-          "times the fold's scale from its normal flights left out in turn (calibrated, nested)")
+          "when its likelihood-ratio statistic exceeds its nominal point (chi-bar-square of k = 0 against k_hat, or "
+          "chi-square), or that point times the fold's scale from its normal flights left out in turn (calibrated, "
+          "nested)")
     for name, fit, stat in (
             (f"(a) FP-VAR over depth (lags {ch.order}: BIC on the normal flights; degree 1 a priori), per segment "
              "estimate_k", var_model(ch), var_stat(ch)),
