@@ -167,3 +167,29 @@ def test_errors_name_the_flag_file_and_column(files, capsys):
     frame.to_csv(bad, index=False)
     assert main(["detect", str(bad), "--baseline", healthy]) == 2
     assert f"--u: {bad} has no column 'cmd_b'" in capsys.readouterr().err
+
+
+def test_fit_with_k_is_the_library_fparx(files, capsys):
+    """``fit --k --u``: an FP-ARX over the files' operating points; detect tests a record at a logged ``--k`` and at
+    its ``--k estimate`` (FPResults.estimate_k given the input)."""
+    out = files["folder"] / "fparx.npz"
+    fit = [str(files["healthy"]), str(files["loss"])]
+    assert main(["fit", *fit, "--columns", "gyro", "--u", "cmd_a,cmd_b", "--k", "gain=1,0.5", "--lags", "2",
+                 "--degree", "1", "--out", str(out), "--quiet"]) == 0
+    assert "FP-ARX(2, 2, nk=0), degree 1 (given)" in capsys.readouterr().out
+    frames = [_frame(p) for p in fit]
+    ref = tsfdi.models.FPARX([f["gyro"] for f in frames], [f[["cmd_a", "cmd_b"]] for f in frames],
+                             pd.DataFrame({"gain": [1.0, 0.5]}), 2, 2, 0, 1).fit()
+    res = tsfdi.load(out)
+    np.testing.assert_allclose(np.asarray(res.params), np.asarray(ref.params), rtol=1e-10)
+    new = str(files["new"])
+    table = files["folder"] / "fparx.csv"
+    assert main(["detect", new, "--baseline", str(out), "--k", "gain=0.5", "--method", "variance", "--out",
+                 str(table)]) == 0
+    f = _frame(files["new"])
+    d = tsfdi.detect(f["gyro"], ref.at(0.5), tsfdi.FTest(1e-3), u=f[["cmd_a", "cmd_b"]])
+    np.testing.assert_allclose(pd.read_csv(table)["statistic_gyro"], d.statistic, rtol=1e-9)
+    capsys.readouterr()
+    assert main(["detect", new, "--baseline", str(out), "--k", "estimate", "--method", "variance"]) == 0
+    est = ref.estimate_k(f["gyro"], f[["cmd_a", "cmd_b"]])
+    assert f"estimated gain = {est.k_hat[0]:.6g}" in capsys.readouterr().out
