@@ -348,7 +348,7 @@ def test_alfa_lofo_chooses_the_channel_set_inside_the_folds():
     times = {"good": np.array([[11.0], [12.0], [np.nan], [np.nan]]),
              "bad": np.array([[5.0], [11.0], [3.0], [np.nan]])}
     grids = {"good": np.array([1.0]), "bad": np.array([2.0])}
-    alarm, chosen, alarm_fit, label_fit, idx_fit = B.lofo(onset, times, grids)
+    alarm, chosen, alarm_fit, label_fit, idx_fit, _ = B.lofo(onset, times, grids)
     np.testing.assert_array_equal(alarm, [11.0, 12.0, np.nan, np.nan])
     assert chosen == ["good 1, bad off"] * 4 and label_fit == "good 1, bad off"
     assert idx_fit == {"good": 0, "bad": 1}

@@ -254,3 +254,13 @@ def test_settle_streams_as_a_block():
     alarms = np.array([det.update(y.to_numpy()[i], u.to_numpy()[i]) for i in range(len(y))])
     np.testing.assert_array_equal(alarms, ref.alarm)
     pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
+
+
+def test_settle_is_checked():
+    with pytest.raises(ValueError, match=r"settle=250 needs statistic='sprt' .* got statistic='zscore'"):
+        OnlineDetector(2, statistic="zscore", settle=250)
+    with pytest.raises(ValueError, match="settle"):
+        OnlineDetector(2, settle=-1)
+    with pytest.raises(TypeError, match="settle"):
+        OnlineDetector(2, settle=2.5)
+    assert OnlineDetector(2, statistic="mean").settle == 0

@@ -409,11 +409,11 @@ class OnlineDetector:
     (``forgetting_factor=0.999``), ``eps=0.03`` and the restarted SPRT at the upper bound of ``alpha=1e-9``
     (about 20.7). Uncalibrated, on the twelve healthy and twelve failure development logs of
     ``benchmarks/streaming.py`` (90 s, 50 Hz, rotor losses of 10-100 %): every pair arms within 9.7 s, no healthy
-    log alarms and all 12 failures are found within 0.5 s, where paper 001's settings (``na=2, nb=2, nk=0, forgetting_factor=0.995,
-    eps=1e-2, statistic="zscore"`` with the GLRT) alarm on all twelve healthy logs and before 11 of the 12
-    failures, and ``alpha=1e-4`` (upper bound 9.2) alarms on 4 of the 12 healthy logs (the largest healthy
-    statistic was 11.4, the smallest within 0.5 s of a failure 68). Paper 001's
-    reproduction takes those arguments explicitly. For a stated false-alarm rate use :meth:`calibrate`.
+    log alarms and all 12 failures are found within 0.5 s, where paper 001's settings (``na=2, nb=2, nk=0,
+    forgetting_factor=0.995, eps=1e-2, statistic="zscore"`` with the GLRT) alarm on all twelve healthy logs and
+    before 11 of the 12 failures, and ``alpha=1e-4`` (upper bound 9.2) alarms on 4 of the 12 healthy logs (the
+    largest healthy statistic was 11.4, the smallest within 0.5 s of a failure 68). Paper 001's reproduction
+    takes those arguments explicitly. For a stated false-alarm rate use :meth:`calibrate`.
 
     **Settle (take-off).** With ``statistic="sprt"`` the errors are standardised by a scale fixed at arming.
     A pair that arms while the vehicle stands still takes the scale of the ground and alarms at take-off. With
@@ -501,6 +501,9 @@ class OnlineDetector:
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
         self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
         self.settle = int_like(settle, "settle", minimum=0)
+        if self.settle and self.statistic != "sprt":
+            raise ValueError(f"settle={self.settle} needs statistic='sprt' (the scale it sets is the SPRT's), got "
+                             f"statistic={self.statistic!r}")
         self._settle_level: float | None = None   # the alarm-free copies of calibrate: the level settle watches
         self.freeze_on_alarm = boolean(freeze_on_alarm, "freeze_on_alarm")
         if isinstance(glrt, str) and glrt == "default":
