@@ -1,6 +1,6 @@
 """The guide's PX4 example (docs/guide/online.md, issue 34): body rates against the actuator controls of
-``data/px4/sample.ulg`` with the autopilot-log recipe -- every axis arms within 10 s of the start and nothing
-alarms -- and the warning of a pair that never arms."""
+``data/px4/sample.ulg`` with the autopilot-log recipe, the constructor's defaults -- every axis arms within 10 s of
+the start and nothing alarms -- and the warning of a pair that never arms."""
 
 import warnings
 from pathlib import Path
@@ -14,7 +14,6 @@ from tsfdi.online import OnlineDetector
 
 pytest.importorskip("pyulog")
 SAMPLE = Path(__file__).resolve().parents[1] / "data" / "px4" / "sample.ulg"
-RECIPE = dict(na=1, nb=2, nk=1, forgetting_factor=0.999, eps=0.03, statistic="sprt")
 
 
 def rates_and_controls(fs=50):
@@ -31,7 +30,7 @@ def test_the_guide_px4_example_arms_within_10_s_and_raises_no_alarm():
     y, u = records[0]
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
-        out = OnlineDetector(["roll", "pitch", "yaw"], **RECIPE).run(y, u)
+        out = OnlineDetector(["roll", "pitch", "yaw"]).run(y, u)
     armed = out.first_alarms["armed_at"].to_numpy() / out.fs
     assert np.all((armed > 0) & (armed < 10.0)), armed
     assert out.first_alarm is None and not out.alarm.any()
@@ -40,5 +39,5 @@ def test_the_guide_px4_example_arms_within_10_s_and_raises_no_alarm():
 def test_a_pair_that_never_arms_is_named_with_what_to_change():
     y, u = rates_and_controls()[1]              # the vehicle lies still: the yaw rate is noise around a constant
     with pytest.warns(ConvergenceWarning, match="pair 'yaw' has not armed") as caught:
-        OnlineDetector(["roll", "pitch", "yaw"], **RECIPE).run(y, u)
+        OnlineDetector(["roll", "pitch", "yaw"]).run(y, u)
     assert "actuator control" in str(caught[0].message)
