@@ -186,3 +186,21 @@ def test_configuration_a_is_paper_001s_zscore_detector(shared_alfa):
     assert det.statistic == "zscore" and det.eps == 1e-2 and det.glrt is None
     outcome = score_records(tab.onset_s.to_numpy(dtype=float), alarm, records=tab.flight)["outcome"]
     assert outcome.value_counts().to_dict() == {"FP": 30, "TP": 5, "FN": 5, "TN": 5}
+
+
+def test_pitch_error_level_finds_the_elevator_failure_c_misses(shared_alfa):
+    """Configuration CP's pitch_err channel: on 2018-09-11-14-41-51 (elevator) it exceeds, within 3 s of the onset,
+    its largest value over the healthy part of every flight (the module docstring's claim); it is a candidate of
+    CP only, not of B5."""
+    bench = benchmark("alfa_detection")
+    tab = list_alfa(shared_alfa)
+    onset = tab.onset_s.to_numpy(dtype=float)
+    healthy, target = [], None
+    for i, path in enumerate(tab.merged_path):
+        t, s = bench.channel_statistic(bench.prepare(bench.load_alfa(path)), "pitch_err")
+        end = onset[i] if np.isfinite(onset[i]) else np.inf
+        healthy.append(s[t < end].max())
+        if "14-41-51_elevator" in tab.flight[i]:
+            target = s[(t >= end) & (t < end + 3.0)].max()
+    assert target > max(healthy) > 25.0
+    assert "pitch_err" not in bench.B5_CHANNELS and "pitch_err" not in bench.BASE_CHANNELS
