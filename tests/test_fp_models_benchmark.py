@@ -244,3 +244,30 @@ def test_healthy_trim_sees_no_cut_flight(bench, small_items, capsys):
     bench.report_detection_folds(t, "healthy trim")
     out = capsys.readouterr().out
     assert "calibration scale median" in out and "RMSE" not in out and "k_hat" not in out    # no depth estimate
+
+
+def test_healthy_trim_by_segment_takes_each_segment_at_its_position(bench, small_items):
+    cp = bench.cp
+    airframes = bench.airframe_k(f.drone for d, f in small_items if d == 0.0)
+    window = cp.samples(bench.WINDOW_S)
+    fit, stat = bench.healthy_trim_model(airframes, window, True), bench.healthy_trim_stat(airframes, window, True)
+    normal = [f for d, f in small_items if d == 0.0]
+    res = fit(small_items)
+    assert res.nobs == sum(len(f.segments) for f in normal) and list(res.model.k_names) == ["k0", "k1"]
+    # with both parameters categorical (degree 1 each), the surface at (airframe, position) is the mean of the window
+    # means of that airframe's segments at that position, and a window spreads about its own segment's mean
+    cut = [f for d, f in small_items if d == 4.0][0]
+    dev = []
+    for pos, x in enumerate(cut.arrays(cp.COMMANDS)):
+        same = [y[:len(y) - len(y) % window] for f in normal if f.drone == cut.drone
+                for i, y in enumerate(f.arrays(cp.COMMANDS)) if i == pos]
+        trim = np.vstack([y.reshape(-1, window, 3).mean(axis=1) for y in same]).mean(axis=0)
+        dev.append(x[:len(x) - len(x) % window].reshape(-1, window, 3).mean(axis=1) - trim)
+    dev = np.vstack(dev)
+    r = dev.mean(axis=0)
+    got = stat(res, cut)
+    assert got["lr"] == pytest.approx(r @ np.linalg.solve(res.S_rec + res.S_within / len(dev), r), rel=1e-9)
+    # the segments' systematic difference is in the surface, not in the windows' spread
+    flat = bench.healthy_trim_model(airframes, window)(small_items)
+    assert res.S_within[1, 1] < 0.5 * flat.S_within[1, 1]
+    assert got["lr"] != pytest.approx(bench.healthy_trim_stat(airframes, window)(flat, cut)["lr"])
