@@ -60,12 +60,13 @@ def test_arx_needs_u_and_gets_it(fits):
     assert tsfdi.identify(Y, {"h": fits["arx"]}, u=U).decisions["h"].reject == d.reject
 
 
-def test_windowed_engine_and_monitor_refuse_arx(fits):
-    with pytest.raises(TypeError, match=r"models\['h'\] is an ARX"):
+def test_windowed_engine_and_monitor_need_the_input_of_arx(fits):
+    """ARX models go through the windowed engine with ``u`` (issue 32): without it, or mixed with AR, refused."""
+    with pytest.raises(TypeError, match="u is required"):
         identify_windows(Y, {"h": fits["arx"]}, window=100)
-    with pytest.raises(TypeError, match=r"models\['h'\] is an ARX"):
-        ResidualWindows({"h": fits["arx"]})
-    with pytest.raises(TypeError, match="baseline is an ARX"):
+    with pytest.raises(TypeError, match="u is required"):
+        ResidualWindows({"h": fits["arx"]}).fit(Y)
+    with pytest.raises(TypeError, match="baseline and models mix ARX"):
         tsfdi.Monitor(fits["arx"], {"f": fits["ar"]}, window=100, step=10, steady_window=50)
 
 
