@@ -193,3 +193,13 @@ def test_fit_with_k_is_the_library_fparx(files, capsys):
     assert main(["detect", new, "--baseline", str(out), "--k", "estimate", "--method", "variance"]) == 0
     est = ref.estimate_k(f["gyro"], f[["cmd_a", "cmd_b"]])
     assert f"estimated gain = {est.k_hat[0]:.6g}" in capsys.readouterr().out
+
+
+def test_an_input_copying_the_output_is_refused(files, capsys):
+    frame = pd.read_csv(files["healthy"]).assign(copy=lambda f: f["gyro"])
+    path = files["folder"] / "copy.csv"
+    frame.to_csv(path, index=False)
+    assert main(["fit", str(path), "--columns", "gyro", "--u", "copy,cmd_b", "--max-lags", "3", "--out",
+                 str(files["folder"] / "copy.npz")]) == 2
+    err = " ".join(capsys.readouterr().err.split())
+    assert "exactly" in err and "Choose the channels with --columns and --u" in err

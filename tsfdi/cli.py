@@ -857,7 +857,8 @@ def _fit(args: argparse.Namespace) -> int:
         said = "; ".join(sel.spec.collinear_channels())
         raise ValueError(f"{model.upper()}({res.lags}) fits the {len(data.columns)} column(s) of {data.path} exactly: "
                          f"collinear or constant channels{f' ({said})' if said else ''}, so the model would explain "
-                         "any flight and detect nothing; not saved. Choose the channels with --columns")
+                         "any flight and detect nothing; not saved. Choose the channels with --columns"
+                         + (" and --u (an input that copies the output explains it exactly)" if model == "arx" else ""))
     name = f"ARX({res.lags}, {res.lags}, nk={args.nk}) of {data.columns} given --u {args.u}" if model == "arx" else \
         f"{model.upper()}({res.lags}) on {data.columns}"
     return _save_fitted(res, args, f"{name} from {len(data.frames)} record(s) "
