@@ -193,13 +193,14 @@ S. *The recipe with the defaults' code path, calibrated in the folds* (issue 34)
    the recipe at its default threshold (nothing taken from data), alarms before the onset on 43 of the 45
    flights (its table is printed, also on Keipour's 22 flights).
 T. *Thrust-channel variants* (issue 34), measured, not configurations: the engine flights' false alarms of B and
-   C come from the thrust channel on three healthy parts (pitch and climb oscillations, ``delta_pitch`` up to about
-   30 deg and climb rate up to 8 m/s within 3 s, where the autopilot cuts the throttle: without the throttle command, which
-   leaks, a commanded thrust cut looks like a loss). The script prints, for the thrust channel with further inputs
-   (load factor f_z, pitch rate, climb rate, pitch rate and error), nb = 5, and the airspeed error split by sign (a
-   throttle saturating at idle), the largest healthy-part maxima over all flights and the engine flights above
-   each within 3 s: with no false alarm at most 2 of 23 engine flights are found by any variant, with one at most
-   14 (pitch rate added), with three 21 (as B). None separates the three manoeuvres from the engine failures.
+   C come from the thrust channel on three healthy parts (pitch and climb oscillations, ``delta_pitch`` up to
+   about 30 deg and climb rate up to 8 m/s within 3 s, where the autopilot cuts the throttle: without the
+   throttle command, which leaks, a commanded thrust cut looks like a loss). The script prints, for the thrust
+   channel with further inputs (load factor f_z, pitch rate, climb rate, pitch rate and error), nb = 5, and the
+   airspeed error split by sign (a throttle saturating at idle), the largest healthy-part maxima over all flights
+   and the engine flights above each within 3 s: with no false alarm at most 2 of 23 engine flights are found by
+   any variant, with one at most 14 (pitch rate added), with three 21 (as B). None separates the three
+   manoeuvres from the engine failures.
 CT. *C with the thrust channel's structure chosen in the folds too* (issue 34: every setting inside the folds):
    in each leave-one-flight-out fold, C's search is run once per thrust variant of T (the variant's crossing
    times on the same threshold grid) and the variant whose fold choice is best on the 44 fitting flights
@@ -860,8 +861,8 @@ def sprt_folds(flights, onset, rate=SPRT_RATE):
     ``false_alarms_per_hour = rate / n_groups`` on the healthy parts (:func:`healthy_part`) of the *other* flights
     only, then run on flight ``i``; its first alarm is the earliest over the groups. A group whose calibration
     raises ``ValueError`` in a fold cannot be used there: the message is kept and the fold has no alarm (``alarm``
-    NaN; :func:`sprt_report` then does not score S). Returns ``(alarm, refusals)``: the held-out first-alarm times (s, NaN: none or refused) and
-    ``{group name: [(fold, message), ...]}``.
+    NaN; :func:`sprt_report` then does not score S). Returns ``(alarm, refusals)``: the held-out first-alarm
+    times (s, NaN: none or refused) and ``{group name: [(fold, message), ...]}``.
     """
     from tsfdi.exceptions import ConvergenceWarning
 
@@ -1039,7 +1040,8 @@ def main(argv=None):
     print(pd.Series(chosen_c).value_counts().to_string())
     print("\nCP: the same with C's candidates and the pitch tracking-error level (count)")
     print(pd.Series(chosen_cp).value_counts().to_string())
-    print(f"CP all-flight choice (in-sample): {label_cpfit}; outcomes {score(alarm_cpfit)['outcome'].value_counts().to_dict()}")
+    print(f"CP all-flight choice (in-sample): {label_cpfit}; outcomes "
+          f"{score(alarm_cpfit)['outcome'].value_counts().to_dict()}")
     print("\nCT: C with the thrust channel's structure (THRUST_VARIANTS) chosen in the folds as well (count)")
     print(pd.Series(chosen_ct).value_counts().to_string())
     print(f"C all-flight choice (in-sample): {label_cfit}; shipped roll_gain threshold {ALFA_GAIN_THRESHOLD:g} "
@@ -1092,7 +1094,8 @@ def main(argv=None):
                          "CT (held-out, the thrust structure chosen in the folds too)": sc_ct,
                          "CP (held-out, C plus the pitch tracking-error level)": sc_cp,
                          "S0 (the recipe at its default SPRT threshold)": sc_s0,
-                         **({} if sc_s is None else {"S (the recipe calibrated in the folds, held-out)": sc_s})}.items():
+                         **({} if sc_s is None else {"S (the recipe calibrated in the folds, held-out)": sc_s}),
+                         }.items():
             print(f"\nSame 22 flights, configuration {name}")
             print(table(sc[sub], kind[sub], kinds).to_string())
 
