@@ -200,7 +200,9 @@ T. *Thrust-channel variants* (issue 34), measured, not configurations: the engin
    airspeed error split by sign (a throttle saturating at idle), the largest healthy-part maxima over all flights
    and the engine flights above each within 3 s: with no false alarm at most 2 of 23 engine flights are found by
    any variant, with one at most 14 (pitch rate added), with three 21 (as B). None separates the three
-   manoeuvres from the engine failures.
+   manoeuvres from the engine failures. Measured on all flights and not kept: vetoing thrust alarms while
+   ``|delta_pitch|`` exceeded 12-15 deg within the last second removes one of the three (21 engine flights found
+   with two false alarms instead of three); longer veto windows (2-3 s) lose engine detections.
 CT. *C with the thrust channel's structure chosen in the folds too* (issue 34: every setting inside the folds):
    in each leave-one-flight-out fold, C's search is run once per thrust variant of T (the variant's crossing
    times on the same threshold grid) and the variant whose fold choice is best on the 44 fitting flights
