@@ -1,8 +1,8 @@
 """Online detection on every labelled ALFA flight of the shared copy (Keipour et al. Table I style).
 
 Run: ``python benchmarks/alfa_detection.py [--data PATH]`` (reads ``../shared/data/alfa`` next to the repository,
-or the ALFA folder ``PATH`` of the same layout; ~1.5 min). Every flight of the copy's ``flights.csv`` is used; the
-counts below are those of the shared copy.
+or the ALFA folder ``PATH`` of the same layout; 1-1.5 min, 1.4 GB of memory for CP's search). Every flight of the
+copy's ``flights.csv`` is used; the counts below are those of the shared copy.
 
 Inputs: only non-leaking columns of ``merged_20hz`` (45 flights: 36 with a failure, 9 without) -- IMU angular
 rates and specific forces, the autopilot navigation errors (airspeed and altitude errors) and the attitude
