@@ -280,6 +280,31 @@ def _within_nodes(scale: np.ndarray, df: np.ndarray) -> tuple[np.ndarray, np.nda
     return np.concatenate(y), w / w.sum()
 
 
+def _lognormal_nodes(mu: np.ndarray, sigma: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes ``ln s`` and weights of the equal mixture of the records' log-normal laws ``exp(N(mu_j, sigma_j^2))``,
+    on the quantile bins of :func:`_within_nodes`."""
+    from scipy import special
+
+    lw = np.linspace(math.log(1e-30), math.log(0.5), _WITHIN_BINS + 1)
+    mid, mass = np.exp(0.5 * (lw[1:] + lw[:-1])), np.diff(np.exp(lw))
+    q = special.ndtri(mid)                                 # lower-half standard normal quantiles
+    y = np.concatenate([mu[:, None] + sigma[:, None] * q, mu[:, None] - sigma[:, None] * q], axis=1).ravel()
+    w = np.tile(np.concatenate([mass, mass]), mu.size)
+    return y, w / w.sum()
+
+
+def _halves(parts: list, per: np.ndarray) -> tuple:
+    """Window sums ``(s1, s2, count, independent)`` of two disjoint halves of every record (``parts``: each record's
+    windows in order, ``per`` its independent windows): its first and last windows, a window's worth of windows
+    (``count / per``) left out between them, so that no window of one half overlaps one of the other."""
+    out = ([], [])
+    for p, n in zip(parts, per):
+        h = int((p.size - math.ceil(p.size / n)) // 2)
+        for k, a in enumerate((p[:h], p[p.size - h:])):
+            out[k].append((a.sum(), np.square(a).sum(), a.size, n * a.size / p.size))
+    return tuple(tuple(np.array(c, dtype=np.float64) for c in zip(*o)) for o in out)
+
+
 def _predictive_tail(value: Any, y: np.ndarray, wy: np.ndarray, x: np.ndarray, lt: np.ndarray) -> np.ndarray:
     """``P(S > value)`` for ``S = exp(X) c_j chi2(nu_j)``: the records' laws on the nodes ``y`` / weights ``wy``
     (:func:`_within_nodes`), ``X`` the predictive law of the anchor, tabulated by :func:`_anchor_table` (``x``,
@@ -325,7 +350,8 @@ class ScaledChi2Threshold:
         anchors' sampling variance :math:`v_s`, averaged over the posterior of the anchors' variance
         :math:`\sigma^2 \sim s^2 (J - 1) / \chi^2_{J-1}` (with :math:`v_s = 0` the Student t of ``J - 1`` degrees
         of freedom, scale :math:`s \sqrt{1 + 1/J}`; a between-record spread hidden in the anchors' sampling noise,
-        estimated as 0, keeps the weight its posterior gives it); the threshold solves
+        estimated as 0, keeps the weight its posterior gives it; with ``shape="record"`` log-normal record laws and
+        :math:`\tau^2` from two halves of every record, see Notes); the threshold solves
         ``P(statistic > t) = false_alarm`` under that predictive law, so that it
         widens as records get fewer. ``"bootstrap"``: the mixture of the records' laws with the ``confidence``
         bootstrap bound (the behaviour before issue 31; it does not extrapolate the record-to-record spread). Records
@@ -338,8 +364,9 @@ class ScaledChi2Threshold:
         The degrees of freedom under ``record_effect="predictive"`` (when ``df`` is not given): ``"pooled"`` -- one
         shape for every record, estimated from all of them, the record effect a change of scale only (a variance
         ratio: records differ by their noise level; :class:`~tsfdi.FTest` sets it); ``"record"`` -- each record its
-        own (a Ljung-Box :math:`Q` of mismatched dynamics: records differ in shape too). ``None`` (default): the
-        test's choice when it calibrates, else ``"record"``.
+        own (a Ljung-Box :math:`Q` of mismatched dynamics: records differ in shape too), a log-normal law with the
+        record's two moments and a between-record variance from two disjoint halves of every record (see Notes).
+        ``None`` (default): the test's choice when it calibrates, else ``"record"``.
     confidence : float
         With several records: the threshold is the ``confidence`` quantile of its bootstrap distribution over
         records (default 0.9), so that a new record's false-alarm rate exceeds ``false_alarm`` only with
@@ -371,8 +398,9 @@ class ScaledChi2Threshold:
         windows sharing a record); ``independent_`` without a record law.
     record_law_ : dict or None
         The predictive law of a new record's anchor, at the point estimates: ``between_sd`` (:math:`\tau`),
-        ``scale`` (:math:`\sqrt{\tau^2 + s^2 / J}`) and ``df`` (``J - 1``) of the posterior of
-        :math:`\sigma^2`; ``None`` with ``record_effect="bootstrap"``, one record or pooled records.
+        ``scale`` (:math:`\sqrt{\tau^2 + s^2 / J}`) and ``df`` (``J - 1``, of the anchors' variance :math:`s^2`:
+        its posterior, or with ``shape="record"`` its point estimate, see Notes); ``None`` with
+        ``record_effect="bootstrap"``, one record or pooled records.
     levels_ : ndarray
         With the predictive record law: each record's level, the log mean of its statistic (what
         :meth:`record_pvalue` compares a new record's with).
@@ -431,6 +459,30 @@ class ScaledChi2Threshold:
     threshold liberal at 1e-3; the posterior average over :math:`\sigma^2` keeps the
     hidden spread and is conservative with very few records instead. Monte Carlo checks on the simulated fleet are
     in ``tests/detection/test_record_calibration.py``.
+
+    With ``shape="record"`` (each record its own shape: the Ljung-Box :math:`Q`) that construction failed on both
+    ends, by two errors that hid each other: (i) a portmanteau statistic's finite-window law is right-skewed beyond
+    the chi-square of its two moments (white noise, 198 samples, 20 lags: skewness 0.94 against 0.68; its
+    :math:`3.3 \cdot 10^{-4}` quantile 10 % above the chi-square's), so each record's tail was too light (the
+    threshold liberal, twice ``false_alarm`` and more, had the anchors not spread); (ii) a record's anchor carries
+    its shape estimated from ~10 windows, whose sampling variance is about twice :math:`v_s` (and not computable
+    from the window counts: overlapping windows estimate the spread better than disjoint ones), so the anchors'
+    noise was read as a between-record spread, from :math:`J - 1` degrees of freedom (0.6 ``false_alarm`` with 5
+    records on the simulated fleet, 0.3 at 1e-3, and on plain white noise). Each record's law is therefore the
+    log-normal with its two moments, :math:`\sigma_j^2 = \ln(1 + 2 / \nu_j)` (skewness 1.07 with the white-noise
+    moments: its quantiles within 2 % of the statistic's from 0.01 to :math:`3.3 \cdot 10^{-4}`), anchored at
+    :math:`\mu_j + z \sigma_j`, and the between-record variance is the covariance, over the records, of the
+    anchors of two disjoint halves of every record (its first and last windows, a window's worth left out between
+    them): their sampling noises are independent, so it estimates :math:`\tau^2` whatever the anchors' own noise
+    (truncated at 0). A new anchor is normal about the records' mean with variance :math:`\tau^2 + s^2 / J`
+    (plugged in: the truncated covariance already errs high where :math:`\tau^2` is small beside the anchors'
+    noise, and a Student t on top was conservative, 0.6-0.8 ``false_alarm`` with 5 records). Chosen on development
+    fleets (``benchmarks/fleet_calibration.py``, seeds of the development runs): the Ljung-Box decision's rate on
+    new records 0.99 / 0.97 / 0.97 ``false_alarm`` at 0.01 with 5 / 10 / 20 records and 1.36 / 1.04 / 1.47 at
+    1e-3 (before: 0.58 / 0.94 / 1.14 and 0.32 / 1.09 / 1.42); on white noise with 5 records 0.85 at 0.01
+    (``tests/detection/test_record_calibration.py``). The excess at 1e-3 with 20 records is the fleet's: its
+    records' anchors are skewed (mismatched dynamics inflate :math:`Q` one way), which a normal record effect
+    does not follow.
     """
 
     method_ = "scaled-chi2"
@@ -514,7 +566,7 @@ class ScaledChi2Threshold:
             else None
         short = self.df is None and per.min() < MIN_RECORD_WINDOWS      # records that cannot show their own spread
         if self.record_effect == "predictive" and len(parts) > 1 and not short:
-            return self._predictive(s1, s2, cnt, per)
+            return self._predictive(s1, s2, cnt, per, _halves(parts, per))
         self.record_law_ = None
         self.effective_windows_ = float(n_ind)
         self.pooled_ = bool(short and len(parts) > 1)
@@ -539,9 +591,11 @@ class ScaledChi2Threshold:
         self._pvalue_factor = pf / tail if tail > 0 else 1.0
         return self
 
-    def _predictive(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray, per: np.ndarray) -> ScaledChi2Threshold:
+    def _predictive(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray, per: np.ndarray,
+                    halves: tuple) -> ScaledChi2Threshold:
         """The record-level predictive law (see Notes) from the records' window sums ``s1``, ``s2``, counts ``cnt``
-        and independent windows ``per``; sets the threshold and the p-value grid."""
+        and independent windows ``per`` (and those of two disjoint halves of every record, :func:`_halves`); sets
+        the threshold and the p-value grid."""
         from scipy import special
 
         j = len(cnt)
@@ -580,10 +634,32 @@ class ScaledChi2Threshold:
         # normal random effect estimated from J records (variance tau2 + s2 / J over the posterior of s2: Student t
         # tails, J - 1 degrees of freedom)
         loc = float(anchor.mean())
-        spread = math.sqrt(tau2 + sa2 / j)
-        scale = law * np.exp(loc - anchor)
-        x, lt = _anchor_table(sa2, samp, j)
-        self._predictive_law = (*_within_nodes(scale, df), x, lt)
+        if self.df is None and self.shape != "pooled" and min(halves[0][2].min(), halves[1][2].min()) >= 2:
+            # each record its own shape: log-normal laws with the records' two moments, the new anchor normal about
+            # the records' mean with the between-record variance from the covariance of the anchors of two disjoint
+            # halves of every record (their sampling noise is independent) plus that of the mean (see Notes)
+            z = -special.ndtri(pf)
+            sg = np.sqrt(np.log1p(2.0 / df))                  # (the laws' squared coefficient of variation is 2 / nu)
+            anchor = np.log(self.scale_ * self.df_) - 0.5 * sg * sg + z * sg
+            half = []
+            for h1, h2, hc, hp in halves:
+                c, nu = self._laws(h1, h2, hc, hp)
+                hs = np.log1p(2.0 / nu)
+                half.append(np.log(c * nu) - 0.5 * hs + z * np.sqrt(hs))
+            tau2 = max(float(np.cov(half[0], half[1])[0, 1]), 0.0)
+            loc, sa2 = float(anchor.mean()), float(np.var(anchor, ddof=1))
+            spread = math.sqrt(tau2 + sa2 / j)
+            if spread > 0:
+                x = spread * np.sinh(np.linspace(0.0, math.asinh(1e3), _TABLE)) * (12.0 / 1e3)
+                lt = special.log_ndtr(-x / spread)
+            else:                                          # records with equal anchors: X is 0
+                x, lt = np.array([0.0, 1e-300]), np.array([math.log(0.5), -np.inf])
+            self._predictive_law = (*_lognormal_nodes(loc - z * sg, sg), x, lt)
+        else:
+            spread = math.sqrt(tau2 + sa2 / j)
+            scale = law * np.exp(loc - anchor)
+            x, lt = _anchor_table(sa2, samp, j)
+            self._predictive_law = (*_within_nodes(scale, df), x, lt)
         self.record_law_ = {"between_sd": math.sqrt(tau2), "scale": spread, "df": j - 1}
         self.levels_ = np.log(m)
         self._level_law = (float(self.levels_.mean()), float(np.var(self.levels_, ddof=1)), samp, cv2)
@@ -593,9 +669,10 @@ class ScaledChi2Threshold:
         self.point_threshold_ = float(_mixture_quantile(self.scale_[None, :], self.df_[None, :], pf)[0])
         # p-values: the predictive tail on a grid following the anchor law's quantiles, interpolated in log-log, through
         # the threshold
-        q = special.chdtri(np.median(self.df_), np.array([1 - 1e-9, 0.9, 0.5, 0.1, 1e-2, 1e-4, 1e-7, 1e-11, 1e-15]))
+        y = self._predictive_law[0]
+        q = np.quantile(y - loc, [0.0, 0.1, 0.3, 0.5, 0.7, 0.9, 1.0])       # the records' laws about the anchor
         xs = np.interp(np.linspace(math.log(1e-16), math.log(0.5), 40), lt[::-1], x[::-1])  # its quantiles
-        grid = np.unique(np.clip(np.concatenate([-xs, xs])[:, None] + np.log(q * np.median(scale)), -700.0, 700.0))
+        grid = np.unique(np.clip(np.concatenate([-xs, xs])[:, None] + loc + q, -700.0, 700.0))
         grid = np.exp(np.unique(np.append(np.quantile(grid, np.linspace(0, 1, 120)), math.log(self.threshold_))))
         tail = _predictive_tail(grid, *self._predictive_law)
         keep = np.append(np.diff(tail) < 0, True) & (tail > 0)
@@ -734,8 +811,13 @@ class ScaledChi2Threshold:
         if self.record_law_ is not None:
             with np.errstate(divide="ignore"):
                 lv = np.log(v)
-            p = np.minimum(1.0, np.exp(np.interp(lv, *self._pvalue_grid)))
-            return np.where(v == np.inf, 0.0, p)      # (the grid ends near the float range: no tail beyond it)
+            gx, gy = self._pvalue_grid
+            # beyond the grid's last point (the records' laws' 1e-30 quantile and more): its last log-log slope
+            slope = (gy[-1] - gy[-2]) / (gx[-1] - gx[-2])
+            with np.errstate(invalid="ignore"):
+                lp = np.where(lv > gx[-1], gy[-1] + slope * (lv - gx[-1]), np.interp(lv, gx, gy))
+            p = np.clip(np.exp(lp), np.finfo(np.float64).tiny, 1.0)     # a finite statistic: a p-value above 0
+            return np.where(v == np.inf, 0.0, p)
         with np.errstate(over="ignore"):                # beyond the float range: a tail of 0
             tail = special.chdtrc(self.df_, v[..., None] / self.scale_).mean(axis=-1)
         return np.minimum(1.0, tail * self._pvalue_factor)
