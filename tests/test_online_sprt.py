@@ -119,6 +119,10 @@ def test_sprt_calibration_refuses_a_record_too_short_for_its_own_exponent():
     ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
     with pytest.raises(ValueError, match=r"healthy run 3, pair 'b': 123 armed samples, at least 320 are needed"):
         sprt_detector().calibrate(ys + [ys[0][:500]], us + [us[0][:500]], false_alarms_per_hour=60, fs=FS)
+    # a run that ends before arm_after leaves its pairs no armed sample: refused by name, not by an internal error
+    with pytest.raises(ValueError, match=r"healthy run 3, pair 'a': 0 armed samples, at least 320 are needed"):
+        sprt_detector(arm_after=600).calibrate(ys + [ys[0][:500]], us + [us[0][:500]], false_alarms_per_hour=60,
+                                               fs=FS)
     det = sprt_detector().calibrate(ys + [ys[0][:700]], us + [us[0][:700]], false_alarms_per_hour=60, fs=FS)
     assert det.calibration_.runs == 4 and det.calibration_.tail["sprt"]["log_exponent_sd"] > 0
 

@@ -1162,7 +1162,8 @@ class OnlineDetector:
                              f"so that the pairs arm)")
         base = copy.copy(self.sprt)
         base.scale_ = 1.0
-        zs = [base.loglik_ratio(w, 1.0) for _, _, w, _ in records]
+        # (a pair armed at or after its run's end has no sample: refused below with the run and the pair, by name)
+        zs = [base.loglik_ratio(w, 1.0) if w.size else np.empty(0) for _, _, w, _ in records]
         rates = [f for *_, f in records]
         h = _wald_exponent(np.concatenate(zs), "the healthy runs")
         sprt = copy.copy(base)
