@@ -382,6 +382,29 @@ def check_paired(a: Signal, b: Signal, names: tuple[str, str] = ("y", "u")) -> N
                      "pass arrays to pair them by position")
 
 
+def model_input(u: Any, sig: Signal, inputs: tuple | None) -> Signal | None:
+    """The input ``u`` of the samples ``sig`` for models fitted with ``inputs`` (``(channels, named)``: their input
+    channels and whether they are named; ``None`` for models without input), in the models' input order.
+
+    ``u`` is required for input-output (ARX) models and refused for the others (``TypeError``); it must be as long as
+    ``sig``, carry the same index when both carry one (:func:`check_paired`) and hold the models' inputs (by name
+    when both are named, else by position).
+    """
+    if inputs is None:
+        if u is not None:
+            raise TypeError("u is only for input-output (ARX) models: these models have no exogenous input; leave "
+                            "u out")
+        return None
+    if u is None:
+        raise TypeError("u is required: the models are ARX (input-output) models; pass the samples' input as u=")
+    usig = as_signal(u, "u", allow_constant=True)
+    if usig.nobs != sig.nobs:
+        raise ValueError(f"u has {usig.nobs} samples but signal has {sig.nobs}: they must match")
+    check_paired(sig, usig, ("signal", "u"))
+    channels, named = inputs
+    return usig.match_channels(channels, "u", named=named, reference="the models were fitted with")
+
+
 def _format_time(value: Any) -> str:
     """A time stamp for a message: ISO format for a date-time, seconds otherwise."""
     if isinstance(value, (pd.Timestamp, np.datetime64)):

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from tsfdi._data import (Signal, as_signal, check_paired, refuse_masked, rolling_variance, sampling_frequency,
+from tsfdi._data import (Signal, as_signal, model_input, refuse_masked, rolling_variance, sampling_frequency,
                          window_samples)
 from tsfdi._validation import boolean, float_like, option, probability
 from tsfdi.coverage import Coverage, check_coverage, warn_if_not_covered, warn_records_not_covered
@@ -465,24 +465,8 @@ class Monitor:
         inputs); the first block sets the channels (matched to the baseline's by name when both are named) and,
         without ``fs``, the sampling frequency from its time index."""
         sig = as_signal(samples, "signal", allow_constant=True)
-        return self._channel_values(sig), self._input_values(u, sig)
-
-    def _input_values(self, u: Any, sig: Signal) -> np.ndarray | None:
-        """The block's input ``u`` in the models' input order, checked against the block ``sig``."""
-        if not self.inputs:
-            if u is not None:
-                raise TypeError("u is only for input-output (ARX) models: the baseline has no exogenous input; "
-                                "leave u out")
-            return None
-        if u is None:
-            raise TypeError("u is required: the baseline is an ARX (input-output) model; pass the input of the "
-                            "samples as u=")
-        usig = as_signal(u, "u", allow_constant=True)
-        if usig.nobs != sig.nobs:
-            raise ValueError(f"u has {usig.nobs} samples but signal has {sig.nobs}: they must match")
-        check_paired(sig, usig, ("signal", "u"))
-        channels, named = self._u_channels
-        return usig.match_channels(channels, "u", named=named, reference="the models were fitted with").values
+        usig = model_input(u, sig, self._u_channels)
+        return self._channel_values(sig), None if usig is None else usig.values
 
     def _channel_values(self, sig: Signal) -> np.ndarray:
         if self._channels is not None:

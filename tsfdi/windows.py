@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import solve_triangular
 
-from tsfdi._data import as_signal, check_paired
+from tsfdi._data import as_signal, model_input
 from tsfdi._validation import boolean, int_like, option
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
@@ -283,27 +283,11 @@ class ResidualWindows:
             raise ValueError(f"signal has {sig.nchan} channel(s) but the models were fitted on {self.nchan}")
         if self._channels is not None:          # a named signal is reordered to the models' channels, by name
             sig = sig.match_channels(self._channels, "signal")
-        usig = self._input(u, sig)
+        usig = model_input(u, sig, self._inputs)
         resid = {name: np.asarray(res.residuals(sig) if usig is None else res.residuals(sig, usig),
                                   dtype=np.float64).reshape(-1, self.nchan)
                  for name, res in self.models.items()}
         return self._set(resid, sig.nobs, sig.channels if channels is None else channels)
-
-    def _input(self, u: Any, sig: Any) -> Any:
-        """``u`` checked against ``sig`` and the models' inputs (in their order), or None for models without input."""
-        if not self.inputs:
-            if u is not None:
-                raise TypeError("u is only for input-output (ARX) models: these models have no exogenous input; "
-                                "leave u out")
-            return None
-        if u is None:
-            raise TypeError("u is required: the models are ARX (input-output) models; pass the record's input as u=")
-        usig = as_signal(u, "u", allow_constant=True)
-        if usig.nobs != sig.nobs:
-            raise ValueError(f"u has {usig.nobs} samples but signal has {sig.nobs}: they must match")
-        check_paired(sig, usig, ("signal", "u"))
-        channels, named = self._inputs
-        return usig.match_channels(channels, "u", named=named, reference="the models were fitted with")
 
     def fit_residuals(self, residuals: Mapping, nobs: int, *, channels: Any = None) -> ResidualWindows:
         """Use residuals computed elsewhere (e.g. held-out residuals of a record through a model fitted without
