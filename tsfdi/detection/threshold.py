@@ -567,7 +567,8 @@ class ScaledChi2Threshold:
             else None
         short = self.df is None and per.min() < MIN_RECORD_WINDOWS      # records that cannot show their own spread
         if self.record_effect == "predictive" and len(parts) > 1 and not short:
-            return self._predictive(s1, s2, cnt, per, _halves(parts, per))
+            own = self.df is None and self.shape != "pooled"               # each record its own shape
+            return self._predictive(s1, s2, cnt, per, _halves(parts, per) if own else None)
         self.record_law_ = None
         self.effective_windows_ = float(n_ind)
         self.pooled_ = bool(short and len(parts) > 1)
@@ -593,10 +594,11 @@ class ScaledChi2Threshold:
         return self
 
     def _predictive(self, s1: np.ndarray, s2: np.ndarray, cnt: np.ndarray, per: np.ndarray,
-                    halves: tuple) -> ScaledChi2Threshold:
+                    halves: tuple | None) -> ScaledChi2Threshold:
         """The record-level predictive law (see Notes) from the records' window sums ``s1``, ``s2``, counts ``cnt``
-        and independent windows ``per`` (and those of two disjoint halves of every record, :func:`_halves`); sets
-        the threshold and the p-value grid."""
+        and independent windows ``per`` (and, for a shape per record, those of two disjoint halves of every record,
+        :func:`_halves`; with fewer than 2 windows in a half, the chi-square law of the pooled shape's construction);
+        sets the threshold and the p-value grid."""
         from scipy import special
 
         j = len(cnt)
@@ -635,7 +637,7 @@ class ScaledChi2Threshold:
         # normal random effect estimated from J records (variance tau2 + s2 / J over the posterior of s2: Student t
         # tails, J - 1 degrees of freedom)
         loc = float(anchor.mean())
-        if self.df is None and self.shape != "pooled" and min(halves[0][2].min(), halves[1][2].min()) >= 2:
+        if halves is not None and min(halves[0][2].min(), halves[1][2].min()) >= 2:
             # each record its own shape: log-normal laws with the records' two moments, the new anchor normal about
             # the records' mean with the between-record variance from the covariance of the anchors of two disjoint
             # halves of every record (their sampling noise is independent) plus that of the mean (see Notes)
