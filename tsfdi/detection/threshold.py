@@ -597,7 +597,7 @@ class ScaledChi2Threshold:
                     halves: tuple | None) -> ScaledChi2Threshold:
         """The record-level predictive law (see Notes) from the records' window sums ``s1``, ``s2``, counts ``cnt``
         and independent windows ``per`` (and, for a shape per record, those of two disjoint halves of every record,
-        :func:`_halves`; with fewer than 2 windows in a half, the chi-square law of the pooled shape's construction);
+        :func:`_halves`; with fewer than 2 windows in a half, the chi-square laws and the posterior average);
         sets the threshold and the p-value grid."""
         from scipy import special
 
