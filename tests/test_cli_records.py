@@ -466,7 +466,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     page = (root / "docs" / "guide" / "cli.md").read_text()
     commands = [line for block in re.findall(r"```bash\n(.*?)```", page, re.S) for line in block.splitlines()
                 if line.startswith("tsfdi ")]
-    assert len(commands) == 17
+    assert len(commands) == 19
     pytest.importorskip("pyulog")
     (tmp_path / "data").symlink_to(root / "data")
     monkeypatch.chdir(tmp_path)
@@ -478,6 +478,7 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
         key += f" {argv[2].split('/')[3]}" if argv[2].startswith("data/crazypad/") else ""      # its condition
         key += " 4 records" if "crazyflie4.npz" in line else ""
         key += " depth" if "depth.npz" in line else ""
+        key += " arx" if "yaw.npz" in line else ""
         printed[key] = capsys.readouterr().out
     # select-order: the orders the page quotes
     assert re.search(r"Selected \(min BIC\) +7\n", printed["select-order"])
@@ -508,6 +509,10 @@ def test_the_cli_page_runs_and_says_true(tmp_path, capsys, monkeypatch):
     assert "from 4 record(s)" in printed["fit normal_flight 4 records"]
     cut = printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm 4 records"]
     assert cut.strip().splitlines()[-1] == "fault in 6 of 6 window(s)"
+    # controller-aware: the ARX of the yaw rate given the commands, from both normal logs, flags the cut (the page)
+    assert printed["fit normal_flight arx"].startswith("ARX(5, 5, nk=0) of ['controller.r_yaw'] given --u")
+    assert printed["detect calibrated cut_propeller_M3_4mm_4mm_39mm arx"].strip().splitlines()[-1] == \
+        "fault in 6 of 6 window(s)"
     # the FP-VAR over the depth cut from M3: the estimates the page prints, its windows flagged (5 of the normal
     # flights' 6, the cut log's 3) and the k_depth column
     assert re.search(r"FP-VAR\(\d+\), degree 1 \(BIC over lags 1..12, degree 0..1\) over depth in \[0, 8\]",
