@@ -151,3 +151,102 @@ def test_a_stream_calibrated_on_three_30s_logs_keeps_its_rate_on_ten_others():
             samples += len(y)
     p = 60.0 / (3600.0 * FS)
     assert stats.binom.ppf(0.005, samples, p) <= episodes <= stats.binom.ppf(0.995, samples, p)
+
+
+def spread_log(rng, seconds=30.0, rise=1.5, fault_at=None):
+    """``short_log`` whose error spread grows smoothly by ``rise`` (a flight phase with more turbulence, centred at a
+    random time, about 8 s long), optionally with pair b's error spread doubled from ``fault_at`` seconds on (the
+    default SPRT's alternative: the error variance times 4)."""
+    n = int(seconds * FS)
+    t = np.arange(n) / FS
+    g = 1.0 + (rise - 1.0) / (1.0 + np.exp(-(t - rng.uniform(5.0, seconds - 5.0)) / 2.0))
+    u = rng.standard_normal((n, 2))
+    e = 0.1 * rng.standard_normal((n, 2)) * g[:, None]
+    if fault_at is not None:
+        e[int(fault_at * FS):, 1] *= 2.0
+    ya = lfilter([1.0], [1.0, -0.7], u[:, 0] + e[:, 0])
+    yb = lfilter([1.0], [1.0, -0.5], 0.8 * u[:, 1] + e[:, 1])
+    return np.column_stack([ya, yb]), u
+
+
+def test_running_scale_follows_a_healthy_spread_change_and_finds_a_fault():
+    """scale_forgetting: the errors standardised by a lagged running scale. A healthy log whose error spread grows
+    by 1.5 (variance 2.25) alarms against the scale fixed at arming and not against the running one; a fault of the
+    SPRT's alternative is still found at once, because its errors meet the scale from before it for scale_lag
+    samples -- without the lag a fast scale adapts it away."""
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        y, u = spread_log(rng)
+        assert sprt_detector().run(y, u).first_alarm is not None
+        assert sprt_detector(scale_forgetting=0.995).run(y, u).first_alarm is None
+    det = sprt_detector(scale_forgetting=0.995)
+    assert det.scale_lag == 50 and det.scale_forgetting == 0.995 and sprt_detector().scale_forgetting is None
+    found = {100: 0, 0: 0}
+    for seed in range(5):
+        y, u = spread_log(np.random.default_rng(seed), rise=1.0, fault_at=20.0)
+        out = sprt_detector(scale_forgetting=0.995).run(y, u)
+        assert out.first_alarm_pair == "b" and 0 <= out.first_alarm - 1000 <= 70
+        for lag in found:
+            found[lag] += sprt_detector(scale_forgetting=0.95, scale_lag=lag).run(y, u).first_alarm is not None
+    # a scale with 20 samples' memory: the fault found while the lag keeps its errors out, mostly adapted away without
+    assert found == {100: 5, 0: 1}
+    with pytest.raises(ValueError, match="scale_forgetting must be < 1"):
+        sprt_detector(scale_forgetting=1.0)
+    with pytest.raises(ValueError, match="scale_forgetting must be > 0"):
+        sprt_detector(scale_forgetting=0)
+    with pytest.raises(TypeError, match="scale_forgetting must be a real number"):
+        sprt_detector(scale_forgetting="0.995")
+    with pytest.raises(ValueError, match="scale_lag must be >= 0"):
+        sprt_detector(scale_forgetting=0.995, scale_lag=-1)
+    with pytest.raises(ValueError, match="scale_forgetting=0.995 needs statistic='sprt'"):
+        OnlineDetector(2, statistic="zscore", scale_forgetting=0.995)
+
+
+@pytest.mark.filterwarnings("ignore::tsfdi.exceptions.ConvergenceWarning")     # chunks of 7 end before arming
+@pytest.mark.parametrize("settle", [0, 120])
+def test_running_scale_streaming_equals_block(settle):
+    """Block, chunks and samples give the same walk, alarms and first alarms with the running scale, across the
+    lag and across skipped (NaN) samples, which neither enter the scale nor count in the lag."""
+    y, u = spread_log(np.random.default_rng(3), seconds=60.0, fault_at=45.0)
+    y[[700, 701, 1500, 2300], 1] = np.nan
+    kw = dict(scale_forgetting=0.99, scale_lag=30, settle=settle)
+    ref = sprt_detector(**kw).run(y, u)
+    assert ref.first_alarm_pair == "b" and ref.first_alarm >= 2250
+    det = sprt_detector(**kw)
+    alarms = np.array([det.update(y[i], u[i]) for i in range(len(y))])
+    np.testing.assert_array_equal(alarms, ref.alarm)
+    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
+    for size in (7, 777):
+        det = sprt_detector(**kw)
+        parts = [det.run(y[i:i + size], u[i:i + size]) for i in range(0, len(y), size)]
+        np.testing.assert_array_equal(np.vstack([p.alarm for p in parts]), ref.alarm)
+        np.testing.assert_array_equal(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic))
+
+
+def test_running_scale_calibrates_logs_whose_spread_varies():
+    """calibrate with scale_forgetting standardises the healthy logs as the walk does. Three 30 s logs whose spread
+    grows by 1.5 are refused with the scale fixed at arming (the walk drifts up) and calibrated with the running
+    one; Monte Carlo (fixed seed) as the issue's acceptance test: 100 times, three such logs set the threshold for
+    60 per hour and ten new ones run without freezing. With this seed: 589 episodes in 8.33 h (70.7 per hour,
+    above the 99 % binomial band of 60 per hour, 443-559: the stated rate is about 15 % low here; measured outside
+    this test, 68 per hour on logs of constant spread and 94 for a spread growing by 2). The rule: within a factor
+    1.5 of the stated rate."""
+    rng = np.random.default_rng(1)
+    logs = [spread_log(rng) for _ in range(3)]
+    ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
+    with pytest.raises(ValueError, match="healthy"):
+        sprt_detector().calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
+    det = sprt_detector(scale_forgetting=0.995).calibrate(ys, us, false_alarms_per_hour=60, fs=FS)
+    assert det.calibration_.estimator == "sprt cycle maxima" and det.threshold > 0
+    episodes, samples = 0, 0
+    for _ in range(100):
+        cal = [spread_log(rng) for _ in range(3)]
+        det = sprt_detector(freeze_on_alarm=False, scale_forgetting=0.995).calibrate(
+            [c[0] for c in cal], [c[1] for c in cal], false_alarms_per_hour=60, fs=FS)
+        for _ in range(10):
+            y, u = spread_log(rng)
+            det.reset()
+            episodes += int(det.run(y, u).false_alarms_per_hour(FS).loc["all", "episodes"])
+            samples += len(y)
+    rate = episodes / (samples / FS / 3600.0)
+    assert 60.0 / 1.5 <= rate <= 60.0 * 1.5

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from scipy import optimize, special, stats
+from scipy.signal import lfilter
 
 from tsfdi._data import as_signal, check_paired, refuse_masked, sampling_frequency
 from tsfdi._validation import boolean, float_like, int_like, option
@@ -313,6 +314,33 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     return float(optimize.brentq(f, lo, hi, rtol=1e-10))
 
 
+def _running_standardise(e: np.ndarray, m: float, v: float, pending: np.ndarray, lam: float,
+                         lag: int) -> tuple:
+    r"""Errors ``e`` standardised by the running mean and variance lagged by ``lag`` finite errors.
+
+    ``(m, v)`` are the estimates after the errors entered so far, ``pending`` the last errors seen but not yet
+    entered (at most ``lag``). The finite error :math:`e_k` is standardised by the estimates after
+    :math:`e_{k-\text{lag}-1}` (the arming values before), and then enters as
+    :math:`m_k = \lambda m_{k-1} + (1-\lambda) e_k`,
+    :math:`v_k = \lambda v_{k-1} + \lambda(1-\lambda)(e_k - m_{k-1})^2`. NaN errors stay NaN and do not enter.
+    Returns ``(w, m, v, pending)``."""
+    ok = np.isfinite(e)
+    x = e[ok]
+    seq = np.concatenate([pending, x])
+    n_in = max(seq.size - lag, 0)
+    entries = seq[:n_in]
+    M, V = np.array([m]), np.array([v])
+    if n_in:
+        ms = lfilter([1.0 - lam], [1.0, -lam], entries, zi=[lam * m])[0]
+        d = entries - np.concatenate([M, ms[:-1]])
+        vs = lfilter([lam * (1.0 - lam)], [1.0, -lam], d * d, zi=[lam * v])[0]
+        M, V = np.concatenate([M, ms]), np.concatenate([V, vs])
+    c = np.maximum(pending.size + np.arange(x.size) - lag, 0)   # errors entered before each of x
+    w = np.full(e.shape, np.nan)
+    w[ok] = (x - M[c]) / np.sqrt(V[c])
+    return w, float(M[-1]), float(V[-1]), seq[n_in:]
+
+
 class OnlineDetector:
     r"""Online anomaly detection on several commanded / measured (input / output) signal pairs at once.
 
@@ -326,7 +354,8 @@ class OnlineDetector:
       one-sided: "down" alarms when the average falls below ``-threshold`` (e.g. a loss of thrust in the
       longitudinal specific force), "up" above ``+threshold``, "both" on the absolute value;
     - ``statistic="sprt"``: Wald's SPRT (:class:`tsfdi.SPRT`, the ``sprt`` test, restarted as a CUSUM) of the
-      errors standardised by the Welford mean and standard deviation at arming: the walk
+      errors standardised by the Welford mean and standard deviation at arming (or, with ``scale_forgetting``, by
+      a lagged running mean and standard deviation, see Notes): the walk
       :math:`S_k = S_{k-1} + z_k` (:math:`z_k` the test's per-sample log-likelihood ratio times its ``scale_``)
       restarts at 0 at its lower bound and after every alarm; an alarm where :math:`S_k \ge` ``threshold`` (by
       default the test's upper bound :math:`\ln((1-\beta)/\alpha)`). The default, for autopilot logs (see the
@@ -389,6 +418,16 @@ class OnlineDetector:
         ``statistic="sprt"``: samples after arming during which a crossing of ``threshold`` re-arms the pair
         instead of alarming, with its scale taken from a steady regime (see Notes); for a log that starts on the
         ground and takes off. 0: the scale is the Welford standard deviation at arming and every crossing alarms.
+    scale_forgetting : float in (0, 1), optional
+        ``statistic="sprt"``: standardise the errors by a running mean and standard deviation with this
+        exponential forgetting :math:`\lambda` (memory about :math:`1/(1-\lambda)` errors), lagged by
+        ``scale_lag`` errors, instead of the values fixed at arming (None, the default); for logs whose healthy
+        error spread varies along the flight (see Notes).
+    scale_lag : int, default 50
+        With ``scale_forgetting``: finite errors between an error and its entry into the running scale (a fault's
+        errors meet the scale from before the fault for this many samples). The default is about twice the samples
+        the default SPRT needs, on average, to reach its upper bound (20.7) on a fault of its alternative (error
+        variance times 4: 0.81 per sample, 26 samples).
     **rls_options
         Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``theta0``, ``stable_samples``
         (consecutive samples the model and the variance gates must hold), ``variance_tol``,
@@ -427,6 +466,25 @@ class OnlineDetector:
     set ``arm_after``). :meth:`calibrate` runs its healthy logs with the same rule at the detector's threshold
     before calibration.
 
+    **Running scale.** With ``scale_forgetting`` :math:`= \lambda` and ``scale_lag`` :math:`= L`, the finite
+    errors :math:`e_1, e_2, \dots` after arming enter a running mean and variance,
+
+    .. math:: m_j = \lambda m_{j-1} + (1-\lambda)\, e_j, \qquad
+              v_j = \lambda v_{j-1} + \lambda(1-\lambda)\,(e_j - m_{j-1})^2,
+
+    from :math:`m_0, v_0` the mean and variance at arming, and the SPRT sees
+    :math:`w_k = (e_k - m_{k-L-1}) / \sqrt{v_{k-L-1}}` (index below 0: the arming values). A change of the spread
+    along a healthy flight (manoeuvres, wind, another flight phase) is followed within about
+    :math:`1/(1-\lambda)` errors, so the walk's law varies less between and within logs. A fault's own errors
+    enter the scale only :math:`L` samples after the walk has seen them against the scale from before the fault,
+    and then with weight :math:`1-\lambda` each: :math:`n` errors later the variance has moved by the fraction
+    :math:`1-\lambda^{n}` towards the fault's. A variance-increase test against a tracking scale adapts a fault
+    away: a fault not found within :math:`L` samples plus a fraction of :math:`1/(1-\lambda)` is found late or not
+    at all, as a slow drift is by design. :meth:`calibrate` standardises its healthy logs by the same rule. The
+    scale is not frozen while the walk is above zero: that would make it depend on the walk's ``scale_`` and
+    ``threshold``, which :meth:`calibrate` sets (its healthy runs would not see the scale of the calibrated
+    detector), and would keep out of the scale the large healthy errors that lift the walk.
+
     **Arming gate.** Paper 001 (section IV-B) considers the model stable for fault detection when the parameter
     step :math:`\|L(k)\hat e(k)\|_\infty < \epsilon` "for some time", with :math:`\epsilon` "a small positive number"
     and no unit. An absolute bound depends on the units of ``y`` and ``u`` (a gain from a command in rad/s to a
@@ -462,7 +520,8 @@ class OnlineDetector:
                  threshold: float | None = None, glrt: Any = "default", freeze_on_alarm: bool = True,
                  nonfinite: str = "skip", n_inputs: int = 1, statistic: str = "sprt", window: int = 20,
                  direction: str = "both", arm_after: int = 0, eps: float = 0.03, sprt: Any = "default",
-                 settle: int = 0, **rls_options: Any) -> None:
+                 settle: int = 0, scale_forgetting: float | None = None, scale_lag: int = 50,
+                 **rls_options: Any) -> None:
         if isinstance(pairs, (int, np.integer)) and not isinstance(pairs, bool):
             n = int_like(pairs, "pairs", minimum=1)
             names = tuple(f"pair{i}" for i in range(n))
@@ -504,6 +563,12 @@ class OnlineDetector:
         if self.settle and self.statistic != "sprt":
             raise ValueError(f"settle={self.settle} needs statistic='sprt' (the scale it sets is the SPRT's), got "
                              f"statistic={self.statistic!r}")
+        self.scale_forgetting = float_like(scale_forgetting, "scale_forgetting", minimum=0.0, maximum=1.0,
+                                           strict_min=True, strict_max=True, optional=True)
+        if self.scale_forgetting is not None and self.statistic != "sprt":
+            raise ValueError(f"scale_forgetting={self.scale_forgetting:g} needs statistic='sprt' (the scale is the "
+                             f"SPRT's), got statistic={self.statistic!r}")
+        self.scale_lag = int_like(scale_lag, "scale_lag", minimum=0)
         self._settle_level: float | None = None   # the alarm-free copies of calibrate: the level settle watches
         self.freeze_on_alarm = boolean(freeze_on_alarm, "freeze_on_alarm")
         if isinstance(glrt, str) and glrt == "default":
@@ -519,7 +584,8 @@ class OnlineDetector:
                              glrt=glrt, freeze_on_alarm=self.freeze_on_alarm, nonfinite=self.nonfinite,
                              n_inputs=self.n_inputs, statistic=self.statistic, window=self.window,
                              direction=self.direction, arm_after=self.arm_after, eps=self.eps, sprt=sprt,
-                             settle=self.settle, **rls_options)
+                             settle=self.settle, scale_forgetting=self.scale_forgetting,
+                             scale_lag=self.scale_lag, **rls_options)
         self.calibration_: OnlineCalibration | None = None
         zs = self.statistic == "zscore"
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
@@ -631,7 +697,8 @@ class OnlineDetector:
         n = e.shape[0]
         path = np.full(n, np.nan)
         alarm = np.zeros(n, dtype=bool)
-        walk = self._walks[c]                  # [sd, mean, walk value, end of the settle period, errors collected]
+        # [sd, mean at arming, walk value, end of the settle period, errors collected, running state or None]
+        walk = self._walks[c]
         armed_at = int(self._armed_at[c])
         lo = 0
         if walk is None:
@@ -640,10 +707,10 @@ class OnlineDetector:
                 return path, alarm
             lo = int(vs[0]) + 1
             if self.settle:
-                walk = [np.nan, np.nan, 0.0, 0, []]
+                walk = [np.nan, np.nan, 0.0, 0, [], None]
             else:
                 armed_at = start + lo
-                walk = [float(np.sqrt(var[vs[0]])), float(mean[vs[0]]), 0.0, armed_at, None]
+                walk = self._armed_walk(float(np.sqrt(var[vs[0]])), float(mean[vs[0]]), armed_at)
         walk = list(walk)
         level = self.threshold if self._settle_level is None else self._settle_level
         while lo < n:
@@ -663,10 +730,10 @@ class OnlineDetector:
                     walk[4] = x[half:].tolist()             # not a steady regime: slide by half the errors
                     continue
                 armed_at = start + lo
-                walk = [sd, float(x.mean()), 0.0, armed_at + self.settle, None]
+                walk = self._armed_walk(sd, float(x.mean()), armed_at + self.settle)
                 continue
             z = np.full(n - lo, np.nan)
-            w = (e[lo:] - walk[1]) / walk[0]
+            w, running = self._standardise(e[lo:], walk)
             ok = np.isfinite(w)
             if ok.any():
                 z[ok] = self.sprt.loglik_ratio(w[ok], 1.0)
@@ -684,12 +751,27 @@ class OnlineDetector:
             path[lo:] = p
             alarm[lo:] = a
             walk[2] = float(state)
+            walk[5] = running
             lo = n
         alarm &= (start + np.arange(n)) >= self.arm_after
         if commit:
             self._armed_at[c] = armed_at
             self._walks[c] = walk
         return path, alarm
+
+    def _armed_walk(self, sd: float, mean: float, settle_end: int) -> list:
+        """The walk state of a pair armed with the scale ``sd`` and mean ``mean`` (see :meth:`_sprt_walk`)."""
+        running = None if self.scale_forgetting is None else (mean, sd ** 2, np.empty(0))
+        return [sd, mean, 0.0, settle_end, None, running]
+
+    def _standardise(self, e: np.ndarray, walk: list) -> tuple:
+        """Errors ``e`` of a pair armed with ``walk`` standardised: by the scale at arming (``scale_forgetting``
+        None) or by the lagged running scale from the walk's running state (class Notes); returns them and the
+        new running state."""
+        if walk[5] is None:
+            return (e - walk[1]) / walk[0], None
+        w, m, v, pending = _running_standardise(e, *walk[5], self.scale_forgetting, self.scale_lag)
+        return w, (m, v, pending)
 
     def _run_sprt(self, c: int, m: RecursiveARX, yc: np.ndarray, uc: np.ndarray, start: int):
         """Run pair ``c`` with the restarted SPRT, freezing its model at the first alarm (as sample by sample)."""
@@ -955,7 +1037,8 @@ class OnlineDetector:
         - :math:`K < 1` (fewer than :math:`1/\rho` healthy hours): ``ValueError``.
 
         **statistic="sprt"**: a few short logs suffice (the restart cycles of the walk are many even where alarms
-        are rare). The standardised errors of every armed (run, pair) record are one record; at least three are
+        are rare). The standardised errors of every armed (run, pair) record are one record (with
+        ``scale_forgetting``, standardised by the lagged running scale as the walk saw them); at least three are
         needed. (1) The per-sample log-likelihood ratios :math:`z` of all records give Wald's exponent
         :math:`h > 0` of the pooled walk, the root of :math:`\hat K(h) + \tfrac{h^2}{2}(\hat v_{lr} - \hat v) = 0`
         (empirical cumulant generating function of :math:`z`, long-run variance over batches of 32 samples, as in
@@ -1150,10 +1233,12 @@ class OnlineDetector:
             hours += n / f / _SECONDS_PER_HOUR
             resid = np.asarray(out.resid, dtype=float).reshape(n, -1)
             for c, walk in enumerate(free._walks):
-                if free._armed_at[c] < 0:
+                armed = int(free._armed_at[c])
+                if armed < 0:
                     continue
-                start = max(int(free._armed_at[c]), self.arm_after)
-                w = (resid[start:, c] - walk[1]) / walk[0]
+                # the errors standardised as the walk saw them, from its arming on (its state at arming)
+                w = free._standardise(resid[armed:, c], free._armed_walk(walk[0], walk[1], 0))[0]
+                w = w[max(self.arm_after - armed, 0):]
                 w = w[np.isfinite(w)]
                 records.append((i, self.pairs[c], w, f))
         if len(records) < _MIN_SPRT_RECORDS:
