@@ -560,11 +560,10 @@ def healthy_trim_stat(airframes: dict, window: int, by_segment: bool = False):
     variance ``S_rec + S_within / windows``, nominally chi-square with one degree of freedom per command; per window
     the same with ``S``. No depth estimate."""
     def stat(res, flight):
-        m = res.model
         dev = []
         for x, point in zip(flight.arrays(cp.COMMANDS), healthy_trim_points(flight, airframes, True)):
             x = x[:len(x) - len(x) % window]
-            trim = fp_basis([point if by_segment else point[:1]], m.degree, m.k_range, m.basis) @ res.params2d
+            trim = res.predict(point if by_segment else point[:1])
             dev.append(x.reshape(-1, window, x.shape[1]).mean(axis=1) - trim)
         dev = np.vstack(dev)
         r = dev.mean(axis=0)

@@ -99,6 +99,36 @@ def test_loglike_and_statistic_equal_a_direct_computation():
     np.testing.assert_allclose(ll250[::2], ll, rtol=1e-12)
 
 
+def test_statistic_and_loglike_at_a_logged_k():
+    """With the record's operating point known, the statistic and the log-likelihood at it (no search): equal to a
+    direct computation from predict(k), never below the profiled minimum; chi-square with s degrees of freedom on
+    new records at their own k (Monte Carlo, windows of independent records); k checked naming it."""
+    rng = np.random.default_rng(7)
+    y, k = records(rng, 40, degree=1, offset_sd=1.0, noise_sd=5.0)
+    res = FPMean(y, k, 500, 1, k_range=K_RANGE).fit()
+    new, k_new = records(rng, 1, degree=1)
+    sig, kk = new[0], k_new[0]
+    mean = res.predict(kk)
+    np.testing.assert_allclose(mean, fp_basis(kk[None], 1, K_RANGE)[0] @ res.params2d, rtol=1e-14)
+    q, ll = res.statistic(sig, k=kk), res.loglike(sig, k=kk)
+    for w in range(8):
+        d = sig[500 * w:500 * (w + 1)].mean(axis=0) - mean
+        assert q[w] == pytest.approx(d @ np.linalg.solve(res.S, d), rel=1e-10)
+        assert ll[w] == pytest.approx(stats.multivariate_normal(mean, res.S).logpdf(d + mean), rel=1e-10)
+    assert (q >= res.statistic(sig) - 1e-9).all()
+    # under the model (new records' offsets and noise as the fitting ones'), one window per record, the model
+    # fitted on many records (S estimated closely: with few records the statistic is Hotelling's, wider): chi2(3)
+    many = FPMean(*records(rng, 600, degree=1, n=2000), 500, 1, k_range=K_RANGE).fit()
+    stat = [many.statistic(r[:500], k=kr)[0] for r, kr in zip(*records(rng, 400, degree=1, n=500))]
+    assert stats.kstest(stat, stats.chi2(3).cdf).pvalue > 0.001
+    with pytest.raises(ValueError, match=r"k must be one operating point with 2 value\(s\)"):
+        res.statistic(sig, k=[3.0])
+    with pytest.raises(ValueError, match="k must be finite"):
+        res.predict([np.nan, 0.1])
+    named = FPMean([pd.DataFrame(r, columns=["a", "b", "c"]) for r in y], k, 500, 1, k_range=K_RANGE).fit()
+    assert list(named.predict(kk).index) == ["a", "b", "c"]
+
+
 def test_refinement_moves_k_off_the_grid_and_never_lowers_the_likelihood():
     # a window generated at an operating point between grid points: the refined k is closer to it than the grid's
     rng = np.random.default_rng(5)

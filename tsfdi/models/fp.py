@@ -598,6 +598,21 @@ class FPARX(_FPModel):
                          hold_back=hold_back, k_range=k_range, u=u, nb=nb, nk=nk)
 
 
+def _operating_point(k: Any, k_names: tuple, name: str = "k") -> np.ndarray:
+    """One operating point ``k`` of a model over the parameters ``k_names`` as a finite ``(d,)`` array, or an error
+    naming ``name``."""
+    d = len(k_names)
+    try:
+        arr = np.asarray(k, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a real operating point ({d} value(s)), got {k!r}") from None
+    if arr.size != d:
+        raise ValueError(f"{name} must be one operating point with {d} value(s) {tuple(k_names)}, got {arr.size}")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
 class FPResults(FrozenResults):
     """Results of :meth:`FPAR.fit` / :meth:`FPVAR.fit` / :meth:`FPARX.fit` (immutable).
 
@@ -758,18 +773,7 @@ class FPResults(FrozenResults):
 
     # --- evaluation at an operating point
     def _point(self, k: Any, name: str = "k") -> np.ndarray:
-        """One operating point ``k`` as a finite ``(d,)`` array, or an error naming ``name``."""
-        d = len(self.model.k_names)
-        try:
-            arr = np.asarray(k, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise TypeError(f"{name} must be a real operating point ({d} value(s)), got {k!r}") from None
-        if arr.size != d:
-            raise ValueError(f"{name} must be one operating point with {d} value(s) {self.model.k_names}, got "
-                             f"{arr.size}")
-        if not np.isfinite(arr).all():
-            raise ValueError(f"{name} must be finite, got {arr.tolist()}")
-        return arr
+        return _operating_point(k, self.model.k_names, name)
 
     def _g(self, k: np.ndarray) -> np.ndarray:
         m = self.model
@@ -1602,9 +1606,8 @@ class FPMeanResults(FrozenResults):
             return self._labelled(2 * stats.norm.sf(np.abs(self._params2d / self._bse2d)))
 
     # --- new windows
-    def _profile(self, signal: Any, step: Any) -> tuple:
-        """The signal, its window starts, and per window the smallest ``q(k)`` and its ``k``: the grid's best point
-        refined by local grids (bounded by ``k_range``), each spanning one spacing of the previous one."""
+    def _windows(self, signal: Any, step: Any) -> tuple:
+        """The signal (its channels matched to the model's), its window starts and their means."""
         m = self.model
         sig = as_signal(signal, "signal", allow_constant=True)
         sig = sig.match_channels(m.data.channels, "signal", named=m.data.named)
@@ -1613,7 +1616,32 @@ class FPMeanResults(FrozenResults):
             raise ValueError(f"signal has {sig.nobs} samples, fewer than the model's window ({w})")
         step = w if step is None else window_samples(step, "step", sampling_frequency(sig, None), minimum=1)
         starts = np.arange(0, sig.nobs - w + 1, step)
-        means = _window_means(sig.values, w, starts)
+        return sig, starts, _window_means(sig.values, w, starts)
+
+    def _at(self, signal: Any, step: Any, k: Any) -> tuple:
+        """The signal, its window starts and per window ``q(k) = (m - M(k))' S^-1 (m - M(k))`` at the given ``k``."""
+        sig, starts, means = self._windows(signal, step)
+        dev = means - self._surface_at(_operating_point(k, self.model.k_names))
+        return sig, starts, np.einsum("wa,ab,wb->w", dev, self._S_inv, dev)
+
+    def _surface_at(self, k: np.ndarray) -> np.ndarray:
+        m = self.model
+        return fp_basis(k[None, :], m.degree, m.k_range, m.basis)[0] @ self._params2d
+
+    def predict(self, k: Any) -> Any:
+        """The surface at operating point ``k``: the expected window mean ``M(k) = sum_j beta_j G_j(k)`` of every
+        channel (a Series over the channels for named records). Outside ``k_range`` the polynomials extrapolate
+        (allowed, not advised)."""
+        mean = self._surface_at(_operating_point(k, self.model.k_names))
+        if self.model.data.kind == "numpy":
+            return mean
+        return pd.Series(mean, index=list(self.model.data.channels), name="mean")
+
+    def _profile(self, signal: Any, step: Any) -> tuple:
+        """The signal, its window starts, and per window the smallest ``q(k)`` and its ``k``: the grid's best point
+        refined by local grids (bounded by ``k_range``), each spanning one spacing of the previous one."""
+        m = self.model
+        sig, starts, means = self._windows(signal, step)
         d = self._k_grid.shape[1]
         q = np.empty(starts.size)
         k_hat = np.empty((starts.size, d))
@@ -1664,8 +1692,9 @@ class FPMeanResults(FrozenResults):
         return xr.DataArray(values, dims=(sig.time_dim, "parameter"),
                             coords={sig.time_dim: np.asarray(index), "parameter": columns}, name=name)
 
-    def statistic(self, signal: Any, step: Any = None) -> Any:
-        """The detector's statistic of every window: ``min_k (m - M(k))' S^-1 (m - M(k))`` over ``k_range``.
+    def statistic(self, signal: Any, step: Any = None, *, k: Any = None) -> Any:
+        """The detector's statistic of every window: ``min_k (m - M(k))' S^-1 (m - M(k))`` over ``k_range``, or
+        ``(m - M(k))' S^-1 (m - M(k))`` at a given (logged) operating point ``k``.
 
         Parameters
         ----------
@@ -1674,18 +1703,22 @@ class FPMeanResults(FrozenResults):
         step : int or time span, optional
             Samples between window starts (default ``window``: consecutive windows); windows that would pass the
             signal's end are not formed.
+        k : float or sequence of float, optional
+            The record's operating point (one value per operating parameter), when it is known: the statistic at
+            it, a Mahalanobis distance with ``s`` degrees of freedom under the model (chi-square for Gaussian
+            windows). Default: profiled over ``k_range`` (:meth:`estimate_k`).
 
         Returns
         -------
         ndarray (windows,), or a Series / DataArray indexed by the time of each window's first sample
         """
-        sig, starts, q, _ = self._profile(signal, step)
+        sig, starts, q = self._at(signal, step, k) if k is not None else self._profile(signal, step)[:3]
         return self._per_window(sig, starts, q, None, "statistic")
 
-    def loglike(self, signal: Any, step: Any = None) -> Any:
-        """The Gaussian log-likelihood of every window's mean at its maximum-likelihood ``k``,
-        ``-1/2 (s ln 2 pi + ln det S + min_k q(k))``; parameters and return as :meth:`statistic`."""
-        sig, starts, q, _ = self._profile(signal, step)
+    def loglike(self, signal: Any, step: Any = None, *, k: Any = None) -> Any:
+        """The Gaussian log-likelihood of every window's mean at its maximum-likelihood ``k`` (or at the given ``k``),
+        ``-1/2 (s ln 2 pi + ln det S + q(k))``; parameters and return as :meth:`statistic`."""
+        sig, starts, q = self._at(signal, step, k) if k is not None else self._profile(signal, step)[:3]
         return self._per_window(sig, starts, self._loglike(q), None, "loglike")
 
     def _loglike(self, q: np.ndarray) -> np.ndarray:
