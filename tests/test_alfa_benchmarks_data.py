@@ -79,7 +79,8 @@ def test_sensor_validation_noise_from_any_official_imu_file(shared_alfa, tmp_pat
 def test_sprt_folds_calibrate_on_the_other_flights_healthy_parts_only(shared_alfa, monkeypatch):
     """Configuration S of alfa_detection.py: in fold i every detector is calibrated (OnlineDetector.calibrate, the
     defaults' code path) on the rows before the onset of the other flights only -- never on flight i, never on a
-    row at or after an onset -- and a fold whose calibration is refused raises no alarm (it is not scored)."""
+    row at or after an onset, never on a healthy part shorter than MIN_HEALTHY_S -- and a fold whose calibration is
+    refused raises no alarm (it is not scored)."""
     bench = benchmark("alfa_detection")
     tab = list_alfa(shared_alfa)
     pick = [tab.index[tab.fault == f][0] for f in ("engine", "rudder", "none", "ailerons")]
@@ -104,10 +105,13 @@ def test_sprt_folds_calibrate_on_the_other_flights_healthy_parts_only(shared_alf
     assert np.isnan(alarm).all()
     assert {g: [i for i, _ in v] for g, v in refusals.items()} == {"+".join(g): list(range(4)) for g in groups}
     assert len(seen) == 4 * len(groups)
+    # healthy parts shorter than MIN_HEALTHY_S are left out (their pairs arm too late for calibrate's records)
+    long_enough = [len(bench.healthy_part(df, o)) >= bench.MIN_HEALTHY_S * bench.FS for df, o in zip(flights, onset)]
+    assert 0 < sum(long_enough) < 4
     for k, (pairs, spans) in enumerate(seen):
         i = k // len(groups)
         assert list(pairs) == groups[k % len(groups)]
-        others = [j for j in range(4) if j != i]
+        others = [j for j in range(4) if j != i and long_enough[j]]
         for (first, last), j in zip(spans, others, strict=True):
             assert first == flights[j].index[0]
             end = flights[j].index[0] + pd.Timedelta(seconds=onset[j]) if np.isfinite(onset[j]) else None
