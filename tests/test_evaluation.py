@@ -398,6 +398,19 @@ def test_evaluate_warns_of_records_the_baselines_do_not_cover(synthetic):
     assert none.records["covered"].isna().all()
 
 
+def test_arx_models_are_refused_naming_the_way_out(synthetic, fitted):
+    """An ARX (input-output) model in the baselines is refused naming it and the engines that take an input, not
+    with the windowed engine's 'u is required' (evaluate has no u)."""
+    import dataclasses
+
+    recs, states, ft = synthetic
+    arx = tsfdi.ARX(recs[0][:, :1], recs[0][:, 1:], na=2, nb=2).fit()
+    io = dataclasses.replace(fitted, models={**fitted.models, "var": {**fitted.models["var"], "healthy": arx}})
+    with pytest.raises(TypeError, match=r"^baselines.models\['var'\]\['healthy'\] is an ARX \(input-output\) model: "
+                                        r".*identify_windows\(y, models, test, u=\.\.\.\)"):
+        tsfdi.evaluate(recs, io, states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0,
+                       progress=False)
+
 def test_functionally_pooled_models_are_refused_naming_at_k(synthetic, fitted):
     """An FP model in the baselines is named with the way out (its point model .at(k)) instead of an AttributeError
     from the coverage check; its point model at one k is evaluated as any VAR."""

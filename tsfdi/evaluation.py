@@ -44,7 +44,7 @@ from tsfdi.coverage import check_coverage, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
-from tsfdi.models import FPResults
+from tsfdi.models import ARXResults, FPResults
 from tsfdi.summary import Summary
 from tsfdi.detection.sequential import msprt, msprt_scale
 from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
@@ -491,6 +491,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         raise TypeError(f"baselines.models[{pooled[0]!r}][{pooled[1]!r}] is a functionally pooled model (FPResults): "
                         "evaluate tests every record with one point model per state; give its point model at an "
                         "operating point, .at(k) (a mapping turbulence level -> Baselines for one point per level)")
+    io = next(((m, s) for b in ([first] if by_level is None else by_level.values()) for m in models
+               for s, r in b.models[m].items() if isinstance(r, ARXResults)), None)
+    if io:
+        raise TypeError(f"baselines.models[{io[0]!r}][{io[1]!r}] is an ARX (input-output) model: evaluate's records "
+                        "carry no input u; test ARX models record by record with identify_windows(y, models, test, "
+                        "u=...) or Monitor(...).run(y, u=...)")
     if not isinstance(windows, (list, tuple)):
         windows = [windows]
     wins = {window_samples(w, "windows", rec.fs, minimum=2): None for w in windows}

@@ -461,7 +461,7 @@ class ResidualWindows:
         and the window decisions (or None). ``lbw``: per part of the test (one for a single test, one per part of an
         :class:`~tsfdi.AnyOf`), the lag products of ``e`` for a per-channel Ljung-Box test (kept by
         :meth:`statistics` across window lengths) or ``None``."""
-        nwin, k = starts.size, e.shape[1]
+        nwin = starts.size
         ref = test.reference(res)
         tests = test.tests if isinstance(test, AnyOf) else (test,)
         refs = ref["references"] if isinstance(test, AnyOf) else (ref,)
