@@ -485,18 +485,19 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     for m in models:
         if not isinstance(m, str) or m not in first.models:
             raise ValueError(f"models must be among the fitted models {list(first.models)}, got {m!r}")
-    pooled = next(((m, s) for b in ([first] if by_level is None else by_level.values()) for m in models
-                   for s, r in b.models[m].items() if isinstance(r, FPResults)), None)
-    if pooled:
-        raise TypeError(f"baselines.models[{pooled[0]!r}][{pooled[1]!r}] is a functionally pooled model (FPResults): "
-                        "evaluate tests every record with one point model per state; give its point model at an "
-                        "operating point, .at(k) (a mapping turbulence level -> Baselines for one point per level)")
-    io = next(((m, s) for b in ([first] if by_level is None else by_level.values()) for m in models
-               for s, r in b.models[m].items() if isinstance(r, ARXResults)), None)
-    if io:
-        raise TypeError(f"baselines.models[{io[0]!r}][{io[1]!r}] is an ARX (input-output) model: evaluate's records "
-                        "carry no input u; test ARX models record by record with identify_windows(y, models, test, "
-                        "u=...) or Monitor(...).run(y, u=...)")
+    # models evaluate cannot run: one point model per state, on records that carry no input
+    refused = {FPResults: "is a functionally pooled model (FPResults): evaluate tests every record with one point "
+                          "model per state; give its point model at an operating point, .at(k) (a mapping turbulence "
+                          "level -> Baselines for one point per level)",
+               ARXResults: "is an ARX (input-output) model: evaluate's records carry no input u; test ARX models "
+                           "record by record with identify_windows(y, models, test, u=...) or Monitor(...).run(y, "
+                           "u=...)"}
+    for b in ([first] if by_level is None else by_level.values()):
+        for m in models:
+            for s, r in b.models[m].items():
+                why = next((text for kind, text in refused.items() if isinstance(r, kind)), None)
+                if why:
+                    raise TypeError(f"baselines.models[{m!r}][{s!r}] {why}")
     if not isinstance(windows, (list, tuple)):
         windows = [windows]
     wins = {window_samples(w, "windows", rec.fs, minimum=2): None for w in windows}
