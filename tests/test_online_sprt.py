@@ -10,7 +10,7 @@ from test_online import PAPER001, two_pairs
 
 from tsfdi.detection.glrt import GLRT
 from tsfdi.detection.sequential import SPRT
-from tsfdi.exceptions import ConvergenceWarning
+from tsfdi.exceptions import ConvergenceWarning, TsfdiWarning
 from tsfdi.online import OnlineDetector
 
 FS = 50.0
@@ -111,20 +111,35 @@ def test_short_healthy_logs_calibrate_the_sprt():
         sprt_detector().calibrate([y[:330] for y in ys], [u[:330] for u in us], false_alarms_per_hour=60, fs=FS)
 
 
-def test_sprt_calibration_refuses_a_record_too_short_for_its_own_exponent():
-    """The spread between logs comes from every armed record's own Wald exponent: a log whose pair armed too late
-    to estimate it is refused, naming the run, the pair and the samples needed (never dropped silently)."""
+def test_sprt_calibration_leaves_a_record_too_short_for_its_own_exponent_out_of_the_spread():
+    """The spread between logs comes from every armed record's own Wald exponent. A record whose pair armed too late
+    to estimate it is left out of that spread only, named in a warning with how many records remain (it is left out
+    by its length, not its values; its samples still count in the pooled walk and its hours in the rate); the
+    calibration is refused only when fewer than three records remain. Before, one such record refused the whole
+    detector (issue 34: what refused whole groups of pairs on ALFA)."""
     rng = np.random.default_rng(5)
     logs = [short_log(rng, 37.0) for _ in range(3)]
     ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
-    with pytest.raises(ValueError, match=r"healthy run 3, pair 'b': 123 armed samples, at least 320 are needed"):
-        sprt_detector().calibrate(ys + [ys[0][:500]], us + [us[0][:500]], false_alarms_per_hour=60, fs=FS)
-    # a run that ends before arm_after leaves its pairs no armed sample: refused by name, not by an internal error
-    with pytest.raises(ValueError, match=r"healthy run 3, pair 'a': 0 armed samples, at least 320 are needed"):
+    ref = sprt_detector().calibrate(ys, us, false_alarms_per_hour=60, fs=FS).calibration_
+    with pytest.warns(TsfdiWarning, match=r"^1 armed \(run, pair\) record\(s\) with fewer than 320 armed samples, too "
+                      r"few for their own Wald exponent: healthy run 3, pair 'b' \(123\) -- left out of the spread "
+                      r"between logs, which 7 of the 8 records give"):
+        cal = sprt_detector().calibrate(ys + [ys[0][:500]], us + [us[0][:500]], false_alarms_per_hour=60,
+                                        fs=FS).calibration_
+    assert cal.runs == 4 and cal.healthy_hours == pytest.approx((3 * 37.0 + 10.0) / 3600)
+    assert cal.sprt_scale != ref.sprt_scale and cal.tail["sprt"]["log_exponent_sd"] > 0    # its samples pooled
+    # a run that ends before arm_after leaves its pairs no armed sample: both named, not an internal error
+    with pytest.warns(TsfdiWarning, match=r"^2 armed .*healthy run 3, pair 'a' \(0\), healthy run 3, pair 'b' \(0\) "
+                      r"-- left out of the spread between logs, which 6 of the 8"):
         sprt_detector(arm_after=600).calibrate(ys + [ys[0][:500]], us + [us[0][:500]], false_alarms_per_hour=60,
                                                fs=FS)
-    det = sprt_detector().calibrate(ys + [ys[0][:700]], us + [us[0][:700]], false_alarms_per_hour=60, fs=FS)
-    assert det.calibration_.runs == 4 and det.calibration_.tail["sprt"]["log_exponent_sd"] > 0
+    # too few records left for the spread: refused, naming the short ones
+    with pytest.raises(ValueError, match=r"from at least 3 records of at least 320 armed samples, the healthy runs "
+                       r"give 2 \(the other armed \(run, pair\) record\(s\) .*healthy run 1, pair 'a' \(0\), "
+                       r"healthy run 1, pair 'b' \(0\), healthy run 2, pair 'a' \(0\), "
+                       r"healthy run 2, pair 'b' \(0\)\)"):
+        sprt_detector(arm_after=600).calibrate([ys[0], ys[1][:500], ys[2][:500]], [us[0], us[1][:500], us[2][:500]],
+                                               false_alarms_per_hour=60, fs=FS)
 
 
 def test_a_stream_calibrated_on_three_30s_logs_keeps_its_rate_on_ten_others():

@@ -25,7 +25,7 @@ from tsfdi._data import as_signal, check_paired, refuse_masked, sampling_frequen
 from tsfdi._validation import boolean, float_like, int_like, option
 from tsfdi.detection.glrt import GLRT
 from tsfdi.detection.sequential import SPRT, renewal_walk
-from tsfdi.exceptions import ConvergenceWarning
+from tsfdi.exceptions import ConvergenceWarning, TsfdiWarning
 from tsfdi.models.lstsq import check_size
 from tsfdi.models.recursive import RecursiveARX
 
@@ -37,6 +37,7 @@ _MIN_EMPIRICAL = 5.0     # expected episodes at the target rate needed for the e
 _MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
 _MIN_SPRT_RECORDS = 3    # armed (run, pair) records the SPRT calibration needs (the spread between logs is estimated)
 _SPRT_BLOCK = 32         # samples per batch of the long-run variance in the SPRT scale of one record
+_MIN_EXPONENT_SAMPLES = 10 * _SPRT_BLOCK   # armed samples a record needs for its own Wald exponent
 _SPRT_BAND = (0.05, 0.5, 0.95)  # quantiles of a new log's false-alarm rate reported as ``rate_band``
 _SPRT_NODES = 400        # quantile nodes of the predictive law of a new log's Wald exponent
 _MIN_SPRT_CYCLES = 50    # restart cycles of the SPRT walk the calibration needs
@@ -286,9 +287,9 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     increment, plus the excess of the long-run variance over batches of ``_SPRT_BLOCK`` samples: the
     autocorrelation to second order); :math:`E[e^{h S_n}] \approx 1`."""
     n = z.size // _SPRT_BLOCK
-    if n < 10:
-        raise ValueError(f"{where}: {z.size} armed samples, at least {10 * _SPRT_BLOCK} are needed to estimate the "
-                         "SPRT's scale on it: give longer healthy runs")
+    if z.size < _MIN_EXPONENT_SAMPLES:
+        raise ValueError(f"{where}: {z.size} armed samples, at least {_MIN_EXPONENT_SAMPLES} are needed to estimate "
+                         "the SPRT's scale on it: give longer healthy runs")
     m = float(z.mean())
     if not m < 0:
         raise ValueError(f"{where}: the SPRT's log-likelihood ratio grows on average ({m:.4g} per sample) on a "
@@ -1051,9 +1052,11 @@ class OnlineDetector:
         differ (each standardises its errors by its own variance at arming), so the records' walks have their own
         exponents; :math:`\hat h_j` (step 1 on record :math:`j` alone, relative to the pooled walk) gives
         :math:`\ln \hat h_j`, taken as normal over logs with mean and spread :math:`s` estimated from the
-        :math:`J` records, and a new log's relative exponent :math:`r = e^{s\sqrt{1 + 1/J}\, T}`,
-        :math:`T \sim t_{J-1}` (the predictive law: the spread and its estimation from few logs). A new log with
-        exponent :math:`r` raises, above :math:`u + x`, on average
+        :math:`J` records (at least three; a record with fewer than 320 armed samples, too few for its own exponent,
+        is left out of this step only, named in a ``TsfdiWarning``: it is left out by its length, not its values,
+        and its samples stay in steps 1-2 with its hours), and a new log's relative exponent
+        :math:`r = e^{s\sqrt{1 + 1/J}\, T}`, :math:`T \sim t_{J-1}` (the predictive law: the spread and its
+        estimation from few logs). A new log with exponent :math:`r` raises, above :math:`u + x`, on average
         :math:`\rho(x, r) = \frac{n_u + 1}{H}\big(1 + \frac{x r}{n_u\hat\beta}\big)^{-n_u}` alarms per flight hour
         (:math:`H` the healthy flight hours, all pairs; the Gamma law of :math:`\hat\beta` averaged over as in the
         exponential tail). The threshold :math:`a = u + x` solves :math:`E_r[\rho(x, r)] = \rho` (400 quantile
@@ -1247,7 +1250,7 @@ class OnlineDetector:
                              f"so that the pairs arm)")
         base = copy.copy(self.sprt)
         base.scale_ = 1.0
-        # (a pair armed at or after its run's end has no sample: refused below with the run and the pair, by name)
+        # (a pair armed at or after its run's end has no sample: left out of the spread below, by name)
         zs = [base.loglik_ratio(w, 1.0) if w.size else np.empty(0) for _, _, w, _ in records]
         rates = [f for *_, f in records]
         h = _wald_exponent(np.concatenate(zs), "the healthy runs")
@@ -1267,14 +1270,29 @@ class OnlineDetector:
         u = float(m[-n_u - 1])
         beta = float(np.mean(m[-n_u:] - u))
         # the between-log effect: each record's own Wald exponent relative to the pooled one (1 after scaling);
-        # its log over records is normal, a new log's is predicted by Student's t (mean and spread estimated)
-        exps = []
+        # its log over records is normal, a new log's is predicted by Student's t (mean and spread estimated). A
+        # record too short for its own exponent is left out of the spread only (by its length, not its values: no
+        # selection), named in a warning; its samples stay in the pooled walk and the tail above, with its hours
+        exps, short = [], []
         for (i, pair, _, _), z in zip(records, zs):
+            if z.size < _MIN_EXPONENT_SAMPLES:
+                short.append(f"healthy run {i}, pair {pair!r} ({z.size})")
+                continue
             try:
                 exps.append(_wald_exponent(h * z, f"healthy run {i}, pair {pair!r}"))
             except ValueError as err:
                 raise ValueError(f"{err} (statistic='sprt' estimates the spread of the healthy logs from every "
-                                 "armed record)") from None
+                                 "armed record long enough for its own exponent)") from None
+        if short:
+            what = (f"armed (run, pair) record(s) with fewer than {_MIN_EXPONENT_SAMPLES} armed samples, too few for "
+                    f"their own Wald exponent: {', '.join(short)}")
+            if len(exps) < _MIN_SPRT_RECORDS:
+                raise ValueError(f"statistic='sprt' estimates the spread between healthy logs from at least "
+                                 f"{_MIN_SPRT_RECORDS} records of at least {_MIN_EXPONENT_SAMPLES} armed samples, "
+                                 f"the healthy runs give {len(exps)} (the other {what}): give longer healthy runs")
+            warnings.warn(f"{len(short)} {what} -- left out of the spread between logs, which {len(exps)} of the "
+                          f"{len(records)} records give (their samples still count in the pooled walk and its tail)",
+                          TsfdiWarning, stacklevel=3)
         log_h = np.log(exps)
         n_rec = log_h.size
         spread = float(log_h.std(ddof=1)) * np.sqrt(1.0 + 1.0 / n_rec)
@@ -1287,8 +1305,8 @@ class OnlineDetector:
             return (n_u + 1.0) / hours * (1.0 + x * (r if x >= 0 else 1.0) / (n_u * beta)) ** -n_u * np.ones_like(r)
 
         x_min = -n_u * beta * (1.0 - 1e-12)
-        x = optimize.brentq(lambda v: np.log(per_hour(v, rel).mean()) - np.log(rate), x_min, 1e3 * (abs(u) + n_u * beta),
-                            rtol=1e-12)
+        x = optimize.brentq(lambda v: np.log(per_hour(v, rel).mean()) - np.log(rate), x_min,
+                            1e3 * (abs(u) + n_u * beta), rtol=1e-12)
         a = u + float(x)
         if not a > 0:
             raise ValueError(f"false_alarms_per_hour={rate:g} needs an SPRT threshold of {a:.4g}, not positive: "
