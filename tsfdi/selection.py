@@ -35,7 +35,7 @@ import pandas as pd
 from tsfdi._data import as_signal
 from tsfdi._validation import float_like, int_like, option
 from tsfdi.exceptions import ConvergenceWarning, IllConditionedWarning
-from tsfdi.models import AR, ARX, VAR
+from tsfdi.models import AR, ARX, VAR, VARX
 from tsfdi.models.criteria import EXACT_FIT_RTOL
 from tsfdi.summary import Summary
 
@@ -49,17 +49,17 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     Parameters
     ----------
     data : array_like, Series, DataFrame or DataArray, or a list of them
-        The output signal ``y`` (scalar for ``"ar"`` / ``"arx"``, ``(nobs, s)`` for ``"var"``), or a list of
-        records of the same process (each holds back its own first ``max_lags`` samples; their Gram
+        The output signal ``y`` (scalar for ``"ar"`` / ``"arx"``, ``(nobs, s)`` for ``"var"`` / ``"varx"``), or a
+        list of records of the same process (each holds back its own first ``max_lags`` samples; their Gram
         matrices add up).
     max_lags : int
         Largest order tried.
-    model : {"ar", "var", "arx"}
-        Model family. For ``"arx"`` the order ``p`` means ``na = nb = p``.
+    model : {"ar", "var", "arx", "varx"}
+        Model family. For ``"arx"`` / ``"varx"`` the order ``p`` means ``na = nb = p``.
     u : array_like, optional
-        Input signal, required for ``"arx"``.
+        Input signal, required for ``"arx"`` / ``"varx"``.
     nk : int
-        Input delay of the ARX model.
+        Input delay of the ARX / VARX model.
     trend : {"n", "c"}
         No intercept or an intercept.
     criterion : {"logdet", "trace"}
@@ -78,7 +78,7 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     ValueError
         ``max_lags`` too large for the data (the message names the model's ``lags`` / ``na``) or for the memory
         limit, data outside ``[1e-152, 1e152]`` (each channel's largest magnitude), and the errors of the model
-        families (:class:`tsfdi.AR`, :class:`tsfdi.VAR`, :class:`tsfdi.ARX`).
+        families (:class:`tsfdi.AR`, :class:`tsfdi.VAR`, :class:`tsfdi.ARX`, :class:`tsfdi.VARX`).
 
     Warns
     -----
@@ -95,16 +95,20 @@ def select_order(data: Any, max_lags: int, model: str = "ar", *, u: Any = None, 
     Paper 003 selects the order by the minimum of BIC (eq. 5) together with the stabilisation of RSS/SSS
     (eq. 6, Fig. 8).
     """
-    family = option(model, "model", ("ar", "var", "arx"))
+    family = option(model, "model", ("ar", "var", "arx", "varx"))
     max_lags = int_like(max_lags, "max_lags", minimum=1)
     tol = float_like(tol, "tol", minimum=0.0)
     if family == "arx":
         if u is None:
             raise ValueError("u is required for model='arx'")
         spec = ARX(data, u, na=max_lags, nb=max_lags, nk=nk, trend=trend)
+    elif family == "varx":
+        if u is None:
+            raise ValueError("u is required for model='varx'")
+        spec = VARX(data, u, max_lags, nb=max_lags, nk=nk, trend=trend, criterion=criterion)
     else:
         if u is not None:
-            raise ValueError(f"u is only used with model='arx', not model={family!r}")
+            raise ValueError(f"u is only used with model='arx' or 'varx', not model={family!r}")
         if family == "ar":
             try:
                 spec = AR(data, max_lags, trend=trend)
@@ -212,8 +216,8 @@ class OrderSelection:
         if spec.neqs > 1:
             header.insert(2, ("BIC variant", spec.criterion))
         notes = ["Every order is fitted on the same sample (the first max_lags samples of each record held back)."]
-        if isinstance(spec, ARX):
-            notes.append("ARX order p: na = nb = p.")
+        if isinstance(spec, (ARX, VARX)):
+            notes.append(f"{type(spec).__name__} order p: na = nb = p.")
         if self.at_bound:
             notes.append(f"The BIC minimum is at the search bound max_lags = {self.max_lags}: a larger order may fit "
                          f"better; search further (max_lags = {2 * self.max_lags}).")

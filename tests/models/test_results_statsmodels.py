@@ -16,7 +16,7 @@ from statsmodels.tsa.api import VAR as smVAR
 
 import tsfdi
 from tsfdi.models import load
-from tsfdi.models.var import _simulate_var
+from tsfdi.models.var import simulate_var
 from tests.conftest import as_kind, to_numpy
 
 RTOL = 1e-8
@@ -38,7 +38,7 @@ def var_signal(n=1200, seed=4):
     A2 = np.array([[0.2, 0.0, 0.05], [0.0, 0.15, 0.0], [0.1, 0.0, 0.1]])
     cov = np.array([[1.0, 0.3, 0.1], [0.3, 0.8, 0.0], [0.1, 0.0, 0.5]])
     e = rng.multivariate_normal(np.zeros(3), cov, size=n + 300) + np.array([0.3, -0.2, 0.1])
-    return _simulate_var(np.stack([A1, A2]), e)[300:]
+    return simulate_var(np.stack([A1, A2]), e)[300:]
 
 
 def arx_signal(n=900, seed=5):

@@ -22,9 +22,9 @@ def var4(seed, n=2000):
     rng = np.random.default_rng(seed)
     A = [np.diag([-0.5, -0.3, -0.4]) + 0.05, np.diag([0.3, 0.2, 0.25]), np.diag([-0.15, 0.1, -0.1]),
          np.array([[0.3, 0.1, 0.0], [0.0, -0.3, 0.1], [0.1, 0.0, 0.35]])]
-    from tsfdi.models.var import _simulate_var
+    from tsfdi.models.var import simulate_var
 
-    return _simulate_var(np.stack(A), rng.standard_normal((n + 500, 3)))[500:]
+    return simulate_var(np.stack(A), rng.standard_normal((n + 500, 3)))[500:]
 
 
 @pytest.mark.parametrize("trend", ["n", "c"])

@@ -10,7 +10,7 @@ from statsmodels.tsa.api import VAR as smVAR
 
 import tsfdi
 from tsfdi.models import load
-from tsfdi.models.var import _simulate_var
+from tsfdi.models.var import simulate_var
 from tests.conftest import as_kind, assert_kind, to_numpy
 
 
@@ -21,7 +21,7 @@ def var_system(seed=0, n=3000):
     coefs = np.stack([A1, A2])
     cov = np.array([[1.0, 0.3, 0.1], [0.3, 0.8, 0.0], [0.1, 0.0, 0.5]])
     e = rng.multivariate_normal(np.zeros(3), cov, size=n + 300)
-    return _simulate_var(coefs, e)[300:], coefs, cov
+    return simulate_var(coefs, e)[300:], coefs, cov
 
 
 def macro():

@@ -28,8 +28,9 @@ from tsfdi.models.lstsq import (MAX_VALUES, check_size, cholesky_nested_fits, gr
                                 lag_residual_products, lagged_design, lstsq, nested_fits, triangular_factor)
 from tsfdi.summary import Summary
 
-__all__ = ["HeldOutResiduals", "LinearTimeSeriesModel", "LinearTimeSeriesResults", "ScalarOutputResults",
-           "DATA_RANGE"]
+__all__ = ["HeldOutResiduals", "InputOutputResults", "LinearTimeSeriesModel", "LinearTimeSeriesResults",
+           "ScalarOutputResults", "VectorOutputResults", "DATA_RANGE", "check_covariance", "gaussian_innovations",
+           "simulate_var"]
 
 #: range of a channel's largest magnitude that the models accept: squares (variances) of data inside it stay
 #: in the normal floating-point range (1e-304 .. 1e304), with four decades to spare
@@ -1210,3 +1211,127 @@ class ScalarOutputResults(LinearTimeSeriesResults):
         for an exact fit, whose ``llf`` uses a floor instead (see :meth:`LinearTimeSeriesModel.fit`)."""
         scale = self.model.y_scale[0]
         return float(self._sse[0, 0] / self.nobs * scale * scale)
+
+
+class VectorOutputResults(LinearTimeSeriesResults):
+    """Results of a model with a vector output (VAR, VARX): ``(df_eq, s)`` ``params``, the ``(s, s)`` covariance
+    ``sigma``, statsmodels ``VAR``'s degrees-of-freedom adjusted ``bse``."""
+
+    @property
+    def coefs(self) -> np.ndarray:
+        """``A_1..A_lags``, shape ``(lags, s, s)``, in the papers' sign."""
+        return self._ar_matrices()
+
+    @property
+    def intercept(self) -> np.ndarray:
+        return self._params2d[0].copy() if self.model.k_const else np.zeros(self.neqs)
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """Maximum-likelihood residual covariance ``E'E / nobs`` (statsmodels' ``sigma_u_mle``)."""
+        scale = self.model.y_scale
+        return self._sse / self.nobs * scale[:, None] * scale[None, :]
+
+
+class InputOutputResults(LinearTimeSeriesResults):
+    """Results of a model with exogenous inputs (ARX, VARX): the residuals and forecasts of the output given the
+    input ``u``. The engines that test input-output models (:class:`tsfdi.windows.ResidualWindows`,
+    :func:`tsfdi.identify`, :class:`tsfdi.Monitor`) recognise them by this class."""
+
+    def residuals(self, y: Any, u: Any) -> Any:
+        """One-step prediction errors of new output ``y`` given new input ``u`` through the fixed model.
+
+        Parameters
+        ----------
+        y : array_like, Series, DataFrame or DataArray
+            Output, with the model's channels (matched by name when both are named).
+        u : array_like, Series, DataFrame or DataArray
+            Input, as long as ``y`` (with its index when both carry one), with the model's inputs (matched by name
+            when both are named).
+
+        Returns
+        -------
+        ``len(y) - max(lags, nk + nb - 1)`` samples in the kind of ``y``, index from that position.
+        """
+        sig = self._new_signal(y)
+        usig = self._new_input(u, sig.nobs)
+        check_paired(sig, usig)
+        return sig.wrap(self._residuals_array(sig.values, usig.values), self.model.max_lag)
+
+    def forecast(self, steps: int, u: Any) -> Any:
+        """Forecasts of the ``steps`` samples after the end of the fitted data (the last record of a model fitted
+        on several), driven by the future inputs ``u``: the model's equation with the forecasts in place of the
+        outputs not yet seen and the fitted data's inputs before ``u`` (statsmodels'
+        ``AutoRegResults.forecast(steps, exog=...)``).
+
+        Parameters
+        ----------
+        steps : int
+            Number of samples forecast.
+        u : array_like (steps,) or (steps, n_inputs), Series, DataFrame or DataArray
+            The inputs of the forecast samples (matched by name when the model and ``u`` are named).
+
+        Returns
+        -------
+        ``steps`` samples in the kind of ``u``, with its index (one column per output channel for a vector model).
+
+        Raises
+        ------
+        ValueError
+            ``steps`` < 1, ``u`` without ``steps`` samples or with other inputs, or forecasts that leave the
+            floating-point range.
+        """
+        steps = int_like(steps, "steps", minimum=1)
+        usig = self._new_input(u, steps, "steps is")
+        m = self.model
+        name = m.data.name if m.data.name is not None else "y"
+        return usig.wrap(self._forecast_array(steps, usig.values), 0, vector=m._vector,
+                         channels=list(m.data.channels), name=name)
+
+    def _new_input(self, u: Any, nobs: int | None = None, against: str = "y has") -> Signal:
+        """``u`` validated, its inputs in the model's order: matched by name when both ``u`` and the model's input
+        are named (a missing or extra input raises naming it), else by position."""
+        usig = as_signal(u, "u", allow_constant=True)
+        fitted = self.model.u_data
+        if not (usig.named and fitted.named) and usig.nchan != fitted.nchan:
+            raise ValueError(f"u has {usig.nchan} input(s) but the model was fitted with {fitted.nchan}")
+        usig = usig.match_channels(fitted.channels, "u", named=fitted.named)
+        if nobs is not None and usig.nobs != nobs:
+            raise ValueError(f"u has {usig.nobs} samples but {against} {nobs}: they must match")
+        return usig
+
+
+def check_covariance(sigma: object, s: int) -> np.ndarray:
+    """``sigma`` as a finite symmetric positive semi-definite ``(s, s)`` matrix, or an error naming it."""
+    try:
+        cov = np.asarray(sigma, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"sigma must be a real ({s}, {s}) covariance matrix, got {sigma!r}") from None
+    if cov.shape != (s, s):
+        raise ValueError(f"sigma must be a ({s}, {s}) covariance matrix, got shape {cov.shape}")
+    if not np.isfinite(cov).all() or not np.allclose(cov, cov.T, rtol=1e-12, atol=0.0):
+        raise ValueError("sigma must be a finite symmetric matrix")
+    top = np.abs(cov).max()
+    if top > 0 and np.linalg.eigvalsh(cov / top).min() < -1e-12:
+        raise ValueError("sigma must be positive semi-definite (it has a negative eigenvalue)")
+    return cov
+
+
+def gaussian_innovations(rng: np.random.Generator, cov: np.ndarray, n: int) -> np.ndarray:
+    """``n`` draws ``(n, s)`` of ``N(0, cov)``: through the Cholesky factor, or the eigendecomposition of a positive
+    semi-definite but singular ``cov``."""
+    try:
+        return rng.multivariate_normal(np.zeros(cov.shape[0]), cov, size=n, method="cholesky")
+    except np.linalg.LinAlgError:
+        return rng.multivariate_normal(np.zeros(cov.shape[0]), cov, size=n, method="eigh")
+
+
+def simulate_var(coefs: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """``y[t] = e[t] - sum_i A_i y[t-i]`` with zero initial conditions."""
+    p, s, _ = coefs.shape
+    n = e.shape[0]
+    y = np.zeros((n + p, s))
+    Aflat = np.concatenate(list(coefs[::-1]), axis=1)   # [A_p ... A_1], (s, p s)
+    for t in range(n):
+        y[t + p] = e[t] - Aflat @ y[t:t + p].ravel()
+    return y[p:]

@@ -9,7 +9,7 @@ Layout (format version 2): a zip archive of ``.npy`` members, the *fields*
 
 ``meta``
     0-d string array holding JSON: ``format`` (``"tsfdi-results"``), ``version``, ``family`` (``"AR"``,
-    ``"VAR"``, ``"ARX"``), ``options`` (``na``, ``nb``, ``nk``, ``trend``, ``hold_back``, ``criterion``),
+    ``"VAR"``, ``"ARX"``, ``"VARX"``), ``options`` (``na``, ``nb``, ``nk``, ``trend``, ``hold_back``, ``criterion``),
     ``multi`` (a list of records) and, for every output record in ``y`` and input record in ``u``, its kind,
     channels, name and the description of its time index.
 ``params``
@@ -37,7 +37,7 @@ a zip archive, a member that cannot be read, a checksum that does not match, a m
 shape. Archives of format version 1 (written by tsfdi before the checksums) are read with the same checks,
 without the checksums; archives of a newer version are refused, not misread.
 
-This module imports no model family: the families that can be archived (AR, VAR, ARX) register their
+This module imports no model family: the families that can be archived (AR, VAR, ARX, VARX) register their
 class here with :func:`register` when their module is imported (the functionally pooled FPAR, FPVAR, FPARX add the
 fields ``k`` (the operating point of every record), ``k_range``, and ``weights`` for a weighted fit, and the
 options ``degree``, ``basis``, ``weights``, ``k_names``; the functionally pooled mean of windows FPMean stores the
@@ -79,6 +79,8 @@ _BUILDERS = {
     "AR": lambda cls, y, u, o: cls(y, o["na"], o["trend"], hold_back=o["hold_back"]),
     "VAR": lambda cls, y, u, o: cls(y, o["na"], o["trend"], hold_back=o["hold_back"], criterion=o["criterion"]),
     "ARX": lambda cls, y, u, o: cls(y, u, o["na"], o["nb"], o["nk"], o["trend"], hold_back=o["hold_back"]),
+    "VARX": lambda cls, y, u, o: cls(y, u, o["na"], o["nb"], o["nk"], o["trend"], hold_back=o["hold_back"],
+                                     criterion=o["criterion"]),
     # functionally pooled families (tsfdi.models.fp): the operating points and the basis ride along
     "FPAR": lambda cls, y, u, o: cls(y, o["k"], o["na"], o["degree"], o["trend"], basis=o["basis"],
                                      weights=o["weights"], hold_back=o["hold_back"], k_range=o["k_range"]),
@@ -112,7 +114,7 @@ def register(model_class: type) -> type:
     """Class decorator: make the model family ``model_class`` loadable by :func:`load`.
 
     The family is stored in an archive by class name; only the families known to this module (AR, VAR,
-    ARX) can be registered.
+    ARX, VARX) can be registered.
     """
     name = model_class.__name__
     if name not in _BUILDERS:
@@ -568,7 +570,7 @@ def _read(p: Path) -> tuple[_Archive, dict, int, str]:
 
 # ------------------------------------------------------------------------------------------- public API
 def save(results: Any, path: Any) -> Path:
-    """Write ``results`` (AR, VAR, ARX, or a functionally pooled FPAR, FPVAR, FPARX, FPMean) to ``path`` as a
+    """Write ``results`` (AR, VAR, ARX, VARX, or a functionally pooled FPAR, FPVAR, FPARX, FPMean) to ``path`` as a
     compressed ``.npz`` archive (format version 2).
 
     ``.npz`` is appended to a file name that does not end with it, as :func:`numpy.savez` does. The file is

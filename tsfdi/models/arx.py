@@ -7,9 +7,8 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
-from tsfdi._data import as_signal, check_paired
-from tsfdi._validation import check_rng, float_like, int_like
-from tsfdi.models._base import LinearTimeSeriesModel, ScalarOutputResults
+from tsfdi._validation import check_rng, float_like
+from tsfdi.models._base import InputOutputResults, LinearTimeSeriesModel, ScalarOutputResults
 from tsfdi.models.archive import register
 
 __all__ = ["ARX", "ARXResults"]
@@ -70,7 +69,7 @@ class ARX(LinearTimeSeriesModel):
                 f"n_inputs={self.n_inputs}, trend={self.trend!r})")
 
 
-class ARXResults(ScalarOutputResults):
+class ARXResults(ScalarOutputResults, InputOutputResults):
     """Results of :meth:`ARX.fit` (immutable).
 
     Attributes
@@ -99,45 +98,6 @@ class ARXResults(ScalarOutputResults):
     @property
     def b(self) -> np.ndarray:
         return self._input_matrices()[:, 0, :].T.copy()
-
-    def residuals(self, y: Any, u: Any) -> Any:
-        """One-step prediction errors of new output ``y`` given new input ``u`` through the fixed model.
-
-        Returns ``len(y) - max(na, nk + nb - 1)`` samples in the kind of ``y``.
-        """
-        sig = self._new_signal(y)
-        usig = self._new_input(u, sig.nobs)
-        check_paired(sig, usig)
-        return sig.wrap(self._residuals_array(sig.values, usig.values), self.model.max_lag)
-
-    def forecast(self, steps: int, u: Any) -> Any:
-        """Forecasts of the ``steps`` samples after the end of the fitted data (the last record of a model fitted
-        on several), driven by the future inputs ``u``:
-        ``y[t] = c - sum_i a_i y[t-i] + sum_m sum_j b_{m,j} u_m[t-nk-j+1]``, with the forecasts in place of the
-        outputs not yet seen and the fitted data's inputs before ``u`` (statsmodels'
-        ``AutoRegResults.forecast(steps, exog=...)``).
-
-        Parameters
-        ----------
-        steps : int
-            Number of samples forecast.
-        u : array_like (steps,) or (steps, n_inputs), Series, DataFrame or DataArray
-            The inputs of the forecast samples (matched by name when the model and ``u`` are named).
-
-        Returns
-        -------
-        ``steps`` samples in the kind of ``u``, with its index.
-
-        Raises
-        ------
-        ValueError
-            ``steps`` < 1, ``u`` without ``steps`` samples or with other inputs, or forecasts that leave the
-            floating-point range.
-        """
-        steps = int_like(steps, "steps", minimum=1)
-        usig = self._new_input(u, steps, "steps is")
-        name = self.model.data.name if self.model.data.name is not None else "y"
-        return usig.wrap(self._forecast_array(steps, usig.values), 0, vector=False, name=name)
 
     def simulate(self, u: Any, rng: Any = None, *, sigma2: float | None = None) -> Any:
         """Simulate the output of the fitted model driven by the input ``u`` and Gaussian innovations.
@@ -175,18 +135,6 @@ class ARXResults(ScalarOutputResults):
                              f"{'unstable' if not self.is_stable else 'driven far beyond its data'}); use a shorter "
                              "or smaller u")
         return usig.wrap(y, 0, vector=False, name="y")
-
-    def _new_input(self, u: Any, nobs: int | None = None, against: str = "y has"):
-        """``u`` validated, its inputs in the model's order: matched by name when both ``u`` and the model's input
-        are named (a missing or extra input raises naming it), else by position."""
-        usig = as_signal(u, "u", allow_constant=True)
-        fitted = self.model.u_data
-        if not (usig.named and fitted.named) and usig.nchan != fitted.nchan:
-            raise ValueError(f"u has {usig.nchan} input(s) but the model was fitted with {fitted.nchan}")
-        usig = usig.match_channels(fitted.channels, "u", named=fitted.named)
-        if nobs is not None and usig.nobs != nobs:
-            raise ValueError(f"u has {usig.nobs} samples but {against} {nobs}: they must match")
-        return usig
 
 
 ARX.results_class = ARXResults

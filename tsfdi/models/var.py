@@ -7,7 +7,8 @@ from typing import Any
 import numpy as np
 
 from tsfdi._validation import check_rng, int_like
-from tsfdi.models._base import LinearTimeSeriesModel, LinearTimeSeriesResults
+from tsfdi.models._base import (LinearTimeSeriesModel, VectorOutputResults, check_covariance, gaussian_innovations,
+                               simulate_var)
 from tsfdi.models.archive import register
 from tsfdi.models.lstsq import check_size
 
@@ -62,7 +63,7 @@ class VAR(LinearTimeSeriesModel):
         super().__init__(y, lags, trend=trend, hold_back=hold_back, criterion=criterion)
 
 
-class VARResults(LinearTimeSeriesResults):
+class VARResults(VectorOutputResults):
     """Results of :meth:`VAR.fit` (immutable).
 
     Attributes
@@ -82,19 +83,6 @@ class VARResults(LinearTimeSeriesResults):
     fittedvalues : same kind as ``y``
         ``y[t] - e[t]`` over the estimation sample.
     """
-
-    @property
-    def coefs(self) -> np.ndarray:
-        return self._ar_matrices()
-
-    @property
-    def intercept(self) -> np.ndarray:
-        return self._params2d[0].copy() if self.model.k_const else np.zeros(self.neqs)
-
-    @property
-    def sigma(self) -> np.ndarray:
-        scale = self.model.y_scale
-        return self._sse / self.nobs * scale[:, None] * scale[None, :]
 
     def residuals(self, y: Any) -> Any:
         """One-step prediction errors of a new vector signal through the fixed model.
@@ -151,45 +139,15 @@ class VARResults(LinearTimeSeriesResults):
         s = self.neqs
         check_size((nobs + burn) * s, f"nobs={nobs} (+ burn={burn}): the simulated signal")
         rng = check_rng(rng)
-        cov = self.sigma if sigma is None else _covariance(sigma, s)
-        try:
-            e = rng.multivariate_normal(np.zeros(s), cov, size=nobs + burn, method="cholesky")
-        except np.linalg.LinAlgError:   # positive semi-definite but singular
-            e = rng.multivariate_normal(np.zeros(s), cov, size=nobs + burn, method="eigh")
+        cov = self.sigma if sigma is None else check_covariance(sigma, s)
+        e = gaussian_innovations(rng, cov, nobs + burn)
         with np.errstate(over="ignore", invalid="ignore"):
-            y = _simulate_var(self.coefs, e + self.intercept)[burn:]
+            y = simulate_var(self.coefs, e + self.intercept)[burn:]
         if not np.isfinite(y).all():
             raise ValueError(f"nobs={nobs}: the simulation leaves the floating-point range (the fitted VAR is "
                              f"{'unstable' if not self.is_stable else 'driven by a huge sigma'}); simulate fewer "
                              "samples")
         return y
-
-
-def _covariance(sigma: object, s: int) -> np.ndarray:
-    """``sigma`` as a finite symmetric positive semi-definite ``(s, s)`` matrix, or an error naming it."""
-    try:
-        cov = np.asarray(sigma, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"sigma must be a real ({s}, {s}) covariance matrix, got {sigma!r}") from None
-    if cov.shape != (s, s):
-        raise ValueError(f"sigma must be a ({s}, {s}) covariance matrix, got shape {cov.shape}")
-    if not np.isfinite(cov).all() or not np.allclose(cov, cov.T, rtol=1e-12, atol=0.0):
-        raise ValueError("sigma must be a finite symmetric matrix")
-    top = np.abs(cov).max()
-    if top > 0 and np.linalg.eigvalsh(cov / top).min() < -1e-12:
-        raise ValueError("sigma must be positive semi-definite (it has a negative eigenvalue)")
-    return cov
-
-
-def _simulate_var(coefs: np.ndarray, e: np.ndarray) -> np.ndarray:
-    """``y[t] = e[t] - sum_i A_i y[t-i]`` with zero initial conditions."""
-    p, s, _ = coefs.shape
-    n = e.shape[0]
-    y = np.zeros((n + p, s))
-    Aflat = np.concatenate(list(coefs[::-1]), axis=1)   # [A_p ... A_1], (s, p s)
-    for t in range(n):
-        y[t + p] = e[t] - Aflat @ y[t:t + p].ravel()
-    return y[p:]
 
 
 VAR.results_class = VARResults
