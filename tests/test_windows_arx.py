@@ -1,4 +1,4 @@
-"""Input-output (ARX, FP-ARX point) models in the windowed engine: ResidualWindows and identify_windows with ``u``."""
+"""Input-output (ARX, VARX, FP-ARX point) models in the windowed engine: ResidualWindows and identify_windows with ``u``."""
 
 import numpy as np
 import pandas as pd
@@ -7,6 +7,7 @@ import scipy.signal as sps
 import xarray as xr
 
 import tsfdi
+from tsfdi.models import VARX
 from tsfdi.windows import ResidualWindows
 
 
@@ -140,6 +141,52 @@ def test_input_refused_or_required(arx, record):
     one = tsfdi.ARX(y[:1200], u[:, :1][:1200], 1, 2).fit()
     with pytest.raises(ValueError, match="ARX models must share one set of inputs"):
         ResidualWindows({**arx, "one": one})
+
+
+def simulate_two(gain, n, rng):
+    """Two rates driven by two commands through a coupled plant; the first command's gain is ``gain``."""
+    y, u = simulate(gain, n, rng)
+    y2 = sps.lfilter([0, 0.4, 0.2], [1, -0.3], u[:, 1]) + 0.3 * np.r_[0, y[:-1]] + 0.1 * rng.standard_normal(n)
+    return np.column_stack([y, y2]), u
+
+
+@pytest.fixture(scope="module")
+def varx():
+    rng = np.random.default_rng(2033)
+    # nb = 3, nk = 1: the input lags reach beyond lags = 1, as for the ARX models above
+    return {name: VARX(*simulate_two(g, 3000, rng), 1, nb=3, nk=1).fit() for name, g in (("healthy", 1.0),
+                                                                                              ("loss", 0.5))}
+
+
+@pytest.mark.parametrize("test", [tsfdi.FTest(1e-3), tsfdi.LjungBox(10, 1e-3), tsfdi.MeanTest(1e-3)])
+def test_varx_windows_equal_identify_on_each_window(varx, test):
+    """VARX results (several outputs given the inputs) run through the windowed engine and identify exactly as ARX
+    results: the windows equal ``identify`` on each window and the residuals are ``residuals(y, u)`` windowed."""
+    rng = np.random.default_rng(8)
+    parts = [simulate_two(g, 1200, rng) for g in (1.0, 0.5)]
+    y, u = np.vstack([p[0] for p in parts]), np.vstack([p[1] for p in parts])
+    wi = tsfdi.identify_windows(y, varx, test, window=400, step=200, u=u)
+    if isinstance(test, tsfdi.FTest):
+        assert wi.labels[0] == "healthy" and wi.labels[-1] == "loss"
+    for w, (s, e) in enumerate(zip(wi.starts, wi.stops)):
+        one = tsfdi.identify(y[s:e], varx, test, u=u[s:e])
+        assert wi[w].label == one.label
+        for name in varx:
+            np.testing.assert_allclose(wi[w].decisions[name].statistic, one.decisions[name].statistic, rtol=1e-9)
+    ws = ResidualWindows(varx).fit(y, u=u).statistics(test, window=400, step=200)
+    for j, (name, res) in enumerate(varx.items()):
+        e = res.residuals(y, u)
+        assert ws.nobs[j] == 400 - res.model.max_lag == 397
+        for w, s in enumerate(ws.starts):
+            want = test.test(e[s:s + 397], **test.reference(res)).statistic
+            np.testing.assert_allclose(ws.statistic[w, j], want, rtol=1e-9)
+    d = tsfdi.detect(y[:1200], varx["healthy"], tsfdi.FTest(1e-3), u=u[:1200])
+    np.testing.assert_allclose(d.statistic, tsfdi.identify(y[:1200], {"h": varx["healthy"]}, tsfdi.FTest(1e-3),
+                                                           u=u[:1200]).decisions["h"].statistic)
+    with pytest.raises(TypeError, match="u is required: models\\['healthy'\\] is a VARX"):
+        tsfdi.identify(y, varx, test)
+    with pytest.raises(TypeError, match="models mixes ARX / VARX"):
+        ResidualWindows({**varx, "var": tsfdi.VAR(y, 2).fit()})
 
 
 def test_crazypad_rates_given_the_commands(shared_crazypad):

@@ -29,7 +29,7 @@ from tsfdi.detection.decision import Decision
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.exceptions import CoverageWarning
 from tsfdi.detection.threshold import EmpiricalThreshold
-from tsfdi.models import ARXResults, FPMeanResults, FPResults
+from tsfdi.models import FPMeanResults, FPResults, InputOutputResults
 from tsfdi.summary import Summary
 from tsfdi.windows import STATUS, ResidualWindows, WindowStatistics, decide, status
 
@@ -60,7 +60,7 @@ def _check_model(res: Any, name: str, sig: Signal, arg: str) -> None:
     """``res`` is fitted results whose channels ``sig`` has: by name when both are named (a missing or an extra
     channel raises naming it; the model's ``residuals`` reorders the signal), else by their number."""
     if not hasattr(res, "residuals"):
-        raise TypeError(f"{arg} must hold fitted results (AR, VAR or ARX) with a residuals() method; "
+        raise TypeError(f"{arg} must hold fitted results (AR, VAR, ARX or VARX) with a residuals() method; "
                         f"{name!r} is a {type(res).__name__}")
     if isinstance(res, FPResults):
         raise TypeError(f"{arg if name == arg else f'{arg}[{name!r}]'} is a functionally pooled model (FPResults): "
@@ -76,10 +76,12 @@ def _check_model(res: Any, name: str, sig: Signal, arg: str) -> None:
 
 
 def _residuals(res: Any, signal: Any, u: Any, what: str) -> Any:
-    """Residuals of ``signal`` through ``res``, with the input ``u`` for an input-output (ARX) model only."""
-    if isinstance(res, ARXResults):
+    """Residuals of ``signal`` through ``res``, with the input ``u`` for an input-output (ARX, VARX) model only."""
+    if isinstance(res, InputOutputResults):
         if u is None:
-            raise TypeError(f"u is required: {what} is an ARX (input-output) model; pass its input signal as u=")
+            name = type(res.model).__name__
+            raise TypeError(f"u is required: {what} is {'a' if name.startswith('V') else 'an'} {name} (input-output) "
+                            "model; pass its input signal as u=")
         return res.residuals(signal, u)
     if u is not None:
         raise TypeError(f"u is only for input-output (ARX) models: {what} ({type(res).__name__}) has no exogenous "
@@ -183,8 +185,8 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
         :class:`~tsfdi.EmpiricalThreshold` calibrated on the statistic of healthy records the baseline was not fitted
         on (required: the statistic's null law has no closed form); the decision's p-value is the threshold's.
     u : array_like, optional
-        Input signal for an input-output baseline (``tsfdi.ARX(...).fit()``), passed to its ``residuals``;
-        required for such a baseline, refused for AR / VAR baselines.
+        Input signal for an input-output baseline (``tsfdi.ARX(...).fit()``, ``tsfdi.VARX(...).fit()``), passed to
+        its ``residuals``; required for such a baseline, refused for AR / VAR baselines.
 
     Returns
     -------
@@ -208,8 +210,8 @@ def detect(signal: Any, baseline: Any, test: ResidualTest | None = None, *, u: A
     TypeError
         ``baseline`` is not fitted results or is a functionally pooled model itself (:class:`~tsfdi.FPResults`:
         give its point model ``.at(k)``), ``test`` is not a residual test (for an FPMean baseline: not a
-        calibrated EmpiricalThreshold), ``u`` is missing for an ARX baseline or given for another, or ``signal`` is
-        not numeric.
+        calibrated EmpiricalThreshold), ``u`` is missing for an ARX / VARX baseline or given for another, or
+        ``signal`` is not numeric.
     ValueError
         ``signal`` is not 1-D / 2-D, holds NaN / inf or a masked value, is too short for the model and test, lacks
         a channel of the baseline or has one it does not know (named), or has a channel count other than the
@@ -354,8 +356,8 @@ def identify(signal: Any, models: Mapping, test: Any = None, *, u: Any = None) -
         :class:`~tsfdi.EmpiricalThreshold` of their statistic, a mapping name -> threshold, or ``None`` (default: no
         threshold, every model accepts and only the ranking decides).
     u : array_like, optional
-        Input signal when the candidates are input-output models (``tsfdi.ARX``): required for those, refused for
-        AR / VAR models.
+        Input signal when the candidates are input-output models (``tsfdi.ARX``, ``tsfdi.VARX``): required for
+        those, refused for AR / VAR models.
 
     Returns
     -------
@@ -509,7 +511,7 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     Parameters
     ----------
     signal, models, test :
-        As in :func:`identify`; the models are AR / VAR results, ARX results (input-output models, e.g. an
+        As in :func:`identify`; the models are AR / VAR results, ARX / VARX results (input-output models, e.g. an
         FP-ARX's point ``.at(k)``; then ``u`` is required), or FPMean results
         (``window`` must be theirs; the result's ``windows.loglik`` is each window's
         :meth:`~tsfdi.models.FPMeanResults.loglike`, so ``decide("likelihood")`` gives the class of the largest
@@ -520,16 +522,16 @@ def identify_windows(signal: Any, models: Mapping, test: Any = None, *, window: 
     fs : float, optional
         Sampling frequency in Hz (default: read from the signal's time index when a time span is given).
     u : array_like, Series, DataFrame or DataArray, optional
-        The record's input for ARX models (required for them, refused for the others): as long as ``signal``, with
-        its index when both carry one, its channels matched to the models' inputs by name when both are named. The
-        residuals of every window are those of ``results.residuals(signal, u)`` on the window.
+        The record's input for ARX / VARX models (required for them, refused for the others): as long as
+        ``signal``, with its index when both carry one, its channels matched to the models' inputs by name when both
+        are named. The residuals of every window are those of ``results.residuals(signal, u)`` on the window.
 
     Returns
     -------
     WindowedIdentification
         Arrays over windows, models and channels; ``result[w]`` is the :class:`Identification` of window ``w``
         (with ``span = (start, stop)``), equal to ``identify(signal[start:stop], models, test)`` (with
-        ``u=u[start:stop]`` for ARX models).
+        ``u=u[start:stop]`` for ARX / VARX models).
 
     Raises
     ------

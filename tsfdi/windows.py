@@ -33,7 +33,7 @@ from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.mean import MeanTest
 from tsfdi.detection.variance import FTest
 from tsfdi.detection.whiteness import LjungBox, LjungBoxWindows
-from tsfdi.models import ARXResults, FPResults
+from tsfdi.models import FPResults, InputOutputResults
 
 __all__ = ["RULES", "SEQUENTIAL_RULES", "STATUS", "ResidualWindows", "WindowStatistics", "decide", "status"]
 
@@ -198,9 +198,10 @@ class ResidualWindows:
     Parameters
     ----------
     models : mapping
-        Name -> fitted AR / VAR results, all with the same number of channels; or name -> fitted ARX results
-        (input-output models, e.g. an FP-ARX's point ``.at(k)``), all with the same inputs: :meth:`fit` then takes
-        the record's input ``u``. The kinds do not mix (a model with inputs and one without take different data).
+        Name -> fitted AR / VAR results, all with the same number of channels; or name -> fitted ARX / VARX results
+        (input-output models, :class:`~tsfdi.models.InputOutputResults`, e.g. an FP-ARX's point ``.at(k)``), all
+        with the same inputs: :meth:`fit` then takes the record's input ``u``. The kinds do not mix (a model with
+        inputs and one without take different data).
 
     Examples
     --------
@@ -214,18 +215,20 @@ class ResidualWindows:
             raise TypeError("models must be a non-empty mapping name -> fitted results")
         for name, res in models.items():
             if not hasattr(res, "residuals"):
-                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR), got {type(res).__name__}")
+                raise TypeError(f"models[{name!r}] must be fitted results (AR, VAR, ARX, VARX), got "
+                                f"{type(res).__name__}")
             if isinstance(res, FPResults):
                 raise TypeError(f"models[{name!r}] is a functionally pooled model (FPResults): give its point model "
                                 "at the record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
-        kinds = {isinstance(res, ARXResults) for res in models.values()}
+        kinds = {isinstance(res, InputOutputResults) for res in models.values()}
         if len(kinds) > 1:
-            raise TypeError("models mixes ARX (input-output) models with AR / VAR models: the ARX residuals are of the "
-                            "output given u, the others of the output alone; test one kind per engine")
-        #: whether the models take an input ``u`` (ARX models)
+            raise TypeError("models mixes ARX / VARX (input-output) models with AR / VAR models: the ARX / VARX "
+                            "residuals are of the output given u, the others of the output alone; test one kind per "
+                            "engine")
+        #: whether the models take an input ``u`` (ARX / VARX models)
         self.inputs = kinds == {True}
         self.models = dict(models)
-        # the first residual is at the largest lag (an ARX's input lags nk + nb - 1 may reach beyond na)
+        # the first residual is at the largest lag (an ARX's / VARX's input lags nk + nb - 1 may reach beyond na)
         self.orders = {name: int(res.model.max_lag if self.inputs else res.lags) for name, res in self.models.items()}
         nchan = {int(getattr(r, "neqs", 1)) for r in self.models.values()}
         if len(nchan) > 1:
@@ -245,7 +248,7 @@ class ResidualWindows:
                       for name, r in self.models.items()}
             # named inputs: one set (each model takes them by name, in its own order); else one count
             if len({frozenset(c) if named else len(c) for c, named in fitted.values()}) > 1:
-                raise ValueError("ARX models must share one set of inputs, got "
+                raise ValueError("ARX or VARX models must share one set of inputs, got "
                                  + "; ".join(f"{name!r}: {c}" for name, (c, _) in fitted.items()))
             self._inputs = next(iter(fitted.values()))
         self._resid: dict | None = None
@@ -260,9 +263,9 @@ class ResidualWindows:
         signal : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, k)
             The record (``k`` = the models' channels), finite.
         u : array_like, Series, DataFrame or DataArray, shape (nobs,) or (nobs, n_inputs)
-            The record's input, for ARX models only (required for them, refused otherwise): as long as ``signal``,
-            with its index when both carry one, its channels matched to the models' inputs by name when both are
-            named (else by position). The residuals are the models' ``residuals(signal, u)``.
+            The record's input, for ARX / VARX models only (required for them, refused otherwise): as long as
+            ``signal``, with its index when both carry one, its channels matched to the models' inputs by name when
+            both are named (else by position). The residuals are the models' ``residuals(signal, u)``.
         channels : sequence of str, optional
             Channel names (default: those of ``signal``).
 
@@ -274,8 +277,8 @@ class ResidualWindows:
         ------
         TypeError, ValueError
             A ``signal`` that is not numeric, not 1-D / 2-D, holds NaN / inf or masked values, is shorter than a
-            model's order + 1 or has another number of channels than the models; ``u`` missing for ARX models or
-            given for others, or (named ``u``) not numeric and finite, of another length or index than ``signal``, or
+            model's order + 1 or has another number of channels than the models; ``u`` missing for ARX / VARX models
+            or given for others, or (named ``u``) not numeric and finite, of another length or index than ``signal``, or
             without the models' inputs.
         """
         sig = as_signal(signal, "signal", allow_constant=True)
