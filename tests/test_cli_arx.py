@@ -1,6 +1,6 @@
-"""Controller-aware models on the command line (issue 32): ``--u COL[,COL...]`` fits an ARX of one output given the
-input columns (``fit``) and gives ``detect`` / ``identify`` / ``monitor`` the input of ARX models, exactly as the
-library does with ``u=``."""
+"""Controller-aware models on the command line (issue 32): ``--u COL[,COL...]`` fits an ARX of one output (a VARX of
+several) given the input columns (``fit``) and gives ``detect`` / ``identify`` / ``monitor`` the input of ARX / VARX
+models, exactly as the library does with ``u=``."""
 
 from __future__ import annotations
 
@@ -23,8 +23,12 @@ def _flight(gain: float, n: int, rng, failure: int | None = None) -> pd.DataFram
     g[(0 if failure is None else failure):] = gain
     y = (sps.lfilter([0.6, 0.3], [1, -0.5], g * u[:, 0]) + sps.lfilter([0, 0.5], [1, -0.5], u[:, 1])
          + 0.1 * rng.standard_normal(n))
+    other = rng.standard_normal(n)
+    # a second rate, for the VARX (several outputs): coupled to the first, driven by cmd_b (no new draws: the
+    # flights of the ARX tests are unchanged)
+    rate2 = sps.lfilter([0, 0.5], [1, -0.3], u[:, 1]) + 0.3 * np.r_[0.0, y[:-1]] + 0.1 * other
     return pd.DataFrame({"time": np.arange(n) / FS, "gyro": y, "cmd_a": u[:, 0], "cmd_b": u[:, 1],
-                         "other": rng.standard_normal(n)})
+                         "other": other, "rate2": rate2})
 
 
 @pytest.fixture(scope="module")
@@ -131,6 +135,47 @@ def test_monitor_is_the_library_with_u(files, tmp_path, rule):
     assert 10.0 < lib.detection_time <= 13.0 and lib.label == "loss"
 
 
+@pytest.mark.filterwarnings("ignore::tsfdi.exceptions.ConvergenceWarning")   # max_lags 4 at the BIC bound
+def test_several_outputs_with_u_fit_a_varx(files, tmp_path, capsys):
+    """``fit --columns gyro,rate2 --u cmd_a,cmd_b`` fits the library's VARX (order by BIC on the common sample of
+    ``select_order(..., "varx")``), ``select-order`` tabulates it, and ``detect`` / ``identify`` test it with the
+    input columns it was fitted with."""
+    outs = ["gyro", "rate2"]
+    paths = {}
+    for name in ("healthy", "loss"):
+        paths[name] = tmp_path / f"{name}_varx.npz"
+        assert main(["fit", str(files[name]), "--columns", ",".join(outs), "--u", "cmd_a,cmd_b", "--max-lags", "4",
+                     "--out", str(paths[name]), "--quiet"]) == 0
+    assert "VARX(" in capsys.readouterr().out
+    h = _frame(files["healthy"])
+    sel = tsfdi.select_order(h[outs], 4, "varx", u=h[["cmd_a", "cmd_b"]])
+    res = tsfdi.load(paths["healthy"])
+    assert type(res) is tsfdi.models.VARXResults and res.lags == sel.selected
+    np.testing.assert_allclose(np.asarray(res.params), np.asarray(sel.fit().params), rtol=1e-10)
+    table = tmp_path / "orders.csv"
+    assert main(["select-order", str(files["healthy"]), "--columns", ",".join(outs), "--u", "cmd_a,cmd_b",
+                 "--max-lags", "4", "--out", str(table)]) == 0
+    np.testing.assert_allclose(pd.read_csv(table)["bic"], np.asarray(sel.table["bic"]), rtol=1e-9)
+    f = _frame(files["new"])
+    y, u = f[outs], f[["cmd_a", "cmd_b"]]
+    models = {n: tsfdi.load(paths[n]) for n in ("healthy", "loss")}
+    out = tmp_path / "detect.csv"
+    assert main(["detect", str(files["new"]), "--columns", ",".join(outs), "--baseline", str(paths["healthy"]),
+                 "--window", "2s", "--step", "1s", "--method", "variance", "--out", str(out)]) == 0
+    ws = ResidualWindows({"h": models["healthy"]}).fit(y, u=u).statistics(tsfdi.FTest(1e-3), window=200, step=100)
+    got = pd.read_csv(out)
+    np.testing.assert_allclose(got[["statistic_gyro", "statistic_rate2"]], ws.statistic[:, 0, :], rtol=1e-6)
+    assert not got["fault"].iloc[:8].any() and got["fault"].iloc[10:].all()
+    out = tmp_path / "identify.csv"
+    assert main(["identify", str(files["new"]), "--columns", ",".join(outs), "--models",
+                 f"healthy={paths['healthy']}", f"loss={paths['loss']}", "--window", "2s", "--step", "1s",
+                 "--method", "variance", "--out", str(out)]) == 0
+    wi = tsfdi.identify_windows(y, models, tsfdi.FTest(1e-3), window=200, step=100, u=u)
+    got = pd.read_csv(out)
+    assert got["label"].fillna("").tolist() == [lab or "" for lab in wi.labels]
+    assert got["label"].iloc[0] == "healthy" and got["label"].iloc[-1] == "loss"
+
+
 def test_errors_name_the_flag_file_and_column(files, capsys):
     new, healthy = str(files["new"]), str(files["healthy.npz"])
     ar = str(files["folder"] / "ar.npz")
@@ -146,12 +191,13 @@ def test_errors_name_the_flag_file_and_column(files, capsys):
          f"--models b is an ARX (input-output) model and --models a an AR / VAR model"),
         (["fit", new, "--columns", "gyro", "--u", "cmd_a,cmd_x", "--out", ar],
          f"--u: {new} has no column 'cmd_x'"),
-        (["fit", new, "--u", "cmd_a,cmd_b", "--out", ar],
-         "--u: an ARX model has one output, but the data gives 2 other column(s) ['gyro', 'other']"),
+        (["fit", new, "--u", "cmd_a,cmd_b", "--k", "g=1", "--out", ar],
+         "--u with --k: a functionally pooled input-output model (FP-ARX) has one output, but the data gives 3 "
+         "other column(s) ['gyro', 'other', 'rate2']"),
         (["fit", new, "--columns", "gyro,cmd_a", "--u", "cmd_a,cmd_b", "--out", ar],
          "--u cmd_a: the column is also an output (--columns gyro,cmd_a)"),
         (["fit", new, "--columns", "gyro", "--nk", "1", "--out", ar],
-         "--nk 1 is the input delay of an ARX model: give its inputs with --u"),
+         "--nk 1 is the input delay of an ARX / VARX model: give its inputs with --u"),
         (["fit", new, "--columns", "gyro", "--u", "cmd_a,cmd_a", "--out", ar],
          "must name each column once, 'cmd_a' is given twice"),
         (["fit", new, "--columns", "gyro", "--u", "cmd_a", "--model", "ar", "--out", ar],

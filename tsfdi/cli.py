@@ -249,16 +249,16 @@ def _check_out(flag: str, path: str | None) -> None:
 
 # ---------------------------------------------------------------------------------------------------- models
 def _load(flag: str, spec: str, path: str) -> Any:
-    from tsfdi.models import ARResults, ARXResults, FPResults, VARResults, load
+    from tsfdi.models import ARResults, ARXResults, FPResults, VARResults, VARXResults, load
 
     try:
         res = load(path)
     except (OSError, ValueError, TypeError) as exc:
         raise ValueError(f"{flag} {spec}: {exc}") from None
-    if not isinstance(res, (ARResults, VARResults, ARXResults, FPResults)):
+    if not isinstance(res, (ARResults, VARResults, ARXResults, VARXResults, FPResults)):
         raise ValueError(f"{flag} {spec}: {type(res).__name__} of a {type(res.model).__name__} model; the command "
-                         "line tests AR / VAR / ARX models and their functionally pooled forms (FP-AR / FP-VAR / "
-                         "FP-ARX)")
+                         "line tests AR / VAR / ARX / VARX models and their functionally pooled forms (FP-AR / FP-VAR "
+                         "/ FP-ARX)")
     return res
 
 
@@ -284,7 +284,8 @@ def _channels(res: Any) -> list[str]:
 
 
 def _inputs(res: Any) -> tuple[list[str], bool] | None:
-    """The inputs of an ARX / FP-ARX model and whether they are named (fitted on columns), or ``None`` (AR / VAR)."""
+    """The inputs of an ARX / VARX / FP-ARX model and whether they are named (fitted on columns), or ``None`` (AR /
+    VAR)."""
     records = res.model.u_records            # (an FP model's are those of its point family)
     if records is None:
         return None
@@ -292,16 +293,23 @@ def _inputs(res: Any) -> tuple[list[str], bool] | None:
     return [str(c) for c in u.channels], bool(u.named or (not u.vector and u.name is not None))
 
 
+def _family(res: Any) -> str:
+    """The family of an input-output model with its article, for the messages: ``"an ARX"``, ``"a VARX"``."""
+    name = type(res.model).__name__.replace("FP", "FP-")
+    return f"{'a' if name.startswith('V') else 'an'} {name}"
+
+
 def _input_columns(args: argparse.Namespace, models: dict) -> list[str] | None:
     """The ``--u`` columns of the models (keyed by how the user gave them, ``"--baseline m.npz"``): by default the
-    inputs an ARX model was fitted with; ``None`` for AR / VAR models (``--u`` refused)."""
+    inputs an ARX / VARX model was fitted with; ``None`` for AR / VAR models (``--u`` refused)."""
     ins = {flag: _inputs(m) for flag, m in models.items()}
     (first, have), *rest = ins.items()
     for flag, other in rest:
         if (other is None) != (have is None):
             arx, plain = (first, flag) if other is None else (flag, first)
-            raise ValueError(f"{arx} is an ARX (input-output) model and {plain} an AR / VAR model: their residuals "
-                             "are of different data (the output given --u, the output alone); test one kind")
+            raise ValueError(f"{arx} is {_family(models[arx])} (input-output) model and {plain} an AR / VAR model: "
+                             "their residuals are of different data (the output given --u, the output alone); test "
+                             "one kind")
         if other is not None and set(other[0]) != set(have[0]):
             raise ValueError(f"{flag} was fitted with the inputs {other[0]} but {first} with {have[0]}: the models "
                              "must share their inputs")
@@ -313,8 +321,8 @@ def _input_columns(args: argparse.Namespace, models: dict) -> list[str] | None:
     names, named = have
     if args.u is None:
         if not named:
-            raise ValueError(f"{first} is an ARX model of {len(names)} unnamed input(s): give their columns with --u "
-                             "COL[,COL...], in the order of the model's inputs")
+            raise ValueError(f"{first} is {_family(models[first])} model of {len(names)} unnamed input(s): give "
+                             "their columns with --u COL[,COL...], in the order of the model's inputs")
         return names
     if not named:
         if len(args.u) != len(names):
@@ -329,10 +337,11 @@ def _input_columns(args: argparse.Namespace, models: dict) -> list[str] | None:
 
 def _u_arg(p: argparse.ArgumentParser, fit: bool = False) -> None:
     p.add_argument("--u", type=opt.column_list, default=None, metavar="COL[,COL...]",
-                   help="input columns of an ARX model, e.g. the controller's commands "
+                   help="input columns of an ARX / VARX model, e.g. the controller's commands "
                         "(controller.cmd_roll,controller.cmd_pitch,controller.cmd_yaw): " + (
-                            "fit an ARX model (FP-ARX with --k) of the one --columns output given them" if fit else
-                            "the inputs of the ARX models given (default: the columns they were fitted with); "
+                            "fit an ARX model (FP-ARX with --k) of the one --columns output given them, or a VARX "
+                            "model of several --columns outputs" if fit else
+                            "the inputs of the ARX / VARX models given (default: the columns they were fitted with); "
                             "refused for AR / VAR models"))
 
 
@@ -761,7 +770,8 @@ def _order_args(p: argparse.ArgumentParser) -> None:
     _add_data_args(p, records_help="required when the file holds several records; several are pooled into one "
                                    "model")
     p.add_argument("--model", choices=("ar", "var"), default=None,
-                   help="ar (one column) or var (several); default from the number of columns (arx with --u)")
+                   help="ar (one column) or var (several); default from the number of columns (with --u: arx of "
+                        "one column, varx of several)")
     _u_arg(p, fit=True)
     p.add_argument("--nk", type=lambda t: opt.integer(t, 0), default=0,
                    help="with --u: the input delay in samples (0: u[t] acts on y[t], as a command on the rate it "
@@ -788,22 +798,24 @@ def _order_args(p: argparse.ArgumentParser) -> None:
 
 
 def _fit_records(args: argparse.Namespace) -> tuple[_Data, str, list]:
-    """The records of ``args`` to fit on, the model kind (``"ar"`` / ``"var"`` / ``"arx"``) and the signals (the
-    inputs of an ARX in ``data.inputs``)."""
+    """The records of ``args`` to fit on, the model kind (``"ar"`` / ``"var"`` / ``"arx"`` / ``"varx"``) and the
+    signals (the inputs of an ARX / VARX in ``data.inputs``)."""
     data = _read(args, require_choice=True, inputs=args.u)
     data = _drop_short(data, args.max_lags + args.nk + 2, f"--max-lags {args.max_lags}")
     k = len(data.columns)
     if args.u is None and args.nk:
-        raise ValueError(f"--nk {args.nk} is the input delay of an ARX model: give its inputs with --u, or leave it "
+        raise ValueError(f"--nk {args.nk} is the input delay of an ARX / VARX model: give its inputs with --u, or "
+                         "leave it "
                          "out")
     if args.u is not None:
         if args.model is not None:
-            raise ValueError(f"--model {args.model}: with --u the model is an ARX (one output given the inputs); "
-                             "leave --model out")
-        if k != 1:
-            raise ValueError(f"--u: an ARX model has one output, but the data gives {k} other column(s) "
-                             f"{data.columns}: pick the output with --columns (one ARX per output)")
-        return data, "arx", [f.iloc[:, 0] for f in data.frames]
+            raise ValueError(f"--model {args.model}: with --u the model is an ARX (one output given the inputs) or a "
+                             "VARX (several outputs given the inputs), from the number of --columns; leave --model out")
+        if k != 1 and args.k is not None:
+            raise ValueError(f"--u with --k: a functionally pooled input-output model (FP-ARX) has one output, but the "
+                             f"data gives {k} other column(s) {data.columns}: pick the output with --columns (one "
+                             "FP-ARX per output)")
+        return (data, "arx", [f.iloc[:, 0] for f in data.frames]) if k == 1 else (data, "varx", list(data.frames))
     model = args.model or ("ar" if k == 1 else "var")
     if model == "ar" and k != 1:
         raise ValueError(f"--model ar needs one column, got {k} {data.columns}: pick one with --columns")
@@ -858,9 +870,9 @@ def _fit(args: argparse.Namespace) -> int:
         raise ValueError(f"{model.upper()}({res.lags}) fits the {len(data.columns)} column(s) of {data.path} exactly: "
                          f"collinear or constant channels{f' ({said})' if said else ''}, so the model would explain "
                          "any flight and detect nothing; not saved. Choose the channels with --columns"
-                         + (" and --u (an input that copies the output explains it exactly)" if model == "arx" else ""))
-    name = f"ARX({res.lags}, {res.lags}, nk={args.nk}) of {data.columns} given --u {args.u}" if model == "arx" else \
-        f"{model.upper()}({res.lags}) on {data.columns}"
+                         + (" and --u (an input that copies the output explains it exactly)" if args.u else ""))
+    name = (f"{model.upper()}({res.lags}, {res.lags}, nk={args.nk}) of {data.columns} given --u {args.u}" if args.u else
+            f"{model.upper()}({res.lags}) on {data.columns}")
     return _save_fitted(res, args, f"{name} from {len(data.frames)} record(s) "
                         f"at {data.rec.fs:g} Hz ({res.nobs} samples): BIC {res.bic:.6g}, RSS/SSS {res.rss_sss:.4g} %, "
                         f"SPP {res.spp:.2f}")
