@@ -23,6 +23,7 @@ from tsfdi._validation import boolean, float_like, int_like, option, probability
 from tsfdi.coverage import MIN_RECORDS, Coverage, coverage
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
+from tsfdi.models import FPResults, select_fp_order
 from tsfdi.monitoring import Monitor
 from tsfdi.selection import select_order
 from tsfdi.windows import ResidualWindows, status
@@ -60,6 +61,12 @@ class Records:
         files. :attr:`ids` then names each record within its file: ``""`` for the single record of a CSV file, the
         ``record`` coordinate of a netCDF file, ``"0"``, ``"1"``, ... for the pieces a file is split into, and
         ``"2.0"``, ``"2.1"`` for the pieces of record 2.
+    k : ndarray or None
+        Per record, its operating point (float64, ``(records, d)``, columns :attr:`k_names`) read from the record
+        coordinates named by ``k=`` (:meth:`from_data`): what a functionally pooled baseline is evaluated at
+        (``res.at(k)``); ``None`` when no ``k`` was asked for.
+    k_names : tuple of str
+        The record coordinates :attr:`k` holds (empty without ``k``).
     """
 
     values: list
@@ -74,10 +81,12 @@ class Records:
     length: int | None = None
     times: list | None = None
     files: np.ndarray | None = None
+    k: np.ndarray | None = None
+    k_names: tuple = ()
 
     @classmethod
     def from_data(cls, data: Any, *, states: Any = None, failure_times: Any = None, turbulence: Any = None,
-                  fs: float | None = None, name: str = "data", check_finite: bool = True) -> Records:
+                  fs: float | None = None, name: str = "data", check_finite: bool = True, k: Any = None) -> Records:
         """Build from a hexacopter ``Dataset``, a ``(record, time, channel)`` DataArray or a sequence of
         signals (numpy / pandas / xarray, each ``(nobs, k)``) with ``states`` (and optional ``failure_times``,
         ``turbulence``) given per record.
@@ -94,11 +103,25 @@ class Records:
 
         A ``Dataset`` or ``DataArray`` backed by dask and chunked along ``record`` (:func:`tsfdi.fleet.is_chunked`)
         is not read: the labels, the channels and ``fs`` come from its coordinates, and the data stays in
-        :attr:`source`."""
+        :attr:`source`.
+
+        ``k`` (a name or a sequence of names) names the record coordinates holding each record's operating point
+        (:attr:`k`, e.g. ``"speed"`` of a hexacopter fleet): numbers, finite for every record; a missing coordinate
+        raises a ``ValueError`` naming ``k`` and the coordinate. A sequence of signals carries no coordinates: give
+        such records as a ``(record, time, channel)`` DataArray with the coordinates."""
         check_finite = boolean(check_finite, "check_finite")
+        k_names = _operating_names(k)
         if isinstance(data, Records):
+            if k is not None and k_names != data.k_names:
+                raise ValueError(f"k names the coordinates {list(k_names)} but {name} is Records read with "
+                                 f"k={list(data.k_names)}")
             return data
         import xarray as xr
+
+        if k_names and not is_xarray(data):
+            raise ValueError(f"k names record coordinates {list(k_names)}, but {name} is a sequence of signals, which "
+                             "has none: give the records as a (record, time, channel) DataArray (or a hexacopter "
+                             "Dataset) with those coordinates")
 
         from tsfdi.fleet import is_chunked
 
@@ -116,7 +139,8 @@ class Records:
             fs_ = _time_rate(_coordinate(data, "time"), name) if fs is None else float_like(fs, "fs", minimum=0.0,
                                                                                             strict_min=True)
             return cls([], st, tb, ft, ids, ~lost, tuple(str(c) for c in _coordinate(data, third)), fs_,
-                       source=data, length=int(data.sizes["time"]))
+                       source=data, length=int(data.sizes["time"]), k=_operating_coords(data, k_names, ids, name),
+                       k_names=k_names)
         if isinstance(data, xr.Dataset):
             from tsfdi.datasets.hexacopter import hexacopter_signals
 
@@ -138,7 +162,8 @@ class Records:
                 valid &= finite
             vals = list(arr)
             chans = tuple(str(c) for c in _coordinate(da, da.dims[2]))
-            return cls(vals, st, tb, ft, ids, valid, chans, fs_)
+            return cls(vals, st, tb, ft, ids, valid, chans, fs_, k=_operating_coords(da, k_names, ids, name),
+                       k_names=k_names)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
             raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
                             f"non-empty sequence of signals, got {type(data).__name__}")
@@ -187,12 +212,15 @@ class Records:
                                        turbulence=self.turbulence[pos], failure_time=self.failure_time[pos],
                                        ids=self.ids[pos], valid=self.valid[pos],
                                        times=None if self.times is None else [self.times[i] for i in pos],
-                                       files=None if self.files is None else self.files[pos])
+                                       files=None if self.files is None else self.files[pos],
+                                       k=None if self.k is None else self.k[pos])
         if chunk is None:
             chunk = self.source.isel(record=where).compute()
         out = Records.from_data(chunk, states=self.state[where], failure_times=self.failure_time[where],
                                 turbulence=self.turbulence[where], fs=self.fs)
-        return dataclasses.replace(out, ids=self.ids[where])
+        # the operating points travel with the labels (read from the coordinates on the driver)
+        return dataclasses.replace(out, ids=self.ids[where], k=None if self.k is None else self.k[where],
+                                   k_names=self.k_names)
 
     def origin(self, i: int) -> str:
         """Where record ``i`` comes from, as messages name it: its file, with the record's :attr:`ids` entry when it
@@ -260,6 +288,45 @@ def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: s
     return (st.astype(str), coord("turbulence", turbulence, "").astype(str),
             _failure_times(coord("failure_time", failure_times, np.nan), n), ids,
             coord("lost_control", None, False).astype(bool))
+
+
+def _operating_names(k: Any, name: str = "k") -> tuple:
+    """The record coordinates ``k`` names (a name or a sequence of distinct names) as a tuple; ``()`` for None."""
+    if k is None:
+        return ()
+    names = [k] if isinstance(k, str) else k
+    if not isinstance(names, Iterable) or isinstance(names, (bytes, Mapping)):
+        raise TypeError(f"{name} must name record coordinates (a name or a sequence of names), got {k!r}")
+    names = list(names)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise TypeError(f"{name} must name record coordinates (non-empty strings), got {k!r}")
+    if len(set(names)) < len(names):
+        raise ValueError(f"{name} names a coordinate twice: {names}")
+    return tuple(names)
+
+
+def _operating_coords(data: Any, names: tuple, ids: np.ndarray, name: str) -> np.ndarray | None:
+    """The operating point of every record, ``(records, len(names))`` float64, from the record coordinates
+    ``names`` of ``data`` (None without names); missing, non-numeric or non-finite coordinates raise naming ``k``."""
+    if not names:
+        return None
+    cols = []
+    for c in names:
+        variable = data.coords.variables.get(c)
+        if variable is None or variable.dims != ("record",):
+            have = [v for v, var in data.coords.variables.items() if var.dims == ("record",) and v != "record"]
+            raise ValueError(f"k: {name} has no record coordinate {c!r} (its record coordinates: {have})")
+        values = np.asarray(variable.values)
+        if values.dtype.kind not in "iuf":
+            raise TypeError(f"k: the coordinate {c!r} of {name} must hold numbers (operating parameters), got dtype "
+                            f"{values.dtype}")
+        values = values.astype(np.float64)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise ValueError(f"k: the coordinate {c!r} of {name} is not finite for record {ids[bad[0]]} "
+                             f"({values[bad[0]]}); every record needs its operating point")
+        cols.append(values)
+    return np.column_stack(cols)
 
 
 def _coordinate(da: Any, dim: str) -> np.ndarray:
@@ -357,9 +424,10 @@ class Baselines:
     Attributes
     ----------
     models : dict
-        Model name (a channel name for a scalar AR, ``"var"`` for the VAR) -> {state -> fitted results}.
+        Model name (a channel name for a scalar AR, ``"var"`` for the VAR) -> {state -> fitted results}
+        (:class:`~tsfdi.FPResults` of functionally pooled models from ``fit_baselines(..., k=...)``).
     selections : dict
-        ``(model name, state)`` -> :class:`~tsfdi.OrderSelection`.
+        ``(model name, state)`` -> :class:`~tsfdi.OrderSelection` (:class:`~tsfdi.models.FPOrderSelection`).
     channels : tuple of str
         Channel names of the records.
     healthy : str
@@ -410,32 +478,48 @@ class Baselines:
         ``records`` is the number of pooled fitting records; ``q_insample`` the median Ljung-Box ``Q`` (20 lags)
         of the in-sample residuals over 20 s blocks (``20 * fs`` samples; the whole record when shorter) and
         channels, to compare with the median of chi2(20), about 19.3.
+
+        A functionally pooled model (``fit_baselines(..., k=...)``) is ``FP-VAR(lags) degree d`` (``FP-AR``): its
+        parameters are the FP coefficients of every basis function, ``rss_sss`` is NaN (not defined for it) and
+        ``stable`` holds at the operating point of every fitting record.
         """
         rows = []
         for state in (self.healthy,) + self.faults:
             for name, per_state in self.models.items():
                 res = per_state[state]
                 vec = name == "var"
-                rows.append({"state": state, "model": "VAR" if vec else "AR",
+                kind = "VAR" if vec else "AR"
+                if isinstance(res, FPResults):
+                    fp, lags = res.model, res.model.na
+                    order = f"FP-{kind}({lags}) degree {','.join(map(str, fp.degree))}"
+                    spp = res.nobs * res.neqs / res.df_model
+                    rss_sss = np.nan
+                    stable = all(res.at(kk).is_stable for kk in np.unique(fp.k, axis=0))
+                else:
+                    lags, order, spp, rss_sss, stable = res.lags, f"{kind}({res.lags})", res.spp, res.rss_sss, \
+                        res.is_stable
+                rows.append({"state": state, "model": kind,
                              "signals": ",".join(self.channels) if vec else name,
-                             "order": f"{'VAR' if vec else 'AR'}({res.lags})", "lags": int(res.lags),
+                             "order": order, "lags": int(lags),
                              "parameters": int(res.df_model), "records": len(_resid_list(res)),
-                             "nobs": int(res.nobs), "spp": float(res.spp), "rss_sss": float(res.rss_sss),
+                             "nobs": int(res.nobs), "spp": float(spp), "rss_sss": float(rss_sss),
                              "bic": float(res.bic), "q_insample": insample_q(res, int(round(20 * self.fs))),
-                             "stable": bool(res.is_stable)})
+                             "stable": bool(stable)})
         return pd.DataFrame(rows)
 
     def monitor(self, model: str = "var", *, window: Any = "20s", step: Any = "1s", test: ResidualTest | None = None,
-                rule: str = "paper") -> Monitor:
+                rule: str = "paper", k: Mapping | None = None) -> Monitor:
         """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models and steady-state thresholds.
 
         ``test`` (default ``LjungBox(lags=20, alpha=1e-3)``) detects with the healthy model and identifies with the
         fault models; with ``threshold="empirical"`` each model gets its own copy calibrated by
-        :meth:`calibrated_tests`.
+        :meth:`calibrated_tests`. ``k``: the operating point of the flights it will watch (parameter name -> value),
+        required for functionally pooled baselines (``fit_baselines(..., k=...)``): their models at it
+        (:meth:`state_models`), calibrated on the FP null.
         """
         test = _check_test(test)
         chans = self.model_channels(model)
-        states = self.state_models(model)
+        states = self.state_models(model, k)
         if test.empirical:
             tests = self.calibrated_tests(model, test, window)
             ident: Any = {f: tests[f] for f in self.faults}
@@ -446,11 +530,27 @@ class Baselines:
                        window=window, step=step, fs=self.fs, test=ident, detection_test=det,
                        steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window, rule=rule)
 
-    def state_models(self, model: str) -> dict:
-        """State -> the fitted model ``model`` of that state (pooled over its fitting records)."""
+    def state_models(self, model: str, k: Mapping | None = None) -> dict:
+        """State -> the fitted model ``model`` of that state (pooled over its fitting records).
+
+        ``k``: an operating point, a mapping parameter name -> value (``{"speed": 4.2}``): the functionally pooled
+        models (:class:`~tsfdi.FPResults`) are then given at that point, ``res.at(k)``, the point models as they are.
+        A parameter of an FP model missing from ``k`` raises a ``ValueError`` naming it."""
         if not isinstance(model, str) or model not in self.models:
             raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
-        return {s: self.models[model][s] for s in (self.healthy,) + self.faults}
+        out = {s: self.models[model][s] for s in (self.healthy,) + self.faults}
+        if k is None:
+            return out
+        if not isinstance(k, Mapping):
+            raise TypeError(f"k must be a mapping operating parameter -> value (e.g. {{'speed': 4.2}}), got {k!r}")
+        for s, res in out.items():
+            if isinstance(res, FPResults):
+                missing = [n for n in res.model.k_names if n not in k]
+                if missing:
+                    raise ValueError(f"k lacks the operating parameter(s) {missing} of the functionally pooled model "
+                                     f"{model!r} of state {s!r} (its parameters: {list(res.model.k_names)})")
+                out[s] = res.at([k[n] for n in res.model.k_names])
+        return out
 
     def calibrated_tests(self, model: str, test: ResidualTest, window: Any, *, step: Any = 1) -> dict:
         r"""Per state, a copy of ``test`` for windows of ``window`` with its threshold calibrated on that state's
@@ -477,6 +577,12 @@ class Baselines:
         (a record the model was not fitted on), as on the evaluation records: every fitting record in turn is
         left out, the model (same order) is refitted on the others and the left-out record's residual windows
         give statistics. The evaluation records are never used.
+
+        A functionally pooled model (``fit_baselines(..., k=...)``) is calibrated on its own null: each fitting
+        record at its own operating point through the FP model fitted without it (:attr:`heldout`), whatever the
+        operating point of the record it then tests. A reference variance (:class:`~tsfdi.FTest`,
+        :class:`~tsfdi.MeanTest`) is the pooled one, the same at every ``k``; an FP model fitted with
+        ``weights="point"`` (a variance that changes with ``k``) is refused for such tests.
         """
         import copy
 
@@ -496,7 +602,7 @@ class Baselines:
                              "to calibrate thresholds")
         out = {}
         for state in (self.healthy,) + self.faults:
-            res = self.models[model][state]
+            res = _reference_results(self.models[model][state], test, model, state)
             t = copy.deepcopy(test)
             n = W - int(res.lags)
             recs = self.heldout[(model, state)]
@@ -510,7 +616,7 @@ class Baselines:
         return out
 
     def covers(self, signal: Any, *, model: str = "var", state: str | None = None, alpha: float = 0.01,
-               lags: int = 2) -> Coverage:
+               lags: int = 2, k: Mapping | None = None) -> Coverage:
         """Whether this baseline's fitting records of ``state`` cover a new record (:func:`tsfdi.coverage.coverage`).
 
         The record's summaries (per channel: mean, log residual scale, residual autocorrelation at lags
@@ -531,15 +637,21 @@ class Baselines:
             False-warning rate of the check on a record like the fitting records.
         lags : int
             Residual autocorrelation lags summarised.
+        k : mapping, optional
+            The record's operating point (parameter name -> value), required for a functionally pooled model
+            (``fit_baselines(..., k=...)``): the record is filtered at it, the fitting records at their own.
 
         Returns
         -------
         Coverage
         """
         state = self.healthy if state is None else state
-        models = self.state_models(model)
+        models = self.state_models(model, k)
         if state not in models:
             raise ValueError(f"state must be one of {list(models)}, got {state!r}")
+        if isinstance(models[state], FPResults):
+            raise TypeError(f"model {model!r} of state {state!r} is functionally pooled: give the record's operating "
+                            f"point, k={{{', '.join(repr(n) + ': ...' for n in models[state].model.k_names)}}}")
         n = len(self.segments.get(state, ()))
         if n < MIN_RECORDS:
             raise ValueError(f"covers needs at least {MIN_RECORDS} fitting records of state {state!r}, the baseline "
@@ -601,11 +713,14 @@ class Baselines:
         chan = None if model == "var" else self.channels.index(model)
         accepted, truth = [], []
         for state in self.faults:
+            own = self.models[model][state]
             for j, seg in enumerate(self.segments[state]):
                 x = seg if chan is None else seg[:, chan]
                 if seg.shape[0] < W:                    # record shorter than one window: skipped
                     continue
-                models = {f: self.models[model][f] for f in self.faults}
+                # functionally pooled models at the record's own operating point
+                at = dict(zip(own.model.k_names, own.model.k[j])) if isinstance(own, FPResults) else None
+                models = {f: r for f, r in self.state_models(model, at).items() if f in self.faults}
                 given = {f: self.heldout[(model, state)][j] if f == state else res.residuals(x)
                          for f, res in models.items()}
                 ws = ResidualWindows(models).fit_residuals(given, seg.shape[0]).statistics(
@@ -666,9 +781,57 @@ def _options(value: Any) -> Any:
     return repr(value)
 
 
+def _reference_results(res: Any, test: ResidualTest, model: str, state: str) -> Any:
+    """The point results whose order and reference (:meth:`ResidualTest.reference`) a test calibrated for ``res`` is
+    given: ``res`` itself, or an FP model at the operating point of its first fitting record (its reference is the
+    same at every point with pooled weights; with point weights a test that carries a reference is refused)."""
+    if not isinstance(res, FPResults):
+        return res
+    at = res.at(res.model.k[0])
+    if res.weights is not None and any(_flat_reference(test.reference(at))):
+        raise ValueError(f"{type(test).__name__} carries the reference variance of the model it is calibrated for, "
+                         f"but the functionally pooled model {model!r} of state {state!r} has weights='point' (a "
+                         "variance that changes with k): refit it with weights='pooled', or use LjungBox")
+    return at
+
+
+def _flat_reference(reference: dict) -> list:
+    """The values of a test's reference keywords, those of a combined test's parts flattened."""
+    out = []
+    for key, value in reference.items():
+        out += [v for part in value for v in _flat_reference(part)] if key == "references" else [value]
+    return out
+
+
 def _resid_list(res: Any) -> list:
     e = res.resid
     return [np.asarray(r, dtype=np.float64) for r in e] if isinstance(e, list) else [np.asarray(e, np.float64)]
+
+
+def _fp_setup(rec: Records, idx: list, state: str, max_degree: int | None) -> tuple:
+    """The operating points of a state's fitting records ``idx`` (a DataFrame, columns :attr:`Records.k_names`) and
+    the largest basis degree searched, checked: several operating points, enough for an explicit ``max_degree``."""
+    pts = rec.k[idx]
+    distinct = [np.unique(pts[:, j]).size for j in range(pts.shape[1])]
+    low = int(np.argmin(distinct))
+    if distinct[low] < 2:
+        raise ValueError(f"k: the fitting records of state {state!r} ({rec.ids[idx].tolist()}) all have "
+                         f"{rec.k_names[low]} = {pts[0, low]:g}; a functionally pooled baseline needs fitting records "
+                         "at several operating points of every parameter: give fit_records='all', an int or record "
+                         "identifiers that span them")
+    if max_degree is None:
+        return pd.DataFrame(pts, columns=list(rec.k_names)), min(2, distinct[low] - 1)
+    if max_degree >= distinct[low]:
+        raise ValueError(f"max_degree={max_degree} needs at least {max_degree + 1} distinct values of each operating "
+                         f"parameter; the fitting records of state {state!r} hold {distinct[low]} of "
+                         f"{rec.k_names[low]!r}: give a smaller max_degree or fitting records at more operating points")
+    return pd.DataFrame(pts, columns=list(rec.k_names)), max_degree
+
+
+def _fp_order(sel: Any, lags: int) -> tuple:
+    """``(lags, degree)``: the given order with the basis degree of the smallest BIC at it (an FP order selection)."""
+    bic = sel.table["bic"].xs(lags, level="lags")
+    return lags, int(bic.idxmin())
 
 
 def insample_q(res: Any, block: int, lags: int = 20) -> float:
@@ -689,8 +852,11 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                   fit_turbulence: Any = None, settle: float = 10.0, duration: float | None = 20.0,
                   models: Sequence[str] | None = None, max_lags: int = 20, var_max_lags: int = 20,
                   order: Any = "bic", steady_window: Any = "10s", steady_factor: float = 1.0,
-                  calibrate: bool = False) -> Baselines:
+                  calibrate: bool = False, k: Any = None, max_degree: int | None = None) -> Baselines:
     r"""Baseline phase: fit a scalar AR model per channel and a VAR on all channels for every state.
+
+    With ``k`` the models are functionally pooled (FP-AR / FP-VAR, :mod:`tsfdi.models.fp`): one global model per
+    state over the operating envelope of its fitting records, each record at its logged operating point.
 
     Parameters
     ----------
@@ -741,7 +907,21 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         Also compute, for every model and state with at least two fitting records, the leave-one-record-out
         residuals (:attr:`Baselines.heldout`) that calibrate data-driven thresholds (:meth:`Baselines.calibrated_tests`,
         a test with ``threshold="empirical"`` in :func:`~tsfdi.evaluate`): each fitting record in turn through the
-        model refitted on the state's other fitting records.
+        model refitted on the state's other fitting records (with ``k``: the FP model refitted without it, at the
+        record's own operating point, :meth:`tsfdi.FPVAR.held_out_residuals`).
+    k : str or sequence of str, optional
+        Record coordinates (of a Dataset / DataArray) holding each record's operating parameters, e.g. ``"speed"``.
+        Every model of every state is then functionally pooled over its fitting records at their logged ``k``
+        (:class:`tsfdi.FPAR` per channel, :class:`tsfdi.FPVAR` for ``"var"``, pooled least squares, Legendre
+        basis), with the order and the basis degree chosen together by BIC on a common sample
+        (:func:`tsfdi.models.select_fp_order`; ``order=<int>`` fixes the order and BIC chooses the degree;
+        ``"rss_sss"`` is for point models only). The fitting records of every state must lie at several operating
+        points (give ``fit_records="all"``, an int or identifiers spanning them). :attr:`Baselines.models` then
+        holds :class:`tsfdi.FPResults`, evaluated at each record's logged ``k`` by
+        ``evaluate(..., k=...)``.
+    max_degree : int, optional
+        Largest polynomial degree of the basis searched (with ``k`` only). Default: 2, or fewer where a state's
+        fitting records hold fewer than 3 distinct values of a parameter (degree ``d`` needs ``d + 1``).
 
     Returns
     -------
@@ -755,9 +935,19 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     over orders ``1..max_lags``; :attr:`Baselines.table` also reports the median Ljung-Box ``Q`` (20 lags) of
     the in-sample residuals over 20 s blocks, a check of their whiteness.
 
+    With ``k`` every parameter of a state's model is a function of the operating point,
+
+    .. math::  \theta(k) = \sum_{j=1}^{p} \theta_j\, G_j(k),
+
+    ``G_j`` Legendre polynomials (tensor products for several parameters) of ``k`` mapped onto ``[-1, 1]`` over the
+    range of the state's fitting records, and the coefficients ``theta_j`` are estimated from all of them at once by
+    pooled least squares (Kopsaftopoulos and Fassois 2010, 2013; the functionally pooled models paper 003 names as
+    its next step): one global model set serves every operating point between the fitting ones.
+
     References
     ----------
     Dutta et al. (paper 003), section "Parametric Model Identification", Table 2 and the Fig. 7 discussion.
+    Kopsaftopoulos and Fassois (2010, 2013): the functionally pooled models of ``k=`` (:mod:`tsfdi.models.fp`).
     """
     settle = float_like(settle, "settle", minimum=0.0)
     duration = None if duration is None else float_like(duration, "duration", minimum=0.0, strict_min=True)
@@ -769,6 +959,14 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
     else:
         order = int_like(order, "order", minimum=1, maximum=max(max_lags, var_max_lags))
     calibrate = boolean(calibrate, "calibrate")
+    if k is None and max_degree is not None:
+        raise ValueError("max_degree is the largest basis degree of functionally pooled baselines: give k= (the "
+                         "record coordinates of the operating parameters) with it")
+    if k is not None:
+        if order == "rss_sss":
+            raise ValueError("order='rss_sss' reads the RSS/SSS curve of a point model; with k the order and the basis "
+                             "degree are chosen together by BIC: give order='bic' or an int")
+        max_degree = None if max_degree is None else int_like(max_degree, "max_degree", minimum=0)
     if isinstance(data, Mapping) and not is_xarray(data):
         if not data:
             raise ValueError("data is an empty mapping: give one signal per state")
@@ -778,7 +976,7 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
         fit_records, settle, duration = "all", 0.0, None
     # the values of the records considered for fitting are checked as they are considered (finite), not all
     rec = Records.from_data(data, states=states, failure_times=failure_times, turbulence=turbulence, fs=fs,
-                            check_finite=False)
+                            check_finite=False, k=k)
     V = window_samples(steady_window, "steady_window", rec.fs, minimum=2)
     uniq = list(dict.fromkeys(rec.state.tolist()))
     if healthy not in uniq:
@@ -855,17 +1053,21 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                 for i, g in zip(idx, segs)]
         # each segment's extremes, kept with its signal for the models' units (channel_extremes)
         flat = [[c for c, hi, lo in zip(rec.channels, *channel_extremes(g)) if hi == lo] for g in sigs]
+        operating = None if rec.k is None else _fp_setup(rec, idx, state, max_degree)
         for m in names:
             for i, f in zip(idx, flat):
                 const = f if m == "var" else [c for c in f if c == m]
                 if const:
                     raise ValueError(f"record {rec.ids[i]} of state {state!r} is constant in channel(s) {const} over "
                                      "its fitting segment: a model cannot be identified from it")
-            if m == "var":
-                sel = select_order(sigs, var_max_lags, "var")
-            else:
-                j = rec.channels.index(m)
-                sel = select_order([g.channel(j) for g in sigs], max_lags, "ar")
+            y = sigs if m == "var" else [g.channel(rec.channels.index(m)) for g in sigs]
+            top = var_max_lags if m == "var" else max_lags
+            if operating is not None:
+                sel = select_fp_order(y, operating[0], top, operating[1], "var" if m == "var" else "ar")
+                sels[(m, state)] = sel
+                out[m][state] = sel.fit() if order == "bic" else sel.fit(*_fp_order(sel, min(order, top)))
+                continue
+            sel = select_order(y, top, "var" if m == "var" else "ar")
             sels[(m, state)] = sel
             p = sel.selected if order == "bic" else sel.stabilized if order == "rss_sss" else \
                 min(order, sel.max_lags)
@@ -877,9 +1079,14 @@ def fit_baselines(data: Any, *, states: Any = None, failure_times: Any = None, t
                 raise ValueError(f"calibrate=True needs at least two fitting records per state; state {state!r} "
                                  f"has {len(segs)}")
             for m in names:
-                # each fitting record through the model (same order, trend, hold-back) fitted on the others
-                heldout[(m, state)] = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
-                                       for e in out[m][state].model.held_out_residuals()]
+                # each fitting record through the model (same order, trend, hold-back) fitted on the others (an FP
+                # model: at the record's own operating point)
+                try:
+                    held = out[m][state].model.held_out_residuals()
+                except ValueError as err:
+                    raise ValueError(f"calibrate=True: the held-out residuals of model {m!r}, state {state!r}: {err}") \
+                        from None
+                heldout[(m, state)] = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1) for e in held]
     # steady-state thresholds: largest rolling variance over the post-settle parts of the fault fitting records
     step = max(1, int(round(0.1 * rec.fs)))
     variances = []

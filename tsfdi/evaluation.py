@@ -372,7 +372,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
              windows: Sequence[Any] = ("5s", "10s", "20s"), turbulence: Any = None, step: Any = "1s",
              settle: float = 10.0, rules: Sequence[str] = ("paper", "likelihood"), detection: bool = True,
              progress: bool = True, states: Any = None, failure_times: Any = None, fs: float | None = None,
-             sprt_alpha: float = 0.01) -> Evaluation:
+             sprt_alpha: float = 0.01, k: Any = None) -> Evaluation:
     r"""Detection and identification over many records, per sliding window (Dutta et al., Table 4).
 
     Parameters
@@ -429,6 +429,16 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         (``fit_baselines(..., calibrate=True)``) the log-likelihood ratios are scale-corrected on them
         (the held-out records of each fault state through every fault model), so that the bound's error rate holds on records the models were
         not fitted on; evaluation records are never used for it.
+    k : str or sequence of str, optional
+        The record coordinates holding each record's operating parameters (e.g. ``"speed"`` of a hexacopter fleet),
+        for baselines holding functionally pooled models (``fit_baselines(..., k=...)``, :class:`~tsfdi.FPResults`):
+        every record is then tested with each FP model at its own logged operating point, ``res.at(k_record)``, the
+        parameters :math:`\theta(k) = \sum_j \theta_j G_j(k)` (see Notes). The names must be those of the FP
+        models' operating parameters. A calibrated test (``threshold="empirical"``) is calibrated on the FP null:
+        the fitting records at their own operating points through the FP model fitted without each
+        (:attr:`Baselines.heldout`), and so is the coverage check. Point models are evaluated as without ``k``.
+        Records backed by dask carry their operating points with their labels (read from the coordinates on the
+        driver).
 
     Returns
     -------
@@ -462,16 +472,22 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     its chunk, checks it for non-finite values (skipped records, as in memory) and returns the counts of its windows
     (:func:`tsfdi.fleet.map_records`), which the driver adds. The driver then holds the counts and one row per record
     in :attr:`Evaluation.records`, whatever the number of windows.
+
+    A functionally pooled baseline (Kopsaftopoulos and Fassois 2010, 2013; the "global" model of paper 003's
+    conclusion) is one model per state over the operating envelope: each parameter is :math:`\theta(k) =
+    \sum_{j=1}^{p} \theta_j G_j(k)` on a polynomial basis :math:`G_j` of the operating point
+    (:mod:`tsfdi.models.fp`), so with ``k`` one model set serves records at every operating point between the fitting
+    ones, each filtered at its logged ``k``.
     """
     if isinstance(baselines, Baselines):
         by_level = None
     elif isinstance(baselines, Mapping) and baselines and all(isinstance(b, Baselines) for b in baselines.values()):
-        by_level = {str(k): b for k, b in baselines.items()}
+        by_level = {str(lvl): b for lvl, b in baselines.items()}
     else:
         raise TypeError("baselines must be the result of tsfdi.fit_baselines or a mapping turbulence level -> "
                         f"Baselines, got {type(baselines).__name__}")
     first = baselines if by_level is None else next(iter(by_level.values()))
-    rec = Records.from_data(data, states=states, failure_times=failure_times, fs=fs)
+    rec = Records.from_data(data, states=states, failure_times=failure_times, fs=fs, k=k)
     for b in ([first] if by_level is None else by_level.values()):
         if rec.channels != b.channels:
             raise ValueError(f"data has channels {rec.channels} but the baselines were fitted on {b.channels}")
@@ -485,19 +501,35 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     for m in models:
         if not isinstance(m, str) or m not in first.models:
             raise ValueError(f"models must be among the fitted models {list(first.models)}, got {m!r}")
-    # models evaluate cannot run: one point model per state, on records that carry no input
-    refused = {FPResults: "is a functionally pooled model (FPResults): evaluate tests every record with one point "
-                          "model per state; give its point model at an operating point, .at(k) (a mapping turbulence "
-                          "level -> Baselines for one point per level)",
-               ARXResults: "is an ARX (input-output) model: evaluate's records carry no input u; test ARX models "
-                           "record by record with identify_windows(y, models, test, u=...) or Monitor(...).run(y, "
-                           "u=...)"}
+    # models evaluate cannot run: records carry no input; an FP model needs the records' operating points (k=)
+    pooled = False
     for b in ([first] if by_level is None else by_level.values()):
         for m in models:
             for s, r in b.models[m].items():
-                why = next((text for kind, text in refused.items() if isinstance(r, kind)), None)
-                if why:
-                    raise TypeError(f"baselines.models[{m!r}][{s!r}] {why}")
+                where = f"baselines.models[{m!r}][{s!r}]"
+                if isinstance(r, ARXResults) or (isinstance(r, FPResults) and r.model.nb):
+                    raise TypeError(f"{where} is an {'FP-' if isinstance(r, FPResults) else ''}ARX (input-output) "
+                                    "model: evaluate's records carry no input u; test ARX models record by record "
+                                    "with identify_windows(y, models, test, u=...) or Monitor(...).run(y, u=...)")
+                if not isinstance(r, FPResults):
+                    continue
+                pooled = True
+                params = list(r.model.k_names)
+                if not rec.k_names:
+                    raise TypeError(f"{where} is a functionally pooled model (FPResults) over {params}: give k= naming "
+                                    "the record coordinate(s) of those operating parameters (each record is tested at "
+                                    "its own, res.at(k_record)), or its point model at one operating point, .at(k) (a "
+                                    "mapping turbulence level -> Baselines for one point per level)")
+                if set(params) != set(rec.k_names):
+                    other = next(iter([c for c in rec.k_names if c not in params] or
+                                      [c for c in params if c not in rec.k_names]))
+                    raise ValueError(f"k names the record coordinates {list(rec.k_names)}, but {where} is a "
+                                     f"functionally pooled model over {params}: {other!r} is "
+                                     f"{'not one of its operating parameters' if other in rec.k_names else 'not named'}"
+                                     "; name exactly its parameters")
+    if rec.k_names and not pooled:
+        raise ValueError(f"k names operating parameters {list(rec.k_names)}, but the baselines' models {models} are "
+                         "point models (no FPResults): fit them with fit_baselines(..., k=...) or leave k out")
     if not isinstance(windows, (list, tuple)):
         windows = [windows]
     wins = {window_samples(w, "windows", rec.fs, minimum=2): None for w in windows}
@@ -548,7 +580,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                       for lvl, b in levels.items() for (m, meth) in tests for W in wins},
             "by_level": by_level is not None, "methods": methods, "windows": list(wins), "step": step_n,
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
-            "detection": detection, "sprt": None}
+            "detection": detection, "sprt": None, "k_names": rec.k_names}
     if sequential:
         plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): _sprt_scale(b, m) if b.heldout else 1.0
                                                        for lvl, b in levels.items() for m in models}}
@@ -561,7 +593,8 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
 
             iterator = tqdm(idx, desc="tsfdi evaluate", unit="record")
         for i in iterator:
-            _evaluate_record(rec.values[i], rec.state[i], rec.turbulence[i], rec.failure_time[i], plan, counts, i)
+            _evaluate_record(rec.values[i], rec.state[i], rec.turbulence[i], rec.failure_time[i], plan, counts, i,
+                             None if rec.k is None else rec.k[i])
     else:
         # records backed by dask: every chunk runs on the current dask scheduler and comes back as its counts, added
         # in record order: integer counts, so the tables are those of the loop above
@@ -614,6 +647,9 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                 cal = b.calibrated_tests(m, t, W) if t.empirical else {}
                 for state in (healthy,) + faults:
                     res = b.models[m][state]
+                    # (an FP model's null distribution: its point model's at any operating point, the same order,
+                    # degrees of freedom and, with pooled weights, reference variance)
+                    res = res.at(res.model.k[0]) if isinstance(res, FPResults) else res
                     # the test's own statistic, and that of each part of a combined test
                     units = [("", t, cal.get(state))]
                     if isinstance(t, AnyOf):
@@ -645,10 +681,13 @@ def _heldout_logliks(base: Baselines, m: str) -> list:
     without it (:attr:`Baselines.heldout`), the others fitted on other states' records: out of sample, as on an
     evaluation record."""
     chans = base.model_channels(m)
-    models = {f: base.models[m][f] for f in base.faults}
     out = []
     for j, state in enumerate(base.faults):
+        own = base.models[m][state]
         for i, seg in enumerate(base.segments[state]):
+            # functionally pooled models at the record's own operating point
+            at = dict(zip(own.model.k_names, own.model.k[i])) if isinstance(own, FPResults) else None
+            models = {f: r for f, r in base.state_models(m, at).items() if f in base.faults}
             x = seg[:, chans]
             if x.shape[0] <= max(int(r.lags) for r in models.values()) + 1:
                 continue
@@ -737,9 +776,10 @@ def _count_table(counter: Counter, columns: list) -> pd.DataFrame:
 
 
 def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: dict, counts: dict,
-                     position: int) -> None:
+                     position: int, k: np.ndarray | None = None) -> None:
     """Add the windows of one record (``evaluate``), every length, model and test, to ``counts``
-    (:func:`_new_counts`); its coverage checks under its ``position`` in the records."""
+    (:func:`_new_counts`); its coverage checks under its ``position`` in the records. ``k``: the record's
+    operating point (``plan["k_names"]``), where its functionally pooled models are evaluated."""
     healthy, faults, fs, step_n = plan["healthy"], plan["faults"], plan["fs"], plan["step"]
     detection, rules = plan["detection"], plan["rules"]
     level = turb if plan["by_level"] else None
@@ -747,9 +787,13 @@ def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: 
     names = [*faults, "ambiguous", "none"]
     # the record's healthy part from settle s on, as the fitting segments: what the coverage check judges
     part = slice(int(np.ceil(round(plan["settle"] * fs, 9))), int(np.floor(round(ft * fs, 9))) if is_fault else None)
-    for m, (per_state, chans) in plan["models"][level].items():
+    point = None if k is None else dict(zip(plan["k_names"], k.tolist()))
+    for m, (fitted, chans) in plan["models"][level].items():
+        per_state = fitted if point is None else {
+            s: r.at([point[n] for n in r.model.k_names]) if isinstance(r, FPResults) else r for s, r in fitted.items()}
         sig = as_signal(x_all[:, chans], "signal", allow_constant=True)
-        _check_coverage(sig.values[part], per_state[healthy], plan, (level, m), position, counts["coverage"])
+        _check_coverage(sig.values[part], per_state[healthy], plan, (level, m), position, counts["coverage"],
+                        held_out=_fp_held_out(fitted[healthy]))
         # each record is filtered once through every (member) model; the windows of every length and
         # test are slices of these residuals
         rw_h = ResidualWindows({healthy: per_state[healthy]})
@@ -794,10 +838,31 @@ def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: 
                 _count(counts["identification"], key, acc, codes, names)
 
 
-def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: int, out: Counter) -> None:
+#: FPResults -> its held-out residuals (each fitting record at its own k through the FP fit without it): the
+#: coverage check's null for the FP model at every record's k, computed once per results (where the records are)
+_FP_HELD_OUT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _fp_held_out(res: Any) -> Any:
+    """The held-out residuals of a functionally pooled model (kept per results); None for a point model (the
+    coverage check computes and keeps its own) or when they cannot be computed (a fold left with too few operating
+    points: the coverage check, if it applies, then says why it did not run)."""
+    if not isinstance(res, FPResults):
+        return None
+    if res not in _FP_HELD_OUT:
+        try:
+            _FP_HELD_OUT[res] = res.model.held_out_residuals()
+        except ValueError:
+            _FP_HELD_OUT[res] = None
+    return _FP_HELD_OUT[res]
+
+
+def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: int, out: Counter,
+                    held_out: Any = None) -> None:
     """The coverage checks of one record's healthy part ``x`` by the healthy model ``res`` of ``key`` (level,
     model), one per method and window, into ``out`` (a row each): the record law of each calibrated detection test,
-    else the summary check, made once for every test without a record law."""
+    else the summary check (on ``held_out``, the fitting records' held-out residuals, when given), made once for
+    every test without a record law."""
     if x.shape[0] < 2:
         return
     level, m = key
@@ -808,7 +873,7 @@ def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: i
             memo = id(test) if test.calibrated else None
             if memo not in done:
                 try:
-                    done[memo] = check_coverage(test, res, x)
+                    done[memo] = check_coverage(test, res, x, held_out=held_out)
                 except ValueError as err:
                     done[memo] = f"coverage not checked: {err}"
             cov = done[memo]
@@ -828,7 +893,7 @@ def _evaluate_chunk(chunk: Any, where: slice, labels: Records, use: np.ndarray, 
     counts = _new_counts()
     for j in np.flatnonzero(use[where] & rec.valid):
         _evaluate_record(rec.values[j], rec.state[j], rec.turbulence[j], rec.failure_time[j], plan, counts,
-                         where.start + j)
+                         where.start + j, None if rec.k is None else rec.k[j])
     return rec.valid, counts
 
 
