@@ -5,14 +5,17 @@ repository; BLAS pinned to one thread; prints its run time).
 
 The question. A Crazyflie's attitude loop compensates a shortened propeller: the gyro rates it regulates stay
 close to normal, the commands it sends take up the lost thrust. A model of the rates alone sees little; a model of
-the rates *given the commands* (the command-response relation, ARX with the commands as inputs) should see that
+the rates *given the commands* (the command-response relation, VARX with the commands as inputs) should see that
 the same rates now need other commands. Three baselines of the same flights, in one run:
 
 - ``VAR gyro``: VAR of the gyro rates ``controller.r_{roll,pitch,yaw}`` (response only);
 - ``VAR gyro+cmd``: VAR of the rates and the commands ``controller.cmd_{roll,pitch,yaw}`` as six channels (how
   the command line could use commands before ``--u``);
-- ``ARX gyro|cmd``: per axis, an ARX of that rate given the three commands (``tsfdi.ARX``, ``nk = 0``, ``na = nb``),
-  tested through the windowed engine with ``u`` (``tsfdi.ResidualWindows(...).fit(y, u=...)``).
+- ``VARX gyro|cmd``: one VARX of the three rates given the three commands (``tsfdi.VARX``, ``nk = 0``,
+  ``nb = lags``), tested through the windowed engine with ``u`` (``tsfdi.ResidualWindows(...).fit(y, u=...)``).
+  Until issue 32's VARX this row combined three scalar ARX models, one per axis (each axis its own order, its
+  likelihood the sum of the three axes' as if their residuals were independent); the VARX couples the axes in one
+  model and one residual covariance.
 
 Data and settings, all fixed before looking at a faulty flight, or chosen on normal flights only:
 
@@ -20,11 +23,11 @@ Data and settings, all fixed before looking at a faulty flight, or chosen on nor
   its 5 normal-flight logs, and every E8 log of the 17 ``cut_propeller_M3_*`` conditions; airborne segments of
   :func:`tsfdi.datasets.load_crazypad` with its default margin of 1 s after take-off and before landing (the data's
   README), two segments per log, held out together;
-- trend ``"c"`` and the order of every model (per axis for the ARX) by BIC, ``select_order(max_lags=20)``, on the
-  fitting normal logs of each fold;
+- trend ``"c"`` and the order of every model by BIC, ``select_order(max_lags=20)``, on the fitting normal logs of
+  each fold;
 - windows of 2 s (202 samples at 101 Hz), step 2 s (independent windows), ``alpha = 0.01`` for the decision of a
   window: a model flags a window when one channel (axis) rejects, each at the Sidak share of alpha over the
-  channels (3, 6, or 3 axes of the ARX), so that every model's decision has size alpha;
+  channels (3, 6 or 3), so that every model's decision has size alpha;
 - tests: ``F`` (variance, ``tsfdi.FTest``), ``M`` (mean shift, ``tsfdi.MeanTest``) and ``F+M``
   (``tsfdi.AnyOf`` of both at their Sidak shares), thresholds calibrated on the held-out residuals of the fitting
   logs (``ScaledChi2Threshold(alpha, min_windows=5, min_records=2)``, as ``benchmarks/crazypad.py``: the short
@@ -38,8 +41,7 @@ and 4 mm on both edges), leave one flight out: one model per condition and kind 
 condition fitted on its other logs, every other condition on all its logs), each with the ``F+M`` test calibrated
 on its own held-out residuals; every 2 s window, step 0.5 s, of the held-out flight is labelled by the paper rule
 (the one accepted model) and the likelihood rule (the most likely accepted model, any model when none is accepted;
-the ARX's likelihood is the sum of its three axes' Gaussian log-likelihoods, the axes' residuals taken as
-independent), percent of the windows correct.
+each model's Gaussian log-likelihood under its own residual covariance), percent of the windows correct.
 """
 
 from __future__ import annotations
@@ -57,6 +59,7 @@ from scipy import stats  # noqa: E402
 
 import tsfdi  # noqa: E402
 from tsfdi.datasets import load_crazypad  # noqa: E402
+from tsfdi.models import VARX  # noqa: E402
 
 GYRO = ["controller.r_roll", "controller.r_pitch", "controller.r_yaw"]
 CMD = ["controller.cmd_roll", "controller.cmd_pitch", "controller.cmd_yaw"]
@@ -65,7 +68,9 @@ WINDOW_S = 2.0
 ALPHA = 0.01
 MAX_LAGS = 20
 FAMILIES = ("F", "M", "F+M")
-MODELS = ("VAR gyro", "VAR gyro+cmd", "ARX gyro|cmd")
+MODELS = ("VAR gyro", "VAR gyro+cmd", "VARX gyro|cmd")
+#: each model's outputs and inputs
+COLUMNS = {"VAR gyro": (GYRO, None), "VAR gyro+cmd": (GYRO + CMD, None), "VARX gyro|cmd": (GYRO, CMD)}
 IDENTIFY = ("normal_flight", "cut_propeller_M3_1mm_1mm_45mm", "cut_propeller_M3_2mm_2mm_43mm",
             "cut_propeller_M3_3mm_3mm_41mm", "cut_propeller_M3_4mm_4mm_39mm")
 IDENTIFY_STEP_S = 0.5
@@ -82,10 +87,6 @@ def logs_of(segs: list) -> dict:
     return out
 
 
-def sidak(alpha: float, k: int) -> float:
-    return 1.0 - (1.0 - alpha) ** (1.0 / k)
-
-
 def make_test(family: str, alpha: float):
     thr = tsfdi.ScaledChi2Threshold(alpha, min_windows=5, min_records=2)
     if family == "F+M":      # each part at its Sidak share of alpha: "any part rejects" has size alpha
@@ -95,52 +96,41 @@ def make_test(family: str, alpha: float):
 
 
 class Baseline:
-    """One model kind fitted on normal segments: per part (the VAR, or one ARX per axis) the results, its held-out
-    residuals and a calibrated test per family; ``flags(segment)`` the windows it flags."""
+    """One model kind fitted on normal segments: the results (a VAR, or a VARX given the commands), a test per
+    family calibrated on its held-out residuals; ``flags(segment)`` the windows it flags."""
 
     def __init__(self, kind: str, segs: list, W: int) -> None:
         self.kind, self.W = kind, W
+        self.cols, self.inputs = COLUMNS[kind]
         groups = [s.attrs["log"] for s in segs]
-        if kind.startswith("VAR"):
-            cols = GYRO if kind == "VAR gyro" else GYRO + CMD
-            recs = [s[cols] for s in segs]
+        recs = [s[self.cols] for s in segs]
+        if self.inputs is None:
             p = int(tsfdi.select_order(recs, MAX_LAGS, "var", trend="c").selected)
             spec = tsfdi.VAR(recs, p, trend="c")
-            self.parts = [(cols, None, spec.fit(), spec.held_out_residuals(groups=groups), alpha)
-                          for alpha in [ALPHA]]
-        else:                   # one ARX per axis, each axis at the Sidak share of alpha over the three
-            self.parts = []
-            for g in GYRO:
-                ys, us = [s[g] for s in segs], [s[CMD] for s in segs]
-                p = int(tsfdi.select_order(ys, MAX_LAGS, "arx", u=us, trend="c").selected)
-                spec = tsfdi.ARX(ys, us, p, p, 0, trend="c")
-                self.parts.append(([g], CMD, spec.fit(), spec.held_out_residuals(groups=groups),
-                                   sidak(ALPHA, len(GYRO))))
-        self.tests = [{f: make_test(f, a).calibrate(held, window=W, step=1) for f in FAMILIES}
-                      for _, _, _, held, a in self.parts]
-        self.orders = [int(res.model.max_lag) for _, _, res, _, _ in self.parts]
+        else:
+            us = [s[self.inputs] for s in segs]
+            p = int(tsfdi.select_order(recs, MAX_LAGS, "varx", u=us, trend="c").selected)
+            spec = VARX(recs, us, p, nk=0, trend="c")
+        self.res = spec.fit()
+        held = spec.held_out_residuals(groups=groups)
+        self.tests = {f: make_test(f, ALPHA).calibrate(held, window=W, step=1) for f in FAMILIES}
+        self.order = int(self.res.model.max_lag)
+
+    def engine(self, seg: pd.DataFrame) -> tsfdi.ResidualWindows:
+        u = None if self.inputs is None else seg[self.inputs]
+        return tsfdi.ResidualWindows({"m": self.res}).fit(seg[self.cols], u=u)
 
     def windows(self, seg: pd.DataFrame, family: str, step: int, common: int) -> tuple:
-        """Every window (``self.W``, ``step`` apart) of ``seg`` under ``family``: rejected (some part rejects) and
-        the log-likelihood score on the samples from ``common`` on (summed over the parts)."""
-        rej, ll = False, 0.0
-        for (cols, inputs, res, _, _), tests in zip(self.parts, self.tests):
-            y = seg[cols[0]] if inputs is not None else seg[cols]
-            ws = tsfdi.ResidualWindows({"m": res}).fit(y, u=None if inputs is None else seg[inputs]).statistics(
-                tests[family], window=self.W, step=step, common=common)
-            rej, ll = rej | ws.reject[:, 0], ll + ws.loglik[:, 0]
-        return rej, ll
+        """Every window (``self.W``, ``step`` apart) of ``seg`` under ``family``: rejected and the log-likelihood
+        score on the samples from ``common`` on."""
+        ws = self.engine(seg).statistics(self.tests[family], window=self.W, step=step, common=common)
+        return ws.reject[:, 0], ws.loglik[:, 0]
 
     def flags(self, seg: pd.DataFrame) -> dict:
-        """Family -> bool per 2 s window (step = window) of ``seg``: some part rejects."""
-        out = {}
-        for (cols, inputs, res, _, _), tests in zip(self.parts, self.tests):
-            y = seg[cols[0]] if inputs is not None else seg[cols]
-            rw = tsfdi.ResidualWindows({"m": res}).fit(y, u=None if inputs is None else seg[inputs])
-            for f in FAMILIES:
-                rej = rw.statistics(tests[f], window=self.W, step=self.W, loglik=False).reject[:, 0]
-                out[f] = rej if f not in out else out[f] | rej
-        return out
+        """Family -> bool per 2 s window (step = window) of ``seg``."""
+        rw = self.engine(seg)
+        return {f: rw.statistics(self.tests[f], window=self.W, step=self.W, loglik=False).reject[:, 0]
+                for f in FAMILIES}
 
 
 def identification(root: Path, W: int, step: int) -> pd.DataFrame:
@@ -154,7 +144,7 @@ def identification(root: Path, W: int, step: int) -> pd.DataFrame:
         for c, fl in flights.items():
             for out, held in fl.items():
                 models = {**full, c: Baseline(kind, [s for log, segs in fl.items() if log != out for s in segs], W)}
-                common = max(max(b.orders) for b in models.values())
+                common = max(b.order for b in models.values())
                 truth = list(models).index(c)
                 for seg in held:
                     got = [models[m].windows(seg, "F+M", step, common) for m in models]
@@ -201,10 +191,10 @@ def main() -> None:
                 for f, rej in base.flags(seg).items():
                     fa[kind, f][0] += int(rej.sum())
                     fa[kind, f][1] += rej.size
-            print(f"  fold {out}: {kind} orders {base.orders}")
+            print(f"  fold {out}: {kind} order {base.order}")
     # 2. detection of the M3 cut flights, baseline on every normal log
     full = {kind: Baseline(kind, [s for segs in normal.values() for s in segs], W) for kind in MODELS}
-    print("orders on all normal logs: " + ", ".join(f"{k} {b.orders}" for k, b in full.items()))
+    print("orders on all normal logs: " + ", ".join(f"{k} {b.order}" for k, b in full.items()))
     det = {(m, f, c): [0, 0] for m in MODELS for f in FAMILIES for c in cuts}
     for c in cuts:
         for seg in segments(root, c):
