@@ -143,11 +143,18 @@ def test_fp_baselines_at_one_k_equal_point_baselines_of_at_k(fleet, fp_baselines
 
 def test_evaluate_at_each_records_k_in_memory_and_on_dask(fleet, fp_baselines):
     """Records at their own speeds: in memory and chunked on dask (the speeds travel with each chunk's labels) the
-    tables are equal; the FP baselines identify the faults at speeds between the fitting ones."""
+    tables are equal, and so are the FP baselines fitted on the chunked fleet; the FP baselines identify the faults
+    at speeds between the fitting ones."""
     opts = dict(models=("var",), windows=("5s",), settle=5.0, progress=False, k="speed",
                 tests={"whiteness": LjungBox(lags=10, alpha=0.01, threshold="calibrated")})
     ev = tsfdi.evaluate(fleet, fp_baselines, **opts)
     lazy = tsfdi.evaluate(fleet.chunk(record=4), fp_baselines, **opts)
+    # the FP baselines of the fleet on dask (only the fitting records read, with their speeds) are the same
+    fitted = tsfdi.fit_baselines(fleet.chunk(record=4), k="speed", fit_records=list(range(18)), settle=5.0,
+                                 duration=None, max_lags=4, var_max_lags=4, steady_window="5s", models=("var",))
+    for s, r in fitted.models["var"].items():
+        np.testing.assert_array_equal(r.params2d, fp_baselines.models["var"][s].params2d)
+        np.testing.assert_array_equal(r.model.k, fp_baselines.models["var"][s].model.k)
     for name in ("identification_counts", "detection_counts", "detection_delays", "records", "coverage",
                  "calibration"):
         pd.testing.assert_frame_equal(getattr(lazy, name), getattr(ev, name))
@@ -212,8 +219,7 @@ def test_fit_baselines_with_k_refuses_what_it_cannot_fit(fleet):
                                          r"of 'speed'"):
         tsfdi.fit_baselines(fleet, k="speed", fit_records=two, max_degree=2, **kw)
     b = tsfdi.fit_baselines(fleet, k="speed", fit_records=two, order=3, **kw)       # default: degree up to 1
-    assert all(r.model.na == 3 and r.model.degree == (1,) or r.model.degree == (0,)
-               for r in b.models["var"].values())
+    assert all(r.model.na == 3 and r.model.degree[0] <= 1 for r in b.models["var"].values())
 
 
 def test_false_alarms_at_logged_k_between_the_fitting_points_hold_alpha():
