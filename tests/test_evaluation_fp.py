@@ -146,6 +146,7 @@ def test_evaluate_at_each_records_k_in_memory_and_on_dask(fleet, fp_baselines):
     tables are equal, and so are the FP baselines fitted on the chunked fleet; the FP baselines identify the faults
     at speeds between the fitting ones."""
     opts = dict(models=("var",), windows=("5s",), settle=5.0, progress=False, k="speed",
+                rules=("paper", "likelihood", "sprt"),
                 tests={"whiteness": LjungBox(lags=10, alpha=0.01, threshold="calibrated")})
     ev = tsfdi.evaluate(fleet, fp_baselines, **opts)
     lazy = tsfdi.evaluate(fleet.chunk(record=4), fp_baselines, **opts)
@@ -156,11 +157,13 @@ def test_evaluate_at_each_records_k_in_memory_and_on_dask(fleet, fp_baselines):
         np.testing.assert_array_equal(r.params2d, fp_baselines.models["var"][s].params2d)
         np.testing.assert_array_equal(r.model.k, fp_baselines.models["var"][s].model.k)
     for name in ("identification_counts", "detection_counts", "detection_delays", "records", "coverage",
-                 "calibration"):
+                 "calibration", "sequential_counts"):
         pd.testing.assert_frame_equal(getattr(lazy, name), getattr(ev, name))
+    assert lazy.sprt == ev.sprt and 0 < ev.sprt["scale"][("", "var")] <= 1.5
     assert ev.records["evaluated"].sum() == 7
     rates = ev.rates().xs(("var", "whiteness", 5.0), level=("model", "method", "window"))
     assert (rates.xs("likelihood", level="rule")["correct"] == 100).all()
+    assert (ev.sequential_rates()["correct"] == 100).all()
 
 
 def test_fp_baselines_without_k_and_bad_k_are_refused_by_name(fleet, fp_baselines, synthetic, fitted):
