@@ -850,8 +850,9 @@ def _fp_held_out(res: Any) -> Any:
     if not isinstance(res, FPResults):
         return None
     if res not in _FP_HELD_OUT:
-        try:
-            _FP_HELD_OUT[res] = res.model.held_out_residuals()
+        try:        # (as float arrays: the check reads them for every record)
+            _FP_HELD_OUT[res] = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
+                                 for e in res.model.held_out_residuals()]
         except ValueError:
             _FP_HELD_OUT[res] = None
     return _FP_HELD_OUT[res]
