@@ -10,7 +10,7 @@ from statsmodels.tsa.api import VAR as smVAR
 
 import tsfdi
 from tsfdi.models import VARX, load
-from tests.conftest import to_numpy
+from tests.conftest import as_kind, assert_kind, to_numpy
 
 A1 = np.array([[-0.5, 0.1], [0.2, -0.4]])
 A2 = np.array([[0.15, 0.0], [0.05, 0.1]])
@@ -127,7 +127,34 @@ def test_names_kept_and_checked():
     with pytest.raises(ValueError, match="u has 999 samples but y has 1000"):
         res.residuals(Y, U.iloc[1:])
     text = str(res.summary())
-    assert "VARX" in text and "c1, c2, c3" in text and "Equation q" in text
+    assert "VARX" in text and "c1, c2, c3" in text and "Equation q" in text and "sum_j B_j u[t-nk-j+1]" in text
+
+
+@pytest.mark.parametrize("kind", ["numpy", "pandas", "xarray"])
+def test_kinds_in_kinds_out(kind):
+    """numpy / pandas / xarray in, the same kind out (residuals, forecasts, simulations), the same numbers."""
+    y, u = varx_system(600, seed=17)
+    Y, U = as_kind(y, kind, ["p", "q"], "y"), as_kind(u, kind, ["c1", "c2", "c3"], "u")
+    res = VARX(Y, U, 2, nb=2, nk=1).fit()
+    ref = VARX(y, u, 2, nb=2, nk=1).fit()
+    np.testing.assert_allclose(to_numpy(res.params), ref.params, rtol=1e-12)
+    e = res.residuals(Y, U)
+    assert_kind(e, kind, 2)
+    np.testing.assert_allclose(to_numpy(e), ref.residuals(y, u), rtol=1e-12)
+    for out in (res.forecast(3, U[:3] if kind == "numpy" else U.iloc[:3] if kind == "pandas" else U[:3]),
+                res.simulate(U, rng=0)):
+        assert_kind(out, kind, 2)
+
+
+def test_no_output_lags_is_a_regression_on_the_inputs():
+    """``lags = 0``: ``y[t] = c + B_1 u[t] + B_2 u[t-1] + e[t]``, the least-squares solve of that regression."""
+    y, u = varx_system(500, seed=19)
+    res = VARX(y, u, 0, nb=2, trend="c").fit()
+    X = np.column_stack([np.ones(499), u[1:], u[:-1]])
+    np.testing.assert_allclose(res.params, np.linalg.lstsq(X, y[1:], rcond=None)[0], rtol=1e-9, atol=1e-12)
+    assert res.coefs.shape == (0, 2, 2) and res.is_stable
+    sim = res.simulate(u[:20], sigma=np.zeros((2, 2)))
+    np.testing.assert_allclose(sim[1:], res.intercept + u[1:20] @ res.b[0].T + u[:19] @ res.b[1].T, rtol=1e-12)
 
 
 def test_records_are_stacked_regressions():

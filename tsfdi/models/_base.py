@@ -1170,7 +1170,8 @@ class LinearTimeSeriesResults(FrozenResults):
             tables.append((f"Equation {channel}" if m._vector else f"Coefficients of {channel}", table))
         a = "A_i" if m._vector else "a_i"
         notes = [f"Coefficients in the papers' sign: y[t] + sum_i {a} y[t-i] = c"
-                 + (" + sum_j b_j u[t-nk-j+1]" if m.nb else "") + f" + e[t] (statsmodels' phi_i = -{a}).",
+                 + (f" + sum_j {'B_j' if m._vector else 'b_j'} u[t-nk-j+1]" if m.nb else "")
+                 + f" + e[t] (statsmodels' phi_i = -{a}).",
                  self._bse_note + "."]
         return Summary(f"{type(m).__name__} results", header, tables, notes)
 
