@@ -310,3 +310,17 @@ def test_hexacopter_fleet_at_several_speeds_end_to_end():
     assert ev.detection_rates()["missed_records"].sum() == 0
     with pytest.raises(TypeError, match=r"give k= naming"):
         tsfdi.evaluate(ds, b, windows=("5s",), settle=5.0, progress=False)
+
+
+def test_calibrating_a_reference_variance_on_point_weights_is_refused(fp_baselines):
+    """An FP model fitted with weights='point' has a noise variance that changes with k: a calibrated test carrying
+    one reference variance (FTest) is refused naming the model, state and the way out; Ljung-Box is calibrated."""
+    b = fp_baselines
+    res = b.models["var"]["healthy"]
+    point = tsfdi.models.FPVAR(b.segments["healthy"], pd.DataFrame({"speed": res.model.k[:, 0]}), res.model.na,
+                               res.model.degree, weights="point").fit()
+    mixed = dataclasses.replace(b, models={**b.models, "var": {**b.models["var"], "healthy": point}}, _calibrated={})
+    with pytest.raises(ValueError, match=r"FTest carries the reference variance .* model 'var' of state 'healthy' has "
+                                         r"weights='point' .* refit it with weights='pooled', or use LjungBox"):
+        mixed.calibrated_tests("var", FTest(alpha=0.01, threshold="empirical"), "5s")
+    assert mixed.calibrated_tests("var", LjungBox(lags=10, alpha=0.01, threshold="empirical"), "5s")["healthy"].calibrated

@@ -788,7 +788,7 @@ def _reference_results(res: Any, test: ResidualTest, model: str, state: str) -> 
     if not isinstance(res, FPResults):
         return res
     at = res.at(res.model.k[0])
-    if res.weights is not None and any(_flat_reference(test.reference(at))):
+    if res.weights is not None and _flat_reference(test.reference(at)):
         raise ValueError(f"{type(test).__name__} carries the reference variance of the model it is calibrated for, "
                          f"but the functionally pooled model {model!r} of state {state!r} has weights='point' (a "
                          "variance that changes with k): refit it with weights='pooled', or use LjungBox")
