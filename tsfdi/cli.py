@@ -257,8 +257,8 @@ def _load(flag: str, spec: str, path: str) -> Any:
         raise ValueError(f"{flag} {spec}: {exc}") from None
     if not isinstance(res, (ARResults, VARResults, ARXResults, VARXResults, FPResults)):
         raise ValueError(f"{flag} {spec}: {type(res).__name__} of a {type(res.model).__name__} model; the command "
-                         "line tests AR / VAR / ARX / VARX models and their functionally pooled forms (FP-AR / FP-VAR "
-                         "/ FP-ARX)")
+                         "line tests AR / VAR / ARX models and their functionally pooled forms (FP-AR / FP-VAR / "
+                         "FP-ARX), and VARX models")
     return res
 
 
