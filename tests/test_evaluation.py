@@ -410,6 +410,13 @@ def test_arx_models_are_refused_naming_the_way_out(synthetic, fitted):
                                         r".*identify_windows\(y, models, test, u=\.\.\.\)"):
         tsfdi.evaluate(recs, io, states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0,
                        progress=False)
+    # a VARX (several outputs given inputs) alike, not the engine's error further on
+    varx = tsfdi.models.VARX(recs[0], recs[1][:, :1], 2, 2).fit()
+    io = dataclasses.replace(fitted, models={**fitted.models, "var": {**fitted.models["var"], "healthy": varx}})
+    with pytest.raises(TypeError, match=r"^baselines.models\['var'\]\['healthy'\] is a VARX \(input-output\) "
+                                        r"model: .*identify_windows\(y, models, test, u=\.\.\.\)"):
+        tsfdi.evaluate(recs, io, states=states, failure_times=ft, fs=FS, windows=("5s",), settle=5.0,
+                       progress=False)
 
 def test_functionally_pooled_models_are_refused_naming_at_k(synthetic, fitted):
     """An FP model in the baselines is named with the way out (its point model .at(k)) instead of an AttributeError

@@ -44,7 +44,7 @@ from tsfdi.coverage import check_coverage, warn_records_not_covered
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
-from tsfdi.models import ARXResults, FPResults
+from tsfdi.models import FPResults, InputOutputResults
 from tsfdi.summary import Summary
 from tsfdi.detection.sequential import msprt, msprt_scale
 from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
@@ -507,10 +507,12 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
         for m in models:
             for s, r in b.models[m].items():
                 where = f"baselines.models[{m!r}][{s!r}]"
-                if isinstance(r, ARXResults) or (isinstance(r, FPResults) and r.model.nb):
-                    raise TypeError(f"{where} is an {'FP-' if isinstance(r, FPResults) else ''}ARX (input-output) "
-                                    "model: evaluate's records carry no input u; test ARX models record by record "
-                                    "with identify_windows(y, models, test, u=...) or Monitor(...).run(y, u=...)")
+                if isinstance(r, InputOutputResults) or (isinstance(r, FPResults) and r.model.nb):
+                    kind = "FP-ARX" if isinstance(r, FPResults) else type(r).__name__.removesuffix("Results")
+                    raise TypeError(f"{where} is {'a' if kind == 'VARX' else 'an'} {kind} (input-output) model: "
+                                    "evaluate's records carry no input u; "
+                                    "test input-output models record by record with identify_windows(y, models, test, "
+                                    "u=...) or Monitor(...).run(y, u=...)")
                 if not isinstance(r, FPResults):
                     continue
                 pooled = True
