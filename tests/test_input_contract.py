@@ -66,7 +66,7 @@ def test_windowed_engine_and_monitor_need_the_input_of_arx(fits):
         identify_windows(Y, {"h": fits["arx"]}, window=100)
     with pytest.raises(TypeError, match="u is required"):
         ResidualWindows({"h": fits["arx"]}).fit(Y)
-    with pytest.raises(TypeError, match="baseline and models mix ARX"):
+    with pytest.raises(TypeError, match="baseline and models mix input-output"):
         tsfdi.Monitor(fits["arx"], {"f": fits["ar"]}, window=100, step=10, steady_window=50)
 
 

@@ -695,7 +695,7 @@ def test_arx_input_required_or_refused(arx_models, models, failure_record):
         mon.run(pd.Series(y), u=pd.DataFrame(u, index=np.arange(1, 1001)))
     with pytest.raises(TypeError, match="u is only for input-output"):
         _monitor(models).run(failure_record, u=failure_record)
-    with pytest.raises(TypeError, match="baseline and models mix ARX"):
+    with pytest.raises(TypeError, match="baseline and models mix input-output"):
         tsfdi.Monitor(arx_models["healthy"], {"f": tsfdi.AR(y, 2).fit()}, window="5s", fs=FS)
     one = tsfdi.ARX(y, u[:, 0], 1, 2).fit()
     with pytest.raises(ValueError, match="ARX models must share one set of inputs"):

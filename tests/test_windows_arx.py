@@ -224,3 +224,24 @@ def test_crazypad_rates_given_the_commands(shared_crazypad):
             np.testing.assert_allclose(wi[w].decisions["h"].statistic, one.decisions["h"].statistic, rtol=1e-9)
     assert not np.concatenate(flagged[:len(held)]).any()             # the held-out normal log: no alarm
     assert np.concatenate(flagged[len(held):]).mean() > 0.5          # the cut flights: most windows (11 of 18)
+
+
+def test_monitor_takes_varx_models():
+    rng = np.random.default_rng(2034)
+    models = {name: tsfdi.models.VARX(*simulate_two(g, 3000, rng), 1, nb=3, nk=1).fit() for name, g in (("healthy", 1.0),
+                                                                                           ("loss", 0.5))}
+    parts = [simulate_two(g, 1500, rng) for g in (1.0, 0.5)]       # the loss from 15 s at 100 Hz
+    y, u = np.vstack([p[0] for p in parts]), np.vstack([p[1] for p in parts])
+    make = lambda: tsfdi.Monitor(models["healthy"], {"loss": models["loss"]}, window="5s", fs=100.0,  # noqa: E731
+                                 test=tsfdi.FTest(alpha=1e-3), steady_window="5s",
+                                 steady_thresholds=[3 * y[1500:, 0].var(), 3 * y[1500:, 1].var()])
+    batch = make().run(y, u=u)
+    assert 15.0 < batch.detection_time <= 20.0 and batch.label == "loss"
+    mon = make()
+    for a in range(0, len(y), 250):                                 # streamed block by block: the same events
+        mon.update(y[a:a + 250], u=u[a:a + 250])
+    assert mon.result().to_frame().equals(batch.to_frame())
+    with pytest.raises(TypeError, match="u is required"):
+        make().run(y)
+    with pytest.raises(TypeError, match="mix input-output"):
+        tsfdi.Monitor(models["healthy"], {"var": tsfdi.VAR(y, 2).fit()})

@@ -29,7 +29,7 @@ from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.sequential import SPRT, msprt, renewal_walk
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.exceptions import CoverageWarning
-from tsfdi.models import ARXResults, FPResults
+from tsfdi.models import FPResults, InputOutputResults
 from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows
 
 __all__ = ["Monitor", "MonitorResult", "MonitorEvent", "rolling_variance"]
@@ -274,8 +274,8 @@ class Monitor:
                             f"{type(models).__name__}")
         if not hasattr(baseline, "residuals"):
             raise TypeError(f"baseline must be fitted results (AR, VAR or ARX), got {type(baseline).__name__}")
-        if len({isinstance(m, ARXResults) for m in (baseline, *models.values())}) > 1:
-            raise TypeError("baseline and models mix ARX (input-output) models with AR / VAR models: the ARX "
+        if len({isinstance(m, InputOutputResults) for m in (baseline, *models.values())}) > 1:
+            raise TypeError("baseline and models mix input-output (ARX, VARX) models with AR / VAR models: their "
                             "residuals are of the output given u, the others of the output alone; use one kind")
         pooled = [n for n, m in {"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}.items()
                   if isinstance(m, FPResults)]
@@ -283,7 +283,7 @@ class Monitor:
             raise TypeError(f"{pooled[0]} is a functionally pooled model (FPResults): give its point model at the "
                             "record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
         engine = ResidualWindows({"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}
-                                 if isinstance(baseline, ARXResults) else {"healthy": baseline})
+                                 if isinstance(baseline, InputOutputResults) else {"healthy": baseline})
         self.nchan = engine.nchan
         #: whether the models take an input ``u`` (ARX models), the same for baseline and fault models (checked by
         #: ``engine``), and its channels in the models' order with whether they are named
