@@ -23,7 +23,7 @@ from tsfdi.io import read_records
 from tsfdi.isolation import Isolation, IsolationSeries, ResidualSet
 from tsfdi.models import (AR, ARX, EMRAN, FPAR, FPARX, FPVAR, VAR, ARResults, ARXResults, EMRANResults, FPMean,
                           FPMeanResults, FPOrderSelection, FPResults, HeldOutResiduals, OperatingPointEstimate,
-                          RecursiveARX, RecursiveARXResults, VARResults, load, select_fp_order)
+                          RecursiveARX, RecursiveARXResults, VARResults, VARX, VARXResults, load, select_fp_order)
 from tsfdi.monitoring import Monitor, MonitorEvent, MonitorResult
 from tsfdi.online import OnlineCalibration, OnlineDetection, OnlineDetector
 from tsfdi.selection import OrderSelection, select_order
@@ -33,8 +33,8 @@ __version__ = "0.1.0"
 
 __all__ = [
     # models and order selection
-    "AR", "ARX", "VAR", "RecursiveARX", "EMRAN", "ARResults", "ARXResults", "VARResults", "RecursiveARXResults",
-    "EMRANResults",
+    "AR", "ARX", "VAR", "VARX", "RecursiveARX", "EMRAN", "ARResults", "ARXResults", "VARResults", "VARXResults",
+    "RecursiveARXResults", "EMRANResults",
     "HeldOutResiduals", "OrderSelection", "select_order", "load",
     # functionally pooled models
     "FPAR", "FPVAR", "FPARX", "FPResults", "FPMean", "FPMeanResults", "OperatingPointEstimate", "FPOrderSelection",
