@@ -1,60 +1,45 @@
 """Record-level calibration on the next aircraft of a fleet (issue 31).
 
 1. A simulated fleet: VAR(2) records whose coefficients (``A + 0.04 N(0, 1)``) and innovation scale (log-normal
-   +-15 % per record and channel) vary from aircraft to aircraft. A baseline VAR(2) is fitted on 5, 10 or 20
-   records of a fleet, the F and Ljung-Box tests (Sidak over the 3 channels, so alpha is the decision's rate) are
-   calibrated on its held-out residuals (windows of 200 samples) with the predictive record-level law, and new
-   records of the same fleet are judged on their disjoint windows. A predictive threshold's rate is alpha *averaged
-   over the fitting fleets* (one fleet's few fitting records set a threshold whose rate on its new records varies
-   far beyond the binomial), so every row (records) draws its own ``--fleets`` independent fleets (fleet ``f`` of
-   row ``J`` from the generator seeded ``[seed, J, f]``: no fleet is shared between rows) and pools their new
-   windows. Printed per row and alpha: the pooled rate, the two-sided 99.9 % binomial band of alpha for the pooled
-   window count, the fleet-clustered 99.9 % interval of the pooled rate (t over the fleets), the ratio of the
-   clustered to the binomial standard error (near 1: the binomial band is the right yardstick; above: the band is
-   too narrow for this design), for F a control-variate rate (below), and the median calibrated threshold of
-   channel y0 (p10-p90 over the fleets) by number of fitting records. The seed is a fresh
-   ``tsfdi.study.evaluation_seed()`` (printed, stored nowhere) unless ``--seed`` reproduces a run.
+   +-15 % per record and channel) vary from aircraft to aircraft. Every row (5, 10 or 20 fitting records) draws
+   ``--fleets`` independent fleets (fleet ``f`` of row ``J``: ``J + 1`` records from the generator seeded
+   ``[seed, J, f]``, nothing shared between fleets or rows; the fleets of a chunk simulated in one recursion). Each
+   fleet: a baseline VAR(2) fitted on its ``J`` records, the F and Ljung-Box tests (Sidak over the 3 channels, so
+   alpha is the decision's rate) calibrated on its held-out residuals (windows of 200 samples) with the predictive
+   record-level law, and the decision judged on the first ``--windows`` disjoint windows of its one new record.
+   Printed per row and alpha: the pooled rate, the two-sided 99.9 % binomial band of alpha for the pooled window
+   count, the fleet-clustered 99.9 % interval (t over the fleets), the ratio of the clustered to the binomial
+   standard error, the median calibrated threshold of channel y0 (p10-p90 over the fleets) by number of fitting
+   records, and the cost per fleet. The seed is a fresh ``tsfdi.study.evaluation_seed()`` (printed, stored nowhere)
+   unless ``--seed`` reproduces a run.
 
-   Design, chosen on development seeds only (40 new records per fleet; 800 fleets each with 5 and 10 records, seeds
-   50000-50799 and 60000-60799, 600 with 20 records, seeds 80000-80599; never the evaluation seed): the spread of
-   the pooled rate between fleet draws is ``sqrt((V_b + alpha / m) / F)``, ``V_b`` the between-fleet variance of a
-   fleet's expected rate, ``m`` the windows per fleet, ``F`` the fleets, and the binomial band's half-width is
-   ``3.29 sqrt(alpha / (m F))``: their ratio does not depend on ``F`` but on ``m``. The largest ``V_b`` was F with
-   5 records at 0.01 (a fleet's expected rate has sd 2.9 alpha; with 10 / 20 records 1.9 / 1.6, at 0.001 4.7-5.5
-   alpha; Ljung-Box 0.3-1.3 alpha), so ``NEW = 5`` new records (``m = 50`` windows) keeps the between-fleet spread
-   of the pooled rate at most 0.62 of the band's half-width in every row (the binomial band is still narrower than
-   the clustered interval for F: its SE ratio is ~2.3 there), and ``FLEETS = 300`` per row (15,000 windows) is what
-   a run of about five minutes affords. The same development fleets give the expected rate of the decision over
-   fleets (cluster standard error; for F with the fitting records' true noise levels as control variate): F
-   0.95 +- 0.05 / 0.94 +- 0.04 / 0.99 +- 0.05 alpha at 0.01 (5 / 10 / 20 records), 1.00 +- 0.11 / 0.97 +- 0.13 /
-   1.06 +- 0.18 at 0.001: unbiased; Ljung-Box 0.59 +- 0.02 / 0.94 +- 0.02 / 1.14 +- 0.02 at 0.01 and
-   0.29 +- 0.04 / 1.09 +- 0.07 / 1.42 +- 0.08 at 0.001 with the chi-square record laws: conservative with 5
-   records (on white noise too), liberal with 20. With each record's log-normal law and the between-record spread
-   from two halves of every record (``ScaledChi2Threshold`` Notes; 400 / 400 / 300 development fleets, generators
-   ``[50000, 5, f]``, ``[60000, 10, f]``, ``[80000, 20, f]``, 40 new records each, no control variate): Ljung-Box
-   0.99 +- 0.04 / 0.97 +- 0.03 / 0.97 +- 0.03 at 0.01 and 1.36 +- 0.10 / 1.04 +- 0.08 / 1.47 +- 0.11 at 0.001
-   (the same fleets gave 0.60 / 0.95 / 1.03 and 0.34 / 0.96 / 1.43 before). F's
-   rate over fleets is heavy-tailed with 5 records (a fleet whose few fitting records happen to share a noise level
-   gets a narrow threshold): its between-fleet variance estimated on 800 fleets is itself unstable, and a run can
-   show an SE ratio of 4-7 there, where only the clustered interval is a yardstick.
-
-   F measured again after two evaluation runs had put its 5-record rows above the binomial band (1.47 / 1.38 alpha
-   at 0.01, 2.6 / 3.1 at 0.001): development fleets ``[50000, 5, f]`` f < 3000, ``[60000, 10, f]`` f < 1000,
-   ``[80000, 20, f]`` f < 700, 40 new records each; mean rate over fleets / alpha +- its standard error, raw and
-   with the control variate: 5 records 0.94 +- 0.06 and 0.92 +- 0.03 at 0.01, 0.84 +- 0.16 and 0.76 +- 0.11 at
-   0.001; 10 records 0.92 +- 0.07 and 0.95 +- 0.04, 0.89 +- 0.18 and 0.99 +- 0.14; 20 records 1.02 +- 0.06 and
-   1.02 +- 0.04, 1.18 +- 0.19 and 1.12 +- 0.15. Not liberal: the new records' levels (log mean variance ratio) are
-   exchangeable with the held-out records' (mean shift <= 0.004 against a spread of 0.30, variance ratio 0.98-1.00),
-   and on the ideal fleet the threshold's exact expected rate is 0.90 / 0.89 alpha with 5 records
-   (``tests/detection/test_threshold_predictive.py``). With 5 records a fleet's rate has sd 3.2 alpha at 0.01 and
-   8.7 at 0.001 (single fleets up to 55 and 325 alpha: their five records share a noise level in one channel; the
-   4.7-5.5 above, from 800 fleets, missed them), so NEW = 5 does not keep that row's spread within the band: on ideal
-   fleets an exactly calibrated law lands above the band in 10 % of runs at each alpha, at both in 4.6 %. Replayed
-   for diagnosis only (nothing chosen on them), the two evaluation runs had drawn such fleets: at 0.001 three of
-   300 fleets gave 34 of 39 and 42 of 47 flags, and the exact t pivot on the fleets' true noise levels (the control
-   variate, expectation alpha) was itself 1.34 / 1.82 and 1.56 / 3.66 alpha at 0.01 / 0.001. The table therefore
-   prints for F the rate less the control variate's excess over alpha (:func:`pivot_rate`, exact over fleets) with
-   its 99.9 % fleet interval; with 50 windows per fleet it removes only part of the spread (correlation 0.3-0.8).
+   Why few windows per fleet: a predictive threshold's rate is alpha *averaged over fleets*; one fleet's few
+   fitting records set a threshold whose rate ``p_f`` on its own new records varies far beyond the binomial. A fleet
+   judged on ``m`` windows flags ``Bin(m, p_f)`` of them, so the pooled rate over ``F`` fleets has variance
+   ``(alpha + (m - 1) V_b) / (m F)`` (``V_b`` the variance of ``p_f`` over fleets, mean alpha) against the binomial
+   band's ``alpha / (m F)``: the ratio of the standard errors, ``sqrt(1 + (m - 1) V_b / alpha)``, does not depend
+   on ``F``, and with ``m = 1`` the judged windows are independent draws of the decision's rate whatever ``V_b``.
+   Development figures (fleets ``[50000, 5, f]`` f < 3000, ``[60000, 10, f]`` f < 1000, ``[80000, 20, f]``
+   f < 700, 40 new records each; never an evaluation seed): the largest ``V_b`` is F's with 5 records, a fleet's
+   rate sd 3.2 alpha at 0.01 and 8.7 alpha at 0.001 (``V_b / alpha`` 0.10 and 0.076; single fleets up to 55 and
+   325 alpha, whose five records share a noise level); with 10 / 20 records and for Ljung-Box it is smaller. So
+   ``m = 2`` keeps the ratio at 1.05 / 1.04 (``m = 3``: 1.10 / 1.07; the 50 windows per fleet of the design
+   before: 2.4 / 2.2, and 4-7 in runs that drew such fleets, where a perfectly calibrated F left the band in ~10 %
+   of runs) and judges twice the windows of ``m = 1`` for the same calibrations, which are the whole cost.
+   One development run of this design (seed 90000, ``--fleets 1000 --windows 2``, 2,000 windows per row; nice 19
+   beside other jobs on this 2-core machine): every row in its band (F 0.65 / 0.80 / 0.95 % at 0.01, 0 / 0.10 /
+   0.05 % at 0.001; Ljung-Box 0.70 / 1.00 / 1.25 % and 0.15 / 0.25 / 0.05 %), 219 / 283 / 390 ms per fleet with
+   5 / 10 / 20 records, nearly all of it the four calibrations; its SE ratios rest on 0-25 flags a row and add
+   nothing to the formula. The F control variate of the design before (the exact t pivot on the fitting records'
+   true noise levels) did not narrow the F intervals at 2 windows per fleet (it explains part of ``V_b``, a small
+   share of a 2-window rate's variance): removed. ``FLEETS = 1500`` (3,000 windows per row) is what about 20
+   minutes afford at that cost; 10,000 windows per row would take about 75 minutes.
+   Expected rate of the decision over those development fleets (mean / alpha +- its standard error), to read
+   the rows by: F 0.94 +- 0.06 / 0.92 +- 0.07 / 1.02 +- 0.06 at 0.01 (5 / 10 / 20 records) and 0.84 +- 0.16 /
+   0.89 +- 0.18 / 1.18 +- 0.19 at 0.001 (exact on the ideal fleet: 0.90 / 0.89 with 5 records,
+   ``tests/detection/test_threshold_predictive.py``); Ljung-Box (fleets ``[50000, 5, f]`` f < 400,
+   ``[60000, 10, f]`` f < 400, ``[80000, 20, f]`` f < 300) 0.99 +- 0.04 / 0.97 +- 0.03 / 0.97 +- 0.03 at 0.01
+   and 1.36 +- 0.10 / 1.04 +- 0.08 / 1.47 +- 0.11 at 0.001.
 2. CrazyPAD (``../shared/data/crazypad``, the functions of ``benchmarks/crazypad.py``: margin, channels and VAR
    order chosen on the fitting flights, each log's two airborne segments fitted and held out together), normal
    flights of both airframes (E8, E9). The tests, each Sidak-corrected over the channels so that alpha is the
@@ -76,7 +61,7 @@
    records only. A VAR (BIC order) fitted on 10 aircraft, the tests calibrated on its held-out residuals, 40 other
    aircraft judged (2 s windows, disjoint): in band?
 
-Run: ``python benchmarks/fleet_calibration.py [--fleets 300] [--new 5] [--seed SEED] [--data PATH] [--no-crazypad]
+Run: ``python benchmarks/fleet_calibration.py [--fleets 1500] [--windows 2] [--seed SEED] [--data PATH] [--no-crazypad]
 [--no-hexacopter]``
 (BLAS pinned to one thread; prints its run time).
 """
@@ -105,40 +90,52 @@ import crazypad as cp  # noqa: E402
 
 A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
 A2 = -0.2 * np.eye(3)
-N, WINDOW, SPREAD, NOISE = 2000, 200, 0.04, 0.15
+N, WINDOW, SPREAD, NOISE, BURN = 2000, 200, 0.04, 0.15, 200
 RECORDS, ALPHAS = (5, 10, 20), (1e-2, 1e-3)
-#: fleets per row and new records per fleet (chosen on development seeds, see the module docstring)
-FLEETS, NEW = 300, 5
+#: independent fleets per row and judged windows per fleet, all of its one new record (see the module docstring)
+FLEETS, WINDOWS = 1500, 2
+#: fleets simulated together (one recursion over their stacked records; each fleet keeps its own generator)
+CHUNK = 25
+
+
+def fleet_draws(rng: np.random.Generator, count: int, n: int = N) -> tuple:
+    """The draws of ``count`` records of the fleet from ``rng``: VAR(2) coefficients ``A + SPREAD N(0, 1)``, the
+    innovations of ``n`` samples after a burn-in of ``BURN``, and their scales ``exp(NOISE z)``, ``z`` standard
+    normal per record and channel (+-15 %, log-normal). Returns ``(b1, b2, e)`` for :func:`simulate` and the log
+    innovation variances ``2 NOISE z``, shape (count, 3)."""
+    b1 = A1 + SPREAD * rng.standard_normal((count, 3, 3))
+    b2 = A2 + SPREAD * rng.standard_normal((count, 3, 3))
+    e = rng.standard_normal((n + BURN, count, 3))
+    z = rng.standard_normal((count, 3))
+    return (b1, b2, e * np.exp(NOISE * z)), 2.0 * NOISE * z
+
+
+def simulate(b1: np.ndarray, b2: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """``y[t] = b1 y[t-1] + b2 y[t-2] + e[t]`` from rest for a stack of records (``b1``, ``b2`` (r, 3, 3), ``e``
+    (time, r, 3)), the first ``BURN`` samples dropped: shape (time - BURN, r, 3)."""
+    y = np.zeros_like(e)
+    for t in range(2, e.shape[0]):
+        y[t] = np.einsum("rij,rj->ri", b1, y[t - 1]) + np.einsum("rij,rj->ri", b2, y[t - 2]) + e[t]
+    return y[BURN:]
 
 
 def fleet_records(rng: np.random.Generator, count: int, n: int = N) -> tuple:
-    """``count`` records of the fleet: VAR(2) with coefficients ``A + SPREAD N(0, 1)`` and innovations scaled by
-    ``exp(NOISE z)``, ``z`` standard normal per record and channel (+-15 %, log-normal) (all records simulated at
-    once). Returns the records and their log innovation variances ``2 NOISE z``, shape (count, 3)."""
-    b1 = A1 + SPREAD * rng.standard_normal((count, 3, 3))
-    b2 = A2 + SPREAD * rng.standard_normal((count, 3, 3))
-    e = rng.standard_normal((n + 200, count, 3))
-    z = rng.standard_normal((count, 3))
-    e = e * np.exp(NOISE * z)
-    y = np.zeros_like(e)
-    for t in range(2, n + 200):
-        y[t] = np.einsum("rij,rj->ri", b1, y[t - 1]) + np.einsum("rij,rj->ri", b2, y[t - 2]) + e[t]
-    return [y[200:, r] for r in range(count)], 2.0 * NOISE * z
+    """``count`` records of the fleet (:func:`fleet_draws`, simulated at once): the records and their log innovation
+    variances ``2 NOISE z``, shape (count, 3)."""
+    draws, log_var = fleet_draws(rng, count, n)
+    y = simulate(*draws)
+    return [y[:, r] for r in range(count)], log_var
 
 
-def pivot_rate(log_var: np.ndarray, alpha: float) -> np.ndarray:
-    """The control variate of the F rows: the decision's rate on a new record of the exact Student t pivot of the
-    fitting records' true log innovation variances ``log_var`` (records x channels, or a stack of such fleets: one
-    rate per fleet), each channel at its Sidak share
-    -- the rate of a threshold ``mean + t_{J-1} s sqrt(1 + 1/J)`` on the new record's log variance, ``N(0, (2
-    NOISE)^2)``. Its expectation over fleets is exactly ``alpha``; it moves with the F test's rate from fleet to
-    fleet (both are high when the fitting records happen to share a noise level), so subtracting it removes most of
-    the between-fleet spread of the F rows."""
-    j = log_var.shape[-2]
-    pf = 1.0 - (1.0 - alpha) ** (1.0 / log_var.shape[-1])
-    q = stats.t.isf(pf, j - 1) * np.sqrt(1.0 + 1.0 / j)
-    tail = stats.norm.sf((log_var.mean(axis=-2) + q * log_var.std(axis=-2, ddof=1)) / (2.0 * NOISE))
-    return 1.0 - np.prod(1.0 - tail, axis=-1)
+def fleets_of(seed: int, records: int, first: int, count: int) -> list:
+    """Fleets ``first .. first + count - 1`` of the row ``records``: fleet ``f`` drawn from its own generator
+    ``[seed, records, f]`` (``records + 1`` records, as :func:`fleet_records`), the fleets simulated together.
+    Returns per fleet the ``records`` fitting records and the one new record."""
+    draws = [fleet_draws(np.random.default_rng([seed, records, f]), records + 1) for f in range(first, first + count)]
+    b1, b2, e = (np.concatenate([d[0][i] for d in draws], axis=ax) for i, ax in ((0, 0), (1, 0), (2, 1)))
+    y = simulate(b1, b2, e)
+    k = records + 1
+    return [([y[:, f * k + r] for r in range(records)], y[:, f * k + records]) for f in range(count)]
 
 
 def make_test(family: str, alpha: float, effect: str = "predictive"):
@@ -164,26 +161,22 @@ def decision_rate(test, new_resid: list) -> float:
     return float(decision_flags(test, new_resid).mean())
 
 
-def fleet_rows(records: int, seed: int, fleets: int, new: int) -> list:
-    """Rows (records, fleet, alpha, test, flagged windows, windows, threshold of channel 0, :func:`pivot_rate` of the
-    fitting records) of ``fleets``
-    independent fleets of the row ``records`` (fleet ``f`` from the generator seeded ``[seed, records, f]``): a
-    baseline VAR(2) fitted on ``records`` records of the fleet, the tests calibrated on its held-out residuals, and
-    ``new`` new records of the same fleet judged."""
+def fleet_rows(records: int, seed: int, fleets: int, windows: int) -> list:
+    """Rows (records, fleet, alpha, test, flagged windows, windows, threshold of channel 0) of ``fleets`` independent
+    fleets of the row ``records`` (:func:`fleets_of`): a baseline VAR(2) fitted on the ``records`` fitting records
+    of the fleet, the tests calibrated on its held-out residuals, and the first ``windows`` disjoint windows of the
+    fleet's one new record judged."""
     rows = []
-    for f in range(fleets):
-        rng = np.random.default_rng([seed, records, f])
-        (fit, log_var), (fresh, _) = fleet_records(rng, records), fleet_records(rng, new)
-        spec = tsfdi.VAR(fit, 2)
-        base = spec.fit()
-        held = spec.held_out_residuals()
-        resid = [np.asarray(base.residuals(x)) for x in fresh]
-        for a in ALPHAS:
-            for fam in ("F", "LB"):
-                test = make_test(fam, a).calibrate(held, window=WINDOW)
-                flags = decision_flags(test, resid)
-                rows.append((records, f, a, fam, int(flags.sum()), flags.size, float(test.threshold_[0]),
-                             float(pivot_rate(log_var, a))))
+    for first in range(0, fleets, CHUNK):
+        for i, (fit, new) in enumerate(fleets_of(seed, records, first, min(CHUNK, fleets - first))):
+            spec = tsfdi.VAR(fit, 2)
+            held = spec.held_out_residuals()
+            resid = [np.asarray(spec.fit().residuals(new[:windows * (WINDOW - 2) + 2]))]
+            for a in ALPHAS:
+                for fam in ("F", "LB"):
+                    test = make_test(fam, a).calibrate(held, window=WINDOW)
+                    flags = decision_flags(test, resid)
+                    rows.append((records, first + i, a, fam, int(flags.sum()), flags.size, float(test.threshold_[0])))
     return rows
 
 
@@ -193,16 +186,20 @@ def band(n: int, alpha: float) -> tuple:
     return lo / n, hi / n
 
 
-def fleet_table(seed: int, fleets: int = FLEETS, new: int = NEW) -> pd.DataFrame:
-    """Part 1: per row (fitting records, alpha, test) the pooled rate of the decision on the new records' windows of
-    all the row's fleets, the two-sided 99.9 % binomial band of alpha for that many windows, the fleet-clustered
-    99.9 % interval of the pooled rate (t over the fleets' rates: every fleet holds as many windows), the ratio of
-    the clustered to the binomial standard error, for F the control-variate rate (the rate less the excess of
-    :func:`pivot_rate` over alpha, regressed over the fleets) with its 99.9 % fleet interval, and the median
-    calibrated threshold of channel y0 (and its p10-p90 over the fleets) by number of fitting records."""
+def fleet_table(seed: int, fleets: int = FLEETS, windows: int = WINDOWS) -> pd.DataFrame:
+    """Part 1: per row (fitting records, alpha, test) the pooled rate of the decision on the judged windows of all
+    the row's fleets (``windows`` of each fleet's one new record), the two-sided 99.9 % binomial band of alpha for
+    that many windows, the fleet-clustered 99.9 % interval of the pooled rate (t over the fleets' rates: every fleet
+    holds as many windows), the ratio of the clustered to the binomial standard error at the pooled rate (its design
+    effect: 1 for independent windows), and the median calibrated threshold of channel y0 (and its p10-p90 over the
+    fleets) by number of fitting records; prints them with the cost per fleet."""
     t0 = time.perf_counter()
-    df = pd.DataFrame([r for j in RECORDS for r in fleet_rows(j, seed, fleets, new)],
-                      columns=["records", "fleet", "alpha", "test", "flagged", "windows", "threshold", "pivot"])
+    rows, cost = [], {}
+    for j in RECORDS:
+        t1 = time.perf_counter()
+        rows += fleet_rows(j, seed, fleets, windows)
+        cost[j] = (time.perf_counter() - t1) / fleets
+    df = pd.DataFrame(rows, columns=["records", "fleet", "alpha", "test", "flagged", "windows", "threshold"])
     q = stats.t.isf(5e-4, fleets - 1)
     out = []
     for (fam, a, j), g in df.groupby(["test", "alpha", "records"], sort=False):
@@ -210,23 +207,17 @@ def fleet_table(seed: int, fleets: int = FLEETS, new: int = NEW) -> pd.DataFrame
         rate = g.flagged.to_numpy() / g.windows.to_numpy()
         lo, hi = band(n, a)
         se = rate.std(ddof=1) / np.sqrt(fleets)
-        cv = "-"
-        if fam == "F":           # the rate less the control variate's excess over its exact expectation alpha
-            c = g["pivot"].to_numpy()
-            adj = rate - np.cov(rate, c)[0, 1] / c.var(ddof=1) * (c - a)
-            h = q * adj.std(ddof=1) / np.sqrt(fleets)
-            cv = f"{100 * adj.mean():.3g} ({100 * max(adj.mean() - h, 0):.3g}-{100 * (adj.mean() + h):.3g})"
         out.append({"test": fam, "alpha": a, "records": j, "flagged": f"{x}/{n}", "rate %": 100 * x / n,
                     "band %": f"{100 * lo:.3g}-{100 * hi:.3g}",
                     "in band": "yes" if lo <= x / n <= hi else ("ABOVE" if x / n > hi else "below"),
                     "fleet 99.9 % CI %": f"{100 * max(x / n - q * se, 0):.3g}-{100 * (x / n + q * se):.3g}",
-                    "SE fleets/binomial": se / np.sqrt(a * (1 - a) / n),
-                    "control-variate rate % (99.9 % CI)": cv,
+                    "SE fleets/binomial": se / np.sqrt(x / n * (1 - x / n) / n) if x else np.nan,
                     "threshold y0": g.threshold.median(),
                     "y0 p10-p90": f"{g.threshold.quantile(0.1):.3g}-{g.threshold.quantile(0.9):.3g}"})
-    print(f"1. simulated fleet (evaluation seed {seed}): per row {fleets} independent fleets, {new} new records x "
-          f"{(N - 2) // (WINDOW - 2)} disjoint windows each, Sidak over 3 channels, predictive calibration "
-          f"({time.perf_counter() - t0:.0f} s)")
+    print(f"1. simulated fleet (evaluation seed {seed}): per row {fleets} independent fleets, each fitted on its "
+          f"records, calibrated, and judged on {windows} disjoint window(s) of {WINDOW - 2} residuals of one new "
+          f"record; Sidak over 3 channels, predictive calibration ({time.perf_counter() - t0:.0f} s; per fleet "
+          + ", ".join(f"{1e3 * c:.0f} ms with {j} records" for j, c in cost.items()) + ")")
     tab = pd.DataFrame(out).sort_values(["test", "alpha", "records"], ascending=[True, False, True])
     print(tab.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     return tab
@@ -422,7 +413,9 @@ def hexacopter_rows() -> None:
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fleets", type=int, default=FLEETS, help="independent fleets per row of part 1 (0: skip it)")
-    p.add_argument("--new", type=int, default=NEW, help="new records judged per fleet")
+    p.add_argument("--windows", type=int, default=WINDOWS,
+                   help="disjoint windows judged per fleet, all of its one new record (1 to "
+                        f"{(N - 2) // (WINDOW - 2)})")
     p.add_argument("--seed", type=int, default=None,
                    help="evaluation seed of part 1, to reproduce a run (default: a fresh one, printed)")
     p.add_argument("--data", default=None, help="CrazyPAD folder (default ../shared/data/crazypad)")
@@ -431,9 +424,10 @@ def main(argv=None) -> None:
     args = p.parse_args(argv)
     t0 = time.perf_counter()
     if args.fleets:
-        if args.fleets < 2 or args.new < 1:
-            p.error("--fleets needs at least 2 fleets and --new at least 1 record")
-        fleet_table(evaluation_seed() if args.seed is None else args.seed, args.fleets, args.new)
+        if args.fleets < 2 or not 1 <= args.windows <= (N - 2) // (WINDOW - 2):
+            p.error(f"--fleets needs at least 2 fleets and --windows 1 to {(N - 2) // (WINDOW - 2)} windows (a new "
+                    f"record holds {(N - 2) // (WINDOW - 2)} disjoint windows of {WINDOW - 2} residuals)")
+        fleet_table(evaluation_seed() if args.seed is None else args.seed, args.fleets, args.windows)
     if not args.no_crazypad:
         crazypad_rows(args.data)
     if not args.no_hexacopter:

@@ -243,36 +243,6 @@ def test_record_pvalue_refuses_what_it_cannot_judge():
         ScaledChi2Threshold(0.01).record_pvalue(stat)
 
 
-def test_fleet_benchmark_rows_draw_their_own_fleets(capsys, monkeypatch):
-    """The benchmark's rows (5, 10, 20 fitting records) draw independent fleets, so one unlucky draw cannot move
-    every row (they shared their fleets, and the seed's first fleets made all three F rows low), and its table
-    pools the new windows of every fleet of a row."""
-    drawn, simulate = [], FC.fleet_records
-    monkeypatch.setattr(FC, "fleet_records", lambda rng, count: drawn.append(simulate(rng, count)) or drawn[-1])
-    rows = FC.fleet_rows(5, 11, 1, 1) + FC.fleet_rows(10, 11, 1, 1)
-    assert {r[0] for r in rows} == {5, 10} and all(r[5] == (FC.N - 2) // (FC.WINDOW - 2) for r in rows)
-    fit5, fit10 = drawn[0][0], drawn[2][0]
-    assert len(fit5) == 5 and len(fit10) == 10
-    assert not any(np.allclose(x, y) for x in fit5 for y in fit10)        # no record shared between the rows
-    monkeypatch.undo()
-    tab = FC.fleet_table(11, fleets=2, new=1)
-    assert len(tab) == 12 and set(tab.flagged.str.split("/").str[1].astype(int)) == {20}
-    assert "evaluation seed 11" in capsys.readouterr().out
-
-
-
-@pytest.mark.parametrize("records", [5, 20])
-@pytest.mark.parametrize("alpha", [1e-2, 1e-3])
-def test_control_variate_of_the_f_rows_has_expectation_alpha(records, alpha):
-    """The benchmark's control variate (the exact t pivot on the fitting records' true log noise variances, Sidak
-    over the 3 channels) must have expectation alpha over fleets, or the control-variate rate it prints is biased
-    (a wrong share or spread moves it by a factor 3 or more)."""
-    rng = np.random.default_rng(4100 + records)
-    c = FC.pivot_rate(2 * FC.NOISE * rng.standard_normal((100_000, records, 3)), alpha)
-    assert c.shape == (100_000,)
-    assert abs(c.mean() / alpha - 1) < 4 * c.std() / alpha / np.sqrt(c.size), c.mean() / alpha
-
-
 def test_ljung_box_with_five_records_holds_its_rate_on_white_noise():
     """The Ljung-Box test (20 lags, one channel, alpha 0.01) calibrated with the predictive record law on 5 records of
     plain white noise (10 disjoint windows of 198 samples each; no record effect at all), 300 calibrations: the mean
