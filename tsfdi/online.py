@@ -1065,9 +1065,15 @@ class OnlineDetector:
         ``false_alarms_per_hour`` -- a predictive mean, not a bound, so over many logs the count falls on both
         sides of it. ``calibration_.rate_band`` gives the 5 %, 50 % and 95 % quantiles of :math:`\rho(x, r)`
         over :math:`r` (how far a single new log's rate may lie from the stated mean; right-skewed, the median
-        below it). The rate is per flight hour, arming phases included, as for the other statistics. Monte Carlo
-        (``tests/test_online_sprt.py``, two ARX pairs at 50 Hz): calibrated 100 times on three 30 s logs for 60
-        per hour, 1,000 new 30 s logs raised 63.4 per hour (two-sided 99 % binomial band 53-67).
+        below it). The rate is per flight hour, arming phases included, as for the other statistics. What it
+        counts are the cycles of the walk restarted at its lower bound only (as calibrate runs it) that reach the
+        threshold; a log's first alarm is the first of them. A detector that does not freeze restarts its walk at 0
+        after every alarm and may alarm again within the same burst of large errors, before the walk would have
+        returned to its lower bound: :meth:`OnlineDetection.false_alarms_per_hour` counts those alarms too, so its
+        episodes exceed the stated rate (by 1-7 % in the Monte Carlo of ``tests/test_online_sprt.py`` at 60 per
+        hour). That Monte Carlo (the defaults on two ARX pairs at 50 Hz): calibrated 100 times on three 30 s logs
+        for 60 per hour, 1,000 new 30 s logs had 62.6 restart cycles per hour reach the threshold (two-sided 99 %
+        binomial band 53-67) and raised 63.0 alarm episodes per hour without freezing.
 
         With the GLRT on, an alarm of either source is an alarm of the pair. Both sources are set at the level
         of one common rate of their own, :math:`\rho_s \in [\rho/2, \rho]` (at :math:`\rho/2` the union bound
@@ -1079,13 +1085,13 @@ class OnlineDetector:
         :math:`K < 5`, :math:`\rho_s = \rho/2` and each source is extrapolated by its own tail fit (which needs
         :math:`K/2 \ge 1`).
 
-        The rate is that of the detector without freezing, the statistic's distribution in normal operation.
-        With ``freeze_on_alarm=True`` (the default) the first alarm of a healthy run comes at that rate
-        (nothing is frozen before it): a run of :math:`T` hours alarms with probability about
-        :math:`1 - e^{-\rho T}`. The later episodes of that pair are not: its model stays frozen where a false
-        alarm caught it, often with its parameters off, and may keep alarming (with ``"mean"`` often many
-        times), as after a fault. With one threshold for all pairs, pairs whose statistics differ in scale
-        (``"mean"`` in the units of each ``y``) share the rate unevenly.
+        The rate is that of the detector without freezing, the statistic's distribution in normal operation
+        (for ``statistic="sprt"``: of its restart cycles, above). With ``freeze_on_alarm=True`` (the default) the
+        first alarm of a healthy run comes at that rate (nothing is frozen before it): a run of :math:`T` hours
+        alarms with probability about :math:`1 - e^{-\rho T}`. The later episodes of that pair are not: its model
+        stays frozen where a false alarm caught it, often with its parameters off, and may keep alarming (with
+        ``"mean"`` often many times), as after a fault. With one threshold for all pairs, pairs whose statistics
+        differ in scale (``"mean"`` in the units of each ``y``) share the rate unevenly.
 
         References
         ----------
