@@ -598,19 +598,28 @@ def test_monitor_says_nothing_when_coverage_cannot_be_checked(models, fleet_base
     assert table["covered"].isna().all() and table["outside"].tolist() == [""]
 
 
-def test_functionally_pooled_models_are_refused_naming_at_k():
-    """An FP model has no single parameter set: Monitor asks for its point model ``.at(k)`` instead of failing with an
-    AttributeError inside the windowed engine."""
+def test_functionally_pooled_models_are_filtered_at_the_streams_k():
+    """An FP model has no single parameter set: a Monitor of FP models (alone or beside point models) asks for the
+    stream's operating point, k={name: value}, instead of failing with an AttributeError inside the windowed engine,
+    and with it is the Monitor of the point models .at(k)."""
     rng = np.random.default_rng(5)
     recs = [record("healthy", 1500, rng) * (1 + 0.2 * k) for k in (0.0, 0.5, 1.0)]
     fp = tsfdi.models.FPVAR(recs, [0.0, 0.5, 1.0], 2, degree=1).fit()
-    with pytest.raises(TypeError, match=r"^baseline is a functionally pooled model .*\.at\(k\)"):
-        tsfdi.Monitor(fp, window=200, fs=FS, test=FTest(alpha=0.01))
+    (name,) = fp.model.k_names
+    monitor = tsfdi.Monitor(fp, window=200, fs=FS, test=FTest(alpha=0.01))
+    with pytest.raises(TypeError, match=rf"^k is required: the monitor's models are functionally pooled over "
+                                        rf"\['{name}'\]"):
+        monitor.run(recs[1])
     point = VAR(recs[0], 2).fit()
-    with pytest.raises(TypeError, match=r"^models\['f'\] is a functionally pooled model"):
-        tsfdi.Monitor(point, {"f": fp}, window=200, fs=FS, test=FTest(alpha=0.01))
-    monitor = tsfdi.Monitor(fp.at(0.5), window=200, fs=FS, test=FTest(alpha=0.01))
-    assert monitor.run(recs[1]).windows.shape[0] > 0
+    mixed = tsfdi.Monitor(point, {"f": fp}, window=200, fs=FS, test=FTest(alpha=0.01))
+    with pytest.raises(TypeError, match=r"^k is required"):
+        mixed.run(recs[1])
+    at = tsfdi.Monitor(fp.at(0.5), window=200, fs=FS, test=FTest(alpha=0.01)).run(recs[1])
+    got = monitor.run(recs[1], k={name: 0.5})
+    assert got.windows.shape[0] > 0
+    pd.testing.assert_frame_equal(got.windows, at.windows)
+    ref = tsfdi.Monitor(point, {"f": fp.at(0.5)}, window=200, fs=FS, test=FTest(alpha=0.01)).run(recs[1])
+    pd.testing.assert_frame_equal(mixed.run(recs[1], k={name: 0.5}).windows, ref.windows)
 
 
 def _arx_record(gain, n, rng, failure=None):

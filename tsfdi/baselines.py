@@ -24,7 +24,7 @@ from tsfdi.coverage import MIN_RECORDS, Coverage, coverage
 from tsfdi.detection.base import ResidualTest
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
 from tsfdi.models import FPResults, select_fp_order
-from tsfdi.monitoring import Monitor
+from tsfdi.monitoring import Monitor, operating_names, operating_points
 from tsfdi.selection import select_order
 from tsfdi.windows import ResidualWindows, status
 
@@ -110,7 +110,7 @@ class Records:
         raises a ``ValueError`` naming ``k`` and the coordinate. A sequence of signals carries no coordinates: give
         such records as a ``(record, time, channel)`` DataArray with the coordinates."""
         check_finite = boolean(check_finite, "check_finite")
-        k_names = _operating_names(k)
+        k_names = operating_names(k)
         if isinstance(data, Records):
             if k is not None and k_names != data.k_names:
                 raise ValueError(f"k names the coordinates {list(k_names)} but {name} is Records read with "
@@ -139,7 +139,7 @@ class Records:
             fs_ = _time_rate(_coordinate(data, "time"), name) if fs is None else float_like(fs, "fs", minimum=0.0,
                                                                                             strict_min=True)
             return cls([], st, tb, ft, ids, ~lost, tuple(str(c) for c in _coordinate(data, third)), fs_,
-                       source=data, length=int(data.sizes["time"]), k=_operating_coords(data, k_names, ids, name),
+                       source=data, length=int(data.sizes["time"]), k=operating_points(data, k_names, ids, name),
                        k_names=k_names)
         if isinstance(data, xr.Dataset):
             from tsfdi.datasets.hexacopter import hexacopter_signals
@@ -162,7 +162,7 @@ class Records:
                 valid &= finite
             vals = list(arr)
             chans = tuple(str(c) for c in _coordinate(da, da.dims[2]))
-            return cls(vals, st, tb, ft, ids, valid, chans, fs_, k=_operating_coords(da, k_names, ids, name),
+            return cls(vals, st, tb, ft, ids, valid, chans, fs_, k=operating_points(da, k_names, ids, name),
                        k_names=k_names)
         if isinstance(data, (str, bytes)) or not isinstance(data, Sequence) or len(data) == 0:
             raise TypeError(f"{name} must be a hexacopter xarray.Dataset, a (record, time, channel) DataArray or a "
@@ -288,45 +288,6 @@ def _labels(data: Any, states: Any, failure_times: Any, turbulence: Any, name: s
     return (st.astype(str), coord("turbulence", turbulence, "").astype(str),
             _failure_times(coord("failure_time", failure_times, np.nan), n), ids,
             coord("lost_control", None, False).astype(bool))
-
-
-def _operating_names(k: Any, name: str = "k") -> tuple:
-    """The record coordinates ``k`` names (a name or a sequence of distinct names) as a tuple; ``()`` for None."""
-    if k is None:
-        return ()
-    names = [k] if isinstance(k, str) else k
-    if not isinstance(names, Iterable) or isinstance(names, (bytes, Mapping)):
-        raise TypeError(f"{name} must name record coordinates (a name or a sequence of names), got {k!r}")
-    names = list(names)
-    if not names or not all(isinstance(n, str) and n for n in names):
-        raise TypeError(f"{name} must name record coordinates (non-empty strings), got {k!r}")
-    if len(set(names)) < len(names):
-        raise ValueError(f"{name} names a coordinate twice: {names}")
-    return tuple(names)
-
-
-def _operating_coords(data: Any, names: tuple, ids: np.ndarray, name: str) -> np.ndarray | None:
-    """The operating point of every record, ``(records, len(names))`` float64, from the record coordinates
-    ``names`` of ``data`` (None without names); missing, non-numeric or non-finite coordinates raise naming ``k``."""
-    if not names:
-        return None
-    cols = []
-    for c in names:
-        variable = data.coords.variables.get(c)
-        if variable is None or variable.dims != ("record",):
-            have = [v for v, var in data.coords.variables.items() if var.dims == ("record",) and v != "record"]
-            raise ValueError(f"k: {name} has no record coordinate {c!r} (its record coordinates: {have})")
-        values = np.asarray(variable.values)
-        if values.dtype.kind not in "iuf":
-            raise TypeError(f"k: the coordinate {c!r} of {name} must hold numbers (operating parameters), got dtype "
-                            f"{values.dtype}")
-        values = values.astype(np.float64)
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            raise ValueError(f"k: the coordinate {c!r} of {name} is not finite for record {ids[bad[0]]} "
-                             f"({values[bad[0]]}); every record needs its operating point")
-        cols.append(values)
-    return np.column_stack(cols)
 
 
 def _coordinate(da: Any, dim: str) -> np.ndarray:
@@ -513,9 +474,11 @@ class Baselines:
 
         ``test`` (default ``LjungBox(lags=20, alpha=1e-3)``) detects with the healthy model and identifies with the
         fault models; with ``threshold="empirical"`` each model gets its own copy calibrated by
-        :meth:`calibrated_tests`. ``k``: the operating point of the flights it will watch (parameter name -> value),
-        required for functionally pooled baselines (``fit_baselines(..., k=...)``): their models at it
-        (:meth:`state_models`), calibrated on the FP null.
+        :meth:`calibrated_tests`. ``k``: the operating point of the flights it will watch (parameter name -> value):
+        functionally pooled baselines (``fit_baselines(..., k=...)``) give their models at it (:meth:`state_models`),
+        calibrated on the FP null. Without ``k`` the monitor of functionally pooled baselines holds the FP models and
+        filters every flight at its own logged operating point (``run(signal, k={...})``, ``screen(records,
+        k="speed")``).
         """
         test = _check_test(test)
         chans = self.model_channels(model)

@@ -14,7 +14,7 @@ import copy
 import dataclasses
 import datetime
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -169,11 +169,15 @@ class Monitor:
     baseline : fitted results
         Healthy model :math:`M_0`: AR or VAR results, or ARX results (an input-output model, e.g. an FP-ARX's
         point ``.at(k)``, with the controller's commands as inputs: then every block of the stream comes with its
-        input, ``run(signal, u=...)`` / ``update(samples, u=...)``).
+        input, ``run(signal, u=...)`` / ``update(samples, u=...)``); or functionally pooled results
+        (:class:`~tsfdi.FPResults`, a global model over operating points ``k``): then every stream comes with its
+        logged operating point, ``run(signal, k={"speed": 4.2})`` / ``update(samples, k=...)`` /
+        ``screen(records, k="speed")``, and is filtered by every FP model at it, ``res.at(k)`` (the monitor of the
+        point models ``.at(k)``, whose tests calibrated on the FP null hold at every ``k``).
     models : mapping or None
         Name -> fitted fault models :math:`M_1, M_2, \dots`, with the baseline's channels (and, for an ARX
-        baseline, ARX models with its inputs: the kinds do not mix); ``None`` (or an empty mapping) for detection
-        only.
+        baseline, ARX models with its inputs: the kinds do not mix; functionally pooled models beside point models,
+        all of them over the same operating parameters); ``None`` (or an empty mapping) for detection only.
     window : int or time span
         Window length, as in pandas ``rolling``: an int counts samples, a time span (``"20s"``,
         ``pandas.Timedelta``) is converted with ``fs``.
@@ -211,6 +215,8 @@ class Monitor:
 
     Attributes
     ----------
+    k_names : tuple of str
+        The operating parameters of the functionally pooled models (empty for point models).
     window, step, steady_window : int or None
         The lengths in samples; ``None`` for a time span while ``fs`` is not known yet (before the first samples).
     steady_thresholds : ndarray, shape (k,), or None
@@ -274,14 +280,24 @@ class Monitor:
                             f"{type(models).__name__}")
         if not hasattr(baseline, "residuals"):
             raise TypeError(f"baseline must be fitted results (AR, VAR or ARX), got {type(baseline).__name__}")
+        self.baseline = baseline
+        self.models = dict(models)
+        # functionally pooled models: every one over the same operating parameters, filtered at the stream's k
+        pooled = {n: m for n, m in {"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}.items()
+                  if isinstance(m, FPResults)}
+        params = {n: list(m.model.k_names) for n, m in pooled.items()}
+        first = next(iter(params.items()), (None, []))
+        other = next((n for n, p in params.items() if set(p) != set(first[1])), None)
+        if other is not None:
+            raise ValueError(f"{first[0]} is functionally pooled over {first[1]} but {other} over {params[other]}: "
+                             "the models of a monitor are filtered at one operating point; fit them over the same "
+                             "operating parameters")
+        self.k_names = tuple(first[1])
+        self._set_point(None)                 # (the checks read each FP model at its first fitting point)
+        baseline, models = self._base, self._faults
         if len({isinstance(m, InputOutputResults) for m in (baseline, *models.values())}) > 1:
             raise TypeError("baseline and models mix input-output (ARX, VARX) models with AR / VAR models: their "
                             "residuals are of the output given u, the others of the output alone; use one kind")
-        pooled = [n for n, m in {"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}.items()
-                  if isinstance(m, FPResults)]
-        if pooled:
-            raise TypeError(f"{pooled[0]} is a functionally pooled model (FPResults): give its point model at the "
-                            "record's operating point, .at(k) (k logged, or .estimate_k(signal).k_hat)")
         engine = ResidualWindows({"baseline": baseline, **{f"models[{k!r}]": v for k, v in models.items()}}
                                  if isinstance(baseline, InputOutputResults) else {"healthy": baseline})
         self.nchan = engine.nchan
@@ -296,8 +312,6 @@ class Monitor:
             nf = ResidualWindows(models).nchan
             if nf != self.nchan:
                 raise ValueError(f"models have {nf} channel(s) but baseline has {self.nchan}")
-        self.baseline = baseline
-        self.models = dict(models)
         data = getattr(getattr(baseline, "model", None), "data", None)     # the channels it was fitted on
         self._model_named = isinstance(data, Signal) and data.named
         self._model_channels = list(data.channels) if isinstance(data, Signal) else [
@@ -325,6 +339,7 @@ class Monitor:
             self._sequential_tests(test, detection_test)
         else:
             self._window_tests(test, detection_test)
+        self._held_out: Any = None              # (a functionally pooled baseline's, computed when first needed)
         self._steady_given = steady_thresholds is not None
         self._steady_cache: dict = {}           # steady_window in samples -> the thresholds of the fault models
         if steady_thresholds is None:
@@ -374,8 +389,65 @@ class Monitor:
                             "alternative 'variance' or 'mean' and restart=True (the monitoring form), e.g. "
                             f"SPRT('variance', ratio=2.0, restart=True); got {detection_test!r}")
         self.test, self.detection_test = None, detection_test
-        sigma = self.baseline.sigma if hasattr(self.baseline, "sigma") else self.baseline.sigma2
-        self._sigma = np.asarray(sigma, dtype=np.float64).reshape(self.nchan, self.nchan)
+
+    def _set_point(self, k: dict | None) -> None:
+        """Filter the stream at operating point ``k`` (name -> value): the models the engine runs, ``_base`` and
+        ``_faults``, are the functionally pooled ones ``.at(k)`` (``None``: each at its first fitting point, for
+        the checks of the constructor), the point models as given."""
+        def at(res):
+            if not isinstance(res, FPResults):
+                return res
+            return res.at(res.model.k[0] if k is None else [k[n] for n in res.model.k_names])
+
+        self._k = k
+        self._base, self._faults = at(self.baseline), {n: at(m) for n, m in self.models.items()}
+        if self.sequential:
+            sigma = self._base.sigma if hasattr(self._base, "sigma") else self._base.sigma2
+            self._sigma = np.atleast_2d(np.asarray(sigma, dtype=np.float64))
+
+    def _stream_point(self, k: Any) -> None:
+        """Check the operating point ``k`` given with a block of the stream (:meth:`update`) and, with the first
+        block of a stream, filter it there."""
+        if not self.k_names:
+            if k is not None:
+                raise TypeError(f"k is the operating point of functionally pooled models (FPResults), but the "
+                                f"monitor's models are point models: leave k out (got k={k!r})")
+            return
+        if k is None:
+            if self._k is None:
+                raise TypeError(f"k is required: the monitor's models are functionally pooled over "
+                                f"{list(self.k_names)}; give the stream's operating point, k={{"
+                                f"{', '.join(repr(n) + ': ...' for n in self.k_names)}}}")
+            return
+        if not isinstance(k, Mapping):
+            raise TypeError(f"k must be a mapping operating parameter -> value (e.g. {{{self.k_names[0]!r}: 4.2}}), "
+                            f"got {k!r}")
+        missing = [n for n in self.k_names if n not in k]
+        extra = [n for n in k if n not in self.k_names]
+        if missing or extra:
+            raise ValueError(f"k must give exactly the models' operating parameters {list(self.k_names)}, got "
+                             f"{list(k)}" + (f" (missing {missing})" if missing else f" ({extra} not among them)"))
+        point = {n: float_like(k[n], f"k[{n!r}]") for n in self.k_names}
+        if self._k is None:
+            self._set_point(point)
+        elif point != self._k:
+            raise ValueError(f"k: the stream is monitored at {self._k}, got {point}: a stream has one operating point; "
+                             "reset() (or run) to monitor another")
+
+    def _fp_held_out(self) -> Any:
+        """The held-out residuals of a functionally pooled baseline (each fitting record at its own ``k`` through
+        the FP model fitted without it): the null of the coverage check at every ``k``, computed once per monitor;
+        ``None`` for a point baseline (the check keeps its own) or when they cannot be computed (then the check,
+        if it applies, says why it did not run)."""
+        if not isinstance(self.baseline, FPResults):
+            return None
+        if self._held_out is None:
+            try:        # (as float arrays: the check reads them for every record)
+                self._held_out = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
+                                  for e in self.baseline.model.held_out_residuals()]
+            except ValueError:
+                self._held_out = ()
+        return self._held_out or None
 
     def __repr__(self) -> str:
         what = f"models={list(self.models)}" if self.models else "models=None (detection only)"
@@ -415,7 +487,7 @@ class Monitor:
         the records the fault models were fitted on (steady post-failure records; records shorter than ``V`` give no
         window, a model without a record that long is refused)."""
         top = np.zeros(self.nchan)
-        for name, res in self.models.items():
+        for name, res in self._faults.items():
             recs = list(getattr(getattr(res, "model", None), "records", None) or ())
             lengths = []
             for i, rec in enumerate(recs):
@@ -437,8 +509,10 @@ class Monitor:
         return top
 
     def reset(self) -> None:
-        """Forget the stream: back to the healthy phase at time 0 (with ``fs`` as given to the constructor)."""
+        """Forget the stream: back to the healthy phase at time 0 (with ``fs`` as given to the constructor; with
+        functionally pooled models, the next stream gives its operating point ``k``)."""
         self._set_fs(self._fs)
+        self._k = None
         self._channels: list | None = None     # channel names of the stream (its first block), in model order
         self._named = False
         self._buffer = np.empty((0, self.nchan))
@@ -534,10 +608,10 @@ class Monitor:
             return []
         record = self._record(body)
         ubody = None if ux is None else self._input(ux[hist:])
-        det = ResidualWindows({"healthy": self.baseline}).fit(record, u=ubody).statistics(self.detection_test,
+        det = ResidualWindows({"healthy": self._base}).fit(record, u=ubody).statistics(self.detection_test,
                                                                                            window=W, step=S)
         if self.models:
-            ident = ResidualWindows(self.models).fit(record, u=ubody).statistics(self.test, window=W, step=S)
+            ident = ResidualWindows(self._faults).fit(record, u=ubody).statistics(self.test, window=W, step=S)
             names, rej, labels, state = ident.models, ident.reject.T, ident.labels(self.rule), ident.status
         d_stat, d_thr = det.statistic[:, 0], det.threshold[:, 0]
         d_pv, d_rej = det.pvalue[:, 0], det.reject[:, 0]
@@ -589,7 +663,7 @@ class Monitor:
         peak, alarm, cycle = np.full(n, -np.inf), np.zeros(n, dtype=bool), np.zeros(n, dtype=np.int64)
         a = max(first, self._order)                            # first new sample with a healthy residual
         if end > a:
-            e = self._residuals(self.baseline, a - self._order)
+            e = self._residuals(self._base, a - self._order)
             z = self.detection_test.loglik_ratio(e, self._sigma)
             test = self.detection_test
             p, al, cy, _, self._s, start = renewal_walk(z, test.lower, test.upper, state=self._s,
@@ -627,7 +701,7 @@ class Monitor:
             return
         pm = self._fault_order
         a, b = lo - pm - self._offset, upto - self._offset
-        ll = ResidualWindows(self.models).fit(self._record(self._buffer[a:b]),
+        ll = ResidualWindows(self._faults).fit(self._record(self._buffer[a:b]),
                                               u=self._input(self._ubuffer[a:b] if self.inputs else None)
                                               ).loglik(common=pm)
         res = msprt(ll, alpha=self.sprt_alpha, restart=True, scale=self.sprt_scale, models=list(self.models),
@@ -663,7 +737,7 @@ class Monitor:
         self._rows.append(row)
         self._row_peak, self._row_alarm, self._row_ident = -np.inf, False, ()
 
-    def update(self, samples: Any, *, u: Any = None) -> list:
+    def update(self, samples: Any, *, u: Any = None, k: Mapping | None = None) -> list:
         """Feed the next samples of a stream; returns the events of the windows they complete.
 
         Parameters
@@ -673,6 +747,11 @@ class Monitor:
         u : array_like, Series, DataFrame or DataArray, shape (n,) or (n, n_inputs)
             Their input, for ARX models only (required for them, refused otherwise): as many samples, the same
             index when both carry one, the channels matched to the models' inputs by name when both are named.
+        k : mapping, optional
+            The stream's operating point, parameter name -> value (``{"speed": 4.2}``), for functionally pooled
+            models only (required with the first block of a stream, refused for point models): every model is
+            filtered at it, ``res.at(k)``. A stream has one operating point: later blocks may leave it out or repeat
+            it.
 
         Returns
         -------
@@ -683,10 +762,14 @@ class Monitor:
         ValueError
             Samples that are not a finite signal, a missing / extra channel (named) or another number of channels;
             a time span (``window``, ``step``, ``steady_window``; the defaults are time spans) without ``fs`` when
-            the first block carries no time index; ``u`` of another length, index or inputs.
+            the first block carries no time index; ``u`` of another length, index or inputs; ``k`` without one of
+            the models' operating parameters, with another, with a value that is not finite, or other than the
+            stream's.
         TypeError
-            ``u`` missing for ARX models or given for others.
+            ``u`` missing for ARX models or given for others; ``k`` missing for functionally pooled models, given
+            for point models, or not a mapping of numbers.
         """
+        self._stream_point(k)
         x, ux = self._values(samples, u)
         if self.sequential:
             return self._update_sequential(x, ux)
@@ -703,7 +786,7 @@ class Monitor:
         self._keep(max(self._offset, self._next - max(self.steady_window - W, 0)))
         return events
 
-    def run(self, signal: Any, *, u: Any = None) -> MonitorResult:
+    def run(self, signal: Any, *, u: Any = None, k: Mapping | None = None) -> MonitorResult:
         """Monitor a whole record from time 0 (resets the monitor first).
 
         Parameters
@@ -711,6 +794,9 @@ class Monitor:
         signal : array_like, DataFrame or DataArray, shape (nobs, k)
         u : array_like, Series, DataFrame or DataArray, optional
             The record's input, for ARX models only (as in :meth:`update`).
+        k : mapping, optional
+            The record's operating point, parameter name -> value, for functionally pooled models only (required
+            for them, as in :meth:`update`).
 
         Returns
         -------
@@ -731,19 +817,21 @@ class Monitor:
         ------
         ValueError
             As :meth:`update`; also for a ``window`` longer than the signal (no window to test).
+        TypeError
+            As :meth:`update`.
         """
-        res, unchecked = self._run(signal, u)
+        res, unchecked = self._run(signal, u, k)
         if unchecked:
             warnings.warn(f"Monitor.run: coverage not checked: {unchecked}", CoverageWarning, stacklevel=2)
         elif res.coverage is not None:
             warn_if_not_covered(res.coverage, "Monitor.run")
         return res
 
-    def _run(self, signal: Any, u: Any = None) -> tuple:
+    def _run(self, signal: Any, u: Any = None, k: Mapping | None = None) -> tuple:
         """:meth:`run` without its warnings: the result, and why the coverage could not be checked ("" if it could
         or need not be)."""
         self.reset()
-        self.update(signal, u=u)
+        self.update(signal, u=u, k=k)
         nobs = self._offset + self._buffer.shape[0]
         if self.sequential and nobs <= max(self._order, self._fault_order):
             raise ValueError(f"signal has {nobs} samples: the sequential rule needs more than the models' largest "
@@ -756,15 +844,15 @@ class Monitor:
         sig = as_signal(signal, "signal", allow_constant=True)
         resid = None
         if self.inputs:               # an ARX baseline's residuals need the input: given, named by its output
-            e = np.asarray(self.baseline.residuals(sig, u), dtype=np.float64).reshape(-1, self.nchan)
-            resid = pd.DataFrame(e, columns=[str(c) for c in self.baseline.model.data.channels])
+            e = np.asarray(self._base.residuals(sig, u), dtype=np.float64).reshape(-1, self.nchan)
+            resid = pd.DataFrame(e, columns=[str(c) for c in self._base.model.data.channels])
         try:
-            cov = check_coverage(self.detection_test, self.baseline, sig, resid=resid)
+            cov = check_coverage(self.detection_test, self._base, sig, resid=resid, held_out=self._fp_held_out())
         except ValueError as err:
             return res, str(err)
         return (res, "") if cov is None else (dataclasses.replace(res, coverage=cov), "")
 
-    def screen(self, records: Any, *, progress: bool = False) -> pd.DataFrame:
+    def screen(self, records: Any, *, k: Any = None, progress: bool = False) -> pd.DataFrame:
         """Run the monitor over every record of many (offline, each from time 0 as :meth:`run`): one row per record.
 
         Parameters
@@ -777,6 +865,14 @@ class Monitor:
             scheduler (threads, processes or a ``dask.distributed`` Client, :func:`tsfdi.fleet.map_records`) and only
             their rows come back, so the driver never holds the records; the table is the one of the same records in
             memory.
+        k : str or sequence of str, optional
+            For functionally pooled models (:class:`~tsfdi.FPResults`, e.g. ``Baselines.monitor()`` of
+            ``fit_baselines(..., k=...)``; required for them, refused for point models): the record coordinates
+            holding each record's operating point (``"speed"``), exactly the models' operating parameters. Every
+            record is monitored with the models at its own logged point, ``res.at(k_record)``, as
+            ``run(record, k={...})`` (the tests calibrated on the FP null hold at every point). The records must then
+            be xarray with those coordinates (numbers, finite for every record); on dask they are read on the
+            driver and travel with each chunk.
         progress : bool
             Show a tqdm progress bar over the records.
 
@@ -802,9 +898,12 @@ class Monitor:
         ------
         TypeError
             ``records`` of another kind, or ARX models (the records come without their input: :meth:`run` each
-            record with ``u=``).
+            record with ``u=``); ``k`` missing for functionally pooled models, given for point models, not names, or
+            naming a coordinate that does not hold numbers.
         ValueError
-            A record that :meth:`run` refuses (NaN after a loss of control, too short, other channels), named.
+            A record that :meth:`run` refuses (NaN after a loss of control, too short, other channels), named;
+            ``k`` naming a coordinate the records lack, other than the models' operating parameters, a coordinate
+            not finite for some record (named), or given with a sequence of signals (no coordinates).
 
         Notes
         -----
@@ -815,22 +914,53 @@ class Monitor:
         if self.inputs:
             raise TypeError("records: screen runs the records without an input, but the models are ARX (input-output) "
                             "models; run each record with its input, Monitor.run(signal, u=...)")
+        import xarray as xr
+
         progress = boolean(progress, "progress")
+        if isinstance(records, xr.Dataset):     # (lazily on dask: the chunks will hold the signal variables only)
+            from tsfdi.datasets.hexacopter import hexacopter_signals
+
+            records = hexacopter_signals(records)
+        operating = self._record_points(records, k)
         if is_chunked(records):
-            import xarray as xr
-
-            if isinstance(records, xr.Dataset):     # (lazily: the chunks will hold the signal variables only)
-                from tsfdi.datasets.hexacopter import hexacopter_signals
-
-                records = hexacopter_signals(records)
-            parts = map_records(_screen_rows, records, self, progress=progress, desc="tsfdi screen")
+            parts = map_records(_screen_rows, records, self, False, operating, progress=progress, desc="tsfdi screen")
             table = pd.concat(list(parts))
         else:
-            table = _screen_rows(records, slice(0, None), self, progress=progress)
+            table = _screen_rows(records, slice(0, None), self, progress, operating)
         # the check ran where the records are; its warnings are said here, on the driver
         warn_records_not_covered(table["outside"][table["outside"] != ""], "Monitor.screen",
                                  judged=int(table["covered"].notna().sum()), see="the 'outside' column")
         return table
+
+    def _record_points(self, records: Any, k: Any) -> tuple | None:
+        """``(names, points)``: the coordinates ``k`` names and every record's values of them (``(records, d)``),
+        checked against the models' operating parameters (:meth:`screen`); ``None`` for point models."""
+        import xarray as xr
+
+        names = operating_names(k)
+        if not self.k_names:
+            if names:
+                raise TypeError(f"k names operating parameters {list(names)}, but the monitor's models are point "
+                                "models (no FPResults): leave k out, or monitor with functionally pooled models")
+            return None
+        if not names:
+            raise TypeError(f"the monitor's models are functionally pooled over {list(self.k_names)}: give k= naming "
+                            "the record coordinate(s) of those operating parameters (each record is monitored at its "
+                            "own, res.at(k_record))")
+        if set(names) != set(self.k_names):
+            other = next(iter([c for c in names if c not in self.k_names] or
+                              [c for c in self.k_names if c not in names]))
+            raise ValueError(f"k names the record coordinates {list(names)}, but the monitor's models are functionally "
+                             f"pooled over {list(self.k_names)}: {other!r} is "
+                             f"{'not one of their operating parameters' if other in names else 'not named'}; name "
+                             "exactly their parameters")
+        if not isinstance(records, xr.DataArray):
+            raise ValueError(f"k names record coordinates {list(names)}, but records is a sequence of signals, which "
+                             "has none: give the records as a (record, time, channel) DataArray (or a hexacopter "
+                             "Dataset) with those coordinates, or run each with Monitor.run(record, k={...})")
+        n = records.sizes.get("record", 0)
+        ids = records["record"].values if "record" in records.coords else np.arange(n)
+        return names, operating_points(records, names, ids, "records")
 
     def result(self) -> MonitorResult:
         """Events and per-window table of everything fed so far."""
@@ -849,9 +979,51 @@ class Monitor:
                              steady_thresholds=self.steady_thresholds, identification_time=ident_t)
 
 
-def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = False) -> pd.DataFrame:
+def operating_names(k: Any, name: str = "k") -> tuple:
+    """The record coordinates ``k`` names (a name or a sequence of distinct names) as a tuple; ``()`` for None (the
+    ``k=`` of :meth:`Monitor.screen`, :func:`tsfdi.fit_baselines` and :func:`tsfdi.evaluate`)."""
+    if k is None:
+        return ()
+    names = [k] if isinstance(k, str) else k
+    if not isinstance(names, Iterable) or isinstance(names, (bytes, Mapping)):
+        raise TypeError(f"{name} must name record coordinates (a name or a sequence of names), got {k!r}")
+    names = list(names)
+    if not names or not all(isinstance(n, str) and n for n in names):
+        raise TypeError(f"{name} must name record coordinates (non-empty strings), got {k!r}")
+    if len(set(names)) < len(names):
+        raise ValueError(f"{name} names a coordinate twice: {names}")
+    return tuple(names)
+
+
+def operating_points(data: Any, names: tuple, ids: np.ndarray, name: str) -> np.ndarray | None:
+    """The operating point of every record, ``(records, len(names))`` float64, from the record coordinates
+    ``names`` of ``data`` (None without names); missing, non-numeric or non-finite coordinates raise naming ``k``."""
+    if not names:
+        return None
+    cols = []
+    for c in names:
+        variable = data.coords.variables.get(c)
+        if variable is None or variable.dims != ("record",):
+            have = [v for v, var in data.coords.variables.items() if var.dims == ("record",) and v != "record"]
+            raise ValueError(f"k: {name} has no record coordinate {c!r} (its record coordinates: {have})")
+        values = np.asarray(variable.values)
+        if values.dtype.kind not in "iuf":
+            raise TypeError(f"k: the coordinate {c!r} of {name} must hold numbers (operating parameters), got dtype "
+                            f"{values.dtype}")
+        values = values.astype(np.float64)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise ValueError(f"k: the coordinate {c!r} of {name} is not finite for record {ids[bad[0]]} "
+                             f"({values[bad[0]]}); every record needs its operating point")
+        cols.append(values)
+    return np.column_stack(cols)
+
+
+def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = False,
+                 operating: tuple | None = None) -> pd.DataFrame:
     """:meth:`Monitor.screen` of records in memory; ``where.start`` is the position of the first (the index when the
-    records have no ``record`` coordinate)."""
+    records have no ``record`` coordinate); ``operating``: the names of the operating parameters and the operating
+    point of every record of the whole (:meth:`Monitor._record_points`), or None."""
     import xarray as xr
 
     if isinstance(records, xr.Dataset):
@@ -880,7 +1052,8 @@ def _screen_rows(records: Any, where: slice, monitor: Monitor, progress: bool = 
     rows = []
     for i, x in enumerate(items):
         try:
-            res, unchecked = m._run(x)
+            res, unchecked = m._run(x, k=None if operating is None else
+                                    dict(zip(operating[0], operating[1][where][i].tolist())))
         except (TypeError, ValueError) as err:
             raise type(err)(f"records: record {index[i]}: {err}") from None
         cov = res.coverage
