@@ -15,7 +15,9 @@ from test_evaluation_fp import HIGH, LOW, _with_ids, records
 
 import tsfdi
 from tsfdi import SPRT, LjungBox
+from tsfdi.detection.sequential import msprt_scale
 from tsfdi.exceptions import CoverageWarning
+from tsfdi.windows import ResidualWindows
 
 STATES = ["healthy", "f1", "f2"]
 
@@ -170,6 +172,31 @@ def test_fp_monitor_refuses_bad_k_by_name(fleet, fp_baselines):
     with pytest.raises(ValueError, match=r"baseline is functionally pooled over \['speed'\] but models\['f1'\] over "
                                          r"\['weight'\]"):
         tsfdi.Monitor(res, {"f1": other, "f2": b.models["var"]["f2"]}, window="5s")
+
+
+def test_sprt_scale_of_fp_baselines_is_the_smallest_over_the_operating_points(fleet, fp_baselines):
+    """The sequential rule's scale of FP baselines: msprt_scale of the held-out fitting records of each operating
+    point (every fault model at that point), the smallest over the points; not that of all the points' records
+    joined, whose different drifts count as autocorrelation (0.033 here, against 0.085 / 0.165 / 0.83 at 2 / 5 / 8
+    m/s)."""
+    b = fp_baselines
+    fp = b.models["var"]
+    per: dict = {}
+    for j, f in enumerate(b.faults):
+        for i, seg in enumerate(b.segments[f]):
+            v = float(fp[f].model.k[i, 0])
+            at = {g: fp[g].at(v) for g in b.faults}
+            given = {g: b.heldout[("var", f)][i] if g == f else at[g].residuals(seg) for g in b.faults}
+            lls, labels = per.setdefault(v, ([], []))
+            lls.append(ResidualWindows(at).fit_residuals(given, seg.shape[0]).loglik())
+            labels.append(j)
+    scales = {v: msprt_scale(*ll) for v, ll in per.items()}
+    joined = msprt_scale([a for ll, _ in per.values() for a in ll], [j for _, lab in per.values() for j in lab])
+    assert sorted(scales) == [LOW, 5.0, HIGH] and joined < 0.5 * min(scales.values())
+    ev = tsfdi.evaluate(fleet, b, k="speed", windows=("5s",), settle=5.0, rules=("sprt",), detection=False,
+                        progress=False)
+    assert ev.sprt["scale"][("", "var")] == min(scales.values())
+    assert (ev.sequential_rates()["correct"] == 100).all()
 
 
 def test_screen_false_alarms_at_logged_k_between_the_fitting_points_hold_alpha():
