@@ -52,6 +52,7 @@ def test_fp_monitor_at_one_k_equals_the_point_monitor_of_at_k(fleet, fp_baseline
     b = fp_baselines
     fp = b.monitor("var", **CALIBRATED)
     assert isinstance(fp.baseline, tsfdi.FPResults) and fp.k_names == ("speed",)
+    assert "functionally pooled over ['speed']" in repr(fp)
     for rec in (22, 23, 18):                                # f1 at 7.3, f2 at 3.6, healthy at 3.1 m/s
         x = fleet.isel(record=rec).transpose("time", "channel")
         v = float(fleet["speed"][rec])

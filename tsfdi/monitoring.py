@@ -451,6 +451,8 @@ class Monitor:
 
     def __repr__(self) -> str:
         what = f"models={list(self.models)}" if self.models else "models=None (detection only)"
+        if self.k_names:
+            what += f", functionally pooled over {list(self.k_names)}"
 
         def length(name):       # samples, or the time span while fs is unknown
             value = getattr(self, name)
