@@ -611,7 +611,7 @@ class Monitor:
         record = self._record(body)
         ubody = None if ux is None else self._input(ux[hist:])
         det = ResidualWindows({"healthy": self._base}).fit(record, u=ubody).statistics(self.detection_test,
-                                                                                           window=W, step=S)
+                                                                                        window=W, step=S)
         if self.models:
             ident = ResidualWindows(self._faults).fit(record, u=ubody).statistics(self.test, window=W, step=S)
             names, rej, labels, state = ident.models, ident.reject.T, ident.labels(self.rule), ident.status
@@ -957,9 +957,10 @@ class Monitor:
                              f"{'not one of their operating parameters' if other in names else 'not named'}; name "
                              "exactly their parameters")
         if not isinstance(records, xr.DataArray):
-            raise ValueError(f"k names record coordinates {list(names)}, but records is a sequence of signals, which "
-                             "has none: give the records as a (record, time, channel) DataArray (or a hexacopter "
-                             "Dataset) with those coordinates, or run each with Monitor.run(record, k={...})")
+            what = "a sequence of signals" if isinstance(records, Sequence) else f"a {type(records).__name__}"
+            raise ValueError(f"k names record coordinates {list(names)}, but records is {what}, which has none: give "
+                             "the records as a (record, time, channel) DataArray (or a hexacopter Dataset) with those "
+                             "coordinates, or run each with Monitor.run(record, k={...})")
         n = records.sizes.get("record", 0)
         ids = records["record"].values if "record" in records.coords else np.arange(n)
         return names, operating_points(records, names, ids, "records")
