@@ -124,3 +124,30 @@ def test_evaluate_sprt_needs_two_fault_models(synthetic):
     with pytest.raises(ValueError, match="rules: 'sprt'.*two"):
         tsfdi.evaluate(sub, b, states=st, failure_times=ftt, fs=100.0, models=["var"], windows=["10s"], settle=5.0,
                        rules=("sprt",), progress=False)
+
+
+def test_baselines_monitor_with_the_sequential_rule(synthetic):
+    """Baselines.monitor(rule="sprt") gives the sequential Monitor with the baselines' scale (it passed a window
+    and a test, which the sequential monitor refuses); on a fault record it identifies the record's state, the same
+    events as the Monitor built by hand with that scale."""
+    recs, states, ft = synthetic
+    b = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=100.0, settle=5.0, duration=None, max_lags=6,
+                            var_max_lags=6, steady_window="5s", calibrate=True, fit_records=2)
+    ev = tsfdi.evaluate(recs, b, states=states, failure_times=ft, fs=100.0, models=["var"], windows=["10s"],
+                        settle=5.0, rules=("sprt",), progress=False, detection=False)
+    assert b.sprt_scale("var") == ev.sprt["scale"][("", "var")] != 1.0
+    mon = b.monitor("var", rule="sprt", sprt_alpha=1e-3)
+    assert mon.sequential and mon.sprt_scale == b.sprt_scale("var") and mon.sprt_alpha == 1e-3
+    i = next(i for i, s in enumerate(states) if s != "healthy" and i not in b.fit_records)
+    res = mon.run(recs[i])
+    hand = tsfdi.Monitor(b.models["var"]["healthy"], {f: b.models["var"][f] for f in b.faults}, fs=100.0,
+                         rule="sprt", sprt_alpha=1e-3, sprt_scale=b.sprt_scale("var"),
+                         steady_thresholds=b.steady_thresholds, steady_window=b.steady_window).run(recs[i])
+    assert res.label == states[i] and res.to_frame().equals(hand.to_frame())
+    with pytest.raises(ValueError, match="test"):
+        b.monitor("var", rule="sprt", test=tsfdi.LjungBox(lags=10))
+    with pytest.raises(ValueError, match="window"):
+        b.monitor("var", rule="sprt", window="10s")
+    plain = tsfdi.fit_baselines(recs, states=states, failure_times=ft, fs=100.0, settle=5.0, duration=None,
+                                max_lags=6, var_max_lags=6, steady_window="5s", fit_records=2)
+    assert plain.monitor("var", rule="sprt").sprt_scale == 1.0     # no held-out residuals: exact-model scale

@@ -22,11 +22,12 @@ from tsfdi._data import (Signal, as_signal, channel_extremes, is_xarray, refuse_
 from tsfdi._validation import boolean, float_like, int_like, option, probability
 from tsfdi.coverage import MIN_RECORDS, Coverage, coverage
 from tsfdi.detection.base import ResidualTest
+from tsfdi.detection.sequential import msprt_scale
 from tsfdi.detection.whiteness import LjungBox, ljungbox_windows
 from tsfdi.models import FPResults, select_fp_order
 from tsfdi.monitoring import Monitor, operating_names, operating_points
 from tsfdi.selection import select_order
-from tsfdi.windows import ResidualWindows, status
+from tsfdi.windows import RULES, SEQUENTIAL_RULES, ResidualWindows, status
 
 __all__ = ["Baselines", "Records", "fit_baselines", "insample_q"]
 
@@ -468,21 +469,32 @@ class Baselines:
                              "stable": bool(stable)})
         return pd.DataFrame(rows)
 
-    def monitor(self, model: str = "var", *, window: Any = "20s", step: Any = "1s", test: ResidualTest | None = None,
-                rule: str = "paper", k: Mapping | None = None) -> Monitor:
+    def monitor(self, model: str = "var", *, window: Any = None, step: Any = "1s", test: ResidualTest | None = None,
+                rule: str = "paper", k: Mapping | None = None, sprt_alpha: float = 0.01) -> Monitor:
         """A :class:`~tsfdi.Monitor` with this baseline's healthy and fault models and steady-state thresholds.
 
-        ``test`` (default ``LjungBox(lags=20, alpha=1e-3)``) detects with the healthy model and identifies with the
-        fault models; with ``threshold="empirical"`` each model gets its own copy calibrated by
-        :meth:`calibrated_tests`. ``k``: the operating point of the flights it will watch (parameter name -> value):
+        ``test`` (default ``LjungBox(lags=20, alpha=1e-3)``) on ``window`` (default ``"20s"``) detects with the
+        healthy model and identifies with the fault models; with ``threshold="empirical"`` each model gets its own
+        copy calibrated by :meth:`calibrated_tests`. ``rule="sprt"``: the sequential monitor (no window, no test:
+        giving either raises a ``ValueError``) at ``sprt_alpha``, its log-likelihoods scaled by :meth:`sprt_scale`
+        (1 without held-out residuals, ``calibrate=False``). ``k``: the operating point of the flights it will watch (parameter name -> value):
         functionally pooled baselines (``fit_baselines(..., k=...)``) give their models at it (:meth:`state_models`),
         calibrated on the FP null. Without ``k`` the monitor of functionally pooled baselines holds the FP models and
         filters every flight at its own logged operating point (``run(signal, k={...})``, ``screen(records,
         k="speed")``).
         """
-        test = _check_test(test)
         chans = self.model_channels(model)
         states = self.state_models(model, k)
+        if option(rule, "rule", RULES + SEQUENTIAL_RULES) in SEQUENTIAL_RULES:
+            for name, value in (("window", window), ("test", test)):
+                if value is not None:
+                    raise ValueError(f"{name}: the sequential rule ({rule!r}) decides sample by sample with no window "
+                                     f"and no residual test; leave {name} out")
+            return Monitor(states[self.healthy], {f: states[f] for f in self.faults}, step=step, fs=self.fs,
+                           rule=rule, sprt_alpha=sprt_alpha, sprt_scale=self.sprt_scale(model) if self.heldout else 1.0,
+                           steady_thresholds=self.steady_thresholds[chans], steady_window=self.steady_window)
+        window = "20s" if window is None else window
+        test = _check_test(test)
         if test.empirical:
             tests = self.calibrated_tests(model, test, window)
             ident: Any = {f: tests[f] for f in self.faults}
@@ -513,6 +525,67 @@ class Baselines:
                     raise ValueError(f"k lacks the operating parameter(s) {missing} of the functionally pooled model "
                                      f"{model!r} of state {s!r} (its parameters: {list(res.model.k_names)})")
                 out[s] = res.at([k[n] for n in res.model.k_names])
+        return out
+
+    def sprt_scale(self, model: str = "var") -> float:
+        """Scale correction of the sequential rule (``rule="sprt"`` of :func:`tsfdi.evaluate` and :meth:`monitor`)
+        for model ``model``: :func:`~tsfdi.detection.sequential.msprt_scale` of the per-sample log-likelihoods of every
+        fault state's fitting records through every fault model, the record's own state's model refitted without it
+        (:attr:`heldout`, ``fit_baselines(..., calibrate=True)``), the others fitted on other states' records: out of
+        sample, as on a new record. Computed once per baselines and model.
+
+        Functionally pooled models: the smallest of the scales at every operating point of the fitting records, each
+        from the records logged there. A record's walk drifts at the rate of its own operating point (the models tell
+        the states apart more easily at some points than at others); walks of several points joined into one would
+        count their different drifts as autocorrelation (the long-run variance of the batch means about the pooled
+        mean), a spread no record's walk has, and give a smaller scale than that of any point (0.03 against 0.09 /
+        0.17 / 0.83 on the three speeds of tests/test_monitoring_fp.py): decisions slower than the bound needs.
+
+        Raises
+        ------
+        ValueError
+            Baselines without held-out residuals, or records too short for the scale (at an operating point, named).
+        """
+        if not isinstance(model, str) or model not in self.models:
+            raise ValueError(f"model must be one of the fitted models {list(self.models)}, got {model!r}")
+        if not self.heldout:
+            raise ValueError("the sequential rule's scale comes from held-out residuals: fit the baselines with "
+                             "calibrate=True")
+        key = ("sprt_scale", model)
+        if key not in self._calibrated:
+            items = self._heldout_logliks(model)
+            scales = []
+            for point in dict.fromkeys(p for _, _, p in items):
+                group = [(ll, j) for ll, j, p in items if p == point]
+                try:
+                    scales.append(msprt_scale([ll for ll, _ in group], [j for _, j in group]))
+                except ValueError as err:
+                    where = "" if point is None else f" at {', '.join(f'{n} = {v:g}' for n, v in point)}"
+                    raise ValueError(f"the sequential rule cannot be scale-corrected for model {model!r} on the "
+                                     f"baselines' held-out residuals{where}: {err}") from None
+            self._calibrated[key] = min(scales)
+        return self._calibrated[key]
+
+    def _heldout_logliks(self, model: str) -> list:
+        """``(loglik, state index, operating point)`` of every fitting record of every fault state (:meth:`sprt_scale`):
+        the per-sample log-likelihoods of the record through every fault model (:meth:`ResidualWindows.loglik`). The
+        operating point is the record's logged ``k`` for functionally pooled models, a tuple of ``(name, value)``
+        pairs; ``None`` for point models."""
+        chans = self.model_channels(model)
+        out = []
+        for j, state in enumerate(self.faults):
+            own = self.models[model][state]
+            for i, seg in enumerate(self.segments[state]):
+                # functionally pooled models at the record's own operating point
+                point = tuple(zip(own.model.k_names, own.model.k[i].tolist())) if isinstance(own, FPResults) else None
+                models = {f: r for f, r in self.state_models(model, None if point is None else dict(point)).items()
+                          if f in self.faults}
+                x = seg[:, chans]
+                if x.shape[0] <= max(int(r.lags) for r in models.values()) + 1:
+                    continue
+                given = {f: self.heldout[(model, state)][i] if f == state else np.asarray(res.residuals(x)).reshape(
+                    x.shape[0] - int(res.lags), -1) for f, res in models.items()}
+                out.append((ResidualWindows(models).fit_residuals(given, x.shape[0]).loglik(), j, point))
         return out
 
     def calibrated_tests(self, model: str, test: ResidualTest, window: Any, *, step: Any = 1) -> dict:

@@ -46,7 +46,7 @@ from tsfdi.detection.combined import AnyOf
 from tsfdi.detection.whiteness import LjungBox
 from tsfdi.models import FPResults, InputOutputResults
 from tsfdi.summary import Summary
-from tsfdi.detection.sequential import msprt, msprt_scale
+from tsfdi.detection.sequential import msprt
 from tsfdi.windows import AMBIGUOUS, RULES, SEQUENTIAL_RULES, ResidualWindows, decide
 
 __all__ = ["OUTCOMES", "Evaluation", "detection_metrics", "evaluate", "first_alarm", "score_records"]
@@ -584,7 +584,7 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
             "fs": rec.fs, "settle": settle, "rules": rules, "healthy": healthy, "faults": faults,
             "detection": detection, "sprt": None, "k_names": rec.k_names}
     if sequential:
-        plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): _sprt_scale(b, m) if b.heldout else 1.0
+        plan["sprt"] = {"alpha": sprt_alpha, "scale": {(lvl, m): b.sprt_scale(m) if b.heldout else 1.0
                                                        for lvl, b in levels.items() for m in models}}
     counts = _new_counts()
     if rec.source is None:
@@ -675,61 +675,6 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
                       sequential_counts=seq, coverage=cover,
                       sprt={} if not sequential else {"alpha": sprt_alpha, "scale": {
                           ("" if lvl is None else lvl, m): v for (lvl, m), v in plan["sprt"]["scale"].items()}})
-
-
-def _heldout_logliks(base: Baselines, m: str) -> list:
-    """``(loglik, state index, operating point)`` of every fitting record of every fault state: the per-sample
-    log-likelihoods of the record through every fault model of ``m`` (:meth:`ResidualWindows.loglik`), its own state's
-    model refitted without it (:attr:`Baselines.heldout`), the others fitted on other states' records: out of sample,
-    as on an evaluation record. The operating point is the record's logged ``k`` for functionally pooled models, a tuple
-    of ``(name, value)`` pairs; ``None`` for point models."""
-    chans = base.model_channels(m)
-    out = []
-    for j, state in enumerate(base.faults):
-        own = base.models[m][state]
-        for i, seg in enumerate(base.segments[state]):
-            # functionally pooled models at the record's own operating point
-            point = tuple(zip(own.model.k_names, own.model.k[i].tolist())) if isinstance(own, FPResults) else None
-            at = None if point is None else dict(point)
-            models = {f: r for f, r in base.state_models(m, at).items() if f in base.faults}
-            x = seg[:, chans]
-            if x.shape[0] <= max(int(r.lags) for r in models.values()) + 1:
-                continue
-            given = {f: base.heldout[(m, state)][i] if f == state else np.asarray(res.residuals(x)).reshape(
-                x.shape[0] - int(res.lags), -1) for f, res in models.items()}
-            out.append((ResidualWindows(models).fit_residuals(given, x.shape[0]).loglik(), j, point))
-    return out
-
-
-#: Baselines -> {model: scale} of the sequential rule: computed once per (immutable) baselines and model, as
-#: Baselines.calibrated_tests keeps its calibrated tests; an entry goes with its baselines.
-_SPRT_SCALES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _sprt_scale(base: Baselines, m: str) -> float:
-    """Scale correction of the sequential rule for model ``m`` (:func:`~tsfdi.detection.sequential.msprt_scale`)
-    on the held-out fitting records of the fault states (:func:`_heldout_logliks`).
-
-    Functionally pooled models: the smallest of the scales at every operating point of the fitting records, each
-    from the records logged there. A record's walk drifts at the rate of its own operating point (the models tell
-    the states apart more easily at some points than at others); walks of several points joined into one would count
-    their different drifts as autocorrelation (the long-run variance of the batch means about the pooled mean), a
-    spread no record's walk has, and give a smaller scale than that of any point (0.03 against 0.09 / 0.17 / 0.83
-    on the three speeds of tests/test_monitoring_fp.py): decisions slower than the bound needs everywhere."""
-    known = _SPRT_SCALES.setdefault(base, {})
-    if m not in known:
-        items = _heldout_logliks(base, m)
-        scales = []
-        for point in dict.fromkeys(p for _, _, p in items):
-            group = [(ll, j) for ll, j, p in items if p == point]
-            try:
-                scales.append(msprt_scale([ll for ll, _ in group], [j for _, j in group]))
-            except ValueError as err:
-                where = "" if point is None else f" at {', '.join(f'{n} = {v:g}' for n, v in point)}"
-                raise ValueError(f"the sequential rule cannot be scale-corrected for model {m!r} on the baselines' "
-                                 f"held-out residuals{where}: {err}") from None
-        known[m] = min(scales)
-    return known[m]
 
 
 def _state_tests(base: Baselines, test: ResidualTest, m: str, W: int) -> tuple:
