@@ -142,6 +142,31 @@ def test_sprt_calibration_leaves_a_record_too_short_for_its_own_exponent_out_of_
                                                false_alarms_per_hour=60, fs=FS)
 
 
+def test_sprt_calibration_takes_a_record_drifting_up_by_less_than_two_standard_errors_as_censored():
+    """A record whose log-likelihood ratio grows on average, but by less than two standard errors of its mean (from
+    its long-run variance), has a small exponent its samples cannot estimate: it refused the whole detector before
+    (what refused the running scale's groups of pairs on ALFA); now its exponent counts in the spread between logs as
+    a value known only to lie below the exponent of its mean lowered by two standard errors (left-censored, normal
+    maximum likelihood), named in a warning -- kept, not left out by its values. A record growing by more is still
+    refused, naming its standard errors."""
+    rng = np.random.default_rng(5)
+    logs = [short_log(rng, 37.0) for _ in range(3)]
+    ys, us = [lg[0] for lg in logs], [lg[1] for lg in logs]
+    ref = sprt_detector().calibrate(ys, us, false_alarms_per_hour=60, fs=FS).calibration_
+    r1 = np.random.default_rng(1)
+    y, u = [spread_log(r1) for _ in range(3)][2]      # its spread grows 1.5x against the scale at arming
+    with pytest.warns(TsfdiWarning, match=r"^2 armed \(run, pair\) record\(s\) whose SPRT log-likelihood ratio grows "
+                      r"on average, though by less than 2 standard errors: healthy run 3, pair 'a' \(0.13 standard "
+                      r"errors\), healthy run 3, pair 'b' \(1.7 standard errors\) -- each taken .* \(censored\)"):
+        cal = sprt_detector().calibrate(ys + [y], us + [u], false_alarms_per_hour=60, fs=FS).calibration_
+    assert cal.runs == 4 and cal.tail["sprt"]["log_exponent_sd"] > 5 * ref.tail["sprt"]["log_exponent_sd"]
+    assert cal.threshold > ref.threshold
+    y, u = spread_log(np.random.default_rng(3), rise=2.0)
+    with pytest.raises(ValueError, match=r"healthy run 3, pair 'a': the SPRT's log-likelihood ratio grows on average "
+                       r"\(0.04454 per sample, 3.89 standard errors\)"):
+        sprt_detector().calibrate(ys + [y], us + [u], false_alarms_per_hour=60, fs=FS)
+
+
 def recipe_log(rng, seconds=30.0):
     """Two healthy pairs as the defaults model them (``na=1, nb=2, nk=1``): each output follows its input one sample
     later, ``seconds`` at 50 Hz."""

@@ -38,6 +38,7 @@ _MIN_EXTRAPOLATED = 1.0  # ... and for the exponential tail fit
 _MIN_SPRT_RECORDS = 3    # armed (run, pair) records the SPRT calibration needs (the spread between logs is estimated)
 _SPRT_BLOCK = 32         # samples per batch of the long-run variance in the SPRT scale of one record
 _MIN_EXPONENT_SAMPLES = 10 * _SPRT_BLOCK   # armed samples a record needs for its own Wald exponent
+_DRIFT_SE = 2.0          # standard errors of its mean by which a record's SPRT log-likelihood ratio must grow to refuse
 _SPRT_BAND = (0.05, 0.5, 0.95)  # quantiles of a new log's false-alarm rate reported as ``rate_band``
 _SPRT_NODES = 400        # quantile nodes of the predictive law of a new log's Wald exponent
 _MIN_SPRT_CYCLES = 50    # restart cycles of the SPRT walk the calibration needs
@@ -313,6 +314,30 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
         if lo < 1e-9:
             raise ValueError(f"{where}: no positive root of the SPRT walk's cumulant equation")
     return float(optimize.brentq(f, lo, hi, rtol=1e-10))
+
+
+def _mean_se(z: np.ndarray) -> tuple:
+    """Mean of ``z`` and its standard error from the long-run variance over batches of ``_SPRT_BLOCK`` samples."""
+    n = z.size // _SPRT_BLOCK
+    m = float(z.mean())
+    sums = z[: n * _SPRT_BLOCK].reshape(n, _SPRT_BLOCK).sum(axis=1)
+    return m, float(np.sqrt(((sums - m * _SPRT_BLOCK) ** 2).sum() / (n - 1) / _SPRT_BLOCK / z.size))
+
+
+def _censored_sd(x: np.ndarray, c: np.ndarray) -> float:
+    """Standard deviation of a normal law from values ``x`` and values known only to lie below ``c`` (left-censored):
+    the maximum-likelihood estimate times :math:`\\sqrt{J/(J-1)}`, ``J`` all values (the sample standard deviation
+    of ``x`` when nothing is censored)."""
+    if not c.size:
+        return float(x.std(ddof=1))
+
+    def nll(p: np.ndarray) -> float:
+        return -float(stats.norm.logpdf(x, p[0], np.exp(p[1])).sum() + stats.norm.logcdf(c, p[0], np.exp(p[1])).sum())
+
+    fit = optimize.minimize(nll, [x.mean(), np.log(x.std(ddof=1))], method="Nelder-Mead",
+                            options={"xatol": 1e-8, "fatol": 1e-10, "maxiter": 4000})
+    j = x.size + c.size
+    return float(np.exp(fit.x[1]) * np.sqrt(j / (j - 1.0)))
 
 
 def _running_standardise(e: np.ndarray, m: float, v: float, pending: np.ndarray, lam: float,
@@ -1054,7 +1079,11 @@ class OnlineDetector:
         :math:`\ln \hat h_j`, taken as normal over logs with mean and spread :math:`s` estimated from the
         :math:`J` records (at least three; a record with fewer than 320 armed samples, too few for its own exponent,
         is left out of this step only, named in a ``TsfdiWarning``: it is left out by its length, not its values,
-        and its samples stay in steps 1-2 with its hours), and a new log's relative exponent
+        and its samples stay in steps 1-2 with its hours; a record whose :math:`z` grows on average is refused when
+        by at least two standard errors of its mean (long-run variance), and otherwise, its small exponent not
+        estimable, enters as a value known only to lie below the exponent of its :math:`z` lowered by two standard
+        errors -- left-censored, :math:`s` then the normal maximum-likelihood estimate times
+        :math:`\sqrt{J/(J-1)}` -- named in a ``TsfdiWarning``), and a new log's relative exponent
         :math:`r = e^{s\sqrt{1 + 1/J}\, T}`, :math:`T \sim t_{J-1}` (the predictive law: the spread and its
         estimation from few logs). A new log with exponent :math:`r` raises, above :math:`u + x`, on average
         :math:`\rho(x, r) = \frac{n_u + 1}{H}\big(1 + \frac{x r}{n_u\hat\beta}\big)^{-n_u}` alarms per flight hour
@@ -1279,13 +1308,23 @@ class OnlineDetector:
         # its log over records is normal, a new log's is predicted by Student's t (mean and spread estimated). A
         # record too short for its own exponent is left out of the spread only (by its length, not its values: no
         # selection), named in a warning; its samples stay in the pooled walk and the tail above, with its hours
-        exps, short = [], []
+        exps, below, short = [], [], []
         for (i, pair, _, _), z in zip(records, zs):
+            where = f"healthy run {i}, pair {pair!r}"
             if z.size < _MIN_EXPONENT_SAMPLES:
-                short.append(f"healthy run {i}, pair {pair!r} ({z.size})")
+                short.append(f"{where} ({z.size})")
+                continue
+            m, se = _mean_se(h * z)
+            if m >= 0:
+                if m >= _DRIFT_SE * se:
+                    raise ValueError(f"{where}: the SPRT's log-likelihood ratio grows on average ({m:.4g} per sample, "
+                                     f"{m / se:.3g} standard errors) on a healthy run: the prediction errors are not "
+                                     "the healthy law it assumes")
+                # not significantly: its exponent is small, known only to lie below that of its mean at -2 se
+                below.append((where, m / se, _wald_exponent(h * z - _DRIFT_SE * se, where)))
                 continue
             try:
-                exps.append(_wald_exponent(h * z, f"healthy run {i}, pair {pair!r}"))
+                exps.append(_wald_exponent(h * z, where))
             except ValueError as err:
                 raise ValueError(f"{err} (statistic='sprt' estimates the spread of the healthy logs from every "
                                  "armed record long enough for its own exponent)") from None
@@ -1296,12 +1335,23 @@ class OnlineDetector:
                 raise ValueError(f"statistic='sprt' estimates the spread between healthy logs from at least "
                                  f"{_MIN_SPRT_RECORDS} records of at least {_MIN_EXPONENT_SAMPLES} armed samples, "
                                  f"the healthy runs give {len(exps)} (the other {what}): give longer healthy runs")
-            warnings.warn(f"{len(short)} {what} -- left out of the spread between logs, which {len(exps)} of the "
-                          f"{len(records)} records give (their samples still count in the pooled walk and its tail)",
+            warnings.warn(f"{len(short)} {what} -- left out of the spread between logs, which {len(exps) + len(below)} "
+                          f"of the {len(records)} records give (their samples still count in the pooled walk and its "
+                          "tail)", TsfdiWarning, stacklevel=3)
+        if below:
+            if len(exps) < _MIN_SPRT_RECORDS:
+                raise ValueError(f"statistic='sprt' needs at least {_MIN_SPRT_RECORDS} records whose log-likelihood "
+                                 f"ratio falls on average, the healthy runs give {len(exps)}: give longer healthy runs")
+            warnings.warn(f"{len(below)} armed (run, pair) record(s) whose SPRT log-likelihood ratio grows on average, "
+                          f"though by less than {_DRIFT_SE:g} standard errors: "
+                          + ", ".join(f"{w} ({t:.2g} standard errors)" for w, t, _ in below)
+                          + " -- each taken in the spread between logs as an exponent known only to lie below that of "
+                          f"its mean at -{_DRIFT_SE:g} standard errors (censored), which raises the threshold",
                           TsfdiWarning, stacklevel=3)
         log_h = np.log(exps)
-        n_rec = log_h.size
-        spread = float(log_h.std(ddof=1)) * np.sqrt(1.0 + 1.0 / n_rec)
+        n_rec = log_h.size + len(below)
+        sd = _censored_sd(log_h, np.log([c for *_, c in below]))
+        spread = sd * np.sqrt(1.0 + 1.0 / n_rec)
         rel = np.exp(spread * stats.t.ppf((np.arange(_SPRT_NODES) + 0.5) / _SPRT_NODES, n_rec - 1))
 
         def per_hour(x: float, r: np.ndarray) -> np.ndarray:
@@ -1326,7 +1376,7 @@ class OnlineDetector:
             false_alarms_per_hour=rate, healthy_hours=hours, runs=len(ys), threshold=a, glrt_threshold=None,
             estimator="sprt cycle maxima", source_rates={"sprt": rate}, expected_episodes=rate * hours,
             healthy_episodes=int(sum((m >= a).sum() for m, _ in walks)),
-            tail={"sprt": {"u": u, "n_u": n_u, "beta": beta, "log_exponent_sd": float(log_h.std(ddof=1))}},
+            tail={"sprt": {"u": u, "n_u": n_u, "beta": beta, "log_exponent_sd": sd}},
             rate_band=tuple(float(b) for b in band), sprt_scale=h)
         self.reset()
         return self
