@@ -167,7 +167,9 @@ class OnlineCalibration:
     tail : dict
         Per source fitted with the exponential tail: base level ``u``, episodes above it ``n_u`` and mean
         excess ``beta`` (``statistic="sprt"``: of the restart cycles' maxima of all records, and
-        ``log_exponent_sd``, the spread over records of the log of each record's Wald exponent).
+        ``log_exponent_sd``, the spread over records of the log of each record's Wald exponent, a censored
+        maximum-likelihood estimate when records' log-likelihood ratios grow on average, see
+        :meth:`OnlineDetector.calibrate`).
     rate_band : tuple of float or None
         ``statistic="sprt"``: false alarms per flight hour of a new healthy log at the calibrated threshold, 5 %,
         50 % and 95 % quantiles of its predictive law (between-log spread and its estimation from few logs; the
@@ -1307,21 +1309,22 @@ class OnlineDetector:
         # the between-log effect: each record's own Wald exponent relative to the pooled one (1 after scaling);
         # its log over records is normal, a new log's is predicted by Student's t (mean and spread estimated). A
         # record too short for its own exponent is left out of the spread only (by its length, not its values: no
-        # selection), named in a warning; its samples stay in the pooled walk and the tail above, with its hours
+        # selection), named in a warning; its samples stay in the pooled walk and the tail above, with its hours. A
+        # record whose ratio grows on average, not significantly, is kept as a left-censored exponent (warned)
         exps, below, short = [], [], []
         for (i, pair, _, _), z in zip(records, zs):
             where = f"healthy run {i}, pair {pair!r}"
             if z.size < _MIN_EXPONENT_SAMPLES:
                 short.append(f"{where} ({z.size})")
                 continue
-            m, se = _mean_se(h * z)
-            if m >= 0:
-                if m >= _DRIFT_SE * se:
-                    raise ValueError(f"{where}: the SPRT's log-likelihood ratio grows on average ({m:.4g} per sample, "
-                                     f"{m / se:.3g} standard errors) on a healthy run: the prediction errors are not "
-                                     "the healthy law it assumes")
+            drift, se = _mean_se(h * z)
+            if drift >= 0:
+                if drift >= _DRIFT_SE * se:
+                    raise ValueError(f"{where}: the SPRT's log-likelihood ratio grows on average ({drift:.4g} per "
+                                     f"sample, {drift / se:.3g} standard errors) on a healthy run: the prediction "
+                                     "errors are not the healthy law it assumes")
                 # not significantly: its exponent is small, known only to lie below that of its mean at -2 se
-                below.append((where, m / se, _wald_exponent(h * z - _DRIFT_SE * se, where)))
+                below.append((where, drift / se, _wald_exponent(h * z - _DRIFT_SE * se, where)))
                 continue
             try:
                 exps.append(_wald_exponent(h * z, where))
