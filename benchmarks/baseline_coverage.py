@@ -171,13 +171,7 @@ def simulated(reps):
                     out[kind]["record law"] += law_warned(test, res, recs)
                     out[kind]["above"] += [above_band(test, res, y) for y in recs]
             print(f"   {law:7s} spread, {nfit:2d} records:")
-            for check in ("summaries", "record law"):
-                power = ", ".join(f"{k} {100 * np.mean(out[k][check]):5.1f} %" for k in kinds if k != "same fleet")
-                print(f"     {check:10s}: same fleet {rate(out['same fleet'][check])}; other fleets warned: {power}")
-            flagged = {c: [w for k in kinds for w, a in zip(out[k][c], out[k]["above"]) if a]
-                       for c in ("summaries", "record law")}
-            print(f"     records whose windows LB+F+M flags beyond their 99.9 % band: {len(flagged['summaries'])}; "
-                  "warned: " + ", ".join(f"{c} {sum(v)}/{len(v)}" for c, v in flagged.items()))
+            report(out, kinds, ("summaries", "record law"))
             if law == "normal" and nfit == 10:
                 same = out["same fleet"]["summaries"]
                 lo, hi = band(len(same))
@@ -457,13 +451,18 @@ def decision_rows(reps):
                 out[kind]["decision"] += [bool(warn(res.residuals(y))) for y in recs]
                 out[kind]["above"] += [above_band(test, res, y) for y in recs]
         print(f"   {nfit} records:")
-        for check in ("record law", "decision"):
-            power = ", ".join(f"{k} {100 * np.mean(out[k][check]):5.1f} %" for k in kinds if k != "same fleet")
-            print(f"     {check:10s}: same fleet {rate(out['same fleet'][check])}; other fleets warned: {power}")
-        flagged = {c: [w for k in kinds for w, a in zip(out[k][c], out[k]["above"]) if a]
-                   for c in ("record law", "decision")}
-        print(f"     records whose windows LB+F+M flags beyond their 99.9 % band: {len(flagged['decision'])}; warned: "
-              + ", ".join(f"{c} {sum(v)}/{len(v)}" for c, v in flagged.items()))
+        report(out, kinds, ("record law", "decision"))
+
+
+def report(out, kinds, checks):
+    """Print, per check, its false-warning rate on the same fleet and how often it warned of other fleets' records,
+    then how many records LB+F+M flags beyond their 99.9 % band and how many of those each check warned of."""
+    for check in checks:
+        power = ", ".join(f"{k} {100 * np.mean(out[k][check]):5.1f} %" for k in kinds if k != "same fleet")
+        print(f"     {check:10s}: same fleet {rate(out['same fleet'][check])}; other fleets warned: {power}")
+    flagged = {c: [w for k in kinds for w, a in zip(out[k][c], out[k]["above"]) if a] for c in checks}
+    print(f"     records whose windows LB+F+M flags beyond their 99.9 % band: {len(flagged[checks[0]])}; warned: "
+          + ", ".join(f"{c} {sum(v)}/{len(v)}" for c, v in flagged.items()))
 
 
 def main(argv=None):
