@@ -2,38 +2,43 @@
 
 1. A simulated fleet: VAR(2) records whose coefficients (``A + 0.04 N(0, 1)``) and innovation scale (log-normal
    +-15 % per record and channel) vary from aircraft to aircraft. Every row (5, 10 or 20 fitting records) draws
-   ``--fleets`` independent fleets (fleet ``f`` of row ``J``: ``J + 1`` records from the generator seeded
+   ``--fleets`` independent fleets (fleet ``f`` of row ``J``: ``J + --windows`` records from the generator seeded
    ``[seed, J, f]``, nothing shared between fleets or rows; the fleets of a chunk simulated in one recursion). Each
    fleet: a baseline VAR(2) fitted on its ``J`` records, the F and Ljung-Box tests (Sidak over the 3 channels, so
    alpha is the decision's rate) calibrated on its held-out residuals (windows of 200 samples) with the predictive
-   record-level law, and the decision judged on the first ``--windows`` disjoint windows of its one new record.
+   record-level law, and the decision judged on one window (the first) of each of its ``--windows`` new records.
    Printed per row and alpha: the pooled rate, the two-sided 99.9 % binomial band of alpha for the pooled window
    count, the fleet-clustered 99.9 % interval (t over the fleets), the ratio of the clustered to the binomial
    standard error, the median calibrated threshold of channel y0 (p10-p90 over the fleets) by number of fitting
    records, and the cost per fleet. The seed is a fresh ``tsfdi.study.evaluation_seed()`` (printed, stored nowhere)
    unless ``--seed`` reproduces a run.
 
-   Why few windows per fleet: a predictive threshold's rate is alpha *averaged over fleets*; one fleet's few
-   fitting records set a threshold whose rate ``p_f`` on its own new records varies far beyond the binomial. A fleet
-   judged on ``m`` windows flags ``Bin(m, p_f)`` of them, so the pooled rate over ``F`` fleets has variance
-   ``(alpha + (m - 1) V_b) / (m F)`` (``V_b`` the variance of ``p_f`` over fleets, mean alpha) against the binomial
-   band's ``alpha / (m F)``: the ratio of the standard errors, ``sqrt(1 + (m - 1) V_b / alpha)``, does not depend
-   on ``F``, and with ``m = 1`` the judged windows are independent draws of the decision's rate whatever ``V_b``.
-   Development figures (fleets ``[50000, 5, f]`` f < 3000, ``[60000, 10, f]`` f < 1000, ``[80000, 20, f]``
-   f < 700, 40 new records each; never an evaluation seed): the largest ``V_b`` is F's with 5 records, a fleet's
-   rate sd 3.2 alpha at 0.01 and 8.7 alpha at 0.001 (``V_b / alpha`` 0.10 and 0.076; single fleets up to 55 and
-   325 alpha, whose five records share a noise level); with 10 / 20 records and for Ljung-Box it is smaller. So
-   ``m = 2`` keeps the ratio at 1.05 / 1.04 (``m = 3``: 1.10 / 1.07; the 50 windows per fleet of the design
-   before: 2.4 / 2.2, and 4-7 in runs that drew such fleets, where a perfectly calibrated F left the band in ~10 %
-   of runs) and judges twice the windows of ``m = 1`` for the same calibrations, which are the whole cost.
-   One development run of this design (seed 90000, ``--fleets 1000 --windows 2``, 2,000 windows per row; nice 19
-   beside other jobs on this 2-core machine): every row in its band (F 0.65 / 0.80 / 0.95 % at 0.01, 0 / 0.10 /
-   0.05 % at 0.001; Ljung-Box 0.70 / 1.00 / 1.25 % and 0.15 / 0.25 / 0.05 %), 219 / 283 / 390 ms per fleet with
-   5 / 10 / 20 records, nearly all of it the four calibrations; its SE ratios rest on 0-25 flags a row and add
-   nothing to the formula. The F control variate of the design before (the exact t pivot on the fitting records'
-   true noise levels) did not narrow the F intervals at 2 windows per fleet (it explains part of ``V_b``, a small
-   share of a 2-window rate's variance): removed. ``FLEETS = 1500`` (3,000 windows per row) is what about 20
-   minutes afford at that cost; 10,000 windows per row would take about 75 minutes.
+   Why one window of each of few new records per fleet: a predictive threshold's rate is alpha *averaged over
+   fleets*; one fleet's few fitting records set a threshold whose rate ``p_f`` on its new records varies far beyond
+   the binomial. A fleet judged on one window of each of ``m`` new records flags ``Bin(m, p_f)`` of them, so the
+   pooled rate over ``F`` fleets has variance ``(alpha + (m - 1) V_b) / (m F)`` (``V_b`` the variance of ``p_f``
+   over fleets, mean alpha) against the binomial band's ``alpha / (m F)``: the ratio of the standard errors,
+   ``sqrt(1 + (m - 1) V_b / alpha)``, does not depend on ``F``; with ``m = 1`` the judged windows are independent
+   draws of the decision's rate whatever ``V_b``. Development figures (fleets ``[50000, 5, f]`` f < 3000,
+   ``[60000, 10, f]`` f < 1000, ``[80000, 20, f]`` f < 700, 40 new records each; never an evaluation seed): the
+   largest ``V_b`` is F's with 5 records, a fleet's rate sd 3.2 alpha at 0.01 and 8.7 alpha at 0.001 (``V_b /
+   alpha`` 0.10 and 0.076; single fleets up to 55 and 325 alpha, whose five records share a noise level), smaller
+   with 10 / 20 records and for Ljung-Box. So ``m = 2`` keeps the ratio at 1.05 / 1.04 (``m = 3``: 1.10 / 1.07;
+   the 50 windows per fleet of the design before: 2.4 / 2.2, and 4-7 in runs that drew such fleets, where an exactly
+   calibrated F left the band in ~10 % of runs) and judges twice the windows of ``m = 1`` for the same
+   calibrations, which are nearly the whole cost. The windows must come from different new records: windows of one
+   record share its noise level, which the F test's rate follows closely. Measured on development seed 90001 (300
+   fleets per row, each judged on 10 windows of one new record and on one window of each of 10 others, the same
+   calibrations): the F rows' design effect extrapolated to 2 windows is 1.25-1.31 for windows of one record (with
+   5, 10 and 20 records alike) and 1.00-1.04 for windows of different records (3 windows: 1.00-1.08); Ljung-Box
+   1.00-1.01 either way. (Two windows of one record were the design of commit 8efe507: its development run, seed
+   90000, 1000 fleets per row, and its one evaluation run, seed 763467546, 1500 fleets per row, had every row in
+   band, but the evaluation run's F rows showed a design effect of 1.22-1.41, Ljung-Box 0.99-1.00.)
+   ``FLEETS = 1500`` (3,000 windows per row) is what about 20 minutes afford at the 164-408 ms per fleet (5 to 20
+   records; the four calibrations) of that evaluation run on this 2-core machine under nice 19; 10,000 windows per
+   row would take over an hour. The F control variate of the design before (the exact t pivot on the fitting
+   records' true noise levels) explains part of ``V_b``, a small share of a 2-window rate's variance (it did not
+   narrow the F intervals of development run 90000): removed.
    Expected rate of the decision over those development fleets (mean / alpha +- its standard error), to read
    the rows by: F 0.94 +- 0.06 / 0.92 +- 0.07 / 1.02 +- 0.06 at 0.01 (5 / 10 / 20 records) and 0.84 +- 0.16 /
    0.89 +- 0.18 / 1.18 +- 0.19 at 0.001 (exact on the ideal fleet: 0.90 / 0.89 with 5 records,
@@ -92,8 +97,10 @@ A1 = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.1], [0.1, 0.0, 0.3]])
 A2 = -0.2 * np.eye(3)
 N, WINDOW, SPREAD, NOISE, BURN = 2000, 200, 0.04, 0.15, 200
 RECORDS, ALPHAS = (5, 10, 20), (1e-2, 1e-3)
-#: independent fleets per row and judged windows per fleet, all of its one new record (see the module docstring)
+#: independent fleets per row and judged windows per fleet, one of each of as many new records (module docstring)
 FLEETS, WINDOWS = 1500, 2
+#: most windows (new records) per fleet --windows accepts
+MAX_WINDOWS = 10
 #: fleets simulated together (one recursion over their stacked records; each fleet keeps its own generator)
 CHUNK = 25
 
@@ -127,15 +134,16 @@ def fleet_records(rng: np.random.Generator, count: int, n: int = N) -> tuple:
     return [y[:, r] for r in range(count)], log_var
 
 
-def fleets_of(seed: int, records: int, first: int, count: int) -> list:
+def fleets_of(seed: int, records: int, first: int, count: int, new: int = 1) -> list:
     """Fleets ``first .. first + count - 1`` of the row ``records``: fleet ``f`` drawn from its own generator
-    ``[seed, records, f]`` (``records + 1`` records, as :func:`fleet_records`), the fleets simulated together.
-    Returns per fleet the ``records`` fitting records and the one new record."""
-    draws = [fleet_draws(np.random.default_rng([seed, records, f]), records + 1) for f in range(first, first + count)]
+    ``[seed, records, f]`` (``records + new`` records, as :func:`fleet_records`), the fleets simulated together.
+    Returns per fleet the ``records`` fitting records and the ``new`` new records."""
+    k = records + new
+    draws = [fleet_draws(np.random.default_rng([seed, records, f]), k) for f in range(first, first + count)]
     b1, b2, e = (np.concatenate([d[0][i] for d in draws], axis=ax) for i, ax in ((0, 0), (1, 0), (2, 1)))
     y = simulate(b1, b2, e)
-    k = records + 1
-    return [([y[:, f * k + r] for r in range(records)], y[:, f * k + records]) for f in range(count)]
+    return [([y[:, f * k + r] for r in range(records)], [y[:, f * k + r] for r in range(records, k)])
+            for f in range(count)]
 
 
 def make_test(family: str, alpha: float, effect: str = "predictive"):
@@ -164,14 +172,15 @@ def decision_rate(test, new_resid: list) -> float:
 def fleet_rows(records: int, seed: int, fleets: int, windows: int) -> list:
     """Rows (records, fleet, alpha, test, flagged windows, windows, threshold of channel 0) of ``fleets`` independent
     fleets of the row ``records`` (:func:`fleets_of`): a baseline VAR(2) fitted on the ``records`` fitting records
-    of the fleet, the tests calibrated on its held-out residuals, and the first ``windows`` disjoint windows of the
-    fleet's one new record judged."""
+    of the fleet, the tests calibrated on its held-out residuals, and the first window of each of the fleet's
+    ``windows`` new records judged."""
     rows = []
     for first in range(0, fleets, CHUNK):
-        for i, (fit, new) in enumerate(fleets_of(seed, records, first, min(CHUNK, fleets - first))):
+        for i, (fit, new) in enumerate(fleets_of(seed, records, first, min(CHUNK, fleets - first), windows)):
             spec = tsfdi.VAR(fit, 2)
             held = spec.held_out_residuals()
-            resid = [np.asarray(spec.fit().residuals(new[:windows * (WINDOW - 2) + 2]))]
+            base = spec.fit()
+            resid = [np.asarray(base.residuals(x[:WINDOW])) for x in new]
             for a in ALPHAS:
                 for fam in ("F", "LB"):
                     test = make_test(fam, a).calibrate(held, window=WINDOW)
@@ -188,7 +197,7 @@ def band(n: int, alpha: float) -> tuple:
 
 def fleet_table(seed: int, fleets: int = FLEETS, windows: int = WINDOWS) -> pd.DataFrame:
     """Part 1: per row (fitting records, alpha, test) the pooled rate of the decision on the judged windows of all
-    the row's fleets (``windows`` of each fleet's one new record), the two-sided 99.9 % binomial band of alpha for
+    the row's fleets (one of each of a fleet's ``windows`` new records), the two-sided 99.9 % binomial band of alpha for
     that many windows, the fleet-clustered 99.9 % interval of the pooled rate (t over the fleets' rates: every fleet
     holds as many windows), the ratio of the clustered to the binomial standard error at the pooled rate (its design
     effect: 1 for independent windows), and the median calibrated threshold of channel y0 (and its p10-p90 over the
@@ -215,8 +224,8 @@ def fleet_table(seed: int, fleets: int = FLEETS, windows: int = WINDOWS) -> pd.D
                     "threshold y0": g.threshold.median(),
                     "y0 p10-p90": f"{g.threshold.quantile(0.1):.3g}-{g.threshold.quantile(0.9):.3g}"})
     print(f"1. simulated fleet (evaluation seed {seed}): per row {fleets} independent fleets, each fitted on its "
-          f"records, calibrated, and judged on {windows} disjoint window(s) of {WINDOW - 2} residuals of one new "
-          f"record; Sidak over 3 channels, predictive calibration ({time.perf_counter() - t0:.0f} s; per fleet "
+          f"records, calibrated, and judged on one window of {WINDOW - 2} residuals of each of {windows} new "
+          f"record(s); Sidak over 3 channels, predictive calibration ({time.perf_counter() - t0:.0f} s; per fleet "
           + ", ".join(f"{1e3 * c:.0f} ms with {j} records" for j, c in cost.items()) + ")")
     tab = pd.DataFrame(out).sort_values(["test", "alpha", "records"], ascending=[True, False, True])
     print(tab.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
@@ -414,8 +423,7 @@ def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--fleets", type=int, default=FLEETS, help="independent fleets per row of part 1 (0: skip it)")
     p.add_argument("--windows", type=int, default=WINDOWS,
-                   help="disjoint windows judged per fleet, all of its one new record (1 to "
-                        f"{(N - 2) // (WINDOW - 2)})")
+                   help=f"windows judged per fleet, one of each of as many new records (1 to {MAX_WINDOWS})")
     p.add_argument("--seed", type=int, default=None,
                    help="evaluation seed of part 1, to reproduce a run (default: a fresh one, printed)")
     p.add_argument("--data", default=None, help="CrazyPAD folder (default ../shared/data/crazypad)")
@@ -424,9 +432,9 @@ def main(argv=None) -> None:
     args = p.parse_args(argv)
     t0 = time.perf_counter()
     if args.fleets:
-        if args.fleets < 2 or not 1 <= args.windows <= (N - 2) // (WINDOW - 2):
-            p.error(f"--fleets needs at least 2 fleets and --windows 1 to {(N - 2) // (WINDOW - 2)} windows (a new "
-                    f"record holds {(N - 2) // (WINDOW - 2)} disjoint windows of {WINDOW - 2} residuals)")
+        if args.fleets < 2 or not 1 <= args.windows <= MAX_WINDOWS:
+            p.error(f"--fleets needs at least 2 fleets and --windows 1 to {MAX_WINDOWS} windows (one of each of as "
+                    "many new records of a fleet: more would judge a fleet's calibration on correlated windows)")
         fleet_table(evaluation_seed() if args.seed is None else args.seed, args.fleets, args.windows)
     if not args.no_crazypad:
         crazypad_rows(args.data)
