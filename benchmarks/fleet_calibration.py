@@ -35,7 +35,8 @@
    90000, 1000 fleets per row, and its one evaluation run, seed 763467546, 1500 fleets per row, had every row in
    band, but the evaluation run's F rows showed a design effect of 1.22-1.41, Ljung-Box 0.99-1.00.)
    ``FLEETS = 1500`` (3,000 windows per row) is what about 20 minutes afford at the 164-408 ms per fleet (5 to 20
-   records; the four calibrations) of that evaluation run on this 2-core machine under nice 19; 10,000 windows per
+   records; the four calibrations) of that evaluation run on this 2-core machine under nice 19 beside other jobs
+   (1,221 s; the run of this design, 94-217 ms per fleet on a less busy machine, took 662 s); 10,000 windows per
    row would take over an hour. The F control variate of the design before (the exact t pivot on the fitting
    records' true noise levels) explains part of ``V_b``, a small share of a 2-window rate's variance (it did not
    narrow the F intervals of development run 90000): removed.
