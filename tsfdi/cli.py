@@ -852,7 +852,8 @@ def _fit_args(p: argparse.ArgumentParser) -> None:
 
 
 @command("fit", "fit an AR / VAR baseline model (order by BIC) on records of a CSV, netCDF or flight-log file and "
-                "save it (.npz); with --k, a functionally pooled model over operating points", _fit_args)
+                "save it (.npz); with --u, an ARX (one output) or VARX (several) given the input columns; with --k, "
+                "a functionally pooled model over operating points", _fit_args)
 def _fit(args: argparse.Namespace) -> int:
     _check_out("--out", args.out)
     if args.lags is not None and args.lags > args.max_lags:
