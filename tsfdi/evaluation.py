@@ -427,8 +427,10 @@ def evaluate(data: Any, baselines: Baselines, *, models: Sequence[str] = ("var",
     sprt_alpha : float
         Error probability of the sequential rule's bound (in (0, 1)). With held-out residuals in the baselines
         (``fit_baselines(..., calibrate=True)``) the log-likelihood ratios are scale-corrected on them
-        (the held-out records of each fault state through every fault model), so that the bound's error rate holds on records the models were
-        not fitted on; evaluation records are never used for it.
+        (:meth:`Baselines.sprt_scale`: the held-out records of each fault state through every fault model; for
+        functionally pooled baselines the smallest of the scales at each operating point of the fitting records),
+        so that the bound's error rate holds on records the models were not fitted on; evaluation records are never
+        used for it.
     k : str or sequence of str, optional
         The record coordinates holding each record's operating parameters (e.g. ``"speed"`` of a hexacopter fleet),
         for baselines holding functionally pooled models (``fit_baselines(..., k=...)``, :class:`~tsfdi.FPResults`):
