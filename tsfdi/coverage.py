@@ -114,9 +114,11 @@ def _summaries(y: np.ndarray, e: np.ndarray, lags: int) -> np.ndarray:
     return np.concatenate(out)
 
 
-#: results -> {lags: the fitting records' summaries on the model's own held-out residuals}: one entry per (immutable)
-#: results object, so that judging many records against one baseline summarises its fitting records once (only what
-#: the library computed is kept: a ``held_out`` the caller gives may change between calls)
+#: model -> {lags: the fitting records' summaries on the model's own held-out residuals}: one entry per model
+#: specification, shared by every results object of it (a functionally pooled model's point results ``.at(k)`` at
+#: every ``k`` share one model, whose held-out residuals are the FP model's), so that judging many records against
+#: one baseline summarises its fitting records once (only what the library computed is kept: a ``held_out`` the
+#: caller gives may change between calls)
 _FIT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -220,10 +222,10 @@ def coverage(results: Any, signal: Any, *, held_out: Any = None, alpha: float = 
 
 def _fit_summaries(results: Any, held_out: Any, lags: int, idx: pd.MultiIndex) -> np.ndarray:
     """The summaries of the fitting records of ``results`` (one row each) on their held-out residuals (``held_out``,
-    default ``results.model.held_out_residuals()``, whose summaries are kept for the next call with the same results
+    default ``results.model.held_out_residuals()``, whose summaries are kept for the next call with the same model
     and ``lags``)."""
     if held_out is None:
-        known = _FIT.setdefault(results, {})
+        known = _FIT.setdefault(results.model, {})
         if lags not in known:
             known[lags] = _fit_summaries(results, results.model.held_out_residuals(), lags, idx)
         return known[lags]

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import numbers
-import weakref
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -755,8 +754,7 @@ def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: 
         per_state = fitted if point is None else {
             s: r.at([point[n] for n in r.model.k_names]) if isinstance(r, FPResults) else r for s, r in fitted.items()}
         sig = as_signal(x_all[:, chans], "signal", allow_constant=True)
-        _check_coverage(sig.values[part], per_state[healthy], plan, (level, m), position, counts["coverage"],
-                        held_out=_fp_held_out(fitted[healthy]))
+        _check_coverage(sig.values[part], per_state[healthy], plan, (level, m), position, counts["coverage"])
         # each record is filtered once through every (member) model; the windows of every length and
         # test are slices of these residuals
         rw_h = ResidualWindows({healthy: per_state[healthy]})
@@ -801,32 +799,12 @@ def _evaluate_record(x_all: np.ndarray, state: str, turb: str, ft: float, plan: 
                 _count(counts["identification"], key, acc, codes, names)
 
 
-#: FPResults -> its held-out residuals (each fitting record at its own k through the FP fit without it): the
-#: coverage check's null for the FP model at every record's k, computed once per results (where the records are)
-_FP_HELD_OUT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _fp_held_out(res: Any) -> Any:
-    """The held-out residuals of a functionally pooled model (kept per results); None for a point model (the
-    coverage check computes and keeps its own) or when they cannot be computed (a fold left with too few operating
-    points: the coverage check, if it applies, then says why it did not run)."""
-    if not isinstance(res, FPResults):
-        return None
-    if res not in _FP_HELD_OUT:
-        try:        # (as float arrays: the check reads them for every record)
-            _FP_HELD_OUT[res] = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
-                                 for e in res.model.held_out_residuals()]
-        except ValueError:
-            _FP_HELD_OUT[res] = None
-    return _FP_HELD_OUT[res]
-
-
-def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: int, out: Counter,
-                    held_out: Any = None) -> None:
+def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: int, out: Counter) -> None:
     """The coverage checks of one record's healthy part ``x`` by the healthy model ``res`` of ``key`` (level,
     model), one per method and window, into ``out`` (a row each): the record law of each calibrated detection test,
-    else the summary check (on ``held_out``, the fitting records' held-out residuals, when given), made once for
-    every test without a record law."""
+    else the summary check (on the held-out residuals of ``res``'s model: for a functionally pooled model's point
+    results ``.at(k)``, the FP model's, summarised once for every ``k``), made once for every test without a record
+    law."""
     if x.shape[0] < 2:
         return
     level, m = key
@@ -837,7 +815,7 @@ def _check_coverage(x: np.ndarray, res: Any, plan: dict, key: tuple, position: i
             memo = id(test) if test.calibrated else None
             if memo not in done:
                 try:
-                    done[memo] = check_coverage(test, res, x, held_out=held_out)
+                    done[memo] = check_coverage(test, res, x)
                 except ValueError as err:
                     done[memo] = f"coverage not checked: {err}"
             cov = done[memo]

@@ -339,7 +339,6 @@ class Monitor:
             self._sequential_tests(test, detection_test)
         else:
             self._window_tests(test, detection_test)
-        self._held_out: Any = None              # (a functionally pooled baseline's, computed when first needed)
         self._steady_given = steady_thresholds is not None
         self._steady_cache: dict = {}           # steady_window in samples -> the thresholds of the fault models
         if steady_thresholds is None:
@@ -433,21 +432,6 @@ class Monitor:
         elif point != self._k:
             raise ValueError(f"k: the stream is monitored at {self._k}, got {point}: a stream has one operating point; "
                              "reset() (or run) to monitor another")
-
-    def _fp_held_out(self) -> Any:
-        """The held-out residuals of a functionally pooled baseline (each fitting record at its own ``k`` through
-        the FP model fitted without it): the null of the coverage check at every ``k``, computed once per monitor;
-        ``None`` for a point baseline (the check keeps its own) or when they cannot be computed (then the check,
-        if it applies, says why it did not run)."""
-        if not isinstance(self.baseline, FPResults):
-            return None
-        if self._held_out is None:
-            try:        # (as float arrays: the check reads them for every record)
-                self._held_out = [np.asarray(e, dtype=np.float64).reshape(np.shape(e)[0], -1)
-                                  for e in self.baseline.model.held_out_residuals()]
-            except ValueError:
-                self._held_out = ()
-        return self._held_out or None
 
     def __repr__(self) -> str:
         what = f"models={list(self.models)}" if self.models else "models=None (detection only)"
@@ -849,7 +833,7 @@ class Monitor:
             e = np.asarray(self._base.residuals(sig, u), dtype=np.float64).reshape(-1, self.nchan)
             resid = pd.DataFrame(e, columns=[str(c) for c in self._base.model.data.channels])
         try:
-            cov = check_coverage(self.detection_test, self._base, sig, resid=resid, held_out=self._fp_held_out())
+            cov = check_coverage(self.detection_test, self._base, sig, resid=resid)
         except ValueError as err:
             return res, str(err)
         return (res, "") if cov is None else (dataclasses.replace(res, coverage=cov), "")
