@@ -323,4 +323,5 @@ def test_calibrating_a_reference_variance_on_point_weights_is_refused(fp_baselin
     with pytest.raises(ValueError, match=r"FTest carries the reference variance .* model 'var' of state 'healthy' has "
                                          r"weights='point' .* refit it with weights='pooled', or use LjungBox"):
         mixed.calibrated_tests("var", FTest(alpha=0.01, threshold="empirical"), "5s")
-    assert mixed.calibrated_tests("var", LjungBox(lags=10, alpha=0.01, threshold="empirical"), "5s")["healthy"].calibrated
+    calibrated = mixed.calibrated_tests("var", LjungBox(lags=10, alpha=0.01, threshold="empirical"), "5s")
+    assert calibrated["healthy"].calibrated

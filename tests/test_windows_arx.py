@@ -1,4 +1,5 @@
-"""Input-output (ARX, VARX, FP-ARX point) models in the windowed engine: ResidualWindows and identify_windows with ``u``."""
+"""Input-output (ARX, VARX, FP-ARX point) models in the windowed engine: ResidualWindows and identify_windows
+with ``u``."""
 
 import numpy as np
 import pandas as pd
@@ -223,10 +224,11 @@ def test_crazypad_rates_given_the_commands(shared_crazypad):
     assert np.concatenate(flagged[len(held):]).mean() > 0.5          # the cut flights: most windows (11 of 18)
 
 
-def test_monitor_takes_varx_models():
+def test_monitor_takes_varx_models(varx):
+    """Monitor with VARX baseline and fault models (it raised a raw KeyError 'baseline'): detects and identifies the
+    loss, streamed equals batch, u required, input-output and AR / VAR models not mixed."""
+    models = varx
     rng = np.random.default_rng(2034)
-    models = {name: tsfdi.models.VARX(*simulate_two(g, 3000, rng), 1, nb=3, nk=1).fit() for name, g in (("healthy", 1.0),
-                                                                                           ("loss", 0.5))}
     parts = [simulate_two(g, 1500, rng) for g in (1.0, 0.5)]       # the loss from 15 s at 100 Hz
     y, u = np.vstack([p[0] for p in parts]), np.vstack([p[1] for p in parts])
     make = lambda: tsfdi.Monitor(models["healthy"], {"loss": models["loss"]}, window="5s", fs=100.0,  # noqa: E731

@@ -477,9 +477,9 @@ class Baselines:
         healthy model and identifies with the fault models; with ``threshold="empirical"`` each model gets its own
         copy calibrated by :meth:`calibrated_tests`. ``rule="sprt"``: the sequential monitor (no window, no test:
         giving either raises a ``ValueError``) at ``sprt_alpha``, its log-likelihoods scaled by :meth:`sprt_scale`
-        (1 without held-out residuals, ``calibrate=False``). ``k``: the operating point of the flights it will watch (parameter name -> value):
-        functionally pooled baselines (``fit_baselines(..., k=...)``) give their models at it (:meth:`state_models`),
-        calibrated on the FP null. Without ``k`` the monitor of functionally pooled baselines holds the FP models and
+        (1 without held-out residuals, ``calibrate=False``). ``k``: the operating point of the flights it will watch
+        (parameter name -> value): functionally pooled baselines (``fit_baselines(..., k=...)``) give their models at
+        it (:meth:`state_models`), calibrated on the FP null. Without ``k`` the monitor of functionally pooled baselines holds the FP models and
         filters every flight at its own logged operating point (``run(signal, k={...})``, ``screen(records,
         k="speed")``).
         """
