@@ -289,7 +289,6 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     :math:`\hat K(h) + \tfrac{h^2}{2}(\hat v_{lr} - \hat v) = 0` (empirical cumulant generating function of one
     increment, plus the excess of the long-run variance over batches of ``_SPRT_BLOCK`` samples: the
     autocorrelation to second order); :math:`E[e^{h S_n}] \approx 1`."""
-    n = z.size // _SPRT_BLOCK
     if z.size < _MIN_EXPONENT_SAMPLES:
         raise ValueError(f"{where}: {z.size} armed samples, at least {_MIN_EXPONENT_SAMPLES} are needed to estimate "
                          "the SPRT's scale on it: give longer healthy runs")
@@ -297,8 +296,7 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     if not m < 0:
         raise ValueError(f"{where}: the SPRT's log-likelihood ratio grows on average ({m:.4g} per sample) on a "
                          "healthy run: the prediction errors are not the healthy law it assumes")
-    sums = z[: n * _SPRT_BLOCK].reshape(n, _SPRT_BLOCK).sum(axis=1)
-    extra = 0.5 * (float(((sums - m * _SPRT_BLOCK) ** 2).sum() / (n - 1) / _SPRT_BLOCK) - float(z.var()))
+    extra = 0.5 * (_long_run_variance(z) - float(z.var()))
     log_n = np.log(z.size)
 
     def f(h: float) -> float:
@@ -318,12 +316,17 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     return float(optimize.brentq(f, lo, hi, rtol=1e-10))
 
 
-def _mean_se(z: np.ndarray) -> tuple:
-    """Mean of ``z`` and its standard error from the long-run variance over batches of ``_SPRT_BLOCK`` samples."""
+def _long_run_variance(z: np.ndarray) -> float:
+    """Long-run variance per sample of ``z``: the variance of its sums over batches of ``_SPRT_BLOCK`` samples (about
+    its mean) per sample (at least two batches)."""
     n = z.size // _SPRT_BLOCK
-    m = float(z.mean())
     sums = z[: n * _SPRT_BLOCK].reshape(n, _SPRT_BLOCK).sum(axis=1)
-    return m, float(np.sqrt(((sums - m * _SPRT_BLOCK) ** 2).sum() / (n - 1) / _SPRT_BLOCK / z.size))
+    return float(((sums - float(z.mean()) * _SPRT_BLOCK) ** 2).sum() / (n - 1) / _SPRT_BLOCK)
+
+
+def _mean_se(z: np.ndarray) -> tuple:
+    """Mean of ``z`` and its standard error from the long-run variance (:func:`_long_run_variance`)."""
+    return float(z.mean()), float(np.sqrt(_long_run_variance(z) / z.size))
 
 
 def _censored_sd(x: np.ndarray, c: np.ndarray) -> float:
