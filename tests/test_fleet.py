@@ -168,8 +168,11 @@ def test_simulate_writes_chunked_storage(tmp_path, capsys, suffix):
         for name in ("roll", "r", "lost_control", "failure_time", "seed"):
             np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
         assert list(ds["state"].values) == list(ref["state"].values)
-        if suffix == ".zarr":          # chunked by record on disk, coordinates like the data
-            assert ds.chunksizes["record"] == (4, 2)
+        if suffix == ".zarr":          # chunked by record on disk; each label in one chunk (one read, issue 36)
+            assert ds["roll"].data.chunks[0] == (4, 2)
+            for name in ("lost_control", "lost_control_time", "failure_time", "seed", "state"):
+                assert ds[name].chunks == ((6,),), name
+                assert name in (ds.data_vars if name.startswith("lost") else ds.coords), name
     # the packed variables, and a cluster-less processes scheduler (zarr only)
     assert main(args[:2] + [str(tmp_path / "s.zarr")] + args[3:] + ["--shipped", "--no-progress"]) == 0
     with xr.open_zarr(tmp_path / "s.zarr", mask_and_scale=False) as ds:
