@@ -12,26 +12,34 @@ rotor's effectiveness (``failure_level`` drawn uniformly in ``--loss``, default 
 1-6 drawn) at a time drawn uniformly in [15 s, duration - 10 s]; a log is cut where the simulator declares the
 aircraft lost (``lost_control``).
 
-Detector (the guide's autopilot-log recipe, :doc:`docs/guide/online.md`): ``tsfdi.OnlineDetector`` with three pairs,
-the measured body rates ``p, q, r`` (gyro), one sample after their inputs (``nk=1``), ``statistic="sprt"`` (Wald's
-restarted SPRT of a variance increase on the standardised prediction errors), thresholds from the development
-healthy logs by ``calibrate(..., false_alarms_per_hour=rate)``. Two pair sets (``PAIR_SETS``): each rate against
-its axis's actuator control (``roll_control, pitch_control, yaw_control``, the rate controller's outputs) or
+Detector (the guide's autopilot-log recipe, :doc:`docs/guide/online.md`): ``tsfdi.OnlineDetector`` whose pairs
+are body rates from the gyro, one sample after their inputs (``nk=1``), ``statistic="sprt"`` (Wald's restarted SPRT
+on the standardised prediction errors), thresholds from the development healthy logs by
+``calibrate(..., false_alarms_per_hour=rate)``. Three pair sets (``PAIR_SETS``): the rates ``p, q, r`` against
+their axis's actuator control (``roll_control, pitch_control, yaw_control``, the rate controller's outputs) or
 against the six motor commands (``n_inputs=6``, ``eps=0.05``: what each rotor is asked to do, so a rotor that
-delivers less breaks its own coefficient).
+delivers less breaks its own coefficient), both with the SPRT of a variance increase (the default); or
+``"rotors"``, one pair per rotor: the rate in the direction a loss of that rotor turns the aircraft,
+:math:`\sin\psi_i\, p - \cos\psi_i\, q` (``SIGNATURES``; :math:`\psi_i` the arm angle of rotor :math:`i`,
+``ARM_ANGLES``, as in the simulator's mixer), against the six motor commands, with a one-sided SPRT of a mean
+shift of ``shift`` standard deviations (``SHIFTS``). Why: on the development logs a small loss shows as a bias of
+the one-step prediction errors of ``p`` and ``q`` (0.5-3 standard deviations over the first 0.5 s, decaying over
+1-2 s as the rate loop takes over) in the direction of the lost thrust's torque, which the variance-increase
+alternative spends poorly and which the rotor's direction joins across the roll and pitch pairs (Findings).
 
-Protocol. Development logs (seeds from ``--dev-seed``, default 1: ``--dev`` healthy logs, ``--dev`` failure logs
-of ``--loss`` and ``--dev`` more of 10-30 % loss, the losses the rate loop hides best) choose the settings: the
-pair set, the ARX orders and the requested false-alarm rate, from a small grid, by (no development false alarm,
-then the most development failures found within 0.5 s, then the lowest requested rate, then the smallest mean
-delay). The chosen detector, calibrated on the development healthy logs only, then runs once on fresh evaluation
-logs whose seed is drawn at run time from the operating system's entropy (``numpy.random.SeedSequence()``) and
-is neither printed nor stored; beside it, on the same logs, the other pair set at its own development choice and
-the uncalibrated ``OnlineDetector(pairs)`` defaults (rates against the actuator controls). Scores, per
-evaluation log: a failure log is *found* when its first alarm is at or after the failure (delay = alarm -
-failure time), *missed* when there is none, *false* when the first alarm comes before the failure; on a healthy
-log every alarm episode is a false alarm (counted with ``freeze_on_alarm=False`` so that every episode of the
-whole log counts, per hour of log); the pre-failure part of failure logs adds its hours and early alarms.
+Protocol. Development logs (seeds from ``--dev-seed``, default 1: ``--dev`` healthy logs, ``--dev`` failure logs of
+``--loss`` and ``--dev`` more of 10-30 % loss, the losses the rate loop hides best) choose the settings: the pair
+set, the ARX orders, the shift of the "rotors" set and the requested false-alarm rate, from a small grid, by (no
+development false alarm, then the most development failures found within 0.5 s, then the lowest requested rate, then
+the smallest mean delay); ``--dev-only`` stops there. The chosen detector, calibrated on the development healthy
+logs only, then runs once on fresh evaluation logs whose seed is drawn at run time from the operating system's
+entropy (``numpy.random.SeedSequence()``) and is neither printed nor stored; beside it, on the same logs, the other
+pair sets at their own development choice and the uncalibrated ``OnlineDetector(pairs)`` defaults (rates against the
+actuator controls). Scores, per evaluation log: a failure log is *found* when its first alarm is at or after the
+failure (delay = alarm - failure time), *missed* when there is none, *false* when the first alarm comes before the
+failure; on a healthy log every alarm episode is a false alarm (counted with ``freeze_on_alarm=False`` so that every
+episode of the whole log counts, per hour of log); the pre-failure part of failure logs adds its hours and early
+alarms.
 
 Findings (session 35, the run pasted in docs/guide/online.md, with the current ``calibrate``; one evaluation
 run). The motor set was added to the grid from development logs only: on the 24 healthy logs of development seeds
@@ -73,18 +81,33 @@ import tsfdi
 from tsfdi.datasets import FleetSpread, sensor_log, simulate_hexacopter
 from tsfdi.online import OnlineDetector
 
-PAIRS = ("roll", "pitch", "yaw")
 RATES = ("p", "q", "r")
 CONTROLS = ("roll_control", "pitch_control", "yaw_control")
 MOTORS = tuple(f"motor_command{i}" for i in range(1, 7))
-#: candidate pair sets: the logged inputs of each body-rate pair (topic.column) and the set's own options
+#: arm angle of rotor i (rad, from the nose towards the right wing), as in the simulator's mixer
+ARM_ANGLES = tuple(np.arange(6) * np.pi / 3)
+#: the body-rate direction a loss of rotor i turns the aircraft (roll rate, pitch rate): less thrust at the arm
+#: angle psi rolls towards it (sin psi) and pitches away from its nose component (-cos psi)
+SIGNATURES = tuple((float(np.sin(a)), float(-np.cos(a))) for a in ARM_ANGLES)
+#: candidate pair sets: the names of the pairs, the output of each pair (weights of the gyro rates p, q, r), the
+#: logged inputs of each pair (topic.column) and the set's own options
 PAIR_SETS = {
-    "controls": ([[f"commands.{c}"] for c in CONTROLS], {}),      # each rate against its axis's actuator control
-    "motors": ([[f"motors.{m}" for m in MOTORS]] * 3, {"eps": 0.05}),  # each rate against the six motor commands
+    # each rate against its axis's actuator control
+    "controls": (("roll", "pitch", "yaw"), ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+                 [[f"commands.{c}"] for c in CONTROLS], {}),
+    # each rate against the six motor commands
+    "motors": (("roll", "pitch", "yaw"), ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+               [[f"motors.{m}" for m in MOTORS]] * 3, {"eps": 0.05}),
+    # one pair per rotor: the rate in the direction its loss turns the aircraft against the six motor commands,
+    # with a one-sided mean-shift SPRT (its shift from the grid, SHIFTS)
+    "rotors": (tuple(f"rotor{i}" for i in range(1, 7)), tuple((sp, sq, 0.0) for sp, sq in SIGNATURES),
+               [[f"motors.{m}" for m in MOTORS]] * 6, {"eps": 0.05}),
 }
 TURBULENCE = ("light", "moderate", "severe")
 #: the development grid: pair set, ARX orders (na, nb) and the requested false alarms per hour
 ORDERS = ((1, 2), (1, 3))
+#: mean shifts (standard deviations of the pair's error) of the one-sided SPRT of the "rotors" set
+SHIFTS = (1.5, 2.0)
 REQUESTED = (0.01, 0.1, 1.0, 10.0)
 DEADLINE = 0.5          # seconds: a failure must be found within this
 LOSS = (0.1, 1.0)       # loss of effectiveness of the failed rotor, drawn uniformly (1: the whole rotor)
@@ -120,9 +143,14 @@ def make_logs(gen: np.random.Generator, n: int, *, failures: bool, duration: flo
 
 
 def split(f: pd.DataFrame, pairs: str = "controls"):
-    """Outputs (the three gyro rates) and inputs (``n_inputs`` columns per pair, pair by pair) of a log."""
-    inputs = PAIR_SETS[pairs][0]
-    return f[[f"gyro.{r}" for r in RATES]], f[[c for cols in inputs for c in cols]]
+    """Outputs (one column per pair: a gyro rate, or for the "rotors" set the rates in each rotor's loss direction)
+    and inputs (``n_inputs`` columns per pair, pair by pair) of a log."""
+    names, weights, inputs, _ = PAIR_SETS[pairs]
+    rates = f[[f"gyro.{r}" for r in RATES]]
+    w = np.asarray(weights, dtype=float)
+    y = rates if np.array_equal(w, np.eye(len(RATES))) else pd.DataFrame(rates.to_numpy() @ w.T, index=f.index,
+                                                                        columns=list(names))
+    return y, f[[c for cols in inputs for c in cols]]
 
 
 def seconds(f: pd.DataFrame) -> np.ndarray:
@@ -130,13 +158,17 @@ def seconds(f: pd.DataFrame) -> np.ndarray:
     return idx.total_seconds().to_numpy() if isinstance(idx, pd.TimedeltaIndex) else np.asarray(idx, dtype=float)
 
 
-def detector(pairs: str, na: int, nb: int, **options) -> OnlineDetector:
-    inputs, own = PAIR_SETS[pairs]
-    return OnlineDetector(list(PAIRS), na=na, nb=nb, n_inputs=len(inputs[0]), **{**SETTINGS, **own, **options})
+def detector(pairs: str, na: int, nb: int, shift: float | None = None, **options) -> OnlineDetector:
+    """The pair set's detector; ``shift``: the one-sided mean-shift SPRT of that many standard deviations instead of
+    the default variance-increase SPRT (for the "rotors" set)."""
+    names, _, inputs, own = PAIR_SETS[pairs]
+    if shift is not None:
+        own = {**own, "sprt": tsfdi.SPRT("mean", shift=shift, alpha=1e-9, beta=0.01, restart=True)}
+    return OnlineDetector(list(names), na=na, nb=nb, n_inputs=len(inputs[0]), **{**SETTINGS, **own, **options})
 
 
-def calibrated(healthy: list, pairs: str, na: int, nb: int, rate: float) -> OnlineDetector:
-    det = detector(pairs, na, nb)
+def calibrated(healthy: list, pairs: str, na: int, nb: int, rate: float, shift: float | None = None) -> OnlineDetector:
+    det = detector(pairs, na, nb, shift)
     ys, us = zip(*(split(f, pairs) for f, *_ in healthy))
     return det.calibrate(list(ys), list(us), false_alarms_per_hour=rate)
 
@@ -178,6 +210,7 @@ def score(det: OnlineDetector, free: OnlineDetector, logs: list, pairs: str = "c
         rows.append({"kind": "healthy" if ft is None else "failure", "turbulence": turb, "rotor": rotor,
                      "loss": level if ft is not None else 0.0,
                      "failure_s": ft, "first_alarm_s": first, "delay_s": delay, "outcome": outcome,
+                     "first_pair": out.first_alarm_pair,
                      "armed_s": float(np.max(armed) / det_fs(f)) if (armed >= 0).all() else np.nan,
                      "unarmed_warnings": len(caught), "healthy_hours": hours, "false_episodes": episodes})
     return pd.DataFrame(rows)
@@ -221,6 +254,8 @@ def main(argv=None) -> None:
     parser.add_argument("--dev-seed", type=int, default=1)
     parser.add_argument("--loss", type=float, nargs=2, default=LOSS, metavar=("LOW", "HIGH"),
                         help="range of the failed rotor's loss of effectiveness (1: the whole rotor)")
+    parser.add_argument("--dev-only", action="store_true",
+                        help="stop after the development grid (no evaluation log is drawn)")
     args = parser.parse_args(argv)
     t0 = time.time()
     dev = np.random.default_rng(args.dev_seed)
@@ -233,39 +268,49 @@ def main(argv=None) -> None:
     grid = []
     for pairs in PAIR_SETS:
         for na, nb in ORDERS:
-            for rate in REQUESTED:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    try:
-                        det = calibrated(dev_healthy, pairs, na, nb, rate)
-                    except ValueError as err:               # e.g. a pair armed too late on a healthy log
-                        print(f"pairs={pairs}, na={na}, nb={nb}, {rate:g} per hour: not calibrated: {err}")
-                        continue
-                s = summary(score(det, unfrozen(det, pairs, na, nb), dev_healthy + dev_fail, pairs)).iloc[0]
-                grid.append({"pairs": pairs, "na": na, "nb": nb, "requested / h": rate, "threshold": det.threshold,
-                             "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
-                             "found in time": int(s[f"within {DEADLINE} s"]),
-                             "false episodes": int(s["false episodes"]), "mean delay s": s["mean delay s"]})
+            for shift in (SHIFTS if pairs == "rotors" else (None,)):
+                for rate in REQUESTED:
+                    what = f"pairs={pairs}, na={na}, nb={nb}, shift={shift}, {rate:g} per hour"
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        try:
+                            det = calibrated(dev_healthy, pairs, na, nb, rate, shift)
+                        except ValueError as err:               # e.g. a pair armed too late on a healthy log
+                            print(f"{what}: not calibrated: {err}")
+                            continue
+                    s = summary(score(det, unfrozen(det, pairs, na, nb), dev_healthy + dev_fail, pairs)).iloc[0]
+                    grid.append({"pairs": pairs, "na": na, "nb": nb, "shift": shift, "requested / h": rate,
+                                 "threshold": det.threshold,
+                                 "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
+                                 "found in time": int(s[f"within {DEADLINE} s"]),
+                                 "false episodes": int(s["false episodes"]), "mean delay s": s["mean delay s"]})
     grid = pd.DataFrame(grid)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(grid.to_string(index=False))
     grid["quiet"] = grid["false episodes"] == 0
     order = grid.sort_values(["quiet", "found in time", "requested / h", "mean delay s"],
                              ascending=[False, False, True, True])
-    picks = {p: order[order.pairs == p].iloc[0] for p in PAIR_SETS}       # each set's best, for comparison
-    pick = order.iloc[0]
-    pairs, na, nb, rate = str(pick["pairs"]), int(pick["na"]), int(pick["nb"]), float(pick["requested / h"])
-    print(f"chosen on the development logs: pairs={pairs}, na={na}, nb={nb}, false_alarms_per_hour={rate:g}")
+    picks = {p: order[order.pairs == p].iloc[0] for p in PAIR_SETS if (order.pairs == p).any()}   # each set's best
+
+    def setting(r):
+        """pair set, na, nb, shift (None: the variance SPRT) and requested rate of a grid row"""
+        return (str(r["pairs"]), int(r["na"]), int(r["nb"]), None if pd.isna(r["shift"]) else float(r["shift"]),
+                float(r["requested / h"]))
+
+    pairs, na, nb, shift, rate = setting(order.iloc[0])
+    print(f"chosen on the development logs: pairs={pairs}, na={na}, nb={nb}, shift={shift}, "
+          f"false_alarms_per_hour={rate:g}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        dets = {p: calibrated(dev_healthy, p, int(r["na"]), int(r["nb"]), float(r["requested / h"]))
-                for p, r in picks.items()}
+        dets = {p: calibrated(dev_healthy, *setting(r)[:3], setting(r)[4], setting(r)[3]) for p, r in picks.items()}
     det = dets[pairs]
     cal = det.calibration_
     print(f"calibrated on {cal.runs} healthy logs ({cal.healthy_hours * 60:.1f} min): SPRT threshold "
           f"{det.threshold:.3f}, scale {cal.sprt_scale:.3f}; stated false alarms per hour: {rate:g} on average over "
           f"new logs, a single log's 5 / 50 / 95 %: {cal.rate_band[0]:.3g} / {cal.rate_band[1]:.3g} / "
           f"{cal.rate_band[2]:.3g}")
+    if args.dev_only:
+        return
 
     fresh = np.random.default_rng(np.random.SeedSequence())        # drawn now, printed and stored nowhere
     t1 = time.time()
@@ -279,13 +324,15 @@ def main(argv=None) -> None:
         # defaults uncalibrated (the rates against the actuator controls, the SPRT at its upper bound)
         for p, r in picks.items():
             if p != pairs:
-                other = score(dets[p], unfrozen(dets[p], p, int(r["na"]), int(r["nb"])), logs, p)
-                print(f"\npairs={p} at its development choice (na={int(r['na'])}, nb={int(r['nb'])}, "
-                      f"{float(r['requested / h']):g} per hour, threshold {dets[p].threshold:.3f}):")
+                _, pna, pnb, pshift, prate = setting(r)
+                other = score(dets[p], unfrozen(dets[p], p, pna, pnb), logs, p)
+                print(f"\npairs={p} at its development choice (na={pna}, nb={pnb}, shift={pshift}, {prate:g} per hour, "
+                      f"threshold {dets[p].threshold:.3f}):")
                 print(by_loss(other).to_string())
                 print(summary(other).to_string(index=False))
-        plain = OnlineDetector(list(PAIRS))
-        dflt = score(plain, OnlineDetector(list(PAIRS), freeze_on_alarm=False), logs)
+        names = list(PAIR_SETS["controls"][0])
+        plain = OnlineDetector(names)
+        dflt = score(plain, OnlineDetector(names, freeze_on_alarm=False), logs)
         print(f"\nOnlineDetector(pairs) uncalibrated, rates against the actuator controls (threshold "
               f"{plain.threshold:.3f}):")
         print(by_loss(dflt).to_string())
@@ -294,7 +341,8 @@ def main(argv=None) -> None:
         print(f"\nby loss of effectiveness (within: found within {DEADLINE} s):")
         print(by_loss(tab).to_string())
         print("\nper failure log:")
-        print(fail[["turbulence", "rotor", "loss", "failure_s", "first_alarm_s", "delay_s", "outcome"]].round(3)
+        print(fail[["turbulence", "rotor", "loss", "failure_s", "first_alarm_s", "delay_s", "outcome", "first_pair"]]
+              .round(3)
               .to_string(index=False))
         late = tab[(tab.outcome != "found") & (tab.kind == "failure") | (tab.false_episodes > 0)]
         if len(late):

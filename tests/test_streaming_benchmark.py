@@ -22,9 +22,19 @@ def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
     assert 15.0 <= ft <= 30.0 and 1 <= rotor <= 6 and turb in B.TURBULENCE and 0.5 <= loss <= 1.0
     y, u = B.split(f, "motors")
     assert list(y.columns) == ["gyro.p", "gyro.q", "gyro.r"] and u.shape[1] == 18     # six motors per pair
+    # one pair per rotor: the rates in the direction its loss turns the aircraft (rotor 1 on the nose: pitch down,
+    # rotor 2 at 60 degrees to the right: roll right and pitch down), against the six motor commands
+    y, u = B.split(f, "rotors")
+    assert list(y.columns) == [f"rotor{i}" for i in range(1, 7)] and u.shape[1] == 36
+    p, q = f["gyro.p"].to_numpy(), f["gyro.q"].to_numpy()
+    np.testing.assert_allclose(y["rotor1"], -q, atol=1e-12)
+    np.testing.assert_allclose(y["rotor2"], np.sqrt(3) / 2 * p - q / 2, atol=1e-12)
+    np.testing.assert_allclose(y["rotor4"], q, atol=1e-12)
     for pairs in B.PAIR_SETS:
-        det = B.calibrated(healthy[:3], pairs, 1, 2, 1.0)
+        shift = B.SHIFTS[-1] if pairs == "rotors" else None
+        det = B.calibrated(healthy[:3], pairs, 1, 2, 1.0, shift)
         assert det.calibration_.runs == 3 and det.statistic == "sprt" and det.models[0].nk == 1
+        assert det.sprt.alternative == ("mean" if pairs == "rotors" else "variance")
         tab = B.score(det, B.unfrozen(det, pairs, 1, 2), healthy[3:] + failures, pairs)
         fail = tab[tab.kind == "failure"]
         assert (fail.outcome == "found").all() and (fail.delay_s <= B.DEADLINE).all(), (pairs, fail)
