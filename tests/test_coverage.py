@@ -13,7 +13,7 @@ from conftest import as_kind
 from scipy import stats
 
 import tsfdi
-from tsfdi.coverage import (ALL, MIN_RECORDS, Coverage, check_coverage, coverage, record_coverage,
+from tsfdi.coverage import (ALL, LEVEL_SUM, MIN_RECORDS, Coverage, check_coverage, coverage, record_coverage,
                             warn_if_not_covered)
 from tsfdi.exceptions import CoverageWarning, TsfdiWarning
 
@@ -241,16 +241,18 @@ def calibrated(baseline):
 def test_record_coverage_table_is_the_record_law_of_every_part_and_channel(calibrated):
     """One row per part and channel: the new record's level and its p-value under the part's predictive record
     law (ScaledChi2Threshold.record_pvalue on the windows the calibration used: every window here, step 1), the
-    fitting records' levels, the one-sided bound at the Sidak share of alpha over the 9 rows; a record of a higher
-    noise level is out on the F test, one of a lower noise level is not warned of (its false alarms are fewer)."""
+    fitting records' levels, the one-sided bound at the Sidak share of alpha over the 10 rows (these 9 and the
+    levels' sum, test_record_coverage_level_sum_row_by_hand); a record of a higher noise level is out on the F
+    test, one of a lower noise level is not warned of (its false alarms are fewer)."""
     b, test = calibrated
     rng = np.random.default_rng(12)
     y = fleet(rng, 1)[0]
     e = b.residuals(y)
     cov = record_coverage(test, e)
-    assert cov.records == 10 and cov.nobs == e.shape[0] and len(cov.table) == 9
-    assert list(cov.table.index.get_level_values("summary").unique()) == ["LjungBox", "FTest", "MeanTest"]
-    share = 1 - 0.99 ** (1 / 9)
+    assert cov.records == 10 and cov.nobs == e.shape[0] and len(cov.table) == 10
+    assert list(cov.table.index.get_level_values("summary").unique()) == ["LjungBox", "FTest", "MeanTest",
+                                                                          LEVEL_SUM]
+    share = 1 - 0.99 ** (1 / 10)
     for part in test.tests:
         stat = part.window_statistic(np.asarray(e), 198, 1)
         for c, th in enumerate(part.thresholds_):
@@ -262,9 +264,38 @@ def test_record_coverage_table_is_the_record_law_of_every_part_and_channel(calib
             assert row["lower"] == -np.inf and row["out"] == (p < share) == (level > row["upper"])
     assert cov.covered
     loud = record_coverage(test, b.residuals(fleet(rng, 1, noise=1.6)[0]))
-    assert not loud.covered and loud.out.index[0][0] == "FTest" and "FTest[" in loud.warning_message()
+    assert not loud.covered and loud.table.loc["FTest", "out"].any() and "FTest[" in loud.warning_message()
     quiet = record_coverage(test, b.residuals(fleet(rng, 1, noise=0.6)[0]))
     assert quiet.covered and (quiet.table.loc["FTest", "t"] < -3).all()
+
+
+def test_record_coverage_level_sum_row_by_hand(calibrated):
+    """The row of the whole decision: the new record's levels summed over the parts and channels against each
+    fitting record's sum (the record laws' levels_), the one-sided Student t pivot (D - mean) / (s sqrt(1 + 1/J))
+    with J - 1 degrees of freedom, its bound at the Sidak share of the 10 rows; a record half as long has its
+    variance scaled by the fitting records' windows over its own (noisier levels). A record whose means moved a
+    little on every channel lies within every part's row and outside the sum (it was covered before)."""
+    b, test = calibrated
+    rng = np.random.default_rng(18)
+    e = np.asarray(b.residuals(fleet(rng, 1)[0]))
+    fit = np.sum([th.levels_ for part in test.tests for th in part.thresholds_], axis=0)
+    share = 1 - 0.99 ** (1 / 10)
+    for x, ratio in ((e, 1.0), (e[:999], 10 / 5)):                   # 10 windows of 198 per fitting record; 5
+        cov = record_coverage(test, x)
+        row = cov.table.loc[(LEVEL_SUM, ALL)]
+        d = cov.table["value"].iloc[:9].sum()
+        scale = fit.std(ddof=1) * np.sqrt(1 / 10 + ratio)
+        t = (d - fit.mean()) / scale
+        assert row["value"] == pytest.approx(d) and row["fit_mean"] == pytest.approx(fit.mean())
+        assert row["fit_std"] == pytest.approx(fit.std(ddof=1)) and row["fit_max"] == pytest.approx(fit.max())
+        assert row["t"] == pytest.approx(t) and row["pvalue"] == pytest.approx(stats.t.sf(t, 9))
+        assert row["upper"] == pytest.approx(fit.mean() + stats.t.isf(share, 9) * scale)
+        assert row["out"] == (row["pvalue"] < share) and row["lower"] == -np.inf
+    moved = record_coverage(test, b.residuals(fleet(rng, 1, shift=0.15)[0]))
+    assert not moved.covered and list(moved.out.index) == [(LEVEL_SUM, ALL)], moved.table
+    one = tsfdi.FTest(alpha=0.01, threshold="calibrated").calibrate(
+        [r[:, :1] for r in b.model.held_out_residuals()], window=200)
+    assert LEVEL_SUM not in record_coverage(one, e[:, :1]).table.index.get_level_values("summary")  # one row
 
 
 def test_record_coverage_bad_input(calibrated):
@@ -379,7 +410,7 @@ def test_check_coverage_prefers_the_record_law_of_a_calibrated_test(calibrated):
     got = check_coverage(test, b, y)
     ref = record_coverage(test, b.residuals(y))
     np.testing.assert_allclose(got.table["pvalue"], ref.table["pvalue"], rtol=1e-12)
-    assert not got.covered and got.out.index[0][0] == "FTest"
+    assert not got.covered and got.table.loc["FTest", "out"].any()
     pd.testing.assert_frame_equal(check_coverage(tsfdi.LjungBox(), b, y).table, coverage(b, y).table)
     assert check_coverage(test, b, y[:590]) is None                  # 2 windows, shorter than the records
     assert not check_coverage(test, b, y[:600]).covered             # 3 windows of 198 residuals: the record law
