@@ -62,7 +62,8 @@ class Coverage:
         False-warning rate of the check on a record like the fitting records (all summaries together).
     table : pandas.DataFrame
         One row per summary, indexed by (``summary``, ``channel``) (of :func:`record_coverage`: see there, with
-        the row of the whole decision :data:`LEVEL_SUM`); ``summary`` is ``"mean"`` (the signal's mean, the trim), ``"log_scale"`` (log root-mean-square residual) or
+        the row of the whole decision :data:`LEVEL_SUM`); ``summary`` is ``"mean"`` (the signal's mean, the
+        trim), ``"log_scale"`` (log root-mean-square residual) or
         ``"acf1"``, ``"acf2"``, ... (Fisher z, ``arctanh``, of the residual autocorrelation at that lag).
         Columns: ``value`` (the new record's), ``fit_mean``, ``fit_std``, ``fit_min``, ``fit_max`` (over the
         fitting records), ``lower``, ``upper`` (the predictive interval at the per-summary level), ``t``
