@@ -9,8 +9,9 @@ check's false-warning rate on a record like the fitting records, all summaries t
 (``coverage``: trims, residual scales and autocorrelations, two-sided per-summary predictive t) and "record law"
 (``record_coverage`` of LB+F+M -- ``tsfdi.AnyOf`` of Ljung-Box, F and mean tests, Sidak over parts and channels,
 calibrated on the held-out residuals -- one-sided: the tests' own statistics above the predictive record law their
-thresholds rest on; since session 37 with the row of their levels' sum, section 6); and, per section, of the records whose disjoint windows LB+F+M flags beyond their two-sided
-99.9 % binomial band of alpha (where its calibration does not hold), how many each check warned of. Sections:
+thresholds rest on; since session 37 with the row of their levels' sum, section 6); and, per section, of the
+records whose disjoint windows LB+F+M flags beyond their two-sided 99.9 % binomial band of alpha (where its
+calibration does not hold), how many each check warned of. Sections:
 
 1. Simulated fleet (fixed seed): VAR(2) records whose coefficients, channel noise scales and means vary by +-15 %
    between aircraft (factors 1 + N(0, 0.075^2), or uniform on 1 +- 0.15); per repetition a baseline on 5, 10 or
