@@ -271,3 +271,97 @@ def test_healthy_trim_by_segment_takes_each_segment_at_its_position(bench, small
     flat = bench.healthy_trim_model(airframes, window)(small_items)
     assert res.S_within[1, 1] < 0.5 * flat.S_within[1, 1]
     assert got["lr"] != pytest.approx(bench.healthy_trim_stat(airframes, window)(flat, cut)["lr"])
+
+
+# ------------------------------------------------------------------ detectability limit (section 4), without data
+def _summary_table(rng, normal=(5, 3), cut=(), cols=("a", "b")):
+    """Flights of airframes 'E8' / 'E9' (normal counts ``normal``; ``cut``: (drone, depth, shift vector) per cut
+    flight), every summary N(airframe mean + shift, 1) with airframe means 10 and -10."""
+    rows = []
+    for drone, n in zip(("E8", "E9"), normal):
+        rows += [{"depth": 0.0, "drone": drone, "log": f"{drone}_n{i}"} for i in range(n)]
+    rows += [{"depth": d, "drone": drone, "log": f"{drone}_c{i}", "shift": s} for i, (drone, d, s) in enumerate(cut)]
+    t = pd.DataFrame(rows)
+    base = np.where(t.drone == "E8", 10.0, -10.0)[:, None] + rng.standard_normal((len(t), len(cols)))
+    shift = np.array([s if isinstance(s, np.ndarray) else np.zeros(len(cols)) for s in t.get("shift", [0] * len(t))])
+    return t.drop(columns="shift", errors="ignore").assign(**dict(zip(cols, (base + shift).T)))
+
+
+def test_null_spread_pools_each_airframe_about_its_own_mean():
+    bench = load_benchmark()
+    t = pd.DataFrame({"depth": [0.0] * 5 + [3.0], "drone": ["E8", "E8", "E8", "E9", "E9", "E8"],
+                      "log": list("abcdef"), "a": [1.0, 2.0, 3.0, 10.0, 14.0, 99.0]})
+    mu, S, df, n_a = bench.null_spread(t, ["a"])
+    assert mu.loc["E8", "a"] == 2.0 and mu.loc["E9", "a"] == 12.0       # the cut flight (99) is not in the null
+    assert df == 3 and S[0, 0] == pytest.approx((1 + 0 + 1 + 4 + 4) / 3) and n_a.to_dict() == {"E8": 3, "E9": 2}
+
+
+def test_predictive_power_is_the_t_and_hotelling_law():
+    bench = load_benchmark()
+    from scipy import stats
+    # one summary: the two-sided predictive t, noncentral with delta / sqrt(1 + 1/n_a)
+    df, n_a, z = 6, 5, 4.0
+    lam = z / np.sqrt(1 + 1 / n_a)
+    crit = stats.t.isf(0.005, df)
+    want = stats.nct.sf(crit, df, lam) + stats.nct.cdf(-crit, df, lam)
+    assert bench.predictive_power(lam ** 2, 1, df) == pytest.approx(want, rel=1e-6)
+    assert bench.predictive_power(0.0, 3, df) == pytest.approx(0.01, rel=1e-6)        # no shift: the size
+    assert bench.predictive_power(0.0, 1, np.inf) == pytest.approx(0.01, rel=1e-6)
+    z50 = bench.detectable_effect(0.5, n_a, df)
+    assert bench.predictive_power(z50 ** 2 / (1 + 1 / n_a), 1, df) == pytest.approx(0.5, abs=1e-9)
+    assert bench.detectable_effect(0.5, np.inf, np.inf) == pytest.approx(stats.norm.isf(0.005), abs=0.01)
+    assert z50 > bench.detectable_effect(0.5, 50, 200) > bench.detectable_effect(0.5, np.inf, np.inf)
+    with pytest.raises(ValueError, match="2 degrees of freedom cannot estimate the covariance of 3 summaries"):
+        bench.predictive_power(1.0, 3, 2)
+
+
+def test_predictive_test_holds_its_size_and_leaves_the_normal_flight_out():
+    bench = load_benchmark()
+    rng = np.random.default_rng(2032)
+    cut_p, normal_p = [], []
+    for _ in range(1500):                            # 8 normal flights and a new one, all from the null
+        t = _summary_table(rng, cut=[("E9", 1.0, None)])
+        pt = bench.predictive_test(t, ["a", "b"])
+        cut_p.append(pt.pvalue.iloc[-1])
+        normal_p += list(pt.pvalue.iloc[:-1])
+    assert list(pt.df) == [5] * 8 + [6]            # a normal flight judged against the 7 others
+    # exact law: the p-values uniform, the rate of p < 0.05 in its 99 % binomial band (without the factor
+    # 1 + 1/n_a: 0.074 for the new flight, outside)
+    for p, n in ((np.array(cut_p), 1500), (np.array(normal_p), 1500 * 8)):
+        lo, hi = stats_band(n, 0.05)
+        assert lo <= np.mean(p < 0.05) <= hi and abs(np.mean(p) - 0.5) < 0.03
+    shifted = _summary_table(rng, cut=[("E8", 2.0, np.array([8.0, 0.0]))])
+    assert bench.predictive_test(shifted, ["a", "b"]).detected.iloc[-1]
+    with pytest.raises(ValueError, match="no normal flight of airframe 'E7'"):
+        bench.predictive_test(shifted.assign(drone=["E8"] * 8 + ["E7"]), ["a"])
+
+
+def stats_band(n, p):
+    from scipy import stats
+    return stats.binom.ppf(0.005, n, p) / n, stats.binom.ppf(0.995, n, p) / n
+
+
+def test_depth_effects_and_session_scatter_by_hand():
+    bench = load_benchmark()
+    rng = np.random.default_rng(7)
+    t = _summary_table(rng, cut=[("E8", 1.0, None), ("E8", 1.0, None), ("E8", 2.0, None)], cols=("a",))
+    eff = bench.depth_effects(t, ["a"])
+    mu, S, df, n_a = bench.null_spread(t, ["a"])
+    sd = np.sqrt(S[0, 0])
+    one = t[(t.depth == 1.0)].a - mu.loc["E8", "a"]
+    assert list(eff.depth) == [1.0, 2.0] and list(eff.flights) == [2, 1]
+    assert eff["z a"][0] == pytest.approx(one.mean() / sd)
+    assert eff["se a"][0] == pytest.approx(one.std() / np.sqrt(2) / sd)
+    assert np.isnan(eff["se a"][1])
+    assert eff["power a"][0] == pytest.approx(bench.predictive_power(eff["z a"][0] ** 2 / (1 + 1 / 5), 1, df))
+    assert bench.joint_power(t, ["a"])[("E8", 1.0)] == pytest.approx(eff["power a"][0])   # one summary: the t
+    # session scatter: depth means on a parabola plus offsets +-1 (sigma units), flights' se 0.5 (two flights)
+    depths = np.arange(1.0, 7.0)
+    off = np.array([1, -1, 1, -1, 1, -1.0])
+    e = pd.DataFrame({"depth": depths, "flights": 2, "z a": 0.3 * depths ** 2 + off, "se a": 0.5})
+    resid = off - np.polyval(np.polyfit(depths, off, 2), depths)
+    tau, within = bench.session_spread(e, "a")
+    assert tau == pytest.approx(np.sqrt(np.sum(resid ** 2) / 3 - 0.25)) and within == pytest.approx(0.5 * np.sqrt(2))
+    assert bench.session_spread(e.assign(**{"z a": 0.3 * depths ** 2}), "a")[0] == 0.0     # on the curve: none
+    with pytest.raises(ValueError, match="3 depths"):
+        bench.session_spread(e[:3], "a")
