@@ -20,7 +20,7 @@ their axis's actuator control (``roll_control, pitch_control, yaw_control``, the
 against the six motor commands (``n_inputs=6``, ``eps=0.05``: what each rotor is asked to do, so a rotor that
 delivers less breaks its own coefficient), both with the SPRT of a variance increase (the default); or
 ``"rotors"``, one pair per rotor: the rate in the direction a loss of that rotor turns the aircraft,
-:math:`\sin\psi_i\, p - \cos\psi_i\, q` (``SIGNATURES``; :math:`\psi_i` the arm angle of rotor :math:`i`,
+``sin(psi_i) p - cos(psi_i) q`` (``SIGNATURES``; ``psi_i`` the arm angle of rotor ``i``,
 ``ARM_ANGLES``, as in the simulator's mixer), against the six motor commands, with a one-sided SPRT of a mean
 shift of ``shift`` standard deviations (``SHIFTS``). Why: on the development logs a small loss shows as a bias of
 the one-step prediction errors of ``p`` and ``q`` (0.5-3 standard deviations over the first 0.5 s, decaying over
