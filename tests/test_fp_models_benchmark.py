@@ -1,7 +1,8 @@
 """benchmarks/fp_models.py (issue 32), its CrazyPAD rows on reduced paths: the healthy baselines over both airframes
 (pooled and FP, leave one flight out), the detection rule of a flight, the between-flight spread of the depth
 estimate chosen on the fitting depths only, and the detection of the cut flights through models of the depth (FP-VAR
-likelihood ratio, trim over depth and airframe, healthy trim; nested folds on a subset of depths).
+likelihood ratio, trim over depth and airframe, healthy trim; nested folds on a subset of depths), and the
+detectability section's arithmetic (flight summaries, the predictive law and its power, the session scatter).
 
 The data-bound tests need ../shared/data/crazypad (``shared_crazypad`` in conftest.py)."""
 
@@ -365,3 +366,25 @@ def test_depth_effects_and_session_scatter_by_hand():
     assert bench.session_spread(e.assign(**{"z a": 0.3 * depths ** 2}), "a")[0] == 0.0     # on the curve: none
     with pytest.raises(ValueError, match="3 depths"):
         bench.session_spread(e[:3], "a")
+
+
+def test_flight_summaries_by_hand(bench, choice, small_items):
+    cp = bench.cp
+    t = bench.flight_summaries(small_items, choice)
+    assert list(t.log) == [f.log for _, f in small_items] and list(t.columns[3:]) == list(bench.SUMMARIES)
+    window = cp.samples(bench.WINDOW_S)
+    normal = [f for d, f in small_items if d == 0.0]
+    cut = [f for d, f in small_items if d == 4.0][0]
+    row = t[(t.depth == 4.0) & (t.log == cut.log)].iloc[0]
+    segs = [x[:len(x) - len(x) % window] for x in cut.arrays(cp.COMMANDS)]
+    np.testing.assert_allclose([row[c] for c in bench.TRIMS], np.vstack(segs).mean(axis=0), rtol=1e-12)
+    # the spread about each segment's own mean, not about the flight's (the segments hold different trims)
+    dev = np.vstack([s - s.mean(axis=0) for s in segs])
+    sd = np.sqrt((dev ** 2).sum(axis=0) / (len(dev) - len(segs)))
+    np.testing.assert_allclose([row[c] for c in bench.SPREADS], np.log(sd), rtol=1e-12)
+    # a normal flight's residuals through the healthy VAR fitted without it; a cut flight's through all normal flights
+    for depth, f, fitted in ((0.0, normal[0], normal[1:]), (4.0, cut, normal)):
+        var = tsfdi.VAR(cp.records(fitted, choice.channels), choice.order, trend="c").fit()
+        e = np.vstack([np.asarray(var.residuals(x)) for x in f.arrays(choice.channels)])
+        got = t[(t.depth == depth) & (t.log == f.log)].iloc[0]
+        assert got["resid all"] == pytest.approx(np.linalg.slogdet(np.cov(e.T))[1], rel=1e-9)
