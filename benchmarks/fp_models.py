@@ -881,6 +881,9 @@ def detectability(ch, b0: pd.DataFrame) -> None:
     for c in SUMMARIES:
         own = t[t.depth == 0.0].groupby("drone")[c].agg(["std", "size"])
         sess = [f"{d} {'/'.join(f'{v:.1f}' for v in session_spread(g, c))}" for d, g in eff.groupby("drone")]
+        if c == SUMMARIES[0]:
+            print("      (session scatter over depths - " + f"{LACK_OF_FIT_DEGREE + 1} degrees of freedom: "
+                  + ", ".join(f"{d} {len(g) - LACK_OF_FIT_DEGREE - 1}" for d, g in eff.groupby("drone")) + ")")
         pt = predictive_test(t, [c])
         cut, normal = pt[pt.depth > 0], pt[pt.depth == 0]
         per = ", ".join(f"{d} {sd_a:.4g}, {n - 1}" for d, sd_a, n in zip(own.index, own["std"], own["size"]))
