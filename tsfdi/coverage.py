@@ -337,11 +337,12 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
     as the fitting records' were.
 
     Each row has its share of ``alpha``: with the 6 segments of 3 flights of a CrazyPAD airframe (``J = 6``) and
-    LB+F+M on six channels, a row must lie about 6.7 predictive standard deviations out, so that a record whose
-    statistics all sit a few deviations high is not warned of. The row of the whole decision sums a record's
-    levels over the parts and channels, :math:`D = \sum_r l_r`: the record law takes every level as a normal
-    record effect, so a fixed linear combination of them is normal too (when they are jointly normal), and over the
-    ``J`` fitting records' sums :math:`D_j`, with mean :math:`\bar D` and standard deviation :math:`s_D`,
+    LB+F+M on six channels (18 rows), a row must lie about 6.7 predictive standard deviations out (6.8 with the
+    row below), so that a record whose statistics all sit a few deviations high is not warned of. The row of the
+    whole decision sums a record's levels over the parts and channels, :math:`D = \sum_r l_r`: the record law takes
+    every level as a normal record effect, so a fixed linear combination of them is normal too (when they are
+    jointly normal), and over the ``J`` fitting records' sums :math:`D_j`, with mean :math:`\bar D` and standard
+    deviation :math:`s_D`,
 
     .. math:: t = \frac{D_{new} - \bar D}{s_D \sqrt{1/J + \max(1, \bar n / n_{new})}} \sim t_{J-1}
 
