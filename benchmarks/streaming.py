@@ -115,6 +115,7 @@ from tsfdi.online import OnlineDetector
 RATES = ("p", "q", "r")
 CONTROLS = ("roll_control", "pitch_control", "yaw_control")
 MOTORS = tuple(f"motor_command{i}" for i in range(1, 7))
+ACCELS = ("ax", "ay", "az")
 #: arm angle of rotor i (rad, from the nose towards the right wing), as in the simulator's mixer
 ARM_ANGLES = tuple(np.arange(6) * np.pi / 3)
 #: the body-rate direction a loss of rotor i turns the aircraft (roll rate, pitch rate): less thrust at the arm
@@ -147,9 +148,11 @@ SETTINGS = dict(nk=1, statistic="sprt", forgetting_factor=0.999, eps=0.03, nonfi
 
 
 def make_logs(gen: np.random.Generator, n: int, *, failures: bool, duration: float, fs: float,
-              loss: tuple = LOSS) -> list:
+              loss: tuple = LOSS, accel: bool = False) -> list:
     """``n`` simulated autopilot logs on the ``fs`` grid: (DataFrame of the gyro rates, actuator controls and
-    motor commands, failure time or None, rotor, turbulence, loss of effectiveness drawn uniformly in ``loss``)."""
+    motor commands, failure time or None, rotor, turbulence, loss of effectiveness drawn uniformly in ``loss``).
+    ``accel``: the accelerometer's specific forces ``accel.ax, accel.ay, accel.az`` and the collective as well
+    (last columns; the same draws, so the same logs)."""
     seeds = gen.integers(0, 2**31 - 1, n)
     turb = [TURBULENCE[i] for i in gen.integers(0, 3, n)]
     rotors = gen.integers(1, 7, n) if failures else np.zeros(n, dtype=int)
@@ -164,8 +167,11 @@ def make_logs(gen: np.random.Generator, n: int, *, failures: bool, duration: flo
         if bool(rec["lost_control"]):
             rec = rec.sel(time=slice(None, float(rec["lost_control_time"]) - 0.002))
         log = sensor_log(rec, rng=int(seeds[i]) ^ 0x5E75)
-        frames = tsfdi.align({"gyro": log["gyro"][list(RATES)], "commands": log["commands"][list(CONTROLS)],
-                              "motors": log["motors"][list(MOTORS)]}, fs=fs)
+        topics = {"gyro": log["gyro"][list(RATES)], "commands": log["commands"][list(CONTROLS)],
+                  "motors": log["motors"][list(MOTORS)]}
+        if accel:
+            topics |= {"accel": log["accel"][list(ACCELS)], "collective": log["commands"][["collective"]]}
+        frames = tsfdi.align(topics, fs=fs)
         if len(frames) != 1:
             raise RuntimeError(f"log {i} split into {len(frames)} records by align")
         f = frames[0]
@@ -276,6 +282,147 @@ def by_loss(tab: pd.DataFrame) -> pd.DataFrame:
         within=("delay_s", lambda d: int((d <= DEADLINE).sum())), mean_delay_s=("delay_s", "mean")).round(3)
 
 
+#: loss bands of the detectability bound (loss of effectiveness, right-closed)
+BANDS = (0.1, 0.2, 0.3, 0.5, 1.0)
+MOTOR_COLS = [f"motors.{m}" for m in MOTORS]
+GYRO_COLS = [f"gyro.{r}" for r in RATES]
+ACCEL_COLS = [f"accel.{a}" for a in ACCELS]
+#: signal sets of the bound: outputs, inputs, directions ("arms": SIGNATURES; None: learned from the failures)
+BOUND_SETS = {
+    "p, q | motors (arm directions)": (GYRO_COLS[:2], MOTOR_COLS, "arms"),
+    "p, q | motors": (GYRO_COLS[:2], MOTOR_COLS, None),
+    "p, q, r | motors": (GYRO_COLS, MOTOR_COLS, None),
+    "p, q, r, accel | motors": ([*GYRO_COLS, *ACCEL_COLS], MOTOR_COLS, None),
+    "accel | rates, motors": (ACCEL_COLS, [*GYRO_COLS, *MOTOR_COLS], None),
+    "motors | rates": (MOTOR_COLS, GYRO_COLS, None),
+}
+
+
+def one_step_errors(f: pd.DataFrame, outputs: list, inputs: list, lags: int, fit: np.ndarray):
+    """One-step prediction errors of ``outputs`` by least squares on a constant and lags ``1..lags`` of every
+    column of ``outputs`` and ``inputs`` (the healthy model a detector could know exactly), fitted on the rows
+    where ``fit`` is true. Returns the errors (n, len(outputs); NaN for the first ``lags`` rows) and their
+    covariance on the fitted rows."""
+    z = f[list(dict.fromkeys([*outputs, *inputs]))].to_numpy(dtype=float)
+    y = f[list(outputs)].to_numpy(dtype=float)
+    n = len(f)
+    if n <= lags:
+        raise ValueError(f"a log of {n} rows is not longer than lags={lags}")
+    x = np.hstack([np.ones((n - lags, 1))] + [z[lags - k:n - k] for k in range(1, lags + 1)])
+    rows = np.asarray(fit, dtype=bool)[lags:]
+    if rows.sum() <= 2 * x.shape[1]:
+        raise ValueError(f"{int(rows.sum())} fitting rows for {x.shape[1]} coefficients per output")
+    coef, *_ = np.linalg.lstsq(x[rows], y[lags:][rows], rcond=None)
+    e = np.full(y.shape, np.nan)
+    e[lags:] = y[lags:] - x @ coef
+    return e, np.cov(e[lags:][rows], rowvar=False).reshape(y.shape[1], y.shape[1])
+
+
+def matched(e: np.ndarray, sigma: np.ndarray, directions: np.ndarray, window: int, fit: np.ndarray) -> np.ndarray:
+    """The matched filter of a bias along each direction over ``window`` samples: for direction ``d`` the sum
+    over the window starting at each sample of ``d' sigma^-1 e_t``, divided by the standard deviation of that
+    window sum on the ``fit`` rows (so that it counts the errors' autocorrelation); shape (n, directions),
+    NaN where the window is incomplete. Under a bias ``b d`` over the window and white errors of covariance
+    ``sigma`` it is about ``b sqrt(window d' sigma^-1 d)`` above its healthy mean."""
+    w = np.linalg.solve(sigma, np.asarray(directions, dtype=float).T)          # (outputs, directions)
+    s = e @ w
+    c = np.vstack([np.zeros((1, s.shape[1])), np.nancumsum(s, axis=0)])
+    n = len(s)
+    sums = np.full(s.shape, np.nan)
+    sums[:n - window + 1] = c[window:] - c[:n - window + 1]
+    ok = np.isfinite(s).all(axis=1)
+    complete = np.zeros(n, dtype=bool)
+    complete[:n - window + 1] = np.convolve(ok, np.ones(window), "valid") == window
+    sums[~complete] = np.nan
+    whole = np.zeros(n, dtype=bool)                     # windows lying wholly in the fitted rows
+    whole[:n - window + 1] = np.convolve(np.asarray(fit, dtype=bool) & ok, np.ones(window), "valid") == window
+    if whole.sum() < 2:
+        raise ValueError(f"no two windows of {window} samples in the fitted rows")
+    mean, sd = sums[whole].mean(axis=0), sums[whole].std(axis=0, ddof=1)
+    return (sums - mean) / sd
+
+
+def healthy_level(maxima: np.ndarray, hours_each: float, hours: float) -> float:
+    """Median of the largest statistic over ``hours`` of healthy flight: a Gumbel law fitted (maximum
+    likelihood) to the largest statistic of each healthy log of ``hours_each`` hours, its maximum over
+    ``hours / hours_each`` such logs (location plus scale times the log of that number)."""
+    from scipy.stats import gumbel_r
+
+    maxima = np.asarray(maxima, dtype=float)
+    if maxima.size < 3 or not np.isfinite(maxima).all():
+        raise ValueError(f"maxima: need at least three finite values, got {maxima.size}")
+    loc, scale = gumbel_r.fit(maxima)
+    return float(loc + scale * (np.log(hours / hours_each) - np.log(np.log(2.0))))
+
+
+def detectability(healthy: list, failures: list, outputs: list, inputs: list, *, directions=None, lags: int = 2,
+                  windows: tuple = (0.5, 1.0, 2.0), settle: float = 5.0, hours: float = 2.4):
+    """An oracle bound on what a detector of ``outputs`` given ``inputs`` can find within each window at no false
+    alarm (benchmark logs of :func:`make_logs`).
+
+    For each log the healthy model of :func:`one_step_errors` (fitted from ``settle`` seconds on: a healthy log
+    whole, a failure log up to its failure). The oracle knows the failure time and rotor: its statistic is the
+    :func:`matched` filter of the failed rotor's direction over the window starting at the first sample at or
+    after the failure. The healthy level is the statistic a causal detector would have to scan, every rotor
+    direction and every window start of the healthy logs, whose per-log maxima give :func:`healthy_level` over
+    ``hours`` of healthy flight. ``directions``: (6, len(outputs)) the bias direction of a loss of each rotor;
+    None learns it from the failure logs (mean error over the window divided by the loss, averaged over the
+    rotor's other failure logs for a failure, over all of them for the healthy scan).
+
+    Returns the table by loss band (failures, found: statistic above the healthy level), the per-failure
+    statistics and the per-healthy-log maxima, all per window.
+    """
+    fs = det_fs(healthy[0][0])
+    rows, fails = [], []
+    for f, ft, rotor, _, level in [*healthy, *failures]:
+        t = seconds(f)
+        end = len(t) if ft is None else int(np.searchsorted(t, ft))
+        fit = (t >= settle) & (np.arange(len(t)) < end)
+        e, sigma = one_step_errors(f, outputs, inputs, lags, fit)
+        rows.append((e, sigma, fit, end, ft, rotor, level, t >= settle))
+    ns = {w: int(round(w * fs)) for w in windows}
+    learned = {}
+    for w, n in ns.items():
+        m = np.zeros((6, len(outputs))); k = np.zeros(6)
+        for e, _, _, end, ft, rotor, level, _ in rows:
+            if ft is not None:
+                v = np.nanmean(e[end:end + n], axis=0) / level
+                learned[w, id(e)] = v
+                m[rotor - 1] += v; k[rotor - 1] += 1
+        learned[w] = (m, k)
+    out = []
+    for w, n in ns.items():
+        if directions is None:
+            m, k = learned[w]
+            scan = m / np.maximum(k, 1)[:, None]
+        else:
+            scan = np.asarray(directions, dtype=float)
+        maxima = []
+        for e, sigma, fit, end, ft, rotor, level, after in rows:
+            if ft is None:
+                maxima.append((after.sum() / fs / 3600.0, float(np.nanmax(matched(e, sigma, scan, n, fit)[after]))))
+                continue
+            d = scan[rotor - 1]
+            if directions is None:                       # leave this log out of its rotor's direction
+                m, k = learned[w]
+                d = (m[rotor - 1] - learned[w, id(e)]) / max(k[rotor - 1] - 1, 1)
+            z = matched(e, sigma, np.vstack([scan, d]), n, fit)
+            pre = z[:max(end - n + 1, 0), :6][after[:max(end - n + 1, 0)]]
+            fails.append({"window_s": w, "rotor": rotor, "loss": level, "oracle": float(z[end, 6]),
+                          "pre_failure_max": float(np.nanmax(pre)) if np.isfinite(pre).any() else np.nan})
+        maxima = np.array(maxima)
+        level_w = healthy_level(maxima[:, 1], float(maxima[:, 0].mean()), hours)
+        out.append({"window_s": w, "healthy logs": len(maxima), "healthy h": maxima[:, 0].sum(),
+                    "largest healthy": maxima[:, 1].max(), f"level for {hours:g} h": level_w})
+    levels = pd.DataFrame(out).set_index("window_s")
+    fails = pd.DataFrame(fails)
+    fails["found"] = fails["oracle"] > fails["window_s"].map(levels[f"level for {hours:g} h"])
+    band = pd.cut(fails["loss"], list(BANDS))
+    table = fails.groupby(["window_s", band], observed=True).agg(
+        failures=("found", "size"), found=("found", "sum"), median_oracle=("oracle", "median")).unstack(0)
+    return table, fails, levels
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dev", type=int, default=12, help="development logs of each kind (healthy, failure)")
@@ -287,8 +434,33 @@ def main(argv=None) -> None:
                         help="range of the failed rotor's loss of effectiveness (1: the whole rotor)")
     parser.add_argument("--dev-only", action="store_true",
                         help="stop after the development grid (no evaluation log is drawn)")
+    parser.add_argument("--bound", type=int, nargs="*", metavar="SEED",
+                        help="print the oracle detectability bound on the development logs of these seeds "
+                             "(default: --dev-seed) with the accelerometer, and stop")
     args = parser.parse_args(argv)
     t0 = time.time()
+    if args.bound is not None:
+        healthy, fail = [], []
+        for seed in args.bound or [args.dev_seed]:
+            dev = np.random.default_rng(seed)
+            healthy += make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs, accel=True)
+            fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs,
+                              loss=tuple(args.loss), accel=True)
+            fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL,
+                              accel=True)
+        print(f"oracle bound on the development logs of seeds {args.bound or [args.dev_seed]}: {len(healthy)} "
+              f"healthy, {len(fail)} failure logs of {args.duration:g} s at {args.fs:g} Hz, {time.time() - t0:.0f} s")
+        with pd.option_context("display.width", 200, "display.max_columns", 20):
+            for name, (outputs, inputs, dirs) in BOUND_SETS.items():
+                table, fails, levels = detectability(
+                    healthy, fail, outputs, inputs, directions=np.array(SIGNATURES) if dirs == "arms" else None)
+                top = levels.columns[-1]
+                above = (fails.pre_failure_max > fails.window_s.map(levels[top])).sum()
+                print(f"\n{name}: healthy level by window (Gumbel over the healthy logs' maxima; "
+                      f"pre-failure stretches above it: {above})")
+                print(levels.round(2).to_string())
+                print(table.round(2).to_string())
+        return
     dev = np.random.default_rng(args.dev_seed)
     dev_healthy = make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs)
     dev_fail = make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=tuple(args.loss))

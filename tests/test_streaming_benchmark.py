@@ -2,6 +2,7 @@
 
 
 import numpy as np
+import pandas as pd
 import pytest
 from _scripts import load_script
 
@@ -42,3 +43,59 @@ def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
         s = B.summary(tab).iloc[0]
         assert s["found"] == 3 and s["healthy h"] == pytest.approx(tab.healthy_hours.sum(), abs=1e-4)
     assert B.by_loss(tab)["logs"].sum() == 3
+
+
+def test_detectability_bound_recovers_a_known_bias_on_synthetic_logs():
+    B = _streaming_benchmark()
+    gen = np.random.default_rng(3)
+    # matched filter on white errors of covariance sigma: a bias b d over the window scores b sqrt(n d' sigma^-1 d)
+    n, window, b = 20000, 25, 0.6
+    sigma = np.array([[1.0, 0.8], [0.8, 4.0]])
+    e = gen.multivariate_normal([0.0, 0.0], sigma, n)
+    d = np.array([[0.6, -0.8], [-0.6, 0.8]])
+    fit = np.arange(n) < n // 2
+    expected = b * np.sqrt(window * d[0] @ np.linalg.solve(sigma, d[0]))      # 2.76 (unweighted by sigma: 2.05)
+    z = B.matched(e + b * d[0] * ~fit[:, None], sigma, d, window, fit)
+    assert np.isnan(z[n - window + 1:]).all() and np.isfinite(z[:n - window + 1]).all()
+    np.testing.assert_allclose(z[:n // 2 - window + 1].mean(0), 0.0, atol=1e-9)          # healthy: standardised
+    np.testing.assert_allclose(z[:n // 2 - window + 1].std(0, ddof=1), 1.0, atol=1e-9)
+    np.testing.assert_allclose(z[n // 2:n - window + 1].mean(0), [expected, -expected], atol=0.3)
+    # a bias on one window only, at five error sd along the direction: the first direction sees it, not the second
+    e[15000:15000 + window] += 5 * d[0] / np.sqrt(d[0] @ np.linalg.solve(sigma, d[0]))
+    z = B.matched(e, sigma, d, window, fit)
+    assert abs(z[15000, 0] - 25) < 4 and z[15000, 1] < -20 and z[15000, 0] > max(z[14999, 0], z[15001, 0])
+    assert np.nanmax(np.delete(z[:, 0], np.arange(15000 - window, 15000 + window))) < 5
+
+    # the healthy level: the median of the largest of 100 logs' maxima, from a Gumbel fit to 4000 logs' maxima
+    maxima = gen.gumbel(3.0, 1.0, 4000)
+    largest = gen.gumbel(3.0, 1.0, (2000, 100)).max(1)
+    assert abs(B.healthy_level(maxima, 0.01, 1.0) - np.median(largest)) < 0.2           # 7.97
+    with pytest.raises(ValueError, match="maxima"):
+        B.healthy_level(maxima[:2], 0.01, 1.0)
+
+    # the whole bound on synthetic logs: two rates driven by six commands (one sample late) and white noise; a
+    # failure adds a bias of known size in its rotor's direction from the failure on
+    def log(ft, rotor, bias):
+        t = np.arange(0, 60.0, 0.02)
+        u = 500 + gen.normal(0, 5, (len(t), 6))
+        y = np.zeros((len(t), 2))
+        for k in range(1, len(t)):
+            y[k] = 0.5 * y[k - 1] + 0.01 * (u[k - 1, :2] - u[k - 1, 3:5]) + gen.normal(0, 0.1, 2)
+            if ft is not None and t[k] >= ft:
+                y[k] += bias * np.array(B.SIGNATURES[rotor - 1])
+        f = pd.DataFrame(np.column_stack([y, u]), index=pd.Index(t, name="time"),
+                         columns=["gyro.p", "gyro.q", *(f"motors.{m}" for m in B.MOTORS)])
+        return f, ft, rotor, "light", 0.15 if bias else 0.6
+    healthy = [log(None, 0, 0.0) for _ in range(6)]
+    failures = [log(40.0, 1 + k % 6, 0.2) for k in range(12)] + [log(30.0, 1, 0.0)]
+    table, fails, levels = B.detectability(healthy, failures, ["gyro.p", "gyro.q"], B.MOTOR_COLS,
+                                           directions=np.array(B.SIGNATURES), windows=(0.5, 1.0))
+    # a bias of two error sd over 25 (50) samples: the matched filter 2 sqrt(25) = 10 (2 sqrt(50) = 14.1)
+    got = fails.set_index("window_s")
+    np.testing.assert_allclose(got.oracle[got.loss == 0.15].groupby(level=0).mean(), [10.0, 14.14], atol=1.0)
+    assert abs(got.oracle[got.loss == 0.6]).max() < 3.5                                   # no bias: noise
+    assert levels["healthy logs"].tolist() == [6, 6] and (levels["level for 2.4 h"] > levels["largest healthy"]).all()
+    assert 3.0 < levels["level for 2.4 h"].min() and levels["level for 2.4 h"].max() < 6.0
+    assert fails.found.tolist() == ([True] * 12 + [False]) * 2
+    assert table.loc[pd.Interval(0.1, 0.2), ("found", 0.5)] == 12
+    assert table.loc[pd.Interval(0.5, 1.0), ("found", 1.0)] == 0
