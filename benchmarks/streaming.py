@@ -385,6 +385,11 @@ def detectability(healthy: list, failures: list, outputs: list, inputs: list, *,
     Returns the table by loss band (failures, found: statistic above the healthy level), the per-failure
     statistics and the per-healthy-log maxima, all per window.
     """
+    if len(healthy) < 3 or not failures:
+        raise ValueError(f"healthy, failures: need at least three healthy logs and one failure log, got "
+                         f"{len(healthy)} and {len(failures)}")
+    if directions is not None and np.shape(directions) != (6, len(outputs)):
+        raise ValueError(f"directions: shape (6, {len(outputs)}) expected, got {np.shape(directions)}")
     fs = det_fs(healthy[0][0])
     rows, fails = [], []
     for f, ft, rotor, _, level in [*healthy, *failures]:

@@ -99,3 +99,7 @@ def test_detectability_bound_recovers_a_known_bias_on_synthetic_logs():
     assert fails.found.tolist() == ([True] * 12 + [False]) * 2
     assert table.loc[pd.Interval(0.1, 0.2), ("found", 0.5)] == 12
     assert table.loc[pd.Interval(0.5, 1.0), ("found", 1.0)] == 0
+    with pytest.raises(ValueError, match="directions"):
+        B.detectability(healthy, failures, ["gyro.p", "gyro.q"], B.MOTOR_COLS, directions=np.eye(2))
+    with pytest.raises(ValueError, match="healthy"):
+        B.detectability(healthy[:2], failures, ["gyro.p", "gyro.q"], B.MOTOR_COLS)
