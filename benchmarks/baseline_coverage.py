@@ -66,7 +66,12 @@ calibration does not hold), how many each check warned of. Sections:
    99 % band), 1.3 % with 10. Session 37's development seed 9200 (1,000 records with 5 fitting records): 3.0 %,
    on its log 2.0 %, as the mean normal score of the window's Sidak-adjusted p-value 1.9 %; with the new record
    judged by the same leave-one-out tests 2.1 / 1.7 / 1.5 % (standard error over baselines ~2x the binomial): a
-   positive, right-skewed summary whose spread over 5 records is not a t law's.
+   positive, right-skewed summary whose spread over 5 records is not a t law's. Development seed 9600, one new
+   record per baseline (800 independent trials, 5 records; run after section 6's evaluation, information only):
+   2.25 / 1.75 / 1.88 % judged by the full test (S / log S / normal score), 1.88 / 1.00 / 1.00 % judged by the
+   leave-one-out tests. So log S or the normal score judged that way may hold with 5 records (unmeasured with 10
+   and 20); it needs the fitting records' residuals and ``J`` calibrations per test, which ``record_coverage`` does
+   not have.
 
 ``--sections 4`` runs section 4 alone (about a minute).
 """

@@ -348,11 +348,11 @@ def record_coverage(test: Any, resid: Any, *, alpha: float = 0.01, name: str = "
 
     (the Student t pivot; :math:`\bar n` the fitting records' independent windows per record, :math:`n_{new}` the
     new record's: a shorter record's levels are noisier, and scaling the whole variance by the ratio errs on the
-    safe side). A summary of the decision's own window p-values was measured instead and not adopted (the
-    record's mean :math:`-\ln \min p`, each fitting record through the test calibrated without it): a positive,
-    right-skewed statistic whose t pivot was liberal with 5 records, 3.0 % false warnings at 0.01, and still
-    1.5-2.0 % on its log or as the mean normal score of the window's Sidak-adjusted p-value, where the sum of
-    levels gave 1.0 % on the same kind of development fleets (``benchmarks/baseline_coverage.py``, section 6).
+    safe side). A summary of the decision's own window p-values (the record's mean :math:`-\ln \min p`, each
+    fitting record through the test calibrated without it) was measured and not adopted: a positive, right-skewed
+    statistic whose t pivot was liberal with 5 records (3.0 % false warnings at 0.01); its log or mean normal score
+    came closer only with the new record judged by the same leave-one-out calibrations, and needs the fitting
+    records' residuals and a calibration without each of them (``benchmarks/baseline_coverage.py``, section 6).
     """
     alpha = probability(alpha, "alpha")
     parts = tuple(getattr(test, "tests", (test,)))
