@@ -1,7 +1,8 @@
 """Streaming detection on simulated autopilot logs of the realistic hexacopter (issue 34).
 
-Run: ``python benchmarks/streaming.py [--dev N] [--eval N] [--duration S] [--fs HZ] [--loss LOW HIGH]`` (~3-4 min
-with the defaults); ``--bound [SEED ...]`` prints the oracle detectability bound on development logs instead (below).
+Run: ``python benchmarks/streaming.py [--dev N] [--dev-seed SEED ...] [--eval N] [--duration S] [--fs HZ] [--loss LOW
+HIGH]`` (several minutes with the defaults); ``--bound [SEED ...]`` prints the oracle detectability bound on development
+logs instead (below).
 
 Logs. Each log is one record of :func:`tsfdi.datasets.simulate_hexacopter` (1 kHz truth, a fleet aircraft drawn
 around the nominal one, ``FleetSpread()``, Dryden turbulence light / moderate / severe drawn per log, ground speed
@@ -15,7 +16,7 @@ aircraft lost (``lost_control``).
 Detector (the guide's autopilot-log recipe, :doc:`docs/guide/online.md`): ``tsfdi.OnlineDetector`` whose pairs
 are body rates from the gyro, one sample after their inputs (``nk=1``), ``statistic="sprt"`` (Wald's restarted SPRT
 on the standardised prediction errors), thresholds from the development healthy logs by
-``calibrate(..., false_alarms_per_hour=rate)``. Three pair sets (``PAIR_SETS``): the rates ``p, q, r`` against
+``calibrate(..., false_alarms_per_hour=rate)``. Five pair sets (``PAIR_SETS``): the rates ``p, q, r`` against
 their axis's actuator control (``roll_control, pitch_control, yaw_control``, the rate controller's outputs) or
 against the six motor commands (``n_inputs=6``, ``eps=0.05``: what each rotor is asked to do, so a rotor that
 delivers less breaks its own coefficient), both with the SPRT of a variance increase (the default); or
@@ -25,11 +26,18 @@ delivers less breaks its own coefficient), both with the SPRT of a variance incr
 shift of ``shift`` standard deviations (``SHIFTS``). Why: on the development logs a small loss shows as a bias of
 the one-step prediction errors of ``p`` and ``q`` (0.5-3 standard deviations over the first 0.5 s, decaying over
 1-2 s as the rate loop takes over) in the direction of the lost thrust's torque, which the variance-increase
-alternative spends poorly and which the rotor's direction joins across the roll and pitch pairs (Findings).
+alternative spends poorly and which the rotor's direction joins across the roll and pitch pairs (Findings). The
+last two again (``"motors+accel"``, ``"rotors+accel"``, ``n_inputs=8``) with the accelerometer's lateral specific
+forces ``ax, ay`` after the motor commands as further inputs of every pair: the oracle bound's finding (below), their
+errors share the gusts of the rate errors.
 
-Protocol. Development logs (seeds from ``--dev-seed``, default 1: ``--dev`` healthy logs, ``--dev`` failure logs of
-``--loss`` and ``--dev`` more of 10-30 % loss, the losses the rate loop hides best) choose the settings: the pair
-set, the ARX orders, the shift of the "rotors" set and the requested false-alarm rate, from a small grid, by (no
+Protocol. Development logs (seeds ``--dev-seed``, default 1-4, ``DEV_SEEDS``; per seed ``--dev`` healthy logs,
+``--dev`` failure logs of ``--loss`` and ``--dev`` more of 10-30 % loss, the losses the rate loop hides best; with
+the defaults 48 healthy logs, 2.5 healthy hours with the failure logs' pre-failure parts, about the evaluation's)
+choose the settings: the pair set, the ARX orders (``ORDERS``), the RLS forgetting factor (``FORGETTING``: 0.999, the
+recipe's 20 s memory, or closer to 1, a memory the fault hardly enters), the shift of the "rotors" sets and the
+requested false-alarm rate (``REQUESTED``: 0.01 or 0.1 per hour, so that no false alarm over the evaluation's 2.4
+healthy hours is what is asked), from a small grid, by (no
 development false alarm, then the most development failures found within 0.5 s, then the lowest requested rate, then
 the smallest mean delay); ``--dev-only`` stops there. The chosen detector, calibrated on the development healthy
 logs only, then runs once on fresh evaluation logs whose seed is drawn at run time from the operating system's
@@ -147,13 +155,24 @@ PAIR_SETS = {
     # with a one-sided mean-shift SPRT (its shift from the grid, SHIFTS)
     "rotors": (tuple(f"rotor{i}" for i in range(1, 7)), tuple((sp, sq, 0.0) for sp, sq in SIGNATURES),
                [[f"motors.{m}" for m in MOTORS]] * 6, {"eps": 0.05}),
+    # the same two with the accelerometer's lateral specific forces as further inputs (they share the gusts of the
+    # rate errors: the oracle bound's finding)
+    "motors+accel": (("roll", "pitch", "yaw"), ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+                     [[*(f"motors.{m}" for m in MOTORS), "accel.ax", "accel.ay"]] * 3, {"eps": 0.05}),
+    "rotors+accel": (tuple(f"rotor{i}" for i in range(1, 7)), tuple((sp, sq, 0.0) for sp, sq in SIGNATURES),
+                     [[*(f"motors.{m}" for m in MOTORS), "accel.ax", "accel.ay"]] * 6, {"eps": 0.05}),
 }
 TURBULENCE = ("light", "moderate", "severe")
-#: the development grid: pair set, ARX orders (na, nb) and the requested false alarms per hour
-ORDERS = ((1, 2), (1, 3))
-#: mean shifts (standard deviations of the pair's error) of the one-sided SPRT of the "rotors" set
+#: the development grid: pair set, ARX orders (na, nb), the RLS forgetting factor (1: growing memory, the model
+#: does not follow a fault) and the requested false alarms per hour (at most 0.1: "no false alarm" over the
+#: evaluation's 2.4 healthy hours is what is asked)
+ORDERS = ((1, 2),)
+FORGETTING = (0.999, 0.9999, 1.0)
+#: mean shifts (standard deviations of the pair's error) of the one-sided SPRT of the "rotors" sets
 SHIFTS = (1.5, 2.0)
-REQUESTED = (0.01, 0.1, 1.0, 10.0)
+REQUESTED = (0.01, 0.1)
+#: development seeds (each: --dev healthy logs, --dev failure logs of --loss, --dev of 10-30 % loss)
+DEV_SEEDS = (1, 2, 3, 4)
 DEADLINE = 0.5          # seconds: a failure must be found within this
 LOSS = (0.1, 1.0)       # loss of effectiveness of the failed rotor, drawn uniformly (1: the whole rotor)
 SMALL = (0.1, 0.3)      # the development's extra failure logs: small losses, which the rate loop hides best
@@ -210,22 +229,25 @@ def seconds(f: pd.DataFrame) -> np.ndarray:
 
 def detector(pairs: str, na: int, nb: int, shift: float | None = None, **options) -> OnlineDetector:
     """The pair set's detector; ``shift``: the one-sided mean-shift SPRT of that many standard deviations instead of
-    the default variance-increase SPRT (for the "rotors" set)."""
+    the default variance-increase SPRT (for the "rotors" sets); ``options`` override ``SETTINGS`` (e.g.
+    ``forgetting_factor``)."""
     names, _, inputs, own = PAIR_SETS[pairs]
     if shift is not None:
         own = {**own, "sprt": tsfdi.SPRT("mean", shift=shift, alpha=1e-9, beta=0.01, restart=True)}
     return OnlineDetector(list(names), na=na, nb=nb, n_inputs=len(inputs[0]), **{**SETTINGS, **own, **options})
 
 
-def calibrated(healthy: list, pairs: str, na: int, nb: int, rate: float, shift: float | None = None) -> OnlineDetector:
-    det = detector(pairs, na, nb, shift)
+def calibrated(healthy: list, pairs: str, na: int, nb: int, rate: float, shift: float | None = None,
+               forgetting: float = SETTINGS["forgetting_factor"]) -> OnlineDetector:
+    det = detector(pairs, na, nb, shift, forgetting_factor=forgetting)
     ys, us = zip(*(split(f, pairs) for f, *_ in healthy))
     return det.calibrate(list(ys), list(us), false_alarms_per_hour=rate)
 
 
 def unfrozen(det: OnlineDetector, pairs: str, na: int, nb: int) -> OnlineDetector:
     """``det`` (calibrated) without freezing at an alarm: every alarm episode of a healthy stretch counts."""
-    return detector(pairs, na, nb, threshold=det.threshold, sprt=det.sprt, freeze_on_alarm=False)
+    return detector(pairs, na, nb, threshold=det.threshold, sprt=det.sprt, freeze_on_alarm=False,
+                    forgetting_factor=det.models[0].forgetting_factor)
 
 
 def score(det: OnlineDetector, free: OnlineDetector, logs: list, pairs: str = "controls") -> pd.DataFrame:
@@ -447,7 +469,8 @@ def main(argv=None) -> None:
     parser.add_argument("--eval", type=int, default=60, help="evaluation logs of each kind")
     parser.add_argument("--duration", type=float, default=90.0, help="log length in seconds")
     parser.add_argument("--fs", type=float, default=50.0, help="grid rate in Hz")
-    parser.add_argument("--dev-seed", type=int, default=1)
+    parser.add_argument("--dev-seed", type=int, nargs="+", default=list(DEV_SEEDS),
+                        help="development seeds (default %(default)s)")
     parser.add_argument("--loss", type=float, nargs=2, default=LOSS, metavar=("LOW", "HIGH"),
                         help="range of the failed rotor's loss of effectiveness (1: the whole rotor)")
     parser.add_argument("--dev-only", action="store_true",
@@ -459,14 +482,14 @@ def main(argv=None) -> None:
     t0 = time.time()
     if args.bound is not None:
         healthy, fail = [], []
-        for seed in args.bound or [args.dev_seed]:
+        for seed in args.bound or args.dev_seed:
             dev = np.random.default_rng(seed)
             healthy += make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs, accel=True)
             fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs,
                               loss=tuple(args.loss), accel=True)
             fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL,
                               accel=True)
-        print(f"oracle bound on the development logs of seeds {args.bound or [args.dev_seed]}: {len(healthy)} "
+        print(f"oracle bound on the development logs of seeds {args.bound or args.dev_seed}: {len(healthy)} "
               f"healthy, {len(fail)} failure logs of {args.duration:g} s at {args.fs:g} Hz, {time.time() - t0:.0f} s")
         with pd.option_context("display.width", 200, "display.max_columns", 20):
             for name, (outputs, inputs, dirs) in BOUND_SETS.items():
@@ -479,32 +502,38 @@ def main(argv=None) -> None:
                 print(levels.round(2).to_string())
                 print(table.round(2).to_string())
         return
-    dev = np.random.default_rng(args.dev_seed)
-    dev_healthy = make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs)
-    dev_fail = make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=tuple(args.loss))
-    dev_fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL)
-    print(f"development: {args.dev} healthy + {args.dev} failure logs (loss {args.loss[0]:g}-{args.loss[1]:g}) + "
-          f"{args.dev} failure logs (loss {SMALL[0]:g}-{SMALL[1]:g}) of {args.duration:g} s at {args.fs:g} Hz "
-          f"(seed {args.dev_seed}), {time.time() - t0:.0f} s")
+    dev_healthy, dev_fail = [], []
+    for seed in args.dev_seed:
+        dev = np.random.default_rng(seed)
+        dev_healthy += make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs, accel=True)
+        dev_fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs,
+                              loss=tuple(args.loss), accel=True)
+        dev_fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL,
+                              accel=True)
+    print(f"development, per seed: {args.dev} healthy + {args.dev} failure logs (loss {args.loss[0]:g}-"
+          f"{args.loss[1]:g}) + {args.dev} failure logs (loss {SMALL[0]:g}-{SMALL[1]:g}) of {args.duration:g} s at "
+          f"{args.fs:g} Hz (seeds {args.dev_seed}), {time.time() - t0:.0f} s")
     grid = []
     for pairs in PAIR_SETS:
         for na, nb in ORDERS:
-            for shift in (SHIFTS if pairs == "rotors" else (None,)):
-                for rate in REQUESTED:
-                    what = f"pairs={pairs}, na={na}, nb={nb}, shift={shift}, {rate:g} per hour"
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore")
-                        try:
-                            det = calibrated(dev_healthy, pairs, na, nb, rate, shift)
-                        except ValueError as err:               # e.g. a pair armed too late on a healthy log
-                            print(f"{what}: not calibrated: {err}")
-                            continue
-                    s = summary(score(det, unfrozen(det, pairs, na, nb), dev_healthy + dev_fail, pairs)).iloc[0]
-                    grid.append({"pairs": pairs, "na": na, "nb": nb, "shift": shift, "requested / h": rate,
-                                 "threshold": det.threshold,
-                                 "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
-                                 "found in time": int(s[f"within {DEADLINE} s"]),
-                                 "false episodes": int(s["false episodes"]), "mean delay s": s["mean delay s"]})
+            for lam in FORGETTING:
+                for shift in (SHIFTS if pairs.startswith("rotors") else (None,)):
+                    for rate in REQUESTED:
+                        what = f"pairs={pairs}, na={na}, nb={nb}, forgetting={lam:g}, shift={shift}, {rate:g} per hour"
+                        with warnings.catch_warnings():
+                            warnings.simplefilter("ignore")
+                            try:
+                                det = calibrated(dev_healthy, pairs, na, nb, rate, shift, lam)
+                            except ValueError as err:               # e.g. a pair armed too late on a healthy log
+                                print(f"{what}: not calibrated: {err}")
+                                continue
+                            tab = score(det, unfrozen(det, pairs, na, nb), dev_healthy + dev_fail, pairs)
+                        s = summary(tab).iloc[0]
+                        grid.append({"pairs": pairs, "na": na, "nb": nb, "forgetting": lam, "shift": shift,
+                                     "requested / h": rate, "threshold": det.threshold,
+                                     "stated band / h": tuple(np.round(det.calibration_.rate_band, 3)),
+                                     "found in time": int(s[f"within {DEADLINE} s"]),
+                                     "false episodes": int(s["false episodes"]), "mean delay s": s["mean delay s"]})
     grid = pd.DataFrame(grid)
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(grid.to_string(index=False))
@@ -514,16 +543,19 @@ def main(argv=None) -> None:
     picks = {p: order[order.pairs == p].iloc[0] for p in PAIR_SETS if (order.pairs == p).any()}   # each set's best
 
     def setting(r):
-        """pair set, na, nb, shift (None: the variance SPRT) and requested rate of a grid row"""
+        """pair set, na, nb, shift (None: the variance SPRT), requested rate and forgetting factor of a grid row"""
         return (str(r["pairs"]), int(r["na"]), int(r["nb"]), None if pd.isna(r["shift"]) else float(r["shift"]),
-                float(r["requested / h"]))
+                float(r["requested / h"]), float(r["forgetting"]))
 
-    pairs, na, nb, shift, rate = setting(order.iloc[0])
-    print(f"chosen on the development logs: pairs={pairs}, na={na}, nb={nb}, shift={shift}, "
-          f"false_alarms_per_hour={rate:g}")
+    pairs, na, nb, shift, rate, lam = setting(order.iloc[0])
+    print(f"chosen on the development logs: pairs={pairs}, na={na}, nb={nb}, forgetting_factor={lam:g}, "
+          f"shift={shift}, false_alarms_per_hour={rate:g}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        dets = {p: calibrated(dev_healthy, *setting(r)[:3], setting(r)[4], setting(r)[3]) for p, r in picks.items()}
+        dets = {}
+        for p, r in picks.items():
+            _, pna, pnb, pshift, prate, plam = setting(r)
+            dets[p] = calibrated(dev_healthy, p, pna, pnb, prate, pshift, plam)
     det = dets[pairs]
     cal = det.calibration_
     print(f"calibrated on {cal.runs} healthy logs ({cal.healthy_hours * 60:.1f} min): SPRT threshold "
@@ -535,8 +567,9 @@ def main(argv=None) -> None:
 
     fresh = np.random.default_rng(np.random.SeedSequence())        # drawn now, printed and stored nowhere
     t1 = time.time()
-    logs = (make_logs(fresh, args.eval, failures=False, duration=args.duration, fs=args.fs)
-            + make_logs(fresh, args.eval, failures=True, duration=args.duration, fs=args.fs, loss=tuple(args.loss)))
+    logs = (make_logs(fresh, args.eval, failures=False, duration=args.duration, fs=args.fs, accel=True)
+            + make_logs(fresh, args.eval, failures=True, duration=args.duration, fs=args.fs, loss=tuple(args.loss),
+                        accel=True))
     tab = score(det, unfrozen(det, pairs, na, nb), logs, pairs)
     print(f"evaluation: {args.eval} healthy + {args.eval} failure logs (fresh seed), {time.time() - t1:.0f} s")
     with pd.option_context("display.width", 200, "display.max_columns", 20):
@@ -545,10 +578,10 @@ def main(argv=None) -> None:
         # defaults uncalibrated (the rates against the actuator controls, the SPRT at its upper bound)
         for p, r in picks.items():
             if p != pairs:
-                _, pna, pnb, pshift, prate = setting(r)
+                _, pna, pnb, pshift, prate, plam = setting(r)
                 other = score(dets[p], unfrozen(dets[p], p, pna, pnb), logs, p)
-                print(f"\npairs={p} at its development choice (na={pna}, nb={pnb}, shift={pshift}, {prate:g} per hour, "
-                      f"threshold {dets[p].threshold:.3f}):")
+                print(f"\npairs={p} at its development choice (na={pna}, nb={pnb}, forgetting {plam:g}, "
+                      f"shift={pshift}, {prate:g} per hour, threshold {dets[p].threshold:.3f}):")
                 print(by_loss(other).to_string())
                 print(summary(other).to_string(index=False))
         names = list(PAIR_SETS["controls"][0])

@@ -15,11 +15,12 @@ def _streaming_benchmark():
 def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
     B = _streaming_benchmark()
     gen = np.random.default_rng(7)
-    healthy = B.make_logs(gen, 4, failures=False, duration=40.0, fs=50.0)
-    failures = B.make_logs(gen, 3, failures=True, duration=40.0, fs=50.0, loss=(0.5, 1.0))
+    healthy = B.make_logs(gen, 4, failures=False, duration=40.0, fs=50.0, accel=True)
+    failures = B.make_logs(gen, 3, failures=True, duration=40.0, fs=50.0, loss=(0.5, 1.0), accel=True)
     f, ft, rotor, turb, loss = failures[0]
     assert list(f.columns) == ["gyro.p", "gyro.q", "gyro.r", "commands.roll_control", "commands.pitch_control",
-                               "commands.yaw_control", *(f"motors.motor_command{i}" for i in range(1, 7))]
+                               "commands.yaw_control", *(f"motors.motor_command{i}" for i in range(1, 7)),
+                               "accel.ax", "accel.ay", "accel.az", "collective.collective"]
     assert 15.0 <= ft <= 30.0 and 1 <= rotor <= 6 and turb in B.TURBULENCE and 0.5 <= loss <= 1.0
     y, u = B.split(f, "motors")
     assert list(y.columns) == ["gyro.p", "gyro.q", "gyro.r"] and u.shape[1] == 18     # six motors per pair
@@ -31,12 +32,22 @@ def test_rotor_failures_are_found_at_once_and_healthy_logs_stay_quiet():
     np.testing.assert_allclose(y["rotor1"], -q, atol=1e-12)
     np.testing.assert_allclose(y["rotor2"], np.sqrt(3) / 2 * p - q / 2, atol=1e-12)
     np.testing.assert_allclose(y["rotor4"], q, atol=1e-12)
-    for pairs in B.PAIR_SETS:
-        shift = B.SHIFTS[-1] if pairs == "rotors" else None
-        det = B.calibrated(healthy[:3], pairs, 1, 2, 1.0, shift)
+    # the same with the accelerometer's lateral specific forces after the six motor commands of every pair
+    for pairs, k in (("motors+accel", 3), ("rotors+accel", 6)):
+        y, u = B.split(f, pairs)
+        assert y.shape[1] == k and u.shape[1] == 8 * k
+        assert list(u.columns[6:8]) == ["accel.ax", "accel.ay"] and list(u.columns[-2:]) == ["accel.ax", "accel.ay"]
+        np.testing.assert_array_equal(u.iloc[:, 8:14], f[B.MOTOR_COLS])
+    for i, pairs in enumerate(B.PAIR_SETS):
+        shift = B.SHIFTS[-1] if pairs.startswith("rotors") else None
+        lam = B.FORGETTING[i % len(B.FORGETTING)]
+        det = B.calibrated(healthy[:3], pairs, 1, 2, 1.0, shift, lam)
         assert det.calibration_.runs == 3 and det.statistic == "sprt" and det.models[0].nk == 1
-        assert det.sprt.alternative == ("mean" if pairs == "rotors" else "variance")
-        tab = B.score(det, B.unfrozen(det, pairs, 1, 2), healthy[3:] + failures, pairs)
+        assert det.sprt.alternative == ("mean" if pairs.startswith("rotors") else "variance")
+        free = B.unfrozen(det, pairs, 1, 2)          # the same detector but for freezing: its forgetting too
+        assert [m.forgetting_factor for m in free.models] == [lam] * len(free.models) and not free.freeze_on_alarm
+        assert free.threshold == det.threshold and free.n_inputs == det.n_inputs
+        tab = B.score(det, free, healthy[3:] + failures, pairs)
         fail = tab[tab.kind == "failure"]
         assert (fail.outcome == "found").all() and (fail.delay_s <= B.DEADLINE).all(), (pairs, fail)
         assert tab.false_episodes.sum() == 0
