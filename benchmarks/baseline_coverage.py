@@ -69,9 +69,10 @@ calibration does not hold), how many each check warned of. Sections:
    positive, right-skewed summary whose spread over 5 records is not a t law's. Development seed 9600, one new
    record per baseline (800 independent trials, 5 records; run after section 6's evaluation, information only):
    2.25 / 1.75 / 1.88 % judged by the full test (S / log S / normal score), 1.88 / 1.00 / 1.00 % judged by the
-   leave-one-out tests. So log S or the normal score judged that way may hold with 5 records (unmeasured with 10
-   and 20); it needs the fitting records' residuals and ``J`` calibrations per test, which ``record_coverage`` does
-   not have.
+   leave-one-out tests; with 10 records (400 trials) 3.50 / 2.00 / 2.00 % and 3.25 / 1.50 / 2.00 % (in the wide
+   band 0-2.5 % but S above it). So log S or the normal score judged that way is not shown liberal, nor shown to
+   hold; it would need the fitting records' residuals and ``J`` calibrations per test, which ``record_coverage``
+   does not have.
 
 ``--sections 4`` runs section 4 alone (about a minute).
 """
