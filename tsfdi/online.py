@@ -3,7 +3,8 @@
 :class:`OnlineDetector` runs several (output, input) signal pairs at once, each through a recursive ARX model
 with the stability gate, Welford running variance and Z-score alarms of paper 001 and a streaming GLRT on the
 same prediction errors (paper 002), and reports the first alarm of every pair and of the whole system with time
-stamps; ``statistic="sprt"`` runs Wald's restarted SPRT (:class:`tsfdi.SPRT`) on them instead.
+stamps; ``statistic="sprt"`` runs Wald's restarted SPRT (:class:`tsfdi.SPRT`) on them instead, ``statistic="zmean"``
+the standardised moving-window sum (paper 002's GLRT with a fixed window).
 :meth:`OnlineDetector.calibrate` sets the thresholds from healthy runs for a required number of false alarms per
 flight hour (paper 002's rule: the threshold from the statistic's distribution in normal operation; for the SPRT
 from the restart cycles of a few short healthy logs, averaged over the spread between logs and its uncertainty).
@@ -44,6 +45,8 @@ _SPRT_NODES = 400        # quantile nodes of the predictive law of a new log's W
 _MIN_SPRT_CYCLES = 50    # restart cycles of the SPRT walk the calibration needs
 _TAIL_EPISODES = 20      # episodes above the base level of the tail fit
 _MIN_TAIL_EPISODES = 10  # fewest episodes above the base level the tail fit accepts
+#: the statistics on the errors standardised by the scale fixed at arming (the SPRT's arming, settle, running scale)
+_ARMED_SCALE = ("sprt", "zmean")
 _STEADY_RATIO = 4.0      # statistic="sprt": largest ratio of the error variances of the two halves of the errors
                          # that set the scale at arming (a steady regime)
 #: the RecursiveARX options OnlineDetector passes on (it sets the others: gate, threshold, freeze_on_alarm, ...)
@@ -65,7 +68,7 @@ class OnlineDetection:
         Per-sample alarm of each pair (detection statistic or GLRT).
     first_alarms : pandas.DataFrame
         One row per pair: ``position`` (sample number since the detector started, -1 if none), ``time``
-        (index label, None if none), ``source`` ("zscore", "mean", "sprt", "glrt", or two joined by "+"), ``armed_at``
+        (index label, None if none), ``source`` ("zscore", "mean", "sprt", "zmean", "glrt", or two joined by "+"), ``armed_at``
         (position where the GLRT was armed / the variance became stable, -1 if not yet).
     first_alarm : int or None
         Earliest alarm position over all pairs (since the detector started).
@@ -76,8 +79,8 @@ class OnlineDetection:
     statistic : ndarray, DataFrame or DataArray, shape (nobs, n_pairs)
         The detection statistic compared with ``threshold``: the Z-score (``statistic="zscore"``; the alarm is
         on its absolute value), the direction-signed moving average of the prediction errors
-        (``statistic="mean"``) or the SPRT walk :math:`S_k` before its restart (``statistic="sprt"``), NaN where
-        undefined.
+        (``statistic="mean"``), the SPRT walk :math:`S_k` before its restart (``statistic="sprt"``) or the
+        direction-signed standardised window sum :math:`T_k` (``statistic="zmean"``), NaN where undefined.
     alarm_start : ndarray of bool, shape (nobs, n_pairs)
         First sample of every alarm *episode* (a maximal stretch of consecutive alarmed samples of a pair, one
         alarm to the operator); an episode continuing from the previous block of the stream is not restarted.
@@ -376,7 +379,7 @@ class OnlineDetector:
     r"""Online anomaly detection on several commanded / measured (input / output) signal pairs at once.
 
     Every pair gets its own :class:`tsfdi.RecursiveARX` (same orders and options for all pairs). Its a-priori
-    prediction errors feed one of two detection statistics:
+    prediction errors feed one of four detection statistics:
 
     - ``statistic="zscore"`` (paper 001): the model's own Z-score against the Welford mean and variance, armed
       once the model and the error variance are stable; ``threshold`` is in standard deviations (4.5);
@@ -390,7 +393,17 @@ class OnlineDetector:
       :math:`S_k = S_{k-1} + z_k` (:math:`z_k` the test's per-sample log-likelihood ratio times its ``scale_``)
       restarts at 0 at its lower bound and after every alarm; an alarm where :math:`S_k \ge` ``threshold`` (by
       default the test's upper bound :math:`\ln((1-\beta)/\alpha)`). The default, for autopilot logs (see the
-      guide): :meth:`calibrate` sets it from a few short healthy logs.
+      guide): :meth:`calibrate` sets it from a few short healthy logs;
+    - ``statistic="zmean"``: the standardised moving-window sum of the last ``window`` errors (a causal matched
+      filter of a bias of known length, paper 002's GLRT with a fixed window, see Notes),
+
+      .. math:: T_k = \frac{1}{\hat\sigma\sqrt{w}} \sum_{i=k-w+1}^{k} (e_i - \hat\mu),
+
+      with :math:`w` = ``window`` and :math:`\hat\mu, \hat\sigma` the mean and scale fixed at arming exactly as
+      for ``"sprt"`` (``settle`` and ``scale_forgetting`` apply the same way); standard normal in normal operation
+      for white errors, so one ``threshold`` in standard deviations serves logs whose error spread differs.
+      ``direction`` as for ``"mean"``: "up" alarms when :math:`T_k >` ``threshold``, "down" when
+      :math:`T_k <` ``-threshold``, "both" on :math:`|T_k|`.
 
     Optionally a streaming :class:`tsfdi.detection.GLRT` runs on the same errors once the variance is stable
     and positive (its ``scale`` is the Welford standard deviation at arming, its input the error minus the
@@ -414,9 +427,9 @@ class OnlineDetector:
     forgetting_factor : float, default 0.999
         Paper 001: 0.995.
     threshold : float, optional
-        Alarm threshold of ``statistic``: standard deviations for "zscore" (default 4.5), units of ``y`` for "mean"
-        (default 4.5), the SPRT walk's level for "sprt" (default the upper bound of ``sprt``).
-    glrt : GLRT or None, default ``GLRT(window=20, alpha=1e-6)`` for "zscore", None for "mean"
+        Alarm threshold of ``statistic``: standard deviations for "zscore" and "zmean" (default 4.5), units of ``y``
+        for "mean" (default 4.5), the SPRT walk's level for "sprt" (default the upper bound of ``sprt``).
+    glrt : GLRT or None, default ``GLRT(window=20, alpha=1e-6)`` for "zscore", None otherwise
         The GLRT whose window and threshold are used for every pair (its ``scale`` is replaced per pair);
         ``None`` disables the GLRT.
     freeze_on_alarm : bool, default True
@@ -428,13 +441,13 @@ class OnlineDetector:
     n_inputs : int, default 1
         Inputs per pair; ``u`` then has ``n_pairs * n_inputs`` columns, pair by pair (the inputs of pair 0
         first).
-    statistic : {"sprt", "zscore", "mean"}, default "sprt"
+    statistic : {"sprt", "zscore", "mean", "zmean"}, default "sprt"
         Paper 001: "zscore".
     window : int, default 20
-        Length of the moving average (``statistic="mean"``); the errors it holds, ``n_pairs * (window - 1)``
+        Length in samples of the moving average (``statistic="mean"``) or window sum (``"zmean"``); the errors it holds, ``n_pairs * (window - 1)``
         values, are checked against the 2 GiB limit (2**28 values) before anything is allocated.
     direction : {"both", "down", "up"}, default "both"
-        Side of the moving-average test.
+        Side of the moving-average (``"mean"``) or window-sum (``"zmean"``) test.
     arm_after : int, default 0
         Length of the baseline phase in samples (counted from the first sample given to the detector).
     eps : float, default 0.03
@@ -446,11 +459,11 @@ class OnlineDetector:
         variance grows by ``ratio``: any change that makes the errors larger, either sign) or "mean" (a shift of
         ``shift`` standard deviations, one-sided), with ``restart=True``. With it ``glrt`` must be None.
     settle : int, default 0
-        ``statistic="sprt"``: samples after arming during which a crossing of ``threshold`` re-arms the pair
+        ``statistic="sprt"`` or ``"zmean"``: samples after arming during which a crossing of ``threshold`` re-arms the pair
         instead of alarming, with its scale taken from a steady regime (see Notes); for a log that starts on the
         ground and takes off. 0: the scale is the Welford standard deviation at arming and every crossing alarms.
     scale_forgetting : float in (0, 1), optional
-        ``statistic="sprt"``: standardise the errors by a running mean and standard deviation with this
+        ``statistic="sprt"`` or ``"zmean"``: standardise the errors by a running mean and standard deviation with this
         exponential forgetting :math:`\lambda` (memory about :math:`1/(1-\lambda)` errors), lagged by
         ``scale_lag`` errors, instead of the values fixed at arming (None, the default); for logs whose healthy
         error spread varies along the flight (see Notes).
@@ -541,6 +554,18 @@ class OnlineDetector:
     makes it usable on real records whose error distribution is heavy-tailed and non-stationary, where a
     single-sample Z-score against a running variance raises false alarms.
 
+    **Standardised window sum** (``statistic="zmean"``). For independent Gaussian errors of variance
+    :math:`\sigma^2` and a jump of the mean by :math:`A` over the last :math:`w` samples, paper 002's GLRT
+    (eqs. 1-3) with the change instant fixed at :math:`j = k - w + 1` is
+    :math:`\max_A S_j^k = (\sum_{i=j}^{k} e_i)^2 / (2\sigma^2 w) = T_k^2 / 2`: :math:`T_k` is its signed root, the
+    matched filter of a bias lasting :math:`w` samples, :math:`N(0, 1)` under the null and shifted by
+    :math:`A\sqrt{w}/\sigma` under the jump. Against ``"mean"`` it divides by the scale of each pair fixed at
+    arming, so that its threshold is in standard deviations of the window sum and holds across pairs and logs
+    whose error spread differs; against the SPRT of a mean shift it does not accumulate past :math:`w` samples,
+    so a bias that decays (a loss the rate loop compensates within 1-2 s) is not offset by the negative drift of
+    the walk. Autocorrelated errors make its null variance differ from 1 (the sum of the autocorrelations over the
+    window): :meth:`calibrate` reads the threshold from the healthy runs, as for ``"mean"``.
+
     References
     ----------
     Keipour, Mousaei, Scherer, ICRA 2019 (paper 001), sections IV-V; Hansen, Blanke, Adrian (paper 002),
@@ -569,7 +594,7 @@ class OnlineDetector:
                 raise TypeError(f"{key} {why}; the RecursiveARX options it passes on are {', '.join(_RLS_OPTIONS)}")
         self.pairs = names
         self.nonfinite = option(nonfinite, "nonfinite", ("skip", "raise"))
-        self.statistic = option(statistic, "statistic", ("zscore", "mean", "sprt"))
+        self.statistic = option(statistic, "statistic", ("zscore", "mean", "sprt", "zmean"))
         if isinstance(sprt, str) and sprt == "default":
             sprt = SPRT("variance", ratio=4.0, alpha=1e-9, beta=0.01, restart=True)
         if self.statistic != "sprt":
@@ -591,14 +616,14 @@ class OnlineDetector:
         self.n_inputs = int_like(n_inputs, "n_inputs", minimum=1)
         self.eps = float_like(eps, "eps", minimum=0.0, strict_min=True)
         self.settle = int_like(settle, "settle", minimum=0)
-        if self.settle and self.statistic != "sprt":
-            raise ValueError(f"settle={self.settle} needs statistic='sprt' (the scale it sets is the SPRT's), got "
-                             f"statistic={self.statistic!r}")
+        if self.settle and self.statistic not in _ARMED_SCALE:
+            raise ValueError(f"settle={self.settle} needs statistic='sprt' or 'zmean' (the scale it sets is theirs), "
+                             f"got statistic={self.statistic!r}")
         self.scale_forgetting = float_like(scale_forgetting, "scale_forgetting", minimum=0.0, maximum=1.0,
                                            strict_min=True, strict_max=True, optional=True)
-        if self.scale_forgetting is not None and self.statistic != "sprt":
-            raise ValueError(f"scale_forgetting={self.scale_forgetting:g} needs statistic='sprt' (the scale is the "
-                             f"SPRT's), got statistic={self.statistic!r}")
+        if self.scale_forgetting is not None and self.statistic not in _ARMED_SCALE:
+            raise ValueError(f"scale_forgetting={self.scale_forgetting:g} needs statistic='sprt' or 'zmean' (the "
+                             f"scale is theirs), got statistic={self.statistic!r}")
         self.scale_lag = int_like(scale_lag, "scale_lag", minimum=0)
         self._settle_level: float | None = None   # the alarm-free copies of calibrate: the level settle watches
         self.freeze_on_alarm = boolean(freeze_on_alarm, "freeze_on_alarm")
@@ -609,6 +634,9 @@ class OnlineDetector:
         if glrt is not None and self.statistic == "sprt":
             raise ValueError("glrt must be None with statistic='sprt': the SPRT is the sequential test of the "
                              "prediction errors (a GLRT beside it would double the false alarms calibrate sets)")
+        if glrt is not None and self.statistic == "zmean":
+            raise ValueError("glrt must be None with statistic='zmean': the standardised window sum is the GLRT of "
+                             "a jump of known length (a GLRT beside it would double the false alarms calibrate sets)")
         self.glrt = glrt
         # the constructor's options, for the alarm-free copies run by calibrate()
         self._options = dict(na=na, nb=nb, nk=nk, forgetting_factor=forgetting_factor, threshold=self.threshold,
@@ -673,13 +701,22 @@ class OnlineDetector:
 
     def _mean_statistic(self, c: int, e: np.ndarray) -> np.ndarray:
         """Direction-signed moving average of the errors of pair ``c`` continuing its tail (not updated)."""
-        w1 = self.window - 1
-        m = _moving_average(np.concatenate([self._tail[c], e]), self.window)[w1:]
+        return self._signed(_moving_average(np.concatenate([self._tail[c], e]), self.window)[self.window - 1:])
+
+    def _signed(self, m: np.ndarray) -> np.ndarray:
+        """``m`` on the side of ``direction``: negated for "down", absolute for "both"."""
         if self.direction == "down":
             return -m
         if self.direction == "both":
             return np.abs(m)
         return m
+
+    def _window_sum(self, w: np.ndarray, tail: np.ndarray) -> tuple:
+        """Direction-signed standardised window sum ``T_k`` of the standardised errors ``w`` continuing ``tail`` (the
+        last ``window - 1`` of them before; NaN in the window: NaN), and the new tail."""
+        x = np.concatenate([tail, w])
+        t = self._signed(_moving_average(x, self.window)[self.window - 1:] * np.sqrt(self.window))
+        return t, x[x.size - tail.size:]
 
     @staticmethod
     def _join(parts: list) -> tuple:
@@ -763,15 +800,24 @@ class OnlineDetector:
                 armed_at = start + lo
                 walk = self._armed_walk(sd, float(x.mean()), armed_at + self.settle)
                 continue
-            z = np.full(n - lo, np.nan)
             w, running = self._standardise(e[lo:], walk)
-            ok = np.isfinite(w)
-            if ok.any():
-                z[ok] = self.sprt.loglik_ratio(w[ok], 1.0)
-            p, a, _, _, state, _ = renewal_walk(z, self.sprt.lower, self.threshold, state=walk[2])
+            if self.statistic == "zmean":
+                p, state = self._window_sum(w, walk[2])
+                a = np.nan_to_num(p, nan=-np.inf) > self.threshold
+            else:
+                z = np.full(n - lo, np.nan)
+                ok = np.isfinite(w)
+                if ok.any():
+                    z[ok] = self.sprt.loglik_ratio(w[ok], 1.0)
+                p, a, _, _, state, _ = renewal_walk(z, self.sprt.lower, self.threshold, state=walk[2])
             settling = start + lo + np.arange(n - lo) < walk[3]
             if settling.any():
-                hit = a if level == self.threshold else renewal_walk(z, self.sprt.lower, level, state=walk[2])[1]
+                if level == self.threshold:
+                    hit = a
+                elif self.statistic == "zmean":
+                    hit = np.nan_to_num(p, nan=-np.inf) > level
+                else:
+                    hit = renewal_walk(z, self.sprt.lower, level, state=walk[2])[1]
                 hits = np.flatnonzero(hit & settling)
                 if hits.size:                               # not a steady regime yet: re-arm
                     j = int(hits[0])
@@ -781,7 +827,7 @@ class OnlineDetector:
                     continue
             path[lo:] = p
             alarm[lo:] = a
-            walk[2] = float(state)
+            walk[2] = state if self.statistic == "zmean" else float(state)
             walk[5] = running
             lo = n
         alarm &= (start + np.arange(n)) >= self.arm_after
@@ -793,7 +839,9 @@ class OnlineDetector:
     def _armed_walk(self, sd: float, mean: float, settle_end: int) -> list:
         """The walk state of a pair armed with the scale ``sd`` and mean ``mean`` (see :meth:`_sprt_walk`)."""
         running = None if self.scale_forgetting is None else (mean, sd ** 2, np.empty(0))
-        return [sd, mean, 0.0, settle_end, None, running]
+        # the statistic's state: the SPRT walk's value, or the last window - 1 standardised errors of "zmean"
+        state = np.full(self.window - 1, np.nan) if self.statistic == "zmean" else 0.0
+        return [sd, mean, state, settle_end, None, running]
 
     def _standardise(self, e: np.ndarray, walk: list) -> tuple:
         """Errors ``e`` of a pair armed with ``walk`` standardised: by the scale at arming (``scale_forgetting``
@@ -860,7 +908,7 @@ class OnlineDetector:
                     f"its parameter step never stayed below eps={self.eps:g} of the parameters {run}: check that y "
                     "follows u (on an autopilot log: the body rate of an axis against the actuator control of that "
                     "axis, nk=1), give more data or raise eps")
-            source = {"zscore": "Z-score", "sprt": "SPRT"}.get(self.statistic, "GLRT")
+            source = {"zscore": "Z-score", "sprt": "SPRT", "zmean": "window-sum"}.get(self.statistic, "GLRT")
             warnings.warn(f"OnlineDetector pair {self.pairs[c]!r} has not armed by the end of the data at {when}, so "
                           f"it could raise no {source} alarm: {gate}",
                           ConvergenceWarning, stacklevel=2)
@@ -885,7 +933,7 @@ class OnlineDetector:
             if self.statistic == "zscore":
                 e, z, zal, vstable, var, mean = self._join([m.run(yc, uc)])
                 stat = z
-            elif self.statistic == "sprt":
+            elif self.statistic in _ARMED_SCALE:
                 e, z, stat, zal, vstable, var, mean = self._run_sprt(c, m, yc, uc, start)
             else:
                 e, z, stat, zal, vstable, var, mean = self._run_mean(c, m, yc, uc, start)
@@ -917,7 +965,7 @@ class OnlineDetector:
                         G[idx, c] = g
                         gal[idx] = g > stream.threshold
                 gal &= pos >= self.arm_after
-            elif self._armed_at[c] < 0 and self.statistic != "sprt":
+            elif self._armed_at[c] < 0 and self.statistic not in _ARMED_SCALE:
                 vs = np.flatnonzero(vstable)
                 if vs.size:
                     self._armed_at[c] = start + int(vs[0]) + 1
@@ -1001,7 +1049,8 @@ class OnlineDetector:
         Every healthy run goes through a fresh copy of the detector (same options) whose thresholds are never
         reached, so its models never freeze; the copy's statistic is kept from the sample it can alarm at
         (after arming and the baseline phase ``arm_after``): :math:`|Z|` for ``statistic="zscore"``, the
-        direction-signed moving average for ``"mean"``, and the GLRT's :math:`g(k)` when the GLRT is on. The
+        direction-signed moving average for ``"mean"``, the direction-signed standardised window sum for ``"zmean"``
+        (its episodes counted as for the others), and the GLRT's :math:`g(k)` when the GLRT is on. The
         thresholds are then set, :meth:`reset` is called and ``calibration_`` records the estimate.
 
         Parameters
