@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numba
 import numpy as np
 from scipy import special
 
@@ -350,26 +351,42 @@ _LOG_SPACE_BELOW = 1e-250
 def _log_beta_tail(a: np.ndarray, b: np.ndarray, log_y: np.ndarray) -> np.ndarray:
     r""":math:`\ln I_y(a, b)` (the lower tail of :math:`B(a, b)` at :math:`y = e^{\text{log\_y}}`) for
     :math:`y < (a + 1) / (a + b + 2)`: the prefactor :math:`y^a (1-y)^b / (a B(a, b))` in log space times the
-    continued fraction of the incomplete beta function (modified Lentz), which converges there."""
+    continued fraction of the incomplete beta function (:func:`_beta_fraction`)."""
     y = np.exp(log_y)
-    qab, qap, qam = a + b, a + 1.0, a - 1.0
-    tiny = 1e-300
-
-    def clip(v):
-        return np.where(np.abs(v) < tiny, tiny, v)
-
-    c = np.ones_like(y)
-    d = 1.0 / clip(1.0 - qab * y / qap)
-    h = d
-    for m in range(1, 5000):
-        for an in (m * (b - m) * y / ((qam + 2 * m) * (a + 2 * m)),
-                   -(a + m) * (qab + m) * y / ((a + 2 * m) * (qap + 2 * m))):
-            d = 1.0 / clip(1.0 + an * d)
-            c = clip(1.0 + an / c)
-            h = h * d * c
-        if np.all(np.abs(d * c - 1.0) < 1e-15):
-            break
+    flat = [np.ascontiguousarray(v, dtype=np.float64).ravel() for v in np.broadcast_arrays(a, b, y)]
+    h = _beta_fraction(*flat).reshape(np.shape(y))
     return a * log_y + b * np.log1p(-y) - special.betaln(a, b) - np.log(a) + np.log(h)
+
+
+@numba.njit(cache=True, nogil=True)
+def _beta_fraction(a: np.ndarray, b: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The continued fraction of the incomplete beta function :math:`I_y(a, b)` (Numerical Recipes' ``betacf``,
+    modified Lentz), element by element until its last factor is within 1e-15 of 1 (at most 4,999 terms);
+    compiled: the far tails of a fleet's F tests call it for thousands of windows."""
+    tiny = 1e-300
+    out = np.empty(y.size)
+    for i in range(y.size):
+        ai, bi, yi = a[i], b[i], y[i]
+        qab, qap, qam = ai + bi, ai + 1.0, ai - 1.0
+        c = 1.0
+        d = 1.0 - qab * yi / qap
+        d = 1.0 / (tiny if abs(d) < tiny else d)
+        h = d
+        for m in range(1, 5000):
+            for even in (True, False):
+                if even:
+                    an = m * (bi - m) * yi / ((qam + 2 * m) * (ai + 2 * m))
+                else:
+                    an = -(ai + m) * (qab + m) * yi / ((ai + 2 * m) * (qap + 2 * m))
+                d = 1.0 + an * d
+                d = 1.0 / (tiny if abs(d) < tiny else d)
+                c = 1.0 + an / c
+                c = tiny if abs(c) < tiny else c
+                h = h * d * c
+            if abs(d * c - 1.0) < 1e-15:
+                break
+        out[i] = h
+    return out
 
 
 #: Ratio of the degrees of freedom from which the F law is its chi-square limit, :math:`\mathcal F(n, d) \to
