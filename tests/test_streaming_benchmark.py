@@ -114,3 +114,20 @@ def test_detectability_bound_recovers_a_known_bias_on_synthetic_logs():
         B.detectability(healthy, failures, ["gyro.p", "gyro.q"], B.MOTOR_COLS, directions=np.eye(2))
     with pytest.raises(ValueError, match="healthy"):
         B.detectability(healthy[:2], failures, ["gyro.p", "gyro.q"], B.MOTOR_COLS)
+
+
+def test_the_window_sum_detector_of_the_grid_and_its_unfrozen_copy():
+    """The grid's standardised window sum (statistic="zmean", issue 34): one-sided on the rotor directions,
+    two-sided on the rates; the unfrozen copy that counts false-alarm episodes keeps its statistic and window."""
+    B = _streaming_benchmark()
+    assert B.WINDOWS == (0.25, 0.5, 1.0)
+    for pairs, side in (("rotors+accel", "up"), ("motors+accel", "both")):
+        det = B.detector(pairs, 1, 2, window=25, forgetting_factor=0.9999, threshold=5.0)
+        assert (det.statistic, det.window, det.direction, det.n_inputs) == ("zmean", 25, side, 8)
+        free = B.unfrozen(det, pairs, 1, 2)
+        assert (free.statistic, free.window, free.direction, free.threshold) == ("zmean", 25, side, 5.0)
+        assert not free.freeze_on_alarm and free.models[0].forgetting_factor == 0.9999
+    sprt = B.unfrozen(B.detector("rotors", 1, 2, shift=2.0, threshold=9.0), "rotors", 1, 2)
+    assert sprt.statistic == "sprt" and sprt.sprt.shift == 2.0 and sprt.threshold == 9.0
+    with pytest.raises(ValueError, match="give one"):
+        B.detector("rotors+accel", 1, 2, shift=2.0, window=25)
