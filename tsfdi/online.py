@@ -68,8 +68,8 @@ class OnlineDetection:
         Per-sample alarm of each pair (detection statistic or GLRT).
     first_alarms : pandas.DataFrame
         One row per pair: ``position`` (sample number since the detector started, -1 if none), ``time``
-        (index label, None if none), ``source`` ("zscore", "mean", "sprt", "zmean", "glrt", or two joined by "+"), ``armed_at``
-        (position where the GLRT was armed / the variance became stable, -1 if not yet).
+        (index label, None if none), ``source`` ("zscore", "mean", "sprt", "zmean", "glrt", or two joined by "+"),
+        ``armed_at`` (position where the GLRT was armed / the variance became stable, -1 if not yet).
     first_alarm : int or None
         Earliest alarm position over all pairs (since the detector started).
     first_alarm_time : object or None
@@ -444,8 +444,9 @@ class OnlineDetector:
     statistic : {"sprt", "zscore", "mean", "zmean"}, default "sprt"
         Paper 001: "zscore".
     window : int, default 20
-        Length in samples of the moving average (``statistic="mean"``) or window sum (``"zmean"``); the errors it holds, ``n_pairs * (window - 1)``
-        values, are checked against the 2 GiB limit (2**28 values) before anything is allocated.
+        Length in samples of the moving average (``statistic="mean"``) or window sum (``"zmean"``); the errors it
+        holds, ``n_pairs * (window - 1)`` values, are checked against the 2 GiB limit (2**28 values) before
+        anything is allocated.
     direction : {"both", "down", "up"}, default "both"
         Side of the moving-average (``"mean"``) or window-sum (``"zmean"``) test.
     arm_after : int, default 0
@@ -459,12 +460,13 @@ class OnlineDetector:
         variance grows by ``ratio``: any change that makes the errors larger, either sign) or "mean" (a shift of
         ``shift`` standard deviations, one-sided), with ``restart=True``. With it ``glrt`` must be None.
     settle : int, default 0
-        ``statistic="sprt"`` or ``"zmean"``: samples after arming during which a crossing of ``threshold`` re-arms the pair
-        instead of alarming, with its scale taken from a steady regime (see Notes); for a log that starts on the
-        ground and takes off. 0: the scale is the Welford standard deviation at arming and every crossing alarms.
+        ``statistic="sprt"`` or ``"zmean"``: samples after arming during which a crossing of ``threshold`` re-arms
+        the pair instead of alarming, with its scale taken from a steady regime (see Notes); for a log that starts
+        on the ground and takes off. 0: the scale is the Welford standard deviation at arming and every crossing
+        alarms.
     scale_forgetting : float in (0, 1), optional
-        ``statistic="sprt"`` or ``"zmean"``: standardise the errors by a running mean and standard deviation with this
-        exponential forgetting :math:`\lambda` (memory about :math:`1/(1-\lambda)` errors), lagged by
+        ``statistic="sprt"`` or ``"zmean"``: standardise the errors by a running mean and standard deviation with
+        this exponential forgetting :math:`\lambda` (memory about :math:`1/(1-\lambda)` errors), lagged by
         ``scale_lag`` errors, instead of the values fixed at arming (None, the default); for logs whose healthy
         error spread varies along the flight (see Notes).
     scale_lag : int, default 50
@@ -498,7 +500,8 @@ class OnlineDetector:
     largest healthy statistic was 11.4, the smallest within 0.5 s of a failure 68). Paper 001's reproduction
     takes those arguments explicitly. For a stated false-alarm rate use :meth:`calibrate`.
 
-    **Settle (take-off).** With ``statistic="sprt"`` the errors are standardised by a scale fixed at arming.
+    **Settle (take-off).** With ``statistic="sprt"`` (or ``"zmean"``) the errors are standardised by a scale fixed
+    at arming.
     A pair that arms while the vehicle stands still takes the scale of the ground and alarms at take-off. With
     ``settle`` :math:`= S > 0` the pair arms on a *steady regime*: once the error variance is stable, the next
     :math:`W = \max(S, \text{min\_variance\_samples})` finite errors give the mean and scale if the variances
