@@ -23,6 +23,23 @@ def paper001(pairs, **options):
     return OnlineDetector(pairs, **{**PAPER001, **options})
 
 
+def assert_streams_like_a_block(make, y, u, sizes=(777,)):
+    """The detector ``make()`` fed the stream sample by sample (``update``) and in chunks of each of ``sizes``
+    (``run``) gives the alarms, first alarms and statistic of one ``run`` over the whole stream; returns that run."""
+    ref = make().run(y, u)
+    det = make()
+    alarms = np.array([det.update(y[i], u[i]) for i in range(len(y))])
+    np.testing.assert_array_equal(alarms, ref.alarm)
+    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
+    for size in sizes:
+        det = make()
+        parts = [det.run(y[i:i + size], u[i:i + size]) for i in range(0, len(y), size)]
+        np.testing.assert_array_equal(np.vstack([p.alarm for p in parts]), ref.alarm)
+        np.testing.assert_allclose(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic),
+                                   equal_nan=True)
+    return ref
+
+
 def two_pairs(n=4000, change=3000, seed=0, bias=0.0, gain=0.0):
     """Pair A: y = 0.7 y[-1] + u + e; pair B: y = 0.5 y[-1] + 0.8 u + e with a fault in B from ``change``."""
     rng = np.random.default_rng(seed)

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 from scipy.signal import lfilter
-from test_online import PAPER001, two_pairs
+from test_online import PAPER001, assert_streams_like_a_block, two_pairs
 
 from tsfdi.detection.glrt import GLRT
 from tsfdi.detection.sequential import SPRT
@@ -49,16 +49,7 @@ def test_sprt_statistic_detects_a_bias_and_restarts():
 
 def test_sprt_statistic_streaming_equals_block():
     y, u = two_pairs(n=3400, bias=0.3)
-    ref = sprt_detector().run(y, u)
-    assert ref.first_alarm is not None
-    det = sprt_detector()
-    alarms = np.array([det.update(y[i], u[i]) for i in range(len(y))])
-    np.testing.assert_array_equal(alarms, ref.alarm)
-    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
-    det = sprt_detector()
-    parts = [det.run(y[i:i + 777], u[i:i + 777]) for i in range(0, len(y), 777)]
-    np.testing.assert_array_equal(np.vstack([p.alarm for p in parts]), ref.alarm)
-    np.testing.assert_allclose(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic))
+    assert assert_streams_like_a_block(sprt_detector, y, u).first_alarm is not None
 
 
 def test_sprt_statistic_freezes_the_model_at_the_first_alarm():
@@ -288,17 +279,8 @@ def test_running_scale_streaming_equals_block(settle):
     y, u = spread_log(np.random.default_rng(3), seconds=60.0, fault_at=45.0)
     y[[700, 701, 1500, 2300], 1] = np.nan
     kw = dict(scale_forgetting=0.99, scale_lag=30, settle=settle)
-    ref = sprt_detector(**kw).run(y, u)
+    ref = assert_streams_like_a_block(lambda: sprt_detector(**kw), y, u, sizes=(7, 777))
     assert ref.first_alarm_pair == "b" and ref.first_alarm >= 2250
-    det = sprt_detector(**kw)
-    alarms = np.array([det.update(y[i], u[i]) for i in range(len(y))])
-    np.testing.assert_array_equal(alarms, ref.alarm)
-    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
-    for size in (7, 777):
-        det = sprt_detector(**kw)
-        parts = [det.run(y[i:i + size], u[i:i + size]) for i in range(0, len(y), size)]
-        np.testing.assert_array_equal(np.vstack([p.alarm for p in parts]), ref.alarm)
-        np.testing.assert_array_equal(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic))
 
 
 def test_running_scale_calibrates_logs_whose_spread_varies():

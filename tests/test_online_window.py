@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from scipy import stats
-from test_online import FS, PAPER001, episodes_and_hours, healthy_runs, two_pairs
+from test_online import FS, PAPER001, assert_streams_like_a_block, episodes_and_hours, healthy_runs, two_pairs
 
 from tsfdi.detection.glrt import GLRT
 from tsfdi.models.recursive import RecursiveARX
@@ -76,18 +76,8 @@ def test_zmean_is_standard_normal_under_white_errors():
 
 def test_zmean_streaming_equals_block():
     y, u = two_pairs(n=3400, bias=0.3)
-    ref = zmean_detector().run(y, u)
-    assert ref.first_alarm is not None
-    det = zmean_detector()
-    alarms = np.array([det.update(y[i], u[i]) for i in range(len(y))])
-    np.testing.assert_array_equal(alarms, ref.alarm)
-    pd.testing.assert_frame_equal(det.first_alarms, ref.first_alarms)
-    det = zmean_detector(scale_forgetting=0.999, settle=100)
-    ref = det.run(y, u)
-    det.reset()
-    parts = [det.run(y[i:i + 777], u[i:i + 777]) for i in range(0, len(y), 777)]
-    np.testing.assert_array_equal(np.vstack([p.alarm for p in parts]), ref.alarm)
-    np.testing.assert_allclose(np.vstack([np.asarray(p.statistic) for p in parts]), np.asarray(ref.statistic))
+    assert assert_streams_like_a_block(zmean_detector, y, u).first_alarm is not None
+    assert_streams_like_a_block(lambda: zmean_detector(scale_forgetting=0.999, settle=100), y, u)
 
 
 def test_calibrated_zmean_keeps_its_rate_on_new_healthy_runs():
