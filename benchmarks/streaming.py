@@ -542,6 +542,19 @@ def detectability(healthy: list, failures: list, outputs: list, inputs: list, *,
     return table, fails, levels
 
 
+def development_logs(seeds, args) -> tuple[list, list]:
+    """The development logs of ``seeds`` (with the accelerometer): per seed ``args.dev`` healthy logs, ``args.dev``
+    failure logs of ``args.loss`` and ``args.dev`` of the small losses ``SMALL``; (healthy, failure)."""
+    healthy, fail = [], []
+    for seed in seeds:
+        dev = np.random.default_rng(seed)
+        healthy += make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs, accel=True)
+        for loss in (tuple(args.loss), SMALL):
+            fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=loss,
+                              accel=True)
+    return healthy, fail
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dev", type=int, default=12, help="development logs of each kind (healthy, failure)")
@@ -560,14 +573,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     t0 = time.time()
     if args.bound is not None:
-        healthy, fail = [], []
-        for seed in args.bound or args.dev_seed:
-            dev = np.random.default_rng(seed)
-            healthy += make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs, accel=True)
-            fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs,
-                              loss=tuple(args.loss), accel=True)
-            fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL,
-                              accel=True)
+        healthy, fail = development_logs(args.bound or args.dev_seed, args)
         print(f"oracle bound on the development logs of seeds {args.bound or args.dev_seed}: {len(healthy)} "
               f"healthy, {len(fail)} failure logs of {args.duration:g} s at {args.fs:g} Hz, {time.time() - t0:.0f} s")
         with pd.option_context("display.width", 200, "display.max_columns", 20):
@@ -581,14 +587,7 @@ def main(argv=None) -> None:
                 print(levels.round(2).to_string())
                 print(table.round(2).to_string())
         return
-    dev_healthy, dev_fail = [], []
-    for seed in args.dev_seed:
-        dev = np.random.default_rng(seed)
-        dev_healthy += make_logs(dev, args.dev, failures=False, duration=args.duration, fs=args.fs, accel=True)
-        dev_fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs,
-                              loss=tuple(args.loss), accel=True)
-        dev_fail += make_logs(dev, args.dev, failures=True, duration=args.duration, fs=args.fs, loss=SMALL,
-                              accel=True)
+    dev_healthy, dev_fail = development_logs(args.dev_seed, args)
     print(f"development, per seed: {args.dev} healthy + {args.dev} failure logs (loss {args.loss[0]:g}-"
           f"{args.loss[1]:g}) + {args.dev} failure logs (loss {SMALL[0]:g}-{SMALL[1]:g}) of {args.duration:g} s at "
           f"{args.fs:g} Hz (seeds {args.dev_seed}), {time.time() - t0:.0f} s")
