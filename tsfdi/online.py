@@ -634,12 +634,9 @@ class OnlineDetector:
             glrt = GLRT(window=20, alpha=1e-6) if self.statistic == "zscore" else None
         if glrt is not None and not isinstance(glrt, GLRT):
             raise TypeError(f"glrt must be a tsfdi.detection.GLRT or None, got {type(glrt).__name__}")
-        if glrt is not None and self.statistic == "sprt":
-            raise ValueError("glrt must be None with statistic='sprt': the SPRT is the sequential test of the "
-                             "prediction errors (a GLRT beside it would double the false alarms calibrate sets)")
-        if glrt is not None and self.statistic == "zmean":
-            raise ValueError("glrt must be None with statistic='zmean': the standardised window sum is the GLRT of "
-                             "a jump of known length (a GLRT beside it would double the false alarms calibrate sets)")
+        if glrt is not None and self.statistic in _ARMED_SCALE:
+            raise ValueError(f"glrt must be None with statistic={self.statistic!r}: it is the test of the prediction "
+                             "errors (a GLRT beside it would double the false alarms calibrate sets)")
         self.glrt = glrt
         # the constructor's options, for the alarm-free copies run by calibrate()
         self._options = dict(na=na, nb=nb, nk=nk, forgetting_factor=forgetting_factor, threshold=self.threshold,
@@ -806,7 +803,7 @@ class OnlineDetector:
             w, running = self._standardise(e[lo:], walk)
             if self.statistic == "zmean":
                 p, state = self._window_sum(w, walk[2])
-                a = np.nan_to_num(p, nan=-np.inf) > self.threshold
+                a = p > self.threshold                      # NaN (window not yet full): no alarm
             else:
                 z = np.full(n - lo, np.nan)
                 ok = np.isfinite(w)
@@ -818,7 +815,7 @@ class OnlineDetector:
                 if level == self.threshold:
                     hit = a
                 elif self.statistic == "zmean":
-                    hit = np.nan_to_num(p, nan=-np.inf) > level
+                    hit = p > level
                 else:
                     hit = renewal_walk(z, self.sprt.lower, level, state=walk[2])[1]
                 hits = np.flatnonzero(hit & settling)
