@@ -379,9 +379,9 @@ def write_fleet(ds: Any, path: str | os.PathLike, *, encoding: dict | None = Non
     encoding : dict, optional
         Per variable, as ``Dataset.to_netcdf``; for zarr only ``dtype``, ``scale_factor`` and ``_FillValue`` are
         kept (zarr's own compressor). A zarr store holds each variable along ``record`` alone (a label such as
-        ``seed`` or ``lost_control``: a few bytes per record) in one chunk, so that a reader gets it in one read, not one per chunk of records
-        (:func:`~tsfdi.datasets.hexacopter_signals` of a store of 2,000 records in chunks of 50: 0.18 s with its
-        eight labels in 320 chunks, 0.01 s with each in one); the labels backed by dask (computed by the
+        ``seed`` or ``lost_control``: a few bytes per record) in one chunk, so that a reader gets it in one read,
+        not one per chunk of records (:func:`~tsfdi.datasets.hexacopter_signals` of a store of 2,000 records in
+        chunks of 50: 0.18 s with its eight labels in 320 chunks, 0.01 s with each in one); the labels backed by dask (computed by the
         simulation, e.g. ``lost_control``) are computed with the data and written after it. ``Dataset.chunks`` of
         such a store raises (its labels are chunked apart from the data): ask a data variable,
         ``store["roll"].chunks``.
