@@ -2,7 +2,6 @@
 matched filter of a bias lasting ``window`` samples; paper 002's GLRT with a fixed window), issue 34."""
 
 import numpy as np
-import pandas as pd
 import pytest
 from scipy import stats
 from test_online import FS, PAPER001, assert_streams_like_a_block, episodes_and_hours, healthy_runs, two_pairs
