@@ -312,10 +312,11 @@ def _numpy_scan(x, window, scale):
 
 
 @pytest.mark.parametrize("n, window", [(1, 1), (7, 3), (2047, 500), (4097, 4096), (12_000, 5000), (30_000, 500),
-                                       (9000, 20_000)])
+                                       (9000, 20_000), (5000, 7), (6000, 2050), (4500, 13)])
 def test_statistic_equals_numpy_scan(n, window):
-    # the length-outer kernel of GLRT.statistic on records spanning several 4096-sample blocks, windows longer than a
-    # block or than the record, with a mean far from zero (cumulative-sum cancellation)
+    # the length-outer kernel of GLRT.statistic on records spanning several 2048-sample blocks, windows longer than a
+    # block or than the record, windows whose lengths do not split into the kernel's passes of four (7, 13, 2050),
+    # with a mean far from zero (cumulative-sum cancellation)
     rng = np.random.default_rng(n + window)
     x = 3.0 * rng.standard_normal(n) + 40.0
     g = np.asarray(tsfdi.GLRT(window, scale=2.5).statistic(x))

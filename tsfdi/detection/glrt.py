@@ -65,11 +65,14 @@ def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
 
     Window sums are differences of a cumulative sum ``c`` restarted every block of 2048 outputs (so its magnitude
     stays bounded on long records). Within a block the loop runs over the post-change length ``n`` outside and the
-    outputs ``k`` inside: ``g[k] = max(g[k], (c[k] - c[k - n])^2 coef / n)`` reads ``c`` at two unit-stride offsets
+    outputs ``k`` inside: ``g[k] = max(g[k], (c[k] - c[k - n])^2 coef / n)`` reads ``c`` at unit-stride offsets
     and has no loop-carried dependency, so LLVM compiles it to packed subtract / multiply / compare instructions
     (4 doubles each with AVX2; ``tests/detection/test_glrt.py`` checks the assembly for packed instructions). The
-    other order (max over ``n`` inside, a floating-point max reduction) compiles to scalar code. Each ``g[k]`` is
-    the max of the same products in either order (equal to about 1e-16 relative: ``fastmath`` may round a product
+    other order (max over ``n`` inside, a floating-point max reduction) compiles to scalar code. Where every output
+    of the block has at least ``n + 3`` samples, one pass takes four lengths ``n .. n + 3``: ``c[k]`` and ``g[k]``
+    are loaded and ``g[k]`` stored once for four products instead of four times (1.9x faster at N = 60,000,
+    M = 500 on the benchmark's machine: the single-length pass is bound by its loads and stores). Each ``g[k]`` is
+    the max of the same products in any order (equal to about 1e-16 relative: ``fastmath`` may round a product
     differently).
     """
     n_all = x.shape[0]
@@ -84,10 +87,31 @@ def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
         for i in range(lo, b1):
             c[i - lo + 1] = c[i - lo] + x[i]
         gb = g[b0 - first:b1 - first]
-        for n in range(1, window + 1):
+        n = 1
+        while n <= window:
             k0 = max(b0, n - 1)                 # outputs with at least n samples: k + 1 >= n
             if k0 >= b1:
                 break
+            if n + 3 <= window and b0 >= n + 2:
+                # every output of the block has n + 3 samples: lengths n .. n + 3 in one pass (slices, so the
+                # indices are non-negative and the loop vectorises)
+                w0, w1, w2, w3 = coef / n, coef / (n + 1), coef / (n + 2), coef / (n + 3)
+                at, size = b0 - lo + 1, b1 - b0     # c at k + 1 (sum up to x[k]) for k = b0
+                hi = c[at:at + size]
+                l0 = c[at - n:at - n + size]
+                l1 = c[at - n - 1:at - n - 1 + size]
+                l2 = c[at - n - 2:at - n - 2 + size]
+                l3 = c[at - n - 3:at - n - 3 + size]
+                for j in range(size):
+                    h = hi[j]
+                    d0, d1, d2, d3 = h - l0[j], h - l1[j], h - l2[j], h - l3[j]
+                    v0, v1, v2, v3 = d0 * d0 * w0, d1 * d1 * w1, d2 * d2 * w2, d3 * d3 * w3
+                    v0 = v0 if v0 > v1 else v1
+                    v2 = v2 if v2 > v3 else v3
+                    v0 = v0 if v0 > v2 else v2
+                    gb[j] = v0 if v0 > gb[j] else gb[j]
+                n += 4
+                continue
             w = coef / n
             hi = c[k0 - lo + 1:b1 - lo + 1]     # c at k + 1 (sum up to x[k])
             low = c[k0 - lo + 1 - n:b1 - lo + 1 - n]
@@ -96,6 +120,7 @@ def _scan_g(x, first, window, coef):  # pragma: no cover - compiled
                 d = hi[j] - low[j]
                 v = d * d * w
                 gk[j] = v if v > gk[j] else gk[j]
+            n += 1
     return g
 
 
