@@ -4,10 +4,11 @@ Prints the median time (CPU time of the process by default, ``--clock wall`` for
 shared) of
   * select_order(y, max_lags=50)           vs statsmodels ar_select_order(y, 50)        for N = 2,000 and 60,000
   * select_order(Y, 20, model="var")       vs statsmodels VAR(Y).select_order(20)      3 channels, N = 2,000
-and the ratio against the issue 36 acceptance targets, together with the orders both select (they must agree).
-BLAS is pinned to one thread.
+and the ratio against the issue 36 acceptance targets, together with the orders both select (they must agree); then
+the same tsfdi calls on this tree against the commit before issue 36 (``previous_commit.py``; ``--against REF`` picks
+another commit), fresh interpreters, interleaved rounds. BLAS is pinned to one thread.
 
-Run: python benchmarks/order_selection.py [--clock cpu|wall]
+Run: python benchmarks/order_selection.py [--clock cpu|wall] [--against REF]
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from statsmodels.tsa.api import VAR as smVAR  # noqa: E402
 from statsmodels.tsa.ar_model import ar_select_order  # noqa: E402
 
 import tsfdi  # noqa: E402
+from previous_commit import BEFORE_ISSUE_36, compare  # noqa: E402
 
 #: issue 36 acceptance: ratio statsmodels / tsfdi
 TARGETS = {"AR N=2000": 1000, "AR N=60000": 6000, "VAR N=2000": 400}
@@ -66,7 +68,10 @@ def main() -> None:
     global now
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--clock", choices=("cpu", "wall"), default="cpu")
-    now = CLOCKS[parser.parse_args().clock]
+    parser.add_argument("--against", default=BEFORE_ISSUE_36,
+                        help=f"earlier commit to compare with (default {BEFORE_ISSUE_36}, before issue 36)")
+    args = parser.parse_args()
+    now = CLOCKS[args.clock]
     rng = np.random.default_rng(2026)
     rows = []
     for n, rep_ref in ((2000, 7), (60000, 3)):
@@ -93,6 +98,10 @@ def main() -> None:
         print(f"{name:<12} {1e3 * ours:>11.3f} {1e3 * ref:>17.1f} {ratio:>8.0f}x {TARGETS[name]:>6}x  "
               f"{p_ours:>11d} {p_ref:>8d}")
     print("all targets met and the same orders selected" if ok else "SOME TARGET MISSED OR ORDERS DIFFER")
+    compare({"select_ar_2000": ("select_order(y, 50), AR, N = 2,000", 50),
+             "select_ar_60000": ("select_order(y, 50), AR, N = 60,000", 15),
+             "select_var_2000": ("select_order(Y, 20, 'var'), 3 channels, N = 2,000", 50)},
+            args.against, rounds=3, clock=args.clock)
 
 
 if __name__ == "__main__":

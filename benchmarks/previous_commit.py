@@ -2,7 +2,8 @@
 
 Used by ``identify_speed.py`` and ``evaluate_speed.py`` (``--against REF``, default :data:`REFERENCE`, the last
 commit before the windowed engine of issue 16; ``evaluate_speed.py`` also against the commit before issue 36),
-``rls_throughput.py`` (default there: the commit before issue 18) and ``glrt_speed.py`` (the commit before issue 36).
+``rls_throughput.py`` (default there: the commit before issue 18), ``glrt_speed.py`` and ``order_selection.py`` (the
+commit before issue 36).
 The earlier ``tsfdi`` package is exported with ``git archive`` into a temporary folder; each measurement is a fresh
 interpreter (``python previous_commit.py WORKLOAD REPEAT CLOCK``) with that folder or this repository first on
 ``PYTHONPATH``, the two trees alternating so that a slow spell of the machine hits both. A worker builds its inputs,
@@ -96,7 +97,8 @@ def compare(workloads: dict, against: str = REFERENCE, rounds: int = 3, clock: s
             new.append(_run(ROOT, name, repeat, clock))
         mo, mn = statistics.median(old), statistics.median(new)
         verdict = "not slower" if mn <= 1.05 * mo else "SLOWER"
-        print(f"  {what:<58} {mo * 1e3:8.1f}ms {mn * 1e3:8.1f}ms {mo / mn:9.2f}x  {verdict}")
+        digits = 3 if max(mo, mn) < 0.01 else 1                # sub-10-ms workloads to the microsecond
+        print(f"  {what:<58} {mo * 1e3:8.{digits}f}ms {mn * 1e3:8.{digits}f}ms {mo / mn:9.2f}x  {verdict}")
         out[name] = (mo, mn)
     return out
 
@@ -216,12 +218,30 @@ def _fit_baselines_workload(**kw):
     return lambda: tsfdi.fit_baselines(sig, **kw)
 
 
+def _select_workload(model: str, n: int):
+    """``select_order`` of benchmarks/order_selection.py: AR, max lag 50, or VAR of 3 channels, max lag 20."""
+    import numpy as np
+
+    import tsfdi
+    from order_selection import ar6, var4
+
+    rng = np.random.default_rng(2026)
+    if model == "ar":
+        y = ar6(n, rng)
+        return lambda: tsfdi.select_order(y, 50, trend="c").selected
+    y = var4(n, rng)
+    return lambda: tsfdi.select_order(y, 20, "var", trend="c").selected
+
+
 WORKLOADS = {"identify_windows": identify_windows_workload, "identify_windows_ftest": identify_windows_ftest_workload,
              "evaluate": evaluate_workload, "evaluate_first": lambda: evaluate_workload("first"), "monitor": monitor_workload, "glrt": glrt_workload,
              "rls_d4": lambda: _rls_workload(4), "rls_d20": lambda: _rls_workload(20),
              "rls_d60": lambda: _rls_workload(60),
              "var_fit_c": lambda: _var_fit_workload("c"), "var_fit_n": lambda: _var_fit_workload("n"),
              "fit_baselines": _fit_baselines_workload,
+             "select_ar_2000": lambda: _select_workload("ar", 2000),
+             "select_ar_60000": lambda: _select_workload("ar", 60_000),
+             "select_var_2000": lambda: _select_workload("var", 2000),
              "fit_baselines_var10": lambda: _fit_baselines_workload(fit_turbulence="severe", duration=None,
                                                                     models=["var"], fit_records=10, order=20)}
 
