@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,6 +52,8 @@ _STEADY_RATIO = 4.0      # statistic="sprt": largest ratio of the error variance
                          # that set the scale at arming (a steady regime)
 #: the RecursiveARX options OnlineDetector passes on (it sets the others: gate, threshold, freeze_on_alarm, ...)
 _RLS_OPTIONS = ("P0", "trend", "theta0", "stable_samples", "variance_tol", "min_variance_samples")
+#: the RecursiveARX options that may differ between pairs (a mapping from pair names)
+_PER_PAIR_OPTIONS = ("theta0", "P0")
 
 
 @dataclass(frozen=True, eq=False)
@@ -477,7 +480,11 @@ class OnlineDetector:
     **rls_options
         Further :class:`tsfdi.RecursiveARX` options: ``P0``, ``trend``, ``theta0``, ``stable_samples``
         (consecutive samples the model and the variance gates must hold), ``variance_tol``,
-        ``min_variance_samples``. The others are set by the detector (``gate="relative"``, see Notes) or are its
+        ``min_variance_samples``. ``theta0`` and ``P0`` are one value for every pair or a mapping from pair names
+        to each pair's own, e.g. ``theta0={"roll": arx_results, ...}`` (the ``ARXResults`` of a fit of that pair's
+        ARX on other healthy logs: a prior, see Notes); a pair not named starts from RecursiveARX's defaults (zeros
+        and ``1e4``), a name that is no pair raises ``ValueError``, and a value RecursiveARX refuses raises its
+        error with the pair named. The others are set by the detector (``gate="relative"``, see Notes) or are its
         own parameters above; passing one raises ``TypeError``.
 
     Attributes
@@ -531,6 +538,18 @@ class OnlineDetector:
     scale is not frozen while the walk is above zero: that would make it depend on the walk's ``scale_`` and
     ``threshold``, which :meth:`calibrate` sets (its healthy runs would not see the scale of the calibrated
     detector), and would keep out of the scale the large healthy errors that lift the walk.
+
+    **Prior per pair.** Each pair's RLS minimises, after :math:`N` samples,
+    :math:`\sum_t \lambda^{N-t} e_t^2 + \lambda^N (\theta - \theta_0)' P_0^{-1} (\theta - \theta_0)` (the
+    recursion of :class:`tsfdi.RecursiveARX` from :math:`\theta_0`, :math:`P_0`; with its anti-windup rule for
+    :math:`\lambda < 1`). Least squares of the pair's ARX on :math:`M` samples of other healthy logs gives
+    :math:`\hat\theta` and :math:`(\sum \varphi\varphi')^{-1}`, the RLS state after those samples: with
+    ``theta0`` :math:`= \hat\theta` and ``P0`` :math:`= k (\sum \varphi\varphi')^{-1}` the pair starts as if it
+    had seen :math:`M / k` samples of that fleet: it predicts from its first sample, and its steps, small against
+    :math:`\hat\theta`, pass the model gate sooner than from zero. A prior helps only as far as the new vehicle is
+    like the fleet: for a small :math:`k` the anti-windup rule keeps each variance at most its :math:`P_0` value, so
+    the pair cannot move far from :math:`\hat\theta`. On the streaming benchmark's development logs (aircraft drawn
+    around a nominal one) no prior did better than none (``benchmarks/streaming.py``, ``--prior``).
 
     **Arming gate.** Paper 001 (section IV-B) considers the model stable for fault detection when the parameter
     step :math:`\|L(k)\hat e(k)\|_\infty < \epsilon` "for some time", with :math:`\epsilon` "a small positive number"
@@ -595,6 +614,17 @@ class OnlineDetector:
                 why = ("is set by OnlineDetector: its pairs use the scale-free gate='relative' (its Notes)"
                        if key == "gate" else "is not an option of OnlineDetector")
                 raise TypeError(f"{key} {why}; the RecursiveARX options it passes on are {', '.join(_RLS_OPTIONS)}")
+        # theta0 / P0 per pair: a mapping from pair names (a pair not named starts from RecursiveARX's default)
+        per_pair: dict = {}
+        for key in _PER_PAIR_OPTIONS:
+            if isinstance(rls_options.get(key), Mapping):
+                given = dict(rls_options[key])
+                unknown = [k for k in given if k not in names]
+                if unknown:
+                    raise ValueError(f"{key} names no pair {unknown[0]!r}: a mapping of {key} is keyed by the pair "
+                                     f"names {list(names)}")
+                per_pair[key] = given
+                rls_options[key] = given
         self.pairs = names
         self.nonfinite = option(nonfinite, "nonfinite", ("skip", "raise"))
         self.statistic = option(statistic, "statistic", ("zscore", "mean", "sprt", "zmean"))
@@ -648,12 +678,22 @@ class OnlineDetector:
         self.calibration_: OnlineCalibration | None = None
         zs = self.statistic == "zscore"
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
-        self._models = [RecursiveARX(na, nb, nk, forgetting_factor, n_inputs=self.n_inputs,
+        self._models = []
+        for name in names:
+            own = {**rls_options, **{key: given[name] for key, given in per_pair.items() if name in given}}
+            for key, given in per_pair.items():
+                if name not in given:
+                    del own[key]
+            try:
+                model = RecursiveARX(na, nb, nk, forgetting_factor, n_inputs=self.n_inputs,
                                      threshold=self.threshold if zs else 1e300,
                                      freeze_on_alarm=self.freeze_on_alarm and zs, nonfinite=self.nonfinite,
-                                     arm_after=self.arm_after if zs else 0, eps=self.eps, gate="relative",
-                                     **rls_options)
-                        for _ in names]
+                                     arm_after=self.arm_after if zs else 0, eps=self.eps, gate="relative", **own)
+            except (ValueError, TypeError) as err:
+                if not any(name in given for given in per_pair.values()):
+                    raise
+                raise type(err)(f"pair {name!r}: {err}") from err
+            self._models.append(model)
         self.reset()
 
     def reset(self) -> None:
