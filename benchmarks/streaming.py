@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/streaming.py [--dev N] [--dev-seed SEED ...] [--eval N] [--duration S] [--fs HZ] [--loss LOW
 HIGH]`` (about 5 min with the defaults); ``--bound [SEED ...]`` prints the oracle detectability bound on development
-logs instead (below).
+logs instead (below); ``--prior`` the fleet-prior development experiment (below) instead.
 
 Logs. Each log is one record of :func:`tsfdi.datasets.simulate_hexacopter` (1 kHz truth, a fleet aircraft drawn
 around the nominal one, ``FleetSpread()``, Dryden turbulence light / moderate / severe drawn per log, ground speed
@@ -50,6 +50,41 @@ failure (delay = alarm - failure time), *missed* when there is none, *false* whe
 failure; on a healthy log every alarm episode is a false alarm (counted with ``freeze_on_alarm=False`` so that every
 episode of the whole log counts, per hour of log); the pre-failure part of failure logs adds its hours and early
 alarms.
+
+Fleet prior (session 38, ``--prior``, :func:`prior_experiment`; development logs of seeds 1-4 only, 5 min 49 s; no
+evaluation run: no setting entered the grid). Does each pair's RLS, started from a fit of other healthy logs instead of from
+zero, arm sooner and predict well from the first seconds, closing the gap to the oracle bound? Leave one seed out:
+the prior of a seed's logs is each pair's pooled least-squares ARX (:func:`fleet_prior`) on the other three seeds'
+36 healthy logs, ``theta0`` its estimate and ``P0`` its ``(X'X)^-1`` times 1, 36, 360 or 3600 (the prior worth 36
+logs, one log, 9 s or 0.9 s of one; ``PRIOR_SCALES``) or the spread of the per-log estimates ("between"), on the
+chosen detector (rotors+accel, na=1, nb=2, shift 2) at each forgetting factor of the grid. No prior setting
+calibrated at 0.1 per hour: in each, some healthy (run, pair) record's SPRT walk has no Wald exponent (at x36 the
+refused records' long-run variance is 0.4-0.7 times their variance, where without a prior seed 1's records lie at
+0.78-2.0; scratch /work/notes/s38/h1/diag3.py, diag4.py). So the comparison is the separation count (the
+best threshold at no development false alarm: the walk within 0.5 s of a failure above the largest walk of the 48
+healthy logs and 96 pre-failure parts), every setting's walk at the SPRT scale calibrated without a prior at
+forgetting 0.9999; in brackets the healthy walks taken from 15 s on only (no failure comes earlier: the arming
+time does not matter):
+
+- forgetting 0.9999: no prior 87 of 96 separated (50 of 59 of 10-30 %, 25 of 34 of 10-20 %; calibrated: 85, 48,
+  24, no false alarm, as the grid); P0 x1: 1 (a healthy walk reaches 600); x36: 26; x360: 62 (26, 11); x3600: 80
+  (43, 19); "between": 81 (44, 20) [85 (48, 24)];
+- forgetting 1: no prior 87 (50, 25; calibrated 83, 46, 24); x1: 32; x36: 37; x360: 60; x3600: 81 (44, 20);
+  "between": 81 (44, 20) [85 (48, 24)];
+- forgetting 0.999 (no prior does not calibrate either, as in the grid): no prior 84 (47, 23); x1: 1; x36: 40;
+  x360: 63; x3600: 83 (46, 22); "between": 76 (39, 17) [84 (47, 23)].
+
+The prior arms the pairs sooner (the last pair of a log at a median 7.0-7.5 s with P0 x360 or "between", 12.1 s at
+x3600, 16.3 s without; forgetting 0.9999, scratch diag5.py), but arming is not what limits the detector: 3 of the
+96 failures came before every pair of the detector without a prior had armed (forgetting 0.9999; it separates 2 of
+them, the priors from x360 on all 3). The tighter the prior, the worse: the fleet's pooled model is not this
+aircraft's (``FleetSpread``; a rotor pair's pooled ``a1`` -0.74 where two seed-1 logs' own RLS ends at -0.80 and
+-0.84, scratch diag.py) and the anti-windup rule keeps every variance at most its ``P0`` value, so the pair cannot
+leave it: its errors' standard deviation over 30-90 s is 15, 10, 7, 2 and 1 % larger than without a prior (x1,
+x36, x360, x3600, "between"; seed 1's healthy logs, scratch diag4.py), the healthy walks rise and the walk within
+0.5 s of a failure is smaller (median 20 at x360, 31 at x3600, 40 with "between", 43 without). The loosest priors
+come near the detector without one, never above it. What the bound has and the detectors lack is not a start
+nearer the fleet but the log's own model (fitted on its healthy part, the scanned stretch included).
 
 Window sum (session 37, development only; no evaluation run: the grid did not choose it). The standardised
 window sum ``statistic="zmean"`` entered the grid for the "+accel" sets (windows 0.25, 0.5, 1 s, forgetting 0.999,
@@ -316,17 +351,21 @@ def detector(pairs: str, na: int, nb: int, shift: float | None = None, window: i
 
 
 def calibrated(healthy: list, pairs: str, na: int, nb: int, rate: float, shift: float | None = None,
-               forgetting: float = SETTINGS["forgetting_factor"], window: int | None = None) -> OnlineDetector:
-    det = detector(pairs, na, nb, shift, window, forgetting_factor=forgetting)
+               forgetting: float = SETTINGS["forgetting_factor"], window: int | None = None,
+               **options) -> OnlineDetector:
+    """The pair set's detector calibrated on the ``healthy`` logs for ``rate`` false alarms per hour (``options``:
+    further detector options, e.g. the per-pair ``theta0`` and ``P0`` of a fleet prior)."""
+    det = detector(pairs, na, nb, shift, window, forgetting_factor=forgetting, **options)
     ys, us = zip(*(split(f, pairs) for f, *_ in healthy))
     return det.calibrate(list(ys), list(us), false_alarms_per_hour=rate)
 
 
-def unfrozen(det: OnlineDetector, pairs: str, na: int, nb: int) -> OnlineDetector:
-    """``det`` (calibrated) without freezing at an alarm: every alarm episode of a healthy stretch counts."""
+def unfrozen(det: OnlineDetector, pairs: str, na: int, nb: int, **options) -> OnlineDetector:
+    """``det`` (calibrated) without freezing at an alarm: every alarm episode of a healthy stretch counts
+    (``options``: those ``det`` was built with beyond the pair set's, e.g. a fleet prior's ``theta0`` and ``P0``)."""
     return detector(pairs, na, nb, threshold=det.threshold, sprt=det.sprt, freeze_on_alarm=False,
                     forgetting_factor=det.models[0].forgetting_factor, statistic=det.statistic, window=det.window,
-                    direction=det.direction)
+                    direction=det.direction, **options)
 
 
 def score(det: OnlineDetector, free: OnlineDetector, logs: list, pairs: str = "controls") -> pd.DataFrame:
@@ -542,6 +581,189 @@ def detectability(healthy: list, failures: list, outputs: list, inputs: list, *,
     return table, fails, levels
 
 
+#: P0 of the fleet prior's pairs (``--prior``): the pooled fit's ``(X'X)^-1`` times each number (the prior weighs
+#: as many samples as the pooled fit divided by it: 1, all the other seeds' healthy logs, 36 of them; 36, one log;
+#: 360, 9 s of one log; 3600, 0.9 s), or "between": the covariance of the per-log fits over the pooled error variance (how far
+#: one aircraft's parameters lie from the fleet's)
+PRIOR_SCALES = (1.0, 36.0, 360.0, 3600.0, "between")
+
+
+def fleet_prior(healthy: list, pairs: str, na: int, nb: int) -> dict:
+    r"""The fleet prior of every pair of ``pairs``: least squares of the pair's ARX (the detector's orders, ``nk``
+    and parameter order, :meth:`tsfdi.RecursiveARX.regressors`) on the healthy logs ``healthy`` pooled.
+
+    Returns {pair: (theta, P, between)}: the pooled estimate, ``(X'X)^-1`` of the pooled regressors (the RLS
+    covariance after those samples, :math:`P = (\sum_t \varphi_t \varphi_t')^{-1}`) and the covariance of the
+    per-log estimates divided by the pooled error variance :math:`\hat\sigma^2 = RSS / (N - d)` (the spread
+    between aircraft, in the units of ``P``)."""
+    names, _, inputs, _ = PAIR_SETS[pairs]
+    ni = len(inputs[0])
+    model = tsfdi.RecursiveARX(na, nb, SETTINGS["nk"], n_inputs=ni)
+    lag = model.max_lag
+    xs = {name: [] for name in names}
+    ys = {name: [] for name in names}
+    for f, *_ in healthy:
+        y, u = split(f, pairs)
+        yv, uv = y.to_numpy(dtype=float), u.to_numpy(dtype=float)
+        for c, name in enumerate(names):
+            xs[name].append(np.asarray(model.regressors(yv[:, c], uv[:, c * ni:(c + 1) * ni])))
+            ys[name].append(yv[lag:, c])
+    out = {}
+    for name in names:
+        x, y = np.vstack(xs[name]), np.concatenate(ys[name])
+        ok = np.isfinite(x).all(axis=1) & np.isfinite(y)
+        x, y = x[ok], y[ok]
+        theta, *_ = np.linalg.lstsq(x, y, rcond=None)
+        sigma2 = float(((y - x @ theta) ** 2).sum() / (y.size - x.shape[1]))
+        p = np.linalg.inv(x.T @ x)
+        own = np.array([np.linalg.lstsq(xi, yi, rcond=None)[0] for xi, yi in zip(xs[name], ys[name])])
+        out[name] = (theta, 0.5 * (p + p.T), np.cov(own, rowvar=False) / sigma2)
+    return out
+
+
+def prior_options(prior: dict, scale) -> dict:
+    """The ``theta0`` and ``P0`` options of a :func:`fleet_prior` at a ``PRIOR_SCALES`` entry."""
+    if scale == "between":
+        return {"theta0": {k: v[0] for k, v in prior.items()}, "P0": {k: v[2] for k, v in prior.items()}}
+    return {"theta0": {k: v[0] for k, v in prior.items()}, "P0": {k: float(scale) * v[1] for k, v in prior.items()}}
+
+
+def walk_maxima(det: OnlineDetector, pairs: str, na: int, nb: int, logs: list, after: float = 15.0,
+                **options) -> list:
+    """Per log, the largest statistic of ``det`` (its scale, not freezing, never alarming: the walk restarted at its
+    lower bound only; ``options`` override its forgetting factor or add, e.g., a prior) over all pairs on the healthy stretch (a healthy log whole, a failure log before its failure),
+    on the healthy stretch from ``after`` s on (default the earliest failure time of :func:`make_logs`: what a
+    detector that could not alarm before then would see) and within ``DEADLINE`` s from the failure (NaN for a
+    healthy log), and when its last pair armed (s; NaN if one did not): (loss, healthy max, healthy max from
+    ``after``, max within, armed)."""
+    free = detector(pairs, na, nb, threshold=1e300, sprt=det.sprt, freeze_on_alarm=False,
+                    **{"forgetting_factor": det.models[0].forgetting_factor, **options})
+    out = []
+    for f, ft, _, _, level in logs:
+        y, u = split(f, pairs)
+        t = seconds(f)
+        free.reset()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            run = free.run(y, u)
+        walk = np.asarray(run.statistic, dtype=float)
+        armed = run.first_alarms["armed_at"].to_numpy()
+        walk = np.where(np.isfinite(walk), walk, -np.inf).max(axis=1)       # NaN: not armed
+        end = len(t) if ft is None else int(np.searchsorted(t, ft))
+        top = float(walk[:end].max(initial=-np.inf))
+        late = float(walk[after * det_fs(f) <= np.arange(len(t))][:max(end - int(np.ceil(after * det_fs(f))), 0)]
+                     .max(initial=-np.inf))
+        within = np.nan if ft is None else float(walk[(t >= ft) & (t <= ft + DEADLINE)].max(initial=-np.inf))
+        out.append((0.0 if ft is None else level, top, late, within,
+                    float(armed.max() / det_fs(f)) if (armed >= 0).all() else np.nan))
+    return out
+
+
+def prior_experiment(healthy: list, fail: list, seeds, dev: int, *, pairs: str = "rotors+accel", na: int = 1,
+                     nb: int = 2, shift: float = 2.0, forgetting=(0.9999,), rate: float = 0.1,
+                     scales=PRIOR_SCALES, scale_from: float = 0.9999) -> tuple:
+    """Development experiment (``--prior``): the pairs' RLS started from a fleet prior, leave one seed out.
+
+    ``healthy``, ``fail``: :func:`development_logs` of ``seeds`` (``dev`` healthy and ``2 dev`` failure logs per
+    seed, in seed order). For each seed ``s`` the prior is :func:`fleet_prior` of the other seeds' healthy logs, so
+    no log is scored by a prior that has seen it; the detector (``pairs``, ``na``, ``nb``, ``shift``, each
+    forgetting factor) starts every pair from it with ``P0`` at each of ``scales`` (:func:`prior_options`), is
+    calibrated for ``rate`` false alarms per hour on all the development healthy logs (as the grid is; 3/4 of
+    them in its prior) and scored (:func:`score`) on seed ``s``'s logs; beside it the same detector without a prior
+    (``P0`` "no prior"), calibrated and scored on the same logs. A setting that does not calibrate in every fold
+    has no calibrated counts (NaN; ``calibrated folds`` and the first refusal say why). Separation
+    (:func:`walk_maxima`, calibrated or not): a failure is separated when its walk within ``DEADLINE`` s of the
+    failure exceeds the largest walk of every healthy log and every pre-failure part (the best threshold at no
+    development false alarm), every setting's walk at the SPRT scale calibrated without a prior at forgetting
+    ``scale_from`` (one statistic, the model its only difference); ``sep unarmed``: separated among the
+    ``unarmed`` failures, those that came before every pair of the detector without a prior had armed; ``from 15
+    s``: the healthy walks counted from 15 s on only (no failure comes earlier; what an arming held back to 15 s
+    would allow). Returns (table, per-log scores, refusals)."""
+    fold_h = np.repeat(list(seeds), dev)
+    fold_f = np.repeat(list(seeds), 2 * dev)
+    if len(fold_h) != len(healthy) or len(fold_f) != len(fail):
+        raise ValueError(f"healthy, fail: {dev} and {2 * dev} logs per seed of {list(seeds)} expected, got "
+                         f"{len(healthy)} and {len(fail)}")
+    priors = {s: fleet_prior([h for h, k in zip(healthy, fold_h) if k != s], pairs, na, nb) for s in seeds}
+    rows, logs, refused = [], [], {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = calibrated(healthy, pairs, na, nb, rate, shift, scale_from)        # the walks' scale
+    for lam in forgetting:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                plain = calibrated(healthy, pairs, na, nb, rate, shift, lam)
+            except ValueError as err:
+                plain, why_plain = None, f"{err}"
+        for scale in (None, *scales):
+            name = "no prior" if scale is None else scale
+            tabs, maxima, thresholds, why = [], [], [], None
+            t0 = time.time()
+            for s in seeds:
+                opts = {} if scale is None else prior_options(priors[s], scale)
+                mine = [h for h, k in zip(healthy, fold_h) if k == s] + [f for f, k in zip(fail, fold_f) if k == s]
+                det = plain
+                if scale is None and plain is None:
+                    why = why_plain
+                elif scale is not None:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        try:
+                            det = calibrated(healthy, pairs, na, nb, rate, shift, lam, **opts)
+                        except ValueError as err:       # e.g. a record whose walk has no Wald exponent
+                            det, why = None, why or f"seed {s}: {err}"
+                if det is not None:
+                    thresholds.append(det.threshold)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        tab = score(det, unfrozen(det, pairs, na, nb, **opts), mine, pairs)
+                else:
+                    tab = pd.DataFrame({"kind": ["healthy" if ft is None else "failure" for _, ft, *_ in mine],
+                                        "loss": [0.0 if ft is None else lv for _, ft, _, _, lv in mine],
+                                        "failure_s": [ft for _, ft, *_ in mine], "outcome": "not calibrated"})
+                tab["seed"] = s
+                tabs.append(tab)
+                maxima += walk_maxima(ref, pairs, na, nb, mine, forgetting_factor=lam, **opts)
+            tab = pd.concat(tabs, ignore_index=True)
+            tab["forgetting"], tab["P0"] = lam, str(name)
+            m = pd.DataFrame(maxima, columns=["loss", "healthy_max", "healthy_max_late", "within_max", "walk_armed_s"])
+            for col in m.columns[1:]:
+                tab[col] = m[col].to_numpy()
+            level, level_late = m["healthy_max"].max(), m["healthy_max_late"].max()
+            fails = tab[tab.kind == "failure"]
+            sep, sep_late = fails.within_max > level, fails.within_max > level_late
+            if scale is None:           # failures before every pair of the detector without a prior had armed
+                unarmed = ~(fails.walk_armed_s < fails.failure_s).to_numpy()
+            row = {"forgetting": lam, "P0": name, "calibrated folds": len(thresholds),
+                   "thresholds": "/".join(f"{t:.2f}" for t in dict.fromkeys(thresholds))}
+            if len(thresholds) == len(seeds):
+                inside = (fails.outcome == "found") & (fails.delay_s <= DEADLINE)
+                sm = summary(tab).iloc[0]
+                row |= {"within": int(inside.sum()), "within 10-30": int(inside[fails.loss <= 0.3].sum()),
+                        "within 10-20": int(inside[fails.loss <= 0.2].sum()),
+                        "false episodes": int(sm["false episodes"]), "missed": int(sm["missed"]),
+                        "early": int(sm["early (false)"]), "mean delay s": sm["mean delay s"],
+                        "median arming s": float(tab.armed_s.median()), "latest arming s": sm["latest arming s"]}
+            else:
+                refused[(lam, str(name))] = why
+            row |= {"sep level": round(float(level), 2), "sep": int(sep.sum()),
+                    "sep 10-30": int(sep[fails.loss <= 0.3].sum()), "sep 10-20": int(sep[fails.loss <= 0.2].sum()),
+                    "unarmed": int(unarmed.sum()), "sep unarmed": int(sep[unarmed].sum()),
+                    "level from 15 s": round(float(level_late), 2), "sep from 15 s": int(sep_late.sum()),
+                    "from 15 s 10-30": int(sep_late[fails.loss <= 0.3].sum()),
+                    "from 15 s 10-20": int(sep_late[fails.loss <= 0.2].sum()), "run s": round(time.time() - t0)}
+            rows.append(row)
+            logs.append(tab)
+            with pd.option_context("display.width", 250, "display.max_columns", 30):
+                print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
+    table = pd.DataFrame(rows)
+    first = [c for c in ("forgetting", "P0", "calibrated folds", "thresholds", "within", "within 10-30", "within 10-20",
+                         "false episodes", "missed", "early", "mean delay s", "median arming s", "latest arming s")
+             if c in table]
+    return table[first + [c for c in table if c not in first]], pd.concat(logs, ignore_index=True), refused
+
+
 def development_logs(seeds, args) -> tuple[list, list]:
     """The development logs of ``seeds`` (with the accelerometer): per seed ``args.dev`` healthy logs, ``args.dev``
     failure logs of ``args.loss`` and ``args.dev`` of the small losses ``SMALL``; (healthy, failure)."""
@@ -567,6 +789,9 @@ def main(argv=None) -> None:
                         help="range of the failed rotor's loss of effectiveness (1: the whole rotor)")
     parser.add_argument("--dev-only", action="store_true",
                         help="stop after the development grid (no evaluation log is drawn)")
+    parser.add_argument("--prior", action="store_true",
+                        help="the fleet-prior development experiment (prior_experiment: leave one development seed "
+                             "out) on the development logs, and stop")
     parser.add_argument("--bound", type=int, nargs="*", metavar="SEED",
                         help="print the oracle detectability bound on the development logs of these seeds "
                              "(default: --dev-seed) with the accelerometer, and stop")
@@ -588,6 +813,16 @@ def main(argv=None) -> None:
                 print(table.round(2).to_string())
         return
     dev_healthy, dev_fail = development_logs(args.dev_seed, args)
+    if args.prior:
+        print(f"fleet prior (leave one seed out) on the development logs of seeds {args.dev_seed}: "
+              f"{len(dev_healthy)} healthy, {len(dev_fail)} failure logs, {time.time() - t0:.0f} s")
+        table, _, refused = prior_experiment(dev_healthy, dev_fail, args.dev_seed, args.dev, forgetting=FORGETTING)
+        with pd.option_context("display.width", 250, "display.max_columns", 40):
+            print(table.to_string(index=False))
+        for (lam, p0), why in refused.items():
+            print(f"not calibrated, forgetting {lam:g}, P0 {p0}: {why}")
+        print(f"total {time.time() - t0:.0f} s")
+        return
     print(f"development, per seed: {args.dev} healthy + {args.dev} failure logs (loss {args.loss[0]:g}-"
           f"{args.loss[1]:g}) + {args.dev} failure logs (loss {SMALL[0]:g}-{SMALL[1]:g}) of {args.duration:g} s at "
           f"{args.fs:g} Hz (seeds {args.dev_seed}), {time.time() - t0:.0f} s")

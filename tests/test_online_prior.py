@@ -2,6 +2,7 @@
 prior, each pair's RLS started from a fit of other healthy logs)."""
 
 import numpy as np
+import pandas as pd
 import pytest
 from test_online import assert_streams_like_a_block, two_pairs
 
@@ -115,3 +116,50 @@ def test_per_pair_priors_are_checked_by_pair():
     # one value for every pair keeps its message (no pair named)
     with pytest.raises(ValueError, match=r"^theta0 must hold 2 finite values"):
         OnlineDetector(["a", "b"], **ORDERS, theta0=[0.1, 0.2, 0.3])
+
+
+def test_the_streaming_benchmarks_fleet_prior_is_the_pooled_least_squares():
+    """benchmarks/streaming.py --prior: fleet_prior recovers the ARX of logs built from one (a rotor pair's output
+    against the six motor commands, the accelerometer's inputs unused), in RecursiveARX's parameter order, with
+    P = (X'X)^-1 of the pooled regressors; prior_options hands them to the detector per pair."""
+    from _scripts import load_script
+    from scipy.signal import lfilter
+
+    B = load_script("benchmarks/streaming.py")
+    rng = np.random.default_rng(7)
+    bp, bq = rng.normal(0.0, 0.5, 6), rng.normal(0.0, 0.5, 6)
+    logs = []
+    for _ in range(3):
+        n = 3000
+        m = rng.standard_normal((n, 6))
+        cols = {f"motors.{c}": m[:, j] for j, c in enumerate(B.MOTORS)}
+        # p, q = 0.8 p[-1] + b . m[-1] + e: every rotor direction s p - c q has a1 = -0.8 (papers' sign)
+        for name, b in (("p", bp), ("q", bq)):
+            drive = np.r_[0.0, m[:-1] @ b] + 0.01 * rng.standard_normal(n)
+            cols[f"gyro.{name}"] = lfilter([1.0], [1.0, -0.8], drive)
+        cols["gyro.r"] = rng.standard_normal(n)
+        cols["accel.ax"], cols["accel.ay"] = rng.standard_normal(n), rng.standard_normal(n)
+        f = pd.DataFrame(cols, index=pd.to_timedelta(np.arange(n) / 50.0, unit="s"))
+        logs.append((f, None, 0, "light", 1.0))
+    prior = B.fleet_prior(logs, "rotors+accel", 1, 2)
+    assert list(prior) == [f"rotor{i}" for i in range(1, 7)]
+    sp, sq = B.SIGNATURES[1]              # rotor 2: y = sp p + sq q
+    theta, p, between = prior["rotor2"]
+    # theta: a1, then b0_1, b0_2 (motor 1 at lags 1 and 2), ..., b7_1, b7_2 (accel.ay)
+    expected = np.r_[-0.8, np.column_stack([sp * bp + sq * bq, np.zeros(6)]).ravel(), np.zeros(4)]
+    np.testing.assert_allclose(theta, expected, atol=2e-3)
+    y, u = B.split(logs[0][0], "rotors+accel")
+    x = np.asarray(tsfdi.RecursiveARX(1, 2, 1, n_inputs=8).regressors(y.iloc[:, 1].to_numpy(),
+                                                                      u.iloc[:, 8:16].to_numpy()))
+    xs = [x] + [np.asarray(tsfdi.RecursiveARX(1, 2, 1, n_inputs=8).regressors(
+        B.split(f, "rotors+accel")[0].iloc[:, 1].to_numpy(), B.split(f, "rotors+accel")[1].iloc[:, 8:16].to_numpy()))
+        for f, *_ in logs[1:]]
+    pooled = np.vstack(xs)
+    np.testing.assert_allclose(p, np.linalg.inv(pooled.T @ pooled), rtol=1e-8)
+    assert between.shape == (17, 17)
+    opts = B.prior_options(prior, 36.0)
+    det = B.detector("rotors+accel", 1, 2, shift=2.0, **opts)
+    np.testing.assert_allclose(det.models[1].theta_, theta)
+    np.testing.assert_allclose(det.models[1].P_, 36.0 * p)
+    # "between": the spread of the per-log fits (three logs here: singular, so only handed on)
+    assert B.prior_options(prior, "between")["P0"]["rotor6"] is prior["rotor6"][2]
