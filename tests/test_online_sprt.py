@@ -133,6 +133,36 @@ def test_sprt_calibration_leaves_a_record_too_short_for_its_own_exponent_out_of_
                                                false_alarms_per_hour=60, fs=FS)
 
 
+def test_wald_exponent_is_the_first_root_where_the_cumulant_is_positive_on_a_short_interval_only():
+    """With negatively autocorrelated increments (the long-run variance below the variance) the cumulant equation of
+    the SPRT's walk can be positive on a short interval only: here MA(1) increments, positive for h in about 1.30 to
+    1.76 and negative at h = 1, 2, 4, ... Its first root is Wald's exponent. Before, the search doubled h from 1,
+    stepped over the interval and refused the record ("never rises"; found on the streaming benchmark's logs with
+    per-pair priors, session 38)."""
+    from scipy import special
+
+    from tsfdi.online import _long_run_variance, _wald_exponent
+
+    e = np.random.default_rng(10).standard_normal(4001)
+    z = -0.05 + e[1:] - 0.7 * e[:-1]
+    extra = 0.5 * (_long_run_variance(z) - z.var())
+
+    def cumulant(h):
+        return special.logsumexp(h * z) - np.log(z.size) + h * h * extra
+
+    assert all(cumulant(2.0 ** k) < 0 for k in range(21))
+    h = _wald_exponent(z, "run")
+    assert 1.2 < h < 1.35 and abs(cumulant(h)) < 1e-9
+    assert all(cumulant(g) < 0 for g in np.linspace(1e-3, h, 200)[:-1])            # nothing positive before it
+    # white increments: the root where the doubling search found it (h* = -2 mean / variance for normal increments)
+    w = -0.05 + np.random.default_rng(11).standard_normal(4000)
+    assert _wald_exponent(w, "run") == pytest.approx(0.1, rel=0.3)
+    # strongly negatively correlated increments with no positive region: refused with the variance ratio
+    with pytest.raises(ValueError, match=r"run: the SPRT's log-likelihood ratio never rises .* the long-run variance "
+                       r"of its increments is 0\.\d\d times their variance"):
+        _wald_exponent(-0.2 + e[1:] - 0.95 * e[:-1], "run")
+
+
 def test_sprt_calibration_takes_a_record_drifting_up_by_less_than_two_standard_errors_as_censored():
     """A record whose log-likelihood ratio grows on average, but by less than two standard errors of its mean (from
     its long-run variance), has a small exponent its samples cannot estimate: it refused the whole detector before

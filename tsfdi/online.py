@@ -308,18 +308,29 @@ def _wald_exponent(z: np.ndarray, where: str) -> float:
     def f(h: float) -> float:
         return float(special.logsumexp(h * z) - log_n + h * h * extra)
 
-    hi = 1.0
-    while f(hi) <= 0:
-        hi *= 2.0
-        if hi > 1e6:
-            raise ValueError(f"{where}: the SPRT's log-likelihood ratio never rises on the healthy runs (no positive "
-                             "root of its walk's cumulant equation): give longer healthy runs")
-    lo = hi
-    while f(lo) >= 0:
-        lo /= 2.0
-        if lo < 1e-9:
-            raise ValueError(f"{where}: no positive root of the SPRT walk's cumulant equation")
-    return float(optimize.brentq(f, lo, hi, rtol=1e-10))
+    # the smallest positive root: f(0) = 0 and f'(0) = mean < 0, so f starts negative; it is scanned upwards in steps
+    # of 9 % from h = 2**-10, because with negatively autocorrelated increments (``extra`` < 0) f can be positive on
+    # a short interval only (e.g. 1.30 to 1.76), which a search doubling h steps over
+    lo = 0.0
+    for hi in _EXPONENT_GRID:
+        if f(hi) > 0:
+            if lo == 0.0:                       # positive at the grid's first point already: halve below it
+                lo = hi / 2.0
+                while f(lo) >= 0:
+                    lo /= 2.0
+                    if lo < 1e-12:
+                        raise ValueError(f"{where}: no positive root of the SPRT walk's cumulant equation")
+            return float(optimize.brentq(f, lo, hi, rtol=1e-10))
+        lo = hi
+    ratio = 2.0 * extra / float(z.var()) + 1.0
+    raise ValueError(f"{where}: the SPRT's log-likelihood ratio never rises on the healthy runs (no positive root of "
+                     f"its walk's cumulant equation up to h = {_EXPONENT_GRID[-1]:.0e}; the long-run variance of its "
+                     f"increments is {ratio:.2f} times their variance): give longer healthy runs, or prediction errors "
+                     "closer to white")
+
+
+#: where :func:`_wald_exponent` looks for the first sign change: 2**-10 to 2**20 in steps of 2**(1/8)
+_EXPONENT_GRID = 2.0 ** (np.arange(-80, 161) / 8.0)
 
 
 def _long_run_variance(z: np.ndarray) -> float:
