@@ -13,7 +13,13 @@
    ``LocalCluster`` whose scheduler runs in a process of its own, as on a real cluster, so that the driver's process
    holds the client alone (its memory is measured below). Each is started for its run, warmed up by an untimed
    ``evaluate`` of 200 records (the workers import tsfdi and get the baselines, which the timed run then refers to,
-   as a user's second call does), and closed after it: one cluster is alive at a time, as a user has.
+   as a user's second call does), and closed after it: one cluster is alive at a time, as a user has. The clusters
+   start with :data:`THROUGHPUT` (session 38): dask's monitoring -- the event-loop tick every 20 ms, the system
+   monitor every 0.5 s, the workers' memory monitor every 0.1 s, their profiler's stack sample every 10 ms -- made
+   less frequent or off, which the printed idle CPU of a 2-worker cluster with and without them shows is about a
+   tenth of a core by default (the ratio of 2 workers to 1 was 1.79-1.88 in three runs of session 38 with the
+   defaults); ``--dask-defaults`` starts them with dask's defaults, docs/guide/cluster.md says what the settings
+   cost (dashboard detail).
    What changed in this yardstick in issue 36's session 32, and why: (a) the serial path read the records into
    memory before its timed runs, while the workers read their chunks within theirs (0.7-1 s of ~17 s): the ratio
    compared evaluate in memory with read + evaluate. Now both pay for their read; the serial read's time is
@@ -48,7 +54,7 @@
    100,000 flight hours on 64 workers from the measured cost per record.
 
 BLAS is pinned to one thread (here and, inherited, on the workers). Run:
-``python benchmarks/fleet_scale.py [--records 2000] [--repeat 3] [--cache DIR] [--against REF]``.
+``python benchmarks/fleet_scale.py [--records 2000] [--repeat 3] [--cache DIR] [--against REF] [--dask-defaults]``.
 """
 
 import os
@@ -91,6 +97,15 @@ LOG = "distributed.admin.low-level-log-length"
 LEVELS = ("moderate", "severe")
 #: the dask runs: name -> worker processes (one thread each)
 CLUSTERS = {"1 worker": 1, "2 workers": 2}
+#: dask settings of the benchmark's clusters (issue 36, session 38): the monitoring a cluster's processes run beside the
+#: tasks, less often -- the event-loop tick (20 ms), the system monitor (0.5 s), the workers' memory monitor (0.1 s)
+#: and their statistical profiler (a stack sample every 10 ms). With dask's defaults an idle cluster of 2 workers uses
+#: about a tenth of a core (its scheduler, 2 nannies and 2 workers), which on 2 cores the computing workers lack;
+#: printed by :func:`idle_cpu`. ``--dask-defaults`` runs the clusters with dask's defaults instead.
+THROUGHPUT = {"distributed.admin.tick.interval": "1s", "distributed.admin.system-monitor.interval": "2s",
+              "distributed.worker.memory.monitor-interval": "1s", "distributed.worker.profile.enabled": False}
+#: the settings the clusters of this run start with (THROUGHPUT, or {} with --dask-defaults)
+SETTINGS: dict = dict(THROUGHPUT)
 #: the variables the serial path reads into memory (what evaluate reads of each record)
 SIGNALS = ("roll", "pitch", "r", "lost_control")
 
@@ -192,15 +207,45 @@ def from_store(ds, base, reads: list):
 
 
 @contextlib.contextmanager
+def environment(settings: dict):
+    """The dask ``settings`` as the environment variables that set them in the processes started meanwhile (the
+    cluster's scheduler, nannies and workers read ``DASK_*`` when they import dask)."""
+    env = {"DASK_" + k.upper().replace(".", "__").replace("-", "_"): str(v) for k, v in settings.items()}
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k)
+            else:
+                os.environ[k] = v
+
+
+@contextlib.contextmanager
 def cluster(n: int, ds, base):
-    """A ``SubprocessCluster`` of ``n`` single-threaded workers and a Client of it, warmed up (the workers import
-    tsfdi, load the store's metadata and get the baselines: ``evaluate`` of 200 records, not timed)."""
-    with SubprocessCluster(n_workers=n, threads_per_worker=1, dashboard_address=":0") as cl, \
+    """A ``SubprocessCluster`` of ``n`` single-threaded workers started with :data:`SETTINGS` and a Client of it,
+    warmed up (the workers import tsfdi, load the store's metadata and get the baselines: ``evaluate`` of 200 records,
+    not timed)."""
+    with environment(SETTINGS), SubprocessCluster(n_workers=n, threads_per_worker=1, dashboard_address=":0") as cl, \
             Client(cl, set_as_default=False) as client:
         client.wait_for_workers(n)
         with client.as_current():
             tsfdi.evaluate(balanced(ds, SMALL), base, **OPTIONS)
         yield cl, client
+
+
+def idle_cpu(settings: dict, seconds: float = 10.0) -> float:
+    """Percent of a core that the processes of an idle 2-worker ``SubprocessCluster`` started with ``settings`` use
+    over ``seconds`` (after 3 s to settle): what the workers' cores lose to the cluster itself."""
+    with environment(settings), SubprocessCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cl, \
+            Client(cl, set_as_default=False) as client:
+        client.wait_for_workers(2)
+        time.sleep(3.0)
+        before, t0 = _own_cpu(), time.perf_counter()
+        time.sleep(seconds)
+        return 100.0 * (_own_cpu() - before) / (time.perf_counter() - t0)
 
 
 def workers_time(stream: list, start: float, stop: float) -> np.ndarray:
@@ -287,7 +332,8 @@ def previous(ref: str, store: Path, repeat: int, runs: dict, reference) -> None:
     out = tree / "runs.pkl"
     env = dict(os.environ, PYTHONPATH=str(tree))
     subprocess.run([sys.executable, str(Path(__file__).resolve()), "--repeat", str(repeat), "--dask-only",
-                    str(store), str(out)], check=True, env=env, cwd=str(tree))
+                    str(store), str(out), *([] if SETTINGS else ["--dask-defaults"])], check=True, env=env,
+                   cwd=str(tree))
     prev = pd.read_pickle(out)
     equal = all(prev["tables"][n].equals(getattr(reference, n)) for n in prev["tables"])
     print(f"\nthe same dask runs with tsfdi of commit {ref} ({prev['tsfdi']}), after the runs above, {repeat} "
@@ -343,7 +389,11 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "tsfdi" / "fleet_scale")
     ap.add_argument("--against", default=PREVIOUS, help="earlier commit whose dask runs are timed too ('': none)")
     ap.add_argument("--dask-only", nargs=2, type=Path, metavar=("STORE", "OUT"), help=argparse.SUPPRESS)
+    ap.add_argument("--dask-defaults", action="store_true",
+                    help="start the clusters with dask's default settings instead of THROUGHPUT")
     args = ap.parse_args()
+    if args.dask_defaults:
+        SETTINGS.clear()
     if args.records <= SMALL:
         ap.error(f"--records must be above {SMALL}: the memory section compares the driver at {SMALL} records with "
                  f"--records (got {args.records})")
@@ -415,6 +465,9 @@ def main() -> None:
           f"{len(reference.detection_counts)} + {len(reference.identification_counts)} rows (+ "
           f"{len(reference.detection_delays)} delay rows)")
 
+    print("\nthe clusters' dask settings: " + (", ".join(f"{k} = {v}" for k, v in SETTINGS.items()) or "dask's defaults")
+          + f"; an idle 2-worker cluster and its client use {idle_cpu({}):.1f} % of a core with dask's defaults, "
+          f"{idle_cpu(THROUGHPUT):.1f} % with THROUGHPUT (10 s each)")
     with cluster(2, ds, base) as (two, _):
         print(f"\ndriver memory (MB) at {SMALL} and {n:,} records: the dask runs on the 2 workers, the serial one "
               "reading the records into the driver")
