@@ -2,9 +2,9 @@
 the cut depth of CrazyPAD propeller M3 estimated from a flight (leave one depth out).
 
 Run: ``python benchmarks/fp_models.py [--data PATH] [--lags N] [--degree D]`` (BLAS pinned to one thread; reads
-``../shared/data/crazypad`` for sections 2-3, skipped with a message when it is missing; about 6 min on the 2-core
-development machine, most of it the inner folds of section 2 and the nested folds of its detection through models of
-the depth).
+``../shared/data/crazypad`` for sections 2-3, skipped with a message when it is missing; about 100 s on the 2-core
+development machine (97 s in session 38), most of it the inner folds of section 2 and the nested folds of its
+detection through models of the depth).
 
 1. Cost, simulated FP-VAR data (6 channels, 16 operating points x 2 records x 2000 samples, lags 8, Legendre degree
    3): ``FPVAR.fit`` against the point models it replaces (one ``VAR`` per operating point) and one pooled ``VAR``
