@@ -465,9 +465,9 @@ def main() -> None:
           f"{len(reference.detection_counts)} + {len(reference.identification_counts)} rows (+ "
           f"{len(reference.detection_delays)} delay rows)")
 
-    print("\nthe clusters' dask settings: " + (", ".join(f"{k} = {v}" for k, v in SETTINGS.items()) or "dask's defaults")
-          + f"; an idle 2-worker cluster and its client use {idle_cpu({}):.1f} % of a core with dask's defaults, "
-          f"{idle_cpu(THROUGHPUT):.1f} % with THROUGHPUT (10 s each)")
+    settings = ", ".join(f"{k} = {v}" for k, v in SETTINGS.items()) or "dask's defaults"
+    print(f"\nthe clusters' dask settings: {settings}; an idle 2-worker cluster and its client use "
+          f"{idle_cpu({}):.1f} % of a core with dask's defaults, {idle_cpu(THROUGHPUT):.1f} % with THROUGHPUT (10 s each)")
     with cluster(2, ds, base) as (two, _):
         print(f"\ndriver memory (MB) at {SMALL} and {n:,} records: the dask runs on the 2 workers, the serial one "
               "reading the records into the driver")

@@ -148,13 +148,13 @@ def test_the_streaming_benchmarks_fleet_prior_is_the_pooled_least_squares():
     # theta: a1, then b0_1, b0_2 (motor 1 at lags 1 and 2), ..., b7_1, b7_2 (accel.ay)
     expected = np.r_[-0.8, np.column_stack([sp * bp + sq * bq, np.zeros(6)]).ravel(), np.zeros(4)]
     np.testing.assert_allclose(theta, expected, atol=2e-3)
-    y, u = B.split(logs[0][0], "rotors+accel")
-    x = np.asarray(tsfdi.RecursiveARX(1, 2, 1, n_inputs=8).regressors(y.iloc[:, 1].to_numpy(),
-                                                                      u.iloc[:, 8:16].to_numpy()))
-    xs = [x] + [np.asarray(tsfdi.RecursiveARX(1, 2, 1, n_inputs=8).regressors(
-        B.split(f, "rotors+accel")[0].iloc[:, 1].to_numpy(), B.split(f, "rotors+accel")[1].iloc[:, 8:16].to_numpy()))
-        for f, *_ in logs[1:]]
-    pooled = np.vstack(xs)
+
+    def regressors(f):                    # rotor 2's pair: its output and its 8 inputs
+        y, u = B.split(f, "rotors+accel")
+        return np.asarray(tsfdi.RecursiveARX(1, 2, 1, n_inputs=8).regressors(y.iloc[:, 1].to_numpy(),
+                                                                           u.iloc[:, 8:16].to_numpy()))
+
+    pooled = np.vstack([regressors(f) for f, *_ in logs])
     np.testing.assert_allclose(p, np.linalg.inv(pooled.T @ pooled), rtol=1e-8)
     assert between.shape == (17, 17)
     opts = B.prior_options(prior, 36.0)

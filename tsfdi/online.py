@@ -691,10 +691,8 @@ class OnlineDetector:
         # in "mean" mode the model's own Z-score never alarms (threshold 1e300) and halting is done here
         self._models = []
         for name in names:
-            own = {**rls_options, **{key: given[name] for key, given in per_pair.items() if name in given}}
-            for key, given in per_pair.items():
-                if name not in given:
-                    del own[key]
+            own = {k: v for k, v in rls_options.items() if k not in per_pair}
+            own.update({key: given[name] for key, given in per_pair.items() if name in given})
             try:
                 model = RecursiveARX(na, nb, nk, forgetting_factor, n_inputs=self.n_inputs,
                                      threshold=self.threshold if zs else 1e300,
